@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# The project's environment: the venv first on PATH, the catkin workspace sourced,
+# ROS bound to loopback unless you set ROS_IP / ROS_HOSTNAME yourself.
+#   ./env.sh CMD ARGS...   run CMD inside it
+#   source env.sh          set it up in this shell
+_lt_root=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+if [ ! -f "$_lt_root/.ws/devel/setup.bash" ] || [ ! -x "$_lt_root/.venv/bin/python" ]; then
+  echo "leap_teleop: not set up yet; run 'make setup' (or make demo / make test) first" >&2
+  # shellcheck disable=SC2317
+  return 1 2>/dev/null || exit 1
+fi
+set +u
+# shellcheck disable=SC1091
+source "$_lt_root/.ws/devel/setup.bash"
+# shellcheck disable=SC1091
+source "$_lt_root/.venv/bin/activate"
+export ROS_HOSTNAME=${ROS_HOSTNAME:-127.0.0.1}
+export ROS_IP=${ROS_IP:-127.0.0.1}
+export ROS_MASTER_URI=${ROS_MASTER_URI:-http://127.0.0.1:11311}
+export ROS_HOME=${ROS_HOME:-$_lt_root/.ws/ros_home}
+export PYTHONDONTWRITEBYTECODE=1
+if [ "${BASH_SOURCE[0]}" = "$0" ]; then
+  [ $# -gt 0 ] || { echo "usage: ./env.sh CMD [ARGS...]" >&2; exit 2; }
+  exec "$@"
+fi

@@ -1,0 +1,87 @@
+"""HandState -> ROS messages. One function per message type, both hands alike."""
+import rospy
+from geometry_msgs.msg import Point, Vector3
+
+from leap_teleop.msg import GestureEvent, Hand, leapcobotleft, leapcobotright
+
+LEAP_FRAME = 'leap_hands'
+LEAPCOBOT_TYPES = {'right': leapcobotright, 'left': leapcobotleft}
+SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
+MM = 0.001
+
+
+def _header(msg, state, frame_id=LEAP_FRAME):
+    msg.header.stamp = rospy.Time.from_sec(state.timestamp)
+    msg.header.frame_id = frame_id
+    return msg
+
+
+def to_leapcobot(state, frame_id=LEAP_FRAME):
+    """The original leapcobotright / leapcobotleft message; palmpos in Leap mm."""
+    side = state.side
+    msg = _header(LEAPCOBOT_TYPES[side](), state, frame_id)
+    values = {
+        'is_%s_hand': state.present,
+        '%s_hand_palmpos': Point(*state.palm_position),
+        '%s_hand_fist': state.fist,
+        '%s_hand_thumb_up': state.thumb_up,
+        '%s_hand_pinch': state.pinch,
+        '%s_hand_pinch_value': state.pinch_value,
+        '%s_hand_origin_frame': state.origin_set,
+        '%s_hand_set_origin_frame_detected': state.rock,
+        '%s_hand_rotate_value': state.rotate,
+        '%s_hand_turn_value': state.turn,
+        '%s_hand_swing_value': state.swing,
+    }
+    for pattern, value in values.items():
+        setattr(msg, pattern % side, value)
+    return msg
+
+
+def from_leapcobot(msg):
+    """Field dict of a leapcobot message without the side prefix, for consumers
+    that serve both hands with one code path."""
+    side = 'right' if hasattr(msg, 'is_right_hand') else 'left'
+    prefix = '%s_hand_' % side
+    out = {'side': side, 'present': getattr(msg, 'is_%s_hand' % side),
+           'stamp': msg.header.stamp.to_sec()}
+    for slot in msg.__slots__:
+        if slot.startswith(prefix):
+            out[slot[len(prefix):]] = getattr(msg, slot)
+    p = out['palmpos']
+    out['palmpos'] = (p.x, p.y, p.z)
+    return out
+
+
+def to_hand(state, frame_id=LEAP_FRAME):
+    """The rich Hand message; positions in metres in frame leap_hands."""
+    msg = _header(Hand(), state, frame_id)
+    msg.side = SIDE_CODES[state.side]
+    msg.present = state.present
+    msg.leap_frame_id = state.frame_id
+    msg.palm_position = Point(*(x * MM for x in state.palm_position))
+    msg.palm_velocity = Vector3(*(x * MM for x in state.palm_velocity))
+    msg.palm_normal = Vector3(*state.palm_normal)
+    msg.direction = Vector3(*state.direction)
+    msg.grab_strength = state.grab_strength
+    msg.pinch_strength = state.pinch_strength
+    msg.confidence = state.confidence
+    msg.finger_extended = list(state.finger_extended)
+    msg.finger_tips = [Point(*(x * MM for x in tip)) for tip in state.finger_tips]
+    for name in ('fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'origin_set',
+                 'rotate', 'turn', 'swing'):
+        setattr(msg, name, getattr(state, name))
+    return msg
+
+
+def to_gesture_events(state, frame_id=LEAP_FRAME):
+    """One GestureEvent message per event this frame produced."""
+    out = []
+    for event in state.events:
+        msg = _header(GestureEvent(), state, frame_id)
+        msg.side = SIDE_CODES[state.side]
+        msg.gesture = event.gesture
+        msg.active = event.active
+        msg.value = event.value
+        out.append(msg)
+    return out

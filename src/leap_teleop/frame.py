@@ -1,0 +1,65 @@
+"""SDK-independent hand frames: what every hand source yields.
+
+Units and axes are the Leap Motion's: millimetres, right-handed, origin at the
+device, +x to the user's right, +y up, +z toward the user.
+"""
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+FINGER_NAMES = ('thumb', 'index', 'middle', 'ring', 'pinky')
+SIDES = ('right', 'left')
+
+
+def vec3(values=None):
+    """A float (3,) array; None -> zeros."""
+    if values is None:
+        return np.zeros(3)
+    return np.asarray(values, dtype=float).reshape(3)
+
+
+@dataclass
+class Finger:
+    """One finger. Joint positions are optional; sources fill what they have."""
+    tip: np.ndarray = field(default_factory=vec3)          # mm
+    direction: np.ndarray = field(default_factory=vec3)    # unit, tip direction
+    extended: Optional[bool] = None                         # the SDK's flag, None when absent
+    mcp: Optional[np.ndarray] = None                        # knuckle, mm
+    pip: Optional[np.ndarray] = None                        # mm
+    dip: Optional[np.ndarray] = None                        # mm
+
+
+@dataclass
+class Hand:
+    side: str                                               # 'right' | 'left'
+    palm_position: np.ndarray = field(default_factory=vec3)  # mm
+    palm_velocity: np.ndarray = field(default_factory=vec3)  # mm/s
+    palm_normal: np.ndarray = field(default_factory=lambda: vec3((0.0, -1.0, 0.0)))
+    direction: np.ndarray = field(default_factory=lambda: vec3((0.0, 0.0, -1.0)))
+    grab_strength: float = 0.0                              # 0..1
+    pinch_strength: float = 0.0                             # 0..1
+    confidence: float = 1.0                                 # 0..1
+    fingers: Tuple[Finger, ...] = ()                        # FINGER_NAMES order, 5 or none
+    id: int = 0
+
+    def finger(self, name):
+        i = FINGER_NAMES.index(name)
+        return self.fingers[i] if len(self.fingers) > i else None
+
+
+@dataclass
+class Frame:
+    """One tracking frame. timestamp: capture time in seconds on the source's clock
+    (wall time for live and scripted sources, recorded time for recordings)."""
+    id: int
+    timestamp: float
+    hands: List[Hand] = field(default_factory=list)
+    gestures: List[dict] = field(default_factory=list)      # SDK gesture events, if any
+
+    def hand(self, side):
+        """The first hand of that side, or None."""
+        for h in self.hands:
+            if h.side == side:
+                return h
+        return None

@@ -1,0 +1,247 @@
+"""The Leap listener: frames in, a thread-safe per-hand snapshot and gestures out.
+
+Mirrors the original leap_interface.py API (``li.get_right_hand_palmpos()`` ...), but:
+frames arrive from any HandSource on the interface's own thread, both hands are
+swapped in under one lock (no torn reads), every flag is cleared when a hand leaves,
+and listeners are called once per frame instead of being polled.
+"""
+import logging
+import math
+import threading
+from dataclasses import dataclass, field, replace
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from .frame import SIDES
+from .gestures import GestureEvent, GestureRecognizer
+
+log = logging.getLogger(__name__)
+
+# Rotation since the origin: (dead band low, high) in rad, per DESIGN.md section 3.
+DEAD_BANDS = {'rotate': (-0.40, 0.40), 'turn': (-0.15, 0.35), 'swing': (-0.05, 0.45)}
+MAX_PALM_MM = 2000.0     # beyond this a palm position is a tracking error, not a hand
+
+
+def dead_band(angle, low, high):
+    """angle minus the crossed bound; 0 inside [low, high]."""
+    if angle > high:
+        return angle - high
+    if angle < low:
+        return angle - low
+    return 0.0
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def hand_angles(normal, direction):
+    """(roll, yaw, pitch) as the Leap SDK defines them: about z, y, x."""
+    roll = math.atan2(normal[0], -normal[1])
+    yaw = math.atan2(direction[0], -direction[2])
+    pitch = math.atan2(direction[1], -direction[2])
+    return roll, yaw, pitch
+
+
+@dataclass(frozen=True)
+class HandState:
+    """Everything known about one hand after one frame. Immutable: share freely."""
+    side: str
+    present: bool = False
+    timestamp: float = 0.0
+    frame_id: int = 0
+    palm_position: Tuple[float, float, float] = (0.0, 0.0, 0.0)   # mm, Leap axes
+    palm_velocity: Tuple[float, float, float] = (0.0, 0.0, 0.0)   # mm/s
+    palm_normal: Tuple[float, float, float] = (0.0, 0.0, 0.0)
+    direction: Tuple[float, float, float] = (0.0, 0.0, 0.0)
+    grab_strength: float = 0.0
+    pinch_strength: float = 0.0
+    confidence: float = 0.0
+    finger_extended: Tuple[bool, ...] = (False,) * 5
+    finger_tips: Tuple[Tuple[float, float, float], ...] = ((0.0, 0.0, 0.0),) * 5   # mm
+    fist: bool = False
+    thumb_up: bool = False
+    pinch: bool = False
+    pinch_value: float = 0.0
+    rock: bool = False
+    open: bool = False
+    origin_set: bool = False
+    origin_palm: Tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotate: float = 0.0
+    turn: float = 0.0
+    swing: float = 0.0
+    events: Tuple[GestureEvent, ...] = ()
+
+
+def _finite_tuple(v, limit=None):
+    a = np.asarray(v, dtype=float).reshape(3)
+    if not np.all(np.isfinite(a)) or (limit is not None and np.any(np.abs(a) > limit)):
+        return None
+    return tuple(float(x) for x in a)
+
+
+def _unit_interval(x):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return 0.0
+    return min(max(x, 0.0), 1.0) if math.isfinite(x) else 0.0
+
+
+class HandTracker:
+    """State of one side across frames: gestures, origin, rotation since origin."""
+
+    def __init__(self, side, recognizer=None):
+        self.side = side
+        self.recognizer = recognizer or GestureRecognizer()
+        self.state = HandState(side)
+        self._origin_angles = None
+        self.rejected_frames = 0
+
+    def _lost(self, timestamp, frame_id):
+        was_present = self.state.present
+        self.recognizer.reset()
+        self._origin_angles = None
+        events = (GestureEvent('hand_lost'),) if was_present else ()
+        self.state = HandState(self.side, timestamp=timestamp, frame_id=frame_id, events=events)
+        return self.state
+
+    def update(self, hand, timestamp, frame_id):
+        """Advance with this frame's hand of our side (None when absent)."""
+        if hand is None:
+            return self._lost(timestamp, frame_id)
+        palm = _finite_tuple(hand.palm_position, MAX_PALM_MM)
+        normal = _finite_tuple(hand.palm_normal)
+        direction = _finite_tuple(hand.direction)
+        if palm is None or normal is None or direction is None:
+            # A hand we cannot place is treated as gone: consumers hold still.
+            self.rejected_frames += 1
+            if self.rejected_frames in (1, 10, 100) or self.rejected_frames % 1000 == 0:
+                log.warning('%s hand: rejected %d frame(s) with a non-finite or out-of-range '
+                            'palm (|p| > %g mm)', self.side, self.rejected_frames, MAX_PALM_MM)
+            return self._lost(timestamp, frame_id)
+        was_present = self.state.present
+        g = self.recognizer.update(hand, timestamp)
+        events = list(g.events)
+        if not was_present:
+            events.insert(0, GestureEvent('hand_found'))
+
+        angles = hand_angles(normal, direction)
+        if g.rock:
+            self._origin_angles = angles
+            origin_palm = palm
+        else:
+            origin_palm = self.state.origin_palm
+        rotation = {'rotate': 0.0, 'turn': 0.0, 'swing': 0.0}
+        if self._origin_angles is not None:
+            for key, now, ref in zip(('rotate', 'turn', 'swing'), angles, self._origin_angles):
+                rotation[key] = dead_band(_wrap(now - ref), *DEAD_BANDS[key])
+        tips = tuple((_finite_tuple(f.tip) or (0.0, 0.0, 0.0)) for f in hand.fingers[:5])
+        tips = tips + ((0.0, 0.0, 0.0),) * (5 - len(tips))
+        velocity = _finite_tuple(hand.palm_velocity) or (0.0, 0.0, 0.0)
+        self.state = HandState(
+            side=self.side, present=True, timestamp=timestamp, frame_id=frame_id,
+            palm_position=palm, palm_velocity=velocity, palm_normal=normal,
+            direction=direction, grab_strength=_unit_interval(hand.grab_strength),
+            pinch_strength=_unit_interval(hand.pinch_strength),
+            confidence=_unit_interval(hand.confidence),
+            finger_extended=tuple(bool(x) for x in g.finger_extended), finger_tips=tips,
+            fist=g.fist, thumb_up=g.thumb_up, pinch=g.pinch,
+            pinch_value=min(max(float(g.pinch_value), 0.0), 0.8) if g.pinch else 0.0,
+            rock=g.rock, open=g.open, origin_set=self._origin_angles is not None,
+            origin_palm=origin_palm, events=tuple(events), **rotation)
+        return self.state
+
+
+class LeapInterface:
+    """Listener over a HandSource. Call start() to run the source on a thread, or
+    feed frames yourself with on_frame(frame)."""
+
+    def __init__(self, source=None, recognizer_factory=GestureRecognizer, sides=SIDES):
+        self.source = source
+        self._trackers = {side: HandTracker(side, recognizer_factory()) for side in sides}
+        self._lock = threading.Lock()
+        self._states = {side: HandState(side) for side in sides}
+        self._listeners = []
+        self._thread = None
+        self.frames_seen = 0
+        self.error = None
+        self.finished = threading.Event()
+
+    # -- listener side -------------------------------------------------------------
+    def add_listener(self, callback):
+        """callback(frame, states) runs on the source thread once per frame;
+        states maps side -> HandState. Keep it short."""
+        self._listeners.append(callback)
+
+    def on_frame(self, frame):
+        states = {side: tracker.update(frame.hand(side), frame.timestamp, frame.id)
+                  for side, tracker in self._trackers.items()}
+        with self._lock:
+            self._states = states
+            self.frames_seen += 1
+        for callback in self._listeners:
+            callback(frame, states)
+        return states
+
+    def start(self):
+        if self.source is None:
+            raise RuntimeError('LeapInterface.start() needs a source')
+        self._thread = threading.Thread(target=self._run, name='leap_interface', daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self):
+        try:
+            for frame in self.source.frames():
+                self.on_frame(frame)
+        except Exception as e:   # reported to the owner, who decides what to do
+            log.exception('hand source failed: %s', e)
+            self.error = e
+        finally:
+            self.finished.set()
+
+    def stop(self, timeout=2.0):
+        if self.source is not None:
+            self.source.stop()
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    # -- getters ------------------------------------------------------------------
+    def snapshot(self, side=None):
+        """The latest HandState of `side`, or a dict of both (one consistent frame)."""
+        with self._lock:
+            states = self._states
+        return states if side is None else states[side]
+
+    def get_is_right_hand(self):
+        return self.snapshot('right').present
+
+    def get_is_left_hand(self):
+        return self.snapshot('left').present
+
+
+# The original getters, for both hands from one table: get_<side>_hand_<name>().
+_GETTERS = {
+    'palmpos': 'palm_position', 'fist': 'fist', 'thumb_up': 'thumb_up', 'pinch': 'pinch',
+    'pinch_value': 'pinch_value', 'origin_frame': 'origin_set',
+    'set_origin_frame_detected': 'rock', 'rotate_value': 'rotate', 'turn_value': 'turn',
+    'swing_value': 'swing', 'normal': 'palm_normal', 'direction': 'direction',
+    'velocity': 'palm_velocity', 'grab_strength': 'grab_strength',
+    'pinch_strength': 'pinch_strength', 'open': 'open', 'state': None,
+}
+
+
+def _make_getter(side, attr):
+    def getter(self):
+        state = self.snapshot(side)
+        return state if attr is None else getattr(state, attr)
+    getter.__name__ = 'get_%s_hand_%s' % (side, attr or 'state')
+    getter.__doc__ = 'The %s hand\'s %s from the latest frame.' % (side, attr or 'HandState')
+    return getter
+
+
+for _side in SIDES:
+    for _name, _attr in _GETTERS.items():
+        setattr(LeapInterface, 'get_%s_hand_%s' % (_side, _name), _make_getter(_side, _attr))

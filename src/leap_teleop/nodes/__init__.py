@@ -1,0 +1,1 @@
+"""Thin ROS adapters: each module has a main() that scripts/ calls."""

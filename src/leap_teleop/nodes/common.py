@@ -1,0 +1,55 @@
+"""What every node shares: a parameter table that is both read and shown by --help."""
+import sys
+import textwrap
+
+import rospkg
+import rospy
+
+
+class Param:
+    def __init__(self, default, doc):
+        self.default = default
+        self.doc = doc
+
+
+def handle_help(node_name, description, params, argv=None):
+    """Print the node's private parameters and exit when --help / -h is given."""
+    argv = rospy.myargv(argv if argv is not None else sys.argv)
+    if '-h' not in argv and '--help' not in argv:
+        return
+    print('usage: rosrun leap_teleop %s [_param:=value ...] [topic:=remapped ...]\n' % node_name)
+    print(textwrap.fill(description, 88) + '\n')
+    print('private parameters (~name, default):')
+    for name, p in params.items():
+        print('  ~%-22s %-28r %s' % (name, p.default, p.doc))
+    sys.exit(0)
+
+
+def read_params(params):
+    """A dict of every ~param, defaults from the table."""
+    return {name: rospy.get_param('~' + name, p.default) for name, p in params.items()}
+
+
+def package_path(*parts):
+    """A path inside this package (config files, scripts)."""
+    import os
+    return os.path.join(rospkg.RosPack().get_path('leap_teleop'), *parts)
+
+
+class RateLimitedLog:
+    """Warn at most once per period per key, with a count of what was suppressed."""
+
+    def __init__(self, period=2.0):
+        self.period = period
+        self._last = {}
+        self._suppressed = {}
+
+    def warn(self, key, fmt, *args):
+        now = rospy.get_time() if rospy.core.is_initialized() else 0.0
+        last = self._last.get(key)
+        if last is not None and 0.0 <= now - last < self.period:
+            self._suppressed[key] = self._suppressed.get(key, 0) + 1
+            return
+        n = self._suppressed.pop(key, 0)
+        self._last[key] = now
+        rospy.logwarn(fmt + (' (%d similar suppressed)' % n if n else ''), *args)

@@ -1,0 +1,131 @@
+"""sender: hand source -> LeapInterface -> leapcobot / Hand / GestureEvent topics.
+
+Publishes once per source frame from the source's thread (event-driven; no polling).
+"""
+import threading
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import TransformStamped
+
+from leap_teleop import conversions
+from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.msg import GestureEvent, Hand
+from leap_teleop.nodes.common import Param, handle_help, package_path, read_params
+from leap_teleop.sources import SourceError, make_source
+
+PARAMS = {
+    'source': Param('scripted', 'hand source: scripted, recording, leap, leapc'),
+    'script': Param('', 'gesture script YAML for the scripted source '
+                        '(default config/gestures/demo_pick_place_dual.yaml)'),
+    'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source'),
+    'rate': Param(0.0, 'scripted source frame rate in Hz; 0 = the script\'s own'),
+    'loop': Param(False, 'restart the script / recording when it ends'),
+    'realtime': Param(True, 'pace frames at their recorded / scripted timing'),
+    'freq': Param(0.0, 'the original sender\'s period in s; > 0 throttles publishing to at '
+                       'most one frame per period; 0 = every frame'),
+    'sides': Param(['right', 'left'], 'hands to publish'),
+    'leapcobot_topic_right': Param('leapmotion/data_right', 'leapcobotright topic'),
+    'leapcobot_topic_left': Param('leapmotion/data_left', 'leapcobotleft topic'),
+    'hand_topic_right': Param('leapmotion/hand_right', 'rich Hand topic, right'),
+    'hand_topic_left': Param('leapmotion/hand_left', 'rich Hand topic, left'),
+    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic (both hands)'),
+    'frame_id': Param('leap_hands', 'frame of the hand messages'),
+    'world_frame': Param('world', 'parent frame of the static TF to frame_id'),
+    'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame, m'),
+    'shutdown_on_end': Param(True, 'shut the node down when a finite source ends'),
+    'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)'),
+}
+# Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
+LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
+
+
+def build_source(p):
+    name = p['source']
+    if name == 'scripted':
+        script = p['script'] or package_path('config', 'gestures', 'demo_pick_place_dual.yaml')
+        return make_source('scripted', script=script, rate_hz=p['rate'] or None,
+                           loop=p['loop'], realtime=p['realtime'], clock=rospy.get_time)
+    if name == 'recording':
+        if not p['recording']:
+            raise SourceError('~source recording needs ~recording:=PATH to a LeapJS file')
+        return make_source('recording', path=p['recording'], loop=p['loop'],
+                           realtime=p['realtime'], clock=rospy.get_time)
+    return make_source(name)
+
+
+class Sender:
+    def __init__(self, p, interface):
+        self.p = p
+        self.sides = list(p['sides'])
+        q = int(p['queue_size'])
+        self.leapcobot_pubs = {
+            side: rospy.Publisher(p['leapcobot_topic_' + side],
+                                  conversions.LEAPCOBOT_TYPES[side], queue_size=q)
+            for side in self.sides}
+        self.hand_pubs = {side: rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q)
+                          for side in self.sides}
+        self.gesture_pub = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
+        self.period = float(p['freq'])
+        self._last_sent = None
+        self.published = 0
+        interface.add_listener(self.on_frame)
+
+    def on_frame(self, frame, states):
+        if self.period > 0:
+            if self._last_sent is not None and frame.timestamp - self._last_sent < self.period:
+                return
+            self._last_sent = frame.timestamp
+        frame_id = self.p['frame_id']
+        for side in self.sides:
+            state = states[side]
+            self.leapcobot_pubs[side].publish(conversions.to_leapcobot(state, frame_id))
+            self.hand_pubs[side].publish(conversions.to_hand(state, frame_id))
+            for event in conversions.to_gesture_events(state, frame_id):
+                self.gesture_pub.publish(event)
+        self.published += 1
+
+
+def publish_leap_tf(p):
+    broadcaster = tf2_ros.StaticTransformBroadcaster()
+    t = TransformStamped()
+    t.header.stamp = rospy.Time.now()
+    t.header.frame_id = p['world_frame']
+    t.child_frame_id = p['frame_id']
+    t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = p['leap_xyz']
+    r = t.transform.rotation
+    r.x, r.y, r.z, r.w = LEAP_IN_WORLD_XYZW
+    broadcaster.sendTransform(t)
+    return broadcaster
+
+
+def main(argv=None):
+    handle_help('sender.py', __doc__, PARAMS, argv)
+    rospy.init_node('leap_sender')
+    p = read_params(PARAMS)
+    try:
+        source = build_source(p)
+    except SourceError as e:
+        rospy.logfatal('sender: %s', e)
+        raise SystemExit(1)
+    interface = LeapInterface(source, sides=list(p['sides']))
+    sender = Sender(p, interface)
+    tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)
+    rospy.loginfo('sender: publishing %s hands from the %s source on %s',
+                  '/'.join(sender.sides), p['source'],
+                  ', '.join(pub.resolved_name for pub in sender.leapcobot_pubs.values()))
+    rospy.on_shutdown(interface.stop)
+    interface.start()
+    while not rospy.is_shutdown() and not interface.finished.wait(0.2):
+        pass
+    if interface.error is not None:
+        rospy.logerr('sender: the hand source failed: %s', interface.error)
+    if interface.finished.is_set() and not rospy.is_shutdown():
+        rospy.loginfo('sender: source ended after %d frames', interface.frames_seen)
+        if p['shutdown_on_end']:
+            rospy.sleep(0.5)   # let subscribers drain the last frames
+            rospy.signal_shutdown('source ended')
+        else:
+            rospy.spin()
+    if interface.error is not None:
+        raise SystemExit(2)

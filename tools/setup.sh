@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Installs what is missing (Debian packages, the venv, pip packages) and builds the
+# catkin workspace in .ws/. Idempotent: a second run installs and rebuilds nothing new.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+say() { printf '[setup] %s\n' "$*"; }
+
+# 1. Debian packages (ROS 1 from Debian's own archive).
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+mapfile -t wanted < <(grep -vE '^\s*(#|$)' tools/debian-packages.txt)
+missing=()
+for p in "${wanted[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  say "installing ${#missing[@]} Debian packages: ${missing[*]}"
+  "${sudo_cmd[@]}" apt-get update -q
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+else
+  say "Debian packages: all ${#wanted[@]} present"
+fi
+
+# 2. The venv: Debian's python (the one rospy is built for) with system site-packages.
+if [ ! -x .venv/bin/python ]; then
+  say "creating .venv from /usr/bin/python3"
+  /usr/bin/python3 -m venv --system-site-packages .venv
+fi
+req_hash=$(sha256sum tools/requirements.txt | cut -d' ' -f1)
+if [ "$(cat .venv/.requirements.sha256 2>/dev/null)" != "$req_hash" ]; then
+  say "installing pinned pip packages (tools/requirements.txt) into .venv"
+  .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt
+  echo "$req_hash" > .venv/.requirements.sha256
+else
+  say "pip packages: up to date"
+fi
+
+# 3. Out-of-tree catkin workspace: .ws/src/leap_teleop -> this repository.
+mkdir -p .ws/src
+[ -L .ws/src/leap_teleop ] || ln -sfn "$root" .ws/src/leap_teleop
+say "building the catkin workspace in .ws/"
+(
+  set +u
+  source /opt/ros/*/setup.bash 2>/dev/null || true
+  cd .ws
+  catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON \
+    > build.log 2>&1 || { tail -40 build.log; echo "[setup] catkin_make failed; full log in .ws/build.log" >&2; exit 1; }
+)
+say "ready: run commands with ./env.sh CMD, or 'source env.sh'"
