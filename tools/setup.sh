@@ -30,7 +30,10 @@ fi
 req_hash=$(sha256sum tools/requirements.txt | cut -d' ' -f1)
 if [ "$(cat .venv/.requirements.sha256 2>/dev/null)" != "$req_hash" ]; then
   say "installing pinned pip packages (tools/requirements.txt) into .venv"
-  .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt
+  .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt 2>&1 \
+    | grep -v "is ignored: it is neither a file nor a directory" || true
+  .venv/bin/python -c "import pybullet, numpy, lzstring, yaml, hypothesis, pytest" >/dev/null 2>&1 \
+    || { echo "[setup] pip install failed (see above)" >&2; exit 1; }
   echo "$req_hash" > .venv/.requirements.sha256
 else
   say "pip packages: up to date"
@@ -44,6 +47,8 @@ say "building the catkin workspace in .ws/"
   set +u
   source /opt/ros/*/setup.bash 2>/dev/null || true
   cd .ws
+  exec 9>.build.lock
+  flock 9   # concurrent set-ups (parallel shells, helpers) build one at a time
   catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON \
     > build.log 2>&1 || { tail -40 build.log; echo "[setup] catkin_make failed; full log in .ws/build.log" >&2; exit 1; }
 )

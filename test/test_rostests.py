@@ -1,0 +1,23 @@
+"""Runs every rostest (.test file in this folder) under its own private master."""
+import glob
+import os
+import subprocess
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
+TIMEOUT_S = 300
+
+
+@pytest.mark.rostest
+@pytest.mark.parametrize('test_file', TESTS, ids=[os.path.basename(t) for t in TESTS])
+def test_rostest(test_file, tmp_path):
+    env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log'))
+    proc = subprocess.run(
+        ['rostest', '--text', '--results-base-dir', str(tmp_path / 'results'), test_file],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=TIMEOUT_S)
+    output = proc.stdout.decode(errors='replace')
+    assert proc.returncode == 0, 'rostest %s failed:\n%s' % (os.path.basename(test_file),
+                                                           output[-8000:])
+    assert 'SUMMARY' in output and '* RESULT: SUCCESS' in output, output[-8000:]
