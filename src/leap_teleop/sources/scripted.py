@@ -16,7 +16,8 @@ Script format (all keys but `hands` optional)::
       left: [...]
 
 A segment holds `pose` for `duration` seconds while the palm moves from where the
-previous segment ended to `palm` (mm, Leap axes) and the orientation to `rpy`.
+previous segment ended to `palm` (mm, Leap axes) and the orientation to `rpy`; a hand
+that appears (first segment, or after `absent`) appears at its `palm` and `rpy`.
 `circle` moves the palm once round a horizontal circle of `radius` mm instead.
 A hand whose segments are over is absent. Poses: absent and hand_model.POSES.
 """
@@ -98,10 +99,12 @@ class GestureScript:
             if not (0 < seg.duration < 1e6):
                 raise SourceError('%s: duration must be > 0 s, got %r' % (here, raw.get('duration')))
             seg.start = t
-            seg.palm0 = palm
             seg.palm1 = _vector(raw['palm'], here + '.palm') if 'palm' in raw else palm
-            seg.rpy0 = rpy
             seg.rpy1 = np.radians(_vector(raw['rpy'], here + '.rpy')) if 'rpy' in raw else rpy
+            # A hand that (re)appears does so at its waypoint; otherwise it moves there.
+            appears = not out or out[-1].pose == 'absent'
+            seg.palm0 = seg.palm1 if appears else palm
+            seg.rpy0 = seg.rpy1 if appears else rpy
             seg.value = float(raw.get('value', 0.5))
             if not (0.0 <= seg.value <= 0.8):
                 raise SourceError('%s: pinch value must be in [0, 0.8], got %r' % (here, seg.value))

@@ -1,0 +1,150 @@
+"""LeapInterface: getters, reset on hand loss, origin / rotation, thread safety."""
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from leap_teleop.frame import Frame
+from leap_teleop.hand_model import render_hand, rpy_to_basis
+from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface, dead_band
+from leap_teleop.sources.base import HandSource
+
+
+def frame(i, *hands):
+    return Frame(id=i, timestamp=100.0 + i * 0.01, hands=list(hands))
+
+
+def test_getters_exist_for_both_sides_and_read_the_latest_frame():
+    li = LeapInterface()
+    li.on_frame(frame(1, render_hand('right', 'fist', [10, 200, 5]),
+                      render_hand('left', 'open', [-10, 180, 0])))
+    assert li.get_is_right_hand() and li.get_is_left_hand()
+    assert li.get_right_hand_palmpos() == (10.0, 200.0, 5.0)
+    assert li.get_left_hand_palmpos() == (-10.0, 180.0, 0.0)
+    assert li.get_right_hand_fist() and not li.get_left_hand_fist()
+    for side in ('right', 'left'):
+        for name in ('thumb_up', 'pinch', 'pinch_value', 'origin_frame',
+                     'set_origin_frame_detected', 'rotate_value', 'turn_value', 'swing_value'):
+            getattr(li, 'get_%s_hand_%s' % (side, name))()
+
+
+def test_every_flag_clears_when_the_hand_leaves():
+    li = LeapInterface()
+    li.on_frame(frame(1, render_hand('right', 'rock', [0, 200, 0])))
+    li.on_frame(frame(2, render_hand('right', 'pinch', [5, 200, 0], pinch_value=0.5)))
+    state = li.get_right_hand_state()
+    assert state.origin_set and state.pinch and state.pinch_value == pytest.approx(0.5)
+    li.on_frame(frame(3))
+    state = li.get_right_hand_state()
+    assert not state.present
+    assert not (state.fist or state.thumb_up or state.pinch or state.rock or state.open
+                or state.origin_set)
+    assert state.pinch_value == state.rotate == state.turn == state.swing == 0.0
+    assert state.palm_position == (0.0, 0.0, 0.0)
+    assert [e.gesture for e in state.events] == ['hand_lost']
+    # Back again: the origin must be set anew.
+    li.on_frame(frame(4, render_hand('right', 'open', [0, 200, 0])))
+    assert not li.get_right_hand_origin_frame()
+    assert 'hand_found' in [e.gesture for e in li.get_right_hand_state().events]
+
+
+def test_rotation_since_origin_applies_the_dead_bands():
+    li = LeapInterface()
+    li.on_frame(frame(1, render_hand('right', 'rock', [0, 200, 0])))
+    normal, direction = rpy_to_basis(0.0, 0.0, math.radians(40), 'right')   # yaw 40 deg
+    li.on_frame(frame(2, render_hand('right', 'open', [0, 200, 0], normal, direction)))
+    assert li.get_right_hand_turn_value() == pytest.approx(math.radians(40) - 0.35, abs=1e-6)
+    assert li.get_right_hand_rotate_value() == pytest.approx(0.0, abs=1e-6)
+    normal, direction = rpy_to_basis(math.radians(-20), 0.0, 0.0, "right")  # roll -20 deg
+    li.on_frame(frame(3, render_hand('right', 'open', [0, 200, 0], normal, direction)))
+    assert li.get_right_hand_rotate_value() == pytest.approx(0.0, abs=1e-6)   # inside +-0.40
+    normal, direction = rpy_to_basis(math.radians(-60), 0.0, 0.0, 'right')
+    li.on_frame(frame(4, render_hand('right', 'open', [0, 200, 0], normal, direction)))
+    assert abs(li.get_right_hand_rotate_value()) == pytest.approx(math.radians(60) - 0.40, abs=1e-6)
+
+
+@pytest.mark.parametrize('angle, expected', [(0.3, 0.0), (0.5, 0.05), (-0.1, -0.05), (0.0, 0.0)])
+def test_dead_band_swing(angle, expected):
+    assert dead_band(angle, *DEAD_BANDS['swing']) == pytest.approx(expected)
+
+
+@pytest.mark.parametrize('palm', [[float('nan'), 200, 0], [0, float('inf'), 0], [1e9, 0, 0]])
+def test_unplaceable_hands_are_treated_as_absent(palm):
+    li = LeapInterface()
+    li.on_frame(frame(1, render_hand('right', 'fist', [0, 200, 0])))
+    hand = render_hand('right', 'fist', [0, 200, 0])
+    hand.palm_position = np.array(palm, dtype=float)
+    li.on_frame(frame(2, hand))
+    state = li.get_right_hand_state()
+    assert not state.present and not state.fist
+
+
+def test_out_of_range_strengths_are_clamped():
+    li = LeapInterface()
+    hand = render_hand('right', 'open', [0, 200, 0])
+    hand.grab_strength, hand.pinch_strength, hand.confidence = 7.0, float('nan'), -3.0
+    li.on_frame(frame(1, hand))
+    s = li.get_right_hand_state()
+    assert (s.grab_strength, s.pinch_strength, s.confidence) == (1.0, 0.0, 0.0)
+    assert 0.0 <= s.pinch_value <= 0.8
+
+
+class _CountingSource(HandSource):
+    """Frame i puts both palms at x = i / 2, so a torn read shows as a mismatch."""
+
+    def __init__(self, n):
+        self.n = n
+
+    def frames(self):
+        for i in range(1, self.n + 1):
+            if self.stopped:
+                return
+            yield frame(i, render_hand('right', 'open', [i / 2, 200, 0]),
+                        render_hand('left', 'fist', [i / 2, 150, 0]))
+
+
+def test_snapshots_are_consistent_under_a_concurrent_writer():
+    li = LeapInterface(_CountingSource(2000))
+    errors, reads = [], [0]
+
+    def reader():
+        last = 0
+        while not li.finished.is_set():
+            both = li.snapshot()
+            right, left = both['right'], both['left']
+            if right.present:
+                if not (right.frame_id == left.frame_id == 2 * right.palm_position[0]
+                        == 2 * left.palm_position[0]):
+                    errors.append((right.frame_id, left.frame_id, right.palm_position))
+                if right.frame_id < last:
+                    errors.append(('went back', last, right.frame_id))
+                last = right.frame_id
+            reads[0] += 1
+            time.sleep(0)   # let the writer run
+
+    readers = [threading.Thread(target=reader) for _ in range(3)]
+    for t in readers:
+        t.start()
+    li.start()
+    li.finished.wait(30)
+    for t in readers:
+        t.join(5)
+    assert li.error is None and li.frames_seen == 2000
+    assert reads[0] > 100 and not errors, errors[:5]
+
+
+def test_listeners_get_every_frame_in_order_and_source_errors_are_reported():
+    class Broken(HandSource):
+        def frames(self):
+            yield frame(1)
+            raise ValueError('device unplugged')
+
+    li = LeapInterface(Broken())
+    seen = []
+    li.add_listener(lambda f, states: seen.append((f.id, sorted(states))))
+    li.start()
+    assert li.finished.wait(5)
+    assert seen == [(1, ['left', 'right'])]
+    assert isinstance(li.error, ValueError)

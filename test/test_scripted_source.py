@@ -1,0 +1,122 @@
+"""Scripted gesture source: validation, shapes, timing."""
+import time
+
+import numpy as np
+import pytest
+
+from leap_teleop.frame import FINGER_NAMES
+from leap_teleop.sources import SourceError, make_source
+from leap_teleop.sources.scripted import GestureScript, ScriptedSource
+
+SCRIPT = {
+    'rate_hz': 100,
+    'hands': {
+        'right': [
+            {'pose': 'absent', 'duration': 0.2},
+            {'pose': 'open', 'palm': [0, 200, 0], 'duration': 0.5},
+            {'pose': 'open', 'palm': [100, 200, 0], 'duration': 1.0},
+            {'pose': 'pinch', 'value': 0.5, 'duration': 0.3},
+        ],
+        'left': [{'pose': 'fist', 'palm': [-50, 150, 10], 'duration': 1.0}],
+    },
+}
+
+
+def frames(script=SCRIPT, **kw):
+    kw.setdefault('realtime', False)
+    return list(ScriptedSource(GestureScript(script), **kw).frames())
+
+
+def test_frame_count_ids_and_timestamps():
+    out = frames(clock=lambda: 1000.0)
+    assert len(out) == 200                                # 2.0 s at 100 Hz
+    assert [f.id for f in out] == list(range(1, 201))
+    np.testing.assert_allclose(np.diff([f.timestamp for f in out]), 0.01, atol=1e-9)
+    assert out[0].timestamp == pytest.approx(1000.0)
+
+
+def test_hand_presence_and_shapes_follow_the_script():
+    out = frames()
+    assert out[0].hand('right') is None and out[0].hand('left') is not None
+    right = out[20].hand('right')
+    assert right.side == 'right' and len(right.fingers) == len(FINGER_NAMES)
+    for finger in right.fingers:
+        assert finger.tip.shape == (3,) and finger.extended is True
+    assert out[150].hand('left') is None                  # left script is over
+    pinch = out[185].hand('right')
+    assert pinch.pinch_strength == pytest.approx(0.7)
+
+
+def test_palm_interpolates_between_waypoints_with_matching_velocity():
+    out = frames()
+    # 0.2 + 0.5 s reach [0, 200, 0]; then 1.0 s to x = 100: halfway at t = 1.2 s
+    hand = out[120].hand('right')
+    np.testing.assert_allclose(hand.palm_position, [50, 200, 0], atol=1e-6)
+    np.testing.assert_allclose(hand.palm_velocity, [100, 0, 0], atol=1e-3)
+
+
+def test_seeded_noise_is_reproducible_and_bounded():
+    a = frames(noise_mm=2.0, seed=7)
+    b = frames(noise_mm=2.0, seed=7)
+    pa = np.array([f.hand('left').palm_position for f in a[:50]])
+    pb = np.array([f.hand('left').palm_position for f in b[:50]])
+    np.testing.assert_array_equal(pa, pb)
+    spread = np.std(pa - [-50, 150, 10], axis=0)
+    assert np.all(spread > 0.5) and np.all(spread < 5.0)
+
+
+def test_realtime_pacing_matches_the_rate():
+    script = {'hands': {'right': [{'pose': 'open', 'duration': 0.5}]}}
+    t0 = time.monotonic()
+    out = list(ScriptedSource(GestureScript(script), rate_hz=200, realtime=True).frames())
+    elapsed = time.monotonic() - t0
+    assert len(out) == 100
+    assert 0.45 < elapsed < 1.0
+
+
+def test_loop_restarts_and_stop_ends_it():
+    src = ScriptedSource(GestureScript({'hands': {'right': [{'pose': 'fist', 'duration': 0.1}]}}),
+                         rate_hz=100, realtime=False, loop=True)
+    got = []
+    for f in src.frames():
+        got.append(f)
+        if len(got) == 35:
+            src.stop()
+    assert len(got) == 35 and all(f.hand('right') is not None for f in got)
+
+
+@pytest.mark.parametrize('bad, message', [
+    ({}, 'hands'),
+    ({'hands': {'middle': []}}, 'unknown hand'),
+    ({'hands': {'right': [{'pose': 'jazz_hands'}]}}, 'unknown pose'),
+    ({'hands': {'right': [{'pose': 'open', 'duration': -1}]}}, 'duration'),
+    ({'hands': {'right': [{'pose': 'open', 'palm': [0, float('nan'), 0]}]}}, 'finite'),
+    ({'hands': {'right': [{'pose': 'open', 'palm': [1, 2]}]}}, 'list of 3'),
+    ({'hands': {'right': [{'pose': 'pinch', 'value': 3}]}}, 'pinch value'),
+    ({'hands': {'right': [{'pose': 'open', 'speed': 3}]}}, 'unknown keys'),
+    ({'rate_hz': 0, 'hands': {}}, 'rate_hz'),
+])
+def test_invalid_scripts_are_rejected_with_a_clear_message(bad, message):
+    with pytest.raises(SourceError, match=message):
+        GestureScript(bad)
+
+
+def test_unreadable_files_and_unknown_sources_fail_clearly(tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('hands: [unclosed')
+    with pytest.raises(SourceError, match='not valid YAML'):
+        GestureScript.load(bad)
+    with pytest.raises(SourceError, match='cannot read'):
+        GestureScript.load(tmp_path / 'missing.yaml')
+    with pytest.raises(SourceError, match='unknown hand source'):
+        make_source('kinect')
+
+
+def test_shipped_scripts_load():
+    import glob
+    import os
+    here = os.path.dirname(os.path.abspath(__file__))
+    scripts = glob.glob(os.path.join(here, '..', 'config', 'gestures', '*.yaml'))
+    assert scripts
+    for path in scripts:
+        assert GestureScript.load(path).duration > 1.0, path
