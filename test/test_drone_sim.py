@@ -1,0 +1,222 @@
+"""ArDroneSim: the driver's cmd_vel semantics, states, flips, limits, battery."""
+import math
+
+import pytest
+
+from leap_teleop.drone import sim as ds
+from leap_teleop.drone.sim import ArDroneSim
+
+
+@pytest.fixture
+def warnings():
+    return []
+
+
+@pytest.fixture
+def drone(warnings):
+    d = ArDroneSim(warn=lambda key, text: warnings.append((key, text)))
+    yield d
+    d.close()
+
+
+def fly(d, timeout=8.0):
+    assert d.takeoff()
+    t0 = d.time
+    while d.state != ds.HOVERING and d.time - t0 < timeout:
+        d.step()
+    assert d.state == ds.HOVERING
+    d.advance(1.0)
+    return d
+
+
+def states(d):
+    return [s for _, s in d.events]
+
+
+def test_takeoff_climbs_to_about_1m_and_hovers(drone):
+    assert drone.state == ds.LANDED and drone.altitude == pytest.approx(0.0, abs=0.01)
+    fly(drone)
+    assert states(drone) == [ds.TAKING_OFF, ds.HOVERING]
+    assert drone.altitude == pytest.approx(1.0, abs=0.1)
+    nav = drone.navdata()
+    assert nav['state'] == ds.HOVERING and abs(nav['altd'] - 1000) < 100
+    assert nav['az'] == pytest.approx(1.0, abs=0.05)       # specific force in g
+
+
+def test_land_sequence_and_motors_off(drone):
+    fly(drone)
+    assert drone.land()
+    drone.advance(6.0)
+    assert states(drone) == [ds.TAKING_OFF, ds.HOVERING, ds.LANDING, ds.LANDED]
+    assert drone.altitude < 0.02 and max(drone.motors) == 0.0
+
+
+def test_commands_that_make_no_sense_are_ignored_with_a_warning(drone, warnings):
+    assert not drone.land()                       # landed already
+    assert not drone.flight_animation(19, 0)      # not flying
+    drone.set_cmd_vel(0.5, 0, 0, 0, 0, 0)        # landed: accepted but does nothing
+    drone.advance(0.5)
+    assert drone.state == ds.LANDED and drone.altitude < 0.01
+    drone.set_cmd_vel()                           # the driver holds the last command
+    fly(drone)
+    assert not drone.takeoff()                    # already flying
+    assert {k for k, _ in warnings} >= {'land', 'anim', 'cmd_vel_landed', 'takeoff'}
+    assert not drone.set_cmd_vel(float('nan'))    # non-finite: rejected, state kept
+    assert drone.state == ds.HOVERING
+
+
+def test_hover_holds_altitude_within_5cm_for_10s(drone):
+    fly(drone)
+    drone.set_cmd_vel(0, 0, 0, 0, 0, 0)
+    a0, x0 = drone.altitude, drone.pos[:2]
+    worst = 0.0
+    for _ in range(int(10.0 / drone.dt)):
+        drone.step()
+        worst = max(worst, abs(drone.altitude - a0))
+    assert worst < 0.05
+    assert math.dist(drone.pos[:2], x0) < 0.05       # auto-hover holds position too
+    assert drone.state == ds.HOVERING
+
+
+def test_linear_x_half_tilts_to_half_euler_angle_max_within_0_3s(drone):
+    fly(drone)
+    target = 0.5 * drone.p.euler_angle_max
+    drone.set_cmd_vel(0.5, 0, 0, 0, 0, 0)
+    drone.advance(0.3)
+    assert drone.pitch == pytest.approx(target, rel=0.1)     # nose down = +pitch
+    assert drone.navdata()['rotY'] == pytest.approx(math.degrees(target), rel=0.1)
+    drone.advance(1.5)
+    assert drone.vel[0] > 0.5 and drone.state == ds.FLYING
+    assert abs(drone.altitude - 1.0) < 0.1                   # tilting does not sink
+
+
+def test_linear_y_left_and_clamping(drone):
+    fly(drone)
+    drone.set_cmd_vel(0, 5.0, 0, 0, 0, 0)            # clamped to 1: full left tilt
+    assert drone.cmd[1] == 1.0
+    drone.advance(0.5)
+    assert drone.roll == pytest.approx(-drone.p.euler_angle_max, rel=0.1)  # left side down
+    drone.advance(1.0)
+    assert drone.vel[1] > 0.5
+
+
+def test_climb_rate_and_altitude_max(drone):
+    drone.p.altitude_max = 1800.0
+    fly(drone)
+    drone.set_cmd_vel(0, 0, 0.5, 0, 0, 0)
+    drone.advance(0.5)
+    assert drone.vel[2] == pytest.approx(0.5 * drone.p.control_vz_max / 1000, rel=0.1)
+    drone.set_cmd_vel(0, 0, 1.0, 0, 0, 0)
+    drone.advance(5.0)
+    assert drone.altitude == pytest.approx(1.8, abs=0.05)   # stops at altitude_max
+    drone.set_cmd_vel(0, 0, -1.0, 0, 0, 0)
+    drone.advance(6.0)
+    assert drone.altitude == pytest.approx(drone.p.altitude_min / 1000, abs=0.03)
+    assert drone.state == ds.FLYING                          # altitude_min is not a landing
+
+
+def test_yaw_rate_positive_is_left(drone):
+    fly(drone)
+    yaw0 = drone.yaw
+    drone.set_cmd_vel(0, 0, 0, 0, 0, 0.5)
+    drone.advance(1.0)
+    assert drone.omega[2] == pytest.approx(0.5 * drone.p.control_yaw, rel=0.1)
+    assert drone.yaw > yaw0                                 # counter-clockwise
+
+
+def test_angular_xy_nonzero_disables_auto_hover(drone):
+    fly(drone)
+    drone.set_cmd_vel(1.0, 0, 0, 0, 0, 0)
+    drone.advance(1.0)
+    drone.set_cmd_vel(0, 0, 0, 0.1, 0.1, 0)      # no tilt, but no auto-hover: coasts
+    drone.advance(1.0)
+    assert drone.state == ds.FLYING and drone.vel[0] > 0.3
+    drone.set_cmd_vel(0, 0, 0, 0, 0, 0)          # auto-hover brakes
+    drone.advance(3.0)
+    assert drone.state == ds.HOVERING and abs(drone.vel[0]) < 0.05
+
+
+@pytest.mark.parametrize('kind', [ds.FLIP_AHEAD, ds.FLIP_BEHIND, ds.FLIP_LEFT, ds.FLIP_RIGHT])
+def test_flip_turns_360_degrees_and_recovers(drone, kind):
+    fly(drone)
+    alt0 = drone.altitude
+    assert drone.flight_animation(kind, 0)
+    assert drone.state == ds.LOOPING
+    axis, sign = ds.FLIP_AXES[kind]
+    turned, inverted = 0.0, False
+    t0 = drone.time
+    while drone.state == ds.LOOPING and drone.time - t0 < 5.0:
+        drone.step()
+        turned += sign * drone.omega[axis] * drone.dt
+        inverted = inverted or drone.R[8] < -0.9            # body z pointed down once
+    assert drone.state != ds.LOOPING, 'flip never finished'
+    assert math.degrees(turned) == pytest.approx(360.0, abs=15.0)
+    assert inverted
+    assert drone.last_flip_min_altitude < alt0 - 0.05          # it loses some height
+    drone.advance(2.0)
+    assert drone.state == ds.HOVERING
+    assert abs(drone.roll) < 0.03 and abs(drone.pitch) < 0.03
+    assert drone.altitude == pytest.approx(alt0, abs=0.1)
+    assert drone.flip_count == 1
+
+
+def test_bad_animation_type_refused_other_types_accepted(drone, warnings):
+    fly(drone)
+    assert not drone.flight_animation(20, 0)
+    assert not drone.flight_animation(-1, 0)
+    assert any('not in 0..19' in text for _, text in warnings)
+    assert drone.flight_animation(6, 2000)                   # turnaround: a full yaw turn
+    yaw_turned = 0.0
+    for _ in range(int(2.0 / drone.dt)):
+        drone.step()
+        yaw_turned += drone.omega[2] * drone.dt
+    assert math.degrees(yaw_turned) == pytest.approx(360.0, abs=40.0)
+    drone.advance(2.0)
+    assert drone.state == ds.HOVERING
+
+
+def test_reset_toggles_emergency(drone):
+    fly(drone)
+    drone.reset()
+    assert drone.state == ds.UNKNOWN and drone.emergency
+    drone.advance(1.5)
+    assert drone.altitude < 0.05 and max(drone.motors) == 0.0   # motors off: it fell
+    assert not drone.takeoff()
+    drone.reset()
+    assert drone.state == ds.LANDED and not drone.emergency
+    assert drone.takeoff()
+
+
+def test_battery_drains_and_empty_battery_lands(drone):
+    drone.p.battery_flight_time = 20.0
+    fly(drone)
+    b = drone.battery
+    drone.advance(2.0)
+    assert drone.battery == pytest.approx(b - 10.0, abs=2.0)
+    drone.advance(30.0)
+    assert drone.battery == 0.0 and drone.state == ds.LANDED
+    assert not drone.takeoff()
+
+
+def test_link_loss_landing_when_enabled(drone):
+    fly(drone)
+    drone.p.link_timeout = 2.0
+    drone.set_cmd_vel(0, 0, 0, 0, 0, 0)
+    drone.advance(1.5)
+    assert drone.state == ds.HOVERING
+    drone.advance(5.0)
+    assert drone.state == ds.LANDED
+
+
+def test_params_validated():
+    with pytest.raises(ValueError):
+        ArDroneSim({'altitude_min': 5000.0})
+    with pytest.raises(ValueError):
+        ArDroneSim({'no_such_param': 1})
+
+
+def test_snapshot_png(drone, tmp_path):
+    fly(drone)
+    img = drone.snapshot(str(tmp_path / 'drone.png'), 160, 120)
+    assert img.shape == (120, 160, 3) and (tmp_path / 'drone.png').stat().st_size > 500
+    assert img.std() > 5        # not a blank frame
