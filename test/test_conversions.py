@@ -1,0 +1,53 @@
+"""HandState -> leapcobot / Hand / GestureEvent messages."""
+import pytest
+
+from leap_teleop import conversions
+from leap_teleop.frame import Frame
+from leap_teleop.hand_model import render_hand
+from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
+
+
+def states(*hands, ts=1234.5):
+    li = LeapInterface()
+    return li.on_frame(Frame(id=42, timestamp=ts, hands=list(hands)))
+
+
+@pytest.mark.parametrize('side, msg_type', [('right', leapcobotright), ('left', leapcobotleft)])
+def test_leapcobot_keeps_original_semantics(side, msg_type):
+    s = states(render_hand(side, 'pinch', [12.5, 210.0, -30.0], pinch_value=0.45))[side]
+    msg = conversions.to_leapcobot(s)
+    assert isinstance(msg, msg_type)
+    assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
+    assert msg.header.frame_id == 'leap_hands'
+    assert getattr(msg, 'is_%s_hand' % side)
+    palm = getattr(msg, '%s_hand_palmpos' % side)
+    assert (palm.x, palm.y, palm.z) == (12.5, 210.0, -30.0)          # Leap mm, as the original
+    assert getattr(msg, '%s_hand_pinch' % side)
+    assert getattr(msg, '%s_hand_pinch_value' % side) == pytest.approx(0.45)
+    back = conversions.from_leapcobot(msg)
+    assert back['side'] == side and back['present'] and back['palmpos'] == (12.5, 210.0, -30.0)
+    assert back['pinch_value'] == pytest.approx(0.45)
+
+
+def test_absent_hand_gives_an_all_clear_leapcobot():
+    msg = conversions.to_leapcobot(states()['left'])
+    assert not msg.is_left_hand and not msg.left_hand_fist and msg.left_hand_pinch_value == 0.0
+
+
+def test_rich_hand_is_in_metres_with_side_and_frame_id():
+    s = states(render_hand('left', 'fist', [100.0, 200.0, 50.0]))['left']
+    msg = conversions.to_hand(s)
+    assert msg.side == Hand.SIDE_LEFT and msg.present and msg.leap_frame_id == 42
+    assert (msg.palm_position.x, msg.palm_position.y, msg.palm_position.z) == pytest.approx(
+        (0.1, 0.2, 0.05))
+    assert msg.fist and not msg.open
+    assert len(msg.finger_tips) == 5 and all(abs(t.y - 0.2) < 0.1 for t in msg.finger_tips)
+
+
+def test_gesture_events_carry_name_side_and_stamp():
+    s = states(render_hand('right', 'fist', [0, 200, 0]), ts=5.0)['right']
+    events = conversions.to_gesture_events(s)
+    names = [e.gesture for e in events]
+    assert names[0] == 'hand_found' and 'fist' in names
+    assert all(e.side == Hand.SIDE_RIGHT and e.header.stamp.to_sec() == 5.0 for e in events)
