@@ -1,0 +1,319 @@
+"""The gesture pilot: hand state + gesture events + navdata in, drone commands out.
+
+Pure logic (no ROS): the node adapter feeds ``on_hand`` / ``on_gesture`` /
+``on_navdata`` from its callbacks (cheap, never blocking) and a worker thread drains
+the command queue with ``pop`` and runs ``watchdog``.
+
+Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
+``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
+``flip_min_altitude``.
+
+Modes:
+
+- ``tilt`` (default): on unfold the palm position and hand yaw become the reference
+  (re-captured when the hand comes back after a loss, so it never jumps). Palm offset
+  beyond ``dead_zone`` maps linearly to a command reaching 1 at ``dead_zone +
+  full_scale``: away from the user (-Leap z) -> forward (linear.x), to the left
+  (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
+  left -> yaw left (angular.z). Clamped to ``max_cmd``; angular.x / y are zero, so a
+  centred hand is the driver's auto-hover.
+- ``paper``: the paper's Algorithm 1, quirks included. With the Leap SDK's angles
+  (pitch = atan2(dir_y, -dir_z), roll = atan2(normal_x, -normal_y)), a frame whose
+  pitch AND roll both exceed +25 degrees (signed, as written) captures init_x = palm z,
+  init_y = palm x (mm); it re-captures on every such frame. Once captured, every frame
+  sends linear.x = -(palm_z - init_x) / 3000, linear.y = -(palm_x - init_y) / 3000,
+  linear.z = palm normal y (about -1 for a flat palm: the paper's drone sinks unless
+  the palm is tilted), angular.x = init_x, angular.y = init_y (raw mm: any non-zero
+  value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
+  Nothing is sent before the first capture.
+
+Safety added in both modes: hand twists are only sent while the drone flies or hovers
+(when navdata is known); hand lost (Hand.present false, a hand_lost event, or no Hand
+message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
+``land_after`` -> land. Commands go through a bounded FIFO: when full, the oldest
+twist is dropped (takeoff / land / flip never are); twists leave at most ``rate`` per
+second, discrete commands at once.
+"""
+import collections
+import math
+import threading
+from dataclasses import dataclass, fields
+
+FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
+AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
+LANDED = 2
+ZERO_TWIST = (0.0,) * 6
+
+
+@dataclass
+class PilotConfig:
+    mode: str = 'tilt'                  # tilt | paper
+    rate: float = 100.0                 # Hz, maximum twist publishing rate
+    queue_size: int = 10
+    flip_type: int = 19                 # FLIP_RIGHT
+    flip_duration: int = 0              # ms, 0 = the firmware's default
+    flip_min_altitude: float = 0.6      # m, no flip below this
+    hand_timeout: float = 0.15          # s without a Hand message = hand lost
+    land_after: float = 3.0             # s of lost hand before landing
+    dead_zone: float = 0.03             # m, palm offset ignored around the reference
+    full_scale: float = 0.10            # m beyond the dead zone for a full command
+    z_dead_zone: float = 0.03           # m, vertical
+    z_full_scale: float = 0.10          # m, vertical
+    yaw_dead_zone: float = 15.0         # deg
+    yaw_full_scale: float = 45.0        # deg
+    max_cmd: float = 1.0                # cap on every tilt-mode component
+    paper_angle: float = 25.0           # deg, Algorithm 1's capture threshold
+    paper_scale: float = 3000.0         # mm per unit command, Algorithm 1
+
+    def update(self, values):
+        known = {f.name for f in fields(self)}
+        for key, value in values.items():
+            if key in known:
+                setattr(self, key, type(getattr(self, key))(value))
+        if self.mode not in ('tilt', 'paper'):
+            raise ValueError('mode must be tilt or paper, got %r' % self.mode)
+        if self.rate <= 0 or self.queue_size < 1:
+            raise ValueError('rate must be > 0 and queue_size >= 1')
+        if self.full_scale <= 0 or self.z_full_scale <= 0 or self.yaw_full_scale <= 0:
+            raise ValueError('full scales must be > 0')
+        if not 0 <= self.flip_type <= 19:
+            raise ValueError('flip_type must be in 0..19')
+        return self
+
+
+@dataclass
+class HandInput:
+    """What the pilot reads from a leap_teleop/Hand message (metres, Leap axes)."""
+    present: bool
+    palm: tuple = (0.0, 0.0, 0.0)
+    normal: tuple = (0.0, -1.0, 0.0)
+    direction: tuple = (0.0, 0.0, -1.0)
+
+
+@dataclass(frozen=True)
+class Command:
+    kind: str                   # twist | takeoff | land | flip
+    twist: tuple = ZERO_TWIST   # (lx, ly, lz, ax, ay, az) for twist
+    anim: tuple = ()            # (type, duration) for flip
+    stamp: float = 0.0          # time of the input that caused it (latency accounting)
+
+
+def leap_angles(normal, direction):
+    """(pitch, roll, yaw) in degrees as the Leap SDK defines them."""
+    pitch = math.degrees(math.atan2(direction[1], -direction[2]))
+    roll = math.degrees(math.atan2(normal[0], -normal[1]))
+    yaw = math.degrees(math.atan2(direction[0], -direction[2]))
+    return pitch, roll, yaw
+
+
+def paper_twist(palm_mm, normal, init_x, init_y, scale=3000.0):
+    """Algorithm 1's twist from a palm (mm) and the captured reference."""
+    return (-(palm_mm[2] - init_x) / scale, -(palm_mm[0] - init_y) / scale, normal[1],
+            init_x, init_y, 0.0)
+
+
+def shaped(offset, dead_zone, full_scale, cap=1.0):
+    """0 inside the dead zone, then linear, reaching `cap` at dead_zone + full_scale."""
+    excess = abs(offset) - dead_zone
+    if excess <= 0.0:
+        return 0.0
+    return math.copysign(min(cap, excess / full_scale * cap), offset)
+
+
+class CommandQueue:
+    """Bounded FIFO shared by callbacks (push) and one worker (pop, wait)."""
+
+    def __init__(self, maxsize):
+        self.maxsize = maxsize
+        self._items = collections.deque()
+        self._cond = threading.Condition()
+        self.dropped = 0
+
+    def push(self, cmd):
+        with self._cond:
+            if len(self._items) >= self.maxsize:
+                for i, old in enumerate(self._items):
+                    if old.kind == 'twist':
+                        del self._items[i]
+                        self.dropped += 1
+                        break
+                else:
+                    if cmd.kind == 'twist':
+                        self.dropped += 1
+                        return
+            self._items.append(cmd)
+            self._cond.notify()
+
+    def peek(self):
+        with self._cond:
+            return self._items[0] if self._items else None
+
+    def popleft(self):
+        with self._cond:
+            return self._items.popleft() if self._items else None
+
+    def wait(self, timeout):
+        with self._cond:
+            if not self._items:
+                self._cond.wait(timeout)
+
+    def wake(self):
+        with self._cond:
+            self._cond.notify_all()
+
+    def __len__(self):
+        return len(self._items)
+
+
+class DronePilot:
+    def __init__(self, config=None, warn=None):
+        self.cfg = config or PilotConfig()
+        self._warn = warn or (lambda key, text: None)
+        self.queue = CommandQueue(self.cfg.queue_size)
+        self._lock = threading.Lock()
+        self.drone_state = None          # navdata state, None until known
+        self.altitude = 0.0              # m
+        self.last_hand_time = None
+        self.hand_present = False
+        self.lost_since = None
+        self._landed_for_loss = False
+        self.engaged = False             # tilt: unfold seen, not folded since
+        self.reference = None            # tilt: (palm xyz m, yaw deg)
+        self.paper_ref = None            # paper: (init_x, init_y) mm
+        self._last_hand = None
+        self._last_twist_out = None      # monotonic time of the last twist published
+        self._zero_sent = False
+
+    # -- inputs (callbacks: quick, never block) --------------------------------------
+    def on_navdata(self, state, altd_mm, now=None):
+        with self._lock:
+            self.drone_state = int(state)
+            self.altitude = float(altd_mm) / 1000.0
+
+    def on_hand(self, hand, now):
+        with self._lock:
+            self.last_hand_time = now
+            if not hand.present:
+                self._lose(now)
+                return
+            if not all(math.isfinite(v) for v in tuple(hand.palm) + tuple(hand.normal)
+                       + tuple(hand.direction)):
+                self._warn('hand', 'ignored a Hand with non-finite values')
+                return
+            if not self.hand_present:
+                self.hand_present = True
+                self.lost_since = None
+                self._landed_for_loss = False
+                if self.engaged:
+                    self._capture(hand)        # resume from where the hand came back
+            self._last_hand = hand
+            twist = self._twist(hand)
+            if twist is None:
+                return
+            if self.drone_state is not None and self.drone_state not in FLYING_STATES:
+                return
+            self._zero_sent = all(v == 0.0 for v in twist)
+            self.queue.push(Command('twist', twist, stamp=now))
+
+    def on_gesture(self, name, active, now):
+        with self._lock:
+            state = self.drone_state
+            if name == 'hand_lost':
+                self._lose(now)
+            elif name == 'unfold':
+                if self.cfg.mode == 'tilt':
+                    self.engaged = True
+                    if self._last_hand is not None and self.hand_present:
+                        self._capture(self._last_hand)
+                if state is None or state == LANDED:
+                    self.queue.push(Command('takeoff', stamp=now))
+                else:
+                    self._warn('unfold', 'unfold: no takeoff, the drone is not landed (state %s)'
+                               % state)
+            elif name == 'fold':
+                self.engaged = False
+                self.reference = None
+                if state is None or state in AIRBORNE_STATES:
+                    self.queue.push(Command('land', stamp=now))
+                else:
+                    self._warn('fold', 'fold: no landing, the drone is not flying (state %s)'
+                               % state)
+            elif name in ('circle_cw', 'circle_ccw'):
+                if state in (3, 4) and self.altitude >= self.cfg.flip_min_altitude:
+                    self.queue.push(Command('flip', anim=(self.cfg.flip_type,
+                                                          self.cfg.flip_duration), stamp=now))
+                else:
+                    self._warn('circle', '%s: no flip (state %s, altitude %.2f m < %.2f m or '
+                               'not flying)' % (name, state, self.altitude,
+                                                self.cfg.flip_min_altitude))
+
+    # -- mapping ---------------------------------------------------------------------
+    def _capture(self, hand):
+        self.reference = (tuple(hand.palm), leap_angles(hand.normal, hand.direction)[2])
+
+    def _twist(self, hand):
+        cfg = self.cfg
+        if cfg.mode == 'paper':
+            pitch, roll, _ = leap_angles(hand.normal, hand.direction)
+            palm_mm = tuple(1000.0 * v for v in hand.palm)
+            if pitch > cfg.paper_angle and roll > cfg.paper_angle:
+                self.paper_ref = (palm_mm[2], palm_mm[0])
+            if self.paper_ref is None:
+                return None
+            return paper_twist(palm_mm, hand.normal, self.paper_ref[0], self.paper_ref[1],
+                               cfg.paper_scale)
+        if not self.engaged or self.reference is None:
+            return None
+        ref, yaw_ref = self.reference
+        d = [hand.palm[i] - ref[i] for i in range(3)]
+        yaw = leap_angles(hand.normal, hand.direction)[2]
+        dyaw = (yaw - yaw_ref + 180.0) % 360.0 - 180.0
+        cap = min(abs(cfg.max_cmd), 1.0)
+        return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
+                -shaped(d[0], cfg.dead_zone, cfg.full_scale, cap),
+                shaped(d[1], cfg.z_dead_zone, cfg.z_full_scale, cap),
+                0.0, 0.0,
+                -shaped(dyaw, cfg.yaw_dead_zone, cfg.yaw_full_scale, cap))
+
+    # -- watchdog ----------------------------------------------------------------------
+    def _lose(self, now):
+        if self.hand_present or self.lost_since is None:
+            self.lost_since = now
+        was_present = self.hand_present
+        self.hand_present = False
+        self._last_hand = None
+        if was_present or not self._zero_sent:
+            self._zero_sent = True
+            self.queue.push(Command('twist', ZERO_TWIST, stamp=now))
+
+    def watchdog(self, now):
+        """Call often (every ~20 ms): stale input -> hover; long loss -> land."""
+        with self._lock:
+            if (self.hand_present and self.last_hand_time is not None
+                    and now - self.last_hand_time > self.cfg.hand_timeout):
+                self._warn('stale', 'no Hand message for %.2f s: hovering'
+                           % (now - self.last_hand_time))
+                self._lose(self.last_hand_time + self.cfg.hand_timeout)
+            if (self.lost_since is not None and not self._landed_for_loss
+                    and now - self.lost_since >= self.cfg.land_after
+                    and self.drone_state in AIRBORNE_STATES):
+                self._landed_for_loss = True
+                self.engaged = False
+                self.reference = None
+                self._warn('lost', 'hand lost for %.1f s: landing' % (now - self.lost_since))
+                self.queue.push(Command('land', stamp=now))
+
+    # -- output ------------------------------------------------------------------------
+    def pop(self, mono_now):
+        """The next command due at monotonic time mono_now, or (None, seconds to wait)."""
+        cmd = self.queue.peek()
+        if cmd is None:
+            return None, None
+        if cmd.kind == 'twist' and self._last_twist_out is not None:
+            wait = self._last_twist_out + 1.0 / self.cfg.rate - mono_now
+            if wait > 0:
+                return None, wait
+        cmd = self.queue.popleft()
+        if cmd is not None and cmd.kind == 'twist':
+            self._last_twist_out = mono_now
+        return cmd, 0.0

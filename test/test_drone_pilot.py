@@ -1,0 +1,219 @@
+"""DronePilot logic: paper mode = Algorithm 1, tilt mapping, gestures, watchdog, queue."""
+import math
+
+import pytest
+
+from leap_teleop.drone.pilot import (Command, CommandQueue, DronePilot, HandInput,
+                                     PilotConfig, leap_angles, shaped)
+
+FLAT = dict(normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0))
+
+
+def hand(palm, normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0), present=True):
+    return HandInput(present, tuple(palm), tuple(normal), tuple(direction))
+
+
+_MONO = [1000.0]
+
+
+def drain(pilot):
+    """Everything queued, popped at ever later (monotonic) times so pacing never holds."""
+    out = []
+    while True:
+        _MONO[0] += 1.0
+        cmd, _ = pilot.pop(_MONO[0])
+        if cmd is None:
+            return out
+        out.append(cmd)
+
+
+def twists(cmds):
+    return [c.twist for c in cmds if c.kind == 'twist']
+
+
+def kinds(cmds):
+    return [c.kind for c in cmds]
+
+
+# -- paper mode: Algorithm 1 on hand-computed inputs -------------------------------------
+def test_leap_angles_match_the_sdk_definitions():
+    p, r, y = leap_angles((math.sin(math.radians(30)), -math.cos(math.radians(30)), 0.0),
+                          (0.0, math.sin(math.radians(40)), -math.cos(math.radians(40))))
+    assert (p, r, y) == pytest.approx((40.0, 30.0, 0.0))
+
+
+def test_paper_mode_reproduces_algorithm_1():
+    pilot = DronePilot(PilotConfig(mode='paper'))
+    pilot.on_navdata(4, 1000)
+    tilted_n = (0.5, -math.sqrt(3) / 2, 0.0)                            # roll 30 deg
+    tilted_d = (0.0, math.sin(math.radians(40)), -math.cos(math.radians(40)))   # pitch 40
+    # Pitch 40 but roll only 20: no capture, nothing sent.
+    pilot.on_hand(hand((0.03, 0.2, 0.06), (math.sin(math.radians(20)),
+                                           -math.cos(math.radians(20)), 0), tilted_d), 0.0)
+    # Roll 30 but pitch -40 (signed test, as written): still nothing.
+    pilot.on_hand(hand((0.03, 0.2, 0.06), tilted_n, (0, -tilted_d[1], tilted_d[2])), 0.01)
+    assert drain(pilot) == []
+    # Both exceed 25 deg: init_x = palm z = 60 mm, init_y = palm x = 30 mm.
+    pilot.on_hand(hand((0.030, 0.200, 0.060), tilted_n, tilted_d), 0.02)
+    (t,) = twists(drain(pilot))
+    assert t == pytest.approx((0.0, 0.0, -math.sqrt(3) / 2, 60.0, 30.0, 0.0))
+    # Flat hand at (-120, 250, -240) mm: no re-capture.
+    # linear.x = -(-240 - 60)/3000 = 0.1; linear.y = -(-120 - 30)/3000 = 0.05;
+    # linear.z = normal y = -1; angular = (init_x, init_y, 0).
+    pilot.on_hand(hand((-0.120, 0.250, -0.240)), 0.03)
+    (t,) = twists(drain(pilot))
+    assert t == pytest.approx((0.1, 0.05, -1.0, 60.0, 30.0, 0.0))
+    # Palm to the right and toward the user: backward and right.
+    pilot.on_hand(hand((0.330, 0.2, 0.360)), 0.04)
+    (t,) = twists(drain(pilot))
+    assert t == pytest.approx((-0.1, -0.1, -1.0, 60.0, 30.0, 0.0))
+
+
+# -- tilt mode --------------------------------------------------------------------------
+def test_shaped_dead_zone_and_full_scale():
+    assert shaped(0.02, 0.03, 0.1) == 0.0
+    assert shaped(0.08, 0.03, 0.1) == pytest.approx(0.5)
+    assert shaped(-0.08, 0.03, 0.1) == pytest.approx(-0.5)
+    assert shaped(0.5, 0.03, 0.1) == 1.0
+    assert shaped(0.5, 0.03, 0.1, cap=0.4) == 0.4
+
+
+def test_tilt_mode_maps_offsets_from_the_reference():
+    pilot = DronePilot(PilotConfig())
+    pilot.on_navdata(2, 0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    assert drain(pilot) == []                       # not engaged: nothing
+    pilot.on_gesture('unfold', True, 0.0)
+    assert kinds(drain(pilot)) == ['takeoff']
+    pilot.on_navdata(4, 1000)
+    pilot.on_hand(hand((0.01, 0.21, -0.01)), 0.1)      # inside the dead zone: hover
+    pilot.on_hand(hand((-0.08, 0.2, -0.08)), 0.2)      # away + left by 80 mm
+    pilot.on_hand(hand((0.0, 0.28, 0.5)), 0.3)         # up 80 mm, far toward the user
+    yaw = math.radians(-40)                            # hand turned left by 40 deg
+    pilot.on_hand(hand((0.0, 0.2, 0.0), direction=(math.sin(yaw), 0, -math.cos(yaw))), 0.4)
+    t = twists(drain(pilot))
+    assert t[0] == (0.0,) * 6
+    assert t[1] == pytest.approx((0.5, 0.5, 0.0, 0.0, 0.0, 0.0))
+    assert t[2] == pytest.approx((-1.0, 0.0, 0.5, 0.0, 0.0, 0.0))
+    assert t[3] == pytest.approx((0.0, 0.0, 0.0, 0.0, 0.0, 25.0 / 45.0))
+    assert all(-1.0 <= v <= 1.0 for tw in t for v in tw)
+
+
+def test_no_hand_twists_while_landed_or_taking_off():
+    pilot = DronePilot(PilotConfig())
+    pilot.on_navdata(2, 0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    drain(pilot)
+    pilot.on_navdata(6, 300)
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
+    assert drain(pilot) == []
+
+
+# -- gestures ---------------------------------------------------------------------------
+def test_gestures_respect_the_drone_state():
+    pilot = DronePilot(PilotConfig(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
+    pilot.on_navdata(4, 1000)
+    pilot.on_gesture('unfold', True, 0.0)                 # flying: no takeoff
+    pilot.on_gesture('circle_cw', True, 0.0)
+    assert [(c.kind, c.anim) for c in drain(pilot)] == [('flip', (18, 0))]
+    pilot.on_navdata(4, 400)                              # too low for a flip
+    pilot.on_gesture('circle_ccw', True, 0.0)
+    assert drain(pilot) == []
+    pilot.on_navdata(9, 1000)                             # looping: no second flip
+    pilot.on_gesture('circle_ccw', True, 0.0)
+    assert drain(pilot) == []
+    pilot.on_navdata(3, 1000)
+    pilot.on_gesture('fold', True, 0.0)
+    assert kinds(drain(pilot)) == ['land']
+    pilot.on_navdata(2, 0)
+    pilot.on_gesture('fold', True, 0.0)                   # landed: no land
+    pilot.on_gesture('circle_cw', True, 0.0)
+    assert drain(pilot) == []
+    pilot.on_gesture('unfold', True, 0.0)
+    assert kinds(drain(pilot)) == ['takeoff']
+
+
+# -- watchdog ---------------------------------------------------------------------------
+def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
+    pilot = DronePilot(PilotConfig(land_after=3.0))
+    pilot.on_navdata(2, 0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(3, 1000)
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
+    assert twists(drain(pilot))[-1][0] == 1.0
+    pilot.on_hand(hand((0, 0, 0), present=False), 0.2)
+    pilot.on_hand(hand((0, 0, 0), present=False), 0.3)
+    assert twists(drain(pilot)) == [(0.0,) * 6]           # once, not per frame
+    pilot.watchdog(3.1)
+    assert drain(pilot) == []
+    pilot.watchdog(3.25)
+    assert kinds(drain(pilot)) == ['land']
+    pilot.watchdog(4.0)
+    assert drain(pilot) == []                              # land only once
+
+
+def test_silence_counts_as_a_lost_hand():
+    pilot = DronePilot(PilotConfig(hand_timeout=0.15, land_after=3.0))
+    pilot.on_navdata(2, 0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(3, 1000)
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
+    drain(pilot)
+    pilot.watchdog(0.2)
+    assert drain(pilot) == []
+    pilot.watchdog(0.26)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    pilot.watchdog(3.0)
+    assert drain(pilot) == []
+    pilot.watchdog(3.26)
+    assert kinds(drain(pilot)) == ['land']
+
+
+def test_reference_recaptured_when_the_hand_comes_back():
+    pilot = DronePilot(PilotConfig())
+    pilot.on_navdata(2, 0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(4, 1000)
+    pilot.on_hand(hand((0, 0, 0), present=False), 0.1)
+    pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
+    pilot.on_hand(hand((0.15, 0.25, 0.0)), 0.6)           # then 100 mm forward from there
+    t = twists(drain(pilot))
+    assert t[-2] == (0.0,) * 6 and t[-1][0] == pytest.approx(0.7)
+
+
+# -- queue ------------------------------------------------------------------------------
+def test_queue_is_bounded_and_keeps_discrete_commands():
+    q = CommandQueue(3)
+    q.push(Command('takeoff'))
+    for i in range(5):
+        q.push(Command('twist', (float(i),) + (0.0,) * 5))
+    q.push(Command('land'))
+    items = [q.popleft() for _ in range(len(q))]
+    assert [c.kind for c in items] == ['takeoff', 'twist', 'land']
+    assert items[1].twist[0] == 4.0 and q.dropped == 4
+
+
+def test_twists_are_paced_at_the_rate():
+    pilot = DronePilot(PilotConfig(rate=50.0))
+    pilot.queue.push(Command('twist'))
+    pilot.queue.push(Command('twist'))
+    pilot.queue.push(Command('land'))
+    cmd, _ = pilot.pop(10.0)
+    assert cmd.kind == 'twist'
+    cmd, wait = pilot.pop(10.005)
+    assert cmd is None and wait == pytest.approx(0.015)
+    cmd, _ = pilot.pop(10.02)
+    assert cmd.kind == 'twist'
+    cmd, _ = pilot.pop(10.021)                               # discrete: not paced
+    assert cmd.kind == 'land'
+
+
+def test_bad_config_rejected():
+    with pytest.raises(ValueError):
+        PilotConfig().update({'mode': 'joystick'})
+    with pytest.raises(ValueError):
+        PilotConfig().update({'flip_type': 25})
