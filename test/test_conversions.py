@@ -4,12 +4,18 @@ import pytest
 from leap_teleop import conversions
 from leap_teleop.frame import Frame
 from leap_teleop.hand_model import render_hand
+from leap_teleop.gestures import GestureRecognizer
 from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 
 
+def per_frame():
+    """Single-frame checks: no temporal filtering."""
+    return GestureRecognizer(stateless=True)
+
+
 def states(*hands, ts=1234.5):
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     return li.on_frame(Frame(id=42, timestamp=ts, hands=list(hands)))
 
 
@@ -46,8 +52,12 @@ def test_rich_hand_is_in_metres_with_side_and_frame_id():
 
 
 def test_gesture_events_carry_name_side_and_stamp():
-    s = states(render_hand('right', 'fist', [0, 200, 0]), ts=5.0)['right']
-    events = conversions.to_gesture_events(s)
+    li = LeapInterface()      # the streaming recognizer: events come from transitions
+    events = []
+    for i in range(10):
+        st = li.on_frame(Frame(id=i, timestamp=5.0 + i, hands=[render_hand('right', 'fist', [0, 200, 0])]))
+        events += conversions.to_gesture_events(st['right'])
     names = [e.gesture for e in events]
     assert names[0] == 'hand_found' and 'fist' in names
-    assert all(e.side == Hand.SIDE_RIGHT and e.header.stamp.to_sec() == 5.0 for e in events)
+    assert all(e.side == Hand.SIDE_RIGHT for e in events)
+    assert events[0].header.stamp.to_sec() == 5.0

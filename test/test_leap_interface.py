@@ -8,8 +8,14 @@ import pytest
 
 from leap_teleop.frame import Frame
 from leap_teleop.hand_model import render_hand, rpy_to_basis
+from leap_teleop.gestures import GestureRecognizer
 from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface, dead_band
 from leap_teleop.sources.base import HandSource
+
+
+def per_frame():
+    """Single-frame checks: no temporal filtering."""
+    return GestureRecognizer(stateless=True)
 
 
 def frame(i, *hands):
@@ -17,7 +23,7 @@ def frame(i, *hands):
 
 
 def test_getters_exist_for_both_sides_and_read_the_latest_frame():
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     li.on_frame(frame(1, render_hand('right', 'fist', [10, 200, 5]),
                       render_hand('left', 'open', [-10, 180, 0])))
     assert li.get_is_right_hand() and li.get_is_left_hand()
@@ -31,7 +37,7 @@ def test_getters_exist_for_both_sides_and_read_the_latest_frame():
 
 
 def test_every_flag_clears_when_the_hand_leaves():
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     li.on_frame(frame(1, render_hand('right', 'rock', [0, 200, 0])))
     li.on_frame(frame(2, render_hand('right', 'pinch', [5, 200, 0], pinch_value=0.5)))
     state = li.get_right_hand_state()
@@ -51,7 +57,7 @@ def test_every_flag_clears_when_the_hand_leaves():
 
 
 def test_rotation_since_origin_applies_the_dead_bands():
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     li.on_frame(frame(1, render_hand('right', 'rock', [0, 200, 0])))
     normal, direction = rpy_to_basis(0.0, 0.0, math.radians(40), 'right')   # yaw 40 deg
     li.on_frame(frame(2, render_hand('right', 'open', [0, 200, 0], normal, direction)))
@@ -72,7 +78,7 @@ def test_dead_band_swing(angle, expected):
 
 @pytest.mark.parametrize('palm', [[float('nan'), 200, 0], [0, float('inf'), 0], [1e9, 0, 0]])
 def test_unplaceable_hands_are_treated_as_absent(palm):
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     li.on_frame(frame(1, render_hand('right', 'fist', [0, 200, 0])))
     hand = render_hand('right', 'fist', [0, 200, 0])
     hand.palm_position = np.array(palm, dtype=float)
@@ -82,7 +88,7 @@ def test_unplaceable_hands_are_treated_as_absent(palm):
 
 
 def test_out_of_range_strengths_are_clamped():
-    li = LeapInterface()
+    li = LeapInterface(recognizer_factory=per_frame)
     hand = render_hand('right', 'open', [0, 200, 0])
     hand.grab_strength, hand.pinch_strength, hand.confidence = 7.0, float('nan'), -3.0
     li.on_frame(frame(1, hand))

@@ -8,8 +8,8 @@ and listeners are called once per frame instead of being polled.
 import logging
 import math
 import threading
-from dataclasses import dataclass, field, replace
-from typing import List, Optional, Tuple
+from dataclasses import dataclass
+from typing import Tuple
 
 import numpy as np
 
@@ -164,6 +164,7 @@ class LeapInterface:
         self._lock = threading.Lock()
         self._states = {side: HandState(side) for side in sides}
         self._listeners = []
+        self._hand_listeners = []
         self._thread = None
         self.frames_seen = 0
         self.error = None
@@ -175,9 +176,17 @@ class LeapInterface:
         states maps side -> HandState. Keep it short."""
         self._listeners.append(callback)
 
+    def add_hand_listener(self, callback):
+        """callback(frame, state) runs as soon as one side's HandState is ready, before
+        the other side is processed: for consumers where latency matters."""
+        self._hand_listeners.append(callback)
+
     def on_frame(self, frame):
-        states = {side: tracker.update(frame.hand(side), frame.timestamp, frame.id)
-                  for side, tracker in self._trackers.items()}
+        states = {}
+        for side, tracker in self._trackers.items():
+            states[side] = state = tracker.update(frame.hand(side), frame.timestamp, frame.id)
+            for callback in self._hand_listeners:
+                callback(frame, state)
         with self._lock:
             self._states = states
             self.frames_seen += 1

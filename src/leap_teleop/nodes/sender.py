@@ -2,8 +2,6 @@
 
 Publishes once per source frame from the source's thread (event-driven; no polling).
 """
-import threading
-
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
@@ -67,22 +65,25 @@ class Sender:
                           for side in self.sides}
         self.gesture_pub = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
         self.period = float(p['freq'])
-        self._last_sent = None
+        self._last_sent = {}
         self.published = 0
-        interface.add_listener(self.on_frame)
+        interface.add_hand_listener(self.on_hand)
 
-    def on_frame(self, frame, states):
+    def on_hand(self, frame, state):
+        """Publish one side's messages as soon as that side is recognised."""
+        side = state.side
+        if side not in self.leapcobot_pubs:
+            return
         if self.period > 0:
-            if self._last_sent is not None and frame.timestamp - self._last_sent < self.period:
+            last = self._last_sent.get(side)
+            if last is not None and frame.timestamp - last < self.period:
                 return
-            self._last_sent = frame.timestamp
+            self._last_sent[side] = frame.timestamp
         frame_id = self.p['frame_id']
-        for side in self.sides:
-            state = states[side]
-            self.leapcobot_pubs[side].publish(conversions.to_leapcobot(state, frame_id))
-            self.hand_pubs[side].publish(conversions.to_hand(state, frame_id))
-            for event in conversions.to_gesture_events(state, frame_id):
-                self.gesture_pub.publish(event)
+        self.leapcobot_pubs[side].publish(conversions.to_leapcobot(state, frame_id))
+        self.hand_pubs[side].publish(conversions.to_hand(state, frame_id))
+        for event in conversions.to_gesture_events(state, frame_id):
+            self.gesture_pub.publish(event)
         self.published += 1
 
 

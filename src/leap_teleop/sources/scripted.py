@@ -203,5 +203,8 @@ class ScriptedSource(HandSource):
                         hand.palm_position = hand.palm_position + self._rng.normal(
                             0.0, self.noise_mm, 3)
                     hands.append(hand)
-            yield Frame(id=k + 1, timestamp=t0_wall + k * period, hands=hands)
+            # Live pacing stamps the moment the frame is complete, as a device would;
+            # fast-as-possible runs keep the ideal grid (their time is virtual).
+            stamp = self._clock() if self.realtime else t0_wall + k * period
+            yield Frame(id=k + 1, timestamp=stamp, hands=hands)
             k += 1
