@@ -1,0 +1,228 @@
+"""ardrone_sim: a simulated AR.Drone 2.0 behind the ardrone_autonomy driver's interface.
+
+Subscribes cmd_vel (Twist), ardrone/takeoff, ardrone/land, ardrone/reset (Empty);
+publishes ardrone/navdata (leap_teleop/Navdata, the driver's MD5), ardrone/imu,
+ardrone/odometry and TF odom -> ardrone_base_link (+ static front / bottom camera
+frames) at ~looprate; serves ardrone/setflightanimation (FlightAnim) and
+ardrone/snapshot (std_srvs/Trigger: writes a PNG, returns its path). With
+/use_sim_time true it publishes /clock and can run faster than real time.
+"""
+import math
+import os
+import threading
+import time
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import TransformStamped
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Empty
+from std_srvs.srv import Trigger, TriggerResponse
+from geometry_msgs.msg import Twist
+
+from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
+from leap_teleop.msg import Navdata
+from leap_teleop.nodes.common import Param, handle_help, read_params
+from leap_teleop.srv import FlightAnim, FlightAnimResponse
+
+_D = DroneParams()
+PARAMS = {
+    'euler_angle_max': Param(_D.euler_angle_max, 'max tilt for linear.x/y = 1, rad (driver)'),
+    'control_vz_max': Param(_D.control_vz_max, 'climb rate for linear.z = 1, mm/s (driver)'),
+    'control_yaw': Param(_D.control_yaw, 'yaw rate for angular.z = 1, rad/s (driver)'),
+    'altitude_max': Param(_D.altitude_max, 'altitude ceiling, mm (driver)'),
+    'altitude_min': Param(_D.altitude_min, 'altitude floor while flying, mm (driver)'),
+    'looprate': Param(50.0, 'navdata / imu / odometry / TF rate, Hz (driver)'),
+    'takeoff_altitude': Param(_D.takeoff_altitude, 'where a takeoff levels off, m'),
+    'physics_rate': Param(_D.physics_rate, 'physics and onboard controller rate, Hz'),
+    'battery_flight_time': Param(_D.battery_flight_time, 's of hover on a full battery'),
+    'link_timeout': Param(_D.link_timeout, 's without any command -> land (firmware '
+                                           'link loss); 0 = off, as with a live driver'),
+    'gui': Param(False, 'open the PyBullet GUI window'),
+    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
+                                  '(only sensible with /use_sim_time)'),
+    'snapshot_dir': Param('', 'where ardrone/snapshot writes PNGs (default ROS_HOME or /tmp)'),
+    'snapshot_size': Param([640, 480], 'snapshot width, height in pixels'),
+    'base_frame': Param('ardrone_base_link', 'drone body frame'),
+    'odom_frame': Param('odom', 'odometry frame'),
+    'start_xy': Param([0.0, 0.0], 'start position in odom, m'),
+}
+
+
+class ArDroneSimNode:
+    def __init__(self, p):
+        self.p = p
+        names = ('euler_angle_max', 'control_vz_max', 'control_yaw', 'altitude_max',
+                 'altitude_min', 'takeoff_altitude', 'physics_rate', 'battery_flight_time',
+                 'link_timeout')
+        self.sim = ArDroneSim({k: p[k] for k in names}, gui=bool(p['gui']),
+                              warn=lambda key, text: rospy.logwarn('ardrone_sim: %s', text),
+                              start_xyz=tuple(p['start_xy']))
+        self.lock = threading.Lock()
+        self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
+        self.base, self.odom = p['base_frame'], p['odom_frame']
+        self.nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=25)
+        self.imu_pub = rospy.Publisher('ardrone/imu', Imu, queue_size=25)
+        self.odom_pub = rospy.Publisher('ardrone/odometry', Odometry, queue_size=25)
+        self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
+                          if self.use_sim_time else None)
+        self.tf = tf2_ros.TransformBroadcaster()
+        self.static_tf = tf2_ros.StaticTransformBroadcaster()
+        self._publish_camera_frames()
+        rospy.Subscriber('cmd_vel', Twist, self.on_cmd_vel, queue_size=10)
+        rospy.Subscriber('ardrone/takeoff', Empty, lambda _: self._call(self.sim.takeoff))
+        rospy.Subscriber('ardrone/land', Empty, lambda _: self._call(self.sim.land))
+        rospy.Subscriber('ardrone/reset', Empty, lambda _: self._call(self.sim.reset))
+        rospy.Service('ardrone/setflightanimation', FlightAnim, self.on_flight_animation)
+        rospy.Service('ardrone/snapshot', Trigger, self.on_snapshot)
+        self._last_state = None
+
+    # -- inputs ---------------------------------------------------------------------
+    def _call(self, fn, *args):
+        with self.lock:
+            return fn(*args)
+
+    def on_cmd_vel(self, msg):
+        self._call(self.sim.set_cmd_vel, msg.linear.x, msg.linear.y, msg.linear.z,
+                   msg.angular.x, msg.angular.y, msg.angular.z)
+
+    def on_flight_animation(self, req):
+        return FlightAnimResponse(result=bool(self._call(self.sim.flight_animation,
+                                                         req.type, req.duration)))
+
+    def on_snapshot(self, _req):
+        folder = self.p['snapshot_dir'] or os.environ.get('ROS_HOME') or '/tmp'
+        try:
+            os.makedirs(folder, exist_ok=True)
+            path = os.path.join(folder, 'ardrone_%08.3f.png' % self.sim.time)
+            w, h = (int(v) for v in self.p['snapshot_size'])
+            with self.lock:
+                self.sim.snapshot(path, w, h)
+        except (OSError, ValueError) as e:
+            return TriggerResponse(success=False, message='snapshot failed: %s' % e)
+        return TriggerResponse(success=True, message=path)
+
+    # -- outputs --------------------------------------------------------------------
+    def _publish_camera_frames(self):
+        frames = []
+        for child, xyz, rpy in (('ardrone_base_frontcam', (0.21, 0.0, 0.0),
+                                 (-math.pi / 2, 0.0, -math.pi / 2)),
+                                ('ardrone_base_bottomcam', (0.0, -0.02, 0.0),
+                                 (math.pi, 0.0, -math.pi / 2))):
+            t = TransformStamped()
+            t.header.stamp = rospy.Time.now()
+            t.header.frame_id = self.base
+            t.child_frame_id = child
+            t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = xyz
+            q = _quat_from_rpy(*rpy)
+            r = t.transform.rotation
+            r.x, r.y, r.z, r.w = q
+            frames.append(t)
+        self.static_tf.sendTransform(frames)
+
+    def stamp(self):
+        return rospy.Time.from_sec(self.sim.time) if self.use_sim_time else rospy.Time.now()
+
+    def publish(self):
+        s = self.sim
+        with self.lock:
+            nav = s.navdata()
+            pos, quat, omega, alt = s.pos, s.quat, s.omega, s.altitude
+        stamp = self.stamp()
+        if self.clock_pub is not None:
+            self.clock_pub.publish(Clock(clock=stamp))
+        msg = Navdata()
+        msg.header.stamp, msg.header.frame_id = stamp, self.base
+        for key, value in nav.items():
+            setattr(msg, key, value)
+        msg.magX = int(200 * math.cos(math.radians(nav['rotZ'])))     # earth field, heading
+        msg.magY = int(-200 * math.sin(math.radians(nav['rotZ'])))
+        msg.magZ = -400
+        msg.pressure = int(101325 - 12.0 * alt)
+        msg.temp = 25
+        self.nav_pub.publish(msg)
+        if nav['state'] != self._last_state:
+            rospy.loginfo('ardrone_sim: state %d (%s)', nav['state'], STATE_NAMES[nav['state']])
+            self._last_state = nav['state']
+
+        imu = Imu()
+        imu.header.stamp, imu.header.frame_id = stamp, self.base
+        o = imu.orientation
+        o.x, o.y, o.z, o.w = quat
+        imu.angular_velocity.x, imu.angular_velocity.y, imu.angular_velocity.z = omega
+        a = imu.linear_acceleration
+        a.x, a.y, a.z = nav['ax'] * 9.8, nav['ay'] * 9.8, nav['az'] * 9.8
+        self.imu_pub.publish(imu)
+
+        odo = Odometry()
+        odo.header.stamp, odo.header.frame_id = stamp, self.odom
+        odo.child_frame_id = self.base
+        pp = odo.pose.pose
+        pp.position.x, pp.position.y, pp.position.z = pos[0], pos[1], alt
+        pp.orientation = o
+        tw = odo.twist.twist
+        tw.linear.x, tw.linear.y, tw.linear.z = nav['vx'] / 1000, nav['vy'] / 1000, nav['vz'] / 1000
+        tw.angular.x, tw.angular.y, tw.angular.z = omega
+        self.odom_pub.publish(odo)
+
+        t = TransformStamped()
+        t.header.stamp, t.header.frame_id, t.child_frame_id = stamp, self.odom, self.base
+        t.transform.translation.x, t.transform.translation.y = pos[0], pos[1]
+        t.transform.translation.z = alt
+        t.transform.rotation = o
+        self.tf.sendTransform(t)
+
+    def run(self):
+        rate = float(self.p['looprate'])
+        if rate <= 0:
+            raise ValueError('~looprate must be > 0')
+        steps = max(1, int(round(self.sim.p.physics_rate / rate)))
+        rtf = float(self.p['realtime_factor'])
+        if rtf <= 0 and not self.use_sim_time:
+            rospy.logwarn('ardrone_sim: realtime_factor %g without /use_sim_time: running in '
+                          'real time instead', rtf)
+            rtf = 1.0
+        t0_wall, t0_sim = time.monotonic(), self.sim.time
+        self.publish()
+        while not rospy.is_shutdown():
+            with self.lock:
+                for _ in range(steps):
+                    self.sim.step()
+            self.publish()
+            if rtf > 0:
+                delay = t0_wall + (self.sim.time - t0_sim) / rtf - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+                elif delay < -0.5:          # fell behind (loaded machine): do not sprint
+                    t0_wall, t0_sim = time.monotonic(), self.sim.time
+            else:
+                time.sleep(0)               # let the callbacks in
+
+
+def _quat_from_rpy(roll, pitch, yaw):
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+
+
+def main(argv=None):
+    handle_help('ardrone_sim.py', __doc__, PARAMS, argv)
+    rospy.init_node('ardrone_sim')
+    p = read_params(PARAMS)
+    try:
+        node = ArDroneSimNode(p)
+    except (ValueError, TypeError) as e:
+        rospy.logfatal('ardrone_sim: bad parameter: %s', e)
+        raise SystemExit(1)
+    rospy.loginfo('ardrone_sim: ready (%s, %s)', 'GUI' if p['gui'] else 'headless',
+                  'sim time x%g' % p['realtime_factor'] if node.use_sim_time else 'wall time')
+    try:
+        node.run()
+    except rospy.ROSInterruptException:
+        pass
+    finally:
+        node.sim.close()
