@@ -62,7 +62,7 @@ OPENING_WINDOW_S = 0.15
 # of successive segments is summed as a rotation vector; a circle is one full turn about
 # a consistent axis within the time window. (track name, spacing mm, min radius mm,
 # max radius mm, window s)
-CIRCLE_TRACKS = (('palm', 6.0, 25.0, 300.0, 2.0), ('finger', 1.2, 3.0, 60.0, 0.8))
+CIRCLE_TRACKS = (('palm', 6.0, 25.0, 300.0, 2.0), ('finger', 4.0, 3.0, 60.0, 1.0))
 CIRCLE_TURN = 2 * math.pi * 0.9    # rad of consistent turning that makes a circle
 CIRCLE_MAX_STEP_TURN = math.radians(100.0)   # a sharper corner is a reversal, not a circle
 CIRCLE_CONSISTENCY = 0.75          # |sum of turn vectors| / sum of |turns|

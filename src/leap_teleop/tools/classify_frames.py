@@ -1,0 +1,149 @@
+"""Classify Leap frames offline: one JSON line of per-hand gestures per input frame.
+
+usage: python -m leap_teleop.tools.classify_frames [INPUT] [--stateless] [--out FILE]
+       rosrun leap_teleop classify_frames [INPUT] [--stateless]
+
+INPUT is a LeapJS Playback recording (.json, .json.gz, .json.lz; formatVersion 0.1, 1 or
+packed 2), or JSON Lines: one LeapJS frame dict per line (fields as in a recording:
+id, timestamp [us], hands[] with id, type, palmPosition, palmNormal, direction,
+grabStrength, pinchStrength, confidence; pointables[] with handId, type 0..4,
+tipPosition, dipPosition, pipPosition, mcpPosition, direction, extended). Without INPUT
+(or with "-") JSON Lines are read from stdin.
+
+Output, one line per input frame, in input order:
+
+    {"id": 139235, "timestamp": 12439621196,
+     "hands": [{"type": "right", "fist": false, "thumb_up": false, "pinch": true,
+                "pinch_value": 0.62, "rock": false, "open": false,
+                "events": ["pinch", "circle_cw"]}]}
+
+- id, timestamp: copied from the frame (timestamp in the frame's microseconds; null
+  when absent).
+- hands: one entry per left / right hand in the frame, in frame order. fist, thumb_up,
+  pinch, rock, open: the recognizer's held gestures; pinch_value: pinch strength - 0.2
+  in 0..0.8 while pinching, else 0.
+- events: what started on this frame: a held gesture's name when it turns on
+  ("fist", "thumb_up", "pinch", "rock", "open"), "unfold" (fist -> open), "fold"
+  (open -> fist), "circle_cw" / "circle_ccw" (palm or fingertip circle).
+- A line that is not a JSON object yields {"id": null, "timestamp": null, "hands": [],
+  "error": "..."}; a frame with missing fields is classified from what is there (a hand
+  without fingers shows every gesture false).
+
+--stateless classifies every frame on its own (no temporal filter, no events): for
+snapshot data whose frames are unrelated. Otherwise frames are a stream: a gesture
+turns on after 3 consistent frames and off after 3, per hand side.
+"""
+import argparse
+import json
+import math
+import sys
+
+from ..gestures import GestureRecognizer
+from ..sources import SourceError, leapjs
+
+HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open')
+
+
+class Classifier:
+    """Frame dict -> output dict, keeping one recognizer per hand side."""
+
+    def __init__(self, stateless=False):
+        self.stateless = stateless
+        self.recognizers = {}
+
+    def classify(self, d):
+        try:
+            frame = leapjs.frame_from_dict(d)
+        except leapjs.FrameError as e:
+            return {'id': None, 'timestamp': None, 'hands': [], 'error': str(e)}
+        ts = d.get('timestamp')
+        ts = ts if isinstance(ts, (int, float)) and not isinstance(ts, bool) and \
+            math.isfinite(ts) else None
+        fid = d.get('id')
+        fid = fid if isinstance(fid, (int, str)) and not isinstance(fid, bool) else None
+        t = frame.timestamp if math.isfinite(frame.timestamp) else None
+        hands, seen = [], set()
+        for hand in frame.hands:
+            rec = self.recognizers.get(hand.side)
+            if rec is None:
+                rec = self.recognizers[hand.side] = GestureRecognizer(stateless=self.stateless)
+            if hand.side in seen:       # a second hand of one side: judge it on its own
+                rec = GestureRecognizer(stateless=True)
+            seen.add(hand.side)
+            state = rec.update(hand, t if t is not None else math.nan)
+            out = {'type': hand.side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
+                   'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
+                   'rock': bool(state.rock), 'open': bool(state.open),
+                   'events': [e.gesture for e in state.events if e.active]}
+            hands.append(out)
+        for side, rec in self.recognizers.items():
+            if side not in seen:
+                rec.reset()
+        return {'id': fid, 'timestamp': ts, 'hands': hands}
+
+
+def iter_json_lines(stream):
+    for line in stream:
+        line = line.strip()
+        if not line:
+            continue
+        try:
+            yield leapjs.parse_json(line)
+        except ValueError as e:
+            yield e
+
+
+def looks_like_recording(path):
+    if path.endswith(('.lz', '.gz')):
+        return True
+    with open(path, 'rb') as f:
+        head = f.read(4096).lstrip()
+    # A recording is one JSON object with "frames"; JSON Lines start a frame per line.
+    return head.startswith(b'{') and b'"frames"' in head.split(b'\n', 1)[0][:4096] \
+        and b'"metadata"' in head
+
+
+def frames_of(path):
+    if path in (None, '-'):
+        return iter_json_lines(sys.stdin)
+    if looks_like_recording(path):
+        _, dicts = leapjs.load(path)
+        return iter(dicts)
+    return iter_json_lines(open(path, encoding='utf-8', errors='replace'))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('input', nargs='?', default='-', help='recording or JSON Lines; - = stdin')
+    ap.add_argument('--stateless', action='store_true', help='no temporal filtering / events')
+    ap.add_argument('--out', default='-', help='output file; - = stdout')
+    if argv is None:   # drop ROS remappings that rosrun / roslaunch add
+        argv = [a for a in sys.argv[1:] if ':=' not in a]
+    args = ap.parse_args(argv)
+    try:
+        frames = frames_of(args.input)
+    except (SourceError, OSError) as e:
+        print('classify_frames: %s' % e, file=sys.stderr)
+        return 2
+    out = sys.stdout if args.out == '-' else open(args.out, 'w')
+    classifier = Classifier(stateless=args.stateless)
+    n = 0
+    try:
+        for d in frames:
+            if isinstance(d, Exception) or not isinstance(d, dict):
+                why = 'not JSON: %s' % d if isinstance(d, Exception) else 'not a frame object'
+                result = {'id': None, 'timestamp': None, 'hands': [], 'error': why}
+            else:
+                result = classifier.classify(d)
+            out.write(json.dumps(result) + '\n')
+            n += 1
+    except BrokenPipeError:
+        return 0
+    finally:
+        if out is not sys.stdout:
+            out.close()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
