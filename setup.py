@@ -5,6 +5,6 @@ from setuptools import setup
 setup(**generate_distutils_setup(
     packages=['leap_teleop', 'leap_teleop.sources', 'leap_teleop.nodes',
               'leap_teleop.tools', 'leap_teleop.ur10', 'leap_teleop.drone',
-              'leap_teleop.bench'],
+              'leap_teleop.bench', 'leap_teleop.teleop'],
     package_dir={'': 'src'},
 ))

@@ -1,0 +1,1 @@
+"""Teleoperation logic that turns hand input into robot commands (no ROS here)."""
