@@ -65,7 +65,9 @@ OPENING_WINDOW_S = 0.15
 CIRCLE_TRACKS = (('palm', 6.0, 25.0, 300.0, 2.0), ('finger', 4.0, 3.0, 60.0, 1.0))
 CIRCLE_TURN = 2 * math.pi * 0.9    # rad of consistent turning that makes a circle
 CIRCLE_MAX_STEP_TURN = math.radians(100.0)   # a sharper corner is a reversal, not a circle
-CIRCLE_CONSISTENCY = 0.75          # |sum of turn vectors| / sum of |turns|
+CIRCLE_CONSISTENCY = 0.6           # |sum of turn vectors| / sum of |turns|
+PALM_SMOOTHING = 0.35             # exponential smoothing factor of the palm path
+_UP = np.array([0.0, 1.0, 0.0])
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
 
 
@@ -216,7 +218,6 @@ def classify_geometry(g, hand, active=None, opening=False):
     r = {}
     r['fist'] = all_curled['fist'] and not out
     r['thumb_up'] = all_curled['thumb_up'] and out and ('thumb_up' in active or not opening)
-    r['open'] = bool(extended.all())           # thumb either way (a flat hand tucks it)
     # Rock: index and pinky out, middle and ring curled (looser bar for the curl: a
     # horns hand rarely folds middle and ring as deep as a fist).
     r['rock'] = bool(extended[0] and extended[3] and known[1] and known[2]
@@ -229,6 +230,8 @@ def classify_geometry(g, hand, active=None, opening=False):
              and (not math.isfinite(bend[0]) or bend[0] > float(np.min(others)) + PINCH_BEND_MARGIN
                   or not bool(np.all(others > CURLED_BEND[1]))))
     r['pinch'] = bool(pinch)
+    # Open: four fingers straight, thumb either way (a flat hand tucks it), not pinching.
+    r['open'] = bool(extended.all()) and not pinch
     strength = _num(hand.pinch_strength, -1.0)
     if not 0.0 <= strength <= 1.0:
         strength = geometric_pinch_strength(gap)
@@ -315,20 +318,27 @@ class CircleDetector:
         palm, finger = CIRCLE_TRACKS
         self.tracks = [_CircleTrack(*palm[1:])] + [_CircleTrack(*finger[1:]) for _ in range(5)]
         self._last_event = -math.inf
+        self._palm_smooth = None
 
     def reset(self):
         for tr in self.tracks:
             tr.reset()
         self._last_event = -math.inf
+        self._palm_smooth = None
 
     def update(self, hand, timestamp, geometry=None):
         """GestureEvent or None."""
         found = None
         palm = np.asarray(hand.palm_position, dtype=float)
         if palm.shape == (3,) and np.all(np.isfinite(palm)):
-            hit = self.tracks[0].add(timestamp, palm)
+            # Light smoothing: palm noise would otherwise scramble the turning at the
+            # palm track's coarse spacing.
+            sm = self._palm_smooth
+            sm = palm if sm is None else sm + PALM_SMOOTHING * (palm - sm)
+            self._palm_smooth = sm
+            hit = self.tracks[0].add(timestamp, sm)
             if hit is not None:
-                found = (hit[0] @ np.array([0.0, 1.0, 0.0]) > 0, hit[1])
+                found = (hit[0] @ _UP > 0, hit[1])
         if geometry is not None:
             for i, f in enumerate(hand.fingers[:5]):
                 tip = np.asarray(f.tip, dtype=float)
@@ -339,7 +349,10 @@ class CircleDetector:
                     ref = np.asarray(f.direction, dtype=float)
                     if ref.shape != (3,) or not np.all(np.isfinite(ref)):
                         ref = geometry.basis[2]
-                    found = (hit[0] @ ref > 0, hit[1])
+                    along = float(hit[0] @ ref)
+                    # A circle drawn across the finger's axis has no SDK sense: fall back
+                    # on the palm convention.
+                    found = ((along > 0) if abs(along) >= 0.5 else (hit[0] @ _UP > 0), hit[1])
         if found is None or timestamp - self._last_event < CIRCLE_REFRACTORY_S:
             return None
         self._last_event = timestamp

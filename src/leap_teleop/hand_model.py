@@ -92,9 +92,11 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
         fingers.append([name, pip_l, dip_l, tip_l, mcp_local])
 
     if pose == 'pinch':
-        # Thumb and index tips meet in front of the palm; the gap closes with strength.
-        gap = (1.0 - pinch) * 70.0
-        meet = np.array([22.0, 25.0, 75.0])
+        # Thumb and index tips meet below the index knuckle, the index curled down to the
+        # thumb as on real captures; the gap closes from 30 mm (value 0) to 0 (value 0.8),
+        # so every pinch value is a pinch and pinch strength = 0.2 + value round-trips.
+        gap = 30.0 * (1.0 - (pinch - 0.2) / 0.8)
+        meet = np.array([20.0, 38.0, 62.0])
         for f in fingers:
             if f[0] in ('thumb', 'index'):
                 sign = 1.0 if f[0] == 'thumb' else -1.0

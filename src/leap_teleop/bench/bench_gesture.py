@@ -1,0 +1,78 @@
+"""Gesture recognition and recording decoding speed.
+
+gesture.us_per_hand_frame: GestureRecognizer.update per hand frame (stream mode, circles
+on), over real recorded hands when the shared recordings exist, else synthetic poses.
+recording.frames_per_s: read + decode + convert to Frames, all shared .json.gz takes.
+recording.lz_frames_per_s: the same from the original .json.lz files.
+"""
+import glob
+import os
+import time
+
+from ..gestures import GestureRecognizer
+from ..hand_model import POSES, render_hand
+from ..sources import leapjs
+from ..tools.evaluate import DEFAULT_DATA
+
+
+def _hands():
+    files = sorted(glob.glob(os.path.join(DEFAULT_DATA, 'decoded', '*.json.gz')))
+    hands = []
+    for path in files:
+        _, dicts = leapjs.load(path)
+        for d in dicts:
+            if d is None:
+                continue
+            f = leapjs.frame_from_dict(d)
+            hands.extend((h, f.timestamp) for h in f.hands)
+    if not hands:
+        hands = [(render_hand('right', pose, (0.0, 200.0 + i % 50, 0.0)), i / 120.0)
+                 for i, pose in enumerate(list(POSES) * 200)]
+    return hands
+
+
+def _decode_rate(files):
+    if not files:
+        return None
+    best = 0.0
+    for _ in range(3):
+        t0 = time.perf_counter()
+        n = 0
+        for path in files:
+            _, dicts = leapjs.load(path)
+            for d in dicts:
+                if d is not None:
+                    leapjs.frame_from_dict(d)
+                    n += 1
+        best = max(best, n / (time.perf_counter() - t0))
+    return best
+
+
+def run():
+    out = {}
+    hands = _hands()
+    best = None
+    for _ in range(3):
+        rec = {'right': GestureRecognizer(), 'left': GestureRecognizer()}
+        t0 = time.perf_counter()
+        for hand, ts in hands:
+            rec[hand.side].update(hand, ts)
+        us = (time.perf_counter() - t0) * 1e6 / len(hands)
+        best = us if best is None else min(best, us)
+    out['gesture.us_per_hand_frame'] = best
+    gz = sorted(glob.glob(os.path.join(DEFAULT_DATA, 'decoded', '*.json.gz')))
+    rate = _decode_rate(gz)
+    if rate is None:    # no shared data: a recording of synthetic frames written here
+        import tempfile
+        from ..frame import Frame
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, 'synthetic.json.gz')
+            frames = [leapjs.frame_to_dict(Frame(i, i / 120.0, [render_hand('right', 'open', (0, 200, 0))]))
+                      for i in range(2000)]
+            leapjs.save(path, frames)
+            rate = _decode_rate([path])
+    out['recording.frames_per_s'] = rate
+    lz = sorted(glob.glob(os.path.join(DEFAULT_DATA, '*.json.lz')))
+    if lz:
+        out['recording.lz_frames_per_s'] = _decode_rate(lz)
+    return out
