@@ -10,6 +10,8 @@ if [ ! -f "$_lt_root/.ws/devel/setup.bash" ] || [ ! -x "$_lt_root/.venv/bin/pyth
   return 1 2>/dev/null || exit 1
 fi
 set +u
+_lt_args=("$@")
+set --     # catkin's setup.bash reads its own options from the positional arguments
 # shellcheck disable=SC1091
 source "$_lt_root/.ws/devel/setup.bash"
 # shellcheck disable=SC1091
@@ -19,6 +21,8 @@ export ROS_IP=${ROS_IP:-127.0.0.1}
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://127.0.0.1:11311}
 export ROS_HOME=${ROS_HOME:-$_lt_root/.ws/ros_home}
 export PYTHONDONTWRITEBYTECODE=1
+set -- "${_lt_args[@]}"
+unset _lt_args
 if [ "${BASH_SOURCE[0]}" = "$0" ]; then
   [ $# -gt 0 ] || { echo "usage: ./env.sh CMD [ARGS...]" >&2; exit 2; }
   exec "$@"

@@ -1,0 +1,166 @@
+"""ur10_arm: one hand drives one UR10 (the original's UR10_lm_arm).
+
+Subscribes the hand's leapcobot topic and joint_states; publishes
+arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory) and
+~status (ArmStatus) plus diagnostics. Callbacks only store input and wake the control
+loop, which runs at ~rate and right after each new hand message. Every key of
+config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, ...) is
+also a private parameter; the launch files load that file into the node's namespace.
+"""
+import threading
+
+import diagnostic_updater
+import rospy
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Point
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from leap_teleop import conversions
+from leap_teleop.msg import ArmStatus
+from leap_teleop.nodes.common import (Param, RateLimitedLog, handle_help, package_path,
+                                      read_params)
+from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, DISARMED, HOLDING
+from leap_teleop.ur10.kinematics import JOINT_NAMES
+from leap_teleop.ur10.model import GRIPPER_JOINT
+
+PARAMS = {
+    'hand': Param('right', 'which hand drives this arm: right | left'),
+    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
+    'rate': Param(125.0, 'control loop rate, Hz (it also runs on each new hand message)'),
+    'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
+    'status_rate': Param(10.0, 'ArmStatus publishing rate, Hz (also on every change)'),
+}
+TELEOP_KEYS = [f for f in ArmTeleopParams.__dataclass_fields__]
+
+
+def teleop_params():
+    """ArmTeleopParams from the node's private namespace (config/ur10_teleop.yaml)."""
+    values = {k: rospy.get_param('~' + k) for k in TELEOP_KEYS if rospy.has_param('~' + k)}
+    for k in ('axis_map', 'workspace_min', 'workspace_max'):
+        if k in values:
+            values[k] = tuple(tuple(r) if isinstance(r, list) else r for r in values[k])
+    return ArmTeleopParams.from_dict(values)
+
+
+class ArmNode:
+    def __init__(self, p, params):
+        self.p = p
+        self.teleop = ArmTeleop(params)
+        self.lock = threading.Lock()
+        self.wake = threading.Event()
+        self.log = RateLimitedLog(2.0)
+        prefix = p['joint_prefix']
+        self.arm_joints = [prefix + n for n in JOINT_NAMES]
+        self.gripper_joint = prefix + GRIPPER_JOINT
+        self._joint_index = None
+        side = p['hand']
+        if side not in conversions.LEAPCOBOT_TYPES:
+            raise ValueError('~hand must be right or left, got %r' % side)
+        topic = p['hand_topic'] or 'leapmotion/data_%s' % side
+        self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
+        self.gripper_pub = rospy.Publisher('gripper/command', JointTrajectory, queue_size=10)
+        self.status_pub = rospy.Publisher('~status', ArmStatus, queue_size=10, latch=True)
+        rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self.on_hand, queue_size=50,
+                         tcp_nodelay=True)
+        rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
+        self._last_status = None
+        self._last_status_pub = 0.0
+        self.diagnostics = diagnostic_updater.Updater()
+        self.diagnostics.setHardwareID('ur10_arm_%s' % side)
+        self.diagnostics.add('teleop', self.diagnose)
+        rospy.loginfo('ur10_arm: %s hand on %s drives %s (mode %s, gripper %s, max joint speed '
+                      '%.3g rad/s)', side, rospy.resolve_name(topic),
+                      self.arm_pub.resolved_name, params.mode, params.gripper_mode,
+                      params.max_joint_speed)
+
+    # Callbacks: store and wake, nothing else.
+    def on_hand(self, msg):
+        hand = HandInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        with self.lock:
+            why = self.teleop.on_hand(hand, rospy.get_time())
+        if why:
+            self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)
+        self.wake.set()
+
+    def on_joints(self, msg):
+        if self._joint_index is None or len(msg.name) != self._joint_count:
+            index = []
+            for name in JOINT_NAMES:
+                match = [i for i, n in enumerate(msg.name) if n == name or n.endswith('_' + name)
+                         or n.endswith('/' + name)]
+                if not match:
+                    self.log.warn('joints', 'ur10_arm: joint_states lacks %s', name)
+                    return
+                index.append(match[0])
+            self._joint_index, self._joint_count = index, len(msg.name)
+        q = [msg.position[i] for i in self._joint_index]
+        with self.lock:
+            self.teleop.on_joints(q)
+
+    def loop(self):
+        period = 1.0 / float(self.p['rate'])
+        while not rospy.is_shutdown():
+            self.wake.wait(period)
+            self.wake.clear()
+            now = rospy.get_time()
+            with self.lock:
+                cmd = self.teleop.step(now)
+                status = self.teleop.status
+                snapshot = (status.state, status.reason, status.origin_set)
+            if cmd.q is not None:
+                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.q, cmd.duration))
+            if cmd.gripper is not None:
+                self.gripper_pub.publish(self._trajectory([self.gripper_joint], [cmd.gripper],
+                                                          0.1))
+            self._publish_status(snapshot, now)
+            self.diagnostics.update()
+
+    @staticmethod
+    def _trajectory(names, positions, duration):
+        msg = JointTrajectory()
+        msg.header.stamp = rospy.Time(0)     # start now (ros_control convention)
+        msg.joint_names = list(names)
+        msg.points = [JointTrajectoryPoint(positions=[float(x) for x in positions],
+                                           time_from_start=rospy.Duration.from_sec(duration))]
+        return msg
+
+    def _publish_status(self, snapshot, now):
+        changed = snapshot != self._last_status
+        if changed:
+            state, reason, _ = snapshot
+            log = rospy.logwarn if state == HOLDING else rospy.loginfo
+            log('ur10_arm: %s (%s)', state, reason)
+        if not changed and now - self._last_status_pub < 1.0 / float(self.p['status_rate']):
+            return
+        self._last_status, self._last_status_pub = snapshot, now
+        s = self.teleop.status
+        msg = ArmStatus(state=s.state, reason=s.reason, origin_set=s.origin_set,
+                        rejected_inputs=s.rejected_inputs, ik_failures=s.ik_failures)
+        msg.header.stamp = rospy.Time.now()
+        if len(s.target) == 3:
+            msg.target = Point(*s.target)
+        self.status_pub.publish(msg)
+
+    def diagnose(self, stat):
+        s = self.teleop.status
+        level = DiagnosticStatus.WARN if s.state == HOLDING else DiagnosticStatus.OK
+        stat.summary(level, '%s: %s' % (s.state, s.reason))
+        stat.add('origin set', s.origin_set)
+        stat.add('rejected inputs', s.rejected_inputs)
+        stat.add('IK failures', s.ik_failures)
+        return stat
+
+
+def main(argv=None):
+    handle_help('ur10_arm.py', __doc__, PARAMS, argv)
+    rospy.init_node('ur10_arm')
+    p = read_params(PARAMS)
+    try:
+        params = teleop_params()
+    except (ValueError, TypeError) as e:
+        rospy.logfatal('ur10_arm: bad parameters: %s (see %s)', e,
+                       package_path('config', 'ur10_teleop.yaml'))
+        raise SystemExit(1)
+    node = ArmNode(p, params)
+    node.loop()
