@@ -86,12 +86,14 @@ def test_tilt_mode_maps_offsets_from_the_reference():
     pilot.on_gesture('unfold', True, 0.0)
     assert kinds(drain(pilot)) == ['takeoff']
     pilot.on_navdata(4, 1000)
-    pilot.on_hand(hand((0.01, 0.21, -0.01)), 0.1)      # inside the dead zone: hover
-    pilot.on_hand(hand((-0.08, 0.2, -0.08)), 0.2)      # away + left by 80 mm
-    pilot.on_hand(hand((0.0, 0.28, 0.5)), 0.3)         # up 80 mm, far toward the user
     yaw = math.radians(-40)                            # hand turned left by 40 deg
-    pilot.on_hand(hand((0.0, 0.2, 0.0), direction=(math.sin(yaw), 0, -math.cos(yaw))), 0.4)
-    t = twists(drain(pilot))
+    t = []
+    for i, h in enumerate([hand((0.01, 0.21, -0.01)),          # inside the dead zone: hover
+                           hand((-0.08, 0.2, -0.08)),          # away + left by 80 mm
+                           hand((0.0, 0.28, 0.5)),             # up 80 mm, far toward the user
+                           hand((0.0, 0.2, 0.0), direction=(math.sin(yaw), 0, -math.cos(yaw)))]):
+        pilot.on_hand(h, 0.1 * (i + 1))
+        t += twists(drain(pilot))
     assert t[0] == (0.0,) * 6
     assert t[1] == pytest.approx((0.5, 0.5, 0.0, 0.0, 0.0, 0.0))
     assert t[2] == pytest.approx((-1.0, 0.0, 0.5, 0.0, 0.0, 0.0))
@@ -179,9 +181,11 @@ def test_reference_recaptured_when_the_hand_comes_back():
     pilot.on_gesture('unfold', True, 0.0)
     pilot.on_navdata(4, 1000)
     pilot.on_hand(hand((0, 0, 0), present=False), 0.1)
-    pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
-    pilot.on_hand(hand((0.15, 0.25, 0.0)), 0.6)           # then 100 mm forward from there
     t = twists(drain(pilot))
+    pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
+    t += twists(drain(pilot))
+    pilot.on_hand(hand((0.15, 0.25, 0.0)), 0.6)           # then 100 mm forward from there
+    t += twists(drain(pilot))
     assert t[-2] == (0.0,) * 6 and t[-1][0] == pytest.approx(0.7)
 
 
@@ -189,21 +193,27 @@ def test_reference_recaptured_when_the_hand_comes_back():
 def test_queue_is_bounded_and_keeps_discrete_commands():
     q = CommandQueue(3)
     q.push(Command('takeoff'))
-    for i in range(5):
+    for i in range(5):                       # consecutive twists coalesce: latest wins
         q.push(Command('twist', (float(i),) + (0.0,) * 5))
     q.push(Command('land'))
     items = [q.popleft() for _ in range(len(q))]
     assert [c.kind for c in items] == ['takeoff', 'twist', 'land']
     assert items[1].twist[0] == 4.0 and q.dropped == 4
+    for kind in ('twist', 'flip', 'twist', 'land', 'twist'):
+        q.push(Command(kind))                # full (3): the oldest twist goes first
+    assert [c.kind for c in (q.popleft() for _ in range(len(q)))] == ['flip', 'land', 'twist']
 
 
 def test_twists_are_paced_at_the_rate():
     pilot = DronePilot(PilotConfig(rate=50.0))
     pilot.queue.push(Command('twist'))
+    pilot.queue.push(Command('flip'))
     pilot.queue.push(Command('twist'))
     pilot.queue.push(Command('land'))
     cmd, _ = pilot.pop(10.0)
     assert cmd.kind == 'twist'
+    cmd, _ = pilot.pop(10.001)
+    assert cmd.kind == 'flip'
     cmd, wait = pilot.pop(10.005)
     assert cmd is None and wait == pytest.approx(0.015)
     cmd, _ = pilot.pop(10.02)

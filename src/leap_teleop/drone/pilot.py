@@ -30,9 +30,10 @@ Modes:
 Safety added in both modes: hand twists are only sent while the drone flies or hovers
 (when navdata is known); hand lost (Hand.present false, a hand_lost event, or no Hand
 message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
-``land_after`` -> land. Commands go through a bounded FIFO: when full, the oldest
-twist is dropped (takeoff / land / flip never are); twists leave at most ``rate`` per
-second, discrete commands at once.
+``land_after`` -> land. Commands go through a bounded FIFO: a twist replaces an unsent
+twist at the tail (the newer hand state wins, so a hand faster than ``rate`` adds no
+lag); when full, the oldest twist is dropped (takeoff / land / flip never are); twists
+leave at most ``rate`` per second, discrete commands at once.
 """
 import collections
 import math
@@ -48,7 +49,7 @@ ZERO_TWIST = (0.0,) * 6
 @dataclass
 class PilotConfig:
     mode: str = 'tilt'                  # tilt | paper
-    rate: float = 100.0                 # Hz, maximum twist publishing rate
+    rate: float = 200.0                 # Hz, maximum twist publishing rate
     queue_size: int = 10
     flip_type: int = 19                 # FLIP_RIGHT
     flip_duration: int = 0              # ms, 0 = the firmware's default
@@ -131,6 +132,12 @@ class CommandQueue:
 
     def push(self, cmd):
         with self._cond:
+            if cmd.kind == 'twist' and self._items and self._items[-1].kind == 'twist':
+                # A newer hand state supersedes an unsent twist: latency stays one slot.
+                self._items[-1] = cmd
+                self.dropped += 1
+                self._cond.notify()
+                return
             if len(self._items) >= self.maxsize:
                 for i, old in enumerate(self._items):
                     if old.kind == 'twist':
