@@ -128,6 +128,7 @@ class HandGeometry:
     thumb_out: float            # mm, thumb tip's thumbward offset from the palm centre
     pinch_gap: float            # mm, thumb tip to index tip
     tips_local: np.ndarray      # (5, 3) mm, fingertips in the hand frame
+    tips_world: np.ndarray      # (5, 3) mm, fingertips in Leap axes
     basis: np.ndarray           # (3, 3) rows: thumbward, normal, direction (Leap axes)
 
 
@@ -163,7 +164,7 @@ def hand_geometry(hand):
     if dn < 1e-6:
         return None
     d = d / dn
-    x = np.cross(d, n)
+    x = np.array([d[1] * n[2] - d[2] * n[1], d[2] * n[0] - d[0] * n[2], d[0] * n[1] - d[1] * n[0]])
     if hand.side == 'left':
         x = -x
     basis = np.stack([x, n, d])
@@ -183,7 +184,7 @@ def hand_geometry(hand):
         gap_v = pts[0, 0] - pts[1, 0]
         gap = math.sqrt(gap_v @ gap_v)
     return HandGeometry(bend=bend, thumb_out=float(tips_local[0, 0]), pinch_gap=gap,
-                        tips_local=tips_local, basis=basis)
+                        tips_local=tips_local, tips_world=pts[:, 0], basis=basis)
 
 
 _NAN3 = np.full(3, math.nan)
@@ -251,26 +252,27 @@ class _CircleTrack:
         self.reset()
 
     def reset(self):
-        self.last = None          # last accepted point
+        self.last = None          # last accepted point (x, y, z)
         self.seg = None           # last segment vector
         self.steps = deque()      # (t, turn vector, |turn|, segment length)
-        self.turn = np.zeros(3)
+        self.turn = [0.0, 0.0, 0.0]
         self.abs_turn = 0.0
         self.length = 0.0
 
-    def _drop(self):
-        t, v, a, s = self.steps.popleft()
-        self.turn = self.turn - v
-        self.abs_turn -= a
-        self.length -= s
+    def _clear(self):
+        self.steps.clear()
+        self.turn = [0.0, 0.0, 0.0]
+        self.abs_turn = self.length = 0.0
 
     def add(self, t, p):
-        """Feed a point; (axis unit vector, radius mm) when a circle just closed."""
+        """Feed a point (3 floats); (axis unit vector, radius mm) when a circle closed.
+        Plain floats: numpy's per-call overhead dominates on 3-vectors."""
         if self.last is None:
             self.last = p
             return None
-        seg = p - self.last
-        length = math.sqrt(seg @ seg)
+        lx, ly, lz = self.last
+        sx, sy, sz = p[0] - lx, p[1] - ly, p[2] - lz
+        length = math.sqrt(sx * sx + sy * sy + sz * sz)
         if length < self.spacing:
             return None
         if length > 25 * self.spacing + 2 * self.r_max:   # a jump: tracking glitch
@@ -278,30 +280,39 @@ class _CircleTrack:
             self.last = p
             return None
         self.last = p
-        prev, self.seg = self.seg, seg
+        prev, self.seg = self.seg, (sx, sy, sz)
         if prev is None:
             return None
-        c = np.cross(prev, seg)
-        cn = math.sqrt(c @ c)
-        angle = math.atan2(cn, prev @ seg)
+        px, py, pz = prev
+        cx, cy, cz = py * sz - pz * sy, pz * sx - px * sz, px * sy - py * sx
+        cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+        angle = math.atan2(cn, px * sx + py * sy + pz * sz)
         if angle > CIRCLE_MAX_STEP_TURN:
-            self.steps.clear()
-            self.turn, self.abs_turn, self.length = np.zeros(3), 0.0, 0.0
+            self._clear()
             return None
-        v = c * (angle / cn) if cn > 0 else np.zeros(3)
-        self.steps.append((t, v, angle, length))
-        self.turn = self.turn + v
+        k = angle / cn if cn > 0 else 0.0
+        v = (cx * k, cy * k, cz * k)
+        steps = self.steps
+        steps.append((t, v, angle, length))
+        turn = self.turn
+        turn[0] += v[0]
+        turn[1] += v[1]
+        turn[2] += v[2]
         self.abs_turn += angle
         self.length += length
-        while self.steps and t - self.steps[0][0] > self.window:
-            self._drop()
-        total = math.sqrt(self.turn @ self.turn)
+        while steps and (t - steps[0][0] > self.window or t < steps[0][0]):
+            _, ov, oa, ol = steps.popleft()
+            turn[0] -= ov[0]
+            turn[1] -= ov[1]
+            turn[2] -= ov[2]
+            self.abs_turn -= oa
+            self.length -= ol
+        total = math.sqrt(turn[0] ** 2 + turn[1] ** 2 + turn[2] ** 2)
         if total < CIRCLE_TURN or total < CIRCLE_CONSISTENCY * self.abs_turn:
             return None
         radius = self.length / total
-        axis = self.turn / total
-        self.steps.clear()
-        self.turn, self.abs_turn, self.length = np.zeros(3), 0.0, 0.0
+        axis = np.array(turn) / total
+        self._clear()
         if not self.r_min <= radius <= self.r_max:
             return None
         return axis, radius
@@ -336,15 +347,17 @@ class CircleDetector:
             sm = self._palm_smooth
             sm = palm if sm is None else sm + PALM_SMOOTHING * (palm - sm)
             self._palm_smooth = sm
-            hit = self.tracks[0].add(timestamp, sm)
+            hit = self.tracks[0].add(timestamp, sm.tolist())
             if hit is not None:
                 found = (hit[0] @ _UP > 0, hit[1])
         if geometry is not None:
+            tips = geometry.tips_world
+            ok = np.isfinite(tips).all(axis=1).tolist()
+            tips = tips.tolist()
             for i, f in enumerate(hand.fingers[:5]):
-                tip = np.asarray(f.tip, dtype=float)
-                if tip.shape != (3,) or not np.all(np.isfinite(tip)):
+                if not ok[i]:
                     continue
-                hit = self.tracks[1 + i].add(timestamp, tip)
+                hit = self.tracks[1 + i].add(timestamp, tips[i])
                 if hit is not None and found is None:
                     ref = np.asarray(f.direction, dtype=float)
                     if ref.shape != (3,) or not np.all(np.isfinite(ref)):
@@ -379,7 +392,7 @@ class GestureRecognizer:
         self._active = set()
         self._count = {name: 0 for name in HELD_GESTURES}
         self._since = {name: 0.0 for name in HELD_GESTURES}
-        self._bend_hist = deque()
+        self._bend_hist = deque(maxlen=64)
         self._last_shape = None
         self._prev = GestureState()
         self._last_confident = -math.inf
@@ -406,7 +419,7 @@ class GestureRecognizer:
                 if np.all(np.isfinite(bends)):
                     mean_bend = float(bends.mean())
                     hist = self._bend_hist
-                    while hist and timestamp - hist[0][0] > OPENING_WINDOW_S:
+                    while hist and not 0.0 <= timestamp - hist[0][0] <= OPENING_WINDOW_S:
                         hist.popleft()
                     hist.append((timestamp, mean_bend))
                     opening = max(b for _, b in hist) - mean_bend > OPENING_DEG

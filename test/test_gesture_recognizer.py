@@ -1,0 +1,202 @@
+"""Gesture recognizer: synthetic poses, temporal filter, events, circles, robustness."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from leap_teleop.frame import Finger, Hand
+from leap_teleop.gestures import GestureRecognizer, OriginalRules
+from leap_teleop.hand_model import POSES, render_hand
+from leap_teleop.leap_interface import HandTracker
+from leap_teleop.sources.scripted import GestureScript, ScriptedSource
+
+HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open')
+EXPECTED = {'open': {'open'}, 'fist': {'fist'}, 'thumbs_up': {'thumb_up'}, 'rock': {'rock'},
+            'pinch': {'pinch'}, 'point': set(), 'two': set(), 'gun': set()}
+
+
+def on(state):
+    return {n for n in HELD if getattr(state, n)}
+
+
+def feed(rec, hands, t0=0.0, dt=1 / 120.0):
+    return [rec.update(h, t0 + i * dt) for i, h in enumerate(hands)]
+
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+@pytest.mark.parametrize('pose', sorted(POSES))
+def test_every_synthetic_pose_is_recognized(side, pose):
+    assert set(EXPECTED) == set(POSES)
+    hand = render_hand(side, pose, (30.0, 210.0, -20.0), pinch_value=0.5)
+    state = feed(GestureRecognizer(), [hand] * 30)[-1]
+    assert on(state) == EXPECTED[pose]
+    assert on(GestureRecognizer(stateless=True).update(hand, 0.0)) == EXPECTED[pose]
+
+
+@pytest.mark.parametrize('value', [0.0, 0.25, 0.5, 0.8])
+def test_pinch_value_round_trips_through_the_hand_model(value):
+    state = feed(GestureRecognizer(), [render_hand('right', 'pinch', (0, 200, 0), pinch_value=value)] * 10)[-1]
+    assert state.pinch and state.pinch_value == pytest.approx(value, abs=1e-6)
+
+
+def test_rotated_poses_still_recognized():
+    from leap_teleop.hand_model import rpy_to_basis
+    for rpy in [(0.3, 0.0, 0.0), (0.0, 0.4, 0.0), (0.0, 0.0, 0.5), (-0.4, 0.3, -0.3)]:
+        n, d = rpy_to_basis(*rpy, 'right')
+        for pose in ('fist', 'open', 'rock', 'pinch'):
+            state = feed(GestureRecognizer(), [render_hand('right', pose, (0, 200, 0), n, d)] * 10)[-1]
+            assert on(state) == EXPECTED[pose], (rpy, pose)
+
+
+def test_temporal_filter_needs_consistent_frames_and_emits_start_stop():
+    rec = GestureRecognizer(on_frames=3, off_frames=3)
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    opn = render_hand('right', 'open', (0, 200, 0))
+    states = feed(rec, [fist] * 5)
+    assert [s.fist for s in states] == [False, False, True, True, True]
+    assert [(e.gesture, e.active) for e in states[2].events] == [('fist', True)]
+    # A 2-frame blip of open does not switch anything (hysteresis / off filter).
+    states = feed(rec, [opn, opn, fist, fist], t0=1.0)
+    assert all(s.fist and not s.open for s in states)
+    states = feed(rec, [opn] * 4, t0=2.0)
+    assert [s.fist for s in states] == [True, True, False, False]
+    events = [(e.gesture, e.active) for e in states[2].events]
+    assert ('fist', False) in events and ('open', True) in events and ('unfold', True) in events
+
+
+def test_fold_event_and_reset():
+    rec = GestureRecognizer()
+    opn = render_hand('left', 'open', (0, 200, 0))
+    fist = render_hand('left', 'fist', (0, 200, 0))
+    names = [e.gesture for s in feed(rec, [opn] * 5 + [fist] * 5) for e in s.events]
+    assert 'fold' in names and 'unfold' not in names
+    rec.reset()
+    names = [e.gesture for s in feed(rec, [opn] * 5, t0=5.0) for e in s.events]
+    assert names == ['open']          # no fold / unfold across a reset
+
+
+def test_low_confidence_frames_do_not_turn_gestures_on():
+    fist = render_hand('right', 'fist', (0, 200, 0), confidence=0.05)
+    states = feed(GestureRecognizer(), [fist] * 20)
+    assert not any(s.fist for s in states)
+    rec = GestureRecognizer()
+    feed(rec, [render_hand('right', 'fist', (0, 200, 0))] * 5)
+    held = feed(rec, [fist] * 10, t0=0.05, dt=0.01)         # 0.1 s: held
+    assert held[-1].fist
+    later = feed(rec, [fist] * 10, t0=0.2, dt=0.05)          # beyond 0.25 s: let go
+    assert not later[-1].fist
+
+
+def test_stateless_mode_has_no_memory():
+    rec = GestureRecognizer(stateless=True)
+    assert rec.update(render_hand('right', 'fist', (0, 200, 0)), 0).fist
+    s = rec.update(render_hand('right', 'open', (0, 200, 0)), 0.001)
+    assert s.open and not s.fist and s.events == []
+
+
+def _circle_events(radius, duration, direction, noise=0.0, seed=0):
+    sc = GestureScript({'rate_hz': 120, 'noise_mm': noise, 'hands': {'right': [
+        {'pose': 'open', 'duration': 0.3},
+        {'pose': 'open', 'circle': {'radius': radius, 'direction': direction}, 'duration': duration},
+        {'pose': 'open', 'duration': 0.5}]}})
+    rec = GestureRecognizer()
+    out = []
+    for f in ScriptedSource(sc, realtime=False, seed=seed).frames():
+        out += [e for e in rec.update(f.hand('right'), f.timestamp).events
+                if e.gesture.startswith('circle')]
+    return out
+
+
+@pytest.mark.parametrize('radius,duration', [(40, 1.5), (60, 1.0), (120, 1.5)])
+@pytest.mark.parametrize('direction', ['cw', 'ccw'])
+def test_scripted_palm_circle_fires_one_event_with_direction(radius, duration, direction):
+    events = _circle_events(radius, duration, direction)
+    assert [e.gesture for e in events] == ['circle_' + direction]
+    assert events[0].value == pytest.approx(radius / 1000.0, rel=0.25)
+
+
+def test_circle_survives_palm_noise():
+    assert [e.gesture for e in _circle_events(40, 1.5, 'cw', noise=1.0, seed=4)] == ['circle_cw']
+
+
+def test_straight_moves_make_no_circle():
+    sc = GestureScript({'rate_hz': 120, 'noise_mm': 0.5, 'hands': {'right': [
+        {'pose': 'open', 'palm': [100, 200, 0], 'duration': 0.5},
+        {'pose': 'open', 'palm': [-100, 250, 50], 'duration': 0.5},
+        {'pose': 'fist', 'palm': [0, 200, 0], 'duration': 0.5}]}})
+    rec = GestureRecognizer()
+    for f in ScriptedSource(sc, realtime=False).frames():
+        assert not any(e.gesture.startswith('circle') for e in rec.update(f.hand('right'), f.timestamp).events)
+
+
+def test_original_rules_are_the_baseline():
+    rules = OriginalRules()
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    assert rules.classify(fist).fist
+    thumbs = render_hand('right', 'thumbs_up', (0, 200, 0))
+    assert rules.classify(thumbs).thumb_up and not rules.classify(thumbs).fist
+    p = render_hand('right', 'pinch', (0, 200, 0), pinch_value=0.3)
+    s = rules.classify(p)
+    assert s.pinch and s.pinch_value == pytest.approx(0.3)
+    rock = render_hand('right', 'rock', (0, 200, 0))
+    assert rules.classify(rock).rock
+
+
+# -- robustness --------------------------------------------------------------------------
+floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32),
+                   st.floats(-500, 500))
+vec = st.lists(floats, min_size=3, max_size=3).map(lambda v: np.array(v, dtype=float))
+maybe_vec = st.one_of(st.none(), vec)
+
+
+@st.composite
+def fingers(draw):
+    return Finger(tip=draw(vec), direction=draw(vec), extended=draw(st.sampled_from([None, True, False])),
+                  mcp=draw(maybe_vec), pip=draw(maybe_vec), dip=draw(maybe_vec))
+
+
+@st.composite
+def hands(draw):
+    n = draw(st.sampled_from([0, 5, 5, 3]))
+    return Hand(side=draw(st.sampled_from(['right', 'left'])), palm_position=draw(vec),
+                palm_velocity=draw(vec), palm_normal=draw(vec), direction=draw(vec),
+                grab_strength=draw(floats), pinch_strength=draw(floats), confidence=draw(floats),
+                fingers=tuple(draw(fingers()) for _ in range(n)))
+
+
+def check_state(s):
+    for n in HELD:
+        assert isinstance(getattr(s, n), bool)
+    assert 0.0 <= s.pinch_value <= 0.8 and (s.pinch or s.pinch_value == 0.0)
+    assert len(s.finger_extended) == 5
+    for e in s.events:
+        assert math.isfinite(e.value)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(hands(), min_size=1, max_size=12), st.lists(floats, min_size=12, max_size=12))
+def test_random_hands_never_raise_and_stay_in_range(hs, times):
+    rec, stateless, orig = GestureRecognizer(), GestureRecognizer(stateless=True), OriginalRules()
+    tracker = HandTracker('right')
+    for i, h in enumerate(hs):
+        check_state(rec.update(h, times[i]))
+        check_state(stateless.update(h, times[i]))
+        check_state(orig.classify(h))
+        hs_ = tracker.update(h, times[i] if math.isfinite(times[i]) else 0.0, i)
+        for key in ('rotate', 'turn', 'swing', 'pinch_value', 'grab_strength', 'confidence'):
+            assert math.isfinite(getattr(hs_, key))
+        assert 0.0 <= hs_.pinch_value <= 0.8
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(sorted(POSES)), st.floats(-0.6, 0.6),
+                          st.floats(-0.6, 0.6), st.floats(0, 0.8)), min_size=1, max_size=20))
+def test_pose_sequences_keep_exclusive_gestures(seq):
+    from leap_teleop.hand_model import rpy_to_basis
+    rec = GestureRecognizer()
+    for i, (pose, roll, pitch, value) in enumerate(seq):
+        n, d = rpy_to_basis(roll, pitch, 0.0, 'right')
+        s = rec.update(render_hand('right', pose, (0, 200, 0), n, d, pinch_value=value), i / 100)
+        check_state(s)
+        assert not (s.fist and s.open) and not (s.fist and s.thumb_up) and not (s.fist and s.pinch)
