@@ -1,0 +1,353 @@
+"""Recording source, LeapJS reader / writer, recorder, and the Leap / LeapC backends
+with fake SDK modules."""
+import gzip
+import json
+import os
+import sys
+import threading
+import time
+import types
+
+import numpy as np
+import pytest
+
+from leap_teleop.frame import Frame
+from leap_teleop.hand_model import render_hand
+from leap_teleop.sources import SourceError, leapjs, make_source
+from leap_teleop.tools import record_frames
+
+DATA = os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', 'shared', 'data', 'leapjs')
+DATA = os.path.normpath(DATA)
+need_data = pytest.mark.skipif(not os.path.isdir(DATA), reason='shared/data/leapjs absent')
+
+
+def test_lz_decoder_matches_the_reference_package():
+    import lzstring
+    ref = lzstring.LZString()
+    rng = np.random.default_rng(0)
+    samples = ['', 'a', 'hello hello hello', json.dumps({'frames': [[1, 2.5, 'x']] * 50}),
+               ''.join(chr(c) for c in rng.integers(32, 2000, 3000))]
+    for text in samples[1:]:
+        assert leapjs.lz_decompress_base64(ref.compressToBase64(text)) == text
+    with pytest.raises(ValueError):
+        leapjs.lz_decompress_base64('!!!not base64!!!')
+
+
+@need_data
+def test_every_shared_recording_reads_in_every_encoding():
+    takes = sorted(f[:-len('.json.lz')] for f in os.listdir(DATA) if f.endswith('.json.lz'))
+    assert len(takes) == 13
+    for take in takes:
+        lz = make_source('recording', path=os.path.join(DATA, take + '.json.lz'), realtime=False)
+        gz = make_source('recording', path=os.path.join(DATA, 'decoded', take + '.json.gz'),
+                         realtime=False, clock=lambda: 100.0)
+        a, b = list(lz.frames()), list(gz.frames())
+        assert len(a) == len(b) == int(lz.metadata['frames']) and len(a) > 50
+        assert b[0].timestamp == 100.0 and all(y.timestamp > x.timestamp for x, y in zip(b, b[1:]))
+        assert any(f.hands for f in b)
+        h = next(h for f in b for h in f.hands)
+        assert h.side in ('right', 'left') and len(h.fingers) == 5
+        assert np.all(np.isfinite(h.palm_position)) and np.all(np.isfinite(h.fingers[1].pip))
+        if take == 'finger-tap-54fps':       # packed format 2: no extended flag
+            assert lz.metadata['formatVersion'] == 2 and h.fingers[1].extended is None
+        else:
+            assert isinstance(h.fingers[1].extended, bool)
+
+
+@need_data
+def test_sdk_gestures_pass_through():
+    src = make_source('recording', path=os.path.join(DATA, 'flapping.json.lz'), realtime=False)
+    types_ = {g['type'] for f in src.frames() for g in f.gestures}
+    assert {'circle', 'swipe', 'keyTap'} <= types_
+
+
+def _write(tmp_path, name, frames, meta=None):
+    path = str(tmp_path / name)
+    leapjs.save(path, frames, meta)
+    return path
+
+
+def _frames(n=30, dt_us=10000):
+    return [leapjs.frame_to_dict(Frame(i, 5.0 + i * dt_us * 1e-6,
+                                       [render_hand('right', 'open', (i, 200, 0))])) for i in range(n)]
+
+
+def test_realtime_pacing_loop_and_clock_mapping(tmp_path):
+    path = _write(tmp_path, 'r.json', _frames(30, 10000))    # 0.29 s
+    src = make_source('recording', path=path, realtime=True, loop=True, clock=lambda: 1000.0)
+    t0 = time.monotonic()
+    got = []
+    for f in src.frames():
+        got.append(f)
+        if len(got) == 60:
+            break
+    elapsed = time.monotonic() - t0
+    assert 0.5 < elapsed < 2.0                                # two passes of 0.29 s + a period
+    stamps = [f.timestamp for f in got]
+    assert stamps[0] == 1000.0 and all(b > a for a, b in zip(stamps, stamps[1:]))
+    assert stamps[30] - stamps[29] == pytest.approx(0.01, abs=1e-6)
+    assert got[30].hands[0].palm_position[0] == pytest.approx(0.0)
+
+
+def test_stop_from_another_thread(tmp_path):
+    path = _write(tmp_path, 'r.json.gz', _frames(10, 100000))   # 1 s
+    src = make_source('recording', path=path, loop=True)
+    threading.Timer(0.3, src.stop).start()
+    t0 = time.monotonic()
+    n = sum(1 for _ in src.frames())
+    assert time.monotonic() - t0 < 1.0 and 2 <= n <= 6
+
+
+@pytest.mark.parametrize('content,needle', [
+    (b'', 'empty'), (b'not base64 at all!', 'LZString'), (b'{"metadata": {}, "frames": [', 'not valid JSON'),
+    (b'{"metadata": {}}', 'no "frames"'), (b'{"frames": []}', 'no frames'),
+    (b'\x1f\x8b\x08\x00garbage', 'gzip'), (b'{"frames": [{"id": 1}]}', 'timestamp'),
+    (b'\xff\xfe\x00bin', 'neither')])
+def test_malformed_files_raise_clear_errors(tmp_path, content, needle):
+    path = tmp_path / 'bad.json'
+    path.write_bytes(content)
+    with pytest.raises(SourceError) as e:
+        make_source('recording', path=str(path))
+    assert needle in str(e.value) and 'bad.json' in str(e.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(SourceError, match='cannot read'):
+        make_source('recording', path=str(tmp_path / 'nope.json.lz'))
+
+
+def test_truncated_gzip_and_lz(tmp_path):
+    good = _write(tmp_path, 'g.json.gz', _frames(50))
+    raw = open(good, 'rb').read()
+    (tmp_path / 't.json.gz').write_bytes(raw[:len(raw) // 2])
+    with pytest.raises(SourceError):
+        make_source('recording', path=str(tmp_path / 't.json.gz'))
+    lz = _write(tmp_path, 'g.json.lz', _frames(50))
+    text = open(lz).read()
+    (tmp_path / 't.json.lz').write_text(text[:len(text) // 2])
+    with pytest.raises(SourceError):
+        make_source('recording', path=str(tmp_path / 't.json.lz'))
+
+
+def test_bad_single_frames_are_skipped_and_counted(tmp_path):
+    frames = _frames(10)
+    frames[3] = 'garbage'
+    frames[5] = {'id': 9, 'timestamp': 'x'}
+    frames[7] = dict(frames[7], hands=[{'type': 'right', 'palmPosition': 'oops'}], pointables=5)
+    path = tmp_path / 'm.json'
+    path.write_text(json.dumps({'metadata': {}, 'frames': frames}))
+    src = make_source('recording', path=str(path), realtime=False)
+    got = list(src.frames())
+    assert len(got) == 7 and src.bad_frames == 3
+
+
+def test_recorder_round_trip_from_the_scripted_source(tmp_path):
+    script = tmp_path / 's.yaml'
+    script.write_text('rate_hz: 100\nhands:\n  right:\n    - {pose: fist, palm: [10, 220, 5], duration: 0.3}\n'
+                      '    - {pose: open, duration: 0.3}\n  left:\n    - {pose: pinch, value: 0.4, duration: 0.6}\n')
+    for ext in ('json', 'json.gz', 'json.lz'):
+        out = str(tmp_path / ('rec.' + ext))
+        assert record_frames.main([out, '--source', 'scripted', '--script', str(script),
+                                   '--realtime', '0']) == 0
+        src = make_source('recording', path=out, realtime=False)
+        frames = list(src.frames())
+        assert len(frames) == 60 and src.metadata['source'] == 'scripted'
+        orig = list(make_source('scripted', script=str(script), realtime=False).frames())
+        for a, b in zip(orig, frames):
+            for ha in a.hands:
+                hb = b.hand(ha.side)
+                assert np.allclose(ha.palm_position, hb.palm_position, atol=1e-4)
+                assert np.allclose(ha.fingers[2].tip, hb.fingers[2].tip, atol=1e-4)
+                assert hb.fingers[2].extended == ha.fingers[2].extended
+                assert hb.pinch_strength == pytest.approx(ha.pinch_strength)
+
+
+def test_recorder_reports_a_missing_sdk(tmp_path, capsys):
+    assert record_frames.main([str(tmp_path / 'x.json'), '--source', 'leapc']) == 2
+    assert 'leap' in capsys.readouterr().err
+
+
+# -- hardware backends with fake SDK modules -----------------------------------------------
+class V:
+    def __init__(self, x, y, z):
+        self.x, self.y, self.z = x, y, z
+
+
+def _fake_leap_v2():
+    Leap = types.ModuleType('Leap')
+
+    class Bone:
+        TYPE_METACARPAL, TYPE_PROXIMAL, TYPE_INTERMEDIATE, TYPE_DISTAL = 0, 1, 2, 3
+
+        def __init__(self, prev):
+            self.prev_joint = prev
+
+    class FakeFinger:
+        def __init__(self, t, hand):
+            self.type = t
+            p = hand.fingers[t]
+            self._p = p
+            self.tip_position = V(*p.tip)
+            self.direction = V(*p.direction)
+            self.is_extended = bool(p.extended)
+
+        def bone(self, kind):
+            p = self._p
+            return Bone(V(*{1: p.mcp, 2: p.pip, 3: p.dip}[kind]))
+
+    class FakeHand:
+        def __init__(self, h):
+            self.is_right = h.side == 'right'
+            self.is_left = not self.is_right
+            self.id = 7
+            for a, b in (('palm_position', 'palm_position'), ('palm_velocity', 'palm_velocity'),
+                         ('palm_normal', 'palm_normal'), ('direction', 'direction')):
+                setattr(self, a, V(*getattr(h, b)))
+            self.grab_strength, self.pinch_strength, self.confidence = h.grab_strength, h.pinch_strength, 0.9
+            self.fingers = [FakeFinger(t, h) for t in range(5)]
+
+    class FakeFrame:
+        def __init__(self, i):
+            self.id = i
+            self.timestamp = 1_000_000 + i * 8333
+            self.hands = [FakeHand(render_hand('right', 'fist', (0, 200, 0))),
+                          FakeHand(render_hand('left', 'open', (-50, 200, 0)))]
+
+    class Listener:
+        pass
+
+    class Controller:
+        def __init__(self):
+            self.listeners = []
+            self.i = 0
+            self._stop = threading.Event()
+            threading.Thread(target=self._run, daemon=True).start()
+
+        def _run(self):
+            while not self._stop.is_set():
+                time.sleep(0.005)
+                self.i += 1
+                for listener in list(self.listeners):
+                    listener.on_frame(self)
+
+        def frame(self):
+            return FakeFrame(self.i)
+
+        def add_listener(self, listener):
+            self.listeners.append(listener)
+
+        def remove_listener(self, listener):
+            self.listeners.remove(listener)
+            self._stop.set()
+
+    Leap.Bone, Leap.Listener, Leap.Controller = Bone, Listener, Controller
+    return Leap
+
+
+def _fake_leapc():
+    leap = types.ModuleType('leap')
+
+    class HandType:
+        Left, Right = 0, 1
+
+    class TrackingMode:
+        Desktop = 0
+
+    def bone(a, b):
+        return types.SimpleNamespace(prev_joint=V(*a), next_joint=V(*b))
+
+    def hand(h):
+        digits = []
+        for f in h.fingers:
+            digits.append(types.SimpleNamespace(
+                is_extended=bool(f.extended), proximal=bone(f.mcp, f.pip),
+                intermediate=bone(f.pip, f.dip), distal=bone(f.dip, f.tip)))
+        palm = types.SimpleNamespace(position=V(*h.palm_position), velocity=V(*h.palm_velocity),
+                                     normal=V(*h.palm_normal), direction=V(*h.direction))
+        return types.SimpleNamespace(type=HandType.Left if h.side == 'left' else HandType.Right,
+                                     id=3, palm=palm, digits=digits, grab_strength=h.grab_strength,
+                                     pinch_strength=h.pinch_strength, confidence=1.0)
+
+    class Listener:
+        pass
+
+    class Connection:
+        def __init__(self):
+            self.listeners = []
+            self.mode = None
+
+        def add_listener(self, listener):
+            self.listeners.append(listener)
+
+        def set_tracking_mode(self, mode):
+            self.mode = mode
+
+        def open(self):
+            conn = self
+
+            class Ctx:
+                def __enter__(self):
+                    conn._stop = threading.Event()
+
+                    def run():
+                        i = 0
+                        while not conn._stop.is_set():
+                            time.sleep(0.005)
+                            i += 1
+                            ev = types.SimpleNamespace(
+                                tracking_frame_id=i, timestamp=2_000_000 + i * 8333,
+                                hands=[hand(render_hand('right', 'thumbs_up', (0, 210, 0)))])
+                            for listener in conn.listeners:
+                                listener.on_tracking_event(ev)
+                    threading.Thread(target=run, daemon=True).start()
+                    return conn
+
+                def __exit__(self, *exc):
+                    conn._stop.set()
+                    return False
+            return Ctx()
+
+    leap.HandType, leap.TrackingMode, leap.Listener, leap.Connection = HandType, TrackingMode, Listener, Connection
+    return leap
+
+
+def _take(source, n):
+    out = []
+    for f in source.frames():
+        out.append(f)
+        if len(out) >= n:
+            source.stop()
+    return out
+
+
+def test_leap_v2_backend_with_a_fake_sdk(monkeypatch):
+    monkeypatch.setitem(sys.modules, 'Leap', _fake_leap_v2())
+    from leap_teleop.leap_interface import LeapInterface
+    src = make_source('leap', clock=lambda: 50.0)
+    frames = _take(src, 10)
+    assert len(frames) == 10
+    f = frames[-1]
+    assert {h.side for h in f.hands} == {'right', 'left'}
+    assert f.timestamp > 50.0 - 1e-9 and frames[1].timestamp - frames[0].timestamp > 0
+    li = LeapInterface()
+    for fr in frames:
+        li.on_frame(fr)
+    assert li.get_right_hand_fist() and li.get_left_hand_open()
+
+
+def test_leapc_backend_with_a_fake_sdk(monkeypatch):
+    monkeypatch.setitem(sys.modules, 'leap', _fake_leapc())
+    from leap_teleop.gestures import GestureRecognizer
+    frames = _take(make_source('leapc'), 8)
+    assert len(frames) == 8 and frames[0].hands[0].side == 'right'
+    rec = GestureRecognizer()
+    states = [rec.update(f.hands[0], f.timestamp) for f in frames]
+    assert states[-1].thumb_up
+
+
+@pytest.mark.parametrize('name,module', [('leap', 'Leap'), ('leapc', 'leap')])
+def test_missing_sdk_names_what_to_install(monkeypatch, name, module):
+    monkeypatch.setitem(sys.modules, module, None)      # import fails
+    with pytest.raises(SourceError) as e:
+        make_source(name)
+    assert 'install' in str(e.value) and ('import %s' % module) in str(e.value)
