@@ -1,0 +1,114 @@
+"""classify_frames CLI: recordings, JSON Lines, malformed input, schema."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from leap_teleop.frame import Frame
+from leap_teleop.hand_model import render_hand
+from leap_teleop.sources import leapjs
+from leap_teleop.tools.classify_frames import Classifier
+
+DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..',
+                                     'shared', 'data', 'leapjs'))
+KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'events']
+
+
+def run_cli(args, stdin=None):
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.tools.classify_frames'] + args,
+                       input=stdin, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    return [json.loads(line) for line in p.stdout.splitlines()]
+
+
+def check_line(line):
+    assert set(line) >= {'id', 'timestamp', 'hands'}
+    for h in line['hands']:
+        assert list(h) == KEYS and h['type'] in ('left', 'right')
+        assert 0.0 <= h['pinch_value'] <= 0.8
+        assert all(isinstance(h[k], bool) for k in ('fist', 'thumb_up', 'pinch', 'rock', 'open'))
+
+
+def _dicts(poses):
+    return [leapjs.frame_to_dict(Frame(i, i / 100.0, [render_hand('right', p, (0, 200, 0), pinch_value=0.5)]))
+            for i, p in enumerate(poses)]
+
+
+def test_json_lines_on_stdin_stream_and_stateless(tmp_path):
+    frames = _dicts(['fist'] * 6 + ['open'] * 6)
+    text = '\n'.join(json.dumps(f) for f in frames) + '\n'
+    out = run_cli([], stdin=text)
+    assert len(out) == 12 and [o['id'] for o in out] == list(range(12))
+    for o in out:
+        check_line(o)
+    assert out[5]['hands'][0]['fist'] and out[11]['hands'][0]['open']
+    events = [e for o in out for e in o['hands'][0]['events']]
+    assert events == ['fist', 'open', 'unfold']
+    out = run_cli(['--stateless'], stdin=text)
+    assert out[0]['hands'][0]['fist'] and out[6]['hands'][0]['open']
+    assert all(o['hands'][0]['events'] == [] for o in out)
+
+
+def test_recording_file_and_json_lines_file(tmp_path):
+    frames = _dicts(['pinch'] * 5)
+    rec = str(tmp_path / 'r.json.gz')
+    leapjs.save(rec, frames)
+    jl = tmp_path / 'f.jsonl'
+    jl.write_text('\n'.join(json.dumps(f) for f in frames))
+    a, b = run_cli([rec]), run_cli([str(jl)])
+    assert a == b and len(a) == 5 and a[-1]['hands'][0]['pinch']
+    assert a[-1]['hands'][0]['pinch_value'] == pytest.approx(0.5)
+
+
+def test_garbage_lines_never_stop_the_run():
+    text = 'not json\n[1, 2]\n{"id": 3}\n{"id": 4, "hands": [{"type": "left"}], "pointables": "x"}\n' \
+           '{"id": 5, "timestamp": 9, "hands": [{"type": "right", "palmPosition": [1, null, 2]}]}\n'
+    out = run_cli([], stdin=text)
+    assert len(out) == 5
+    assert 'error' in out[0] and 'error' in out[1] and out[2]['hands'] == []
+    assert out[4]['hands'][0]['type'] == 'right' and not out[4]['hands'][0]['open']
+
+
+@pytest.mark.skipif(not os.path.isdir(DATA), reason='shared/data/leapjs absent')
+def test_every_shared_recording_classifies():
+    for name in sorted(os.listdir(DATA)):
+        if name.endswith('.json.lz'):
+            out = run_cli([os.path.join(DATA, name)])
+            assert len(out) > 50
+            for o in out:
+                check_line(o)
+
+
+json_values = st.recursive(st.one_of(st.none(), st.booleans(), st.integers(), st.text(max_size=5),
+                                     st.floats(allow_nan=True, allow_infinity=True)),
+                           lambda c: st.one_of(st.lists(c, max_size=4),
+                                               st.dictionaries(st.text(max_size=8), c, max_size=4)),
+                           max_leaves=20)
+vec = st.one_of(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=3, max_size=3),
+                json_values)
+hand = st.fixed_dictionaries({'type': st.sampled_from(['left', 'right', 'up']), 'id': st.integers(0, 3)},
+                             optional={'palmPosition': vec, 'palmNormal': vec, 'direction': vec,
+                                       'grabStrength': json_values, 'pinchStrength': json_values,
+                                       'confidence': json_values})
+pointable = st.fixed_dictionaries({'handId': st.integers(0, 3), 'type': st.integers(-1, 6)},
+                                  optional={'tipPosition': vec, 'dipPosition': vec, 'pipPosition': vec,
+                                            'mcpPosition': vec, 'direction': vec, 'extended': json_values})
+frame = st.fixed_dictionaries({}, optional={'id': json_values, 'timestamp': json_values,
+                                            'hands': st.one_of(st.lists(hand, max_size=3), json_values),
+                                            'pointables': st.one_of(st.lists(pointable, max_size=8), json_values),
+                                            'gestures': json_values})
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(frame, json_values), min_size=1, max_size=6), st.booleans())
+def test_frame_parsing_never_raises(frames, stateless):
+    c = Classifier(stateless=stateless)
+    for d in frames:
+        if not isinstance(d, dict):
+            continue
+        line = c.classify(d)
+        json.dumps(line, allow_nan=False)
+        check_line(line)
