@@ -85,3 +85,19 @@ def to_gesture_events(state, frame_id=LEAP_FRAME):
         msg.value = event.value
         out.append(msg)
     return out
+
+
+def hand_messages(state, frame_id=LEAP_FRAME):
+    """Everything the sender publishes for one side's state, as (kind, message) pairs,
+    leapcobot first; kind is 'leapcobot', 'hand' or 'gesture'. A generator, so the
+    first message can go out before the others are built. Shared with the bag tools."""
+    yield 'leapcobot', to_leapcobot(state, frame_id)
+    yield 'hand', to_hand(state, frame_id)
+    for msg in to_gesture_events(state, frame_id):
+        yield 'gesture', msg
+
+
+def default_topics(side):
+    """The sender's default topic per kind for one side."""
+    return {'leapcobot': 'leapmotion/data_%s' % side, 'hand': 'leapmotion/hand_%s' % side,
+            'gesture': 'leapmotion/gestures'}

@@ -57,13 +57,13 @@ class Sender:
         self.p = p
         self.sides = list(p['sides'])
         q = int(p['queue_size'])
-        self.leapcobot_pubs = {
-            side: rospy.Publisher(p['leapcobot_topic_' + side],
-                                  conversions.LEAPCOBOT_TYPES[side], queue_size=q)
-            for side in self.sides}
-        self.hand_pubs = {side: rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q)
-                          for side in self.sides}
-        self.gesture_pub = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
+        gestures = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
+        self.pubs = {side: {'leapcobot': rospy.Publisher(p['leapcobot_topic_' + side],
+                                                         conversions.LEAPCOBOT_TYPES[side],
+                                                         queue_size=q),
+                            'hand': rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q),
+                            'gesture': gestures}
+                     for side in self.sides}
         self.period = float(p['freq'])
         self._last_sent = {}
         self.published = 0
@@ -72,18 +72,16 @@ class Sender:
     def on_hand(self, frame, state):
         """Publish one side's messages as soon as that side is recognised."""
         side = state.side
-        if side not in self.leapcobot_pubs:
+        pubs = self.pubs.get(side)
+        if pubs is None:
             return
         if self.period > 0:
             last = self._last_sent.get(side)
             if last is not None and frame.timestamp - last < self.period:
                 return
             self._last_sent[side] = frame.timestamp
-        frame_id = self.p['frame_id']
-        self.leapcobot_pubs[side].publish(conversions.to_leapcobot(state, frame_id))
-        self.hand_pubs[side].publish(conversions.to_hand(state, frame_id))
-        for event in conversions.to_gesture_events(state, frame_id):
-            self.gesture_pub.publish(event)
+        for kind, msg in conversions.hand_messages(state, self.p['frame_id']):
+            pubs[kind].publish(msg)
         self.published += 1
 
 
@@ -114,7 +112,7 @@ def main(argv=None):
     tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)
     rospy.loginfo('sender: publishing %s hands from the %s source on %s',
                   '/'.join(sender.sides), p['source'],
-                  ', '.join(pub.resolved_name for pub in sender.leapcobot_pubs.values()))
+                  ', '.join(pubs['leapcobot'].resolved_name for pubs in sender.pubs.values()))
     rospy.on_shutdown(interface.stop)
     interface.start()
     while not rospy.is_shutdown() and not interface.finished.wait(0.2):

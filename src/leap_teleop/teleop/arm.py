@@ -26,7 +26,7 @@ class ArmTeleopParams:
     mode: str = 'imitation'
     # Leap axes (x right, y up, z toward the user) -> arm base axes, rows = base x, y, z.
     axis_map: tuple = ((0.0, 0.0, -1.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
-    scale: float = 1.5                 # imitation: robot m per hand m
+    scale: float = 2.5                 # imitation: robot m per hand m
     deadzone_mm: float = 30.0          # joystick: radius around the origin that moves nothing
     joystick_gain: float = 2.0         # joystick: TCP m/s per m of palm excess
     max_tcp_speed: float = 0.25        # joystick: m/s cap
