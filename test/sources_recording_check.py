@@ -1,0 +1,41 @@
+#!/usr/bin/env python3
+"""rostest node: the sender, fed by the recording source, publishes the take's hands."""
+import os
+import sys
+import unittest
+
+import rospy
+import rostest
+
+from leap_teleop.msg import GestureEvent, Hand, leapcobotright
+
+
+class SenderPlaysRecording(unittest.TestCase):
+    def test_messages_arrive_with_present_hands(self):
+        path = rospy.get_param('~recording')
+        if not os.path.exists(path):
+            self.skipTest('recording %s absent' % path)
+        hands, cobots, events = [], [], []
+        rospy.Subscriber('leapmotion/hand_right', Hand, hands.append, queue_size=5000)
+        rospy.Subscriber('leapmotion/data_right', leapcobotright, cobots.append, queue_size=5000)
+        rospy.Subscriber('leapmotion/gestures', GestureEvent, events.append, queue_size=5000)
+        deadline = rospy.Time.now() + rospy.Duration(rospy.get_param('~duration', 6.0))
+        while rospy.Time.now() < deadline and not rospy.is_shutdown():
+            rospy.sleep(0.1)
+        # grab.json.lz: 374 frames in 3.3 s (~113 Hz), a right hand in every frame.
+        self.assertGreater(len(hands), 200)
+        present = [m for m in hands if m.present]
+        self.assertGreater(len(present), 0.95 * len(hands))
+        self.assertTrue(any(m.fist for m in present), 'no fist in the grab take')
+        self.assertTrue(any(m.open for m in present), 'no open hand in the grab take')
+        self.assertTrue(any(m.right_hand_fist for m in cobots))
+        self.assertFalse(any(m.right_hand_pinch for m in cobots), 'a fist is not a pinch')
+        for a, b in zip(present, present[1:]):
+            self.assertGreaterEqual(b.header.stamp, a.header.stamp)
+        ys = [m.palm_position.y for m in present]
+        self.assertTrue(all(0.05 < y < 0.5 for y in ys), 'palm height out of range (m)')
+
+
+if __name__ == '__main__':
+    rospy.init_node('sources_recording_check')
+    rostest.rosrun('leap_teleop', 'sources_recording_check', SenderPlaysRecording, sys.argv)
