@@ -49,7 +49,9 @@ say "building the catkin workspace in .ws/"
   cd .ws
   exec 9>.build.lock
   flock 9   # concurrent set-ups (parallel shells, helpers) build one at a time
-  catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON \
+  # The venv's python is Debian's /usr/bin/python3 plus the pip packages: node wrappers
+  # that catkin generates then start inside the venv wherever they are launched from.
+  catkin_make -DPYTHON_EXECUTABLE="$root/.venv/bin/python3" -DCATKIN_ENABLE_TESTING=ON \
     > build.log 2>&1 || { tail -40 build.log; echo "[setup] catkin_make failed; full log in .ws/build.log" >&2; exit 1; }
 )
 say "ready: run commands with ./env.sh CMD, or 'source env.sh'"
