@@ -15,7 +15,7 @@ from leap_teleop.sources import SourceError, make_source
 PARAMS = {
     'source': Param('scripted', 'hand source: scripted, recording, leap, leapc'),
     'script': Param('', 'gesture script YAML for the scripted source '
-                        '(default config/gestures/demo_pick_place_dual.yaml)'),
+                        '(default config/gestures/wave_hello.yaml)'),
     'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source'),
     'rate': Param(0.0, 'scripted source frame rate in Hz; 0 = the script\'s own'),
     'loop': Param(False, 'restart the script / recording when it ends'),
@@ -41,7 +41,7 @@ LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 def build_source(p):
     name = p['source']
     if name == 'scripted':
-        script = p['script'] or package_path('config', 'gestures', 'demo_pick_place_dual.yaml')
+        script = p['script'] or package_path('config', 'gestures', 'wave_hello.yaml')
         return make_source('scripted', script=script, rate_hz=p['rate'] or None,
                            loop=p['loop'], realtime=p['realtime'], clock=rospy.get_time)
     if name == 'recording':
