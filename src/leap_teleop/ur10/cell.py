@@ -1,0 +1,335 @@
+"""UR10Cell: one or two UR10 arms with grippers, a table, cubes and trays in PyBullet.
+
+Plain Python (no ROS). Time is simulated time: step() advances the physics by one
+1/physics_hz step and every arm's trajectory follower with it. Arms are driven by
+PyBullet position control (target position + feed-forward velocity from the follower,
+motor speed capped at the UR10 limits), fingers by force-limited position control.
+
+Grasping is by contact only: when both fingers of a closing gripper touch the same cube,
+a helper fixed constraint ties the cube to the TCP; it is removed as soon as the gripper
+is commanded open or either finger loses contact. Nothing else ever moves a cube.
+"""
+import io
+import os
+
+import numpy as np
+import pybullet as p
+
+from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.config import CellConfig, load_config
+from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_CLOSED, GRIPPER_JOINT, urdf_file
+from leap_teleop.ur10.trajectory import TrajectoryFollower
+
+GRIPPER_MAX_SPEED = 1.6        # knuckle rad/s: about 0.5 s from open to closed (2F-85-like)
+GRIPPER_FORCE = 60.0           # N per finger
+ARM_FORCE = np.array([330.0, 330.0, 150.0, 54.0, 54.0, 54.0])   # URDF efforts
+GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
+GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
+
+
+class _Arm:
+    """PyBullet handles and control state of one arm."""
+
+    def __init__(self, cfg, body, client):
+        self.cfg = cfg
+        self.name = cfg.name
+        self.body = body
+        joints, links = {}, {}
+        for i in range(p.getNumJoints(body, physicsClientId=client)):
+            info = p.getJointInfo(body, i, physicsClientId=client)
+            joints[info[1].decode()[len(cfg.prefix):]] = i
+            links[info[12].decode()[len(cfg.prefix):]] = i
+        self.arm_joints = [joints[n] for n in kin.JOINT_NAMES]
+        self.knuckle = joints[GRIPPER_JOINT]
+        self.fingers = [joints['left_finger_joint'], joints['right_finger_joint']]
+        self.finger_links = [links['left_finger_link'], links['right_finger_link']]
+        self.tcp_link = links['tcp_link']
+        self.arm_follower = TrajectoryFollower(cfg.home, kin.MAX_JOINT_SPEED,
+                                               kin.JOINT_LOWER, kin.JOINT_UPPER)
+        self.gripper_follower = TrajectoryFollower([0.0], GRIPPER_MAX_SPEED, [0.0], [GRIPPER_CLOSED])
+        self.grasp = None              # (constraint id, cube name, knuckle at grasp)
+        self.lost_checks = 0
+        self.touching = ([], [])       # cube names touched by left, right finger
+
+
+class UR10Cell:
+    """The simulated work cell. config: a CellConfig, a path, or a file name in config/."""
+
+    def __init__(self, config='ur10_cell.yaml', gui=False):
+        self.config = config if isinstance(config, CellConfig) else load_config(config)
+        self.dt = 1.0 / self.config.physics_hz
+        self.gui = bool(gui) and bool(os.environ.get('DISPLAY'))
+        self.client = p.connect(p.GUI if self.gui else p.DIRECT)
+        self.time = 0.0
+        self.steps = 0
+        c = self.client
+        p.setGravity(0, 0, -9.81, physicsClientId=c)
+        p.setTimeStep(self.dt, physicsClientId=c)
+        if self.gui:
+            p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=c)
+        self._build_scene()
+        self.arms = {}
+        for a in self.config.arms:
+            body = p.loadURDF(urdf_file(a.prefix, a.base_xyz, a.base_rpy), useFixedBase=True,
+                              flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
+            self.arms[a.name] = arm = _Arm(a, body, c)
+            for j in arm.fingers + [arm.knuckle]:
+                p.changeDynamics(body, j, jointLowerLimit=0.0,
+                                 jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
+                                 physicsClientId=c)
+        self.reset()
+
+    # ---- scene -------------------------------------------------------------------------
+    def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
+        c = self.client
+        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=c)
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c)
+        body = p.createMultiBody(mass, col, vis, basePosition=xyz, physicsClientId=c)
+        p.changeDynamics(body, -1, lateralFriction=friction, physicsClientId=c)
+        return body
+
+    def _build_scene(self):
+        cfg, c = self.config, self.client
+        plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c)
+        self.floor = p.createMultiBody(0, plane, physicsClientId=c)
+        (tx, ty), (sx, sy), h = cfg.table_center, cfg.table_size, cfg.table_height
+        self.table = self._box([sx / 2, sy / 2, 0.025], [tx, ty, h - 0.025], [0.6, 0.45, 0.3, 1])
+        self.trays = {}
+        for a in cfg.arms:
+            t = a.tray
+            (ix, iy), (wt, wh) = t.inner, t.wall
+            x, y, z = t.xyz
+            parts = [([ix / 2 + wt, iy / 2 + wt, wt / 2], [0, 0, wt / 2]),
+                     ([wt / 2, iy / 2 + wt, wh / 2], [ix / 2 + wt / 2, 0, wh / 2]),
+                     ([wt / 2, iy / 2 + wt, wh / 2], [-ix / 2 - wt / 2, 0, wh / 2]),
+                     ([ix / 2, wt / 2, wh / 2], [0, iy / 2 + wt / 2, wh / 2]),
+                     ([ix / 2, wt / 2, wh / 2], [0, -iy / 2 - wt / 2, wh / 2])]
+            col = p.createCollisionShapeArray([p.GEOM_BOX] * 5, halfExtents=[h for h, _ in parts],
+                                              collisionFramePositions=[o for _, o in parts],
+                                              physicsClientId=c)
+            vis = p.createVisualShapeArray([p.GEOM_BOX] * 5, halfExtents=[h for h, _ in parts],
+                                           visualFramePositions=[o for _, o in parts],
+                                           rgbaColors=[[0.3, 0.3, 0.35, 1]] * 5, physicsClientId=c)
+            self.trays[a.name] = p.createMultiBody(0, col, vis, basePosition=[x, y, z],
+                                                   physicsClientId=c)
+        half = cfg.cube_size / 2
+        self.cubes = {}
+        for cube in cfg.cubes:
+            body = self._box([half] * 3, cube.xyz, list(cube.rgba), mass=cfg.cube_mass, friction=1.0)
+            self.cubes[cube.name] = body
+        self._cube_by_body = {b: n for n, b in self.cubes.items()}
+
+    # ---- commands ----------------------------------------------------------------------
+    def arm(self, name):
+        try:
+            return self.arms[name]
+        except KeyError:
+            raise KeyError('no arm %r (arms: %s)' % (name, list(self.arms))) from None
+
+    @property
+    def arm_names(self):
+        return list(self.arms)
+
+    def command_arm(self, name, points, start_time=None):
+        """Follow joint points [(time_from_start, q[6] in JOINT_NAMES order, qd[6]|None)],
+        replacing the current trajectory. Raises TrajectoryError on a bad command (the arm
+        keeps what it was doing). Returns the sim time the last point will be reached."""
+        return self.arm(name).arm_follower.command(self.time, points, start_time)
+
+    def command_gripper(self, name, points, start_time=None):
+        """Like command_arm for the one gripper joint (knuckle: 0 open .. 0.8 closed)."""
+        return self.arm(name).gripper_follower.command(self.time, points, start_time)
+
+    def move_to(self, name, q, duration=0.0):
+        """Convenience: one-point trajectory to q (duration stretched to the speed limits)."""
+        return self.command_arm(name, [(duration, q, None)])
+
+    def set_gripper(self, name, knuckle, duration=0.0):
+        return self.command_gripper(name, [(duration, [knuckle], None)])
+
+    # ---- simulation --------------------------------------------------------------------
+    def step(self, n=1):
+        c = self.client
+        for _ in range(n):
+            t = self.time + self.dt      # targets for the end of this step
+            for arm in self.arms.values():
+                q, qd = arm.arm_follower.sample(t)
+                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
+                                            targetPositions=q, targetVelocities=qd,
+                                            forces=ARM_FORCE, positionGains=[0.5] * 6,
+                                            velocityGains=[1.0] * 6, physicsClientId=c)
+                g, _ = arm.gripper_follower.sample(t)
+                f = float(g[0]) * FINGER_TRAVEL / GRIPPER_CLOSED
+                p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],
+                                            p.POSITION_CONTROL, targetPositions=[f, f, float(g[0])],
+                                            forces=[GRIPPER_FORCE, GRIPPER_FORCE, 1.0],
+                                            positionGains=[0.2, 0.2, 0.2], physicsClientId=c)
+            p.stepSimulation(physicsClientId=c)
+            self.time = t
+            self.steps += 1
+            if self.steps % GRASP_CHECK_EVERY == 0:
+                for arm in self.arms.values():
+                    self._update_grasp(arm)
+
+    def run(self, seconds):
+        """Step for the given simulated time."""
+        self.step(max(1, int(round(seconds / self.dt))))
+
+    def _touching(self, arm, link):
+        out = []
+        for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link, physicsClientId=self.client):
+            name = self._cube_by_body.get(cp[2])
+            if name is not None and name not in out:
+                out.append(name)
+        return out
+
+    def _update_grasp(self, arm):
+        c = self.client
+        left, right = (self._touching(arm, link) for link in arm.finger_links)
+        arm.touching = (left, right)
+        g_des = float(arm.gripper_follower.q[0])
+        g_now = self._knuckle(arm)[0]
+        if arm.grasp is not None:
+            cid, cube, g_grasp = arm.grasp
+            opening = g_des < g_grasp - 0.02
+            held = cube in left and cube in right
+            arm.lost_checks = 0 if held else arm.lost_checks + 1
+            if opening or arm.lost_checks >= GRASP_LOSS_CHECKS:
+                p.removeConstraint(cid, physicsClientId=c)
+                arm.grasp = None
+                arm.lost_checks = 0
+            return
+        both = [n for n in left if n in right]
+        # Only a closing gripper squeezing the cube grasps it.
+        if both and g_des > g_now + 0.01 or (both and g_des >= GRIPPER_CLOSED - 1e-6):
+            cube = both[0]
+            body = self.cubes[cube]
+            ls = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
+                                physicsClientId=c)
+            cpos, corn = p.getBasePositionAndOrientation(body, physicsClientId=c)
+            inv_pos, inv_orn = p.invertTransform(ls[0], ls[1])
+            rel_pos, rel_orn = p.multiplyTransforms(inv_pos, inv_orn, cpos, corn)
+            cid = p.createConstraint(arm.body, arm.tcp_link, body, -1, p.JOINT_FIXED, [0, 0, 0],
+                                     rel_pos, [0, 0, 0], parentFrameOrientation=rel_orn,
+                                     physicsClientId=c)
+            p.changeConstraint(cid, maxForce=50.0, physicsClientId=c)
+            arm.grasp = (cid, cube, g_now)
+            arm.lost_checks = 0
+
+    # ---- state -------------------------------------------------------------------------
+    def _knuckle(self, arm):
+        st = p.getJointStates(arm.body, arm.fingers, physicsClientId=self.client)
+        k = GRIPPER_CLOSED / FINGER_TRAVEL
+        return (0.5 * (st[0][0] + st[1][0]) * k, 0.5 * (st[0][1] + st[1][1]) * k)
+
+    def joint_state(self, name):
+        """(q[6], qd[6], gripper_knuckle, gripper_knuckle_velocity) measured."""
+        arm = self.arm(name)
+        st = p.getJointStates(arm.body, arm.arm_joints, physicsClientId=self.client)
+        q = np.array([s[0] for s in st])
+        qd = np.array([s[1] for s in st])
+        g, gd = self._knuckle(arm)
+        return q, qd, g, gd
+
+    def desired_state(self, name):
+        """The follower's current desired (q, qd) for the arm."""
+        f = self.arm(name).arm_follower
+        return f.q.copy(), f.qd.copy()
+
+    def trajectory_active(self, name):
+        return self.arm(name).arm_follower.active
+
+    def tcp_pose(self, name, world=True):
+        """Measured TCP pose (4x4), in the world or in the arm's base_link frame."""
+        arm = self.arm(name)
+        ls = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
+                            physicsClientId=self.client)
+        T = np.eye(4)
+        T[:3, :3] = np.array(p.getMatrixFromQuaternion(ls[5])).reshape(3, 3)
+        T[:3, 3] = ls[4]
+        return T if world else arm.cfg.to_base(T)
+
+    def object_poses(self):
+        """{cube name: (xyz, quaternion xyzw)} in the world frame."""
+        out = {}
+        for name, body in self.cubes.items():
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=self.client)
+            out[name] = (np.array(pos), np.array(orn))
+        return out
+
+    def grasped(self, name):
+        """Name of the cube held by the arm's gripper, or None."""
+        g = self.arm(name).grasp
+        return None if g is None else g[1]
+
+    def fingers_touching(self, name):
+        """(cubes touched by the left finger, by the right finger) at the last check."""
+        return self.arm(name).touching
+
+    def in_tray(self, cube, arm_name):
+        """True when the cube rests inside the arm's tray."""
+        t = self.arm(arm_name).cfg.tray
+        pos = self.object_poses()[cube][0]
+        return (abs(pos[0] - t.xyz[0]) <= t.inner[0] / 2 and abs(pos[1] - t.xyz[1]) <= t.inner[1] / 2
+                and t.floor_z - 0.005 < pos[2] < t.floor_z + self.config.cube_size)
+
+    # ---- reset, camera, teardown ---------------------------------------------------------
+    def reset(self):
+        """Arms home, gripper open, cubes back at their start, no grasp; time keeps going."""
+        c = self.client
+        for arm in self.arms.values():
+            if arm.grasp is not None:
+                p.removeConstraint(arm.grasp[0], physicsClientId=c)
+                arm.grasp = None
+            for j, q in zip(arm.arm_joints, arm.cfg.home):
+                p.resetJointState(arm.body, j, float(q), 0.0, physicsClientId=c)
+            for j in arm.fingers + [arm.knuckle]:
+                p.resetJointState(arm.body, j, 0.0, 0.0, physicsClientId=c)
+            arm.arm_follower.hold(arm.cfg.home)
+            arm.gripper_follower.hold([0.0])
+            arm.touching = ([], [])
+        for cube in self.config.cubes:
+            p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, [0, 0, 0, 1],
+                                              physicsClientId=c)
+            p.resetBaseVelocity(self.cubes[cube.name], [0, 0, 0], [0, 0, 0], physicsClientId=c)
+
+    def snapshot(self, path=None, width=640, height=480, eye=None, target=None, fov=None):
+        """Render the cell (TinyRenderer, works headless); PNG bytes, also written to path."""
+        from PIL import Image
+        cam = self.config.camera
+        eye = eye if eye is not None else cam.get('eye', [1.9, -1.3, 1.8])
+        target = target if target is not None else cam.get('target', [0.4, 0.0, 0.8])
+        fov = fov if fov is not None else cam.get('fov', 50)
+        view = p.computeViewMatrix(eye, target, [0, 0, 1], physicsClientId=self.client)
+        proj = p.computeProjectionMatrixFOV(fov, width / height, 0.05, 10.0,
+                                            physicsClientId=self.client)
+        _, _, rgba, _, _ = p.getCameraImage(width, height, view, proj,
+                                            renderer=p.ER_TINY_RENDERER,
+                                            physicsClientId=self.client)
+        img = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        buf = io.BytesIO()
+        Image.fromarray(img).save(buf, format='PNG')
+        data = buf.getvalue()
+        if path:
+            with open(path, 'wb') as f:
+                f.write(data)
+        return data
+
+    def close(self):
+        if self.client is not None and p.isConnected(self.client):
+            p.disconnect(self.client)
+        self.client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def tray_drop_pose(cfg, arm_name, height_above=0.03):
+    """World TCP position above the arm's tray to release a cube (centre + clearance)."""
+    a = cfg.arm(arm_name)
+    t = a.tray
+    return np.array([t.xyz[0], t.xyz[1], t.floor_z + cfg.cube_size / 2 + height_above])
+

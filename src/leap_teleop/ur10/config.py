@@ -1,0 +1,172 @@
+"""Work-cell configuration (config/ur10_cell.yaml, config/ur10_dual_cell.yaml) as objects.
+
+Everything a consumer needs to script the cell: where each arm's base is in the world,
+its home joints, its tray, and where the cubes start. Poses for IK are in an arm's
+base_link frame; ArmConfig.to_base / to_world convert 4x4 world <-> base poses.
+"""
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+import yaml
+
+from leap_teleop.ur10.kinematics import HOME_Q
+
+
+def _rpy_matrix(rpy):
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    # URDF convention: R = Rz(yaw) Ry(pitch) Rx(roll)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def config_dir():
+    """The package's config/ folder (source tree first, then the ROS package path)."""
+    here = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', '..', 'config'))
+    if os.path.isdir(here):
+        return here
+    import rospkg
+    return os.path.join(rospkg.RosPack().get_path('leap_teleop'), 'config')
+
+
+def config_path(name):
+    """A config path: absolute / existing paths as is, else a file name in config/."""
+    if os.path.exists(name):
+        return name
+    cand = os.path.join(config_dir(), name)
+    if not cand.endswith('.yaml'):
+        cand += '.yaml'
+    return cand
+
+
+@dataclass
+class TrayConfig:
+    xyz: np.ndarray            # centre of the tray's underside, world
+    inner: tuple = (0.2, 0.2)
+    wall: tuple = (0.01, 0.04)  # thickness, height
+
+    @property
+    def floor_z(self):
+        """z of the tray's inner floor (a cube rests on it at floor_z + size / 2)."""
+        return float(self.xyz[2]) + float(self.wall[0])
+
+
+@dataclass
+class ArmConfig:
+    name: str
+    base_xyz: np.ndarray
+    base_rpy: np.ndarray
+    home: np.ndarray
+    tray: TrayConfig
+
+    @property
+    def prefix(self):
+        """Prefix of this arm's joint and link names (e.g. ur10_1_)."""
+        return self.name + '_'
+
+    @property
+    def world_T_base(self):
+        T = np.eye(4)
+        T[:3, :3] = _rpy_matrix(self.base_rpy)
+        T[:3, 3] = self.base_xyz
+        return T
+
+    def to_base(self, T_world):
+        """A world 4x4 pose in this arm's base_link frame."""
+        return np.linalg.inv(self.world_T_base) @ np.asarray(T_world, dtype=float)
+
+    def to_world(self, T_base):
+        return self.world_T_base @ np.asarray(T_base, dtype=float)
+
+    def point_to_base(self, xyz_world):
+        Tb = self.world_T_base
+        return Tb[:3, :3].T @ (np.asarray(xyz_world, dtype=float) - Tb[:3, 3])
+
+
+@dataclass
+class CubeConfig:
+    name: str
+    xyz: np.ndarray           # initial centre, world
+    rgba: tuple
+    arm: str = ''
+
+
+@dataclass
+class CellConfig:
+    arms: list
+    cubes: list
+    table_center: tuple
+    table_size: tuple
+    table_height: float
+    cube_size: float = 0.05
+    cube_mass: float = 0.1
+    physics_hz: float = 240.0
+    camera: dict = field(default_factory=dict)
+    path: str = ''
+
+    def arm(self, name):
+        for a in self.arms:
+            if a.name == name:
+                return a
+        raise KeyError('no arm %r in the cell (arms: %s)' % (name, [a.name for a in self.arms]))
+
+    def cube(self, name):
+        for c in self.cubes:
+            if c.name == name:
+                return c
+        raise KeyError('no cube %r' % name)
+
+
+def _vec(v, n, what):
+    a = np.asarray(v, dtype=float)
+    if a.shape != (n,) or not np.all(np.isfinite(a)):
+        raise ValueError('%s must be %d numbers, got %r' % (what, n, v))
+    return a
+
+
+def parse_config(data, path=''):
+    """CellConfig from the YAML's dict; ValueError on a malformed file."""
+    if not isinstance(data, dict) or not data.get('arms'):
+        raise ValueError('cell config %s: needs a non-empty "arms" list' % path)
+    table = data.get('table', {})
+    height = float(table.get('height', 0.75))
+    size = float(data.get('cube_size', 0.05))
+    arms = []
+    for a in data['arms']:
+        tray = a.get('tray', {})
+        arms.append(ArmConfig(
+            name=str(a['name']),
+            base_xyz=_vec(a.get('base_xyz', [0, 0, height]), 3, 'base_xyz'),
+            base_rpy=_vec(a.get('base_rpy', [0, 0, 0]), 3, 'base_rpy'),
+            home=_vec(a.get('home', HOME_Q), 6, 'home'),
+            tray=TrayConfig(xyz=_vec(tray.get('xyz', [0.45, 0.5, height]), 3, 'tray xyz'),
+                            inner=tuple(tray.get('inner', (0.2, 0.2))),
+                            wall=tuple(tray.get('wall', (0.01, 0.04))))))
+    names = [a.name for a in arms]
+    if len(set(names)) != len(names):
+        raise ValueError('cell config %s: arm names must be unique' % path)
+    cubes = []
+    for c in data.get('cubes', []):
+        xyz = list(c['xyz'])
+        if len(xyz) == 2:
+            xyz.append(height + size / 2)
+        cubes.append(CubeConfig(name=str(c['name']), xyz=_vec(xyz, 3, 'cube xyz'),
+                                rgba=tuple(c.get('rgba', (0.8, 0.2, 0.2, 1))),
+                                arm=str(c.get('arm', ''))))
+    return CellConfig(arms=arms, cubes=cubes,
+                      table_center=tuple(table.get('center', (0.45, 0.0))),
+                      table_size=tuple(table.get('size', (1.4, 1.4))),
+                      table_height=height, cube_size=size,
+                      cube_mass=float(data.get('cube_mass', 0.1)),
+                      physics_hz=float(data.get('physics_hz', 240.0)),
+                      camera=dict(data.get('camera', {})), path=path)
+
+
+def load_config(name='ur10_cell.yaml'):
+    """Load a cell config by path or by file name in config/ (e.g. 'ur10_dual_cell')."""
+    path = config_path(name)
+    with open(path) as f:
+        return parse_config(yaml.safe_load(f), path)

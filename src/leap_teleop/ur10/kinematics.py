@@ -1,0 +1,200 @@
+"""UR10 forward and analytic inverse kinematics (numpy / math only).
+
+Frames. Every pose here is in the arm's ``base_link`` frame (the URDF's, which is the
+UR "Base" DH frame turned by pi about z). The flange is ``tool0`` (DH frame 6). The TCP is
+``tool0`` moved ``TCP_OFFSET`` metres along its z axis: the centre between the gripper's
+finger pads, where a grasped 5 cm cube's centre sits. Orientation of the TCP = tool0's:
+z out of the flange (approach), x the fingers' closing direction.
+
+DH (DESIGN.md section 4): d1 0.1273, a2 -0.612, a3 -0.5723, d4 0.163941, d5 0.1157,
+d6 0.0922, alpha (pi/2, 0, 0, pi/2, -pi/2, 0). The inverse is closed form (scalar math,
+no iteration): up to 8 solutions, 2 shoulder x 2 wrist x 2 elbow.
+"""
+import math
+
+import numpy as np
+
+D1, A2, A3, D4, D5, D6 = 0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922
+ALPHA = (math.pi / 2, 0.0, 0.0, math.pi / 2, -math.pi / 2, 0.0)
+_DH_A = (0.0, A2, A3, 0.0, 0.0, 0.0)
+_DH_D = (D1, 0.0, 0.0, D4, D5, D6)
+
+JOINT_NAMES = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
+               'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint')
+# Joint-limited UR10 as in the URDF: +-360 deg, elbow +-180 deg.
+JOINT_LOWER = np.array([-2 * math.pi, -2 * math.pi, -math.pi,
+                        -2 * math.pi, -2 * math.pi, -2 * math.pi])
+JOINT_UPPER = -JOINT_LOWER
+# UR10 joint speed limits: 120 deg/s base and shoulder, 180 deg/s the others.
+MAX_JOINT_SPEED = np.radians([120.0, 120.0, 180.0, 180.0, 180.0, 180.0])
+
+# Flange (tool0) -> TCP along tool0 z, m. Matches the gripper built in ur10/model.py.
+TCP_OFFSET = 0.105
+
+# A standard "home": upper arm up, forearm forward, tool pointing straight down.
+HOME_Q = np.array([0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
+
+# base_link = DH base turned by pi about z.
+_BASE_FROM_DH = np.diag([-1.0, -1.0, 1.0, 1.0])
+
+# Tool z pointing down (-z of base_link), fingers closing along base_link y.
+TOOL_DOWN = np.array([[0.0, -1.0, 0.0],
+                      [-1.0, 0.0, 0.0],
+                      [0.0, 0.0, -1.0]])
+
+
+def tool_down(yaw=0.0):
+    """Rotation (base_link frame) with the tool z pointing down, turned by yaw about z."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ TOOL_DOWN
+
+
+def pose(position, rotation=TOOL_DOWN):
+    """4x4 homogeneous transform from a position and a 3x3 rotation."""
+    T = np.eye(4)
+    T[:3, :3] = rotation
+    T[:3, 3] = position
+    return T
+
+
+def _dh(i, theta):
+    ct, st = math.cos(theta), math.sin(theta)
+    ca, sa = math.cos(ALPHA[i]), math.sin(ALPHA[i])
+    return np.array([[ct, -st * ca, st * sa, _DH_A[i] * ct],
+                     [st, ct * ca, -ct * sa, _DH_A[i] * st],
+                     [0.0, sa, ca, _DH_D[i]],
+                     [0.0, 0.0, 0.0, 1.0]])
+
+
+def fk(q, tcp=True):
+    """Pose (4x4, base_link frame) of the TCP (tcp=True) or of tool0 for joints q."""
+    T = _BASE_FROM_DH.copy()
+    for i in range(6):
+        T = T @ _dh(i, float(q[i]))
+    if tcp:
+        T[:3, 3] += TCP_OFFSET * T[:3, 2]
+    return T
+
+
+def fk_all(q):
+    """Poses of DH frames 1..6 in base_link (for tests and visual checks)."""
+    T = _BASE_FROM_DH.copy()
+    out = []
+    for i in range(6):
+        T = T @ _dh(i, float(q[i]))
+        out.append(T.copy())
+    return out
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def ik(T, tcp=True, q6_free=0.0, eps=1e-9):
+    """Every joint solution (list of 6-arrays in (-pi, pi]) that puts the TCP (or tool0)
+    at pose T (4x4, base_link). Empty list when unreachable; never raises.
+
+    At a wrist singularity (sin q5 = 0) q6 is not determined; q6_free is used for it.
+    """
+    try:
+        T = np.asarray(T, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            return []
+        # base_link -> DH base: negate x and y rows.
+        xx, xy, xz = -T[0, 0], -T[1, 0], T[2, 0]
+        yx, yy, yz = -T[0, 1], -T[1, 1], T[2, 1]
+        zx, zy, zz = -T[0, 2], -T[1, 2], T[2, 2]
+        px, py, pz = -T[0, 3], -T[1, 3], T[2, 3]
+    except (TypeError, ValueError, IndexError):
+        return []
+    if tcp:
+        px -= TCP_OFFSET * zx
+        py -= TCP_OFFSET * zy
+        pz -= TCP_OFFSET * zz
+    # Wrist centre (origin of frame 5) and the shoulder angle from its distance to z0.
+    p5x, p5y, p5z = px - D6 * zx, py - D6 * zy, pz - D6 * zz
+    r = math.hypot(p5x, p5y)
+    if r < abs(D4) - eps:
+        return []
+    psi = math.atan2(p5y, p5x)
+    phi = math.acos(max(-1.0, min(1.0, D4 / r))) if r > 0 else 0.0
+    sols = []
+    for q1 in (psi + phi + math.pi / 2, psi - phi + math.pi / 2):
+        s1, c1 = math.sin(q1), math.cos(q1)
+        # z1 = (s1, -c1, 0): axis of joints 2, 3, 4; z1 . z6 = cos q5.
+        c5 = (px * s1 - py * c1 - D4) / D6
+        if abs(c5) > 1.0 + 1e-9:
+            continue
+        c5 = max(-1.0, min(1.0, c5))
+        for q5 in (math.acos(c5), -math.acos(c5)):
+            s5 = math.sin(q5)
+            if abs(s5) > 1e-10:
+                # z4 = (z1 x z6) / s5; z1 x z6 = (-c1 zz, -s1 zz, s1 zy + c1 zx)
+                z4x, z4y, z4z = -c1 * zz / s5, -s1 * zz / s5, (s1 * zy + c1 * zx) / s5
+                q6 = math.atan2(-(z4x * xx + z4y * xy + z4z * xz),
+                                -(z4x * yx + z4y * yy + z4z * yz))
+            else:
+                q6 = q6_free
+                # y5 in frame 6 is (s6, c6, 0), and z4 = -y5.
+                s6, c6 = math.sin(q6), math.cos(q6)
+                z4x = -(s6 * xx + c6 * yx)
+                z4y = -(s6 * xy + c6 * yy)
+                z4z = -(s6 * xz + c6 * yz)
+            # q2 + q3 + q4 from z4 in frame 1 = (s234, -c234, 0); x1 = (c1, s1, 0), y1 = z0.
+            q234 = math.atan2(c1 * z4x + s1 * z4y, -z4z)
+            # Origin of frame 4 in frame 1 coordinates; the planar 2R problem for q2, q3.
+            o4x, o4y, o4z = p5x - D5 * z4x, p5y - D5 * z4y, p5z - D5 * z4z
+            ux = c1 * o4x + s1 * o4y
+            uy = o4z - D1
+            c3 = (ux * ux + uy * uy - A2 * A2 - A3 * A3) / (2 * A2 * A3)
+            if abs(c3) > 1.0 + 1e-9:
+                continue
+            c3 = max(-1.0, min(1.0, c3))
+            for q3 in (math.acos(c3), -math.acos(c3)):
+                s3 = math.sin(q3)
+                q2 = math.atan2(uy, ux) - math.atan2(A3 * s3, A2 + A3 * c3)
+                q4 = q234 - q2 - q3
+                sols.append(np.array([_wrap(q1), _wrap(q2), _wrap(q3),
+                                      _wrap(q4), _wrap(q5), _wrap(q6)]))
+    return sols
+
+
+def nearest_in_limits(q, q_ref, lower=JOINT_LOWER, upper=JOINT_UPPER):
+    """q shifted by multiples of 2 pi per joint to be closest to q_ref within the limits;
+    None when some joint has no representative within them."""
+    q = np.asarray(q, dtype=float)
+    q_ref = np.asarray(q_ref, dtype=float)
+    k = np.round((q_ref - q) / (2 * math.pi))
+    out = q + 2 * math.pi * k
+    for _ in range(2):   # step back inside the limits if the nearest copy is outside
+        out = np.where(out > upper, out - 2 * math.pi, out)
+        out = np.where(out < lower, out + 2 * math.pi, out)
+    if np.any(out > upper + 1e-12) or np.any(out < lower - 1e-12):
+        return None
+    return out
+
+
+def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
+    """The IK solution within the joint limits nearest to q_ref (max-abs joint distance);
+    None when the pose is unreachable or no solution fits the limits. Never raises."""
+    try:
+        q_ref = np.asarray(q_ref, dtype=float).reshape(6)
+        if not np.all(np.isfinite(q_ref)):
+            return None
+    except (TypeError, ValueError):
+        return None
+    best, best_d = None, math.inf
+    for q in ik(T, tcp=tcp, q6_free=float(q_ref[5])):
+        q = nearest_in_limits(q, q_ref, lower, upper)
+        if q is None:
+            continue
+        d = float(np.max(np.abs(q - q_ref)))
+        if d < best_d:
+            best, best_d = q, d
+    return best
+
+
+def rotation_error(Ra, Rb):
+    """Angle (rad) of the rotation taking Ra to Rb."""
+    c = (np.trace(np.asarray(Ra).T @ np.asarray(Rb)) - 1.0) / 2.0
+    return math.acos(max(-1.0, min(1.0, c)))
