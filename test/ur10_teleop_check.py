@@ -1,0 +1,198 @@
+#!/usr/bin/env python3
+"""rostest node for the UR10 teleop graph: turns a gesture script into a bag through the
+real sender logic, replays it with `rosbag play` into the running nodes, and checks
+what the simulated arms did. ~scenario picks the check:
+
+  pick_place  every arm's cube ends within 3 cm of its tray's centre
+  watchdog    the input is cut mid-motion: joint velocities ~0 within 0.3 s, disarmed
+  fist        a fist mid-motion stops the arm; a later pinch without re-arming moves nothing
+  joystick    a hand inside the dead zone moves nothing; beyond it the arm moves
+"""
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
+
+from leap_teleop import conversions
+from leap_teleop.msg import ArmStatus
+from leap_teleop.sources.scripted import ScriptedSource
+from leap_teleop.tools.to_bag import write_bag
+from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.ros_interface import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+
+STILL = 0.02          # rad/s: "~0" joint speed
+ARM_JOINTS = kin.JOINT_NAMES
+
+
+class Recorder:
+    """Everything the checks look at, with receipt times."""
+
+    def __init__(self, arms, hand_topics):
+        self.lock = threading.Lock()
+        self.joints = {arm: [] for arm in arms}       # (t, q, qd)
+        self.status = {arm: [] for arm in arms}       # (t, state, reason)
+        self.arm_cmds = {arm: [] for arm in arms}     # (t, q)
+        self.gripper_cmds = {arm: [] for arm in arms}
+        self.cubes = {}
+        self.first_hand = None
+        for arm in arms:
+            rospy.Subscriber('/%s/joint_states' % arm, JointState, self._joints, arm, queue_size=50)
+            rospy.Subscriber('/%s/ur10_arm/status' % arm, ArmStatus, self._status, arm,
+                             queue_size=50)
+            rospy.Subscriber('/%s/arm_controller/command' % arm, JointTrajectory, self._cmd,
+                             (arm, self.arm_cmds), queue_size=100)
+            rospy.Subscriber('/%s/gripper/command' % arm, JointTrajectory, self._cmd,
+                             (arm, self.gripper_cmds), queue_size=100)
+        rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._objects, queue_size=5)
+        for side, topic in hand_topics.items():
+            rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self._hand, queue_size=50)
+
+    def _joints(self, msg, arm):
+        idx = [next(i for i, n in enumerate(msg.name) if n.endswith(j)) for j in ARM_JOINTS]
+        with self.lock:
+            self.joints[arm].append((rospy.get_time(), np.array([msg.position[i] for i in idx]),
+                                     np.array([msg.velocity[i] for i in idx])))
+
+    def _status(self, msg, arm):
+        with self.lock:
+            if not self.status[arm] or self.status[arm][-1][1:] != (msg.state, msg.reason):
+                self.status[arm].append((rospy.get_time(), msg.state, msg.reason))
+
+    def _cmd(self, msg, args):
+        arm, store = args
+        with self.lock:
+            store[arm].append((rospy.get_time(), np.array(msg.points[0].positions)))
+
+    def _objects(self, msg):
+        with self.lock:
+            self.cubes = object_positions(msg)
+
+    def _hand(self, _msg):
+        if self.first_hand is None:
+            self.first_hand = rospy.get_time()
+
+    def joints_between(self, arm, t0, t1):
+        with self.lock:
+            return [(t, q, qd) for t, q, qd in self.joints[arm] if t0 <= t <= t1]
+
+    def status_time(self, arm, state, reason_part=''):
+        with self.lock:
+            for t, s, r in self.status[arm]:
+                if s == state and reason_part in r:
+                    return t
+        return None
+
+
+class Ur10Teleop(unittest.TestCase):
+    def setUp(self):
+        self.scenario = rospy.get_param('~scenario')
+        self.script = rospy.get_param('~script')
+        self.arms = rospy.get_param('~arms')                 # {arm: [hand, cube]}
+        self.hand_topics = rospy.get_param('~hand_topics')   # {hand: topic}
+        self.cell = load_config(rospy.get_param('~cell', 'ur10_dual_cell.yaml'))
+        self.rec = Recorder(list(self.arms), self.hand_topics)
+        for arm in self.arms:
+            rospy.wait_for_message('/%s/joint_states' % arm, JointState, timeout=60)
+        fd, self.bag = tempfile.mkstemp(suffix='.bag')
+        os.close(fd)
+        sides = list(self.hand_topics)
+        topics = {side: {'leapcobot': self.hand_topics[side]} for side in sides}
+        write_bag(ScriptedSource(self.script, realtime=False), self.bag, sides, topics,
+                  kinds=('leapcobot',))
+        self.player = subprocess.Popen(['rosbag', 'play', '--wait-for-subscribers', '-q',
+                                        self.bag], stdout=subprocess.DEVNULL)
+
+    def tearDown(self):
+        if self.player.poll() is None:
+            self.player.send_signal(signal.SIGINT)
+            self.player.wait(10)
+        os.unlink(self.bag)
+
+    def wait_playback(self, settle=2.0):
+        while self.player.poll() is None and not rospy.is_shutdown():
+            rospy.sleep(0.1)
+        rospy.sleep(settle)
+
+    def assert_still(self, arm, t0, t1, what):
+        samples = self.rec.joints_between(arm, t0, t1)
+        self.assertGreater(len(samples), 10, 'no joint states in [%.2f, %.2f]' % (t0, t1))
+        worst = max(float(np.max(np.abs(qd))) for _, _, qd in samples)
+        self.assertLess(worst, STILL, '%s: %s, max joint speed %.4f rad/s' % (arm, what, worst))
+
+    def test_scenario(self):
+        getattr(self, 'check_' + self.scenario)()
+
+    def check_pick_place(self):
+        self.wait_playback(settle=3.0)
+        for arm, (_, cube) in self.arms.items():
+            pos = self.rec.cubes.get(cube)
+            self.assertIsNotNone(pos, 'no pose for %s' % cube)
+            tray = self.cell.arm(arm).tray
+            err = float(np.linalg.norm(np.asarray(pos[:2]) - np.asarray(tray.xyz[:2])))
+            rospy.loginfo('%s placed %s %.3f m from the tray centre', arm, cube, err)
+            self.assertLess(err, 0.03, '%s: %s at %s' % (arm, cube, pos))
+            self.assertLess(pos[2], tray.floor_z + self.cell.cube_size, 'not resting in the tray')
+
+    def check_watchdog(self):
+        arm = next(iter(self.arms))
+        deadline = rospy.get_time() + 30
+        while rospy.get_time() < deadline:
+            recent = self.rec.joints_between(arm, rospy.get_time() - 0.1, rospy.get_time())
+            if recent and max(float(np.max(np.abs(qd))) for _, _, qd in recent) > 0.1:
+                break
+            rospy.sleep(0.02)
+        else:
+            self.fail('the arm never moved')
+        self.player.send_signal(signal.SIGKILL)          # the input stops mid-motion
+        t_stop = rospy.get_time()
+        rospy.sleep(1.5)
+        self.assert_still(arm, t_stop + 0.3, t_stop + 1.5, 'after the input stopped')
+        t_disarm = self.rec.status_time(arm, 'disarmed', 'watchdog')
+        self.assertIsNotNone(t_disarm, self.rec.status[arm])
+        self.assertLess(t_disarm - t_stop, 0.3)
+
+    def check_fist(self):
+        arm = next(iter(self.arms))
+        self.wait_playback(settle=1.0)
+        t_fist = self.rec.status_time(arm, 'disarmed', 'fist')
+        self.assertIsNotNone(t_fist, self.rec.status[arm])
+        moving = self.rec.joints_between(arm, t_fist - 0.5, t_fist)
+        self.assertGreater(max(float(np.max(np.abs(qd))) for _, _, qd in moving), 0.05,
+                           'the arm was not moving when the fist came')
+        end = rospy.get_time()
+        self.assert_still(arm, t_fist + 0.3, end, 'after the fist')
+        late_grip = [t for t, _ in self.rec.gripper_cmds[arm] if t > t_fist]
+        self.assertEqual(late_grip, [], 'the gripper was commanded after the fist')
+        holds = [q for t, q in self.rec.arm_cmds[arm] if t > t_fist + 0.05]
+        self.assertEqual(holds, [], 'arm commands after the fist')
+        self.assertNotIn('armed', [s for t, s, _ in self.rec.status[arm] if t > t_fist])
+
+    def check_joystick(self):
+        arm = next(iter(self.arms))
+        self.wait_playback(settle=0.5)
+        t0 = self.rec.first_hand
+        t_origin = self.rec.status_time(arm, 'tracking', 'origin')
+        self.assertIsNotNone(t_origin, self.rec.status[arm])
+        # Script: origin by 2.3 s, dead-zone wandering until 5.3 s, then 120 mm forward.
+        inside = self.rec.joints_between(arm, t_origin + 0.3, t0 + 5.2)
+        tcp = np.array([kin.fk(q)[:3, 3] for _, q, _ in inside])
+        drift = float(np.max(np.linalg.norm(tcp - tcp[0], axis=1)))
+        self.assertLess(drift, 0.002, 'TCP moved %.4f m inside the dead zone' % drift)
+        final = self.rec.joints_between(arm, rospy.get_time() - 0.2, rospy.get_time())[-1][1]
+        moved = kin.fk(final)[:3, 3] - tcp[0]
+        self.assertGreater(moved[0], 0.1, 'beyond the dead zone the TCP should move forward')
+
+
+if __name__ == '__main__':
+    rospy.init_node('ur10_teleop_check')
+    rostest.rosrun('leap_teleop', 'ur10_teleop_check', Ur10Teleop, sys.argv)
