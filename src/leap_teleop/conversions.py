@@ -16,25 +16,24 @@ def _header(msg, state, frame_id=LEAP_FRAME):
     return msg
 
 
+# leapcobot field -> HandState attribute, per side (built once: this is the hot path).
+_LEAPCOBOT_FIELDS = {
+    side: [(pattern % side, attr) for pattern, attr in (
+        ('is_%s_hand', 'present'), ('%s_hand_fist', 'fist'), ('%s_hand_thumb_up', 'thumb_up'),
+        ('%s_hand_pinch', 'pinch'), ('%s_hand_pinch_value', 'pinch_value'),
+        ('%s_hand_origin_frame', 'origin_set'), ('%s_hand_set_origin_frame_detected', 'rock'),
+        ('%s_hand_rotate_value', 'rotate'), ('%s_hand_turn_value', 'turn'),
+        ('%s_hand_swing_value', 'swing'))]
+    for side in ('right', 'left')}
+
+
 def to_leapcobot(state, frame_id=LEAP_FRAME):
     """The original leapcobotright / leapcobotleft message; palmpos in Leap mm."""
     side = state.side
     msg = _header(LEAPCOBOT_TYPES[side](), state, frame_id)
-    values = {
-        'is_%s_hand': state.present,
-        '%s_hand_palmpos': Point(*state.palm_position),
-        '%s_hand_fist': state.fist,
-        '%s_hand_thumb_up': state.thumb_up,
-        '%s_hand_pinch': state.pinch,
-        '%s_hand_pinch_value': state.pinch_value,
-        '%s_hand_origin_frame': state.origin_set,
-        '%s_hand_set_origin_frame_detected': state.rock,
-        '%s_hand_rotate_value': state.rotate,
-        '%s_hand_turn_value': state.turn,
-        '%s_hand_swing_value': state.swing,
-    }
-    for pattern, value in values.items():
-        setattr(msg, pattern % side, value)
+    for field, attr in _LEAPCOBOT_FIELDS[side]:
+        setattr(msg, field, getattr(state, attr))
+    setattr(msg, '%s_hand_palmpos' % side, Point(*state.palm_position))
     return msg
 
 
