@@ -154,10 +154,12 @@ class UR10Cell:
             t = self.time + self.dt      # targets for the end of this step
             for arm in self.arms.values():
                 q, qd = arm.arm_follower.sample(t)
-                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
-                                            targetPositions=q, targetVelocities=qd,
-                                            forces=ARM_FORCE, positionGains=[0.5] * 6,
-                                            velocityGains=[1.0] * 6, physicsClientId=c)
+                for j, qj, vj, fj, vmax in zip(arm.arm_joints, q, qd, ARM_FORCE,
+                                               kin.MAX_JOINT_SPEED):
+                    p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=qj,
+                                            targetVelocity=vj, force=fj, positionGain=0.5,
+                                            velocityGain=1.0, maxVelocity=vmax,
+                                            physicsClientId=c)
                 g, _ = arm.gripper_follower.sample(t)
                 f = float(g[0]) * FINGER_TRAVEL / GRIPPER_CLOSED
                 p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],

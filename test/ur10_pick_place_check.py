@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""rostest node: a scripted pick & place through ur10_sim's topics alone (no hand input).
+
+For each task "arm:cube" in ~tasks (all arms at once, one thread each) it plans joint
+targets with the analytic IK from the cell config (leap_teleop.ur10.pick_place), sends
+them as JointTrajectory commands on <arm>/arm_controller/command and
+<arm>/gripper/command, waits on <arm>/joint_states for each move to finish, and checks
+via ~object_poses that the cube was held while lifted, ends in the arm's tray, and that
+no other cube moved. TF (robot_state_publisher) must agree with the kinematics.
+"""
+import sys
+import threading
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.pick_place import pick_place_plan
+from leap_teleop.ur10.ros_interface import (OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE,
+                                            object_positions)
+
+POSITION_TOL = 0.01     # rad: a move is done when every joint is this close ...
+SPEED_TOL = 0.02        # ... and this slow (rad/s)
+
+
+class ArmDriver:
+    """Sends one arm's plan and follows its joint_states."""
+
+    def __init__(self, cfg, arm):
+        self.cfg, self.arm = cfg, cfg.arm(arm)
+        self.lock = threading.Lock()
+        self.q = self.qd = None
+        self.g = None
+        self.max_speed_ratio = 0.0
+        ns = self.arm.name
+        self.arm_pub = rospy.Publisher(ns + '/arm_controller/command', JointTrajectory,
+                                       queue_size=5)
+        self.grip_pub = rospy.Publisher(ns + '/gripper/command', JointTrajectory, queue_size=5)
+        rospy.Subscriber(ns + '/joint_states', JointState, self.on_joints, queue_size=20)
+
+    def on_joints(self, msg):
+        names = [self.arm.prefix + n for n in kin.JOINT_NAMES]
+        idx = [msg.name.index(n) for n in names]
+        with self.lock:
+            self.q = np.array([msg.position[i] for i in idx])
+            self.qd = np.array([msg.velocity[i] for i in idx])
+            self.g = msg.position[msg.name.index(self.arm.prefix + 'finger_joint')]
+            self.max_speed_ratio = max(self.max_speed_ratio,
+                                       float(np.max(np.abs(self.qd) / kin.MAX_JOINT_SPEED)))
+
+    def state(self):
+        with self.lock:
+            return self.q, self.qd, self.g
+
+    def wait_ready(self, timeout):
+        deadline = rospy.get_time() + timeout
+        while not rospy.is_shutdown() and rospy.get_time() < deadline:
+            if (self.state()[0] is not None and self.arm_pub.get_num_connections()
+                    and self.grip_pub.get_num_connections()):
+                return True
+            rospy.sleep(0.05)
+        return False
+
+    def send(self, pub, names, positions, duration):
+        msg = JointTrajectory()
+        msg.joint_names = [self.arm.prefix + n for n in names]     # stamp 0: start now
+        msg.points = [JointTrajectoryPoint(positions=[float(v) for v in positions],
+                                           time_from_start=rospy.Duration.from_sec(duration))]
+        pub.publish(msg)
+
+    def move(self, q, timeout):
+        # Duration 0: the sim stretches it to the joint speed limits.
+        self.send(self.arm_pub, kin.JOINT_NAMES, q, 0.0)
+        deadline = rospy.get_time() + timeout
+        while not rospy.is_shutdown() and rospy.get_time() < deadline:
+            rospy.sleep(0.02)
+            qm, qdm, _ = self.state()
+            if np.max(np.abs(qm - q)) < POSITION_TOL and np.max(np.abs(qdm)) < SPEED_TOL:
+                return True
+        return False
+
+    def grip(self, knuckle, seconds=0.8):
+        self.send(self.grip_pub, ['finger_joint'], [knuckle], 0.3)
+        rospy.sleep(seconds)
+
+
+class PickPlace(unittest.TestCase):
+    def test_pick_place_through_topics(self):
+        cfg = load_config(rospy.get_param('~config', 'ur10_cell.yaml'))
+        tasks = dict(t.split(':') for t in rospy.get_param('~tasks', 'ur10_1:cube_red').split())
+        step_timeout = rospy.get_param('~step_timeout', 15.0)
+        poses, held = {}, {}
+        lock = threading.Lock()
+
+        def on_objects(msg):
+            with lock:
+                poses.update(object_positions(msg))
+                for name, arm in zip(msg.names, msg.grasped_by):
+                    if arm:
+                        held.setdefault(name, set()).add(arm)
+
+        rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, on_objects, queue_size=20)
+        drivers = {arm: ArmDriver(cfg, arm) for arm in tasks}
+        for arm, d in drivers.items():
+            self.assertTrue(d.wait_ready(30.0), '%s: no joint_states / command subscribers' % arm)
+        with lock:
+            start = dict(poses)
+        self.assertEqual(sorted(start), sorted(c.name for c in cfg.cubes))
+
+        # TF from robot_state_publisher agrees with the kinematics at the start pose.
+        tf_buffer = tf2_ros.Buffer()
+        tf2_ros.TransformListener(tf_buffer)
+        for arm, d in drivers.items():
+            t = tf_buffer.lookup_transform('world', cfg.arm(arm).prefix + 'tcp_link',
+                                           rospy.Time(0), rospy.Duration(10.0)).transform
+            fk = cfg.arm(arm).to_world(kin.fk(d.state()[0]))[:3, 3]
+            tf_xyz = np.array([t.translation.x, t.translation.y, t.translation.z])
+            self.assertLess(np.linalg.norm(tf_xyz - fk), 1e-3, '%s TF %s vs FK %s'
+                            % (arm, tf_xyz, fk))
+
+        failures = []
+
+        def run(arm, cube):
+            d = drivers[arm]
+            for step in pick_place_plan(cfg, arm, cube, q_start=d.state()[0]):
+                if step.what == 'arm':
+                    if not d.move(step.target, step_timeout):
+                        failures.append('%s: %s not reached (q %s)' % (arm, step.label,
+                                                                        d.state()[0]))
+                        return
+                    rospy.sleep(0.2)
+                else:
+                    d.grip(float(step.target[0]))
+
+        threads = [threading.Thread(target=run, args=item) for item in tasks.items()]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        self.assertEqual(failures, [])
+        rospy.sleep(1.0)
+        with lock:
+            end = dict(poses)
+        for arm, cube in tasks.items():
+            tray = cfg.arm(arm).tray
+            x, y, z = end[cube]
+            rospy.loginfo('%s: %s at %.3f %.3f %.3f, tray at %s', arm, cube, x, y, z, tray.xyz)
+            self.assertIn(arm, held.get(cube, set()), '%s was never reported grasped' % cube)
+            self.assertLess(abs(x - tray.xyz[0]), tray.inner[0] / 2, (cube, end[cube]))
+            self.assertLess(abs(y - tray.xyz[1]), tray.inner[1] / 2, (cube, end[cube]))
+            self.assertAlmostEqual(z, tray.floor_z + cfg.cube_size / 2, delta=0.01)
+            self.assertLessEqual(drivers[arm].max_speed_ratio, 1.05, arm)
+        for name in start:
+            others = set(held.get(name, set())) - {a for a, c in tasks.items() if c == name}
+            self.assertEqual(others, set(), '%s held by an arm that was not tasked' % name)
+            if name not in tasks.values():
+                moved = np.linalg.norm(np.subtract(end[name], start[name]))
+                self.assertLess(moved, 0.005, '%s moved by %.3f m' % (name, moved))
+
+
+if __name__ == '__main__':
+    rospy.init_node('ur10_pick_place_check')
+    rostest.rosrun('leap_teleop', 'ur10_pick_place_check', PickPlace, sys.argv)
