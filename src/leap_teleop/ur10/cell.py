@@ -25,6 +25,7 @@ GRIPPER_FORCE = 60.0           # N per finger
 ARM_FORCE = np.array([330.0, 330.0, 150.0, 54.0, 54.0, 54.0])   # URDF efforts
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
+PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
 
 
 class _Arm:
@@ -177,17 +178,23 @@ class UR10Cell:
         """Step for the given simulated time."""
         self.step(max(1, int(round(seconds / self.dt))))
 
-    def _touching(self, arm, link):
+    def _touching(self, arm, link, axis):
+        """Cubes the finger link presses with its pad: contact normals along the closing
+        axis (fingertips resting on a cube's top do not count)."""
         out = []
         for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link, physicsClientId=self.client):
             name = self._cube_by_body.get(cp[2])
-            if name is not None and name not in out:
+            if (name is not None and name not in out
+                    and abs(float(np.dot(cp[7], axis))) > PAD_NORMAL_MIN_COS):
                 out.append(name)
         return out
 
     def _update_grasp(self, arm):
         c = self.client
-        left, right = (self._touching(arm, link) for link in arm.finger_links)
+        orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
+                             physicsClientId=c)[5]
+        axis = np.array(p.getMatrixFromQuaternion(orn))[[0, 3, 6]]   # TCP x: closing axis
+        left, right = (self._touching(arm, link, axis) for link in arm.finger_links)
         arm.touching = (left, right)
         g_des = float(arm.gripper_follower.q[0])
         g_now = self._knuckle(arm)[0]
