@@ -130,6 +130,52 @@ def test_straight_moves_make_no_circle():
         assert not any(e.gesture.startswith('circle') for e in rec.update(f.hand('right'), f.timestamp).events)
 
 
+def test_fit_circle_recovers_a_noisy_tilted_arc():
+    from leap_teleop.gestures import fit_circle
+    rng = np.random.default_rng(1)
+    normal = np.array([0.3, -0.5, 0.81])
+    normal /= np.linalg.norm(normal)
+    u = np.cross(normal, [1.0, 0.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    theta = np.linspace(0.2, 0.2 + math.radians(300), 40)
+    pts = (np.array([10.0, 200.0, -30.0]) + 12.0 * (np.outer(np.cos(theta), u) + np.outer(np.sin(theta), v))
+           + rng.normal(0, 0.3, (40, 3)))
+    centre, n, radius, residual, angles = fit_circle(pts)
+    assert np.allclose(centre, [10.0, 200.0, -30.0], atol=0.5)
+    assert radius == pytest.approx(12.0, abs=0.4) and residual < 0.5
+    sweep = (angles[-1] - angles[0]) * np.sign(n @ normal)      # right-handed about n
+    assert math.degrees(sweep) == pytest.approx(300, abs=5)
+    assert fit_circle([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]]) is None     # a line
+
+
+def _fingertip_loop(plane, sense=1.0, radius=10.0, duration=0.3, rate=110.0, pose='open'):
+    """Events from a hand translated along a small circle (the fingertips trace it)."""
+    rec = GestureRecognizer()
+    events = []
+    n = int(duration * rate)
+    for i in range(-20, n + 20):
+        a = sense * 2 * math.pi * min(max(i, 0), n) / n
+        off = {'xy': (math.cos(a), math.sin(a), 0.0), 'xz': (math.cos(a), 0.0, math.sin(a))}[plane]
+        hand = render_hand('right', pose, (radius * off[0], 200.0 + radius * off[1], radius * off[2]))
+        events += [e for e in rec.update(hand, i / rate).events if e.gesture.startswith('circle')]
+    return events
+
+
+@pytest.mark.parametrize('sense,expected', [(1.0, 'circle_ccw'), (-1.0, 'circle_cw')])
+def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(sense, expected):
+    # Fingers point -z; the loop is in the x-y plane. Counterclockwise seen along the
+    # fingers (looking toward -z) is 'circle_ccw' (the SDK: cw when normal . finger > 0).
+    events = _fingertip_loop('xy', sense)
+    assert [e.gesture for e in events] == [expected]
+    assert events[0].value == pytest.approx(0.010, rel=0.2)
+
+
+def test_fingertip_loop_in_the_fingers_own_plane_is_not_a_circle():
+    # A loop whose plane holds the finger direction is what a tap or a fold traces.
+    assert _fingertip_loop('xz') == []
+
+
 def test_original_rules_are_the_baseline():
     rules = OriginalRules()
     fist = render_hand('right', 'fist', (0, 200, 0))

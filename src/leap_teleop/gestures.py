@@ -17,6 +17,7 @@ Hand frame used throughout (from palm normal n and hand direction d): x = thumbw
 z = d (toward the fingers). One code path serves both hands.
 """
 import math
+from bisect import bisect_left
 from collections import deque
 from dataclasses import dataclass, field
 from typing import List, Tuple
@@ -58,16 +59,31 @@ OPENING_DEG = 25.0
 OPENING_WINDOW_S = 0.15
 
 # -- circles -------------------------------------------------------------------------------
-# Paths are resampled at a minimum spacing (drops jitter while still), then the turning
-# of successive segments is summed as a rotation vector; a circle is one full turn about
-# a consistent axis within the time window. (track name, spacing mm, min radius mm,
-# max radius mm, window s)
-CIRCLE_TRACKS = (('palm', 6.0, 25.0, 300.0, 2.0), ('finger', 4.0, 3.0, 60.0, 1.0))
-CIRCLE_TURN = 2 * math.pi * 0.9    # rad of consistent turning that makes a circle
-CIRCLE_MAX_STEP_TURN = math.radians(100.0)   # a sharper corner is a reversal, not a circle
-CIRCLE_CONSISTENCY = 0.6           # |sum of turn vectors| / sum of |turns|
-PALM_SMOOTHING = 0.35             # exponential smoothing factor of the palm path
-_UP = np.array([0.0, 1.0, 0.0])
+# Each track (the smoothed palm, every fingertip) keeps its recent path, resampled at a
+# small spacing (drops jitter while still). Cheap gate, per new point, for a few recent
+# stretches of the path: how round the stretch is, closed by its chord (isoperimetric
+# quotient 4 pi area / length^2: 1 for a circle, ~0.96 for a 270 deg arc, ~0.75 for a
+# half circle, ~0 for straight or back-and-forth moves; prefix sums make it O(1)). The
+# roundest stretch past the gate is fitted with a circle (plane + least squares), which
+# decides: an arc of >= CIRCLE_ARC about the fitted centre, swept one way, close to it.
+# (track name, spacing mm, min radius mm, max radius mm, stretches looked at (s)); the
+# SDK's minimum radius is 5 mm, the algebraic fit reads small noisy arcs ~10% small.
+CIRCLE_TRACKS = (('palm', 2.0, 25.0, 300.0, (0.5, 0.8, 1.1, 1.6)),
+                 ('finger', 1.0, 4.0, 60.0, (0.2, 0.3, 0.4, 0.55)))
+# Arc that makes a circle: 300 deg. The Leap SDK starts its circle gestures at 270 deg
+# (CircleGesture MinArcLength 1.5 pi); every one of its circles that lies within the
+# recordings goes on to 0.85..0.93 turns, while many short finger loops it does not call
+# circles stop below 300 deg.
+CIRCLE_ARC = 5.0 / 3.0 * math.pi
+CIRCLE_MIN_ROUNDNESS = 0.6         # isoperimetric quotient that triggers a fit
+CIRCLE_MIN_POINTS = 8
+# |circle normal . finger direction| of a fingertip circle; the SDK's own circles on the
+# recordings: 0.71..0.98 in 18 of 20 (cos 45 deg = 0.71)
+CIRCLE_MIN_ACROSS = 0.7
+CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
+CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
+CIRCLE_RETRY_POINTS = 3            # after a failed fit, new points before the next one
+PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
 
 
@@ -121,21 +137,44 @@ class OriginalRules:
 
 
 # -- geometry -----------------------------------------------------------------------------
+# Plain Python floats throughout: on 3-vectors numpy's per-call overhead costs more than
+# the arithmetic (this path runs for every hand of every frame).
+_NAN = math.nan
+_isfinite = math.isfinite
+
+
 @dataclass
 class HandGeometry:
-    """What the rules look at, in the hand frame. NaN where the frame lacks the data."""
-    bend: np.ndarray            # (5,) degrees; [0] is the thumb's (unused by the rules)
+    """What the rules look at. NaN where the frame lacks the data."""
+    bend: Tuple[float, ...]     # 5 bends, degrees; [0] is the thumb's (unused by the rules)
     thumb_out: float            # mm, thumb tip's thumbward offset from the palm centre
     pinch_gap: float            # mm, thumb tip to index tip
-    tips_local: np.ndarray      # (5, 3) mm, fingertips in the hand frame
-    tips_world: np.ndarray      # (5, 3) mm, fingertips in Leap axes
-    basis: np.ndarray           # (3, 3) rows: thumbward, normal, direction (Leap axes)
+    tips_world: list            # 5 [x, y, z] fingertips, mm, Leap axes
+    basis: tuple                # rows: thumbward, normal, direction (Leap axes), unit
+    palm: list                  # [x, y, z] palm centre, mm
 
 
-def _unit_rows(a):
-    n = np.sqrt(np.einsum('ij,ij->i', a, a))
-    with np.errstate(invalid='ignore', divide='ignore'):
-        return a / n[:, None]
+def _f3(v):
+    """[x, y, z] (numbers) of a 3-vector, or None when absent / malformed."""
+    if v.__class__ is np.ndarray:
+        return v.tolist() if v.shape == (3,) else None
+    if v is None or len(v) != 3:
+        return None
+    return [float(v[0]), float(v[1]), float(v[2])]
+
+
+def _unit(x, y, z):
+    n = math.sqrt(x * x + y * y + z * z)
+    if n > 0.0 and n != math.inf:
+        return x / n, y / n, z / n
+    return _NAN, _NAN, _NAN
+
+
+def _angle_deg(c):
+    """acos in degrees of a cosine; NaN stays NaN."""
+    if c != c:
+        return _NAN
+    return math.degrees(math.acos(1.0 if c > 1.0 else -1.0 if c < -1.0 else c))
 
 
 def hand_geometry(hand):
@@ -145,49 +184,70 @@ def hand_geometry(hand):
     if len(fingers) != 5:
         return None
     try:
-        pts = np.array([[f.tip, f.direction,
-                         f.dip if f.dip is not None else f.tip,
-                         f.pip if f.pip is not None else _NAN3,
-                         f.mcp if f.mcp is not None else _NAN3] for f in fingers], dtype=float)
-        head = np.array([hand.palm_position, hand.palm_normal, hand.direction], dtype=float)
-    except (TypeError, ValueError):
+        palm = _f3(hand.palm_position)
+        n = _f3(hand.palm_normal)
+        d = _f3(hand.direction)
+        if palm is None or n is None or d is None:
+            return None
+        px, py, pz = palm
+        nx, ny, nz = n
+        dx, dy, dz = d
+        if not (_isfinite(px + py + pz) and _isfinite(nx + ny + nz) and _isfinite(dx + dy + dz)):
+            return None
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        if nn < 1e-6:
+            return None
+        nx, ny, nz = nx / nn, ny / nn, nz / nn
+        k = dx * nx + dy * ny + dz * nz
+        dx, dy, dz = dx - nx * k, dy - ny * k, dz - nz * k
+        dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if dn < 1e-6:
+            return None
+        dx, dy, dz = dx / dn, dy / dn, dz / dn
+        # thumbward = d x n for a right hand, its negative for a left one
+        s = -1.0 if hand.side == 'left' else 1.0
+        tx, ty, tz = s * (dy * nz - dz * ny), s * (dz * nx - dx * nz), s * (dx * ny - dy * nx)
+        tips = []
+        bend = []
+        for f in fingers:
+            tip = _f3(f.tip)
+            if tip is None:
+                return None
+            tips.append(tip)
+            ax, ay, az = tip
+            dip = f.dip
+            dip = _f3(dip) if dip is not None else tip
+            if dip is None:
+                return None
+            # The distal bone (dip -> tip); the SDK's finger direction when joints are
+            # absent (it follows the middle bone on real captures: the second choice).
+            ux, uy, uz = ax - dip[0], ay - dip[1], az - dip[2]
+            l2 = ux * ux + uy * uy + uz * uz
+            if not (l2 >= 1e-6 and l2 != math.inf):
+                fd = _f3(f.direction)
+                if fd is None:
+                    return None
+                ux, uy, uz = fd
+            ux, uy, uz = _unit(ux, uy, uz)
+            flex = _angle_deg(ux * dx + uy * dy + uz * dz)
+            pip, mcp = f.pip, f.mcp
+            curl = _NAN
+            if pip is not None and mcp is not None:
+                pip, mcp = _f3(pip), _f3(mcp)
+                if pip is None or mcp is None:
+                    return None
+                vx, vy, vz = _unit(pip[0] - mcp[0], pip[1] - mcp[1], pip[2] - mcp[2])
+                curl = _angle_deg(vx * ux + vy * uy + vz * uz)
+            # the larger of the two (like np.fmax: a NaN loses)
+            bend.append(flex if curl != curl else curl if flex != flex or curl > flex else flex)
+        th, ix = tips[0], tips[1]
+        gx, gy, gz = th[0] - ix[0], th[1] - ix[1], th[2] - ix[2]
+        gap = math.sqrt(gx * gx + gy * gy + gz * gz)
+        thumb_out = (th[0] - px) * tx + (th[1] - py) * ty + (th[2] - pz) * tz
+    except (TypeError, ValueError, AttributeError, IndexError, OverflowError):
         return None
-    if pts.shape != (5, 5, 3) or head.shape != (3, 3) or not np.all(np.isfinite(head)):
-        return None
-    palm, n, d = head
-    nn = math.sqrt(n @ n)
-    if nn < 1e-6:
-        return None
-    n = n / nn
-    d = d - n * (d @ n)
-    dn = math.sqrt(d @ d)
-    if dn < 1e-6:
-        return None
-    d = d / dn
-    x = np.array([d[1] * n[2] - d[2] * n[1], d[2] * n[0] - d[0] * n[2], d[0] * n[1] - d[1] * n[0]])
-    if hand.side == 'left':
-        x = -x
-    basis = np.stack([x, n, d])
-    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
-        tips_local = (pts[:, 0] - palm) @ basis.T
-        # The distal bone (dip -> tip); the SDK's finger direction when joints are absent
-        # (it follows the middle bone on real captures, so it is the second choice).
-        distal = pts[:, 0] - pts[:, 2]
-        bad = ~np.all(np.isfinite(distal), axis=1) | (np.einsum('ij,ij->i', distal, distal) < 1e-6)
-        if bad.any():
-            distal[bad] = pts[bad, 1]
-        distal = _unit_rows(distal)
-        proximal = _unit_rows(pts[:, 3] - pts[:, 4])
-        flex = np.degrees(np.arccos(np.clip(distal @ d, -1.0, 1.0)))
-        curl = np.degrees(np.arccos(np.clip(np.einsum('ij,ij->i', proximal, distal), -1.0, 1.0)))
-        bend = np.where(np.isfinite(curl), np.fmax(flex, curl), flex)
-        gap_v = pts[0, 0] - pts[1, 0]
-        gap = math.sqrt(gap_v @ gap_v)
-    return HandGeometry(bend=bend, thumb_out=float(tips_local[0, 0]), pinch_gap=gap,
-                        tips_local=tips_local, tips_world=pts[:, 0], basis=basis)
-
-
-_NAN3 = np.full(3, math.nan)
+    return HandGeometry(bend=tuple(bend), thumb_out=thumb_out, pinch_gap=gap, tips_world=tips,
+                        basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)
 
 
 def geometric_pinch_strength(gap):
@@ -204,122 +264,209 @@ def classify_geometry(g, hand, active=None, opening=False):
     stay-on thresholds (hysteresis). `opening`: the fingers are unfolding fast (a
     stateful caller knows); a thumbs-up does not start then."""
     active = active or ()
-    bend = g.bend[1:]
-    known = np.isfinite(bend)
+    b1, b2, b3, b4 = g.bend[1:]                  # index, middle, ring, pinky
+    known = _isfinite(b1 + b2 + b3 + b4)
+    least = min(b1, b2, b3, b4) if known else _NAN
     # Each of fist / thumbs-up keeps its own hysteresis: leaving a fist through a brief
     # thumb-out phase must not count as a thumbs-up that is already on.
-    all_curled = {name: bool(known.all() and np.all(bend > th[1 if name in active else 0]))
-                  for name, th in (('fist', CURLED_BEND), ('thumb_up', THUMB_UP_CURLED_BEND))}
-    k_open = 1 if ('open' in active or 'rock' in active) else 0
-    extended = known & (bend < EXTENDED_BEND[k_open])
+    fist_curled = known and least > CURLED_BEND[1 if 'fist' in active else 0]
+    thumb_curled = known and least > THUMB_UP_CURLED_BEND[1 if 'thumb_up' in active else 0]
+    ext_th = EXTENDED_BEND[1 if ('open' in active or 'rock' in active) else 0]
+    e1, e2, e3, e4 = b1 < ext_th, b2 < ext_th, b3 < ext_th, b4 < ext_th   # NaN -> False
     thumb_out = g.thumb_out
-    thumb_known = math.isfinite(thumb_out)
-    k_thumb = 1 if ('thumb_up' in active or 'open' in active) else 0
-    out = thumb_known and thumb_out > THUMB_OUT_MM[k_thumb]
-    r = {}
-    r['fist'] = all_curled['fist'] and not out
-    r['thumb_up'] = all_curled['thumb_up'] and out and ('thumb_up' in active or not opening)
+    out = thumb_out > THUMB_OUT_MM[1 if ('thumb_up' in active or 'open' in active) else 0]
+    fist = fist_curled and not out
+    thumb_up = thumb_curled and out and ('thumb_up' in active or not opening)
     # Rock: index and pinky out, middle and ring curled (looser bar for the curl: a
     # horns hand rarely folds middle and ring as deep as a fist).
-    r['rock'] = bool(extended[0] and extended[3] and known[1] and known[2]
-                     and bend[1] > CURLED_BEND[1] and bend[2] > CURLED_BEND[1])
+    rock = e1 and e4 and b2 > CURLED_BEND[1] and b3 > CURLED_BEND[1]
     gap = g.pinch_gap
-    others = bend[1:]
-    pinch = (math.isfinite(gap) and gap < PINCH_GAP_MM[1 if 'pinch' in active else 0]
-             and not r['fist'] and not r['thumb_up']
-             and bool(np.all(np.isfinite(others)))
-             and (not math.isfinite(bend[0]) or bend[0] > float(np.min(others)) + PINCH_BEND_MARGIN
-                  or not bool(np.all(others > CURLED_BEND[1]))))
-    r['pinch'] = bool(pinch)
+    pinch = False
+    if gap < PINCH_GAP_MM[1 if 'pinch' in active else 0] and not fist and not thumb_up:
+        rest = min(b2, b3, b4)
+        if _isfinite(b2 + b3 + b4):
+            pinch = (not _isfinite(b1) or b1 > rest + PINCH_BEND_MARGIN
+                     or not rest > CURLED_BEND[1])
     # Open: four fingers straight, thumb either way (a flat hand tucks it), not pinching.
-    r['open'] = bool(extended.all()) and not pinch
-    strength = _num(hand.pinch_strength, -1.0)
-    if not 0.0 <= strength <= 1.0:
-        strength = geometric_pinch_strength(gap)
-    r['pinch_value'] = min(max(strength - PINCH_THRESHOLD, 0.0), 0.8) if pinch else 0.0
-    r['extended'] = (bool(out),) + tuple(bool(e) for e in extended)
-    return r
+    opn = e1 and e2 and e3 and e4 and not pinch
+    value = 0.0
+    if pinch:
+        strength = _num(hand.pinch_strength, -1.0)
+        if not 0.0 <= strength <= 1.0:
+            strength = geometric_pinch_strength(gap)
+        value = min(max(strength - PINCH_THRESHOLD, 0.0), 0.8)
+    return {'fist': fist, 'thumb_up': thumb_up, 'rock': rock, 'pinch': pinch, 'open': opn,
+            'pinch_value': value, 'extended': (out, e1, e2, e3, e4)}
 
 
 # -- circles ------------------------------------------------------------------------------
-class _CircleTrack:
-    """One point's path (the palm or a fingertip): resampled, turning accumulated."""
-    __slots__ = ('spacing', 'r_min', 'r_max', 'window', 'last', 'seg', 'steps', 'turn',
-                 'abs_turn', 'length')
+def fit_circle(pts):
+    """Least-squares circle through 3-D points: the plane from their covariance, then an
+    algebraic (Kasa) fit in it. (centre (3,), unit normal (3,), radius, rms radial
+    residual, unwrapped angle of each point about the centre, right-handed about the
+    normal) or None when degenerate."""
+    p = np.array(pts, dtype=float)
+    c = p.mean(axis=0)
+    q = p - c
+    _, vecs = np.linalg.eigh(q.T @ q)
+    normal, u = vecs[:, 0], vecs[:, 2]
+    v = vecs[:, 1]
+    if (u[1] * v[2] - u[2] * v[1]) * normal[0] + (u[2] * v[0] - u[0] * v[2]) * normal[1] \
+            + (u[0] * v[1] - u[1] * v[0]) * normal[2] < 0:
+        v = -v                                  # u x v = normal
+    x, y = q @ u, q @ v
+    # x^2 + y^2 = 2 a x + 2 b y + k, normal equations (x, y are centred: sums are 0)
+    zz = x * x + y * y
+    sxx, sxy, syy = float(x @ x), float(x @ y), float(y @ y)
+    det = sxx * syy - sxy * sxy
+    if not det > 1e-12 * (sxx + syy) ** 2:
+        return None
+    bx, by = float(x @ zz), float(y @ zz)
+    cx = 0.5 * (syy * bx - sxy * by) / det
+    cy = 0.5 * (sxx * by - sxy * bx) / det
+    r2 = float(zz.mean()) + cx * cx + cy * cy
+    dx, dy = x - cx, y - cy
+    radius = math.sqrt(r2)
+    residual = float(np.sqrt(np.mean((np.sqrt(dx * dx + dy * dy) - radius) ** 2)))
+    angles = np.arctan2(dy, dx)
+    step = np.diff(angles)
+    step -= 2 * math.pi * np.round(step / (2 * math.pi))
+    angles = np.concatenate(([angles[0]], angles[0] + np.cumsum(step)))
+    return c + cx * u + cy * v, normal, radius, residual, angles
 
-    def __init__(self, spacing, r_min, r_max, window):
-        self.spacing, self.r_min, self.r_max, self.window = spacing, r_min, r_max, window
+
+class _CircleTrack:
+    """One point's path (the palm or a fingertip); see the circles section above."""
+    __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
+                 'cross', 'length', 'head', 'wait')
+
+    def __init__(self, spacing, r_min, r_max, spans):
+        self.spacing2 = spacing * spacing
+        self.r_min, self.r_max, self.spans = r_min, r_max, spans
+        self.jump2 = (25 * spacing + 2 * r_max) ** 2
+        self.min_len = CIRCLE_ARC * r_min       # path length of the smallest circle
         self.reset()
 
     def reset(self):
-        self.last = None          # last accepted point (x, y, z)
-        self.seg = None           # last segment vector
-        self.steps = deque()      # (t, turn vector, |turn|, segment length)
-        self.turn = [0.0, 0.0, 0.0]
-        self.abs_turn = 0.0
-        self.length = 0.0
+        # Parallel lists from index `head` on: time, point, prefix sums of p[i-1] x p[i]
+        # (twice the vector area swept about the origin) and of the path length.
+        self.ts, self.pts, self.cross, self.length = [], [], [], []
+        self.head = 0
+        self.wait = 0
 
-    def _clear(self):
-        self.steps.clear()
-        self.turn = [0.0, 0.0, 0.0]
-        self.abs_turn = self.length = 0.0
+    def clear(self):
+        """Forget the path so far but keep the current point (after an event)."""
+        last = self.pts[-1] if len(self.pts) > self.head else None
+        t = self.ts[-1] if last is not None else 0.0
+        self.reset()
+        if last is not None:
+            self._start(t, last)
+
+    def _start(self, t, p):
+        self.ts.append(t)
+        self.pts.append(p)
+        self.cross.append(_ZERO3)
+        self.length.append(0.0)
 
     def add(self, t, p):
-        """Feed a point (3 floats); (axis unit vector, radius mm) when a circle closed.
-        Plain floats: numpy's per-call overhead dominates on 3-vectors."""
-        if self.last is None:
-            self.last = p
+        """Feed a point [x, y, z]; (axis unit vector, radius mm) when a circle closed."""
+        pts = self.pts
+        if len(pts) <= self.head:
+            self._start(t, p)
             return None
-        lx, ly, lz = self.last
-        sx, sy, sz = p[0] - lx, p[1] - ly, p[2] - lz
-        length = math.sqrt(sx * sx + sy * sy + sz * sz)
-        if length < self.spacing:
+        ts = self.ts
+        q = pts[-1]
+        x, y, z = p
+        qx, qy, qz = q
+        sx, sy, sz = x - qx, y - qy, z - qz
+        l2 = sx * sx + sy * sy + sz * sz
+        if l2 < self.spacing2:
             return None
-        if length > 25 * self.spacing + 2 * self.r_max:   # a jump: tracking glitch
+        if l2 > self.jump2 or not t >= ts[-1]:      # a jump: tracking glitch
             self.reset()
-            self.last = p
+            self._start(t, p)
             return None
-        self.last = p
-        prev, self.seg = self.seg, (sx, sy, sz)
-        if prev is None:
+        cross, length = self.cross, self.length
+        c = cross[-1]
+        cn = (c[0] + qy * z - qz * y, c[1] + qz * x - qx * z, c[2] + qx * y - qy * x)
+        ln = length[-1] + math.sqrt(l2)
+        cross.append(cn)
+        length.append(ln)
+        ts.append(t)
+        pts.append(p)
+        spans = self.spans
+        # drop what is older than the longest stretch; compact now and then
+        head = self.head
+        oldest = t - spans[-1]
+        while ts[head] < oldest:
+            head += 1
+        if head > 256:
+            del ts[:head], pts[:head], cross[:head], length[:head]
+            head = 0
+        self.head = head
+        if self.wait > 0:
+            self.wait -= 1
             return None
-        px, py, pz = prev
-        cx, cy, cz = py * sz - pz * sy, pz * sx - px * sz, px * sy - py * sx
-        cn = math.sqrt(cx * cx + cy * cy + cz * cz)
-        angle = math.atan2(cn, px * sx + py * sy + pz * sz)
-        if angle > CIRCLE_MAX_STEP_TURN:
-            self._clear()
+        n = len(ts) - 1
+        min_len = self.min_len
+        if ln - length[head] < min_len:
             return None
-        k = angle / cn if cn > 0 else 0.0
-        v = (cx * k, cy * k, cz * k)
-        steps = self.steps
-        steps.append((t, v, angle, length))
-        turn = self.turn
-        turn[0] += v[0]
-        turn[1] += v[1]
-        turn[2] += v[2]
-        self.abs_turn += angle
-        self.length += length
-        while steps and (t - steps[0][0] > self.window or t < steps[0][0]):
-            _, ov, oa, ol = steps.popleft()
-            turn[0] -= ov[0]
-            turn[1] -= ov[1]
-            turn[2] -= ov[2]
-            self.abs_turn -= oa
-            self.length -= ol
-        total = math.sqrt(turn[0] ** 2 + turn[1] ** 2 + turn[2] ** 2)
-        if total < CIRCLE_TURN or total < CIRCLE_CONSISTENCY * self.abs_turn:
+        best, best_j = CIRCLE_MIN_ROUNDNESS, -1
+        last_j = -1
+        for span in spans:
+            j = bisect_left(ts, t - span, head, n)
+            if j == last_j or n - j < CIRCLE_MIN_POINTS:
+                continue
+            last_j = j
+            a = pts[j]
+            ex, ey, ez = x - a[0], y - a[1], z - a[2]
+            perimeter = ln - length[j] + math.sqrt(ex * ex + ey * ey + ez * ez)
+            if perimeter < min_len:
+                continue
+            # twice the area closed by the chord p[n] -> p[j], which adds p[n] x p[j]
+            cj = cross[j]
+            ax = cn[0] - cj[0] + y * a[2] - z * a[1]
+            ay = cn[1] - cj[1] + z * a[0] - x * a[2]
+            az = cn[2] - cj[2] + x * a[1] - y * a[0]
+            # 4 pi area / perimeter^2
+            r = 2.0 * math.pi * math.sqrt(ax * ax + ay * ay + az * az) / (perimeter * perimeter)
+            if r > best:
+                best, best_j = r, j
+        if best_j < 0:
             return None
-        radius = self.length / total
-        axis = np.array(turn) / total
-        self._clear()
-        if not self.r_min <= radius <= self.r_max:
+        hit = self._fit(pts[best_j:])
+        if hit is None:
+            self.wait = CIRCLE_RETRY_POINTS
+        return hit
+
+    def _fit(self, pts):
+        fit = fit_circle(pts)
+        if fit is None:
             return None
-        return axis, radius
+        # Trim to the shortest tail that sweeps the arc about the fitted centre, refit.
+        tail = np.flatnonzero(np.abs(fit[4][-1] - fit[4]) >= CIRCLE_ARC)
+        if not len(tail) or len(pts) - int(tail[-1]) < CIRCLE_MIN_POINTS:
+            return None
+        fit = fit_circle(pts[int(tail[-1]):])
+        if fit is None:
+            return None
+        _, normal, radius, residual, angles = fit
+        sweep = float(angles[-1] - angles[0])
+        travel = float(np.sum(np.abs(np.diff(angles))))
+        # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
+        if (abs(sweep) < 0.9 * CIRCLE_ARC or travel > CIRCLE_MAX_TRAVEL * abs(sweep)
+                or not self.r_min <= radius <= self.r_max
+                or residual > CIRCLE_MAX_RESIDUAL * radius):
+            return None
+        return (normal if sweep > 0 else -normal), radius
+
+
+_ZERO3 = (0.0, 0.0, 0.0)
 
 
 class CircleDetector:
-    """Circles traced by the palm or any fingertip of one hand.
+    """Circles traced by the palm or any fingertip of one hand: one event per circle (all
+    tracks forget their path when one fires), at most one per CIRCLE_REFRACTORY_S.
 
     Direction: a fingertip circle is clockwise when it turns clockwise seen along the
     finger (the Leap SDK's convention: normal . pointable direction > 0); a palm circle
@@ -337,36 +484,46 @@ class CircleDetector:
         self._last_event = -math.inf
         self._palm_smooth = None
 
-    def update(self, hand, timestamp, geometry=None):
-        """GestureEvent or None."""
+    def update(self, hand, timestamp, geometry):
+        """GestureEvent or None, from the hand's HandGeometry (palm and tips)."""
         found = None
-        palm = np.asarray(hand.palm_position, dtype=float)
-        if palm.shape == (3,) and np.all(np.isfinite(palm)):
-            # Light smoothing: palm noise would otherwise scramble the turning at the
-            # palm track's coarse spacing.
-            sm = self._palm_smooth
-            sm = palm if sm is None else sm + PALM_SMOOTHING * (palm - sm)
-            self._palm_smooth = sm
-            hit = self.tracks[0].add(timestamp, sm.tolist())
-            if hit is not None:
-                found = (hit[0] @ _UP > 0, hit[1])
-        if geometry is not None:
-            tips = geometry.tips_world
-            ok = np.isfinite(tips).all(axis=1).tolist()
-            tips = tips.tolist()
-            for i, f in enumerate(hand.fingers[:5]):
-                if not ok[i]:
-                    continue
-                hit = self.tracks[1 + i].add(timestamp, tips[i])
-                if hit is not None and found is None:
-                    ref = np.asarray(f.direction, dtype=float)
-                    if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-                        ref = geometry.basis[2]
-                    along = float(hit[0] @ ref)
-                    # A circle drawn across the finger's axis has no SDK sense: fall back
-                    # on the palm convention.
-                    found = ((along > 0) if abs(along) >= 0.5 else (hit[0] @ _UP > 0), hit[1])
-        if found is None or timestamp - self._last_event < CIRCLE_REFRACTORY_S:
+        tracks = self.tracks
+        # Light smoothing: palm noise would otherwise scramble the turning at the palm
+        # track's coarse spacing.
+        x, y, z = geometry.palm
+        sm = self._palm_smooth
+        if sm is not None:
+            a = PALM_SMOOTHING
+            x, y, z = sm[0] + a * (x - sm[0]), sm[1] + a * (y - sm[1]), sm[2] + a * (z - sm[2])
+        self._palm_smooth = sm = [x, y, z]
+        hit = tracks[0].add(timestamp, sm)
+        if hit is not None:
+            found = (hit[0][1] > 0, hit[1])
+        bend = geometry.bend
+        for i, tip in enumerate(geometry.tips_world):
+            if not _isfinite(tip[0] + tip[1] + tip[2]):
+                continue
+            hit = tracks[1 + i].add(timestamp, tip)
+            if hit is None or found is not None:
+                continue
+            # Like the SDK's: a circle drawn with an extended finger (a curled one only
+            # loops while folding), roughly across the finger's axis (a loop in the
+            # plane the finger bends in is a tap or a fold, not a circle). The sense is
+            # then the SDK's: clockwise when the normal points along the finger.
+            if i > 0 and not bend[i] < EXTENDED_BEND[1]:
+                continue
+            axis = hit[0]
+            ref = _f3(hand.fingers[i].direction)
+            if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
+                ref = geometry.basis[2]
+            along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
+            if abs(along) >= CIRCLE_MIN_ACROSS:
+                found = (along > 0, hit[1])
+        if found is None:
+            return None
+        for tr in tracks:
+            tr.clear()
+        if timestamp - self._last_event < CIRCLE_REFRACTORY_S:
             return None
         self._last_event = timestamp
         cw, radius = found
@@ -404,78 +561,87 @@ class GestureRecognizer:
             timestamp = float(timestamp)
         except (TypeError, ValueError):
             timestamp = math.nan
-        if not math.isfinite(timestamp):
+        if not _isfinite(timestamp):
             timestamp = self._prev_time() + 0.01
         g = hand_geometry(hand)
         confidence = _num(hand.confidence, 1.0)
         usable = g is not None and confidence >= self.min_confidence
+        stateless = self.stateless
+        active = self._active
         events = []
         prev = self._prev
         if usable:
             self._last_confident = timestamp
             opening = False
-            if not self.stateless:
-                bends = g.bend[1:]
-                if np.all(np.isfinite(bends)):
-                    mean_bend = float(bends.mean())
+            if not stateless:
+                b = g.bend
+                mean_bend = (b[1] + b[2] + b[3] + b[4]) * 0.25
+                if _isfinite(mean_bend):
                     hist = self._bend_hist
                     while hist and not 0.0 <= timestamp - hist[0][0] <= OPENING_WINDOW_S:
                         hist.popleft()
                     hist.append((timestamp, mean_bend))
                     opening = max(b for _, b in hist) - mean_bend > OPENING_DEG
-            raw = classify_geometry(g, hand, () if self.stateless else self._active, opening)
-            for name in HELD_GESTURES:
-                if raw[name] == (name in self._active):
-                    self._count[name] = 0
-                    continue
-                if self._count[name] == 0:
-                    self._since[name] = timestamp
-                self._count[name] += 1
-                if name in self._active:
-                    done = self._count[name] >= self.off_frames
-                else:
-                    done = (self._count[name] >= self.on_frames and
-                            timestamp - self._since[name] >= self.on_time.get(name, 0.0) - 1e-9)
-                if done:
-                    self._count[name] = 0
-                    if raw[name]:
-                        self._active.add(name)
+            raw = classify_geometry(g, hand, () if stateless else active, opening)
+            if stateless:
+                active = {n for n in HELD_GESTURES if raw[n]}
+            else:
+                count = self._count
+                for name in HELD_GESTURES:
+                    want = raw[name]
+                    if want == (name in active):
+                        count[name] = 0
+                        continue
+                    if count[name] == 0:
+                        self._since[name] = timestamp
+                    count[name] += 1
+                    if want:
+                        done = (count[name] >= self.on_frames and
+                                timestamp - self._since[name] >= self.on_time.get(name, 0.0) - 1e-9)
                     else:
-                        self._active.discard(name)
+                        done = count[name] >= self.off_frames
+                    if done:
+                        count[name] = 0
+                        if want:
+                            active.add(name)
+                        else:
+                            active.discard(name)
             extended = raw['extended']
             pinch_value = raw['pinch_value']
-            if 'pinch' in self._active and pinch_value == 0.0 and not raw['pinch']:
+            if 'pinch' in active and pinch_value == 0.0 and not raw['pinch']:
                 pinch_value = prev.pinch_value      # held through the off-filter
         else:
             # Unusable frame: hold what we had for a moment, then let go.
-            if timestamp - self._last_confident > HOLD_LOW_CONFIDENCE_S:
-                self._active.clear()
+            if stateless or timestamp - self._last_confident > HOLD_LOW_CONFIDENCE_S:
+                active.clear()
             for name in HELD_GESTURES:
                 self._count[name] = 0
             extended = prev.finger_extended
             pinch_value = prev.pinch_value
-        if self.stateless:
-            self._active = {n for n in HELD_GESTURES if usable and raw[n]}
-        state = GestureState(finger_extended=tuple(extended), events=events,
-                             **{n: n in self._active for n in HELD_GESTURES})
-        state.pinch_value = min(max(float(pinch_value), 0.0), 0.8) if state.pinch else 0.0
-        if not self.stateless:
-            for name in HELD_GESTURES:
-                now = getattr(state, name)
-                if now != getattr(prev, name):
-                    events.append(GestureEvent(name, now,
-                                               state.pinch_value if name == 'pinch' else 0.0))
-        shape = 'fist' if state.fist else 'open' if state.open else None
-        if shape and shape != self._last_shape and not self.stateless:
-            if self._last_shape == 'fist' and shape == 'open':
-                events.append(GestureEvent('unfold'))
-            elif self._last_shape == 'open' and shape == 'fist':
-                events.append(GestureEvent('fold'))
-            self._last_shape = shape
-        if self.circles is not None and usable:
-            circle = self.circles.update(hand, timestamp, g)
-            if circle is not None:
-                events.append(circle)
+        self._active = active
+        pinch = 'pinch' in active
+        state = GestureState('fist' in active, 'thumb_up' in active, pinch,
+                             min(max(float(pinch_value), 0.0), 0.8) if pinch else 0.0,
+                             'rock' in active, 'open' in active, extended, events)
+        if not stateless:
+            if (state.fist != prev.fist or state.thumb_up != prev.thumb_up or pinch != prev.pinch
+                    or state.rock != prev.rock or state.open != prev.open):
+                for name in HELD_GESTURES:
+                    now = getattr(state, name)
+                    if now != getattr(prev, name):
+                        events.append(GestureEvent(name, now,
+                                                   state.pinch_value if name == 'pinch' else 0.0))
+            shape = 'fist' if state.fist else 'open' if state.open else None
+            if shape and shape != self._last_shape:
+                if self._last_shape == 'fist' and shape == 'open':
+                    events.append(GestureEvent('unfold'))
+                elif self._last_shape == 'open' and shape == 'fist':
+                    events.append(GestureEvent('fold'))
+                self._last_shape = shape
+            if self.circles is not None and usable:
+                circle = self.circles.update(hand, timestamp, g)
+                if circle is not None:
+                    events.append(circle)
         self._prev = state
         self._prev_t = timestamp
         return state

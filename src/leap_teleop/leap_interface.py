@@ -75,10 +75,17 @@ class HandState:
 
 
 def _finite_tuple(v, limit=None):
-    a = np.asarray(v, dtype=float).reshape(3)
-    if not np.all(np.isfinite(a)) or (limit is not None and np.any(np.abs(a) > limit)):
+    """(x, y, z) floats of a 3-vector; None when not finite or beyond +-limit."""
+    if v.__class__ is np.ndarray and v.shape == (3,):
+        x, y, z = v.tolist()            # plain floats: numpy per-call costs dominate here
+        x, y, z = float(x), float(y), float(z)
+    else:
+        x, y, z = np.asarray(v, dtype=float).reshape(3).tolist()
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
         return None
-    return tuple(float(x) for x in a)
+    if limit is not None and (abs(x) > limit or abs(y) > limit or abs(z) > limit):
+        return None
+    return (x, y, z)
 
 
 def _unit_interval(x):
