@@ -351,3 +351,51 @@ def test_missing_sdk_names_what_to_install(monkeypatch, name, module):
     with pytest.raises(SourceError) as e:
         make_source(name)
     assert 'install' in str(e.value) and ('import %s' % module) in str(e.value)
+
+
+def _same_frames(a, b):
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        assert (x.id, x.gestures, len(x.hands)) == (y.id, y.gestures, len(y.hands))
+        assert x.timestamp == y.timestamp or (x.timestamp != x.timestamp and y.timestamp != y.timestamp)
+        for h, k in zip(x.hands, y.hands):
+            assert (h.side, h.id) == (k.side, k.id)
+            for name in ('palm_position', 'palm_normal', 'direction', 'palm_velocity'):
+                assert np.array_equal(getattr(h, name), getattr(k, name), equal_nan=True)
+            for f, g in zip(h.fingers, k.fingers):
+                assert f.extended == g.extended
+                for name in ('tip', 'direction', 'mcp', 'pip', 'dip'):
+                    u, v = getattr(f, name), getattr(g, name)
+                    assert (u is None and v is None) or np.array_equal(u, v, equal_nan=True)
+
+
+@pytest.mark.parametrize('fast', [True, False])
+def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast):
+    """load_frames (pysimdjson when installed, else the orjson/json tree) decodes exactly
+    what load + frame_from_dict does, bad frames included."""
+    if not fast:
+        monkeypatch.setattr(leapjs, '_simdjson', None)
+    elif leapjs._simdjson is None:
+        pytest.skip('pysimdjson not installed')
+    frames = _frames(12)
+    frames[2] = 'garbage'
+    frames[4] = {'id': 9, 'timestamp': 'x'}
+    frames[6] = dict(frames[6], hands=[{'type': 'right', 'palmPosition': 'oops'}], pointables=5)
+    frames[8] = dict(frames[8], pointables=[dict(p, tipPosition=[1, 2]) for p in frames[8]['pointables']])
+    frames[9] = dict(frames[9], hands=[dict(h, palmNormal='abc') for h in frames[9]['hands']])
+    paths = [_write(tmp_path, 'm.json', frames), _write(tmp_path, 'm.json.lz', frames)]
+    if os.path.isdir(DATA):
+        paths += [os.path.join(DATA, 'decoded', 'flapping.json.gz'),
+                  os.path.join(DATA, 'finger-tap-54fps.json.lz')]
+    for path in paths:
+        meta, got, errors = leapjs.load_frames(path)
+        meta2, dicts = leapjs.load(path)
+        want, idx = [], []
+        for k, d in enumerate(dicts):
+            try:
+                want.append(leapjs.frame_from_dict(d))
+            except leapjs.FrameError:
+                idx.append(k)
+        assert meta == meta2 and [k for k, _ in errors] == idx
+        _same_frames(got, want)
+    assert len(leapjs.load_frames(paths[0])[2]) == 2       # 'garbage' and pointables=5

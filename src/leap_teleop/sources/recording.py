@@ -9,6 +9,7 @@ import logging
 import math
 import time
 
+from ..frame import Frame
 from .base import HandSource, SourceError
 from . import leapjs
 
@@ -21,21 +22,20 @@ class RecordingSource(HandSource):
         self.loop = bool(loop)
         self.realtime = bool(realtime)
         self._clock = clock
-        self.metadata, dicts = leapjs.load(self.path)
+        # Decoded once, up front (leapjs.load_frames: the fast path); playback re-stamps.
+        self.metadata, frames, errors = leapjs.load_frames(self.path)
         self.bad_frames = 0
-        self._frames = []          # (recorded time s, frame dict)
+        for _, why in errors:
+            self._warn_bad(why)
+        self._frames = []          # (recorded time s, Frame)
         last_ts = None
-        for d in dicts:
-            ts = d.get('timestamp') if isinstance(d, dict) else None
-            try:
-                ts = float(ts) * 1e-6
-            except (TypeError, ValueError):
-                ts = math.nan
+        for frame in frames:
+            ts = frame.timestamp
             if not math.isfinite(ts) or (last_ts is not None and ts < last_ts):
                 self._warn_bad('no usable timestamp' if not math.isfinite(ts)
                                else 'timestamp goes backwards')
                 continue
-            self._frames.append((ts, d))
+            self._frames.append((ts, frame))
             last_ts = ts
         if not self._frames:
             raise SourceError('recording %s has no frame with a usable timestamp' % self.path)
@@ -57,7 +57,7 @@ class RecordingSource(HandSource):
         start_mono = time.monotonic()
         offset = 0.0                 # recorded seconds of the passes already played
         while not self.stopped:
-            for ts, d in self._frames:
+            for ts, f in self._frames:
                 if self.stopped:
                     return
                 rel = offset + ts - ts0
@@ -65,11 +65,9 @@ class RecordingSource(HandSource):
                     delay = start_mono + rel - time.monotonic()
                     if delay > 0:
                         time.sleep(delay)
-                try:
-                    frame = leapjs.frame_from_dict(d, timestamp=start_stamp + rel)
-                except (leapjs.FrameError, TypeError, ValueError) as e:
-                    self._warn_bad(str(e))
-                    continue
+                # A fresh Frame per pass; its Hands are shared between loop passes
+                # (read-only, as every source's are).
+                frame = Frame(f.id, start_stamp + rel, f.hands, f.gestures)
                 yield frame
             if not self.loop:
                 return
