@@ -4,7 +4,7 @@ ENV := ./env.sh
 PYTEST_ARGS ?=
 GUI ?= 0
 
-.PHONY: setup demo test unit rostest bench eval clean
+.PHONY: setup demo test bench eval soak clean
 
 setup:
 	@bash tools/setup.sh
@@ -20,6 +20,9 @@ bench: setup
 
 eval: setup
 	@$(ENV) python -m leap_teleop.tools.evaluate
+
+soak: setup
+	@$(ENV) python -m leap_teleop.tools.soak
 
 clean:
 	rm -rf .ws build devel bench_results.json eval_results.json demo_output

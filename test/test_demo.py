@@ -1,0 +1,16 @@
+"""make demo's job end to end: every task succeeds and the pictures are written."""
+import json
+
+from leap_teleop.tools import demo
+
+
+def test_demo_succeeds_and_writes_its_outputs(tmp_path):
+    out = tmp_path / 'demo_output'
+    assert demo.main(['--out', str(out)]) == 0
+    summary = json.loads((out / 'summary.json').read_text())
+    assert set(summary['tasks']) == {'ur10_pick_place_ur10_1', 'ur10_pick_place_ur10_2',
+                                     'drone_flight'}
+    assert all(task['success'] for task in summary['tasks'].values()), summary
+    for name in ('ur10.gif', 'drone.gif'):
+        assert (out / name).stat().st_size > 10000
+    assert len(list(out.glob('ur10_*.png'))) > 20
