@@ -116,8 +116,9 @@ def test_scripted_palm_circle_fires_one_event_with_direction(radius, duration, d
     assert events[0].value == pytest.approx(radius / 1000.0, rel=0.25)
 
 
-def test_circle_survives_palm_noise():
-    assert [e.gesture for e in _circle_events(40, 1.5, 'cw', noise=1.0, seed=4)] == ['circle_cw']
+@pytest.mark.parametrize('noise,seed', [(1.0, 4), (2.0, 0), (2.0, 3)])
+def test_circle_survives_palm_noise(noise, seed):
+    assert [e.gesture for e in _circle_events(40, 1.5, 'cw', noise=noise, seed=seed)] == ['circle_cw']
 
 
 def test_straight_moves_make_no_circle():
