@@ -86,6 +86,11 @@ def fk_all(q):
     return out
 
 
+_TWO_PI = 2 * math.pi
+_LOWER_LIST = JOINT_LOWER.tolist()
+_UPPER_LIST = JOINT_UPPER.tolist()
+
+
 def _wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
@@ -96,15 +101,23 @@ def ik(T, tcp=True, q6_free=0.0, eps=1e-9):
 
     At a wrist singularity (sin q5 = 0) q6 is not determined; q6_free is used for it.
     """
+    return [np.array(s) for s in _ik_tuples(T, tcp, q6_free, eps)]
+
+
+def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
+    """ik() as plain tuples (no numpy per solution: ik_nearest is on the control path)."""
     try:
         T = np.asarray(T, dtype=float)
-        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        if T.shape != (4, 4):
+            return []
+        (r0, r1, r2, _) = T.tolist()      # Python floats: much faster than numpy scalars
+        if not all(math.isfinite(v) for v in r0 + r1 + r2):
             return []
         # base_link -> DH base: negate x and y rows.
-        xx, xy, xz = -T[0, 0], -T[1, 0], T[2, 0]
-        yx, yy, yz = -T[0, 1], -T[1, 1], T[2, 1]
-        zx, zy, zz = -T[0, 2], -T[1, 2], T[2, 2]
-        px, py, pz = -T[0, 3], -T[1, 3], T[2, 3]
+        xx, xy, xz = -r0[0], -r1[0], r2[0]
+        yx, yy, yz = -r0[1], -r1[1], r2[1]
+        zx, zy, zz = -r0[2], -r1[2], r2[2]
+        px, py, pz = -r0[3], -r1[3], r2[3]
     except (TypeError, ValueError, IndexError):
         return []
     if tcp:
@@ -154,8 +167,7 @@ def ik(T, tcp=True, q6_free=0.0, eps=1e-9):
                 s3 = math.sin(q3)
                 q2 = math.atan2(uy, ux) - math.atan2(A3 * s3, A2 + A3 * c3)
                 q4 = q234 - q2 - q3
-                sols.append(np.array([_wrap(q1), _wrap(q2), _wrap(q3),
-                                      _wrap(q4), _wrap(q5), _wrap(q6)]))
+                sols.append((_wrap(q1), _wrap(q2), _wrap(q3), _wrap(q4), _wrap(q5), _wrap(q6)))
     return sols
 
 
@@ -178,20 +190,34 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
     """The IK solution within the joint limits nearest to q_ref (max-abs joint distance);
     None when the pose is unreachable or no solution fits the limits. Never raises."""
     try:
-        q_ref = np.asarray(q_ref, dtype=float).reshape(6)
-        if not np.all(np.isfinite(q_ref)):
+        ref = np.asarray(q_ref, dtype=float).reshape(6).tolist()
+        if not all(math.isfinite(v) for v in ref):
             return None
+        lo = _LOWER_LIST if lower is JOINT_LOWER else np.broadcast_to(lower, (6,)).tolist()
+        hi = _UPPER_LIST if upper is JOINT_UPPER else np.broadcast_to(upper, (6,)).tolist()
     except (TypeError, ValueError):
         return None
     best, best_d = None, math.inf
-    for q in ik(T, tcp=tcp, q6_free=float(q_ref[5])):
-        q = nearest_in_limits(q, q_ref, lower, upper)
-        if q is None:
-            continue
-        d = float(np.max(np.abs(q - q_ref)))
-        if d < best_d:
-            best, best_d = q, d
-    return best
+    # Scalar code: the same arithmetic as nearest_in_limits, without per-joint numpy calls;
+    # a candidate is dropped as soon as one joint is already no nearer than the best.
+    for sol in _ik_tuples(T, tcp=tcp, q6_free=ref[5]):
+        out, d = [], 0.0
+        for q, r, lo_j, hi_j in zip(sol, ref, lo, hi):
+            v = q + _TWO_PI * round((r - q) / _TWO_PI)
+            for _ in range(2):
+                if v > hi_j:
+                    v -= _TWO_PI
+                if v < lo_j:
+                    v += _TWO_PI
+            if v > hi_j + 1e-12 or v < lo_j - 1e-12:
+                break
+            d = max(d, abs(v - r))
+            if d >= best_d:
+                break
+            out.append(v)
+        else:
+            best, best_d = out, d
+    return None if best is None else np.array(best)
 
 
 def rotation_error(Ra, Rb):
