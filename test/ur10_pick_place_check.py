@@ -109,6 +109,9 @@ class PickPlace(unittest.TestCase):
         drivers = {arm: ArmDriver(cfg, arm) for arm in tasks}
         for arm, d in drivers.items():
             self.assertTrue(d.wait_ready(30.0), '%s: no joint_states / command subscribers' % arm)
+        deadline = rospy.get_time() + 30.0
+        while not rospy.is_shutdown() and rospy.get_time() < deadline and len(poses) < len(cfg.cubes):
+            rospy.sleep(0.05)
         with lock:
             start = dict(poses)
         self.assertEqual(sorted(start), sorted(c.name for c in cfg.cubes))
