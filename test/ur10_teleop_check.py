@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """rostest node for the UR10 teleop graph: turns a gesture script into a bag through the
-real sender logic, replays it with `rosbag play` into the running nodes, and checks
-what the simulated arms did. ~scenario picks the check:
+real sender logic (or takes a recorded ~bag), replays it with `rosbag play` into the
+running nodes, and checks what the simulated arms did. ~scenario picks the check:
 
   pick_place  every arm's cube ends within 3 cm of its tray's centre
   watchdog    the input is cut mid-motion: joint velocities ~0 within 0.3 s, disarmed
@@ -103,22 +103,28 @@ class Ur10Teleop(unittest.TestCase):
         self.rec = Recorder(list(self.arms), self.hand_topics)
         for arm in self.arms:
             rospy.wait_for_message('/%s/joint_states' % arm, JointState, timeout=60)
-        fd, self.bag = tempfile.mkstemp(suffix='.bag')
-        os.close(fd)
-        sides = list(self.hand_topics)
-        topics = {side: {'leapcobot': self.hand_topics[side]} for side in sides}
-        write_bag(ScriptedSource(self.script, realtime=False), self.bag, sides, topics,
-                  kinds=('leapcobot',))
+        given_bag = rospy.get_param('~bag', '')        # a recorded session, else the script's
+        if given_bag:
+            self.bag, self.own_bag = given_bag, False
+        else:
+            fd, self.bag = tempfile.mkstemp(suffix='.bag')
+            os.close(fd)
+            self.own_bag = True
+            sides = list(self.hand_topics)
+            topics = {side: {'leapcobot': self.hand_topics[side]} for side in sides}
+            write_bag(ScriptedSource(self.script, realtime=False), self.bag, sides, topics,
+                      kinds=('leapcobot',))
         # Own process group: `rosbag play` is a wrapper around a C++ child.
         self.player = subprocess.Popen(['rosbag', 'play', '--wait-for-subscribers', '-q',
-                                        self.bag], stdout=subprocess.DEVNULL,
-                                       start_new_session=True)
+                                        self.bag, '--topics'] + list(self.hand_topics.values()),
+                                       stdout=subprocess.DEVNULL, start_new_session=True)
 
     def tearDown(self):
         if self.player.poll() is None:
             os.killpg(self.player.pid, signal.SIGINT)
             self.player.wait(10)
-        os.unlink(self.bag)
+        if self.own_bag:
+            os.unlink(self.bag)
 
     def wait_playback(self, settle=2.0):
         while self.player.poll() is None and not rospy.is_shutdown():
