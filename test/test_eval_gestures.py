@@ -37,9 +37,12 @@ def test_circle_recall_against_the_sdk(results):
     assert results['recognizer']['circle']['recall'] >= 0.9
 
 
-@pytest.mark.xfail(strict=True, reason='known weak: half of the circle events fall on '
-                   'fingertip loops the SDK did not call circles (flapping, whose hands flap '
-                   'throughout); no geometric feature of the path separates them on these takes')
+@pytest.mark.xfail(strict=True, reason='known weak (precision 5/12 at recall 5/5): on flapping '
+                   'every flap cycle makes the left thumb loop about the same centre; the SDK '
+                   'called one of those loops a circle (its circle 86) and not the two later ones '
+                   '(same radius, arc, roundness, speed, finger angle); it also left 4 loops of '
+                   'flapping pinkies and a 5.7 mm thumb loop in Waiting unreported. Recall needs '
+                   'circle 86, so its siblings come with it')
 def test_circle_events_agree_with_the_sdk_when_they_fire(results):
     assert results['recognizer']['circle']['precision'] >= 0.9
 
@@ -50,6 +53,24 @@ def test_circle_ground_truth_counts_what_the_recordings_show():
     rows, sdk = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, 'Waiting-110fps'))
     assert len(sdk) == 2 and sum(c.in_recording for c in sdk.values()) == 1
     assert all(c.clockwise is not None for c in sdk.values())
+
+
+def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
+    from leap_teleop.gestures import GestureEvent
+    sdk = evaluate.SdkCircle('left', 1.0, 1.2, False)
+    sdk.finger, sdk.places = 'thumb', [([20.0, 170.0, 25.0], 17.0)]
+    rows = lambda e, t=1.1, side='left': [(0, side, type('S', (), {'events': [e]}), None, t)]  # noqa: E731
+    here = GestureEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))
+    assert evaluate.circle_agreement(rows(here), {1: sdk}) == (1, 1, 1, 1)
+    for other in (GestureEvent('circle_ccw', True, 0.017, 'pinky', (22.0, 166.0, 27.0)),   # finger
+                  GestureEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 215.0, 27.0)),   # place
+                  GestureEvent('circle_cw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))):   # sense
+        assert evaluate.circle_agreement(rows(other), {1: sdk}) == (0, 1, 0, 1)
+    assert evaluate.circle_agreement(rows(here, t=1.5), {1: sdk}) == (0, 1, 0, 1)        # time
+    assert evaluate.circle_agreement(rows(here, side='right'), {1: sdk}) == (0, 1, 0, 1)
+    # a palm circle carries every fingertip round its own centre: placed by hand and time
+    palm = GestureEvent('circle_ccw', True, 0.05, 'palm', (0.0, 200.0, 0.0))
+    assert evaluate.circle_agreement(rows(palm), {1: sdk}) == (1, 1, 1, 1)
 
 
 def test_main_writes_the_json(tmp_path):

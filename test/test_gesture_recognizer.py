@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from leap_teleop.frame import Finger, Hand
+from leap_teleop.frame import FINGER_NAMES, Finger, Hand
 from leap_teleop.gestures import GestureRecognizer, OriginalRules
 from leap_teleop.hand_model import POSES, render_hand
 from leap_teleop.leap_interface import HandTracker
@@ -170,6 +170,17 @@ def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(s
     events = _fingertip_loop('xy', sense)
     assert [e.gesture for e in events] == [expected]
     assert events[0].value == pytest.approx(0.010, rel=0.2)
+    # it says where: which fingertip drew it and its centre (mm, Leap axes)
+    assert events[0].source in FINGER_NAMES
+    assert len(events[0].center) == 3 and all(math.isfinite(c) for c in events[0].center)
+
+
+@pytest.mark.parametrize('duration,fires', [(0.3, True), (0.12, False)])
+def test_fingertip_loop_at_swipe_speed_is_not_a_circle(duration, fires):
+    # 25 mm radius: 0.52 m/s in 0.3 s, 1.3 m/s in 0.12 s, faster than the SDK's default
+    # swipe velocity (1 m/s): that motion is a swipe, not a circle.
+    events = _fingertip_loop('xy', 1.0, radius=25.0, duration=duration)
+    assert [e.gesture for e in events] == (['circle_ccw'] if fires else [])
 
 
 def test_fingertip_loop_in_the_fingers_own_plane_is_not_a_circle():

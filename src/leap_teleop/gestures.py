@@ -20,7 +20,7 @@ import math
 from bisect import bisect_left
 from collections import deque
 from dataclasses import dataclass, field
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -66,15 +66,18 @@ OPENING_WINDOW_S = 0.15
 # half circle, ~0 for straight or back-and-forth moves; prefix sums make it O(1)). The
 # roundest stretch past the gate is fitted with a circle (plane + least squares), which
 # decides: an arc of >= CIRCLE_ARC about the fitted centre, swept one way, close to it.
-# (track name, spacing mm, min radius mm, max radius mm, stretches looked at (s)); the
-# SDK's minimum radius is 5 mm, the algebraic fit reads small noisy arcs ~10% small.
-CIRCLE_TRACKS = (('palm', 2.0, 25.0, 300.0, (0.5, 0.8, 1.1, 1.6)),
-                 ('finger', 1.0, 4.0, 60.0, (0.2, 0.3, 0.4, 0.55)))
-# Arc that makes a circle: 300 deg. The Leap SDK starts its circle gestures at 270 deg
-# (CircleGesture MinArcLength 1.5 pi); every one of its circles that lies within the
-# recordings goes on to 0.85..0.93 turns, while many short finger loops it does not call
-# circles stop below 300 deg.
-CIRCLE_ARC = 5.0 / 3.0 * math.pi
+# (track name, spacing mm, min radius mm, max radius mm, stretches looked at (s), top
+# speed mm/s); the SDK's minimum radius is 5 mm, the algebraic fit reads small noisy arcs
+# ~10% small.
+# Top speed: a fingertip that moved faster than the SDK's default swipe velocity
+# (Gesture.Swipe.MinVelocity, 1000 mm/s) within the stretch holding the loop was swiping:
+# the SDK gives a pointable's motion to one gesture, and the loop a fast stroke closes on
+# its way back is no circle. (Palm circles are ours, not the SDK's: no limit.)
+CIRCLE_TRACKS = (('palm', 2.0, 25.0, 300.0, (0.5, 0.8, 1.1, 1.6), math.inf),
+                 ('finger', 1.0, 4.0, 60.0, (0.2, 0.3, 0.4, 0.55), 1000.0))
+# Arc that makes a circle: 270 deg, the Leap SDK's (Gesture.Circle.MinArc 1.5 pi): its
+# circles start there (progress 0.76..0.95 turns on the recordings).
+CIRCLE_ARC = 1.5 * math.pi
 CIRCLE_MIN_ROUNDNESS = 0.6         # isoperimetric quotient that triggers a fit
 CIRCLE_MIN_POINTS = 8
 # |circle normal . finger direction| of a fingertip circle; the SDK's own circles on the
@@ -82,7 +85,7 @@ CIRCLE_MIN_POINTS = 8
 CIRCLE_MIN_ACROSS = 0.7
 CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
 CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
-CIRCLE_RETRY_POINTS = 3            # after a failed fit, new points before the next one
+CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
 PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
 
@@ -92,6 +95,10 @@ class GestureEvent:
     gesture: str
     active: bool = True
     value: float = 0.0
+    # Circles only: what traced it ('palm' or a finger name, as the SDK's circles belong
+    # to one pointable) and its centre [x, y, z] in mm, Leap axes.
+    source: str = ''
+    center: Optional[Tuple[float, float, float]] = None
 
 
 @dataclass
@@ -338,11 +345,12 @@ def fit_circle(pts):
 class _CircleTrack:
     """One point's path (the palm or a fingertip); see the circles section above."""
     __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
-                 'cross', 'length', 'head', 'wait')
+                 'cross', 'length', 'speed', 'head', 'wait', 'v_max')
 
-    def __init__(self, spacing, r_min, r_max, spans):
+    def __init__(self, spacing, r_min, r_max, spans, v_max=math.inf):
         self.spacing2 = spacing * spacing
         self.r_min, self.r_max, self.spans = r_min, r_max, spans
+        self.v_max = v_max
         self.jump2 = (25 * spacing + 2 * r_max) ** 2
         self.min_len = CIRCLE_ARC * r_min       # path length of the smallest circle
         self.reset()
@@ -351,6 +359,7 @@ class _CircleTrack:
         # Parallel lists from index `head` on: time, point, prefix sums of p[i-1] x p[i]
         # (twice the vector area swept about the origin) and of the path length.
         self.ts, self.pts, self.cross, self.length = [], [], [], []
+        self.speed = []                         # mm/s of the step that reached each point
         self.head = 0
         self.wait = 0
 
@@ -366,10 +375,12 @@ class _CircleTrack:
         self.ts.append(t)
         self.pts.append(p)
         self.cross.append(_ZERO3)
+        self.speed.append(0.0)
         self.length.append(0.0)
 
     def add(self, t, p):
-        """Feed a point [x, y, z]; (axis unit vector, radius mm) when a circle closed."""
+        """Feed a point [x, y, z]; (axis unit vector, radius mm, centre) when a circle
+        closed."""
         pts = self.pts
         if len(pts) <= self.head:
             self._start(t, p)
@@ -389,9 +400,12 @@ class _CircleTrack:
         cross, length = self.cross, self.length
         c = cross[-1]
         cn = (c[0] + qy * z - qz * y, c[1] + qz * x - qx * z, c[2] + qx * y - qy * x)
-        ln = length[-1] + math.sqrt(l2)
+        step = math.sqrt(l2)
+        ln = length[-1] + step
         cross.append(cn)
         length.append(ln)
+        dt = t - ts[-1]
+        self.speed.append(step / dt if dt > 0.0 else math.inf)
         ts.append(t)
         pts.append(p)
         spans = self.spans
@@ -401,7 +415,7 @@ class _CircleTrack:
         while ts[head] < oldest:
             head += 1
         if head > 256:
-            del ts[:head], pts[:head], cross[:head], length[:head]
+            del ts[:head], pts[:head], cross[:head], length[:head], self.speed[:head]
             head = 0
         self.head = head
         if self.wait > 0:
@@ -434,6 +448,10 @@ class _CircleTrack:
                 best, best_j = r, j
         if best_j < 0:
             return None
+        # (max() only here, past both gates: a few times per loop)
+        if max(self.speed[best_j + 1:]) > self.v_max:
+            self.wait = CIRCLE_RETRY_POINTS
+            return None
         hit = self._fit(pts[best_j:])
         if hit is None:
             self.wait = CIRCLE_RETRY_POINTS
@@ -450,7 +468,7 @@ class _CircleTrack:
         fit = fit_circle(pts[int(tail[-1]):])
         if fit is None:
             return None
-        _, normal, radius, residual, angles = fit
+        centre, normal, radius, residual, angles = fit
         sweep = float(angles[-1] - angles[0])
         travel = float(np.sum(np.abs(np.diff(angles))))
         # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
@@ -458,7 +476,7 @@ class _CircleTrack:
                 or not self.r_min <= radius <= self.r_max
                 or residual > CIRCLE_MAX_RESIDUAL * radius):
             return None
-        return (normal if sweep > 0 else -normal), radius
+        return (normal if sweep > 0 else -normal), radius, centre
 
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -498,7 +516,7 @@ class CircleDetector:
         self._palm_smooth = sm = [x, y, z]
         hit = tracks[0].add(timestamp, sm)
         if hit is not None:
-            found = (hit[0][1] > 0, hit[1])
+            found = (hit[0][1] > 0, hit[1], 'palm', hit[2])
         bend = geometry.bend
         for i, tip in enumerate(geometry.tips_world):
             if not _isfinite(tip[0] + tip[1] + tip[2]):
@@ -518,7 +536,7 @@ class CircleDetector:
                 ref = geometry.basis[2]
             along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
             if abs(along) >= CIRCLE_MIN_ACROSS:
-                found = (along > 0, hit[1])
+                found = (along > 0, hit[1], FINGER_NAMES[i], hit[2])
         if found is None:
             return None
         for tr in tracks:
@@ -526,8 +544,9 @@ class CircleDetector:
         if timestamp - self._last_event < CIRCLE_REFRACTORY_S:
             return None
         self._last_event = timestamp
-        cw, radius = found
-        return GestureEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3)
+        cw, radius, source, centre = found
+        return GestureEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3, source,
+                            tuple(float(c) for c in centre))
 
 
 # -- the recognizer -----------------------------------------------------------------------

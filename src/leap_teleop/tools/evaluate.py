@@ -36,8 +36,13 @@ matter of opinion. Per take:
   start 0.03..0.22 s in; their fingertips move 2..14 mm in the recorded frames before the
   start, along no circle). A circle event agrees with an SDK circle of the same hand
   and the same sense (the SDK's: clockwise when its normal points along the finger)
-  when it falls within the SDK circle's span widened by CIRCLE_TOLERANCE_S; precision
-  counts events agreeing with any SDK circle, excluded ones included.
+  when it falls within the SDK circle's span widened by CIRCLE_TOLERANCE_S and is that
+  circle (same_place: the same finger, centre within the SDK's radius, at least 10 mm;
+  the SDK's circles belong to one pointable). Without the place check, hand + sense +
+  time credited two loops the SDK did not report, a middle/ring loop 130 mm from the
+  pinky circle the SDK reported meanwhile and a thumb loop drawn after the SDK's circle
+  ended, 49 mm from its centre. Precision counts events agreeing with any SDK circle,
+  excluded ones included.
 
 No take shows the rock (horns) pose, so rock has no real-data row; it is covered by the
 synthetic-hand tests.
@@ -51,7 +56,7 @@ import json
 import os
 import sys
 
-from ..gestures import GestureRecognizer, OriginalRules
+from ..gestures import FINGER_NAMES, GestureRecognizer, OriginalRules
 from ..sources import leapjs
 
 DEFAULT_DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
@@ -102,6 +107,8 @@ CIRCLE_TAKES = ('Waiting-110fps', 'flapping')
 # reports the start at 270 deg, the recognizer fires at 300 deg, inside the span; the
 # tolerance covers a circle the recognizer closes a little before or after the SDK.
 CIRCLE_TOLERANCE_S = 0.15
+# ... and when it is that circle, not another loop the hand made meanwhile (same_place).
+CIRCLE_PLACE_MM = 10.0
 # The SDK's circles on these takes turn at <= ~3 turns/s (its progress updates: 1.8..3.2),
 # so the 270 deg before its start event take >= 0.25 s of recorded hand.
 CIRCLE_MIN_LEAD_S = 0.25
@@ -158,7 +165,13 @@ def run_take(path):
                 lead = t - first_seen.get(side, t)
                 under_way = g.get('state') != 'start' or (g.get('duration') or 0) > 0
                 c.in_recording = not under_way and lead >= CIRCLE_MIN_LEAD_S
+                p = pointables.get((g.get('pointableIds') or [None])[0]) or {}
+                c.finger = FINGER_NAMES[p['type']] if p.get('type') in range(5) else None
             c.t_last = t
+            try:        # the SDK refines its centre and radius over the updates: keep each
+                c.places.append(([float(x) for x in g['center'][:3]], float(g['radius'])))
+            except (KeyError, TypeError, ValueError, IndexError):
+                pass
     return rows, sdk_circles
 
 
@@ -166,6 +179,8 @@ class SdkCircle:
     def __init__(self, side, t_first, t_last, clockwise):
         self.side, self.t_first, self.t_last, self.clockwise = side, t_first, t_last, clockwise
         self.in_recording = True
+        self.finger = None
+        self.places = []            # (centre [x, y, z] mm, radius mm) per report
 
 
 def _sdk_clockwise(g, pointables):
@@ -187,18 +202,33 @@ def _score(tp, fp, fn, n):
 def circle_agreement(rows, sdk_circles):
     """(matched SDK circles in the recording, SDK circles in the recording, circle events
     that match any SDK circle, circle events)."""
-    events = [(side, t, e.gesture == 'circle_cw') for (_, side, st, _, t) in rows
+    events = [(side, t, e) for (_, side, st, _, t) in rows
               for e in st.events if e.gesture.startswith('circle')]
     tol = CIRCLE_TOLERANCE_S
 
     def near(ev, c):
-        side, t, cw = ev
-        return (c.side in (None, side) and c.clockwise in (None, cw)
-                and c.t_first - tol <= t <= c.t_last + tol)
+        side, t, e = ev
+        return (c.side in (None, side) and c.clockwise in (None, e.gesture == 'circle_cw')
+                and c.t_first - tol <= t <= c.t_last + tol and same_place(e, c))
     judged = [c for c in sdk_circles.values() if c.in_recording]
     matched_sdk = sum(1 for c in judged if any(near(ev, c) for ev in events))
     matched_ev = sum(1 for ev in events if any(near(ev, c) for c in sdk_circles.values()))
     return matched_sdk, len(judged), matched_ev, len(events)
+
+
+def same_place(event, c):
+    """Whether a fingertip circle event is the SDK circle `c` itself, not another loop of
+    the same hand at the same time: traced by the same finger, centred within the SDK
+    circle's radius (at least CIRCLE_PLACE_MM) of a centre the SDK reported for it. A palm
+    circle moves every fingertip around its own centre, so it is placed by hand and time
+    only; an event or SDK circle that does not say where it is is not held against it."""
+    if event.source in ('', 'palm') or event.center is None or not c.places:
+        return True
+    if c.finger is not None and event.source != c.finger:
+        return False
+    e = event.center
+    return any(sum((a - b) ** 2 for a, b in zip(e, centre)) ** 0.5 <= max(radius, CIRCLE_PLACE_MM)
+               for centre, radius in c.places)
 
 
 def evaluate(data_dir=DEFAULT_DATA, verbose=True):
@@ -266,7 +296,7 @@ def print_table(results):
     c = results.get('circle_events')
     if c:
         print('circle events on Waiting-110fps / flapping: %d, %d of them on an SDK circle '
-              '(same hand, same sense); SDK circles drawn inside the recordings: %d, %d found'
+              '(same hand, sense, finger, place); SDK circles drawn inside the recordings: %d, %d found'
               % (c['events'], c['agreeing_events'], c['sdk_circles_in_recording'], c['matched']))
     if results['missing_takes']:
         print('missing takes: %s' % ', '.join(results['missing_takes']))
