@@ -30,7 +30,9 @@ Modes:
 Safety added in both modes: hand twists are only sent while the drone flies or hovers
 (when navdata is known); hand lost (Hand.present false, a hand_lost event, or no Hand
 message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
-``land_after`` -> land. Commands go through a bounded FIFO: a twist replaces an unsent
+``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
+teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
+watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded FIFO: a twist replaces an unsent
 twist at the tail (the newer hand state wins, so a hand faster than ``rate`` adds no
 lag); when full, the oldest twist is dropped (takeoff / land / flip never are); twists
 leave at most ``rate`` per second, discrete commands at once.
@@ -39,6 +41,8 @@ import collections
 import math
 import threading
 from dataclasses import dataclass, fields
+
+from leap_teleop.teleop.input_check import InputStream
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
@@ -65,6 +69,8 @@ class PilotConfig:
     max_cmd: float = 1.0                # cap on every tilt-mode component
     paper_angle: float = 25.0           # deg, Algorithm 1's capture threshold
     paper_scale: float = 3000.0         # mm per unit command, Algorithm 1
+    max_input_age: float = 0.25         # s a Hand may arrive later than the stream's best
+                                        # latency; 0 = no lateness check
 
     def update(self, values):
         known = {f.name for f in fields(self)}
@@ -77,6 +83,8 @@ class PilotConfig:
             raise ValueError('rate must be > 0 and queue_size >= 1')
         if self.full_scale <= 0 or self.z_full_scale <= 0 or self.yaw_full_scale <= 0:
             raise ValueError('full scales must be > 0')
+        if not (math.isfinite(self.max_input_age) and self.max_input_age >= 0):
+            raise ValueError('max_input_age must be >= 0, got %r' % self.max_input_age)
         if not 0 <= self.flip_type <= 19:
             raise ValueError('flip_type must be in 0..19')
         return self
@@ -89,6 +97,7 @@ class HandInput:
     palm: tuple = (0.0, 0.0, 0.0)
     normal: tuple = (0.0, -1.0, 0.0)
     direction: tuple = (0.0, 0.0, -1.0)
+    stamp: float = 0.0          # header stamp, s (0 = unstamped: only order is checked)
 
 
 @dataclass(frozen=True)
@@ -190,6 +199,8 @@ class DronePilot:
         self._last_hand = None
         self._last_twist_out = None      # monotonic time of the last twist published
         self._zero_sent = False
+        self._stream = InputStream(self.cfg.max_input_age, self.cfg.hand_timeout)
+        self.rejected_inputs = 0         # non-finite, out-of-order or late Hand messages
 
     # -- inputs (callbacks: quick, never block) --------------------------------------
     def on_navdata(self, state, altd_mm, now=None):
@@ -199,13 +210,20 @@ class DronePilot:
 
     def on_hand(self, hand, now):
         with self._lock:
+            why = None
+            if hand.present and not all(math.isfinite(v) for v in tuple(hand.palm)
+                                        + tuple(hand.normal) + tuple(hand.direction)):
+                why = 'non-finite values'
+            else:
+                why = self._stream.check(hand.stamp, now)
+            if why:
+                # Not fed to the watchdog: a stream of bad messages hovers, then lands.
+                self.rejected_inputs += 1
+                self._warn('hand', 'ignored a Hand message: %s' % why)
+                return
             self.last_hand_time = now
             if not hand.present:
                 self._lose(now)
-                return
-            if not all(math.isfinite(v) for v in tuple(hand.palm) + tuple(hand.normal)
-                       + tuple(hand.direction)):
-                self._warn('hand', 'ignored a Hand with non-finite values')
                 return
             if not self.hand_present:
                 self.hand_present = True
@@ -296,6 +314,13 @@ class DronePilot:
     def watchdog(self, now):
         """Call often (every ~20 ms): stale input -> hover; long loss -> land."""
         with self._lock:
+            if self.last_hand_time is not None and now < self.last_hand_time - 1e-6:
+                # The clock jumped back (a /clock publisher restarted): the hand is stale.
+                self._warn('clock', 'the clock jumped back: hovering')
+                self.last_hand_time = None
+                self._stream.reset()
+                self.lost_since = None
+                self._lose(now)
             if (self.hand_present and self.last_hand_time is not None
                     and now - self.last_hand_time > self.cfg.hand_timeout):
                 self._warn('stale', 'no Hand message for %.2f s: hovering'

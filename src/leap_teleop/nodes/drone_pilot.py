@@ -5,12 +5,15 @@ events of ~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardron
 and calls ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip;
 ~mode tilt (palm offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only
 queue commands; a worker thread publishes them and calls the service. See
-leap_teleop.drone.pilot for the mapping and the watchdog.
+leap_teleop.drone.pilot for the mapping and the watchdog. Rejected Hand messages
+(non-finite, out of order, late) are counted and reported on /diagnostics.
 """
 import threading
 import time
 
+import diagnostic_updater
 import rospy
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
@@ -40,6 +43,8 @@ PARAMS = {
     'yaw_dead_zone': Param(_C.yaw_dead_zone, 'tilt: hand yaw dead zone, deg'),
     'yaw_full_scale': Param(_C.yaw_full_scale, 'tilt: yaw beyond it for full yaw rate, deg'),
     'max_cmd': Param(_C.max_cmd, 'tilt: cap on every cmd_vel component (0..1)'),
+    'max_input_age': Param(_C.max_input_age, 'drop a Hand arriving this much later than the '
+                                             'stream\'s best latency, s (0 = off)'),
     'service_timeout': Param(0.5, 'wait for ardrone/setflightanimation at most this long, s'),
 }
 SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
@@ -63,6 +68,9 @@ class DronePilotNode:
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
         self.published = 0
+        self.diagnostics = diagnostic_updater.Updater()
+        self.diagnostics.setHardwareID('drone_pilot_%s' % p['side'])
+        self.diagnostics.add('pilot', self.diagnose)
         self._stop = threading.Event()
         self.worker = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)
 
@@ -72,7 +80,8 @@ class DronePilotNode:
             return
         p, n, d = msg.palm_position, msg.palm_normal, msg.direction
         self.pilot.on_hand(HandInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z),
-                                     (d.x, d.y, d.z)), rospy.get_time())
+                                     (d.x, d.y, d.z), msg.header.stamp.to_sec()),
+                           rospy.get_time())
 
     def on_gesture(self, msg):
         if msg.side == self.side:
@@ -85,6 +94,7 @@ class DronePilotNode:
     def run_worker(self):
         while not self._stop.is_set() and not rospy.is_shutdown():
             self.pilot.watchdog(rospy.get_time())
+            self.diagnostics.update()
             cmd, wait = self.pilot.pop(time.monotonic())
             if cmd is None:
                 if wait:
@@ -117,6 +127,19 @@ class DronePilotNode:
                 self.log.warn('flip', 'pilot: ardrone/setflightanimation failed: %s', e)
                 return
             rospy.loginfo('pilot: flight animation %d -> %s', cmd.anim[0], ok)
+
+    def diagnose(self, stat):
+        pl = self.pilot
+        lost = pl.lost_since is not None
+        stat.summary(DiagnosticStatus.WARN if lost and pl.drone_state in (3, 4, 6, 7, 9)
+                     else DiagnosticStatus.OK,
+                     'hand %s, drone state %s' % ('lost' if lost else 'tracked'
+                                                  if pl.hand_present else 'not seen yet',
+                                                  pl.drone_state))
+        stat.add('rejected inputs', pl.rejected_inputs)
+        stat.add('twists superseded or dropped', pl.queue.dropped)
+        stat.add('twists published', self.published)
+        return stat
 
     def start(self):
         self.worker.start()

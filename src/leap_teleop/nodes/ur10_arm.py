@@ -96,7 +96,7 @@ class ArmNode:
             self._joint_index, self._joint_count = index, len(msg.name)
         q = [msg.position[i] for i in self._joint_index]
         with self.lock:
-            self.teleop.on_joints(q)
+            self.teleop.on_joints(q, rospy.get_time())
 
     def loop(self):
         period = 1.0 / float(self.p['rate'])

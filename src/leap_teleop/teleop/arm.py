@@ -4,9 +4,11 @@ Protocol (as the original UR10_lm_arm): thumbs-up arms, fist disarms and stops, 
 stores the origin (palm reference + the TCP's current pose), pinch drives the gripper.
 Modes: imitation (TCP follows the palm's offset from the origin, scaled) and joystick
 (beyond a dead zone around the origin, the TCP moves at a speed proportional to the
-excess). Unlike the original: the input is low-pass filtered and validated, the target
-is clamped to a workspace box, IK failures hold the arm instead of raising, stale input
-or a lost hand holds and disarms (watchdog), and every state change says why.
+excess). Unlike the original: the input is low-pass filtered and validated (out-of-order
+and late messages are dropped and counted, see input_check), the target is clamped to a
+workspace box, IK failures hold the arm instead of raising, stale input or a lost hand
+holds and disarms (watchdog), stale joint states or the clock jumping back (a simulator
+restart) disarm without commanding the old pose, and every state change says why.
 """
 import math
 from dataclasses import dataclass, field, fields
@@ -14,6 +16,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from leap_teleop.teleop.filters import LowPass
+from leap_teleop.teleop.input_check import InputStream
 from leap_teleop.ur10 import kinematics as kin
 
 DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
@@ -40,6 +43,9 @@ class ArmTeleopParams:
     gripper_mode: str = 'binary'
     gripper_binary_closed: float = 0.43
     max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
+    max_input_age: float = 0.25        # s a message may arrive later than the stream's
+                                       # best-case latency; 0 = no lateness check
+    joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
 
     @classmethod
     def from_dict(cls, values):
@@ -66,10 +72,12 @@ class ArmTeleopParams:
         if lo.shape != (3,) or hi.shape != (3,) or np.any(lo >= hi):
             raise ValueError('workspace_min must be below workspace_max on every axis')
         for name in ('scale', 'max_joint_speed', 'min_duration', 'input_timeout',
-                     'max_tcp_speed', 'max_palm_mm'):
+                     'max_tcp_speed', 'max_palm_mm', 'joint_timeout'):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError('%s must be a positive number, got %r' % (name, v))
+        if not (isinstance(self.max_input_age, (int, float)) and 0 <= self.max_input_age < 1e9):
+            raise ValueError('max_input_age must be a number >= 0, got %r' % self.max_input_age)
         if not 0.0 <= self.gripper_binary_closed <= 0.8:
             raise ValueError('gripper_binary_closed must be in [0, 0.8]')
 
@@ -108,7 +116,7 @@ class ArmStatus:
     reason: str = 'waiting for thumbs-up'
     origin_set: bool = False
     target: tuple = ()                 # TCP target, base frame, m
-    rejected_inputs: int = 0           # non-finite / absurd / out-of-order messages
+    rejected_inputs: int = 0           # non-finite / absurd / out-of-order / late messages
     ik_failures: int = 0
     counters: dict = field(default_factory=dict)
 
@@ -126,6 +134,8 @@ class ArmTeleop:
         self._hand = None
         self._hand_rx = None
         self._q = None
+        self._joints_rx = None
+        self._stream = InputStream(self.p.max_input_age, self.p.input_timeout)
         self._palm_ref = None
         self._tcp_ref = None
         self._target = None
@@ -142,18 +152,24 @@ class ArmTeleop:
             why = 'palm position %s is not a trackable hand' % (tuple(palm),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
-        elif self._hand is not None and hand.stamp < self._hand.stamp:
-            why = 'message older than the last one (%.3f s)' % (self._hand.stamp - hand.stamp)
+        else:
+            why = self._stream.check(hand.stamp, now)
         if why:
             self.status.rejected_inputs += 1
             return why
         self._hand, self._hand_rx = hand, now
         return None
 
-    def on_joints(self, q):
+    def on_joints(self, q, now=None):
+        """Store the arm's joint positions; with `now`, their staleness is watched."""
         q = np.asarray(q, dtype=float)
-        if q.shape == (6,) and np.all(np.isfinite(q)):
-            self._q = q
+        # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
+        if (q.shape == (6,) and np.all(np.isfinite(q)) and np.all(q >= kin.JOINT_LOWER - 0.01)
+                and np.all(q <= kin.JOINT_UPPER + 0.01)):
+            self._q = np.clip(q, kin.JOINT_LOWER, kin.JOINT_UPPER)
+            self._joints_rx = now
+            return True
+        return False
 
     # -- control period ---------------------------------------------------------------
     def _set(self, state, reason):
@@ -161,7 +177,20 @@ class ArmTeleop:
 
     def _hold(self):
         self._target = None
+        if self._q is None:
+            return ArmCommand()
         return ArmCommand(q=self._q.copy(), duration=self.p.min_duration)
+
+    def _lose_robot(self, reason):
+        """The robot's state is unknown (simulator or driver gone / restarted): forget it
+        and disarm without a hold, which would command the old pose to a new robot."""
+        self._q = self._joints_rx = self._hand = None
+        self._stream.reset()
+        if self.status.state != DISARMED:
+            self._set(DISARMED, reason)
+            self.status.origin_set = False
+            self._palm_ref = self._tcp_ref = self._target = None
+        return ArmCommand()
 
     def _disarm(self, reason):
         was_moving = self.status.state in (ARMED, TRACKING, HOLDING)
@@ -172,8 +201,13 @@ class ArmTeleop:
 
     def step(self, now):
         """One control period: the command to send (possibly empty)."""
+        jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
         self._last_step = now
+        if jumped_back:
+            return self._lose_robot('the clock jumped back (simulation restarted?)')
+        if self._joints_rx is not None and now - self._joints_rx > self.p.joint_timeout:
+            return self._lose_robot('no joint states for %.2f s' % self.p.joint_timeout)
         if self._q is None:
             self._set(DISARMED, 'waiting for joint states')
             return ArmCommand()

@@ -1,0 +1,42 @@
+"""Order and lateness checks for one stamped input stream (hand messages), no ROS.
+
+A message is out of order when its stamp is older than the last accepted one, and late
+when it arrives more than ``max_age`` later than the stream's best-case latency
+(receive time minus stamp, the minimum seen in this stream). Judging lateness against
+the stream's own best case, not against the absolute clock, keeps replayed bags (old
+stamps) and hosts with unsynchronised clocks working while still catching messages
+that were held up. A silence longer than ``gap`` (no message at all, accepted or not)
+or the clock jumping back (a simulator publishing /clock restarted) starts a new stream:
+a restarted sender or a replayed bag is judged afresh, while a stream that stays
+delayed keeps being refused (the consumers' watchdogs then stop the robots). Unstamped messages (stamp <= 0, as the original sender
+sent them) are only checked for order.
+"""
+
+
+class InputStream:
+    def __init__(self, max_age, gap):
+        self.max_age = float(max_age)      # s; 0 disables the lateness check
+        self.gap = float(gap)              # s of silence that ends a stream
+        self.reset()
+
+    def reset(self):
+        self.last_stamp = None
+        self.last_rx = None
+        self.best_lag = None
+
+    def check(self, stamp, now):
+        """None if the message is in order and on time (it is then recorded), else why not."""
+        if self.last_rx is not None and (now < self.last_rx or now - self.last_rx > self.gap):
+            self.reset()
+        self.last_rx = now
+        if self.last_stamp is not None and stamp < self.last_stamp:
+            return 'out of order: %.3f s older than the last message' % (self.last_stamp - stamp)
+        if stamp > 0 and self.max_age > 0:
+            lag = now - stamp
+            if self.best_lag is None or lag < self.best_lag:
+                self.best_lag = lag
+            elif lag - self.best_lag > self.max_age:
+                return 'late: arrived %.3f s after the stream\'s usual latency (max %.3f s)' % (
+                    lag - self.best_lag, self.max_age)
+        self.last_stamp = stamp
+        return None

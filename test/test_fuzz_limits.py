@@ -1,0 +1,351 @@
+"""Bad input and property-based fuzzing: whatever arrives, nothing raises and no command
+leaves the joint, workspace, gripper or tilt limits. Also the stream checks (out of order,
+late, restarts) behind the fault rostests (test/fault_*.test).
+
+Example budget (per `make test` run): 3000 + 2500 + 3000 here, on top of 3000 in
+test_arm_teleop.py and ~400 in test_gesture_recognizer.py / test_classify_frames.py.
+"""
+import logging
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from leap_teleop import conversions
+from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
+from leap_teleop.frame import Finger, Hand
+from leap_teleop.leap_interface import HandTracker
+from leap_teleop.teleop.arm import (ARMED, DISARMED, TRACKING, ArmTeleop, ArmTeleopParams,
+                                    HandInput)
+from leap_teleop.teleop.input_check import InputStream
+from leap_teleop.ur10 import kinematics as kin
+
+HOME = kin.HOME_Q.copy()
+wild = st.one_of(st.floats(-600, 600), st.floats(allow_nan=True, allow_infinity=True),
+                 st.sampled_from([0.0, 1e9, -1e9, 1e-300]))
+
+
+# -- the stream checks --------------------------------------------------------------------
+def test_stream_drops_out_of_order_and_late_messages_but_not_a_constant_offset():
+    s = InputStream(max_age=0.25, gap=0.2)
+    assert s.check(50.0, 100.0) is None           # 50 s offset: a replayed bag, accepted
+    assert s.check(50.01, 100.01) is None
+    assert 'out of order' in s.check(50.005, 100.02)
+    # A backlog: messages keep coming (no silence) but fall ever further behind.
+    verdicts = [s.check(50.02 + 0.01 * k, 100.02 + 0.09 * k) for k in range(10)]
+    assert verdicts[:4] == [None] * 4 and all('late' in v for v in verdicts[4:])
+    # Only a real silence (sender restarted, bag replayed again) starts a new stream.
+    assert s.check(50.2, 101.2) is None
+
+
+def test_stream_restarts_after_silence_or_a_clock_jump():
+    s = InputStream(max_age=0.25, gap=0.2)
+    assert s.check(10.0, 10.0) is None
+    assert s.check(5.0, 10.5) is None             # silence 0.5 s > gap: a new stream (bag again)
+    assert s.check(5.01, 10.51) is None
+    assert s.check(0.5, 0.5) is None              # the clock jumped back (sim restarted)
+    assert s.check(0.0, 0.51) is not None         # unstamped after stamped: out of order
+    assert InputStream(0.0, 0.2).check(1.0, 500.0) is None   # lateness check off
+
+
+# -- arm: faults ---------------------------------------------------------------------------
+def hand(**kw):
+    kw.setdefault('present', True)
+    kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
+    return HandInput(**kw)
+
+
+class Arm:
+    """An ArmTeleop fed like the node feeds it: hand + joints + step per period."""
+
+    def __init__(self, **params):
+        self.t = ArmTeleop(ArmTeleopParams(filter_cutoff_hz=0.0, **params))
+        self.now = 100.0
+        self.q = HOME.copy()
+
+    def period(self, h=None, joints=True, dt=0.008):
+        self.now += dt
+        if h is not None:
+            h.stamp = h.stamp or self.now
+            self.t.on_hand(h, self.now)
+        if joints:
+            self.t.on_joints(self.q, self.now)
+        cmd = self.t.step(self.now)
+        if cmd.q is not None:
+            self.q = cmd.q.copy()           # the robot 'teleports' to each target
+        return cmd
+
+    def arm_with_origin(self):
+        self.period(hand(thumb_up=True))
+        self.period(hand(rock=True))
+        assert self.t.status.state == TRACKING
+
+
+def test_lost_joint_states_disarm_without_commanding_the_old_pose():
+    a = Arm()
+    a.arm_with_origin()
+    assert a.period(hand(palm_mm=(0.0, 260.0, 0.0))).q is not None
+    cmds = [a.period(hand(palm_mm=(0.0, 260.0, 0.0)), joints=False) for _ in range(80)]
+    assert a.t.status.state == DISARMED
+    assert all(c.q is None for c in cmds[-10:])
+    assert not any(c.q is not None and np.allclose(c.q, a.q) and i > 62
+                   for i, c in enumerate(cmds))   # no hold sent once the robot is gone
+    # The simulator comes back at home: nothing moves until thumbs-up + rock, and the
+    # new origin is the new pose (no jump back to the old target).
+    a.q = HOME.copy()
+    for _ in range(10):
+        assert a.period(hand(palm_mm=(0.0, 260.0, 0.0))).q is None
+    a.period(hand(thumb_up=True, palm_mm=(0.0, 260.0, 0.0)))
+    assert a.t.status.state == ARMED
+    a.period(hand(rock=True, palm_mm=(0.0, 260.0, 0.0)))
+    cmd = a.period(hand(palm_mm=(0.0, 260.0, 0.0)))
+    np.testing.assert_allclose(cmd.q, HOME, atol=1e-6)
+
+
+def test_clock_jumping_back_disarms_and_forgets_the_robot():
+    a = Arm()
+    a.arm_with_origin()
+    a.now = 1.0                                       # /clock restarted
+    assert a.period(hand(palm_mm=(0.0, 300.0, 0.0))).q is None
+    assert a.t.status.state == DISARMED and not a.t.status.origin_set
+    a.period(hand(palm_mm=(0.0, 300.0, 0.0)))
+    a.period(hand(thumb_up=True))
+    assert a.t.status.state == ARMED                  # new stream accepted, re-arm works
+
+
+def test_late_and_out_of_order_hand_messages_are_counted_and_ignored():
+    a = Arm()
+    a.arm_with_origin()
+    target = a.t.status.target
+    a.period(hand(palm_mm=(0.0, 400.0, 0.0), stamp=a.now - 0.5))   # held up 0.5 s
+    a.period(hand(palm_mm=(0.0, 400.0, 0.0), stamp=a.now - 0.05))  # older than the last
+    assert a.t.status.rejected_inputs == 2
+    np.testing.assert_allclose(a.t.status.target, target, atol=1e-9)
+
+
+@pytest.mark.parametrize('value, expected', [(5.0, 0.8), (1e9, 0.8), (0.81, 0.8), (-3.0, None)])
+def test_pinch_values_outside_0_to_0_8_keep_the_gripper_in_range(value, expected):
+    a = Arm(gripper_mode='proportional')
+    a.arm_with_origin()
+    cmd = a.period(hand(pinch=True, pinch_value=value))
+    assert cmd.gripper == expected          # None: clamped to 0 = already open, nothing sent
+
+
+# -- fuzz: recognizer + tracker + message builder -------------------------------------------
+@st.composite
+def raw_hands(draw):
+    """A hand from a few draws (cheap to generate): seeded values in +-600, with the
+    fields picked by a bit mask replaced by one special value (NaN, inf, 1e9, 0)."""
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
+    special = draw(st.sampled_from([math.nan, math.inf, -math.inf, 1e9, 0.0, -1.0]))
+    mask = draw(st.integers(0, 2 ** 10 - 1))
+    n = draw(st.sampled_from([0, 2, 5, 5]))
+
+    def value(bit, shape=(3,)):
+        v = rng.uniform(-600, 600, shape).reshape(-1)
+        if mask >> bit & 1:
+            v[rng.integers(0, v.size)] = special
+        return v if shape != () else float(v[0])
+
+    fingers = tuple(Finger(tip=value(0), direction=value(1),
+                           extended=[None, True, False][int(rng.integers(0, 3))],
+                           mcp=value(2), pip=None, dip=value(3) if mask & 1 else None)
+                    for _ in range(n))
+    return Hand(side='right', palm_position=value(4), palm_velocity=value(5),
+                palm_normal=value(6), direction=value(7),
+                grab_strength=value(8, ()) / 600 + 0.5, pinch_strength=value(9, ()) / 600 + 0.5,
+                confidence=float(rng.uniform(-0.5, 1.5)), fingers=fingers)
+
+
+@settings(max_examples=3000, deadline=None, suppress_health_check=list(HealthCheck))
+@given(st.lists(st.tuples(raw_hands(), st.floats(0.0, 1e6)), min_size=1, max_size=3),
+       st.sampled_from(['right', 'left']))
+def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
+    # Frame times are >= 0: every source produces them so (a negative one cannot be stamped).
+    log = logging.getLogger('leap_teleop.leap_interface')
+    level = log.level
+    log.setLevel(logging.ERROR)        # its rate-limited warnings restart with each tracker
+    try:
+        tracker = HandTracker(side)
+        for i, (h, t) in enumerate(frames):
+            h.side = side
+            state = tracker.update(h, t, i)
+            assert 0.0 <= state.pinch_value <= 0.8
+            for key in ('rotate', 'turn', 'swing', 'grab_strength', 'confidence'):
+                assert math.isfinite(getattr(state, key)), key
+            for flag in ('fist', 'thumb_up', 'pinch'):
+                assert isinstance(getattr(state, flag), bool)
+            for kind, msg in conversions.hand_messages(state):
+                if kind == 'leapcobot':
+                    d = conversions.from_leapcobot(msg)
+                    assert 0.0 <= d['pinch_value'] <= 0.8
+    finally:
+        log.setLevel(level)
+
+
+# -- fuzz: arm mapping over event sequences --------------------------------------------------
+events = st.one_of(
+    st.tuples(st.just('hand'), st.tuples(wild, wild, wild), wild,
+              st.tuples(*[st.booleans()] * 5), st.floats(-1.0, 0.01)),
+    st.tuples(st.just('joints'), st.one_of(
+        st.tuples(*[st.floats(-6.2, 6.2)] * 6),
+        st.tuples(*[wild] * 6))),
+    st.tuples(st.just('time'), st.one_of(st.floats(-0.5, 1.0), st.just(0.3))))
+
+
+@settings(max_examples=2500, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seq=st.lists(events, min_size=1, max_size=8),
+       mode=st.sampled_from(['imitation', 'joystick']),
+       gripper_mode=st.sampled_from(['binary', 'proportional']),
+       cutoff=st.sampled_from([0.0, 4.0]))
+def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cutoff):
+    t = ArmTeleop(ArmTeleopParams(mode=mode, gripper_mode=gripper_mode, filter_cutoff_hz=cutoff,
+                                  max_joint_speed=1.0))
+    lo, hi = np.asarray(t.p.workspace_min), np.asarray(t.p.workspace_max)
+    now = 100.0
+    t.on_joints(HOME, now)
+    for h in (hand(thumb_up=True), hand(rock=True)):
+        now += 0.008
+        h.stamp = now
+        t.on_hand(h, now)
+        t.step(now)
+    for ev in seq:
+        if ev[0] == 'hand':
+            _, palm, pinch_value, (present, fist, thumb, pinch, rock), age = ev
+            t.on_hand(HandInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
+                                pinch=pinch, pinch_value=pinch_value, rock=rock,
+                                stamp=now + age), now)
+        elif ev[0] == 'joints':
+            t.on_joints(ev[1], now)
+        else:
+            now += ev[1]
+        q_before = None if t._q is None else t._q.copy()
+        cmd = t.step(now)
+        if cmd.q is not None:
+            assert q_before is not None
+            assert np.all(np.isfinite(cmd.q))
+            assert np.all(cmd.q <= kin.JOINT_UPPER) and np.all(cmd.q >= kin.JOINT_LOWER)
+            assert cmd.duration >= np.max(np.abs(cmd.q - q_before)) / 1.0 - 1e-9
+            assert cmd.duration >= t.p.min_duration
+        if cmd.gripper is not None:
+            assert 0.0 <= cmd.gripper <= 0.8
+        if len(t.status.target) == 3:
+            target = np.asarray(t.status.target)
+            assert np.all(target >= lo - 1e-9) and np.all(target <= hi + 1e-9)
+
+
+# -- fuzz: drone pilot ------------------------------------------------------------------------
+GESTURES = ['unfold', 'fold', 'circle_cw', 'circle_ccw', 'hand_lost', 'fist', 'swipe', '',
+            'x' * 300]
+pilot_events = st.one_of(
+    st.tuples(st.just('hand'), st.booleans(), st.tuples(wild, wild, wild),
+              st.tuples(wild, wild, wild), st.tuples(wild, wild, wild), st.floats(-1.0, 0.01)),
+    st.tuples(st.just('gesture'), st.sampled_from(GESTURES)),
+    st.tuples(st.just('nav'), st.integers(-5, 300), wild),
+    st.tuples(st.just('time'), st.one_of(st.floats(-1.0, 4.0), st.just(0.2))))
+
+
+@settings(max_examples=3000, deadline=None, suppress_health_check=list(HealthCheck))
+@given(seq=st.lists(pilot_events, min_size=1, max_size=10),
+       mode=st.sampled_from(['tilt', 'paper']), max_cmd=st.sampled_from([1.0, 0.5, 7.0]))
+def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
+    pilot = DronePilot(PilotConfig(mode=mode, max_cmd=max_cmd))
+    now, mono = 0.0, 0.0
+    for ev in seq:
+        if ev[0] == 'hand':
+            _, present, palm, normal, direction, age = ev
+            pilot.on_hand(PilotHand(present, palm, normal, direction, now + age), now)
+        elif ev[0] == 'gesture':
+            pilot.on_gesture(ev[1], True, now)
+        elif ev[0] == 'nav':
+            try:
+                pilot.on_navdata(ev[1], ev[2])
+            except (ValueError, OverflowError):
+                pass                          # rospy would not deliver such a Navdata
+        else:
+            now += ev[1]
+        pilot.watchdog(now)
+        while True:
+            mono += 1.0
+            cmd, _ = pilot.pop(mono)
+            if cmd is None:
+                break
+            assert cmd.kind in ('twist', 'takeoff', 'land', 'flip')
+            if cmd.kind == 'flip':
+                assert cmd.anim == (19, 0) and pilot.altitude >= 0.6
+            if cmd.kind == 'twist':
+                if mode == 'tilt':
+                    cap = min(max_cmd, 1.0)
+                    assert all(math.isfinite(v) and abs(v) <= cap for v in cmd.twist)
+                    assert cmd.twist[3] == 0.0 and cmd.twist[4] == 0.0   # auto-hover possible
+                else:   # Algorithm 1 as published; the driver clamps each component to [-1, 1]
+                    assert all(math.isfinite(v) for v in cmd.twist)
+
+
+def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
+    pilot = DronePilot(PilotConfig())
+    pilot.on_navdata(4, 1000)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=0.01), 0.01)
+    t = 0.01
+    out = []
+    while t < 4.0:          # NaN palms (and late ones) keep coming: they must not feed the watchdog
+        t += 0.01
+        pilot.on_hand(PilotHand(True, (math.nan, 0.2, 0.0), stamp=t), t)
+        pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t - 1.0), t)
+        pilot.watchdog(t)
+        while True:
+            cmd, _ = pilot.pop(1e6 + t * 1e3)
+            if cmd is None:
+                break
+            out.append((t, cmd))
+    zero = [t for t, c in out if c.kind == 'twist' and c.twist == (0.0,) * 6]
+    assert zero and zero[0] - 0.01 <= 0.2
+    land = [t for t, c in out if c.kind == 'land']
+    assert land and 3.0 <= land[0] - 0.01 <= 3.0 + 0.2 + 0.05
+    assert pilot.rejected_inputs > 600
+
+
+def test_pilot_clock_jump_back_hovers():
+    pilot = DronePilot(PilotConfig())
+    pilot.on_navdata(4, 1000)
+    pilot.on_gesture('unfold', True, 50.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=50.0), 50.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=50.01), 50.01)
+    pilot.watchdog(0.5)
+    cmds = []
+    while True:
+        cmd, _ = pilot.pop(1e9 + len(cmds))
+        if cmd is None:
+            break
+        cmds.append(cmd)
+    assert cmds[-1].twist == (0.0,) * 6
+
+
+# -- the drone simulator: bad animations ------------------------------------------------------
+def test_flight_animation_type_200_refused_and_duration_overflow_harmless():
+    from leap_teleop.drone import sim as ds
+    warnings = []
+    d = ds.ArDroneSim(warn=lambda key, text: warnings.append(text))
+    try:
+        assert d.takeoff()
+        while d.state != ds.HOVERING and d.time < 8.0:
+            d.step()
+        d.advance(1.0)
+        assert not d.flight_animation(200, 0)
+        assert not d.flight_animation('flip', 0)
+        assert any('not in 0..19' in w for w in warnings)
+        assert d.flight_animation(19, 2 ** 32 - 1)             # flips ignore the duration
+        worst = 0.0
+        for _ in range(int(3.0 / d.dt)):
+            d.step()
+        assert d.state == ds.HOVERING
+        assert d.flight_animation(6, 2 ** 32 - 1)              # a 49-day yaw turn: slow, level
+        for _ in range(int(2.0 / d.dt)):
+            d.step()
+            worst = max(worst, abs(d.roll), abs(d.pitch))
+        assert worst <= d.p.euler_angle_max + 0.02 and math.isfinite(d.altitude)
+    finally:
+        d.close()
