@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""rostest node (fault_sender.test): SIGKILL the sender while ur10_1 moves and the drone
+flies forward. Then: the arm holds within 0.3 s and disarms, the drone gets a zero twist
+(hover) within 0.3 s and starts landing after land_after; once roslaunch has respawned
+the sender (its script starts over), the arm stays disarmed until the new thumbs-up,
+sends nothing until the new rock, and its first command is the pose it is at (no jump
+toward the old target); the drone stays landed until the new unfold, then takes off."""
+import sys
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+
+from fault_common import Watch, kill, node_pid, wait_for
+
+ARM = 'ur10_1'
+STILL = 0.02            # rad/s
+
+
+class FaultSender(unittest.TestCase):
+    def test_sender_killed_then_respawned(self):
+        w = Watch(arm=ARM, drone=True)
+        land_after = rospy.get_param('/drone_pilot/land_after', 3.0)
+        pid = node_pid('/leap_sender')
+        # Both moving: the arm tracks the palm, the drone flies forward.
+        self.assertTrue(wait_for(lambda: w.drone_state() == 3 and w.twists
+                                 and w.twists[-1][1].linear.x > 0.3
+                                 and (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
+                                      or 0) > 0.08, 45.0),
+                        'never both moving: drone %s, twists %d, arm status %s' % (
+                            w.drone_state(), len(w.twists),
+                            [s.state for _, s in w.status[-3:]]))
+        t_kill = kill(pid)
+        rospy.loginfo('sender killed')
+
+        # Arm: disarmed by the watchdog and still within 0.3 s.
+        self.assertTrue(wait_for(lambda: w.first_status('disarmed', t_kill)[0] is not None, 2.0))
+        t_disarm, st = w.first_status('disarmed', t_kill)
+        self.assertIn('watchdog', st.reason)
+        time.sleep(1.5)
+        speed = w.arm_speed(t_kill + 0.3, t_kill + 1.5)
+        self.assertIsNotNone(speed)
+        self.assertLess(speed, STILL, 'arm still moving %.3f rad/s 0.3 s after the kill' % speed)
+        # Drone: zero twist (auto-hover) within 0.3 s.
+        zero = [t for t, m in list(w.twists) if t > t_kill and m.linear.x == 0.0
+                and m.linear.y == 0.0 and m.linear.z == 0.0 and m.angular.z == 0.0]
+        self.assertTrue(zero, 'no zero twist after the kill')
+        rospy.loginfo('FAULT sender kill: arm disarmed %.3f s, drone zero twist %.3f s after',
+                      t_disarm - t_kill, zero[0] - t_kill)
+        self.assertLess(t_disarm - t_kill, 0.3)
+        self.assertLess(zero[0] - t_kill, 0.3)
+        # ... and lands after land_after.
+        self.assertTrue(wait_for(lambda: w.first_nav((8, 2), t_kill) is not None,
+                                 land_after + 2.0), 'no landing')
+        t_land = w.first_nav((8, 2), t_kill)
+        rospy.loginfo('FAULT sender kill: landing began %.2f s after (land_after %.1f s)',
+                      t_land - t_kill, land_after)
+        self.assertGreater(t_land - t_kill, land_after - 0.1)
+        self.assertLess(t_land - t_kill, land_after + 1.0)
+
+        # Respawn: a new process, the script from the start.
+        self.assertTrue(wait_for(lambda: w.drone_state() == 2, 10.0), 'not landed')
+        new_pid = node_pid('/leap_sender', timeout=20.0)
+        self.assertTrue(wait_for(lambda: node_pid('/leap_sender') != pid, 15.0))
+        new_pid = node_pid('/leap_sender')
+        rospy.loginfo('sender respawned as pid %d', new_pid)
+        t_respawn = time.monotonic()
+        self.assertTrue(wait_for(lambda: w.first_status('tracking', t_respawn)[0] is not None,
+                                 20.0), 'no new origin after the respawn')
+        t_armed, _ = w.first_status('armed', t_respawn)
+        t_origin, _ = w.first_status('tracking', t_respawn)
+        self.assertIsNotNone(t_armed)
+        # Disarmed from the kill until the new thumbs-up: no other state in between.
+        states = [s.state for t, s in w.status if t_disarm <= t < t_armed]
+        self.assertEqual(set(states), {'disarmed'})
+        # No jump toward the old target: from the kill until the new origin the arm gets at
+        # most holds of where it is, and its first command after the new origin starts there.
+        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds), 3.0))
+        first_after = next(t for t, _ in list(w.arm_cmds) if t > t_origin)
+        worst = 0.0
+        for t, q in [(t, q) for t, q in list(w.arm_cmds) if t_disarm - 0.05 < t <= first_after]:
+            worst = max(worst, float(np.max(np.abs(q - w.q_at(t)))))
+        rospy.loginfo('FAULT sender respawn: armed %.2f s, origin %.2f s after the kill; '
+                      'commands at most %.4f rad from the arm\'s pose', t_armed - t_kill,
+                      t_origin - t_kill, worst)
+        self.assertLess(worst, 0.05, 'a command %.3f rad away from the arm\'s pose' % worst)
+
+        # Drone: landed until the new unfold, then a takeoff.
+        self.assertTrue(wait_for(lambda: w.first_nav((6, 3, 4), t_respawn) is not None, 20.0),
+                        'no takeoff after the respawn')
+        t_up = w.first_nav((6, 3, 4), t_respawn)
+        unfolds = [t for t, g in w.gestures if t > t_kill and g.gesture == 'unfold'
+                   and g.side == g.SIDE_LEFT]
+        self.assertTrue(unfolds and unfolds[0] < t_up, 'took off before the new unfold')
+        takeoffs = [t for t, _ in w.takeoffs if t > t_kill]
+        self.assertTrue(takeoffs and takeoffs[0] >= unfolds[0])
+
+
+if __name__ == '__main__':
+    rospy.init_node('fault_sender_check')
+    rostest.rosrun('leap_teleop', 'fault_sender_check', FaultSender, sys.argv)
