@@ -64,6 +64,7 @@ class DronePilotNode:
         self.land_pub = rospy.Publisher('ardrone/land', Empty, queue_size=2)
         self.flip_srv = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
         hand_topic = p['hand_topic'] or 'leapmotion/hand_%s' % p['side']
+        self.hand_topic = rospy.resolve_name(hand_topic)
         rospy.Subscriber(hand_topic, Hand, self.on_hand, queue_size=5, tcp_nodelay=True)
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
@@ -76,7 +77,10 @@ class DronePilotNode:
 
     # -- callbacks: convert and queue, nothing else -----------------------------------
     def on_hand(self, msg):
-        if msg.side != self.side:
+        if msg.side != self.side:      # the other hand on this hand's topic: miswired
+            self.pilot.rejected_inputs += 1
+            self.log.warn('side', 'pilot: ignored a Hand of side %d on %s (following side %d)',
+                          msg.side, self.hand_topic, self.side)
             return
         p, n, d = msg.palm_position, msg.palm_normal, msg.direction
         self.pilot.on_hand(HandInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z),

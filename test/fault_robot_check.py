@@ -1,0 +1,175 @@
+#!/usr/bin/env python3
+"""rostest node (fault_robot.test).
+
+Simulator restart: while ur10_1 tracks a hand, the UR10 simulator is SIGKILLed; the arm
+node must disarm without crashing or spinning (its CPU use while the robot is gone is
+measured), and once roslaunch has respawned the simulator (arm at home) it must send
+nothing until a new thumbs-up + rock, then move from the new joint state.
+
+Bad streams: hand messages with old stamps, out of order, or of the wrong side are
+dropped, counted in ArmStatus.rejected_inputs and on /diagnostics (arm node and drone
+pilot), and the nodes keep running.
+"""
+import sys
+import threading
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from sensor_msgs.msg import JointState
+
+from fault_common import Watch, alive, kill, node_pid, wait_for
+from leap_teleop.bench.harness import cpu_seconds
+from leap_teleop.msg import Hand, leapcobotright
+from leap_teleop.ur10 import kinematics as kin
+
+ARM = 'ur10_1'
+
+
+class HandStream(threading.Thread):
+    """A right hand at 100 Hz on leapmotion/data_right; tests change self.pose."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        self.pub = rospy.Publisher('/leapmotion/data_right', leapcobotright, queue_size=50)
+        self.lock = threading.Lock()
+        self.pose = dict(present=False, palm=(0.0, 200.0, 0.0))
+        self.sent = 0
+
+    def message(self, stamp_offset=0.0, **pose):
+        m = leapcobotright()
+        m.header.stamp = rospy.Time.from_sec(rospy.get_time() + stamp_offset)
+        m.is_right_hand = pose.get('present', True)
+        m.right_hand_palmpos.x, m.right_hand_palmpos.y, m.right_hand_palmpos.z = pose['palm']
+        m.right_hand_thumb_up = pose.get('thumb_up', False)
+        m.right_hand_set_origin_frame_detected = pose.get('rock', False)
+        m.right_hand_origin_frame = pose.get('origin', False)
+        return m
+
+    def set(self, **pose):
+        with self.lock:
+            self.pose = pose
+
+    def run(self):
+        while not rospy.is_shutdown():
+            with self.lock:
+                pose = dict(self.pose)
+            self.pub.publish(self.message(**pose))
+            self.sent += 1
+            time.sleep(0.01)
+
+
+class Diagnostics:
+    def __init__(self):
+        self.values = {}
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.cb, queue_size=20)
+
+    def cb(self, msg):
+        for st in msg.status:
+            for kv in st.values:
+                if kv.key == 'rejected inputs':
+                    self.values[st.name] = int(kv.value)
+
+    def get(self, part):
+        return next((v for k, v in self.values.items() if part in k), None)
+
+
+class FaultRobot(unittest.TestCase):
+    def arm_and_track(self, hand, w, palm0, after):
+        hand.set(palm=palm0, thumb_up=True)
+        self.assertTrue(wait_for(lambda: w.first_status('armed', after)[0] is not None, 5.0),
+                        [s.state + ': ' + s.reason for _, s in w.status[-5:]])
+        hand.set(palm=palm0, rock=True)
+        self.assertTrue(wait_for(lambda: w.first_status('tracking', after)[0] is not None, 5.0))
+        time.sleep(0.2)
+        return w.first_status('tracking', after)[0]
+
+    def test_sim_restart_then_bad_streams(self):
+        w = Watch(arm=ARM)
+        diag = Diagnostics()
+        hand = HandStream()
+        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
+        hand.start()
+        arm_pid, sim_pid = node_pid('/%s/ur10_arm' % ARM), node_pid('/ur10_sim')
+        t0 = time.monotonic()
+        self.arm_and_track(hand, w, (0.0, 250.0, 0.0), t0)
+        hand.set(palm=(150.0, 300.0, -80.0))          # a long move
+        self.assertTrue(wait_for(lambda: (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
+                                          or 0) > 0.08, 5.0), 'the arm never moved')
+        t_kill = kill(sim_pid)
+        self.assertTrue(wait_for(lambda: w.first_status('disarmed', t_kill)[0] is not None, 3.0),
+                        [s.state + ': ' + s.reason for _, s in w.status[-5:]])
+        t_dis, st = w.first_status('disarmed', t_kill)
+        rospy.loginfo('FAULT sim kill: arm disarmed %.3f s after (%s)', t_dis - t_kill, st.reason)
+        self.assertIn('joint states', st.reason)
+        # While the robot is gone: alive, not spinning, not commanding.
+        c0, m0 = cpu_seconds(arm_pid), time.monotonic()
+        self.assertTrue(wait_for(lambda: node_pid('/ur10_sim') != sim_pid, 30.0),
+                        'the simulator was not respawned')
+        t_back = time.monotonic()
+        cpu = (cpu_seconds(arm_pid) - c0) / (t_back - m0)
+        rospy.loginfo('FAULT sim restart: simulator back after %.1f s; arm node CPU while it '
+                      'was gone %.1f %%', t_back - t_kill, 100 * cpu)
+        self.assertTrue(alive(arm_pid))
+        self.assertEqual(node_pid('/%s/ur10_arm' % ARM), arm_pid, 'the arm node restarted')
+        self.assertLess(cpu, 0.3, 'arm node busy while the robot is gone')
+        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=30)
+        t_js = time.monotonic()
+        time.sleep(1.0)              # the hand still says "far away": nothing may move
+        late = [t for t, _ in w.arm_cmds if t > t_dis + 0.05]
+        self.assertEqual(late, [], 'commands while disarmed after the restart')
+        self.assertLess(w.arm_speed(t_js, time.monotonic()), 0.01)
+        q_home = w.q_at(time.monotonic())
+        np.testing.assert_allclose(q_home, kin.HOME_Q, atol=0.05)
+        # Re-arm: the new origin is the new pose; the first command starts there.
+        t_origin = self.arm_and_track(hand, w, (150.0, 300.0, -80.0), t_js)
+        hand.set(palm=(150.0, 320.0, -80.0))
+        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds), 3.0))
+        t_cmd, q_cmd = next((t, q) for t, q in list(w.arm_cmds) if t > t_origin)
+        jump = float(np.max(np.abs(q_cmd - w.q_at(t_cmd))))
+        rospy.loginfo('FAULT sim restart: first command after re-arming %.4f rad from the '
+                      'new pose', jump)
+        self.assertLess(jump, 0.05)
+
+        # -- bad streams into the arm node ------------------------------------------------
+        with w.lock:
+            before = w.status[-1][1].rejected_inputs
+        pose = dict(palm=(150.0, 320.0, -80.0))
+        for k in range(5):
+            hand.pub.publish(hand.message(stamp_offset=-1.0, **pose))       # held up 1 s
+            time.sleep(0.02)
+        hand.pub.publish(hand.message(stamp_offset=-0.05, **pose))          # out of order
+        hand.pub.publish(hand.message(**dict(palm=(float('nan'), 0.0, 0.0))))
+        self.assertTrue(wait_for(lambda: w.status[-1][1].rejected_inputs >= before + 7, 3.0),
+                        'rejected_inputs %d -> %d' % (before, w.status[-1][1].rejected_inputs))
+        self.assertEqual(w.status[-1][1].rejected_inputs, before + 7)
+        self.assertTrue(wait_for(lambda: (diag.get('ur10_arm') or 0) >= before + 7, 5.0),
+                        diag.values)
+        self.assertEqual(w.status[-1][1].state, 'tracking')   # the live stream goes on
+
+        # -- bad streams into the drone pilot ----------------------------------------------
+        pub = rospy.Publisher('/leapmotion/hand_right', Hand, queue_size=50)
+        self.assertTrue(wait_for(lambda: pub.get_num_connections() > 0, 10.0))
+
+        def hand_msg(offset=0.0, side=Hand.SIDE_RIGHT):
+            h = Hand(side=side, present=True)
+            h.header.stamp = rospy.Time.from_sec(rospy.get_time() + offset)
+            h.palm_position.y, h.palm_normal.y, h.direction.z = 0.2, -1.0, -1.0
+            return h
+        for k in range(20):
+            pub.publish(hand_msg())
+            time.sleep(0.01)
+        for offset in (-1.0, -1.0, -1.0):
+            pub.publish(hand_msg(offset))
+            time.sleep(0.01)
+        pub.publish(hand_msg(side=Hand.SIDE_LEFT))
+        self.assertTrue(wait_for(lambda: diag.get('drone_pilot') == 4, 5.0), diag.values)
+        self.assertTrue(alive(node_pid('/drone_pilot')))
+
+
+if __name__ == '__main__':
+    rospy.init_node('fault_robot_check')
+    rostest.rosrun('leap_teleop', 'fault_robot_check', FaultRobot, sys.argv)
