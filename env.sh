@@ -20,6 +20,14 @@ export ROS_HOSTNAME=${ROS_HOSTNAME:-127.0.0.1}
 export ROS_IP=${ROS_IP:-127.0.0.1}
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://127.0.0.1:11311}
 export ROS_HOME=${ROS_HOME:-$_lt_root/.ws/ros_home}
+# roscpp nodes listen on 0.0.0.0 whatever ROS_IP says: while ROS is on loopback, preload
+# the shim that turns their wildcard binds into loopback ones (tools/loopback_bind.c).
+case "${ROS_HOSTNAME:-$ROS_IP}" in
+  127.*|localhost|::1)
+    if [ -f "$_lt_root/.ws/loopback_bind.so" ] && [[ ":${LD_PRELOAD:-}:" != *":$_lt_root/.ws/loopback_bind.so:"* ]]; then
+      export LD_PRELOAD="$_lt_root/.ws/loopback_bind.so${LD_PRELOAD:+:$LD_PRELOAD}"
+    fi ;;
+esac
 export PYTHONDONTWRITEBYTECODE=1
 set -- "${_lt_args[@]}"
 unset _lt_args

@@ -39,7 +39,20 @@ else
   say "pip packages: up to date"
 fi
 
-# 3. Out-of-tree catkin workspace: .ws/src/leap_teleop -> this repository.
+# 3. The loopback bind() shim that env.sh preloads while ROS_IP / ROS_HOSTNAME is loopback
+#    (roscpp nodes would otherwise listen on every interface; see tools/loopback_bind.c).
+mkdir -p .ws
+if [ ! -f .ws/loopback_bind.so ] || [ tools/loopback_bind.c -nt .ws/loopback_bind.so ]; then
+  if command -v cc >/dev/null 2>&1; then
+    say "building the loopback bind() shim (.ws/loopback_bind.so)"
+    cc -shared -fPIC -O2 -Wall -o .ws/loopback_bind.so.tmp tools/loopback_bind.c -ldl \
+      && mv .ws/loopback_bind.so.tmp .ws/loopback_bind.so
+  else
+    say "WARNING: no C compiler: roscpp nodes will listen on all interfaces (see README)"
+  fi
+fi
+
+# 4. Out-of-tree catkin workspace: .ws/src/leap_teleop -> this repository.
 mkdir -p .ws/src
 [ -L .ws/src/leap_teleop ] || ln -sfn "$root" .ws/src/leap_teleop
 say "building the catkin workspace in .ws/"
