@@ -62,8 +62,7 @@ class FaultSender(unittest.TestCase):
 
         # Respawn: a new process, the script from the start.
         self.assertTrue(wait_for(lambda: w.drone_state() == 2, 10.0), 'not landed')
-        new_pid = node_pid('/leap_sender', timeout=20.0)
-        self.assertTrue(wait_for(lambda: node_pid('/leap_sender') != pid, 15.0))
+        self.assertTrue(wait_for(lambda: node_pid('/leap_sender', timeout=20.0) != pid, 15.0))
         new_pid = node_pid('/leap_sender')
         rospy.loginfo('sender respawned as pid %d', new_pid)
         t_respawn = time.monotonic()
