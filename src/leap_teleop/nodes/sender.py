@@ -33,6 +33,9 @@ PARAMS = {
     'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame, m'),
     'shutdown_on_end': Param(True, 'shut the node down when a finite source ends'),
     'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)'),
+    'wait_for_subscribers': Param(False, 'start the source only once every leapcobot topic '
+                                         'has a subscriber (so a session is not lost while '
+                                         'its consumers start)'),
 }
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
@@ -68,6 +71,20 @@ class Sender:
         self._last_sent = {}
         self.published = 0
         interface.add_hand_listener(self.on_hand)
+
+    def wait_for_subscribers(self, log_every=5.0):
+        """Block until every leapcobot topic has a subscriber; False on shutdown."""
+        last_log = rospy.get_time()
+        while not rospy.is_shutdown():
+            waiting = [pubs['leapcobot'].resolved_name for pubs in self.pubs.values()
+                       if pubs['leapcobot'].get_num_connections() == 0]
+            if not waiting:
+                return True
+            if rospy.get_time() - last_log >= log_every:
+                last_log = rospy.get_time()
+                rospy.loginfo('sender: waiting for subscribers on %s', ', '.join(waiting))
+            rospy.sleep(0.05)
+        return False
 
     def on_hand(self, frame, state):
         """Publish one side's messages as soon as that side is recognised."""
@@ -114,6 +131,8 @@ def main(argv=None):
                   '/'.join(sender.sides), p['source'],
                   ', '.join(pubs['leapcobot'].resolved_name for pubs in sender.pubs.values()))
     rospy.on_shutdown(interface.stop)
+    if p['wait_for_subscribers'] and not sender.wait_for_subscribers():
+        return
     interface.start()
     while not rospy.is_shutdown() and not interface.finished.wait(0.2):
         pass

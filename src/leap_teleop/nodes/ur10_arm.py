@@ -61,8 +61,8 @@ class ArmNode:
         self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
         self.gripper_pub = rospy.Publisher('gripper/command', JointTrajectory, queue_size=10)
         self.status_pub = rospy.Publisher('~status', ArmStatus, queue_size=10, latch=True)
-        rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self.on_hand, queue_size=50,
-                         tcp_nodelay=True)
+        self.hand_topic, self.hand_type = topic, conversions.LEAPCOBOT_TYPES[side]
+        self.joints_seen = threading.Event()
         rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
         self._last_status = None
         self._last_status_pub = 0.0
@@ -97,6 +97,19 @@ class ArmNode:
         q = [msg.position[i] for i in self._joint_index]
         with self.lock:
             self.teleop.on_joints(q, rospy.get_time())
+        self.joints_seen.set()
+
+    def wait_for_robot(self):
+        """Listen to the hand only once the robot reports its joints, so no gesture
+        (a thumbs-up) is spent while nothing could act on it; a sender started with
+        ~wait_for_subscribers then starts its session exactly when the arm is ready."""
+        while not self.joints_seen.wait(5.0):
+            if rospy.is_shutdown():
+                return False
+            rospy.loginfo('ur10_arm: waiting for %s', rospy.resolve_name('joint_states'))
+        rospy.Subscriber(self.hand_topic, self.hand_type, self.on_hand, queue_size=50,
+                         tcp_nodelay=True)
+        return True
 
     def loop(self):
         period = 1.0 / float(self.p['rate'])
@@ -163,4 +176,5 @@ def main(argv=None):
                        package_path('config', 'ur10_teleop.yaml'))
         raise SystemExit(1)
     node = ArmNode(p, params)
-    node.loop()
+    if node.wait_for_robot():
+        node.loop()

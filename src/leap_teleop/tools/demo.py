@@ -22,8 +22,9 @@ UR10_SCRIPT = 'ur10_pick_place_dual.yaml'
 DRONE_SCRIPT = 'drone_flight.yaml'
 # arm -> (hand, cube it picks)
 UR10_TASKS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
-SNAPSHOT_PERIOD_S = 0.5
+SNAPSHOT_PERIOD_S = 1.0
 SETTLE_S = 3.0
+MAX_WAIT_S = 240.0          # give up on sessions that never start
 PLACEMENT_TOLERANCE_M = 0.03
 STATE_NAMES = {0: 'unknown', 1: 'init', 2: 'landed', 3: 'flying', 4: 'hovering', 5: 'test',
                6: 'taking off', 7: 'goto fix point', 8: 'landing', 9: 'looping'}
@@ -50,6 +51,16 @@ class Monitor:
         self.drone_states, self.drone_odom = [], None
         self.arm_states = {arm: [] for arm in UR10_TASKS}
         self.cubes = {}
+        self.first_frame = {}
+        from leap_teleop.msg import Hand, leapcobotright
+        if 'ur10' in tasks:
+            rospy.Subscriber('/leapmotion/data_right', leapcobotright,
+                             lambda m: self.first_frame.setdefault('ur10', time.monotonic()),
+                             queue_size=1)
+        if 'drone' in tasks:
+            rospy.Subscriber('/drone/leapmotion/hand_right', Hand,
+                             lambda m: self.first_frame.setdefault('drone', time.monotonic()),
+                             queue_size=1)
         if 'drone' in tasks:
             rospy.Subscriber('/drone/ardrone/navdata', Navdata, self._on_nav, queue_size=50)
             rospy.Subscriber('/drone/ardrone/odometry', Odometry, self._on_odom, queue_size=5)
@@ -88,7 +99,7 @@ class Monitor:
 
 def make_gif(pngs, path, frame_s=SNAPSHOT_PERIOD_S):
     from PIL import Image
-    frames = [Image.open(p).convert('RGB').resize((480, 360)) for p in pngs if p]
+    frames = [Image.open(p).convert('RGB') for p in pngs if p]
     if not frames:
         return False
     frames[0].save(path, save_all=True, append_images=frames[1:],
@@ -152,13 +163,13 @@ def main(argv=None):
     gui = bool(args.gui) and bool(os.environ.get('DISPLAY'))
     if args.gui and not gui:
         say('GUI=1 but no DISPLAY: running headless')
-    duration = 0.0
+    durations = {}
     if 'ur10' in tasks:
-        duration = max(duration, GestureScript.load(package_path('config', 'gestures',
-                                                                 UR10_SCRIPT)).duration)
+        durations['ur10'] = GestureScript.load(package_path('config', 'gestures',
+                                                            UR10_SCRIPT)).duration
     if 'drone' in tasks:
-        duration = max(duration, GestureScript.load(package_path('config', 'gestures',
-                                                                 DRONE_SCRIPT)).duration)
+        durations['drone'] = GestureScript.load(package_path('config', 'gestures',
+                                                             DRONE_SCRIPT)).duration
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
                ROS_HOSTNAME='127.0.0.1', ROS_IP='127.0.0.1', ROS_LOG_DIR=os.path.join(out, 'ros_log'))
@@ -174,7 +185,7 @@ def main(argv=None):
              'drone:=%s' % str('drone' in tasks).lower()],
             env=env, stdout=log, stderr=subprocess.STDOUT)
         try:
-            summary = run_demo(tasks, out, duration)
+            summary = run_demo(tasks, out, durations)
         finally:
             launch.send_signal(2)
             try:
@@ -184,7 +195,7 @@ def main(argv=None):
     return report(summary, out)
 
 
-def run_demo(tasks, out, duration):
+def run_demo(tasks, out, durations):
     mon = Monitor(tasks)
     services = {}
     if 'ur10' in tasks:
@@ -194,19 +205,24 @@ def run_demo(tasks, out, duration):
     say('waiting for the simulations to come up')
     for service in services.values():
         mon.rospy.wait_for_service(service, 120)
-    say('playing the gesture sessions (%.0f s of hand motion)' % duration)
+    say('playing the gesture sessions (%s)' % ', '.join(
+        '%s %.0f s' % kv for kv in durations.items()))
     pngs = {name: [] for name in services}
     t0 = time.monotonic()
     next_shot, last_print = t0, t0
-    while time.monotonic() - t0 < duration + SETTLE_S:
+    while True:
         now = time.monotonic()
+        # Each session runs from its sender's first frame; the demo ends when all are over.
+        ends = [mon.first_frame.get(task, now) + d + SETTLE_S for task, d in durations.items()]
+        if now >= max(ends) or now - t0 > MAX_WAIT_S:
+            break
         if now >= next_shot:
             next_shot += SNAPSHOT_PERIOD_S
             for name, service in services.items():
                 pngs[name].append(mon.snapshot(service))
         if now - last_print >= 5.0:
             last_print = now
-            parts = ['%.0f/%.0f s' % (now - t0, duration + SETTLE_S)]
+            parts = ['%.0f s' % (now - t0)]
             for arm, states in (mon.arm_states.items() if 'ur10' in tasks else ()):
                 parts.append('%s %s' % (arm, states[-1] if states else '-'))
             if mon.drone_states:
@@ -225,8 +241,8 @@ def run_demo(tasks, out, duration):
         kept = [os.path.join(out, '%s_%03d.png' % (name, i)) for i in range(len(frames))]
         if make_gif(kept, os.path.join(out, '%s.gif' % name)):
             summary.setdefault('gifs', []).append('%s.gif' % name)
-    for task in summary['tasks'].values():
-        task['duration_s'] = round(duration, 1)
+    for name, task in summary['tasks'].items():
+        task['session_s'] = round(durations['drone' if name.startswith('drone') else 'ur10'], 1)
     mon.rospy.signal_shutdown('demo done')
     return summary
 
