@@ -154,3 +154,15 @@ def test_listeners_get_every_frame_in_order_and_source_errors_are_reported():
     assert li.finished.wait(5)
     assert seen == [(1, ['left', 'right'])]
     assert isinstance(li.error, ValueError)
+
+
+@pytest.mark.parametrize('stamp', [-1.0, float('nan'), float('inf'), None])
+def test_frames_without_a_valid_capture_time_are_dropped(stamp):
+    li = LeapInterface(recognizer_factory=per_frame)
+    seen = []
+    li.add_listener(lambda f, s: seen.append(f.id))
+    li.on_frame(frame(1, render_hand('right', 'fist', [0, 200, 0])))
+    bad = Frame(id=2, timestamp=stamp, hands=[render_hand('right', 'open', [9, 200, 0])])
+    assert li.on_frame(bad) is None
+    assert li.rejected_frames == 1 and seen == [1]
+    assert li.get_right_hand_fist()                    # the last good frame stands

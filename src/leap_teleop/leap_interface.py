@@ -174,6 +174,7 @@ class LeapInterface:
         self._hand_listeners = []
         self._thread = None
         self.frames_seen = 0
+        self.rejected_frames = 0
         self.error = None
         self.finished = threading.Event()
 
@@ -189,6 +190,19 @@ class LeapInterface:
         self._hand_listeners.append(callback)
 
     def on_frame(self, frame):
+        """Process one frame; a frame without a usable capture time is dropped (counted,
+        warned) since its stamp would order nothing downstream. Returns the states, or
+        None for a dropped frame."""
+        try:
+            stamp = float(frame.timestamp)
+        except (TypeError, ValueError):
+            stamp = math.nan
+        if not (math.isfinite(stamp) and stamp >= 0.0):
+            self.rejected_frames += 1
+            if self.rejected_frames in (1, 10, 100) or self.rejected_frames % 1000 == 0:
+                log.warning('dropped %d frame(s) without a valid capture time (got %r)',
+                            self.rejected_frames, frame.timestamp)
+            return None
         states = {}
         for side, tracker in self._trackers.items():
             states[side] = state = tracker.update(frame.hand(side), frame.timestamp, frame.id)

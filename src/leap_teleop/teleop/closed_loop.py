@@ -44,7 +44,7 @@ def run_session(script, cell_config, arms, params=None, control_hz=120.0, settle
     while t < end:
         while pending is not None and pending.timestamp <= t:
             states = interface.on_frame(pending)
-            for arm, side in arms.items():
+            for arm, side in (arms.items() if states else ()):
                 teleops[arm].on_hand(hand_input(states[side]), t)
             pending = next(frames, None)
         for arm, teleop in teleops.items():
