@@ -1,0 +1,175 @@
+"""Hand -> RViz markers, the drone's primitive markers and the bounded path trail."""
+import math
+
+import pytest
+import rospy
+from visualization_msgs.msg import Marker
+
+from leap_teleop import conversions, visualization as viz
+from leap_teleop.frame import Frame
+from leap_teleop.gestures import GestureRecognizer
+from leap_teleop.hand_model import render_hand
+from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.msg import Hand
+
+PALM_MM = (20.0, 200.0, -10.0)
+
+
+def hand_msg(side, pose=None, palm=PALM_MM, **kw):
+    """The Hand message the sender would publish for one rendered pose (None = absent)."""
+    li = LeapInterface(recognizer_factory=lambda: GestureRecognizer(stateless=True))
+    hands = [render_hand(side, pose, list(palm), **kw)] if pose else []
+    return conversions.to_hand(li.on_frame(Frame(id=7, timestamp=50.0, hands=hands))[side])
+
+
+def by_id(array):
+    return {m.id: m for m in array.markers}
+
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+def test_present_hand_draws_palm_tips_lines_in_the_hand_frame(side):
+    msg = hand_msg(side, 'open')
+    out = viz.hand_markers(msg)
+    ms = by_id(out)
+    assert set(ms) == set(viz.HAND_MARKER_IDS)
+    for m in ms.values():
+        assert m.ns == 'hand_' + side and m.action == Marker.ADD
+        assert m.header.frame_id == 'leap_hands'
+        assert m.header.stamp == msg.header.stamp
+        assert m.lifetime.to_sec() == pytest.approx(0.5)
+    palm = ms[viz.PALM]
+    assert palm.type == Marker.SPHERE
+    assert (palm.pose.position.x, palm.pose.position.y, palm.pose.position.z) == \
+        pytest.approx(tuple(v * 0.001 for v in PALM_MM))
+    tips = ms[viz.TIPS]
+    assert tips.type == Marker.SPHERE_LIST and len(tips.points) == 5
+    assert [(p.x, p.y, p.z) for p in tips.points] == \
+        [(p.x, p.y, p.z) for p in msg.finger_tips]
+    # Fingertips are a hand's length from the palm, not at the origin or in mm.
+    for p in tips.points:
+        d = math.dist((p.x, p.y, p.z), (palm.pose.position.x, palm.pose.position.y,
+                                        palm.pose.position.z))
+        assert 0.03 < d < 0.2
+    bones = ms[viz.BONES]
+    assert bones.type == Marker.LINE_LIST and len(bones.points) == 10
+    assert all(bones.points[i] == palm.pose.position for i in range(0, 10, 2))
+    assert bones.points[1::2] == tips.points
+    arrow = ms[viz.NORMAL]
+    n = msg.palm_normal
+    tip = arrow.points[1]
+    d = (tip.x - palm.pose.position.x, tip.y - palm.pose.position.y,
+         tip.z - palm.pose.position.z)
+    assert sum(a * b for a, b in zip(d, (n.x, n.y, n.z))) == pytest.approx(0.06, rel=1e-3)
+    assert ms[viz.LABEL].text == '%s: open' % side
+
+
+@pytest.mark.parametrize('pose, state', [('open', 'open'), ('fist', 'fist'),
+                                         ('thumbs_up', 'thumb_up'), ('pinch', 'pinch'),
+                                         ('rock', 'rock')])
+def test_colour_follows_the_recognised_state(pose, state):
+    msg = hand_msg('right', pose, pinch_value=0.5)
+    assert viz.hand_state(msg) == state
+    rgb = viz.STATE_COLOURS.get(state, viz.IDLE_COLOUR)
+    palm = by_id(viz.hand_markers(msg))[viz.PALM]
+    assert (palm.color.r, palm.color.g, palm.color.b) == pytest.approx(rgb)
+
+
+def test_every_state_has_its_own_colour():
+    colours = list(viz.STATE_COLOURS.values()) + [viz.IDLE_COLOUR]
+    assert len(set(colours)) == len(colours)
+
+
+def test_folded_fingertips_are_faint():
+    msg = hand_msg('right', 'point')         # index extended only
+    assert list(msg.finger_extended) == [False, True, False, False, False]
+    alphas = [c.a for c in by_id(viz.hand_markers(msg))[viz.TIPS].colors]
+    assert alphas[1] == 1.0
+    assert all(a == viz.FOLDED_ALPHA for i, a in enumerate(alphas) if i != 1)
+
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+def test_absent_hand_deletes_its_own_markers_only(side):
+    out = viz.hand_markers(hand_msg(side, None))
+    assert sorted(m.id for m in out.markers) == sorted(viz.HAND_MARKER_IDS)
+    assert all(m.action == Marker.DELETE and m.ns == 'hand_' + side for m in out.markers)
+
+
+def test_frame_and_scale_overrides():
+    out = by_id(viz.hand_markers(hand_msg('left', 'open'), frame_id='other', lifetime=0,
+                                 scale=2.0))
+    assert all(m.header.frame_id == 'other' for m in out.values())
+    assert out[viz.PALM].scale.x == pytest.approx(0.08)
+    assert out[viz.PALM].lifetime == rospy.Duration(0)
+
+
+def test_bad_input_is_a_clear_value_error():
+    msg = hand_msg('right', 'open')
+    msg.palm_position.x = float('nan')
+    with pytest.raises(ValueError, match='palm_position'):
+        viz.hand_markers(msg)
+    msg = hand_msg('right', 'open')
+    msg.side = 5
+    with pytest.raises(ValueError, match='side'):
+        viz.hand_markers(msg)
+    msg = hand_msg('right', 'open')
+    msg.header.frame_id = ''
+    with pytest.raises(ValueError, match='frame_id'):
+        viz.hand_markers(msg)
+    assert by_id(viz.hand_markers(msg, frame_id='leap_hands'))[viz.PALM].header.frame_id \
+        == 'leap_hands'
+
+
+def test_throttle_rate_state_changes_and_single_delete():
+    th = viz.HandMarkerThrottle(max_rate=10.0)
+    open_r, fist_r, gone_r = hand_msg('right', 'open'), hand_msg('right', 'fist'), \
+        hand_msg('right', None)
+    open_l = hand_msg('left', 'open')
+    assert th.update(open_r, 0.00) is not None
+    assert th.update(open_r, 0.05) is None            # within 1/10 s, same state
+    assert th.update(open_l, 0.05) is not None        # the other hand has its own clock
+    assert th.update(fist_r, 0.06) is not None        # state change: at once
+    assert th.update(fist_r, 0.10) is None
+    assert th.update(fist_r, 0.17) is not None        # period elapsed
+    out = th.update(gone_r, 0.18)
+    assert out is not None and all(m.action == Marker.DELETE for m in out.markers)
+    assert th.update(gone_r, 0.50) is None            # one delete, not one per frame
+    assert th.update(open_r, 0.51) is not None        # back again
+    assert th.update(open_r, 0.40) is not None        # clock went backwards (bag loop)
+    every = viz.HandMarkerThrottle(max_rate=0)
+    assert all(every.update(open_r, 1.0) is not None for _ in range(3))
+    with pytest.raises(ValueError):
+        viz.HandMarkerThrottle(max_rate=-1)
+
+
+def test_drone_markers_are_frame_locked_primitives_with_unique_ids():
+    out = viz.drone_markers('base')
+    ids = [m.id for m in out.markers]
+    assert len(ids) == len(set(ids)) >= 5
+    assert all(m.header.frame_id == 'base' and m.frame_locked and m.action == Marker.ADD
+               for m in out.markers)
+    assert all(m.type in (Marker.CUBE, Marker.CYLINDER, Marker.SPHERE) for m in out.markers)
+    # Everything within the AR.Drone's ~0.52 m hull.
+    assert all(abs(m.pose.position.x) + m.scale.x / 2 <= 0.3 and
+               abs(m.pose.position.y) + m.scale.y / 2 <= 0.3 for m in out.markers)
+
+
+def test_path_trail_is_bounded_and_spaced():
+    trail = viz.PathTrail(max_points=5, min_step=0.1)
+    q = (0.0, 0.0, 0.0, 1.0)
+    assert trail.add(rospy.Time(1), (0, 0, 0), q)
+    assert not trail.add(rospy.Time(2), (0.05, 0, 0), q)      # closer than min_step
+    assert not trail.add(rospy.Time(2), (float('nan'), 0, 0), q)
+    for i in range(1, 10):
+        assert trail.add(rospy.Time(2 + i), (0.2 * i, 0, 0), q)
+    assert trail.changed
+    path = trail.to_msg('odom')
+    assert not trail.changed
+    assert len(path.poses) == 5
+    assert path.header.frame_id == 'odom' and path.header.stamp == rospy.Time(11)
+    xs = [p.pose.position.x for p in path.poses]
+    assert xs == pytest.approx([1.0, 1.2, 1.4, 1.6, 1.8])     # the newest five, in order
+    assert all(p.header.frame_id == 'odom' and p.pose.orientation.w == 1 for p in path.poses)
+    trail.clear()
+    assert trail.to_msg('odom', rospy.Time(3)).poses == []
+    with pytest.raises(ValueError):
+        viz.PathTrail(max_points=1)
