@@ -173,3 +173,58 @@ def test_path_trail_is_bounded_and_spaced():
     assert trail.to_msg('odom', rospy.Time(3)).poses == []
     with pytest.raises(ValueError):
         viz.PathTrail(max_points=1)
+
+
+NODE_CLIENT = r'''
+import json, sys, time
+sys.path.insert(0, sys.argv[1])
+import rospy
+from visualization_msgs.msg import MarkerArray
+from leap_teleop.msg import Hand
+from test_hand_markers import hand_msg
+rospy.init_node('hand_markers_client')
+got = []
+rospy.Subscriber('leapmotion/hand_markers', MarkerArray,
+                 lambda m: got.append([(k.ns, k.id, k.action, k.color.r, k.color.g)
+                                       for k in m.markers]))
+pub = rospy.Publisher('leapmotion/hand_left', Hand, queue_size=10)
+deadline = time.time() + 10
+while (pub.get_num_connections() == 0 or not got) and time.time() < deadline:
+    if pub.get_num_connections():
+        pub.publish(hand_msg('left', 'open'))    # until the node's first markers arrive
+    time.sleep(0.1)
+bad = hand_msg('left', 'fist')
+bad.palm_position.y = float('inf')
+for msg in (bad, hand_msg('left', 'fist'), hand_msg('left', None), hand_msg('left', None)):
+    pub.publish(msg)
+    time.sleep(0.3)
+print(json.dumps(got))
+'''
+
+
+def test_node_publishes_markers_and_deletes_on_a_private_master():
+    import json
+    import os
+    import subprocess
+    import sys
+    from leap_teleop.bench.harness import ros_master, start_node, stop_node
+    here = os.path.dirname(os.path.abspath(__file__))
+    script = os.path.join(here, '..', 'scripts', 'hand_markers.py')
+    with ros_master() as env:
+        node = start_node(env, [sys.executable, script, '_max_rate:=0'])
+        try:
+            out = subprocess.run([sys.executable, '-c', NODE_CLIENT, here], env=env,
+                                 capture_output=True, text=True, timeout=60)
+        finally:
+            stop_node(node)
+            err = node.stderr.read().decode(errors='replace')
+    assert out.returncode == 0, out.stderr
+    arrays = json.loads(out.stdout.strip().splitlines()[-1])
+    assert arrays, 'no MarkerArray from the node'
+    assert all(ns == 'hand_left' for a in arrays for ns, *_ in a)
+    fists = [a for a in arrays if a and a[0][2] == Marker.ADD and a[0][3] > 0.8]
+    assert fists, arrays                     # the red fist after the bad message
+    deletes = [a for a in arrays if a and all(k[2] == Marker.DELETE for k in a)]
+    assert len(deletes) == 1                 # once, not per absent frame
+    assert arrays[-1] == deletes[0]
+    assert 'palm_position is not finite' in err

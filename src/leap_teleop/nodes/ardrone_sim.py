@@ -3,7 +3,8 @@
 Subscribes cmd_vel (Twist), ardrone/takeoff, ardrone/land, ardrone/reset (Empty);
 publishes ardrone/navdata (leap_teleop/Navdata, the driver's MD5), ardrone/imu,
 ardrone/odometry and TF odom -> ardrone_base_link (+ static front / bottom camera
-frames) at ~looprate; serves ardrone/setflightanimation (FlightAnim) and
+frames) at ~looprate, the flown path (nav_msgs/Path, ardrone/path, bounded) at ~path_rate
+and, latched, a drone body of primitive markers (ardrone/markers) for RViz; serves ardrone/setflightanimation (FlightAnim) and
 ardrone/snapshot (std_srvs/Trigger: writes a PNG, returns its path). With
 /use_sim_time true it publishes /clock and can run faster than real time.
 """
@@ -15,17 +16,19 @@ import time
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Empty
 from std_srvs.srv import Trigger, TriggerResponse
 from geometry_msgs.msg import Twist
+from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
 from leap_teleop.msg import Navdata
 from leap_teleop.nodes.common import Param, handle_help, read_params
 from leap_teleop.srv import FlightAnim, FlightAnimResponse
+from leap_teleop.visualization import PathTrail, drone_markers
 
 _D = DroneParams()
 PARAMS = {
@@ -48,6 +51,13 @@ PARAMS = {
     'base_frame': Param('ardrone_base_link', 'drone body frame'),
     'odom_frame': Param('odom', 'odometry frame'),
     'start_xy': Param([0.0, 0.0], 'start position in odom, m'),
+    'path_length': Param(2000, 'poses kept in ardrone/path (oldest dropped)'),
+    'path_min_step': Param(0.02, 'm moved before the path gets a new pose'),
+    'path_rate': Param(5.0, 'ardrone/path publish rate, Hz (only when it changed); 0 = off'),
+    'markers': Param(True, 'publish the drone body markers on ardrone/markers (latched)'),
+    'world_frame': Param('', 'if set, publish a static TF world_frame -> odom_frame '
+                             '(so RViz can show the hands next to the drone)'),
+    'odom_in_world': Param([1.0, 0.0, 0.0], 'odom_frame origin in world_frame, m'),
 }
 
 
@@ -71,6 +81,14 @@ class ArDroneSimNode:
         self.tf = tf2_ros.TransformBroadcaster()
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
         self._publish_camera_frames()
+        self.trail = PathTrail(int(p['path_length']), float(p['path_min_step']))
+        self.path_period = 1.0 / float(p['path_rate']) if float(p['path_rate']) > 0 else None
+        self._path_sent = None
+        self.path_pub = rospy.Publisher('ardrone/path', Path, queue_size=2, latch=True)
+        if p['markers']:
+            self.marker_pub = rospy.Publisher('ardrone/markers', MarkerArray, queue_size=1,
+                                              latch=True)
+            self.marker_pub.publish(drone_markers(self.base))
         rospy.Subscriber('cmd_vel', Twist, self.on_cmd_vel, queue_size=10)
         rospy.Subscriber('ardrone/takeoff', Empty, lambda _: self._call(self.sim.takeoff))
         rospy.Subscriber('ardrone/land', Empty, lambda _: self._call(self.sim.land))
@@ -107,6 +125,16 @@ class ArDroneSimNode:
     # -- outputs --------------------------------------------------------------------
     def _publish_camera_frames(self):
         frames = []
+        if self.p['world_frame']:
+            t = TransformStamped()
+            t.header.stamp = rospy.Time.now()
+            t.header.frame_id, t.child_frame_id = self.p['world_frame'], self.odom
+            xyz = [float(v) for v in self.p['odom_in_world']]
+            if len(xyz) != 3:
+                raise ValueError('~odom_in_world needs [x, y, z]')
+            t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = xyz
+            t.transform.rotation.w = 1.0
+            frames.append(t)
         for child, xyz, rpy in (('ardrone_base_frontcam', (0.21, 0.0, 0.0),
                                  (-math.pi / 2, 0.0, -math.pi / 2)),
                                 ('ardrone_base_bottomcam', (0.0, -0.02, 0.0),
@@ -173,6 +201,17 @@ class ArDroneSimNode:
         t.transform.translation.z = alt
         t.transform.rotation = o
         self.tf.sendTransform(t)
+        self._publish_path(stamp, (pos[0], pos[1], alt), quat)
+
+    def _publish_path(self, stamp, xyz, quat):
+        if self.path_period is None:
+            return
+        self.trail.add(stamp, xyz, quat)
+        now = stamp.to_sec()
+        if self.trail.changed and (self._path_sent is None or now < self._path_sent
+                                   or now - self._path_sent >= self.path_period):
+            self.path_pub.publish(self.trail.to_msg(self.odom, stamp))
+            self._path_sent = now
 
     def run(self):
         rate = float(self.p['looprate'])

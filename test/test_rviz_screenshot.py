@@ -1,0 +1,171 @@
+"""RViz draws the UR10: rviz/ur10.rviz under Xvfb, screenshot, robot pixels counted.
+
+Two RViz windows on two virtual screens watch the same private-master graph
+(launch/ur10_sim.launch): one started by the launch file's rviz:=true with the shipped
+config, one with the same config but the RobotModel display disabled. Inside the 3D
+view, the pixels that differ between the two are what the robot model drew; they must
+cover a robot-sized area near the view's centre and include the UR10's blue joint caps,
+while the reference view has none of those. Skips when rviz or Xvfb is missing.
+"""
+import os
+import shutil
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import yaml
+
+from leap_teleop.bench.harness import free_port
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CONFIG = os.path.join(HERE, '..', 'rviz', 'ur10.rviz')
+SCREEN = (1280, 900)
+BACKGROUND = np.array([48, 48, 48])   # the config's Background Color
+MIN_ROBOT_PIXELS = 3000               # ~0.5 % of the 3D view; the arm covers ~7600
+MIN_BLUE_PIXELS = 150                 # the UR10's light-blue joint caps
+DEADLINE_S = 45.0
+
+
+def _need(tool, package):
+    if shutil.which(tool) is None:
+        pytest.skip('%s not found: install the Debian package %s (tools/setup.sh does)'
+                    % (tool, package))
+
+
+def _start_xvfb():
+    """An Xvfb on a free display number; returns (process, ':N')."""
+    read_fd, write_fd = os.pipe()
+    proc = subprocess.Popen(['Xvfb', '-displayfd', str(write_fd), '-screen', '0',
+                             '%dx%dx24' % SCREEN, '-nolisten', 'tcp'],
+                            pass_fds=(write_fd,), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    os.close(write_fd)
+    with os.fdopen(read_fd) as f:
+        number = f.readline().strip()
+    if not number:
+        proc.kill()
+        pytest.skip('Xvfb did not start')
+    return proc, ':' + number
+
+
+def _grab(display):
+    from PIL import ImageGrab
+    return np.asarray(ImageGrab.grab(xdisplay=display).convert('RGB')).astype(np.int16)
+
+
+def _view_box(img):
+    """Rows / columns of RViz's 3D view: where the background colour dominates."""
+    bg = np.abs(img - BACKGROUND).sum(axis=2) <= 6
+    rows, cols = np.nonzero(bg.mean(axis=1) > 0.3)[0], np.nonzero(bg.mean(axis=0) > 0.3)[0]
+    if len(rows) < 200 or len(cols) < 200:
+        return None
+    return rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+
+
+def _bluish(img):
+    """The UR10 caps' steel blue (r < g < b); not TF's pure blue axes (r == g)."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (b > r + 25) & (g > r + 12) & (b > 70)
+
+
+def measure(robot_img, ref_img):
+    """Robot pixels in the 3D view (robot_img vs the no-robot reference) and where."""
+    box = _view_box(ref_img)
+    if box is None or _view_box(robot_img) is None:
+        return None
+    r0, r1, c0, c1 = box
+    robot, ref = robot_img[r0:r1, c0:c1], ref_img[r0:r1, c0:c1]
+    drawn = np.abs(robot - ref).sum(axis=2) > 60
+    ys, xs = np.nonzero(drawn)
+    h, w = drawn.shape
+    return {'box': box, 'pixels': int(drawn.sum()),
+            'blue': int((drawn & _bluish(robot)).sum()),
+            'ref_blue': int(_bluish(ref).sum()),   # must stay ~0: no robot there
+            'centre': ((xs.mean() / w, ys.mean() / h) if len(xs) else (None, None))}
+
+
+def robot_drawn(m):
+    if m is None or m['pixels'] < MIN_ROBOT_PIXELS or m['blue'] < MIN_BLUE_PIXELS:
+        return False
+    cx, cy = m['centre']
+    return abs(cx - 0.5) < 0.25 and abs(cy - 0.5) < 0.25
+
+
+def _stop(proc, sig=signal.SIGINT, wait=15):
+    if proc is None or proc.poll() is not None:
+        return
+    try:
+        os.killpg(proc.pid, sig)
+        proc.wait(wait)
+    except (subprocess.TimeoutExpired, ProcessLookupError):
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait(5)
+
+
+def test_rviz_draws_the_ur10(tmp_path):
+    _need('rviz', 'rviz')
+    _need('Xvfb', 'xvfb')
+    try:
+        from PIL import features
+        if not features.check('xcb'):
+            pytest.skip('Pillow was built without XCB: no X screenshots')
+    except ImportError:
+        pytest.skip('Pillow missing (tools/requirements.txt)')
+
+    with open(CONFIG) as f:
+        ref_cfg = yaml.safe_load(f)
+    robots = [d for d in ref_cfg['Visualization Manager']['Displays']
+              if d['Class'] == 'rviz/RobotModel']
+    assert robots, 'rviz/ur10.rviz has no RobotModel display'
+    for d in robots:
+        d['Enabled'] = False
+    ref_path = tmp_path / 'no_robot.rviz'
+    ref_path.write_text(yaml.safe_dump(ref_cfg))
+
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
+               ROS_LOG_DIR=str(tmp_path / 'log'), ROS_HOME=str(tmp_path),
+               LIBGL_ALWAYS_SOFTWARE='1', XDG_RUNTIME_DIR=str(tmp_path))
+    procs = []
+    launch = ref = None
+    try:
+        xa, display_a = _start_xvfb()
+        procs.append(xa)
+        xb, display_b = _start_xvfb()
+        procs.append(xb)
+        log = open(tmp_path / 'roslaunch.log', 'wb')
+        launch = subprocess.Popen(['roslaunch', '-p', str(port), 'leap_teleop',
+                                   'ur10_sim.launch', 'rviz:=true'],
+                                  env=dict(env, DISPLAY=display_a), stdout=log,
+                                  stderr=subprocess.STDOUT, start_new_session=True)
+        ref = subprocess.Popen(['rviz', '-d', str(ref_path)], env=dict(env, DISPLAY=display_b),
+                               stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        start, m = time.monotonic(), None
+        while time.monotonic() - start < DEADLINE_S:
+            time.sleep(2.0)
+            assert launch.poll() is None, 'roslaunch ended: see %s' % (tmp_path / 'roslaunch.log')
+            assert ref.poll() is None, 'reference rviz ended'
+            robot_img, ref_img = _grab(display_a), _grab(display_b)
+            m = measure(robot_img, ref_img)
+            if robot_drawn(m):
+                break
+        from PIL import Image
+        Image.fromarray(robot_img.astype(np.uint8)).save(tmp_path / 'rviz_ur10.png')
+        Image.fromarray(ref_img.astype(np.uint8)).save(tmp_path / 'rviz_no_robot.png')
+        print('screenshots in %s: %r after %.1f s' % (tmp_path, m, time.monotonic() - start))
+        assert m is not None, 'no RViz 3D view found on the screen (screenshots in %s)' % tmp_path
+        assert robot_drawn(m), 'robot not drawn: %r (screenshots in %s)' % (m, tmp_path)
+        # The criterion can fail: the reference view has no robot-blue in it, and
+        # compared with itself shows nothing drawn.
+        assert not robot_drawn(measure(ref_img, ref_img))
+        assert m['ref_blue'] < MIN_BLUE_PIXELS / 3, m
+    finally:
+        _stop(ref, signal.SIGTERM)
+        _stop(launch)
+        for p in procs:
+            _stop(p, signal.SIGTERM, 5)
