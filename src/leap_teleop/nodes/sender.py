@@ -2,6 +2,8 @@
 
 Publishes once per source frame from the source's thread (event-driven; no polling).
 """
+import gc
+
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
@@ -131,6 +133,10 @@ def main(argv=None):
                   '/'.join(sender.sides), p['source'],
                   ', '.join(pubs['leapcobot'].resolved_name for pubs in sender.pubs.values()))
     rospy.on_shutdown(interface.stop)
+    # Everything built so far lives as long as the node: keep the cyclic collector off it,
+    # so its passes stay short on the per-frame path.
+    gc.collect()
+    gc.freeze()
     if p['wait_for_subscribers'] and not sender.wait_for_subscribers():
         return
     interface.start()
