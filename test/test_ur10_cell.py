@@ -9,7 +9,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import UR10Cell
-from leap_teleop.ur10.pick_place import pick_place_plan, run_plan
+from leap_teleop.ur10.pick_place import pick_place_plan, play_together, run_plan
 from leap_teleop.ur10.ros_interface import (ARM_JOINTS, CommandError, GRIPPER_JOINTS,
                                             joint_state_msg, object_poses_msg,
                                             object_positions, trajectory_points)
@@ -143,17 +143,7 @@ def test_two_arms_do_not_interfere():
                 assert np.linalg.norm(xyz[0] - start[name]) < 2e-3, name
         # Both at once, each with its own cube (from the start: one cube per tray).
         cell.reset()
-        plans = {'ur10_1': pick_place_plan(cell.config, 'ur10_1', 'cube_red'),
-                 'ur10_2': pick_place_plan(cell.config, 'ur10_2', 'cube_purple')}
-        for k in range(len(plans['ur10_1'])):
-            ends = []
-            for arm, plan in plans.items():
-                step = plan[k]
-                if step.what == 'arm':
-                    ends.append(cell.move_to(arm, step.target))
-                else:
-                    ends.append(cell.set_gripper(arm, float(step.target[0]), 0.5))
-            cell.run(max(ends) - cell.time + 0.3)
+        play_together(cell, {'ur10_1': 'cube_red', 'ur10_2': 'cube_purple'})
         assert cell.in_tray('cube_red', 'ur10_1') and cell.in_tray('cube_purple', 'ur10_2')
         assert not cell.in_tray('cube_purple', 'ur10_1')
     finally:

@@ -26,7 +26,7 @@ import pybullet as p
 
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import UR10Cell
-from leap_teleop.ur10.pick_place import pick_place_plan
+from leap_teleop.ur10.pick_place import play_together
 
 N_POSES = 2000
 
@@ -107,26 +107,6 @@ def _quat(R):
     return q
 
 
-def _play(cell, tasks, on_step=None):
-    """Every arm's pick & place at once, step by step; on_step(cell) after each step."""
-    plans = {arm: pick_place_plan(cell.config, arm, cube) for arm, cube in tasks.items()}
-    for k in range(len(next(iter(plans.values())))):
-        ends = []
-        for arm, plan in plans.items():
-            step = plan[k]
-            if step.what == 'arm':
-                ends.append(cell.move_to(arm, step.target))
-            else:
-                ends.append(cell.set_gripper(arm, float(step.target[0]), 0.5))
-        n = max(1, int(round((max(ends) - cell.time + 0.3) / cell.dt)))
-        if on_step is None:
-            cell.step(n)
-        else:
-            for _ in range(n):
-                cell.step()
-                on_step(cell)
-
-
 def cell_rtf(config, tasks, rounds=3, raw=False):
     """Real-time factor of the cell running each arm's pick & place at once, `rounds`
     times (reset in between); tasks: {arm: cube}. With raw, each round is followed by
@@ -140,7 +120,7 @@ def cell_rtf(config, tasks, rounds=3, raw=False):
         for _ in range(rounds):
             cell.reset()
             t_sim, t0 = cell.time, time.perf_counter()
-            _play(cell, tasks)
+            play_together(cell, tasks)
             wall += time.perf_counter() - t0
             sim += cell.time - t_sim
             placed += sum(cell.in_tray(cube, arm) for arm, cube in tasks.items())
@@ -160,7 +140,7 @@ def motor_targets(config, tasks):
     cell = UR10Cell(config)
     targets = []
     try:
-        _play(cell, tasks, lambda c: targets.append(
+        play_together(cell, tasks, lambda c: targets.append(
             [(a.arm_follower.q.tolist(), a.arm_follower.qd.tolist(),
               float(a.gripper_follower.q[0])) for a in c.arms.values()]))
     finally:

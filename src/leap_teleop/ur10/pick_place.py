@@ -64,3 +64,25 @@ def run_plan(cell, arm_name, steps, settle=0.3, gripper_time=0.5):
         else:
             cell.set_gripper(arm_name, float(step.target[0]), gripper_time)
             cell.run(gripper_time + settle)
+
+
+def play_together(cell, tasks, on_step=None, settle=0.3, gripper_time=0.5):
+    """Every arm's pick & place ({arm: cube}) at once, plan step by plan step, each step
+    held until the slowest arm is there plus `settle` s; on_step(cell) after every physics
+    step when given (benchmarks)."""
+    plans = {arm: pick_place_plan(cell.config, arm, cube) for arm, cube in tasks.items()}
+    for k in range(len(next(iter(plans.values())))):
+        ends = []
+        for arm, plan in plans.items():
+            step = plan[k]
+            if step.what == 'arm':
+                ends.append(cell.move_to(arm, step.target))
+            else:
+                ends.append(cell.set_gripper(arm, float(step.target[0]), gripper_time))
+        n = max(1, int(round((max(ends) - cell.time + settle) / cell.dt)))
+        if on_step is None:
+            cell.step(n)
+        else:
+            for _ in range(n):
+                cell.step()
+                on_step(cell)
