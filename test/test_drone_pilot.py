@@ -227,3 +227,19 @@ def test_bad_config_rejected():
         PilotConfig().update({'mode': 'joystick'})
     with pytest.raises(ValueError):
         PilotConfig().update({'flip_type': 25})
+
+
+@pytest.mark.parametrize('mode', ['tilt', 'paper'])
+def test_absurd_palm_positions_are_rejected_not_flown(mode):
+    # Found by fuzzing: a finite but absurd palm (1.8e305 m) made paper mode's twist infinite.
+    pilot = DronePilot(PilotConfig(mode=mode))
+    pilot.on_navdata(4, 1000)
+    pilot.on_hand(HandInput(False), 0.0)
+    pilot.on_hand(HandInput(True, palm=(1.797693134862316e+305, 0.0, 0.0)), 0.01)
+    pilot.on_hand(HandInput(True, palm=(0.0, 0.2, 0.0), normal=(0.0, -30.0, 0.0)), 0.02)
+    assert pilot.rejected_inputs == 2
+    while True:
+        cmd, _ = pilot.pop(1e9)
+        if cmd is None:
+            break
+        assert all(math.isfinite(v) for v in cmd.twist)

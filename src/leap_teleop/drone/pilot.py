@@ -45,6 +45,7 @@ from dataclasses import dataclass, fields
 from leap_teleop.teleop.input_check import InputStream
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
+MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
 ZERO_TWIST = (0.0,) * 6
@@ -214,6 +215,13 @@ class DronePilot:
             if hand.present and not all(math.isfinite(v) for v in tuple(hand.palm)
                                         + tuple(hand.normal) + tuple(hand.direction)):
                 why = 'non-finite values'
+            elif hand.present and any(abs(v) > MAX_PALM_M for v in hand.palm):
+                # Leap range is well under a metre: beyond that it is a tracking error,
+                # and the paper mode's raw arithmetic would overflow on it.
+                why = 'palm %s m from the device' % (tuple(hand.palm),)
+            elif hand.present and any(abs(v) > 1.5 for v in tuple(hand.normal)
+                                      + tuple(hand.direction)):
+                why = 'palm normal / direction are not unit vectors'
             else:
                 why = self._stream.check(hand.stamp, now)
             if why:
