@@ -47,6 +47,18 @@ def test_circle_events_agree_with_the_sdk_when_they_fire(results):
     assert results['recognizer']['circle']['precision'] >= 0.9
 
 
+def test_circle_figures_over_every_take_include_the_two_circle_takes(results):
+    every = results['circle_all_takes']
+    assert sorted(every['per_take']) == sorted(evaluate.EVERY_TAKE)
+    two = results['circle_events']
+    for key in ('events', 'agreeing_events', 'sdk_circles_in_recording', 'matched'):
+        assert every[key] == sum(v[key] for v in every['per_take'].values())
+        assert every[key] >= two[key]
+    # the SDK also reported circles outside Waiting / flapping (pinch, three-claps, ...)
+    assert every['sdk_circles_in_recording'] > two['sdk_circles_in_recording']
+    assert 0.0 <= every['precision'] <= 1.0 and 0.0 <= every['recall'] <= 1.0
+
+
 def test_circle_ground_truth_counts_what_the_recordings_show():
     rows, sdk = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, 'flapping'))
     assert len(sdk) == 8 and sum(c.in_recording for c in sdk.values()) == 4
