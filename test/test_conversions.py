@@ -36,6 +36,24 @@ def test_leapcobot_keeps_original_semantics(side, msg_type):
     assert back['pinch_value'] == pytest.approx(0.45)
 
 
+@pytest.mark.parametrize('side', ['right', 'left'])
+def test_a_refilled_leapcobot_serializes_like_a_new_one(side):
+    from io import BytesIO
+
+    def wire(msg):
+        buf = BytesIO()
+        msg.serialize(buf)
+        return buf.getvalue()
+    reused = conversions.LEAPCOBOT_TYPES[side]()
+    poses = [('pinch', [12.5, 210.0, -30.0]), ('fist', [-80.0, 150.0, 40.0]), (None, None),
+             ('open', [0.0, 300.0, 0.0])]
+    for k, (pose, palm) in enumerate(poses):
+        hands = [render_hand(side, pose, palm, pinch_value=0.3)] if pose else []
+        s = states(*hands, ts=100.0 + k)[side]
+        assert conversions.to_leapcobot(s, msg=reused) is reused
+        assert wire(reused) == wire(conversions.to_leapcobot(s))     # nothing left over
+
+
 def test_absent_hand_gives_an_all_clear_leapcobot():
     msg = conversions.to_leapcobot(states()['left'])
     assert not msg.is_left_hand and not msg.left_hand_fist and msg.left_hand_pinch_value == 0.0

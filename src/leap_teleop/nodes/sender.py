@@ -69,6 +69,8 @@ class Sender:
                             'hand': rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q),
                             'gesture': gestures}
                      for side in self.sides}
+        # One leapcobot message per side, refilled every frame (conversions.to_leapcobot).
+        self._leapcobot = {side: conversions.LEAPCOBOT_TYPES[side]() for side in self.sides}
         self.period = float(p['freq'])
         self._last_sent = {}
         self.published = 0
@@ -99,7 +101,8 @@ class Sender:
             if last is not None and frame.timestamp - last < self.period:
                 return
             self._last_sent[side] = frame.timestamp
-        for kind, msg in conversions.hand_messages(state, self.p['frame_id']):
+        for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
+                                                   self._leapcobot[side]):
             pubs[kind].publish(msg)
         self.published += 1
 
