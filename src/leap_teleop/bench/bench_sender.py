@@ -13,7 +13,7 @@ from leap_teleop.nodes.common import package_path
 
 RATES_HZ = (120, 200, 295, 400)
 WINDOW_S = 5.0
-ROUNDS = 3
+ROUNDS = 5
 
 
 def _sender_cmd(rate):
