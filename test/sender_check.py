@@ -5,6 +5,7 @@ import unittest
 
 import rospy
 import rostest
+import tf2_ros
 
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 from leap_teleop.sources.scripted import GestureScript
@@ -52,6 +53,23 @@ class SenderFollowsScript(unittest.TestCase):
                              or m.right_hand_set_origin_frame_detected)
             self.assertEqual(m.right_hand_pinch_value, 0.0)
         self.assertFalse(any(m.is_left_hand for m in cobots_left))
+
+    def test_leap_frame_sits_where_the_launch_file_puts_it(self):
+        buffer = tf2_ros.Buffer()
+        listener = tf2_ros.TransformListener(buffer)  # noqa: F841 (fills the buffer)
+        t = buffer.lookup_transform('world', 'leap_hands', rospy.Time(0), rospy.Duration(10.0))
+        p = t.transform.translation
+        for got, want in zip((p.x, p.y, p.z), rospy.get_param('~leap_xyz')):
+            self.assertAlmostEqual(got, want, places=6)
+        # Leap axes in world: x (user's right) -> -y, y (up) -> z, z (toward the user) -> -x
+        q = t.transform.rotation
+        x, y, z, w = q.x, q.y, q.z, q.w
+        columns = ((1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)),
+                   (2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)),
+                   (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)))
+        for got, want in zip(columns, ((0, -1, 0), (0, 0, 1), (-1, 0, 0))):
+            for g, e in zip(got, want):
+                self.assertAlmostEqual(g, e, places=6)
 
 
 if __name__ == '__main__':
