@@ -52,9 +52,20 @@ if [ ! -f .ws/loopback_bind.so ] || [ tools/loopback_bind.c -nt .ws/loopback_bin
   fi
 fi
 
-# 4. Out-of-tree catkin workspace: .ws/src/leap_teleop -> this repository.
-mkdir -p .ws/src
-[ -L .ws/src/leap_teleop ] || ln -sfn "$root" .ws/src/leap_teleop
+# 4. Out-of-tree catkin workspace. .ws/src/leap_teleop mirrors this repository with one
+#    link per top-level entry, hidden ones (.ws itself, .git, .venv) left out: a link to the
+#    whole repository put the workspace inside its own package, where rosrun's `find -L`
+#    met every script several times and asked which one to run.
+pkg=.ws/src/leap_teleop
+if [ -L "$pkg" ]; then rm "$pkg"; fi        # the earlier layout: one link to the repository
+mkdir -p "$pkg"
+for entry in "$root"/*; do
+  link="$pkg/$(basename "$entry")"
+  [ "$(readlink "$link")" = "$entry" ] || ln -sfn "$entry" "$link"
+done
+for link in "$pkg"/*; do                   # entries removed from the repository
+  if [ -L "$link" ] && [ ! -e "$link" ]; then rm "$link"; fi
+done
 say "building the catkin workspace in .ws/"
 (
   set +u
