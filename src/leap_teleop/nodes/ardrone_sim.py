@@ -26,7 +26,7 @@ from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
 from leap_teleop.msg import Navdata
-from leap_teleop.nodes.common import Param, handle_help, read_params
+from leap_teleop.nodes.common import Param, check_rates, start_node
 from leap_teleop.srv import FlightAnim, FlightAnimResponse
 from leap_teleop.visualization import PathTrail, drone_markers
 
@@ -64,6 +64,7 @@ PARAMS = {
 class ArDroneSimNode:
     def __init__(self, p):
         self.p = p
+        check_rates(p, positive=('looprate',))
         names = ('euler_angle_max', 'control_vz_max', 'control_yaw', 'altitude_max',
                  'altitude_min', 'takeoff_altitude', 'physics_rate', 'battery_flight_time',
                  'link_timeout')
@@ -215,8 +216,6 @@ class ArDroneSimNode:
 
     def run(self):
         rate = float(self.p['looprate'])
-        if rate <= 0:
-            raise ValueError('~looprate must be > 0')
         steps = max(1, int(round(self.sim.p.physics_rate / rate)))
         rtf = float(self.p['realtime_factor'])
         if rtf <= 0 and not self.use_sim_time:
@@ -249,14 +248,7 @@ def _quat_from_rpy(roll, pitch, yaw):
 
 
 def main(argv=None):
-    handle_help('ardrone_sim.py', __doc__, PARAMS, argv)
-    rospy.init_node('ardrone_sim')
-    p = read_params(PARAMS)
-    try:
-        node = ArDroneSimNode(p)
-    except (ValueError, TypeError) as e:
-        rospy.logfatal('ardrone_sim: bad parameter: %s', e)
-        raise SystemExit(1)
+    p, node = start_node('ardrone_sim.py', 'ardrone_sim', __doc__, PARAMS, ArDroneSimNode, argv)
     rospy.loginfo('ardrone_sim: ready (%s, %s)', 'GUI' if p['gui'] else 'headless',
                   'sim time x%g' % p['realtime_factor'] if node.use_sim_time else 'wall time')
     try:

@@ -1,4 +1,5 @@
 """What every node shares: a parameter table that is both read and shown by --help."""
+import math
 import sys
 import textwrap
 
@@ -23,6 +24,38 @@ def handle_help(node_name, description, params, argv=None):
     for name, p in params.items():
         print('  ~%-22s %-28r %s' % (name, p.default, p.doc))
     sys.exit(0)
+
+
+def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, TypeError)):
+    """The start every node shares: --help, init_node, the ~params, then build(p). A bad
+    parameter (build raising one of `errors`) ends the node with one fatal log line and
+    exit status 1, not a traceback. Returns (p, what build returned)."""
+    handle_help(script, doc, params, argv)
+    rospy.init_node(name)
+    p = read_params(params)
+    try:
+        return p, build(p)
+    except errors as e:
+        rospy.logfatal('%s: bad parameter: %s', name, e)
+        raise SystemExit(1)
+
+
+def check_rates(p, positive=(), realtime_factor='realtime_factor'):
+    """ValueError unless every `positive` ~param is a finite number > 0 and the
+    simulators' ~realtime_factor (when present) is a finite number >= 0."""
+    for key in positive:
+        if not 0.0 < _number(p, key) < math.inf:
+            raise ValueError('~%s must be > 0, got %r' % (key, p[key]))
+    if realtime_factor in p and not 0.0 <= _number(p, realtime_factor) < math.inf:
+        raise ValueError('~%s must be >= 0 (0 = as fast as possible), got %r'
+                         % (realtime_factor, p[realtime_factor]))
+
+
+def _number(p, key):
+    try:
+        return float(p[key])
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def read_params(params):

@@ -19,7 +19,7 @@ from std_msgs.msg import Empty
 
 from leap_teleop.drone.pilot import DronePilot, HandInput, PilotConfig
 from leap_teleop.msg import GestureEvent, Hand, Navdata
-from leap_teleop.nodes.common import Param, RateLimitedLog, handle_help, read_params
+from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
 from leap_teleop.srv import FlightAnim
 
 _C = PilotConfig()
@@ -154,14 +154,8 @@ class DronePilotNode:
 
 
 def main(argv=None):
-    handle_help('drone_subscriber.py', __doc__, PARAMS, argv)
-    rospy.init_node('drone_pilot')
-    p = read_params(PARAMS)
-    try:
-        node = DronePilotNode(p)
-    except (ValueError, TypeError) as e:
-        rospy.logfatal('drone_pilot: bad parameter: %s', e)
-        raise SystemExit(1)
+    p, node = start_node('drone_subscriber.py', 'drone_pilot', __doc__, PARAMS, DronePilotNode,
+                         argv)
     rospy.on_shutdown(node.stop)
     node.start()
     rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])

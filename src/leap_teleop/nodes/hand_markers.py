@@ -11,7 +11,7 @@ import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.msg import Hand
-from leap_teleop.nodes.common import Param, RateLimitedLog, handle_help, read_params
+from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
 from leap_teleop.visualization import HandMarkerThrottle
 
 PARAMS = {
@@ -48,14 +48,8 @@ class HandMarkersNode:
 
 
 def main(argv=None):
-    handle_help('hand_markers.py', __doc__, PARAMS, argv)
-    rospy.init_node('hand_markers')
-    p = read_params(PARAMS)
-    try:
-        node = HandMarkersNode(p)
-    except (ValueError, TypeError) as e:
-        rospy.logfatal('hand_markers: bad parameter: %s', e)
-        raise SystemExit(1)
+    p, node = start_node('hand_markers.py', 'hand_markers', __doc__, PARAMS, HandMarkersNode,
+                         argv)
     rospy.loginfo('hand_markers: %s -> %s', ', '.join(s.resolved_name for s in node.subs),
                   node.pub.resolved_name)
     rospy.spin()

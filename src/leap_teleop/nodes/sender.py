@@ -11,7 +11,7 @@ from geometry_msgs.msg import TransformStamped
 from leap_teleop import conversions
 from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.msg import GestureEvent, Hand
-from leap_teleop.nodes.common import Param, handle_help, package_path, read_params
+from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SourceError, make_source
 
 PARAMS = {
@@ -121,14 +121,8 @@ def publish_leap_tf(p):
 
 
 def main(argv=None):
-    handle_help('sender.py', __doc__, PARAMS, argv)
-    rospy.init_node('leap_sender')
-    p = read_params(PARAMS)
-    try:
-        source = build_source(p)
-    except SourceError as e:
-        rospy.logfatal('sender: %s', e)
-        raise SystemExit(1)
+    p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build_source, argv,
+                           errors=(SourceError,))
     interface = LeapInterface(source, sides=list(p['sides']))
     sender = Sender(p, interface)
     tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)

@@ -20,7 +20,7 @@ from leap_teleop import conversions
 from leap_teleop.msg import ArmStatus
 from leap_teleop.nodes.common import (Param, RateLimitedLog, handle_help, package_path,
                                       read_params)
-from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, DISARMED, HOLDING
+from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, HOLDING
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 

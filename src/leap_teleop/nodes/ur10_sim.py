@@ -25,7 +25,7 @@ from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
-from leap_teleop.nodes.common import Param, RateLimitedLog, handle_help, read_params
+from leap_teleop.nodes.common import Param, RateLimitedLog, check_rates, start_node
 from leap_teleop.ur10.model import build_urdf
 from leap_teleop.ur10.ros_interface import (ARM_JOINTS, GRIPPER_JOINTS, CommandError,
                                             joint_state_msg, object_poses_msg,
@@ -52,9 +52,7 @@ class UR10SimNode:
     def __init__(self, p):
         from leap_teleop.ur10.cell import UR10Cell     # pybullet: after --help / --urdf
         self.p = p
-        for key in ('joint_state_rate', 'object_pose_rate', 'clock_rate'):
-            if not float(p[key]) > 0:
-                raise ValueError('~%s must be > 0, got %r' % (key, p[key]))
+        check_rates(p, positive=('joint_state_rate', 'object_pose_rate', 'clock_rate'))
         self.cell = UR10Cell(p['config'], gui=bool(p['gui']))
         self.lock = threading.Lock()               # guards self.cell
         self.pending = collections.deque()         # validated commands for the loop
@@ -191,14 +189,8 @@ def main(argv=None):
     if '--urdf' in argv:
         print_urdf(argv)
         return
-    handle_help('ur10_sim.py', __doc__, PARAMS, [sys.argv[0]] + argv)
-    rospy.init_node('ur10_sim')
-    p = read_params(PARAMS)
-    try:
-        node = UR10SimNode(p)
-    except (ValueError, TypeError, KeyError, OSError) as e:
-        rospy.logfatal('ur10_sim: bad parameter: %s', e)
-        raise SystemExit(1)
+    p, node = start_node('ur10_sim.py', 'ur10_sim', __doc__, PARAMS, UR10SimNode,
+                         [sys.argv[0]] + argv, errors=(ValueError, TypeError, KeyError, OSError))
     rospy.loginfo('ur10_sim: ready, arms %s (%s, %s)', ', '.join(node.cell.arm_names),
                   'GUI' if node.cell.gui else 'headless',
                   'sim time x%g' % float(p['realtime_factor']) if node.use_sim_time
