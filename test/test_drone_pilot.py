@@ -1,5 +1,6 @@
 """DronePilot logic: paper mode = Algorithm 1, tilt mapping, gestures, watchdog, queue."""
 import math
+import os
 
 import pytest
 
@@ -113,24 +114,42 @@ def test_no_hand_twists_while_landed_or_taking_off():
 
 
 # -- gestures ---------------------------------------------------------------------------
+HAND_CIRCLE = 0.035        # m, the radius of drone_flight.yaml's palm circle
+
+
+def test_only_a_hand_sized_circle_flips():
+    warnings = []
+    pilot = DronePilot(PilotConfig(flip_min_radius=0.025),
+                       warn=lambda key, text: warnings.append(text))
+    pilot.on_navdata(4, 1000)
+    for radius in (0.004, 0.0199, -0.05, math.nan, math.inf, None, 'wide'):
+        pilot.on_gesture('circle_cw', True, 0.0, radius)
+    assert drain(pilot) == []
+    assert len(warnings) == 7 and all('flip_min_radius' in w for w in warnings)
+    pilot.on_gesture('circle_ccw', True, 0.0, 0.025)
+    assert kinds(drain(pilot)) == ['flip']
+    with pytest.raises(ValueError):
+        PilotConfig().update({'flip_min_radius': -0.01})
+
+
 def test_gestures_respect_the_drone_state():
     pilot = DronePilot(PilotConfig(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
     pilot.on_navdata(4, 1000)
     pilot.on_gesture('unfold', True, 0.0)                 # flying: no takeoff
-    pilot.on_gesture('circle_cw', True, 0.0)
+    pilot.on_gesture('circle_cw', True, 0.0, HAND_CIRCLE)
     assert [(c.kind, c.anim) for c in drain(pilot)] == [('flip', (18, 0))]
     pilot.on_navdata(4, 400)                              # too low for a flip
-    pilot.on_gesture('circle_ccw', True, 0.0)
+    pilot.on_gesture('circle_ccw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
     pilot.on_navdata(9, 1000)                             # looping: no second flip
-    pilot.on_gesture('circle_ccw', True, 0.0)
+    pilot.on_gesture('circle_ccw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
     pilot.on_navdata(3, 1000)
     pilot.on_gesture('fold', True, 0.0)
     assert kinds(drain(pilot)) == ['land']
     pilot.on_navdata(2, 0)
     pilot.on_gesture('fold', True, 0.0)                   # landed: no land
-    pilot.on_gesture('circle_cw', True, 0.0)
+    pilot.on_gesture('circle_cw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
     pilot.on_gesture('unfold', True, 0.0)
     assert kinds(drain(pilot)) == ['takeoff']
@@ -243,3 +262,27 @@ def test_absurd_palm_positions_are_rejected_not_flown(mode):
         if cmd is None:
             break
         assert all(math.isfinite(v) for v in cmd.twist)
+
+
+def test_fingertip_loops_on_real_recordings_never_flip_a_flying_drone():
+    from leap_teleop.tools import evaluate
+    if not os.path.isdir(evaluate.DEFAULT_DATA):
+        pytest.skip('shared/data/leapjs absent')
+    circles = []
+    for take in evaluate.EVERY_TAKE:
+        rows, _ = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, take))
+        circles += [e for (_, _, st, _, _) in rows for e in st.events
+                    if e.gesture.startswith('circle')]
+    assert len(circles) >= 20
+
+    def flips(config):
+        pilot = DronePilot(config)
+        pilot.on_navdata(4, 1500)
+        for e in circles:
+            pilot.on_gesture(e.gesture, True, 0.0, e.value)
+            pilot.on_navdata(4, 1500)       # the flip is over before the next circle
+        return kinds(drain(pilot)).count('flip')
+    fingertip = [e for e in circles if e.source != 'palm']
+    assert all(e.value < 0.025 for e in fingertip)
+    assert flips(PilotConfig()) == len(circles) - len(fingertip) <= 1
+    assert flips(PilotConfig(flip_min_radius=0.0)) == len(circles)     # what the gate stops

@@ -241,7 +241,7 @@ GESTURES = ['unfold', 'fold', 'circle_cw', 'circle_ccw', 'hand_lost', 'fist', 's
 pilot_events = st.one_of(
     st.tuples(st.just('hand'), st.booleans(), st.tuples(wild, wild, wild),
               st.tuples(wild, wild, wild), st.tuples(wild, wild, wild), st.floats(-1.0, 0.01)),
-    st.tuples(st.just('gesture'), st.sampled_from(GESTURES)),
+    st.tuples(st.just('gesture'), st.sampled_from(GESTURES), st.one_of(wild, st.just(0.035))),
     st.tuples(st.just('nav'), st.integers(-5, 300), wild),
     st.tuples(st.just('time'), st.one_of(st.floats(-1.0, 4.0), st.just(0.2))))
 
@@ -257,7 +257,7 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
             _, present, palm, normal, direction, age = ev
             pilot.on_hand(PilotHand(present, palm, normal, direction, now + age), now)
         elif ev[0] == 'gesture':
-            pilot.on_gesture(ev[1], True, now)
+            pilot.on_gesture(ev[1], True, now, ev[2])
         elif ev[0] == 'nav':
             try:
                 pilot.on_navdata(ev[1], ev[2])

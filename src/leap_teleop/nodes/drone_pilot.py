@@ -34,6 +34,8 @@ PARAMS = {
     'flip_type': Param(_C.flip_type, 'flight animation for a circle gesture (19 = flip right)'),
     'flip_duration': Param(_C.flip_duration, 'its duration, ms (0 = default)'),
     'flip_min_altitude': Param(_C.flip_min_altitude, 'no flip below this altitude, m'),
+    'flip_min_radius': Param(_C.flip_min_radius, 'no flip on a smaller circle, m (fingertip '
+                                                 'loops are 4-20 mm)'),
     'hand_timeout': Param(_C.hand_timeout, 's without a Hand message = hand lost (hover)'),
     'land_after': Param(_C.land_after, 's of lost hand before landing'),
     'dead_zone': Param(_C.dead_zone, 'tilt: horizontal palm dead zone, m'),
@@ -89,7 +91,7 @@ class DronePilotNode:
 
     def on_gesture(self, msg):
         if msg.side == self.side:
-            self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time())
+            self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time(), msg.value)
 
     def on_navdata(self, msg):
         self.pilot.on_navdata(msg.state, msg.altd)
