@@ -29,7 +29,7 @@ def fly_script(path, mode='tilt'):
                                 st.palm_normal, st.direction), t)
         for e in st.events:
             events.append(e.gesture)
-            pilot.on_gesture(e.gesture, e.active, t)
+            pilot.on_gesture(e.gesture, e.active, t, e.value)
         pilot.watchdog(t)
         mono += 1.0          # pacing is the node's business; drain everything here
         while True:
