@@ -28,6 +28,30 @@ POSES = {
     'gun':       ({'thumb', 'index'}, 0.5, 0.0),
 }
 PALM_DOWN = (vec3((0, -1, 0)), vec3((0, 0, -1)))
+
+def _local_joints(extended):
+    """(5, 4, 3) joint positions (mcp, pip, dip, tip) in the hand frame for a pose whose
+    `extended` fingers are straight; the others curl (the thumb folds across the palm)."""
+    joints = np.empty((5, 4, 3))
+    for i, name in enumerate(FINGER_NAMES):
+        mcp = np.array(_MCP[name])
+        if name in extended:
+            d = np.array(_EXTENDED_DIR.get(name, (0.0, 0.0, 1.0)))
+            d = d * (_LENGTH[name] / np.linalg.norm(d))
+            offsets = (0.45 * d, 0.75 * d, d)
+        elif name == 'thumb':
+            # Folded across the palm, over the curled fingers.
+            offsets = ((-8.0, 12.0, 15.0), (-18.0, 18.0, 25.0), (-30.0, 22.0, 30.0))
+        else:
+            # Curled: proximal segment bends down, the tip comes back under the palm.
+            offsets = ((0.0, 18.0, 22.0), (0.0, 35.0, 12.0), (0.0, 30.0, -8.0))
+        joints[i, 0] = mcp
+        joints[i, 1:] = mcp + np.array(offsets)
+    return joints
+
+
+_LOCAL_JOINTS = {pose: _local_joints(spec[0]) for pose, spec in POSES.items()}
+_PINCH_MEET = np.array([20.0, 38.0, 62.0])
 # Thumbs-up is shown with the palm facing inward and the thumb up.
 _THUMBS_UP_NORMAL = {'right': vec3((-1, 0, 0)), 'left': vec3((1, 0, 0))}
 
@@ -70,48 +94,27 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
     if pinch is None:
         pinch = 0.2 + float(np.clip(pinch_value, 0.0, 0.8))
 
-    fingers = []
-    for name in FINGER_NAMES:
-        mcp_local = np.array(_MCP[name])
-        length = _LENGTH[name]
-        if name in extended:
-            dir_local = _unit(np.array(_EXTENDED_DIR.get(name, (0.0, 0.0, 1.0))))
-            pip_l = mcp_local + dir_local * length * 0.45
-            dip_l = mcp_local + dir_local * length * 0.75
-            tip_l = mcp_local + dir_local * length
-        elif name == 'thumb':
-            # Folded across the palm, over the curled fingers.
-            pip_l = mcp_local + np.array([-8.0, 12.0, 15.0])
-            dip_l = mcp_local + np.array([-18.0, 18.0, 25.0])
-            tip_l = mcp_local + np.array([-30.0, 22.0, 30.0])
-        else:
-            # Curled: proximal segment bends down, the tip comes back under the palm.
-            pip_l = mcp_local + np.array([0.0, 18.0, 22.0])
-            dip_l = mcp_local + np.array([0.0, 35.0, 12.0])
-            tip_l = mcp_local + np.array([0.0, 30.0, -8.0])
-        fingers.append([name, pip_l, dip_l, tip_l, mcp_local])
-
+    local = _LOCAL_JOINTS[pose]
     if pose == 'pinch':
         # Thumb and index tips meet below the index knuckle, the index curled down to the
         # thumb as on real captures; the gap closes from 30 mm (value 0) to 0 (value 0.8),
         # so every pinch value is a pinch and pinch strength = 0.2 + value round-trips.
         gap = 30.0 * (1.0 - (pinch - 0.2) / 0.8)
-        meet = np.array([20.0, 38.0, 62.0])
-        for f in fingers:
-            if f[0] in ('thumb', 'index'):
-                sign = 1.0 if f[0] == 'thumb' else -1.0
-                f[3] = meet + np.array([sign * gap / 2.0, 0.0, 0.0])
-                f[2] = (f[4] + 2 * f[3]) / 3.0 + np.array([0.0, 8.0, 0.0])
-                f[1] = (2 * f[4] + f[3]) / 3.0 + np.array([0.0, 6.0, 0.0])
+        local = local.copy()
+        mcp = local[:2, 0]                                  # thumb, index
+        tip = _PINCH_MEET + np.array([[gap / 2.0, 0.0, 0.0], [-gap / 2.0, 0.0, 0.0]])
+        local[:2, 3] = tip
+        local[:2, 2] = (mcp + 2 * tip) / 3.0 + (0.0, 8.0, 0.0)
+        local[:2, 1] = (2 * mcp + tip) / 3.0 + (0.0, 6.0, 0.0)
 
-    out = []
-    for name, pip_l, dip_l, tip_l, mcp_l in fingers:
-        to_world = lambda p: palm + basis @ p
-        tip_dir = _unit(basis @ (tip_l - dip_l))
-        out.append(Finger(tip=to_world(tip_l), direction=tip_dir,
-                          extended=name in extended, mcp=to_world(mcp_l),
-                          pip=to_world(pip_l), dip=to_world(dip_l)))
+    # Every joint of every finger to Leap axes in one product: (5, 4, 3) = mcp, pip, dip, tip.
+    world = local @ basis.T + palm
+    tip_dirs = world[:, 3] - world[:, 2]
+    tip_dirs /= np.linalg.norm(tip_dirs, axis=1, keepdims=True)
+    out = tuple(Finger(tip=w[3], direction=u, extended=name in extended, mcp=w[0], pip=w[1],
+                       dip=w[2])
+                for name, w, u in zip(FINGER_NAMES, world, tip_dirs))
     return Hand(side=side, palm_position=palm, palm_velocity=vec3(velocity),
                 palm_normal=n, direction=d, grab_strength=float(grab),
                 pinch_strength=float(pinch), confidence=float(confidence),
-                fingers=tuple(out), id=hand_id if hand_id is not None else (1 if side == 'right' else 2))
+                fingers=out, id=hand_id if hand_id is not None else (1 if side == 'right' else 2))
