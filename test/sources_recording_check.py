@@ -13,8 +13,7 @@ from leap_teleop.msg import GestureEvent, Hand, leapcobotright
 class SenderPlaysRecording(unittest.TestCase):
     def test_messages_arrive_with_present_hands(self):
         path = rospy.get_param('~recording')
-        if not os.path.exists(path):
-            self.skipTest('recording %s absent' % path)
+        self.assertTrue(os.path.exists(path), 'recording %s absent' % path)
         hands, cobots, events = [], [], []
         rospy.Subscriber('leapmotion/hand_right', Hand, hands.append, queue_size=5000)
         rospy.Subscriber('leapmotion/data_right', leapcobotright, cobots.append, queue_size=5000)

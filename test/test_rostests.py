@@ -6,6 +6,8 @@ import subprocess
 
 import pytest
 
+from leap_teleop.tools.evaluate import DEFAULT_DATA
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
 TIMEOUT_S = 300
@@ -15,9 +17,15 @@ TIMEOUT_S = 300
 @pytest.mark.parametrize('test_file', TESTS, ids=[os.path.basename(t) for t in TESTS])
 def test_rostest(test_file, tmp_path):
     env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log'))
+    args = []
+    with open(test_file) as f:
+        if 'name="leapjs_data"' in f.read():      # it plays the shared recordings
+            if not os.path.isdir(DEFAULT_DATA):
+                pytest.skip('shared/data/leapjs absent')
+            args.append('leapjs_data:=%s' % DEFAULT_DATA)
     proc = subprocess.run(
         # Not --text: with it rostest exits 0 even when a test fails.
-        ['rostest', '--results-base-dir', str(tmp_path / 'results'), test_file],
+        ['rostest', '--results-base-dir', str(tmp_path / 'results'), test_file] + args,
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=TIMEOUT_S)
     output = proc.stdout.decode(errors='replace')
     assert proc.returncode == 0, 'rostest %s failed:\n%s' % (os.path.basename(test_file),
