@@ -53,26 +53,31 @@ if [ ! -f .ws/loopback_bind.so ] || [ tools/loopback_bind.c -nt .ws/loopback_bin
 fi
 
 # 4. Out-of-tree catkin workspace. .ws/src/leap_teleop mirrors this repository with one
-#    link per top-level entry, hidden ones (.ws itself, .git, .venv) left out: a link to the
-#    whole repository put the workspace inside its own package, where rosrun's `find -L`
-#    met every script several times and asked which one to run.
-pkg=.ws/src/leap_teleop
-if [ -L "$pkg" ]; then rm "$pkg"; fi        # the earlier layout: one link to the repository
-mkdir -p "$pkg"
-for entry in "$root"/*; do
-  link="$pkg/$(basename "$entry")"
-  [ "$(readlink "$link")" = "$entry" ] || ln -sfn "$entry" "$link"
-done
-for link in "$pkg"/*; do                   # entries removed from the repository
-  if [ -L "$link" ] && [ ! -e "$link" ]; then rm "$link"; fi
-done
+#    link per top-level entry that git tracks or would track (so not .ws itself, .venv,
+#    .git or generated output such as demo_output/): a link to the whole repository put the
+#    workspace inside its own package, where rosrun's `find -L` met every script several
+#    times and asked which one to run.
 say "building the catkin workspace in .ws/"
 (
   set +u
   source /opt/ros/*/setup.bash 2>/dev/null || true
-  cd .ws
-  exec 9>.build.lock
+  exec 9>.ws/.build.lock
   flock 9   # concurrent set-ups (parallel shells, helpers) build one at a time
+  pkg=.ws/src/leap_teleop
+  if [ -L "$pkg" ]; then rm "$pkg"; fi      # the earlier layout: one link to the repository
+  mkdir -p "$pkg"
+  if ! entries=$(git -C "$root" ls-files --cached --others --exclude-standard 2>/dev/null \
+                 | cut -d/ -f1 | sort -u | grep -v '^\.'); then
+    entries=$(cd "$root" && ls)               # not a git checkout: every visible entry
+  fi
+  for name in $entries; do
+    [ "$(readlink "$pkg/$name")" = "$root/$name" ] || ln -sfn "$root/$name" "$pkg/$name"
+  done
+  for link in "$pkg"/*; do                  # entries gone from (or ignored by) the repository
+    name=$(basename "$link")
+    if [ -L "$link" ] && ! grep -qx -- "$name" <<<"$entries"; then rm "$link"; fi
+  done
+  cd .ws
   # The venv's python is Debian's /usr/bin/python3 plus the pip packages: node wrappers
   # that catkin generates then start inside the venv wherever they are launched from.
   catkin_make -DPYTHON_EXECUTABLE="$root/.venv/bin/python3" -DCATKIN_ENABLE_TESTING=ON \
