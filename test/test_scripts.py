@@ -24,6 +24,10 @@ def test_rosrun_script_help(script):
 BAD_PARAMS = [
     ('sender.py', ['_source:=recording'], 'needs ~recording'),
     ('sender.py', ['_source:=telepathy'], 'telepathy'),
+    ('sender.py', ['_leap_xyz:=[1,2]'], 'leap_xyz must be 3 numbers'),
+    ('sender.py', ['_queue_size:=-3'], 'queue_size must be an integer >= 0'),
+    ('ur10_arm.py', ['_hand:=middle'], 'hand must be right or left'),
+    ('hand_markers.py', ['_max_rate:=fast'], 'fast'),
     ('drone_subscriber.py', ['_mode:=loop'], 'mode must be tilt or paper'),
     ('drone_subscriber.py', ['_flip_type:=42'], 'flip_type'),
     ('ur10_sim.py', ['_realtime_factor:=-1'], 'realtime_factor must be >= 0'),

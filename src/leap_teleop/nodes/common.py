@@ -26,17 +26,18 @@ def handle_help(node_name, description, params, argv=None):
     sys.exit(0)
 
 
-def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, TypeError)):
+def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, TypeError),
+               hint=''):
     """The start every node shares: --help, init_node, the ~params, then build(p). A bad
-    parameter (build raising one of `errors`) ends the node with one fatal log line and
-    exit status 1, not a traceback. Returns (p, what build returned)."""
+    parameter (build raising one of `errors`) ends the node with one fatal log line (plus
+    `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
     handle_help(script, doc, params, argv)
     rospy.init_node(name)
     p = read_params(params)
     try:
         return p, build(p)
     except errors as e:
-        rospy.logfatal('%s: bad parameter: %s', name, e)
+        rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
         raise SystemExit(1)
 
 

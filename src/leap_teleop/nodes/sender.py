@@ -3,6 +3,7 @@
 Publishes once per source frame from the source's thread (event-driven; no polling).
 """
 import gc
+import math
 
 import rospy
 import tf2_ros
@@ -43,7 +44,22 @@ PARAMS = {
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 
+def check_params(p):
+    """ValueError for the ~params the publishers and the TF use, before anything starts."""
+    try:
+        xyz = [float(v) for v in p['leap_xyz']]
+    except (TypeError, ValueError):
+        xyz = []
+    if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
+        raise ValueError('~leap_xyz must be 3 numbers (m), got %r' % (p['leap_xyz'],))
+    if not isinstance(p['queue_size'], int) or p['queue_size'] < 0:
+        raise ValueError('~queue_size must be an integer >= 0, got %r' % (p['queue_size'],))
+    if not isinstance(p['freq'], (int, float)) or not 0.0 <= p['freq'] < math.inf:
+        raise ValueError('~freq must be a period >= 0 s, got %r' % (p['freq'],))
+
+
 def build_source(p):
+    check_params(p)
     name = p['source']
     if name == 'scripted':
         script = p['script'] or package_path('config', 'gestures', 'wave_hello.yaml')
@@ -122,7 +138,7 @@ def publish_leap_tf(p):
 
 def main(argv=None):
     p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build_source, argv,
-                           errors=(SourceError,))
+                           errors=(SourceError, ValueError))
     interface = LeapInterface(source, sides=list(p['sides']))
     sender = Sender(p, interface)
     tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)

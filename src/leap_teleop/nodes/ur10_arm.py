@@ -18,8 +18,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from leap_teleop import conversions
 from leap_teleop.msg import ArmStatus
-from leap_teleop.nodes.common import (Param, RateLimitedLog, handle_help, package_path,
-                                      read_params)
+from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
 from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, HOLDING
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
@@ -166,15 +165,8 @@ class ArmNode:
 
 
 def main(argv=None):
-    handle_help('ur10_arm.py', __doc__, PARAMS, argv)
-    rospy.init_node('ur10_arm')
-    p = read_params(PARAMS)
-    try:
-        params = teleop_params()
-    except (ValueError, TypeError) as e:
-        rospy.logfatal('ur10_arm: bad parameters: %s (see %s)', e,
-                       package_path('config', 'ur10_teleop.yaml'))
-        raise SystemExit(1)
-    node = ArmNode(p, params)
+    p, node = start_node('ur10_arm.py', 'ur10_arm', __doc__, PARAMS,
+                         lambda p: ArmNode(p, teleop_params()), argv,
+                         hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
     if node.wait_for_robot():
         node.loop()
