@@ -2,6 +2,7 @@
 import math
 import os
 
+import numpy as np
 import pytest
 
 from leap_teleop.drone.pilot import (Command, CommandQueue, DronePilot, HandInput,
@@ -122,12 +123,16 @@ def test_only_a_hand_sized_circle_flips():
     pilot = DronePilot(PilotConfig(flip_min_radius=0.025),
                        warn=lambda key, text: warnings.append(text))
     pilot.on_navdata(4, 1000)
-    for radius in (0.004, 0.0199, -0.05, math.nan, math.inf, None, 'wide'):
+    for radius in (0.004, 0.0199, -0.05, math.nan, math.inf, None, 'wide', True):
         pilot.on_gesture('circle_cw', True, 0.0, radius)
     assert drain(pilot) == []
-    assert len(warnings) == 7 and all('flip_min_radius' in w for w in warnings)
+    assert len(warnings) == 8 and all('flip_min_radius' in w for w in warnings)
     pilot.on_gesture('circle_ccw', True, 0.0, 0.025)
-    assert kinds(drain(pilot)) == ['flip']
+    pilot.on_gesture('circle_ccw', True, 0.0, np.float32(0.03))    # a message's float32
+    assert kinds(drain(pilot)) == ['flip', 'flip']
+    pilot.on_navdata(2, 0)                  # landed: it says so, whatever the radius
+    pilot.on_gesture('circle_ccw', True, 0.0, 0.004)
+    assert 'not flying' in warnings[-1]
     with pytest.raises(ValueError):
         PilotConfig().update({'flip_min_radius': -0.01})
 

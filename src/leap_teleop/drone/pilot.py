@@ -41,6 +41,7 @@ leave at most ``rate`` per second, discrete commands at once.
 """
 import collections
 import math
+import numbers
 import threading
 from dataclasses import dataclass, fields
 
@@ -279,17 +280,19 @@ class DronePilot:
                     self._warn('fold', 'fold: no landing, the drone is not flying (state %s)'
                                % state)
             elif name in ('circle_cw', 'circle_ccw'):
-                radius = value if isinstance(value, (int, float)) else math.nan
-                if not self.cfg.flip_min_radius <= radius < math.inf:     # NaN too
-                    self._warn('circle', '%s: no flip, radius %.3f m < flip_min_radius %.3f m'
-                               % (name, radius, self.cfg.flip_min_radius))
-                elif state in (3, 4) and self.altitude >= self.cfg.flip_min_altitude:
-                    self.queue.push(Command('flip', anim=(self.cfg.flip_type,
-                                                          self.cfg.flip_duration), stamp=now))
-                else:
+                radius = (float(value) if isinstance(value, numbers.Real)
+                          and not isinstance(value, bool) else math.nan)
+                if not (state in (3, 4) and self.altitude >= self.cfg.flip_min_altitude):
                     self._warn('circle', '%s: no flip (state %s, altitude %.2f m < %.2f m or '
                                'not flying)' % (name, state, self.altitude,
                                                 self.cfg.flip_min_altitude))
+                elif not self.cfg.flip_min_radius <= radius < math.inf:     # NaN too
+                    self._warn('circle_radius', '%s: no flip, radius %r m is not a hand-sized '
+                               'circle (flip_min_radius %g m)'
+                               % (name, value, self.cfg.flip_min_radius))
+                else:
+                    self.queue.push(Command('flip', anim=(self.cfg.flip_type,
+                                                          self.cfg.flip_duration), stamp=now))
 
     # -- mapping ---------------------------------------------------------------------
     def _capture(self, hand):
