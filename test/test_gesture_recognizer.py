@@ -131,6 +131,28 @@ def test_straight_moves_make_no_circle():
         assert not any(e.gesture.startswith('circle') for e in rec.update(f.hand('right'), f.timestamp).events)
 
 
+def test_palm_circle_of_the_drone_flight_fires_once_it_is_drawn_with_its_radius():
+    # config/gestures/drone_flight.yaml: out from the reference to 35 mm, then once round
+    # it in 1.2 s (script time 13.0 .. 14.2 s). Half of it plus the way out used to pass
+    # for a 27.6 mm circle about a centre between them, at 13.6 s.
+    import os
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config',
+                          'gestures', 'drone_flight.yaml')
+    rec, t0, circles = GestureRecognizer(), None, []
+    for f in ScriptedSource(script, realtime=False).frames():
+        t0 = f.timestamp if t0 is None else t0
+        hand = f.hand('right')
+        if hand is None:
+            rec.reset()
+            continue
+        circles += [(f.timestamp - t0, e) for e in rec.update(hand, f.timestamp).events
+                    if e.gesture.startswith('circle')]
+    assert [e.gesture for _, e in circles] == ['circle_cw']
+    t, e = circles[0]
+    assert 13.0 + 0.75 * 1.2 <= t <= 14.2 + 0.1          # after 270 deg of the circle
+    assert e.source == 'palm' and e.value == pytest.approx(0.035, abs=0.0015)
+
+
 def test_fit_circle_recovers_a_noisy_tilted_arc():
     from leap_teleop.gestures import fit_circle
     rng = np.random.default_rng(1)

@@ -85,6 +85,7 @@ CIRCLE_MIN_POINTS = 8
 CIRCLE_MIN_ACROSS = 0.7
 CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
 CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
+CIRCLE_MAX_DEVIATION = 0.6         # largest radial deviation / radius
 CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
 PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
@@ -475,6 +476,13 @@ class _CircleTrack:
         if (abs(sweep) < 0.9 * CIRCLE_ARC or travel > CIRCLE_MAX_TRAVEL * abs(sweep)
                 or not self.r_min <= radius <= self.r_max
                 or residual > CIRCLE_MAX_RESIDUAL * radius):
+            return None
+        # Every point near the circle, not just most: a half circle plus the straight way
+        # out to it sweeps 270 deg about a centre between them with a modest rms residual.
+        q = np.asarray(pts[int(tail[-1]):]) - centre
+        q -= np.outer(q @ normal, normal)                   # in the circle's plane
+        deviation = np.abs(np.sqrt(np.einsum('ij,ij->i', q, q)) - radius)
+        if deviation.max() > CIRCLE_MAX_DEVIATION * radius:
             return None
         return (normal if sweep > 0 else -normal), radius, centre
 

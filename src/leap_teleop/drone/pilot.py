@@ -8,7 +8,7 @@ Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
 ``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
 ``flip_min_altitude`` and the circle's radius is at least ``flip_min_radius``: a
 hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
-recordings: 29 fingertip loops of 4-20 mm, clapping and flapping included).
+recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included).
 
 Modes:
 
