@@ -283,12 +283,18 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
                     assert all(math.isfinite(v) for v in cmd.twist)
 
 
-def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
+def _engaged_pilot(t0):
+    """A pilot flying at 1 m, engaged at t0 and steered by one hand sample 10 ms later."""
     pilot = DronePilot(PilotConfig())
     pilot.on_navdata(4, 1000)
-    pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=0.01), 0.01)
+    pilot.on_gesture('unfold', True, t0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=t0), t0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t0 + 0.01), t0 + 0.01)
+    return pilot
+
+
+def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
+    pilot = _engaged_pilot(0.0)
     t = 0.01
     out = []
     while t < 4.0:          # NaN palms (and late ones) keep coming: they must not feed the watchdog
@@ -309,11 +315,7 @@ def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
 
 
 def test_pilot_clock_jump_back_hovers():
-    pilot = DronePilot(PilotConfig())
-    pilot.on_navdata(4, 1000)
-    pilot.on_gesture('unfold', True, 50.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=50.0), 50.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=50.01), 50.01)
+    pilot = _engaged_pilot(50.0)
     pilot.watchdog(0.5)
     cmds = []
     while True:
