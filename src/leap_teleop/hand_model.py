@@ -28,6 +28,9 @@ POSES = {
     'gun':       ({'thumb', 'index'}, 0.5, 0.0),
 }
 PALM_DOWN = (vec3((0, -1, 0)), vec3((0, 0, -1)))
+# Thumbs-up is shown with the palm facing inward and the thumb up.
+_THUMBS_UP_NORMAL = {'right': vec3((-1, 0, 0)), 'left': vec3((1, 0, 0))}
+
 
 def _local_joints(extended):
     """(5, 4, 3) joint positions (mcp, pip, dip, tip) in the hand frame for a pose whose
@@ -51,9 +54,7 @@ def _local_joints(extended):
 
 
 _LOCAL_JOINTS = {pose: _local_joints(spec[0]) for pose, spec in POSES.items()}
-_PINCH_MEET = np.array([20.0, 38.0, 62.0])
-# Thumbs-up is shown with the palm facing inward and the thumb up.
-_THUMBS_UP_NORMAL = {'right': vec3((-1, 0, 0)), 'left': vec3((1, 0, 0))}
+_PINCH_MEET = np.array([20.0, 38.0, 62.0])    # where thumb and index tips meet, hand frame, mm
 
 
 def _unit(v):

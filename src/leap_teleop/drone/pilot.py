@@ -34,10 +34,11 @@ Safety added in both modes: hand twists are only sent while the drone flies or h
 message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
-watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded FIFO: a twist replaces an unsent
-twist at the tail (the newer hand state wins, so a hand faster than ``rate`` adds no
-lag); when full, the oldest twist is dropped (takeoff / land / flip never are); twists
-leave at most ``rate`` per second, discrete commands at once.
+watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded
+FIFO: a twist replaces an unsent twist at the tail (the newer hand state wins, so a hand
+faster than ``rate`` adds no lag); when full, the oldest twist is dropped (takeoff /
+land / flip never are); twists leave at most ``rate`` per second, discrete commands at
+once.
 """
 import collections
 import math

@@ -4,8 +4,8 @@ Subscribes cmd_vel (Twist), ardrone/takeoff, ardrone/land, ardrone/reset (Empty)
 publishes ardrone/navdata (leap_teleop/Navdata, the driver's MD5), ardrone/imu,
 ardrone/odometry and TF odom -> ardrone_base_link (+ static front / bottom camera
 frames) at ~looprate, the flown path (nav_msgs/Path, ardrone/path, bounded) at ~path_rate
-and, latched, a drone body of primitive markers (ardrone/markers) for RViz; serves ardrone/setflightanimation (FlightAnim) and
-ardrone/snapshot (std_srvs/Trigger: writes a PNG, returns its path). With
+and, latched, a drone body of primitive markers (ardrone/markers) for RViz; serves
+ardrone/setflightanimation (FlightAnim) and ardrone/snapshot (std_srvs/Trigger: writes a PNG, returns its path). With
 /use_sim_time true it publishes /clock and can run faster than real time.
 """
 import math

@@ -59,7 +59,6 @@ def check_params(p):
 
 
 def build_source(p):
-    check_params(p)
     name = p['source']
     if name == 'scripted':
         script = p['script'] or package_path('config', 'gestures', 'wave_hello.yaml')
@@ -137,7 +136,10 @@ def publish_leap_tf(p):
 
 
 def main(argv=None):
-    p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build_source, argv,
+    def checked_source(p):
+        check_params(p)
+        return build_source(p)
+    p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, checked_source, argv,
                            errors=(SourceError, ValueError))
     interface = LeapInterface(source, sides=list(p['sides']))
     sender = Sender(p, interface)

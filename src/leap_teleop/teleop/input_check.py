@@ -8,8 +8,8 @@ stamps) and hosts with unsynchronised clocks working while still catching messag
 that were held up. A silence longer than ``gap`` (no message at all, accepted or not)
 or the clock jumping back (a simulator publishing /clock restarted) starts a new stream:
 a restarted sender or a replayed bag is judged afresh, while a stream that stays
-delayed keeps being refused (the consumers' watchdogs then stop the robots). Unstamped messages (stamp <= 0, as the original sender
-sent them) are only checked for order.
+delayed keeps being refused (the consumers' watchdogs then stop the robots). Unstamped
+messages (stamp <= 0, as the original sender sent them) are only checked for order.
 """
 
 
