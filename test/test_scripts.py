@@ -32,7 +32,7 @@ BAD_PARAMS = [
     ('drone_subscriber.py', ['_flip_type:=42'], 'flip_type'),
     ('ur10_sim.py', ['_realtime_factor:=-1'], 'realtime_factor must be >= 0'),
     ('ardrone_sim.py', ['_looprate:=0'], 'looprate must be > 0'),
-    ('ardrone_sim.py', ['_realtime_factor:=nan'], 'realtime_factor must be >= 0'),
+    ('ardrone_sim.py', ['_realtime_factor:=nan'], '~realtime_factor = '),
 ]
 
 

@@ -6,11 +6,7 @@ import textwrap
 import rospkg
 import rospy
 
-
-class Param:
-    def __init__(self, default, doc):
-        self.default = default
-        self.doc = doc
+from leap_teleop.params import Param, ParamError, check_params  # noqa: F401 (re-exported)
 
 
 def handle_help(node_name, description, params, argv=None):
@@ -20,9 +16,9 @@ def handle_help(node_name, description, params, argv=None):
         return
     print('usage: rosrun leap_teleop %s [_param:=value ...] [topic:=remapped ...]\n' % node_name)
     print(textwrap.fill(description, 88) + '\n')
-    print('private parameters (~name, default):')
+    print('private parameters (~name, default, allowed values):')
     for name, p in params.items():
-        print('  ~%-22s %-28r %s' % (name, p.default, p.doc))
+        print('  ~%-22s %-28r %s\n  %-51s allowed: %s' % (name, p.default, p.doc, '', p.allowed()))
     sys.exit(0)
 
 
@@ -33,10 +29,10 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
     handle_help(script, doc, params, argv)
     rospy.init_node(name)
-    p = read_params(params)
     try:
+        p = read_params(params)
         return p, build(p)
-    except errors as e:
+    except (ParamError,) + tuple(errors) as e:
         rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
         raise SystemExit(1)
 
@@ -60,8 +56,10 @@ def _number(p, key):
 
 
 def read_params(params):
-    """A dict of every ~param, defaults from the table."""
-    return {name: rospy.get_param('~' + name, p.default) for name, p in params.items()}
+    """A dict of every ~param, defaults from the table, each checked against its declaration
+    (ParamError names the first bad one)."""
+    return check_params(params, {name: rospy.get_param('~' + name, params[name].default)
+                                 for name in params})
 
 
 def package_path(*parts):

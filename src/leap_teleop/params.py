@@ -1,0 +1,130 @@
+"""Typed, bounded node parameters: one declaration is checked at start-up and shown by --help.
+
+A `Param` knows its default, doc, unit and what values are allowed; `check_params` turns the
+raw values (from the parameter server) into checked ones or raises `ParamError` with one line
+naming the parameter, the value and the allowed range. Pure Python: testable without a master.
+"""
+import math
+import numbers
+
+
+class ParamError(ValueError):
+    """A parameter value outside what its declaration allows."""
+
+
+class Param:
+    """One ~parameter. The kind follows the default (bool, int, float, str, list), or `kind`.
+
+    Numbers (and list items) must be finite and within `gt` / `ge` / `lt` / `le`; `choices`
+    lists the allowed values; `length` fixes a list's length (`min_length` bounds it);
+    `item` is a list's item kind ('float', 'int', 'str'); `empty_ok=False` refuses ''.
+    """
+
+    KINDS = ('bool', 'int', 'float', 'str', 'list')
+
+    def __init__(self, default, doc, unit='', kind=None, gt=None, ge=None, lt=None, le=None,
+                 choices=None, length=None, min_length=None, item=None, empty_ok=True):
+        self.default = default
+        self.doc = doc
+        self.unit = unit
+        self.kind = kind or _kind_of(default)
+        if self.kind not in self.KINDS:
+            raise TypeError('unknown parameter kind %r' % (self.kind,))
+        self.gt, self.ge, self.lt, self.le = gt, ge, lt, le
+        self.choices = tuple(choices) if choices is not None else None
+        self.length = length
+        self.min_length = min_length
+        self.item = item or (_kind_of(default[0]) if self.kind == 'list' and default else 'str')
+        self.empty_ok = empty_ok
+
+    # -- checking -------------------------------------------------------------------------
+    def check(self, name, value):
+        """The checked (and normalised: int -> float where a float is wanted) value."""
+        try:
+            if self.kind == 'list':
+                return self._check_list(value)
+            return self._check_scalar(value, self.kind)
+        except ParamError as e:
+            raise ParamError('~%s = %r: %s; allowed: %s' % (name, value, e, self.allowed()))
+
+    def _check_list(self, value):
+        if not isinstance(value, (list, tuple)):
+            raise ParamError('not a list')
+        if self.length is not None and len(value) != self.length:
+            raise ParamError('%d items' % len(value))
+        if self.min_length is not None and len(value) < self.min_length:
+            raise ParamError('%d items' % len(value))
+        return [self._check_scalar(v, self.item) for v in value]
+
+    def _check_scalar(self, value, kind):
+        if kind == 'bool':
+            if not isinstance(value, bool):
+                raise ParamError('not true / false')
+            return value
+        if kind == 'str':
+            if not isinstance(value, str):
+                raise ParamError('not a string')
+            if not value and not self.empty_ok:
+                raise ParamError('empty')
+        elif kind == 'int':
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+                raise ParamError('not an integer')
+            value = int(value)
+        else:  # float
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise ParamError('not a number')
+            value = float(value)
+            if not math.isfinite(value):
+                raise ParamError('not finite')
+        if self.choices is not None and value not in self.choices:
+            raise ParamError('not one of the choices')
+        if kind in ('int', 'float'):
+            for bound, ok in ((self.gt, lambda b: value > b), (self.ge, lambda b: value >= b),
+                              (self.lt, lambda b: value < b), (self.le, lambda b: value <= b)):
+                if bound is not None and not ok(bound):
+                    raise ParamError('out of range')
+        return value
+
+    # -- describing -----------------------------------------------------------------------
+    def allowed(self):
+        """What the check accepts, in words: 'a number > 0 (s)', 'one of: a, b', ..."""
+        if self.kind == 'list':
+            n = ('%d ' % self.length if self.length is not None
+                 else '>= %d ' % self.min_length if self.min_length else '')
+            return 'a list of %s%s' % (n, self._scalar_text(self.item, plural=True))
+        return self._scalar_text(self.kind)
+
+    def _scalar_text(self, kind, plural=False):
+        if self.choices is not None:
+            return 'one of: ' + ', '.join(str(c) if c != '' else "''" for c in self.choices)
+        words = {'bool': 'true or false', 'str': 'strings' if plural else 'a string',
+                 'int': 'integers' if plural else 'an integer',
+                 'float': 'finite numbers' if plural else 'a finite number'}[kind]
+        if kind == 'str' and not self.empty_ok:
+            words += ' (not empty)'
+        bounds = [op + ' ' + _fmt(b) for op, b in (('>', self.gt), ('>=', self.ge),
+                                                  ('<', self.lt), ('<=', self.le))
+                  if b is not None]
+        if bounds:
+            words += ' ' + ' and '.join(bounds)
+        if self.unit:
+            words += ' (%s)' % self.unit
+        return words
+
+
+def check_params(table, raw):
+    """{name: checked value} for every parameter of `table`, values from `raw` (a dict of the
+    values found; missing ones take the default). Raises ParamError for the first bad one."""
+    return {name: p.check(name, raw.get(name, p.default)) for name, p in table.items()}
+
+
+def _kind_of(value):
+    for kind, types in (('bool', bool), ('int', numbers.Integral), ('float', numbers.Real),
+                        ('str', str), ('list', (list, tuple))):
+        if isinstance(value, types):
+            return kind
+    raise TypeError('no parameter kind for %r' % (value,))
+
+
+def _fmt(x):
+    return ('%g' % x) if isinstance(x, float) else str(x)
