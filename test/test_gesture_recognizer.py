@@ -6,7 +6,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from leap_teleop.frame import FINGER_NAMES, Finger, Hand
-from leap_teleop.gestures import GestureRecognizer, OriginalRules
+from leap_teleop.gestures import GestureRecognizer
+from leap_teleop.tools.original_rules import OriginalRules
 from leap_teleop.hand_model import POSES, render_hand
 from leap_teleop.leap_interface import HandTracker
 from leap_teleop.sources.scripted import GestureScript, ScriptedSource

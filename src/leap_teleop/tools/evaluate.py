@@ -22,7 +22,10 @@ matter of opinion. Per take:
 - three-claps (both hands, open hands clapping): every frame open; not fist, not pinch,
   not thumb-up.
 - test-paddle-rightwards (right): thumb out of a closed fist (grab >= 0.9 with the thumb
-  tip clear of the fist: frames 28-74, 148-186, 290-318) -> thumb_up, not fist; a fist
+  tip clear of the fist: frames 28-74, 148-186, 290-318) -> not fist; thumb_up where the
+  SDK's own thumb direction points up (within 45 deg of +y), not thumb_up where it points
+  sideways (more than 60 deg from vertical: a thumbs-up means the thumb points up),
+  unlabelled in between (THUMB_UP_BY_DIRECTION); a fist
   with the thumb tucked (262-282) -> fist, not thumb-up; open hand (84-100, 200-236,
   344-366) -> open.
 - Waiting-110fps and flapping: the SDK's own circle gestures are the ground truth for
@@ -56,13 +59,15 @@ precision and recall over the labelled frames, n = labelled frames.
 """
 import argparse
 import json
+import math
 import os
 import sys
 
-from ..gestures import FINGER_NAMES, GestureRecognizer, OriginalRules
+from ..gestures import FINGER_NAMES, GestureRecognizer
+from .original_rules import OriginalRules
 from ..sources import leapjs
 
-DEFAULT_DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
+DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
                                              'shared', 'data', 'leapjs'))
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 ALL = range(0, 10 ** 6)
@@ -72,7 +77,24 @@ def _r(a, b):
     return range(a, b + 1)
 
 
-# take -> list of (side, frame range, {gesture: expected bool})
+# A thumb-out-of-a-fist frame is a thumbs-up when the SDK's thumb direction is within 45
+# deg of +y, not one beyond 60 deg; in between unlabelled.
+UP = 'up'
+THUMB_UP_BY_DIRECTION = (math.cos(math.radians(45.0)), math.cos(math.radians(60.0)))
+
+
+def expected(want, hand):
+    """The label's bool for this hand, or None (unlabelled)."""
+    if want != UP:
+        return want
+    try:
+        y = float(hand.fingers[0].direction[1])
+    except (TypeError, ValueError, IndexError, AttributeError):
+        return None
+    return True if y >= THUMB_UP_BY_DIRECTION[0] else False if y < THUMB_UP_BY_DIRECTION[1] else None
+
+
+# take -> list of (side, frame range, {gesture: expected bool or UP})
 LABELS = {
     'grab': [
         ('right', _r(52, 118), {'fist': True, 'open': False, 'pinch': False, 'thumb_up': False}),
@@ -93,9 +115,9 @@ LABELS = {
         (side, ALL, {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False})
         for side in ('right', 'left')],
     'test-paddle-rightwards': [
-        ('right', _r(28, 74), {'thumb_up': True, 'fist': False, 'open': False, 'pinch': False}),
-        ('right', _r(148, 186), {'thumb_up': True, 'fist': False, 'open': False, 'pinch': False}),
-        ('right', _r(290, 318), {'thumb_up': True, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(28, 74), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(148, 186), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(290, 318), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
         ('right', _r(262, 282), {'fist': True, 'thumb_up': False, 'open': False}),
         ('right', _r(84, 100), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
         ('right', _r(200, 236), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
@@ -157,7 +179,7 @@ def run_take(path):
             first_seen.setdefault(hand.side, frame.timestamp)
             rec = recognizers.setdefault(hand.side, GestureRecognizer())
             state = rec.update(hand, frame.timestamp)
-            rows.append((k, hand.side, state, original.classify(hand), frame.timestamp))
+            rows.append((k, hand.side, state, original.classify(hand), frame.timestamp, hand))
         for side, rec in recognizers.items():
             if side not in seen:
                 rec.reset()
@@ -211,8 +233,7 @@ def _score(tp, fp, fn, n):
 def circle_agreement(rows, sdk_circles):
     """(matched SDK circles in the recording, SDK circles in the recording, circle events
     that match any SDK circle, circle events)."""
-    events = [(side, t, e) for (_, side, st, _, t) in rows
-              for e in st.events if e.gesture.startswith('circle')]
+    events = [(r[1], r[4], e) for r in rows for e in r[2].events if e.gesture.startswith('circle')]
     tol = CIRCLE_TOLERANCE_S
 
     def near(ev, c):
@@ -258,12 +279,15 @@ def evaluate(data_dir=DEFAULT_DATA, verbose=True):
         if run is None:
             continue
         rows, _ = run
-        for k, side, rec, orig, _ in rows:
+        for k, side, rec, orig, _, hand in rows:
             for lside, frames, expect in labels:
                 if lside != side or k not in frames:
                     continue
                 for who, st in (('recognizer', rec), ('original', orig)):
                     for g, want in expect.items():
+                        want = expected(want, hand)
+                        if want is None:
+                            continue
                         got = bool(getattr(st, g))
                         c = counts[who][g]
                         c[3] += 1

@@ -1,0 +1,293 @@
+"""Circles traced by the palm or a fingertip: per-track path buffers, a cheap roundness
+gate, a least-squares circle fit that decides, and the per-hand detector (one event per
+circle, with its sense, radius, centre and what traced it)."""
+import math
+from bisect import bisect_left
+
+import numpy as np
+
+from ..frame import FINGER_NAMES
+from .temporal import GestureEvent
+from .geometry import f3 as _f3
+
+_isfinite = math.isfinite
+
+# Each track (the smoothed palm, every fingertip) keeps its recent path, resampled at a
+# small spacing (drops jitter while still). Cheap gate, per new point, for a few recent
+# stretches of the path: how round the stretch is, closed by its chord (isoperimetric
+# quotient 4 pi area / length^2: 1 for a circle, ~0.96 for a 270 deg arc, ~0.75 for a
+# half circle, ~0 for straight or back-and-forth moves; prefix sums make it O(1)). The
+# roundest stretch past the gate is fitted with a circle (plane + least squares), which
+# decides: an arc of >= CIRCLE_ARC about the fitted centre, swept one way, close to it.
+# (track name, spacing mm, min radius mm, max radius mm, stretches looked at (s), top
+# speed mm/s); the SDK's minimum radius is 5 mm, the algebraic fit reads small noisy arcs
+# ~10% small.
+# Top speed: a fingertip that moved faster than the SDK's default swipe velocity
+# (Gesture.Swipe.MinVelocity, 1000 mm/s) within the stretch holding the loop was swiping:
+# the SDK gives a pointable's motion to one gesture, and the loop a fast stroke closes on
+# its way back is no circle. (Palm circles are ours, not the SDK's: no limit.)
+CIRCLE_TRACKS = (('palm', 2.0, 25.0, 300.0, (0.5, 0.8, 1.1, 1.6), math.inf),
+                 ('finger', 1.0, 4.0, 60.0, (0.2, 0.3, 0.4, 0.55), 1000.0))
+# Arc that makes a circle: 270 deg, the Leap SDK's (Gesture.Circle.MinArc 1.5 pi): its
+# circles start there (progress 0.76..0.95 turns on the recordings).
+CIRCLE_ARC = 1.5 * math.pi
+CIRCLE_MIN_ROUNDNESS = 0.6         # isoperimetric quotient that triggers a fit
+CIRCLE_MIN_POINTS = 8
+# |circle normal . finger direction| of a fingertip circle; the SDK's own circles on the
+# recordings: 0.71..0.98 in 18 of 20 (cos 45 deg = 0.71)
+CIRCLE_MIN_ACROSS = 0.7
+CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
+CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
+CIRCLE_MAX_DEVIATION = 0.6         # largest radial deviation / radius
+CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
+PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
+CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
+
+
+def fit_circle(pts):
+    """Least-squares circle through 3-D points: the plane from their covariance, then an
+    algebraic (Kasa) fit in it. (centre (3,), unit normal (3,), radius, rms radial
+    residual, unwrapped angle of each point about the centre, right-handed about the
+    normal) or None when degenerate."""
+    p = np.array(pts, dtype=float)
+    c = p.mean(axis=0)
+    q = p - c
+    _, vecs = np.linalg.eigh(q.T @ q)
+    normal, u = vecs[:, 0], vecs[:, 2]
+    v = vecs[:, 1]
+    if (u[1] * v[2] - u[2] * v[1]) * normal[0] + (u[2] * v[0] - u[0] * v[2]) * normal[1] \
+            + (u[0] * v[1] - u[1] * v[0]) * normal[2] < 0:
+        v = -v                                  # u x v = normal
+    x, y = q @ u, q @ v
+    # x^2 + y^2 = 2 a x + 2 b y + k, normal equations (x, y are centred: sums are 0)
+    zz = x * x + y * y
+    sxx, sxy, syy = float(x @ x), float(x @ y), float(y @ y)
+    det = sxx * syy - sxy * sxy
+    if not det > 1e-12 * (sxx + syy) ** 2:
+        return None
+    bx, by = float(x @ zz), float(y @ zz)
+    cx = 0.5 * (syy * bx - sxy * by) / det
+    cy = 0.5 * (sxx * by - sxy * bx) / det
+    r2 = float(zz.mean()) + cx * cx + cy * cy
+    dx, dy = x - cx, y - cy
+    radius = math.sqrt(r2)
+    residual = float(np.sqrt(np.mean((np.sqrt(dx * dx + dy * dy) - radius) ** 2)))
+    angles = np.arctan2(dy, dx)
+    step = np.diff(angles)
+    step -= 2 * math.pi * np.round(step / (2 * math.pi))
+    angles = np.concatenate(([angles[0]], angles[0] + np.cumsum(step)))
+    return c + cx * u + cy * v, normal, radius, residual, angles
+
+
+class _CircleTrack:
+    """One point's path (the palm or a fingertip); see the circles section above."""
+    __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
+                 'cross', 'length', 'speed', 'head', 'wait', 'v_max')
+
+    def __init__(self, spacing, r_min, r_max, spans, v_max=math.inf):
+        self.spacing2 = spacing * spacing
+        self.r_min, self.r_max, self.spans = r_min, r_max, spans
+        self.v_max = v_max
+        self.jump2 = (25 * spacing + 2 * r_max) ** 2
+        self.min_len = CIRCLE_ARC * r_min       # path length of the smallest circle
+        self.reset()
+
+    def reset(self):
+        # Parallel lists from index `head` on: time, point, prefix sums of p[i-1] x p[i]
+        # (twice the vector area swept about the origin) and of the path length.
+        self.ts, self.pts, self.cross, self.length = [], [], [], []
+        self.speed = []                         # mm/s of the step that reached each point
+        self.head = 0
+        self.wait = 0
+
+    def clear(self):
+        """Forget the path so far but keep the current point (after an event)."""
+        last = self.pts[-1] if len(self.pts) > self.head else None
+        t = self.ts[-1] if last is not None else 0.0
+        self.reset()
+        if last is not None:
+            self._start(t, last)
+
+    def _start(self, t, p):
+        self.ts.append(t)
+        self.pts.append(p)
+        self.cross.append(_ZERO3)
+        self.speed.append(0.0)
+        self.length.append(0.0)
+
+    def add(self, t, p):
+        """Feed a point [x, y, z]; (axis unit vector, radius mm, centre) when a circle
+        closed."""
+        pts = self.pts
+        if len(pts) <= self.head:
+            self._start(t, p)
+            return None
+        ts = self.ts
+        q = pts[-1]
+        x, y, z = p
+        qx, qy, qz = q
+        sx, sy, sz = x - qx, y - qy, z - qz
+        l2 = sx * sx + sy * sy + sz * sz
+        if l2 < self.spacing2:
+            return None
+        if l2 > self.jump2 or not t >= ts[-1]:      # a jump: tracking glitch
+            self.reset()
+            self._start(t, p)
+            return None
+        cross, length = self.cross, self.length
+        c = cross[-1]
+        cn = (c[0] + qy * z - qz * y, c[1] + qz * x - qx * z, c[2] + qx * y - qy * x)
+        step = math.sqrt(l2)
+        ln = length[-1] + step
+        cross.append(cn)
+        length.append(ln)
+        dt = t - ts[-1]
+        self.speed.append(step / dt if dt > 0.0 else math.inf)
+        ts.append(t)
+        pts.append(p)
+        spans = self.spans
+        # drop what is older than the longest stretch; compact now and then
+        head = self.head
+        oldest = t - spans[-1]
+        while ts[head] < oldest:
+            head += 1
+        if head > 256:
+            del ts[:head], pts[:head], cross[:head], length[:head], self.speed[:head]
+            head = 0
+        self.head = head
+        if self.wait > 0:
+            self.wait -= 1
+            return None
+        n = len(ts) - 1
+        min_len = self.min_len
+        if ln - length[head] < min_len:
+            return None
+        best, best_j = CIRCLE_MIN_ROUNDNESS, -1
+        last_j = -1
+        for span in spans:
+            j = bisect_left(ts, t - span, head, n)
+            if j == last_j or n - j < CIRCLE_MIN_POINTS:
+                continue
+            last_j = j
+            a = pts[j]
+            ex, ey, ez = x - a[0], y - a[1], z - a[2]
+            perimeter = ln - length[j] + math.sqrt(ex * ex + ey * ey + ez * ez)
+            if perimeter < min_len:
+                continue
+            # twice the area closed by the chord p[n] -> p[j], which adds p[n] x p[j]
+            cj = cross[j]
+            ax = cn[0] - cj[0] + y * a[2] - z * a[1]
+            ay = cn[1] - cj[1] + z * a[0] - x * a[2]
+            az = cn[2] - cj[2] + x * a[1] - y * a[0]
+            # 4 pi area / perimeter^2
+            r = 2.0 * math.pi * math.sqrt(ax * ax + ay * ay + az * az) / (perimeter * perimeter)
+            if r > best:
+                best, best_j = r, j
+        if best_j < 0:
+            return None
+        # (max() only here, past both gates: a few times per loop)
+        if max(self.speed[best_j + 1:]) > self.v_max:
+            self.wait = CIRCLE_RETRY_POINTS
+            return None
+        hit = self._fit(pts[best_j:])
+        if hit is None:
+            self.wait = CIRCLE_RETRY_POINTS
+        return hit
+
+    def _fit(self, pts):
+        fit = fit_circle(pts)
+        if fit is None:
+            return None
+        # Trim to the shortest tail that sweeps the arc about the fitted centre, refit.
+        tail = np.flatnonzero(np.abs(fit[4][-1] - fit[4]) >= CIRCLE_ARC)
+        if not len(tail) or len(pts) - int(tail[-1]) < CIRCLE_MIN_POINTS:
+            return None
+        fit = fit_circle(pts[int(tail[-1]):])
+        if fit is None:
+            return None
+        centre, normal, radius, residual, angles = fit
+        sweep = float(angles[-1] - angles[0])
+        travel = float(np.sum(np.abs(np.diff(angles))))
+        # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
+        if (abs(sweep) < 0.9 * CIRCLE_ARC or travel > CIRCLE_MAX_TRAVEL * abs(sweep)
+                or not self.r_min <= radius <= self.r_max
+                or residual > CIRCLE_MAX_RESIDUAL * radius):
+            return None
+        # Every point near the circle, not just most: a half circle plus the straight way
+        # out to it sweeps 270 deg about a centre between them with a modest rms residual.
+        q = np.asarray(pts[int(tail[-1]):]) - centre
+        q -= np.outer(q @ normal, normal)                   # in the circle's plane
+        deviation = np.abs(np.sqrt(np.einsum('ij,ij->i', q, q)) - radius)
+        if deviation.max() > CIRCLE_MAX_DEVIATION * radius:
+            return None
+        return (normal if sweep > 0 else -normal), radius, centre
+
+
+_ZERO3 = (0.0, 0.0, 0.0)
+
+
+class CircleDetector:
+    """Circles traced by the palm or any fingertip of one hand: one event per circle (all
+    tracks forget their path when one fires), at most one per CIRCLE_REFRACTORY_S.
+
+    Direction: a fingertip circle is clockwise when it turns clockwise seen along the
+    finger (the Leap SDK's convention: normal . pointable direction > 0); a palm circle
+    is clockwise as the device sees it, looking up +y (the scripted source's `cw`)."""
+
+    def __init__(self):
+        palm, finger = CIRCLE_TRACKS
+        self.tracks = [_CircleTrack(*palm[1:])] + [_CircleTrack(*finger[1:]) for _ in range(5)]
+        self._last_event = -math.inf
+        self._palm_smooth = None
+
+    def reset(self):
+        for tr in self.tracks:
+            tr.reset()
+        self._last_event = -math.inf
+        self._palm_smooth = None
+
+    def update(self, hand, timestamp, geometry, extended):
+        """GestureEvent or None, from the hand's HandGeometry (palm and tips) and the
+        pose rules' extended verdict per finger."""
+        found = None
+        tracks = self.tracks
+        # Light smoothing: palm noise would otherwise scramble the turning at the palm
+        # track's coarse spacing.
+        x, y, z = geometry.palm
+        sm = self._palm_smooth
+        if sm is not None:
+            a = PALM_SMOOTHING
+            x, y, z = sm[0] + a * (x - sm[0]), sm[1] + a * (y - sm[1]), sm[2] + a * (z - sm[2])
+        self._palm_smooth = sm = [x, y, z]
+        hit = tracks[0].add(timestamp, sm)
+        if hit is not None:
+            found = (hit[0][1] > 0, hit[1], 'palm', hit[2])
+        for i, tip in enumerate(geometry.tips_world):
+            if not _isfinite(tip[0] + tip[1] + tip[2]):
+                continue
+            hit = tracks[1 + i].add(timestamp, tip)
+            if hit is None or found is not None:
+                continue
+            # Like the SDK's: a circle drawn with an extended finger (a curled one only
+            # loops while folding), roughly across the finger's axis (a loop in the
+            # plane the finger bends in is a tap or a fold, not a circle). The sense is
+            # then the SDK's: clockwise when the normal points along the finger.
+            if i > 0 and not extended[i]:
+                continue
+            axis = hit[0]
+            ref = _f3(hand.fingers[i].direction)
+            if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
+                ref = geometry.basis[2]
+            along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
+            if abs(along) >= CIRCLE_MIN_ACROSS:
+                found = (along > 0, hit[1], FINGER_NAMES[i], hit[2])
+        if found is None:
+            return None
+        for tr in tracks:
+            tr.clear()
+        if timestamp - self._last_event < CIRCLE_REFRACTORY_S:
+            return None
+        self._last_event = timestamp
+        cw, radius, source, centre = found
+        return GestureEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3, source,
+                            tuple(float(c) for c in centre))

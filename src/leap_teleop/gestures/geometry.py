@@ -1,0 +1,187 @@
+"""What the pose rules measure on one hand, in the hand's own units.
+
+Lengths are in palm widths (the distance between the index and pinky knuckles, or a
+nominal adult value when the frame has no knuckles), finger curl is the tip-to-knuckle
+chord over the finger's own bone length (1 straight, ~0.4 in a tight fist), directions are
+unit vectors: nothing depends on the size of the hand, its orientation or the tracker
+(a Leap frame and a camera's landmarks give the same joints).
+
+Hand frame used throughout (from palm normal n and hand direction d): x = thumbward
+(cross(d, n) for a right hand, its negative for a left one), y = n (out of the palm),
+z = d (toward the fingers). One code path serves both hands.
+"""
+import math
+from dataclasses import dataclass
+from typing import Tuple
+
+import numpy as np
+
+# Index-to-pinky knuckle distance used when a frame has no knuckle positions (mm; adult
+# hands span ~45..65 mm between the joint centres).
+NOMINAL_PALM_WIDTH_MM = 55.0
+PALM_WIDTH_RANGE_MM = (25.0, 120.0)      # outside: the knuckles are mis-tracked
+# Where the index knuckle sits thumbward of the palm centre, in palm widths (when the
+# frame has no knuckles the thumb is measured from there).
+INDEX_KNUCKLE_THUMBWARD = 0.45
+
+_NAN = math.nan
+_isfinite = math.isfinite
+_sqrt = math.sqrt
+
+
+@dataclass
+class HandGeometry:
+    """What the rules look at. NaN where the frame lacks the data."""
+    bend: Tuple[float, ...]     # 5 bends, degrees: the larger of distal bone vs hand
+                                # direction and distal vs proximal bone
+    chord: Tuple[float, ...]    # 5 tip-to-knuckle distances / the finger's bone length
+    palm_width: float           # mm, the unit of the rest
+    thumb_out: float            # palm widths: thumb tip thumbward of the index knuckle
+    thumb_dir: tuple            # unit (x, y, z), Leap axes: where the thumb points
+    pinch_gap: float            # palm widths, thumb tip to index tip
+    middle_gap: float           # palm widths, thumb tip to middle tip
+    grab: float                 # the tracker's grab strength 0..1, NaN when absent
+    tips_world: list            # 5 [x, y, z] fingertips, mm, Leap axes
+    basis: tuple                # rows: thumbward, normal, direction (Leap axes), unit
+    palm: list                  # [x, y, z] palm centre, mm
+
+
+def f3(v):
+    """[x, y, z] (numbers) of a 3-vector, or None when absent / malformed."""
+    if v.__class__ is np.ndarray:
+        return v.tolist() if v.shape == (3,) else None
+    if v is None or len(v) != 3:
+        return None
+    return [float(v[0]), float(v[1]), float(v[2])]
+
+
+def num(x, default=0.0):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return default
+    return x if math.isfinite(x) else default
+
+
+def _unit(x, y, z):
+    n = _sqrt(x * x + y * y + z * z)
+    if n > 0.0 and n != math.inf:
+        return x / n, y / n, z / n
+    return _NAN, _NAN, _NAN
+
+
+def _angle_deg(c):
+    """acos in degrees of a cosine; NaN stays NaN."""
+    if c != c:
+        return _NAN
+    return math.degrees(math.acos(1.0 if c > 1.0 else -1.0 if c < -1.0 else c))
+
+
+def _dist(a, b):
+    x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return _sqrt(x * x + y * y + z * z)
+
+
+def _joint(v):
+    """A finite joint position or None (a missing or non-finite joint is not there)."""
+    if v is None:
+        return None
+    p = f3(v)
+    if p is None or not _isfinite(p[0] + p[1] + p[2]):
+        return None
+    return p
+
+
+def hand_geometry(hand):
+    """HandGeometry of a Hand, or None when its palm frame is unusable (non-finite or
+    degenerate normal / direction, missing fingers or fingertips)."""
+    fingers = hand.fingers
+    if len(fingers) != 5:
+        return None
+    try:
+        palm = f3(hand.palm_position)
+        n = f3(hand.palm_normal)
+        d = f3(hand.direction)
+        if palm is None or n is None or d is None:
+            return None
+        px, py, pz = palm
+        nx, ny, nz = n
+        dx, dy, dz = d
+        if not (_isfinite(px + py + pz) and _isfinite(nx + ny + nz) and _isfinite(dx + dy + dz)):
+            return None
+        nn = _sqrt(nx * nx + ny * ny + nz * nz)
+        if nn < 1e-6:
+            return None
+        nx, ny, nz = nx / nn, ny / nn, nz / nn
+        k = dx * nx + dy * ny + dz * nz
+        dx, dy, dz = dx - nx * k, dy - ny * k, dz - nz * k
+        dn = _sqrt(dx * dx + dy * dy + dz * dz)
+        if dn < 1e-6:
+            return None
+        dx, dy, dz = dx / dn, dy / dn, dz / dn
+        # thumbward = d x n for a right hand, its negative for a left one
+        s = -1.0 if hand.side == 'left' else 1.0
+        tx, ty, tz = s * (dy * nz - dz * ny), s * (dz * nx - dx * nz), s * (dx * ny - dy * nx)
+        tips, bend, chord, mcps, pips = [], [], [], [], []
+        dirs = []
+        for f in fingers:
+            tip = _joint(f.tip)
+            if tip is None:
+                return None
+            tips.append(tip)
+            dip, pip, mcp = _joint(f.dip), _joint(f.pip), _joint(f.mcp)
+            mcps.append(mcp)
+            pips.append(pip)
+            # The distal bone (dip -> tip); the SDK's finger direction when the joint is
+            # absent (it follows the middle bone on real captures: the second choice).
+            ux = uy = uz = _NAN
+            if dip is not None:
+                ux, uy, uz = _unit(tip[0] - dip[0], tip[1] - dip[1], tip[2] - dip[2])
+            if ux != ux:
+                fd = _joint(f.direction)
+                if fd is not None:
+                    ux, uy, uz = _unit(*fd)
+            dirs.append((ux, uy, uz))
+            flex = _angle_deg(ux * dx + uy * dy + uz * dz)
+            curl = _NAN
+            c = _NAN
+            if pip is not None and mcp is not None:
+                vx, vy, vz = _unit(pip[0] - mcp[0], pip[1] - mcp[1], pip[2] - mcp[2])
+                curl = _angle_deg(vx * ux + vy * uy + vz * uz)
+                if dip is not None:
+                    length = _dist(pip, mcp) + _dist(dip, pip) + _dist(tip, dip)
+                    if length > 1e-3:
+                        c = _dist(tip, mcp) / length
+            chord.append(c)
+            # the larger of the two (like np.fmax: a NaN loses)
+            bend.append(flex if curl != curl else curl if flex != flex or curl > flex else flex)
+        # Palm width from the index and pinky knuckles, when they are there and plausible.
+        width = NOMINAL_PALM_WIDTH_MM
+        im, pm = mcps[1], mcps[4]
+        if im is not None and pm is not None:
+            w = _dist(im, pm)
+            if PALM_WIDTH_RANGE_MM[0] <= w <= PALM_WIDTH_RANGE_MM[1]:
+                width = w
+        inv = 1.0 / width
+        th, ix = tips[0], tips[1]
+        if im is not None:
+            out = ((th[0] - im[0]) * tx + (th[1] - im[1]) * ty + (th[2] - im[2]) * tz) * inv
+        else:
+            out = ((th[0] - px) * tx + (th[1] - py) * ty + (th[2] - pz) * tz) * inv \
+                - INDEX_KNUCKLE_THUMBWARD
+        # Where the thumb points: its knuckle (the Leap's thumb 'pip', a camera's MCP) to
+        # its tip, else its distal bone, else its direction.
+        tp = pips[0]
+        thumb_dir = _unit(th[0] - tp[0], th[1] - tp[1], th[2] - tp[2]) if tp is not None \
+            else (_NAN, _NAN, _NAN)
+        if thumb_dir[0] != thumb_dir[0]:
+            thumb_dir = dirs[0]
+        grab = num(hand.grab_strength, _NAN)
+        if not 0.0 <= grab <= 1.0:
+            grab = _NAN
+    except (TypeError, ValueError, AttributeError, IndexError, OverflowError):
+        return None
+    return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
+                        thumb_dir=thumb_dir, pinch_gap=_dist(th, ix) * inv,
+                        middle_gap=_dist(th, tips[2]) * inv, grab=grab, tips_world=tips,
+                        basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)

@@ -1,0 +1,146 @@
+"""Per-frame pose rules on a HandGeometry: which held gestures the hand shows.
+
+Every threshold is a pair (to turn on, to stay on): a gesture already on is judged on the
+looser one (hysteresis). Lengths are in palm widths, curl is the finger's chord ratio
+(see geometry), so the rules hold for small and large hands alike; where a frame lacks
+the joints for a ratio the rules fall back to bend angles.
+
+- fist: index..pinky curled, thumb tucked over them or lying alongside the index.
+- thumb_up / thumb_down: the same curled fingers with the thumb out, pointing up / down
+  (Leap +y / -y, within THUMB_VERTICAL). A thumb out sideways is neither, nor a fist.
+- rock: index and pinky extended, middle and ring folded, thumb either way.
+- pinch: thumb tip at the index tip, the other fingers in any state but all curled to
+  the thumb like the index (the "O") and not a fist.
+- open: index..pinky extended, thumb either way, not pinching; one finger reported
+  sharply bent is forgiven while the tracker's grab strength stays low and the thumb is
+  out (a tracker's mis-tracked finger; a real "three" holds its fourth finger with the
+  thumb and shows grab).
+"""
+import math
+
+from .geometry import num
+
+PINCH_THRESHOLD = 0.2   # original: pinch when strength > 0.2; pinch_value = strength - 0.2
+
+# Chord ratio of a curled finger (fist, thumbs-up): a tight fist ~0.4, a loose one ~0.6, a
+# C or O shape ~0.7 and up. Bend fallback (degrees) without joints.
+CURLED_CHORD = (0.64, 0.72)
+CURLED_BEND = (95.0, 85.0)
+# Folded enough for rock's middle and ring (a horns hand rarely folds them as deep).
+FOLDED_CHORD = 0.8
+FOLDED_BEND = 85.0
+# Thumb tip to the nearer of the index and middle tips in a fist (palm widths): ~0.3..0.8.
+FIST_THUMB_NEAR = (1.0, 1.15)
+# Extended: nearly straight and pointing along the hand (a relaxed finger bends ~20 deg
+# per joint: chord ~0.95, bend ~50).
+EXTENDED_CHORD = (0.85, 0.8)
+EXTENDED_BEND = (70.0, 80.0)
+# Thumbs-up needs the fingers deeper in the fist to start: every unfold passes through a
+# fist with the thumb already out while the fingers are still half-bent.
+THUMB_UP_CURLED_CHORD = (0.58, 0.72)
+THUMB_UP_CURLED_BEND = (110.0, 85.0)
+# Thumb tip thumbward of the index knuckle, palm widths: tucked < 0, alongside the index
+# ~0.1..0.4, out (thumbs-up) ~0.5..1.3.
+THUMB_OUT = (0.45, 0.4)
+# Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
+THUMB_VERTICAL = (45.0, 55.0)
+# Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
+PINCH_GAP = (0.6, 0.75)
+PINCH_GAP_OPEN = 1.1                 # geometric pinch strength 0 at this gap, 1 at 0.35
+PINCH_GAP_CLOSED = 0.35
+# In a pinch some other finger is less curled than the index, or the middle tip is well
+# clear of the thumb; in an "O" they all curl to the thumb together.
+PINCH_CHORD_MARGIN = 0.1
+PINCH_BEND_MARGIN = 15.0
+PINCH_MIDDLE_CLEAR = 0.9             # palm widths
+# Open with one finger reported bent: the tracker's grab strength must stay below this.
+OPEN_FORGIVE_GRAB = 0.15
+OPEN_FORGIVE_THUMB_OUT = 0.2         # and the thumb must not be holding that finger
+_VERT = tuple(math.cos(math.radians(a)) for a in THUMB_VERTICAL)
+_isfinite = math.isfinite
+
+
+def geometric_pinch_strength(gap):
+    """0..1 from the thumb-index gap in palm widths (1 = touching), like the SDK's."""
+    if not _isfinite(gap):
+        return 0.0
+    s = (PINCH_GAP_OPEN - gap) / (PINCH_GAP_OPEN - PINCH_GAP_CLOSED)
+    return min(max(s, 0.0), 1.0)
+
+
+def _curled(c, b, chord_th, bend_th):
+    """Either measure suffices: a tracker's curled finger model may keep a long chord
+    (ring and pinky) or bend little (a loose fist seen by a camera)."""
+    return c < chord_th or b > bend_th
+
+
+def classify_geometry(g, hand, active=None, opening=False):
+    """Per-frame decisions {gesture: bool}, 'pinch_value' and 'extended' (5 bools) from a
+    HandGeometry. `active` = gestures currently on: they are judged on the stay-on
+    thresholds. `opening`: the fingers are unfolding fast (a stateful caller knows); no
+    thumbs-up starts then."""
+    active = active or ()
+    bend, chord = g.bend, g.chord
+    fist_on = 'fist' in active
+    up_on = 'thumb_up' in active or 'thumb_down' in active
+    k = 1 if fist_on else 0
+    ku = 1 if up_on else 0
+    ext_k = 1 if ('open' in active or 'rock' in active) else 0
+    cc, cb = CURLED_CHORD[k], CURLED_BEND[k]
+    uc, ub = THUMB_UP_CURLED_CHORD[ku], THUMB_UP_CURLED_BEND[ku]
+    ec, eb = EXTENDED_CHORD[ext_k], EXTENDED_BEND[ext_k]
+    curled = thumb_curled = True
+    ext = [False] * 5
+    n_ext = 0
+    for i in (1, 2, 3, 4):
+        c, b = chord[i], bend[i]
+        if c != c and b != b:
+            curled = thumb_curled = False
+            continue
+        if curled and not _curled(c, b, cc, cb):
+            curled = False
+        if thumb_curled and not _curled(c, b, uc, ub):
+            thumb_curled = False
+        if b < eb and (c != c or c > ec):
+            ext[i] = True
+            n_ext += 1
+    out = g.thumb_out > THUMB_OUT[1 if (up_on or 'open' in active) else 0]
+    ty = g.thumb_dir[1]
+    vert = _VERT[ku]
+    # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
+    # as in a C.
+    near = min(g.pinch_gap, g.middle_gap) < FIST_THUMB_NEAR[k]
+    fist = curled and not out and near
+    thumb_up = thumb_curled and out and ty > vert and ('thumb_up' in active or not opening)
+    thumb_down = thumb_curled and out and ty < -vert
+    rock = (ext[1] and ext[4] and _curled(chord[2], bend[2], FOLDED_CHORD, FOLDED_BEND)
+            and _curled(chord[3], bend[3], FOLDED_CHORD, FOLDED_BEND))
+    pinch = False
+    gap = g.pinch_gap
+    if gap < PINCH_GAP[1 if 'pinch' in active else 0] and not (fist or thumb_up or thumb_down):
+        c1 = chord[1]
+        rest_c = max(chord[2], chord[3], chord[4])
+        if c1 == c1 and rest_c == rest_c:
+            pinch = rest_c > c1 + PINCH_CHORD_MARGIN or g.middle_gap > PINCH_MIDDLE_CLEAR
+        else:
+            b1, b2, b3, b4 = bend[1:]
+            rest = min(b2, b3, b4)
+            if _isfinite(b2 + b3 + b4):
+                pinch = (not _isfinite(b1) or b1 > rest + PINCH_BEND_MARGIN
+                         or not rest > CURLED_BEND[1] or g.middle_gap > PINCH_MIDDLE_CLEAR)
+    opn = False
+    if not pinch and not rock:
+        grab = g.grab
+        if n_ext == 4:
+            opn = not grab > 0.8
+        elif n_ext == 3 and grab < OPEN_FORGIVE_GRAB and g.thumb_out > OPEN_FORGIVE_THUMB_OUT:
+            opn = True
+    value = 0.0
+    if pinch:
+        strength = num(hand.pinch_strength, -1.0)
+        if not 0.0 <= strength <= 1.0:
+            strength = geometric_pinch_strength(gap)
+        value = min(max(strength - PINCH_THRESHOLD, 0.0), 0.8)
+    ext[0] = out
+    return {'fist': fist, 'thumb_up': thumb_up, 'thumb_down': thumb_down, 'rock': rock,
+            'pinch': pinch, 'open': opn, 'pinch_value': value, 'extended': tuple(ext)}

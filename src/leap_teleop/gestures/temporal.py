@@ -1,0 +1,105 @@
+"""Held gestures over time: the temporal filter and the events it emits.
+
+A held gesture turns on after `on_frames` consistent frames (and `on_time` seconds, per
+gesture), off after `off_frames`; frames too unsure to judge hold the state for a moment,
+then let go. Events: start / stop of each held gesture, unfold (fist -> open), fold
+(open -> fist).
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+HELD_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
+HOLD_LOW_CONFIDENCE_S = 0.25       # held gestures survive this long on unusable frames
+
+
+@dataclass
+class GestureEvent:
+    gesture: str
+    active: bool = True
+    value: float = 0.0
+    # Circles only: what traced it ('palm' or a finger name, as the SDK's circles belong
+    # to one pointable) and its centre [x, y, z] in mm, Leap axes.
+    source: str = ''
+    center: Optional[Tuple[float, float, float]] = None
+
+
+@dataclass
+class GestureState:
+    fist: bool = False
+    thumb_up: bool = False
+    pinch: bool = False
+    pinch_value: float = 0.0           # 0..0.8
+    rock: bool = False
+    open: bool = False
+    finger_extended: Tuple[bool, ...] = (False,) * 5
+    events: List[GestureEvent] = field(default_factory=list)
+    thumb_down: bool = False           # its own gesture: bound to nothing, never a thumbs-up
+
+
+class HeldFilter:
+    """Per-frame decisions -> filtered held gestures and their start / stop, fold and
+    unfold events."""
+
+    def __init__(self, on_frames=3, off_frames=3, on_time=None):
+        self.on_frames = max(1, int(on_frames))
+        self.off_frames = max(1, int(off_frames))
+        self.on_time = dict(on_time or {})
+        self.reset()
+
+    def reset(self):
+        self.active = set()
+        self._count = {name: 0 for name in HELD_GESTURES}
+        self._since = {name: 0.0 for name in HELD_GESTURES}
+        self._last_confident = -math.inf
+        self._last_shape = None
+
+    def update(self, raw, timestamp):
+        """Feed one usable frame's decisions {gesture: bool}; the set of active ones."""
+        self._last_confident = timestamp
+        active, count = self.active, self._count
+        for name in HELD_GESTURES:
+            want = raw[name]
+            if want == (name in active):
+                count[name] = 0
+                continue
+            if count[name] == 0:
+                self._since[name] = timestamp
+            count[name] += 1
+            if want:
+                done = (count[name] >= self.on_frames and
+                        timestamp - self._since[name] >= self.on_time.get(name, 0.0) - 1e-9)
+            else:
+                done = count[name] >= self.off_frames
+            if done:
+                count[name] = 0
+                if want:
+                    active.add(name)
+                else:
+                    active.discard(name)
+        return active
+
+    def unusable(self, timestamp):
+        """An unusable frame: hold what we had for a moment, then let go."""
+        if timestamp - self._last_confident > HOLD_LOW_CONFIDENCE_S:
+            self.active.clear()
+        for name in HELD_GESTURES:
+            self._count[name] = 0
+        return self.active
+
+    def events(self, state, prev):
+        """Events of the change from `prev` to `state` (GestureStates)."""
+        events = []
+        for name in HELD_GESTURES:
+            now = getattr(state, name)
+            if now != getattr(prev, name):
+                events.append(GestureEvent(name, now,
+                                           state.pinch_value if name == 'pinch' else 0.0))
+        shape = 'fist' if state.fist else 'open' if state.open else None
+        if shape and shape != self._last_shape:
+            if self._last_shape == 'fist' and shape == 'open':
+                events.append(GestureEvent('unfold'))
+            elif self._last_shape == 'open' and shape == 'fist':
+                events.append(GestureEvent('fold'))
+            self._last_shape = shape
+        return events
