@@ -11,6 +11,7 @@ from leap_teleop.ur10 import kinematics as kin
 
 HOME = kin.HOME_Q.copy()
 PALM = (0.0, 200.0, 0.0)
+HOLD_PERIODS = 40                  # 0.32 s of 8 ms periods: past the default arm_hold_s
 
 
 class Clock:
@@ -44,7 +45,7 @@ def armed_with_origin(mode='imitation', **params):
     t = ArmTeleop(ArmTeleopParams(mode=mode, filter_cutoff_hz=0.0, **params))
     c = Clock()
     t.on_joints(HOME)
-    drive(t, c, hand(thumb_up=True))
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
     assert t.status.state == ARMED
     drive(t, c, hand(rock=True))
     assert t.status.state == TRACKING and t.status.origin_set
@@ -57,10 +58,25 @@ def test_nothing_moves_until_thumbs_up_and_rock():
     t.on_joints(HOME)
     cmd = drive(t, c, hand(palm_mm=(50, 250, 0)), periods=5)
     assert t.status.state == DISARMED and cmd.q is None and cmd.gripper is None
-    drive(t, c, hand(thumb_up=True))
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
     cmd = drive(t, c, hand(palm_mm=(50, 250, 0), pinch=True, pinch_value=0.5))
     assert t.status.state == ARMED and cmd.q is None     # no origin yet: gripper only
     assert cmd.gripper == pytest.approx(0.43)
+
+
+def test_arming_needs_the_thumbs_up_held():
+    t = ArmTeleop()
+    c = Clock()
+    t.on_joints(HOME)
+    drive(t, c, hand(thumb_up=True), periods=30)              # 0.24 s: not yet
+    assert t.status.state == DISARMED
+    drive(t, c, hand(), periods=1)                             # let go: the hold restarts
+    drive(t, c, hand(thumb_up=True), periods=30)
+    assert t.status.state == DISARMED
+    drive(t, c, hand(thumb_up=True), periods=10)              # 0.32 s in a row
+    assert t.status.state == ARMED
+    with pytest.raises(ValueError):
+        ArmTeleopParams.from_dict({'arm_hold_s': -1.0})
 
 
 def test_imitation_maps_palm_offset_through_axis_map_and_scale():

@@ -14,7 +14,7 @@ from leap_teleop.tools.classify_frames import Classifier
 
 DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..',
                                      'shared', 'data', 'leapjs'))
-KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'events']
+KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down', 'events']
 
 
 def run_cli(args, stdin=None):
@@ -29,7 +29,7 @@ def check_line(line):
     for h in line['hands']:
         assert list(h) == KEYS and h['type'] in ('left', 'right')
         assert 0.0 <= h['pinch_value'] <= 0.8
-        assert all(isinstance(h[k], bool) for k in ('fist', 'thumb_up', 'pinch', 'rock', 'open'))
+        assert all(isinstance(h[k], bool) for k in ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down'))
 
 
 def _dicts(poses):

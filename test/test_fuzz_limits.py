@@ -60,6 +60,7 @@ class Arm:
     """An ArmTeleop fed like the node feeds it: hand + joints + step per period."""
 
     def __init__(self, **params):
+        params.setdefault('arm_hold_s', 0.0)         # arming on one message (the hold: test_arm_teleop)
         self.t = ArmTeleop(ArmTeleopParams(filter_cutoff_hz=0.0, **params))
         self.now = 100.0
         self.q = HOME.copy()
@@ -201,7 +202,7 @@ events = st.one_of(
        cutoff=st.sampled_from([0.0, 4.0]))
 def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cutoff):
     t = ArmTeleop(ArmTeleopParams(mode=mode, gripper_mode=gripper_mode, filter_cutoff_hz=cutoff,
-                                  max_joint_speed=1.0))
+                                  max_joint_speed=1.0, arm_hold_s=0.0))
     lo, hi = np.asarray(t.p.workspace_min), np.asarray(t.p.workspace_max)
     now = 100.0
     t.on_joints(HOME, now)

@@ -75,7 +75,7 @@ def to_hand(state, frame_id=LEAP_FRAME):
     msg.confidence = state.confidence
     msg.finger_extended = list(state.finger_extended)
     msg.finger_tips = [Point(*(x * MM for x in tip)) for tip in state.finger_tips]
-    for name in ('fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'origin_set',
+    for name in ('fist', 'thumb_up', 'thumb_down', 'pinch', 'pinch_value', 'rock', 'open', 'origin_set',
                  'rotate', 'turn', 'swing'):
         setattr(msg, name, getattr(state, name))
     return msg

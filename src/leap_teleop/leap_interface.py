@@ -67,6 +67,7 @@ class HandState:
     rock: bool = False
     open: bool = False
     origin_set: bool = False
+    thumb_down: bool = False
     origin_palm: Tuple[float, float, float] = (0.0, 0.0, 0.0)
     rotate: float = 0.0
     turn: float = 0.0
@@ -156,7 +157,7 @@ class HandTracker:
             finger_extended=tuple(bool(x) for x in g.finger_extended), finger_tips=tips,
             fist=g.fist, thumb_up=g.thumb_up, pinch=g.pinch,
             pinch_value=min(max(float(g.pinch_value), 0.0), 0.8) if g.pinch else 0.0,
-            rock=g.rock, open=g.open, origin_set=self._origin_angles is not None,
+            rock=g.rock, open=g.open, thumb_down=g.thumb_down, origin_set=self._origin_angles is not None,
             origin_palm=origin_palm, events=tuple(events), **rotation)
         return self.state
 

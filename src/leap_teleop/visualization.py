@@ -19,6 +19,7 @@ STATE_COLOURS = collections.OrderedDict([
     ('thumb_up', (0.10, 0.80, 0.20)),
     ('pinch', (0.15, 0.45, 1.00)),
     ('rock', (1.00, 0.75, 0.00)),
+    ('thumb_down', (0.60, 0.20, 0.70)),
 ])
 IDLE_COLOUR = (0.75, 0.75, 0.75)     # open / no recognised gesture
 FOLDED_ALPHA = 0.35                   # folded fingertips are drawn faint
@@ -29,7 +30,8 @@ HAND_MARKER_IDS = (PALM, TIPS, BONES, NORMAL, LABEL)
 
 
 def hand_state(hand):
-    """The name of the state that colours the hand: fist, thumb_up, pinch, rock or open."""
+    """The name of the state that colours the hand: fist, thumb_up, pinch, rock,
+    thumb_down or open."""
     for name in STATE_COLOURS:
         if getattr(hand, name):
             return name

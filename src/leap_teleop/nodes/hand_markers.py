@@ -3,7 +3,8 @@
 Subscribes leap_teleop/Hand on each of ~hand_topics (default leapmotion/hand_right and
 leapmotion/hand_left) and publishes visualization_msgs/MarkerArray on ~marker_topic:
 palm and fingertip spheres, palm -> tip lines, a palm-normal arrow and a label, coloured
-by the recognised state (grey open, red fist, green thumbs-up, blue pinch, yellow rock),
+by the recognised state (grey open, red fist, green thumbs-up, blue pinch, yellow rock,
+purple thumbs-down),
 deleted when the hand leaves. The frame is the message's (leap_hands; the sender
 publishes the static TF world -> leap_hands).
 """

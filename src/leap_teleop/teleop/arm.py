@@ -46,6 +46,7 @@ class ArmTeleopParams:
     max_input_age: float = 0.25        # s a message may arrive later than the stream's
                                        # best-case latency; 0 = no lateness check
     joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
+    arm_hold_s: float = 0.3            # s a thumbs-up must be held before it arms
 
     @classmethod
     def from_dict(cls, values):
@@ -78,6 +79,8 @@ class ArmTeleopParams:
                 raise ValueError('%s must be a positive number, got %r' % (name, v))
         if not (isinstance(self.max_input_age, (int, float)) and 0 <= self.max_input_age < 1e9):
             raise ValueError('max_input_age must be a number >= 0, got %r' % self.max_input_age)
+        if not (isinstance(self.arm_hold_s, (int, float)) and 0.0 <= self.arm_hold_s <= 5.0):
+            raise ValueError('arm_hold_s must be in [0, 5] s, got %r' % (self.arm_hold_s,))
         if not 0.0 <= self.gripper_binary_closed <= 0.8:
             raise ValueError('gripper_binary_closed must be in [0, 0.8]')
 
@@ -141,6 +144,7 @@ class ArmTeleop:
         self._target = None
         self._last_step = None
         self._gripper_sent = None
+        self._thumb_up_since = None       # capture time the current thumbs-up began
 
     # -- input (cheap; called from subscriber callbacks) ----------------------------
     def on_hand(self, hand, now):
@@ -158,6 +162,10 @@ class ArmTeleop:
             self.status.rejected_inputs += 1
             return why
         self._hand, self._hand_rx = hand, now
+        if not (hand.present and hand.thumb_up):
+            self._thumb_up_since = None
+        elif self._thumb_up_since is None:
+            self._thumb_up_since = hand.stamp
         return None
 
     def on_joints(self, q, now=None):
@@ -225,8 +233,13 @@ class ArmTeleop:
                 return self._disarm('fist')
             return ArmCommand()
         if self.status.state == DISARMED:
-            if hand.thumb_up:
-                self._set(ARMED, 'thumbs-up; show rock to set the origin')
+            # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
+            # be held arm_hold_s by the hand's own capture times.
+            if hand.thumb_up and self._thumb_up_since is not None:
+                if hand.stamp - self._thumb_up_since >= self.p.arm_hold_s - 1e-9:
+                    self._set(ARMED, 'thumbs-up; show rock to set the origin')
+                else:
+                    self._set(DISARMED, 'hold the thumbs-up')
             return ArmCommand()
 
         palm = np.asarray(hand.palm_mm, dtype=float)

@@ -15,15 +15,15 @@ Output, one line per input frame, in input order:
     {"id": 139235, "timestamp": 12439621196,
      "hands": [{"type": "right", "fist": false, "thumb_up": false, "pinch": true,
                 "pinch_value": 0.62, "rock": false, "open": false,
-                "events": ["pinch", "circle_cw"]}]}
+                "thumb_down": false, "events": ["pinch", "circle_cw"]}]}
 
 - id, timestamp: copied from the frame (timestamp in the frame's microseconds; null
   when absent).
 - hands: one entry per left / right hand in the frame, in frame order. fist, thumb_up,
-  pinch, rock, open: the recognizer's held gestures; pinch_value: pinch strength - 0.2
+  pinch, rock, open, thumb_down: the recognizer's held gestures; pinch_value: pinch strength - 0.2
   in 0..0.8 while pinching, else 0.
 - events: what started on this frame: a held gesture's name when it turns on
-  ("fist", "thumb_up", "pinch", "rock", "open"), "unfold" (fist -> open), "fold"
+  ("fist", "thumb_up", "pinch", "rock", "open", "thumb_down"), "unfold" (fist -> open), "fold"
   (open -> fist), "circle_cw" / "circle_ccw" (palm or fingertip circle).
 - A line that is not a JSON object yields {"id": null, "timestamp": null, "hands": [],
   "error": "..."}; a frame with missing fields is classified from what is there (a hand
@@ -41,7 +41,7 @@ import sys
 from ..gestures import GestureRecognizer
 from ..sources import SourceError, leapjs
 
-HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open')
+HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
 
 class Classifier:
@@ -74,6 +74,7 @@ class Classifier:
             out = {'type': hand.side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
                    'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
                    'rock': bool(state.rock), 'open': bool(state.open),
+                   'thumb_down': bool(state.thumb_down),
                    'events': [e.gesture for e in state.events if e.active]}
             hands.append(out)
         for side, rec in self.recognizers.items():

@@ -1,0 +1,272 @@
+"""A seeded synthetic population of hands and poses to test the recognizer against.
+
+Each person has a hand size (adult 5th-95th percentile), finger proportions, a handedness
+and the ways they form each gesture (fist with the thumb tucked or alongside, horns with
+the thumb folded or out, an OK sign with the other fingers straight or relaxed, ...), a
+tracking profile (palm noise 5-10 mm, fingertip jitter, confidence dips, a finger
+mis-tracked now and then) and the fields their tracker leaves out (no knuckles, no joints
+at all, no SDK strengths, no timestamps). Poses come from joint angles and thumb
+placements read off how hands are formed, in the hand's own size, never from the
+recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg;
+thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
+
+    people = make_people(200, seed=1)
+    for frames in take(person, 'fist', rng): ...   # (Hand, timestamp) per frame
+
+GESTURE_POSES name the pose that should show each gesture; CONFUSERS are poses that
+should show none (thumbs-down shows only thumb_down).
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .frame import Finger, Hand
+
+GESTURE_POSES = {'fist': 'fist', 'thumb_up': 'thumbs_up', 'thumb_down': 'thumbs_down',
+                 'pinch': 'ok', 'rock': 'horns', 'open': 'open'}
+CONFUSERS = ('index', 'two', 'three', 'L', 'hang_loose', 'C', 'O', 'sideways_thumb')
+POSES = tuple(GESTURE_POSES.values()) + CONFUSERS
+# What each pose should show (the rest: nothing).
+EXPECTED = {pose: gesture for gesture, pose in GESTURE_POSES.items()}
+
+_FINGERS = ('index', 'middle', 'ring', 'pinky')
+# Knuckles in palm widths (index-pinky knuckle distance): thumbward x, out of the palm y,
+# toward the fingers z (the hand frame).
+_KNUCKLES = np.array([[0.5, 0.0, 1.0], [0.17, 0.0, 1.08], [-0.17, 0.0, 1.0], [-0.5, 0.0, 0.82]])
+_THUMB_BASE = np.array([0.55, 0.15, 0.05])
+# Finger length knuckle -> tip over palm width, mean (adult proportions) and spread.
+_LENGTH = np.array([1.50, 1.65, 1.55, 1.22])
+_PHALANX = np.array([0.47, 0.30, 0.23])       # proximal, middle, distal share
+_SPLAY = np.array([6.0, 0.0, -6.0, -13.0])    # deg, extended fingers fan out
+
+
+@dataclass
+class Person:
+    id: int
+    side: str
+    palm_width: float            # mm, index-pinky knuckle distance
+    lengths: np.ndarray          # (4,) knuckle -> tip, palm widths
+    thumb_length: float          # thumb base -> tip when straight, palm widths
+    fist_thumb: str              # 'tucked' | 'alongside'
+    horns_thumb: str             # 'folded' | 'out'
+    ok_fingers: str              # 'straight' | 'relaxed' | 'curled'
+    open_style: str              # 'flat' | 'relaxed'
+    looseness: float             # 0 tight .. 1 loose curls
+    palm_noise: float            # mm sd
+    tip_noise: float             # mm sd
+    missing: str                 # '' | 'knuckles' | 'joints' | 'strengths' | 'timestamps'
+    mistrack_rate: float         # chance per take of one finger reported sharply bent
+    dip_rate: float              # fraction of frames with a confidence dip
+
+
+def make_people(n, seed=0):
+    rng = np.random.default_rng(seed)
+    people = []
+    for i in range(n):
+        # Hand breadth (adult women ~N(80, 4.5) mm, men ~N(89, 4.5)), clipped to the
+        # 5th..95th percentile of both (72..97 mm); knuckle centres span ~62 % of it.
+        male = rng.random() < 0.5
+        breadth = float(np.clip(rng.normal(89.0 if male else 80.0, 4.5), 72.0, 97.0))
+        lengths = _LENGTH * rng.normal(1.0, 0.06) * rng.normal(1.0, 0.04, 4)
+        people.append(Person(
+            id=i, side='right' if rng.random() < 0.85 else 'left',
+            palm_width=0.62 * breadth, lengths=lengths,
+            thumb_length=float(1.75 * rng.normal(1.0, 0.07)),
+            fist_thumb=str(rng.choice(['tucked', 'alongside'])),
+            horns_thumb=str(rng.choice(['folded', 'out'])),
+            ok_fingers=str(rng.choice(['straight', 'relaxed', 'curled'], p=[0.35, 0.45, 0.2])),
+            open_style=str(rng.choice(['flat', 'relaxed'])),
+            looseness=float(rng.random()),
+            palm_noise=float(rng.uniform(5.0, 10.0)), tip_noise=float(rng.uniform(1.0, 3.0)),
+            missing=str(rng.choice(['', 'knuckles', 'joints', 'strengths', 'timestamps'],
+                                   p=[0.45, 0.15, 0.15, 0.15, 0.1])),
+            mistrack_rate=float(rng.uniform(0.0, 0.3)), dip_rate=float(rng.uniform(0.0, 0.08))))
+    return people
+
+
+# -- poses: per finger (mcp, pip, dip) flexion in degrees, drawn per take -----------------
+def _flex(rng, kind, loose):
+    u = rng.uniform
+    if kind == 'straight':
+        return np.array([u(-5, 12), u(0, 12), u(0, 8)])
+    if kind == 'relaxed':
+        return np.array([u(5, 25), u(10, 30), u(5, 20)])
+    if kind == 'curled':           # in a fist; a loose fist curls less
+        return np.array([u(70, 95), u(90, 110), u(45, 75)]) - loose * np.array([15, 15, 15])
+    if kind == 'folded':           # folded down (horns' middle and ring, "two"'s others)
+        return np.array([u(55, 90), u(75, 110), u(30, 70)])
+    if kind == 'C':
+        return np.array([u(15, 35), u(30, 55), u(15, 35)])
+    if kind == 'O':
+        return np.array([u(30, 50), u(45, 70), u(25, 45)])
+    if kind == 'pinching':         # the index bent to meet the thumb
+        return np.array([u(25, 45), u(30, 55), u(10, 35)])
+    if kind == 'mistracked':       # the tracker shows it sharply bent
+        return np.array([u(30, 60), u(60, 100), u(20, 50)])
+    raise ValueError(kind)
+
+
+_SHAPES = {   # pose -> (finger kinds index..pinky, thumb placement)
+    'open': (None, 'open'), 'fist': (('curled',) * 4, None),
+    'thumbs_up': (('curled',) * 4, 'up'), 'thumbs_down': (('curled',) * 4, 'up'),
+    'sideways_thumb': (('curled',) * 4, 'up'), 'horns': (('straight', 'folded', 'folded', 'straight'), None),
+    'ok': (None, 'meet'), 'index': (('straight', 'folded', 'folded', 'folded'), 'tucked'),
+    'two': (('straight', 'straight', 'folded', 'folded'), 'tucked'),
+    'three': (('straight', 'straight', 'straight', 'folded'), 'over_pinky'),
+    'L': (('straight', 'folded', 'folded', 'folded'), 'open'),
+    'hang_loose': (('folded', 'folded', 'folded', 'straight'), 'up'),
+    'C': (('C',) * 4, 'C'), 'O': (('O',) * 4, 'meet'),
+}
+
+
+def _finger_chain(knuckle, length, flex, splay_deg):
+    """(4, 3) mcp, pip, dip, tip in the hand frame (palm widths): flexion turns the finger
+    from +z toward +y (out of the palm), splay fans it about y."""
+    s = math.radians(splay_deg)
+    pts = [knuckle]
+    a = 0.0
+    p = knuckle
+    for seg, f in zip(_PHALANX * length, flex):
+        a += math.radians(f)
+        d = np.array([math.sin(s) * math.cos(a), math.sin(a), math.cos(s) * math.cos(a)])
+        p = p + seg * d
+        pts.append(p)
+    return np.array(pts)
+
+
+def _thumb_chain(tip, rng):
+    """(4, 3) base, knuckle, IP joint, tip of a thumb ending at `tip` (palm widths); the
+    joints bow out of the palm a little."""
+    base = _THUMB_BASE
+    v = tip - base
+    bow = np.array([0.0, 1.0, 0.0]) * rng.uniform(0.05, 0.15)
+    return np.array([base, base + 0.45 * v + bow, base + 0.75 * v + 0.6 * bow, tip])
+
+
+def local_pose(person, pose, rng):
+    """(5, 4, 3) joints (mcp, pip, dip, tip; thumb first) in the hand frame, palm widths,
+    plus the true flexions (4, 3) of index..pinky."""
+    kinds, thumb = _SHAPES[pose]
+    loose = person.looseness
+    if pose == 'open':
+        kinds = (person.open_style if person.open_style == 'relaxed' else 'straight',) * 4
+    if pose == 'ok':
+        other = {'straight': 'straight', 'relaxed': 'relaxed', 'curled': 'C'}[person.ok_fingers]
+        kinds = ('pinching', other, other, other)
+    if pose == 'fist':
+        thumb = person.fist_thumb
+    if pose == 'horns':
+        thumb = 'tucked' if person.horns_thumb == 'folded' else 'open'
+    flex = np.array([_flex(rng, k, loose) for k in kinds])
+    splay = _SPLAY * (1.0 if pose in ('open', 'three', 'horns', 'two', 'hang_loose') else 0.3)
+    fingers = [_finger_chain(_KNUCKLES[i], person.lengths[i], flex[i], splay[i]) for i in range(4)]
+    u = rng.uniform
+    tl = person.thumb_length
+    if thumb in ('open', 'up'):
+        # out from the hand: thumbward, a little forward (up: nearly straight out)
+        a = math.radians(u(35, 65) if thumb == 'open' else u(0, 20))
+        tip = _THUMB_BASE + tl * np.array([math.cos(a), u(-0.05, 0.15), math.sin(a)])
+    elif thumb == 'tucked':       # across the curled index and middle
+        tip = np.array([u(-0.3, 0.15), u(0.45, 0.75), u(0.7, 1.0)])
+    elif thumb == 'over_pinky':   # holding the folded pinky down
+        tip = np.array([u(-0.5, -0.2), u(0.5, 0.8), u(0.8, 1.1)])
+    elif thumb == 'alongside':    # along the side of the curled index
+        tip = np.array([0.5 + u(0.1, 0.3), u(0.45, 0.75), u(1.05, 1.35)])
+    elif thumb == 'meet':         # at the index tip (OK sign, O)
+        d = rng.normal(size=3)
+        tip = fingers[0][3] + d / np.linalg.norm(d) * u(0.15, 0.4)
+    elif thumb == 'C':            # opposite the fingertips with an opening
+        tip = fingers[0][3] + np.array([u(0.0, 0.2), u(-0.1, 0.2), -u(0.9, 1.5)])
+    else:
+        raise ValueError(thumb)
+    joints = np.concatenate([_thumb_chain(tip, rng)[None], np.array(fingers)])
+    return joints, flex
+
+
+# -- orientation ----------------------------------------------------------------------------
+def _rot(axis, deg):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    a = math.radians(deg)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k
+
+
+def orientation(person, pose, rng):
+    """3x3 hand-frame -> Leap axes (columns thumbward, normal, direction)."""
+    sgn = 1.0 if person.side == 'right' else -1.0
+    # palm down, fingers away from the user: thumbward = -x (right hand), n = -y, d = -z
+    base = np.array([[-sgn, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]).T
+    d = np.array([0.0, 0.0, -1.0])
+    if pose in ('thumbs_up', 'thumbs_down', 'sideways_thumb'):
+        # Roll about the hand direction to put the thumbward axis up / down / level,
+        # then tilt a little either way.
+        roll = {'thumbs_up': -90.0, 'thumbs_down': 90.0}.get(pose, rng.choice([0.0, 180.0]))
+        r = _rot(d, -sgn * roll) @ base
+        tilt = rng.uniform(-20, 20) if pose != 'sideways_thumb' else rng.uniform(-15, 15)
+        r = _rot([1.0, 0.0, 0.0], rng.uniform(-20, 20)) @ _rot(d, tilt) @ r
+        return r
+    kind = rng.choice(['down', 'sideways', 'tilted'])
+    if kind == 'down':
+        return _rot([0, 1, 0], rng.uniform(-20, 20)) @ base
+    if kind == 'sideways':
+        return _rot([0, 1, 0], rng.uniform(-20, 20)) @ _rot(d, -sgn * 90.0 + rng.uniform(-15, 15)) @ base
+    return (_rot([0, 1, 0], rng.uniform(-30, 30)) @ _rot([1, 0, 0], rng.uniform(-60, 60))
+            @ _rot(d, rng.uniform(-60, 60)) @ base)
+
+
+# -- frames -----------------------------------------------------------------------------
+def _sdk_grab(flex):
+    """A tracker-like grab strength from the true finger flexions (0 open, 1 fist)."""
+    return float(np.clip((flex.sum(axis=1) / 230.0).mean(), 0.0, 1.0))
+
+
+def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
+    """[(Hand, timestamp)] of `person` holding `pose` for `frames` frames: one draw of the
+    pose and orientation, tremor and tracking noise per frame."""
+    joints, flex = local_pose(person, pose, rng)
+    rot = orientation(person, pose, rng)
+    if person.side == 'left':
+        joints = joints.copy()              # the hand frame's x is thumbward either side
+    s = person.palm_width
+    palm = np.array([rng.uniform(-80, 80), rng.uniform(150, 300), rng.uniform(-60, 60)])
+    mistracked = rng.integers(1, 5) if rng.random() < person.mistrack_rate else None
+    grab = _sdk_grab(flex)
+    out = []
+    for k in range(frames):
+        j = joints
+        if mistracked is not None and pose in ('open', 'ok', 'horns'):
+            j = joints.copy()
+            i = int(mistracked)
+            if pose == 'open' or (pose == 'horns' and i in (1, 4)) or (pose == 'ok' and i > 1):
+                j[i] = _finger_chain(_KNUCKLES[i - 1], person.lengths[i - 1],
+                                     _flex(rng, 'mistracked', 0.0), 0.0)
+        # tremor: a slow wobble of the whole hand, a degree or two
+        wob = _rot(rng.normal(size=3), rng.normal(0.0, 1.5)) @ rot
+        world = (j * s) @ wob.T + palm + rng.normal(0.0, person.tip_noise, j.shape)
+        n, d = wob[:, 1], wob[:, 2]
+        palm_seen = palm + rng.normal(0.0, person.palm_noise, 3)
+        fingers = []
+        for i in range(5):
+            w = world[i]
+            u = w[3] - w[2]
+            u = u / np.linalg.norm(u)
+            mcp, pip, dip = w[0], w[1], w[2]
+            if person.missing == 'knuckles':
+                mcp = None
+            elif person.missing == 'joints':
+                mcp = pip = dip = None
+            true_ext = i == 0 or flex[i - 1].sum() < 60
+            ext = true_ext if rng.random() > 0.05 else not true_ext
+            fingers.append(Finger(tip=w[3], direction=u, extended=bool(ext), mcp=mcp, pip=pip, dip=dip))
+        g = float(np.clip(grab + rng.normal(0, 0.04), 0, 1))
+        gap = np.linalg.norm(joints[0, 3] - joints[1, 3])
+        p = float(np.clip(1.0 - (gap - 0.3) / 0.8, 0.0, 1.0))
+        if person.missing == 'strengths':
+            g = p = math.nan
+        conf = float(rng.uniform(0.02, 0.3)) if rng.random() < person.dip_rate else float(rng.uniform(0.6, 1.0))
+        hand = Hand(side=person.side, palm_position=palm_seen, palm_normal=n, direction=d,
+                    grab_strength=g, pinch_strength=p, confidence=conf, fingers=tuple(fingers))
+        t = t0 + k / rate
+        out.append((hand, math.nan if person.missing == 'timestamps' else t))
+    return out
