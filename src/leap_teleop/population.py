@@ -217,8 +217,10 @@ def orientation(person, pose, rng):
 
 # -- frames -----------------------------------------------------------------------------
 def _sdk_grab(flex):
-    """A tracker-like grab strength from the true finger flexions (0 open, 1 fist)."""
-    return float(np.clip((flex.sum(axis=1) / 230.0).mean(), 0.0, 1.0))
+    """A tracker-like grab strength from the true finger flexions: 0 until the fingers
+    curl on average past ~70 deg in all (the Leap reports 0 for open hands and for a hand
+    with one finger bent 125 deg, 1 for fists), 1 from ~210 deg."""
+    return float(np.clip((flex.sum(axis=1).mean() - 70.0) / 140.0, 0.0, 1.0))
 
 
 def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
@@ -235,10 +237,10 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
     out = []
     for k in range(frames):
         j = joints
-        if mistracked is not None and pose in ('open', 'ok', 'horns'):
+        if mistracked is not None and pose == 'open':
             j = joints.copy()
             i = int(mistracked)
-            if pose == 'open' or (pose == 'horns' and i in (1, 4)) or (pose == 'ok' and i > 1):
+            if True:
                 j[i] = _finger_chain(_KNUCKLES[i - 1], person.lengths[i - 1],
                                      _flex(rng, 'mistracked', 0.0), 0.0)
         # tremor: a slow wobble of the whole hand, a degree or two

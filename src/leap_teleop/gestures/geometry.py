@@ -24,6 +24,9 @@ PALM_WIDTH_RANGE_MM = (25.0, 120.0)      # outside: the knuckles are mis-tracked
 # frame has no knuckles the thumb is measured from there).
 INDEX_KNUCKLE_THUMBWARD = 0.45
 
+# Signed flexion below this (deg) is a curl past 180, not a hyperextended finger.
+FLEX_WRAP_DEG = -60.0
+
 _NAN = math.nan
 _isfinite = math.isfinite
 _sqrt = math.sqrt
@@ -32,8 +35,9 @@ _sqrt = math.sqrt
 @dataclass
 class HandGeometry:
     """What the rules look at. NaN where the frame lacks the data."""
-    bend: Tuple[float, ...]     # 5 bends, degrees: the larger of distal bone vs hand
-                                # direction and distal vs proximal bone
+    bend: Tuple[float, ...]     # 5 bends, degrees: the larger of the distal bone's
+                                # flexion from the hand direction toward the palm
+                                # (-60..300) and its angle to the proximal bone
     chord: Tuple[float, ...]    # 5 tip-to-knuckle distances / the finger's bone length
     palm_width: float           # mm, the unit of the rest
     thumb_out: float            # palm widths: thumb tip thumbward of the index knuckle
@@ -142,7 +146,11 @@ def hand_geometry(hand):
                 if fd is not None:
                     ux, uy, uz = _unit(*fd)
             dirs.append((ux, uy, uz))
-            flex = _angle_deg(ux * dx + uy * dy + uz * dz)
+            # Signed in the plane of the hand direction and the palm normal (fingers curl
+            # toward the normal), so a fist's ~250 deg does not fold back to ~110.
+            flex = math.degrees(math.atan2(ux * nx + uy * ny + uz * nz, ux * dx + uy * dy + uz * dz))
+            if flex < FLEX_WRAP_DEG:
+                flex += 360.0
             curl = _NAN
             c = _NAN
             if pip is not None and mcp is not None:

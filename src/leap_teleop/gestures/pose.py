@@ -34,7 +34,10 @@ FIST_THUMB_NEAR = (1.0, 1.15)
 # Extended: nearly straight and pointing along the hand (a relaxed finger bends ~20 deg
 # per joint: chord ~0.95, bend ~50).
 EXTENDED_CHORD = (0.85, 0.8)
-EXTENDED_BEND = (70.0, 80.0)
+EXTENDED_BEND = (85.0, 95.0)
+# ... and an open hand's four fingers bend this little on average (a C shape bends each
+# finger about as far as a relaxed hand's most bent one, but all of them).
+OPEN_MEAN_BEND = (65.0, 75.0)
 # Thumbs-up needs the fingers deeper in the fist to start: every unfold passes through a
 # fist with the thumb already out while the fingers are still half-bent.
 THUMB_UP_CURLED_CHORD = (0.58, 0.72)
@@ -53,9 +56,11 @@ PINCH_GAP_CLOSED = 0.35
 PINCH_CHORD_MARGIN = 0.1
 PINCH_BEND_MARGIN = 15.0
 PINCH_MIDDLE_CLEAR = 0.9             # palm widths
-# Open with one finger reported bent: the tracker's grab strength must stay below this.
+PINCH_REST_BEND = (100.0, 110.0)     # an "O" bends every other finger more than this
+# Open with one finger reported bent: the thumb must be out (not holding that finger down,
+# as in a "three"), and the tracker's grab strength, when it gives one, below this.
 OPEN_FORGIVE_GRAB = 0.15
-OPEN_FORGIVE_THUMB_OUT = 0.2         # and the thumb must not be holding that finger
+OPEN_FORGIVE_THUMB_OUT = 0.2
 _VERT = tuple(math.cos(math.radians(a)) for a in THUMB_VERTICAL)
 _isfinite = math.isfinite
 
@@ -117,24 +122,26 @@ def classify_geometry(g, hand, active=None, opening=False):
             and _curled(chord[3], bend[3], FOLDED_CHORD, FOLDED_BEND))
     pinch = False
     gap = g.pinch_gap
-    if gap < PINCH_GAP[1 if 'pinch' in active else 0] and not (fist or thumb_up or thumb_down):
+    pk = 1 if 'pinch' in active else 0
+    if gap < PINCH_GAP[pk] and not (fist or thumb_up or thumb_down):
+        # Some other finger less curled than the index, or the middle tip clear of the
+        # thumb: not every finger rounded to the thumb as in an "O".
         c1 = chord[1]
         rest_c = max(chord[2], chord[3], chord[4])
-        if c1 == c1 and rest_c == rest_c:
-            pinch = rest_c > c1 + PINCH_CHORD_MARGIN or g.middle_gap > PINCH_MIDDLE_CLEAR
-        else:
-            b1, b2, b3, b4 = bend[1:]
-            rest = min(b2, b3, b4)
-            if _isfinite(b2 + b3 + b4):
-                pinch = (not _isfinite(b1) or b1 > rest + PINCH_BEND_MARGIN
-                         or not rest > CURLED_BEND[1] or g.middle_gap > PINCH_MIDDLE_CLEAR)
+        b1, b2, b3, b4 = bend[1:]
+        rest = min(b2, b3, b4)
+        pinch = (g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
+                 or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN)
     opn = False
-    if not pinch and not rock:
+    if not pinch and not rock and n_ext >= 3:
         grab = g.grab
+        b = [x for x in bend[1:] if x == x]
+        flat = len(b) == 4 and sum(b) < 4.0 * OPEN_MEAN_BEND[ext_k]
         if n_ext == 4:
-            opn = not grab > 0.8
-        elif n_ext == 3 and grab < OPEN_FORGIVE_GRAB and g.thumb_out > OPEN_FORGIVE_THUMB_OUT:
-            opn = True
+            opn = flat and not grab > 0.8
+        elif g.thumb_out > OPEN_FORGIVE_THUMB_OUT and not grab >= OPEN_FORGIVE_GRAB:
+            # mean over the three that look extended
+            opn = len(b) == 4 and sum(x for x, e in zip(b, ext[1:]) if e) < 3.0 * OPEN_MEAN_BEND[ext_k]
     value = 0.0
     if pinch:
         strength = num(hand.pinch_strength, -1.0)
