@@ -272,3 +272,76 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
         t = t0 + k / rate
         out.append((hand, math.nan if person.missing == 'timestamps' else t))
     return out
+
+
+# -- motions: what must and must not make a circle ----------------------------------------
+MOTIONS = ('swipe', 'tap', 'knob', 'translate', 'arc', 'circle')
+
+
+def motion_take(person, kind, rng, rate=60.0):
+    """[(Hand, timestamp)] of `person` making a motion with an open hand (a pinch-grip
+    for the knob): 'swipe' (a fast stroke across and a slow return), 'tap' (the index
+    tapping down and up), 'knob' (turning the hand about its axis back and forth),
+    'translate' (straight moves between random points), 'arc' (along at most half a
+    circle), 'circle' (the palm once round a hand-sized circle: the one that should fire)."""
+    u = rng.uniform
+    pose = 'ok' if kind == 'knob' else 'open'
+    joints, flex = local_pose(person, pose, rng)
+    rot = orientation(person, pose, rng)
+    start = np.array([u(-60, 60), u(180, 260), u(-40, 40)])
+    if kind == 'swipe':
+        dur = u(0.25, 0.4) + u(0.5, 0.8)
+    elif kind == 'circle':
+        dur = u(0.9, 1.5)
+    else:
+        dur = u(1.0, 2.0)
+    n = int(dur * rate)
+    t = np.arange(n) / rate
+    path = np.repeat(start[None], n, axis=0)
+    roll = np.zeros(n)
+    tap = np.zeros(n)
+    if kind == 'swipe':
+        d = rng.normal(size=3)
+        d[1] *= 0.3
+        d /= np.linalg.norm(d)
+        length, t_out = u(150, 350), u(0.25, 0.4)
+        s = np.where(t < t_out, t / t_out, 1.0 - (t - t_out) / (dur - t_out))
+        path = start + np.outer(np.clip(s, 0, 1) * length, d)
+    elif kind == 'tap':
+        f = u(2.0, 4.0)
+        tap = np.clip(np.sin(2 * np.pi * f * t), 0, None) * u(25, 45)
+    elif kind == 'knob':
+        f = u(0.8, 1.5)
+        roll = np.sin(2 * np.pi * f * t) * u(30, 70)
+    elif kind == 'translate':
+        pts = start + rng.uniform(-120, 120, (4, 3)) * np.array([1.0, 0.5, 1.0])
+        k = np.linspace(0, 3, n)
+        i = np.minimum(k.astype(int), 2)
+        w = (k - i)[:, None]
+        path = pts[i] * (1 - w) + pts[i + 1] * w
+    elif kind in ('arc', 'circle'):
+        r = u(80, 150) if kind == 'arc' else u(30, 80)
+        sweep = u(0.5, 1.0) * math.pi if kind == 'arc' else u(1.1, 1.4) * 2 * math.pi
+        a = np.linspace(0, sweep, n) * rng.choice([-1.0, 1.0])
+        path = start + r * np.stack([np.cos(a) - 1, np.zeros(n), np.sin(a)], axis=1)
+    s = person.palm_width
+    d_axis = rot[:, 2]
+    out = []
+    for k in range(n):
+        j = joints
+        if tap[k] > 0:
+            j = joints.copy()
+            f = flex[0] + np.array([tap[k], 0.6 * tap[k], 0.3 * tap[k]])
+            j[1] = _finger_chain(_KNUCKLES[0], person.lengths[0], f, 0.0)
+        r = _rot(d_axis, roll[k]) @ rot
+        world = (j * s) @ r.T + path[k] + rng.normal(0.0, person.tip_noise * 0.5, j.shape)
+        fingers = []
+        for i in range(5):
+            w = world[i]
+            dvec = (w[3] - w[2]) / np.linalg.norm(w[3] - w[2])
+            fingers.append(Finger(tip=w[3], direction=dvec, extended=True, mcp=w[0], pip=w[1], dip=w[2]))
+        hand = Hand(side=person.side, palm_position=path[k] + rng.normal(0.0, 1.0, 3),
+                    palm_normal=r[:, 1], direction=r[:, 2], grab_strength=0.0,
+                    pinch_strength=0.0, confidence=1.0, fingers=tuple(fingers))
+        out.append((hand, k / rate))
+    return out

@@ -39,6 +39,7 @@ CIRCLE_MIN_ACROSS = 0.7
 CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
 CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
 CIRCLE_MAX_DEVIATION = 0.6         # largest radial deviation / radius
+CIRCLE_MAX_CORNER = 2.5            # most turning in an eighth of the path / an even share
 CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
 PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
@@ -82,9 +83,10 @@ def fit_circle(pts):
 class _CircleTrack:
     """One point's path (the palm or a fingertip); see the circles section above."""
     __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
-                 'cross', 'length', 'speed', 'head', 'wait', 'v_max')
+                 'cross', 'length', 'speed', 'head', 'wait', 'v_max', 'check_corners')
 
-    def __init__(self, spacing, r_min, r_max, spans, v_max=math.inf):
+    def __init__(self, spacing, r_min, r_max, spans, v_max=math.inf, check_corners=False):
+        self.check_corners = check_corners
         self.spacing2 = spacing * spacing
         self.r_min, self.r_max, self.spans = r_min, r_max, spans
         self.v_max = v_max
@@ -220,7 +222,26 @@ class _CircleTrack:
         deviation = np.abs(np.sqrt(np.einsum('ij,ij->i', q, q)) - radius)
         if deviation.max() > CIRCLE_MAX_DEVIATION * radius:
             return None
+        # Palm: turning spread along the path, not gathered at corners: straight moves
+        # joined by turns (a hand moved between places) also close a round-enough loop.
+        # (Fingertip loops are a few mm: their heading is mostly jitter.)
+        if self.check_corners and _cornered(q, normal):
+            return None
         return (normal if sweep > 0 else -normal), radius, centre
+
+
+def _cornered(q, normal):
+    """Whether a path (points in the circle's plane, about its centre) turns at corners:
+    the most its heading turns within an eighth of the path exceeds CIRCLE_MAX_CORNER
+    times an even turning's share."""
+    step = np.diff(q, axis=0)
+    if len(step) < 16:
+        return False
+    head = np.arctan2(np.cross(step[:-1], step[1:]) @ normal, np.einsum('ij,ij->i', step[:-1], step[1:]))
+    total = abs(float(head.sum()))
+    m = max(2, len(head) // 8)
+    window = np.abs(np.convolve(head, np.ones(m), 'valid'))
+    return float(window.max()) > CIRCLE_MAX_CORNER * total * m / len(head)
 
 
 _ZERO3 = (0.0, 0.0, 0.0)
@@ -236,7 +257,8 @@ class CircleDetector:
 
     def __init__(self):
         palm, finger = CIRCLE_TRACKS
-        self.tracks = [_CircleTrack(*palm[1:])] + [_CircleTrack(*finger[1:]) for _ in range(5)]
+        self.tracks = ([_CircleTrack(*palm[1:], check_corners=True)]
+                       + [_CircleTrack(*finger[1:]) for _ in range(5)])
         self._last_event = -math.inf
         self._palm_smooth = None
 
