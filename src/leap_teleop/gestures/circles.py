@@ -234,9 +234,14 @@ def _cornered(q, normal):
     """Whether a path (points in the circle's plane, about its centre) turns at corners:
     the most its heading turns within an eighth of the path exceeds CIRCLE_MAX_CORNER
     times an even turning's share."""
-    step = np.diff(q, axis=0)
-    if len(step) < 16:
+    if len(q) < 24:
         return False
+    # Averaged over a twelfth of the path, 24 points round: headings above the jitter.
+    w = len(q) // 12
+    c = np.cumsum(np.vstack([np.zeros((1, 3)), q]), axis=0)
+    q = (c[w:] - c[:-w]) / w
+    q = q[np.linspace(0, len(q) - 1, 25).astype(int)]
+    step = np.diff(q, axis=0)
     head = np.arctan2(np.cross(step[:-1], step[1:]) @ normal, np.einsum('ij,ij->i', step[:-1], step[1:]))
     total = abs(float(head.sum()))
     m = max(2, len(head) // 8)
