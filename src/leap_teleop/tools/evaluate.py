@@ -154,10 +154,21 @@ def find_file(data_dir, take):
     return None
 
 
+_LOADED = {}
+
+
+def _load(path):
+    """The take's frame dicts, read once per process (the leave-one-take-out refits run
+    each take many times)."""
+    if path not in _LOADED:
+        _LOADED[path] = leapjs.load(path)[1]
+    return _LOADED[path]
+
+
 def run_take(path):
-    """Per frame: (index, side, recognizer state, original state, timestamp) for every
-    hand, plus the SDK circle gestures: {id: SdkCircle}."""
-    _, dicts = leapjs.load(path)
+    """Per frame: (index, side, recognizer state, original state, timestamp, Hand) for
+    every hand, plus the SDK circle gestures: {id: SdkCircle}."""
+    dicts = _load(path)
     recognizers = {}
     original = OriginalRules()
     rows = []
@@ -261,6 +272,36 @@ def same_place(event, c):
                for centre, radius in c.places)
 
 
+def score_take(take, rows):
+    """{'recognizer' / 'original': {gesture: [tp, fp, fn, n]}, 'forbidden': {who: frames
+    with a pinch or fist on a NO_PINCH_NO_FIST take}} over the take's labelled frames."""
+    counts = {who: {g: [0, 0, 0, 0] for g in GESTURES} for who in ('recognizer', 'original')}
+    forbidden = {'recognizer': 0, 'original': 0}
+    labels = LABELS.get(take, ())
+    for k, side, rec, orig, _, hand in rows:
+        for lside, frames, expect in labels:
+            if lside != side or k not in frames:
+                continue
+            for who, st in (('recognizer', rec), ('original', orig)):
+                for g, want in expect.items():
+                    want = expected(want, hand)
+                    if want is None:
+                        continue
+                    got = bool(getattr(st, g))
+                    c = counts[who][g]
+                    c[3] += 1
+                    if got and want:
+                        c[0] += 1
+                    elif got and not want:
+                        c[1] += 1
+                    elif want and not got:
+                        c[2] += 1
+                if take in NO_PINCH_NO_FIST and (st.pinch or st.fist):
+                    forbidden[who] += 1
+    counts['forbidden'] = forbidden
+    return counts
+
+
 def evaluate(data_dir=DEFAULT_DATA, verbose=True):
     counts = {who: {g: [0, 0, 0, 0] for g in GESTURES} for who in ('recognizer', 'original')}
     forbidden = {'recognizer': 0, 'original': 0}
@@ -274,31 +315,16 @@ def evaluate(data_dir=DEFAULT_DATA, verbose=True):
             if path is None:
                 missing.append(take)
         return runs[take]
-    for take, labels in LABELS.items():
+    for take in LABELS:
         run = take_run(take)
         if run is None:
             continue
-        rows, _ = run
-        for k, side, rec, orig, _, hand in rows:
-            for lside, frames, expect in labels:
-                if lside != side or k not in frames:
-                    continue
-                for who, st in (('recognizer', rec), ('original', orig)):
-                    for g, want in expect.items():
-                        want = expected(want, hand)
-                        if want is None:
-                            continue
-                        got = bool(getattr(st, g))
-                        c = counts[who][g]
-                        c[3] += 1
-                        if got and want:
-                            c[0] += 1
-                        elif got and not want:
-                            c[1] += 1
-                        elif want and not got:
-                            c[2] += 1
-                    if take in NO_PINCH_NO_FIST and (st.pinch or st.fist):
-                        forbidden[who] += 1
+        sc = score_take(take, run[0])
+        for who in counts:
+            for g in GESTURES:
+                for i in range(4):
+                    counts[who][g][i] += sc[who][g][i]
+            forbidden[who] += sc['forbidden'][who]
     results = {who: {g: _score(*counts[who][g]) for g in GESTURES} for who in counts}
     for who in results:
         results[who]['no_pinch_no_fist_violations'] = forbidden[who]
@@ -366,11 +392,23 @@ def main(argv=None):
     ap.add_argument('--data', default=os.environ.get('LEAPJS_DATA', DEFAULT_DATA),
                     help='folder of the LeapJS recordings (default %(default)s)')
     ap.add_argument('--out', default='eval_results.json')
+    ap.add_argument('--people', type=int, default=200,
+                    help='synthetic population size (0: skip it; default %(default)s)')
+    ap.add_argument('--seed', type=int, default=1, help='population seed (default %(default)s)')
+    ap.add_argument('--no-loto', action='store_true', help='skip the leave-one-take-out refits')
     args = ap.parse_args(argv)
     if not os.path.isdir(args.data):
         print('evaluate: no recordings folder at %s' % args.data, file=sys.stderr)
         return 2
     results = evaluate(args.data)
+    if not args.no_loto:
+        from . import evaluate_loto
+        results['leave_one_take_out'] = evaluate_loto.run(args.data)
+        evaluate_loto.print_table(results['leave_one_take_out'])
+    if args.people > 0:
+        from . import evaluate_population
+        results['population'] = evaluate_population.run(args.people, args.seed)
+        evaluate_population.print_table(results['population'])
     with open(args.out, 'w') as f:
         json.dump(results, f, indent=1, sort_keys=True)
     print('wrote %s' % args.out)
