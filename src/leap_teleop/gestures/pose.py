@@ -132,6 +132,8 @@ def classify_geometry(g, hand, active=None, opening=False):
         rest = min(b2, b3, b4)
         pinch = (g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
                  or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN)
+    # Horns never have the thumb on the index tip; a pinch with the pinky out does.
+    rock = rock and not pinch
     opn = False
     if not pinch and not rock and n_ext >= 3:
         grab = g.grab
