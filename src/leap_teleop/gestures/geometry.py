@@ -30,9 +30,12 @@ FLEX_WRAP_DEG = -60.0
 _NAN = math.nan
 _isfinite = math.isfinite
 _sqrt = math.sqrt
+_mdist = math.dist
+_atan2 = math.atan2
+_degrees = math.degrees
 
 
-@dataclass
+@dataclass(slots=True)
 class HandGeometry:
     """What the rules look at. NaN where the frame lacks the data."""
     bend: Tuple[float, ...]     # 5 bends, degrees: the larger of the distal bone's
@@ -86,14 +89,20 @@ def _dist(a, b):
     return _sqrt(x * x + y * y + z * z)
 
 
+_ndarray = np.ndarray
+
+
 def _joint(v):
     """A finite joint position or None (a missing or non-finite joint is not there)."""
     if v is None:
         return None
-    p = f3(v)
-    if p is None or not _isfinite(p[0] + p[1] + p[2]):
-        return None
-    return p
+    if v.__class__ is _ndarray and v.shape == (3,):
+        p = v.tolist()
+    else:
+        p = f3(v)
+        if p is None:
+            return None
+    return p if _isfinite(p[0] + p[1] + p[2]) else None
 
 
 def hand_geometry(hand):
@@ -128,46 +137,57 @@ def hand_geometry(hand):
         tx, ty, tz = s * (dy * nz - dz * ny), s * (dz * nx - dx * nz), s * (dx * ny - dy * nx)
         tips, bend, chord, mcps, pips = [], [], [], [], []
         dirs = []
-        for f in fingers:
+        for i, f in enumerate(fingers):
             tip = _joint(f.tip)
             if tip is None:
                 return None
             tips.append(tip)
+            ax, ay, az = tip
             dip, pip, mcp = _joint(f.dip), _joint(f.pip), _joint(f.mcp)
             mcps.append(mcp)
             pips.append(pip)
             # The distal bone (dip -> tip); the SDK's finger direction when the joint is
             # absent (it follows the middle bone on real captures: the second choice).
-            ux = uy = uz = _NAN
+            ux = _NAN
             if dip is not None:
-                ux, uy, uz = _unit(tip[0] - dip[0], tip[1] - dip[1], tip[2] - dip[2])
+                ux, uy, uz = ax - dip[0], ay - dip[1], az - dip[2]
+                ld = _sqrt(ux * ux + uy * uy + uz * uz)
+                if ld > 1e-3 and ld != math.inf:
+                    ux, uy, uz = ux / ld, uy / ld, uz / ld
+                else:
+                    ux = _NAN
             if ux != ux:
                 fd = _joint(f.direction)
-                if fd is not None:
-                    ux, uy, uz = _unit(*fd)
+                ux, uy, uz = _unit(*fd) if fd is not None else (_NAN, _NAN, _NAN)
             dirs.append((ux, uy, uz))
+            if i == 0:              # the rules read the thumb's position and direction only
+                bend.append(_NAN)
+                chord.append(_NAN)
+                continue
             # Signed in the plane of the hand direction and the palm normal (fingers curl
             # toward the normal), so a fist's ~250 deg does not fold back to ~110.
-            flex = math.degrees(math.atan2(ux * nx + uy * ny + uz * nz, ux * dx + uy * dy + uz * dz))
+            flex = _degrees(_atan2(ux * nx + uy * ny + uz * nz, ux * dx + uy * dy + uz * dz))
             if flex < FLEX_WRAP_DEG:
                 flex += 360.0
-            curl = _NAN
             c = _NAN
             if pip is not None and mcp is not None:
-                vx, vy, vz = _unit(pip[0] - mcp[0], pip[1] - mcp[1], pip[2] - mcp[2])
-                curl = _angle_deg(vx * ux + vy * uy + vz * uz)
-                if dip is not None:
-                    length = _dist(pip, mcp) + _dist(dip, pip) + _dist(tip, dip)
-                    if length > 1e-3:
-                        c = _dist(tip, mcp) / length
+                vx, vy, vz = pip[0] - mcp[0], pip[1] - mcp[1], pip[2] - mcp[2]
+                lp = _sqrt(vx * vx + vy * vy + vz * vz)
+                if lp > 1e-3:
+                    curl = _angle_deg((vx * ux + vy * uy + vz * uz) / lp)
+                    if curl > flex:                 # the larger of the two (NaN loses)
+                        flex = curl
+                    if dip is not None:
+                        length = lp + _mdist(dip, pip) + ld
+                        if length > 1e-3:
+                            c = _mdist(tip, mcp) / length
             chord.append(c)
-            # the larger of the two (like np.fmax: a NaN loses)
-            bend.append(flex if curl != curl else curl if flex != flex or curl > flex else flex)
+            bend.append(flex)
         # Palm width from the index and pinky knuckles, when they are there and plausible.
         width = NOMINAL_PALM_WIDTH_MM
         im, pm = mcps[1], mcps[4]
         if im is not None and pm is not None:
-            w = _dist(im, pm)
+            w = _mdist(im, pm)
             if PALM_WIDTH_RANGE_MM[0] <= w <= PALM_WIDTH_RANGE_MM[1]:
                 width = w
         inv = 1.0 / width
