@@ -47,6 +47,8 @@ class HandGeometry:
     thumb_dir: tuple            # unit (x, y, z), Leap axes: where the thumb points
     pinch_gap: float            # palm widths, thumb tip to index tip
     middle_gap: float           # palm widths, thumb tip to middle tip
+    thumb_to_fingers: float     # palm widths, thumb tip to the nearest index / middle
+                                # joint (pip, dip, tip)
     grab: float                 # the tracker's grab strength 0..1, NaN when absent
     tips_world: list            # 5 [x, y, z] fingertips, mm, Leap axes
     basis: tuple                # rows: thumbward, normal, direction (Leap axes), unit
@@ -82,11 +84,6 @@ def _angle_deg(c):
     if c != c:
         return _NAN
     return math.degrees(math.acos(1.0 if c > 1.0 else -1.0 if c < -1.0 else c))
-
-
-def _dist(a, b):
-    x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-    return _sqrt(x * x + y * y + z * z)
 
 
 _ndarray = np.ndarray
@@ -135,7 +132,7 @@ def hand_geometry(hand):
         # thumbward = d x n for a right hand, its negative for a left one
         s = -1.0 if hand.side == 'left' else 1.0
         tx, ty, tz = s * (dy * nz - dz * ny), s * (dz * nx - dx * nz), s * (dx * ny - dy * nx)
-        tips, bend, chord, mcps, pips = [], [], [], [], []
+        tips, bend, chord, mcps, pips, dips = [], [], [], [], [], []
         dirs = []
         for i, f in enumerate(fingers):
             tip = _joint(f.tip)
@@ -146,6 +143,7 @@ def hand_geometry(hand):
             dip, pip, mcp = _joint(f.dip), _joint(f.pip), _joint(f.mcp)
             mcps.append(mcp)
             pips.append(pip)
+            dips.append(dip)
             # The distal bone (dip -> tip); the SDK's finger direction when the joint is
             # absent (it follows the middle bone on real captures: the second choice).
             ux = _NAN
@@ -210,6 +208,9 @@ def hand_geometry(hand):
     except (TypeError, ValueError, AttributeError, IndexError, OverflowError):
         return None
     return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
-                        thumb_dir=thumb_dir, pinch_gap=_dist(th, ix) * inv,
-                        middle_gap=_dist(th, tips[2]) * inv, grab=grab, tips_world=tips,
+                        thumb_dir=thumb_dir, pinch_gap=_mdist(th, ix) * inv,
+                        middle_gap=_mdist(th, tips[2]) * inv,
+                        thumb_to_fingers=min(_mdist(th, j) for j in (
+                            ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None) * inv,
+                        grab=grab, tips_world=tips,
                         basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)

@@ -29,8 +29,9 @@ CURLED_BEND = (95.0, 85.0)
 # Folded enough for rock's middle and ring (a horns hand rarely folds them as deep).
 FOLDED_CHORD = 0.8
 FOLDED_BEND = 85.0
-# Thumb tip to the nearer of the index and middle tips in a fist (palm widths): ~0.3..0.8.
-FIST_THUMB_NEAR = (1.0, 1.15)
+# Thumb tip to the nearest index / middle joint in a fist (palm widths): ~0.2..0.8; in a
+# C it faces the fingertips across an opening.
+FIST_THUMB_NEAR = (0.9, 1.05)
 # Extended: nearly straight and pointing along the hand (a relaxed finger bends ~20 deg
 # per joint: chord ~0.95, bend ~50).
 EXTENDED_CHORD = (0.85, 0.8)
@@ -43,8 +44,9 @@ OPEN_MEAN_BEND = (65.0, 75.0)
 THUMB_UP_CURLED_CHORD = (0.58, 0.72)
 THUMB_UP_CURLED_BEND = (110.0, 85.0)
 # Thumb tip thumbward of the index knuckle, palm widths: tucked < 0, alongside the index
-# ~0.1..0.4, out (thumbs-up) ~0.5..1.3.
-THUMB_OUT = (0.45, 0.4)
+# ~0.1..0.4 (the shared takes: a thumb 0.41..0.46 out is already leaving the fist), out
+# (thumbs-up) ~0.5..1.3.
+THUMB_OUT = (0.4, 0.35)
 # Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
 THUMB_VERTICAL = (45.0, 55.0)
 # Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
@@ -114,7 +116,7 @@ def classify_geometry(g, hand, active=None, opening=False):
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
     # as in a C.
-    near = min(g.pinch_gap, g.middle_gap) < FIST_THUMB_NEAR[k]
+    near = g.thumb_to_fingers < FIST_THUMB_NEAR[k]
     fist = curled and not out and near
     thumb_up = thumb_curled and out and ty > vert and ('thumb_up' in active or not opening)
     thumb_down = thumb_curled and out and ty < -vert
