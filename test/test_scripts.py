@@ -39,7 +39,7 @@ BAD_PARAMS = [
     ('drone_subscriber.py', ['_hand_timeout:=.nan'], '~hand_timeout = nan: not finite'),
     ('drone_subscriber.py', ['_hand_timeout:=nan'], "~hand_timeout = 'nan': not a number"),
     ('drone_subscriber.py', ['_land_after:=.inf'], '~land_after = inf: not finite'),
-    ('drone_subscriber.py', ['_land_after:=1e9'], '~land_after = 1000000000.0: out of range'),
+    ('drone_subscriber.py', ['_land_after:=1000000.0'], '~land_after = 1000000.0: out of range'),
     ('drone_subscriber.py', ['_navdata_timeout:=0'], '~navdata_timeout = 0: out of range'),
     ('ur10_sim.py', ['_realtime_factor:=-1'], '~realtime_factor = -1: out of range'),
     ('ur10_sim.py', ['_snapshot_size:=[640]'], '~snapshot_size = [640]: 1 items'),
