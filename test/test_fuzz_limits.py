@@ -35,8 +35,24 @@ def test_stream_drops_out_of_order_and_late_messages_but_not_a_constant_offset()
     # A backlog: messages keep coming (no silence) but fall ever further behind.
     verdicts = [s.check(50.02 + 0.01 * k, 100.02 + 0.09 * k) for k in range(10)]
     assert verdicts[:4] == [None] * 4 and all('late' in v for v in verdicts[4:])
-    # Only a real silence (sender restarted, bag replayed again) starts a new stream.
-    assert s.check(50.2, 101.2) is None
+    # A silence, then the same timeline still late: a stalled source's backlog, refused.
+    assert 'late' in s.check(50.2, 101.2)
+    # Only a real restart (fresh stamps, or a bag replayed again) starts a new stream.
+    assert s.check(51.45, 101.5) is None
+    assert s.check(1.0, 102.0) is None
+
+
+def test_found_backlog_burst_after_a_stall_passes_only_its_last_max_age():
+    # Before: the silence of the stall reset the stream, so a 2 s old backlog was accepted.
+    s = InputStream(max_age=0.25, gap=0.2)
+    for k in range(100):                       # 100 Hz, 5 ms latency
+        assert s.check(10.0 + 0.01 * k, 10.005 + 0.01 * k) is None
+    # Stall 2 s, then the 200 messages captured meanwhile arrive within 0.1 s.
+    verdicts = [(stamp, s.check(stamp, 13.0 + 0.0005 * k))
+                for k, stamp in enumerate(11.0 + 0.01 * np.arange(200))]
+    passed = [stamp for stamp, why in verdicts if why is None]
+    assert passed and all(13.1 - stamp <= 0.25 + 0.005 + 0.1 for stamp in passed)
+    assert len(passed) <= 30 and all('late' in why for _, why in verdicts[:150])
 
 
 def test_stream_restarts_after_silence_or_a_clock_jump():

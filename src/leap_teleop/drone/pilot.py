@@ -332,8 +332,7 @@ class DronePilot:
                 if state == LANDED:
                     self.queue.push(Command('takeoff', stamp=now))
                 elif state is None:
-                    self._warn('unfold', 'unfold: no takeoff, no navdata for %s'
-                               % self._navdata_age(now))
+                    self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
                 else:
                     self._warn('unfold', 'unfold: no takeoff, the drone is not landed (state %s)'
                                % state)
@@ -388,10 +387,10 @@ class DronePilot:
                 0.0, 0.0,
                 -shaped(dyaw, cfg.yaw_dead_zone, cfg.yaw_full_scale, cap))
 
-    def _navdata_age(self, now):
+    def _no_navdata(self, now):
         if self.last_navdata_time is None:
-            return 'ever'
-        return '%.2f s' % (now - self.last_navdata_time)
+            return 'no navdata yet'
+        return 'no navdata for %.2f s' % (now - self.last_navdata_time)
 
     # -- watchdog ----------------------------------------------------------------------
     def _lose(self, now):
@@ -438,8 +437,7 @@ class DronePilot:
         if self.navdata_lost_since is None:
             self.navdata_lost_since = now
             self._last_hover = None
-            self._warn('navdata', 'no navdata for %s: drone state unknown, hovering'
-                       % self._navdata_age(now))
+            self._warn('navdata', '%s: drone state unknown, hovering' % self._no_navdata(now))
         if self.drone_state == LANDED or self._landed_for_navdata:
             return
         if self._last_hover is None or not 0.0 <= now - self._last_hover < HOVER_REPEAT:
