@@ -47,10 +47,10 @@ class PushQueue:
         self._leak = leak            # s per s the offset may drift (device vs host clock)
 
     def stamp(self, device_us):
-        """Map a device timestamp (us) onto the clock. The mapping follows the frames that
-        arrived with the least delay (a slowly leaking minimum absorbs clock drift), so a
-        backlog delivered late keeps its capture time and reads as old; a device clock
-        that jumps back (device restart) or an absurd offset re-syncs."""
+        """Map a device timestamp (us) onto the clock, keeping the device's spacing. Late
+        frames move the mapping only slowly (it absorbs clock drift), so a backlog
+        delivered late keeps its capture time and reads as old; a device clock that
+        jumps back (device restart), runs > 0.2 s ahead or an absurd offset re-syncs."""
         now = self.clock()
         try:
             dev = float(device_us) * 1e-6
@@ -59,10 +59,10 @@ class PushQueue:
         if not math.isfinite(dev):
             return now
         offset = now - dev
-        if (self._offset is None or dev < self._last_dev or offset < self._offset
+        if (self._offset is None or dev < self._last_dev or offset < self._offset - 0.2
                 or offset - self._offset > 60.0 or now < self._last_now):
-            self._offset = offset
-        else:
+            self._offset = offset         # first frame, device restart or clock jump
+        elif offset > self._offset:       # a late frame moves the mapping only slowly
             self._offset = min(offset, self._offset + self._leak * (now - self._last_now))
         self._last_dev, self._last_now = dev, now
         return self._offset + dev
