@@ -34,6 +34,8 @@ BAD_PARAMS = [
     ('ur10_arm.py', ['_input_timeout:=.nan'], '~input_timeout = nan: not finite'),
     ('ur10_arm.py', ['_workspace_min:=[0, 0]'], '~workspace_min = [0, 0]: 2 items'),
     ('hand_markers.py', ['_max_rate:=fast'], "~max_rate = 'fast': not a number"),
+    ('hand_markers.py', ['_hand_topics:=[]'], '~hand_topics = []: 0 items'),
+    ('hand_markers.py', ['_scale:=0'], '~scale = 0: out of range'),
     ('drone_subscriber.py', ['_mode:=loop'], "~mode = 'loop': not one of the choices"),
     ('drone_subscriber.py', ['_flip_type:=42'], '~flip_type = 42: out of range'),
     ('drone_subscriber.py', ['_hand_timeout:=.nan'], '~hand_timeout = nan: not finite'),

@@ -50,6 +50,7 @@ PARAMS = {
                            ge=16, le=4096),
 }
 
+MAX_PENDING = 100               # commands queued for the physics loop (bounded)
 SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
 KINDS = {'arm': ('arm_controller/command', ARM_JOINTS),
          'gripper': ('gripper/command', GRIPPER_JOINTS)}
@@ -64,6 +65,7 @@ class UR10SimNode:
         self.render_lock = threading.Lock()        # one snapshot at a time
         self.renderer = SnapshotRenderer(self.cell.config)
         self.pending = collections.deque()         # validated commands for the loop
+        self.dropped_commands = 0
         self.log = RateLimitedLog(2.0)
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
@@ -91,6 +93,11 @@ class UR10SimNode:
         except CommandError as e:
             self._reject(arm, kind, e)
             return
+        if len(self.pending) >= MAX_PENDING:       # the loop stalled: newer commands win
+            self.pending.popleft()
+            self.dropped_commands += 1
+            self.log.warn('pending', 'ur10_sim: %d command(s) dropped, the physics loop is '
+                          'behind', self.dropped_commands)
         self.pending.append((arm, kind, points, stamp))
 
     def _reject(self, arm, kind, why):
