@@ -1,9 +1,12 @@
 """Bad input and property-based fuzzing: whatever arrives, nothing raises and no command
-leaves the joint, workspace, gripper or tilt limits. Also the stream checks (out of order,
-late, restarts) behind the fault rostests (test/fault_*.test).
+leaves the joint, workspace, gripper or tilt limits; any accepted watchdog setting still
+hovers, lands and disarms. Also the stream checks (out of order, late, restarts, backlog
+bursts), the pilot's worker and the live sources' queue behind the fault rostests
+(test/fault_*.test).
 
-Example budget (per `make test` run): 3000 + 2500 + 3000 here, on top of 3000 in
-test_arm_teleop.py and ~400 in test_gesture_recognizer.py / test_classify_frames.py.
+Example budget (per `make test` run): 3000 + 2500 + 3000 + 150 + 100 here, on top of 3000
+in test_arm_teleop.py, 1500 in test_params.py and ~400 in test_gesture_recognizer.py /
+test_classify_frames.py.
 """
 import logging
 import math
