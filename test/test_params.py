@@ -178,3 +178,19 @@ def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():
         for value in (math.nan, math.inf, 0.0, -5.0):
             with pytest.raises(ValueError):
                 ArmTeleop(ArmTeleopParams(**{key: value}))
+
+
+@pytest.mark.parametrize('key, value', [('physics_hz', 0), ('physics_hz', math.nan),
+                                        ('physics_hz', 'fast'), ('cube_size', -0.05),
+                                        ('cube_mass', math.inf)])
+def test_cell_config_scalars_are_checked(key, value):
+    # A physics rate of 0 divided by zero when the cell started; NaN corrupted the physics.
+    import yaml
+    from leap_teleop.ur10.config import config_path, load_config, parse_config
+    with open(config_path('ur10_cell.yaml')) as f:
+        data = yaml.safe_load(f)
+    assert load_config('ur10_cell.yaml').physics_hz == data['physics_hz']
+    data[key] = value
+    with pytest.raises(ValueError) as e:
+        parse_config(data, 'cell.yaml')
+    assert ('%s = ' % key) in str(e.value) and 'allowed' in str(e.value)
