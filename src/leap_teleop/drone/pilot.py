@@ -29,8 +29,10 @@ Modes:
   value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
   Nothing is sent before the first capture.
 
-Safety added in both modes: hand twists are only sent while the drone flies or hovers
-(when navdata is known); hand lost (Hand.present false, a hand_lost event, or no Hand
+Safety added in both modes: hand twists are only sent while fresh navdata (no older
+than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
+says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
+the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present false, a hand_lost event, or no Hand
 message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
