@@ -49,6 +49,7 @@ class HandGeometry:
     middle_gap: float           # palm widths, thumb tip to middle tip
     thumb_to_fingers: float     # palm widths, thumb tip to the nearest index / middle
                                 # joint (pip, dip, tip)
+    finger_joints: bool         # index and middle pip and dip are there
     grab: float                 # the tracker's grab strength 0..1, NaN when absent
     tips_world: list            # 5 [x, y, z] fingertips, mm, Leap axes
     basis: tuple                # rows: thumbward, normal, direction (Leap axes), unit
@@ -212,5 +213,6 @@ def hand_geometry(hand):
                         middle_gap=_mdist(th, tips[2]) * inv,
                         thumb_to_fingers=min(_mdist(th, j) for j in (
                             ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None) * inv,
+                        finger_joints=None not in (pips[1], pips[2], dips[1], dips[2]),
                         grab=grab, tips_world=tips,
                         basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)

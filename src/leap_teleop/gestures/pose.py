@@ -32,6 +32,7 @@ FOLDED_BEND = 85.0
 # Thumb tip to the nearest index / middle joint in a fist (palm widths): ~0.2..0.8; in a
 # C it faces the fingertips across an opening.
 FIST_THUMB_NEAR = (0.9, 1.05)
+FIST_GRAB_WITHOUT_JOINTS = 0.9
 # Extended: nearly straight and pointing along the hand (a relaxed finger bends ~20 deg
 # per joint: chord ~0.95, bend ~50).
 EXTENDED_CHORD = (0.85, 0.8)
@@ -115,8 +116,10 @@ def classify_geometry(g, hand, active=None, opening=False):
     ty = g.thumb_dir[1]
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
-    # as in a C.
-    near = g.thumb_to_fingers < FIST_THUMB_NEAR[k]
+    # as in a C. Without the finger joints (tips only) an alongside thumb is as far from
+    # the tips as a C's: then a tracker's grab strength near 1 decides.
+    near = (g.thumb_to_fingers < FIST_THUMB_NEAR[k]
+            or (not g.finger_joints and g.grab >= FIST_GRAB_WITHOUT_JOINTS))
     fist = curled and not out and near
     thumb_up = thumb_curled and out and ty > vert and ('thumb_up' in active or not opening)
     thumb_down = thumb_curled and out and ty < -vert
