@@ -112,7 +112,7 @@ def test_main_writes_the_json(tmp_path):
 def test_paddle_thumb_labels_follow_the_sdk_thumb_direction():
     rows, _ = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, 'test-paddle-rightwards'))
     labels = evaluate.LABELS['test-paddle-rightwards'][:3]
-    verdicts = [evaluate.expected(e['thumb_up'], r[5]) for r in rows for _, fr, e in labels
+    verdicts = [evaluate.expected(e['thumb_up'], r.hand) for r in rows for _, fr, e in labels
                 if r[0] in fr]
     # thumb up, sideways (> 60 deg off vertical) and in between all occur on this take
     assert verdicts.count(True) == 30 and verdicts.count(False) == 41 and None in verdicts

@@ -157,6 +157,12 @@ def find_file(data_dir, take):
 _LOADED = {}
 
 
+class Row(tuple):
+    """(frame index, side, recognizer state, original state, timestamp); .hand: the Hand
+    judged (the labels' thumb direction reads it)."""
+    hand = None
+
+
 def _load(path):
     """The take's frame dicts, read once per process (the leave-one-take-out refits run
     each take many times)."""
@@ -166,8 +172,8 @@ def _load(path):
 
 
 def run_take(path):
-    """Per frame: (index, side, recognizer state, original state, timestamp, Hand) for
-    every hand, plus the SDK circle gestures: {id: SdkCircle}."""
+    """Per frame: a Row (index, side, recognizer state, original state, timestamp; .hand)
+    for every hand, plus the SDK circle gestures: {id: SdkCircle}."""
     dicts = _load(path)
     recognizers = {}
     original = OriginalRules()
@@ -190,7 +196,9 @@ def run_take(path):
             first_seen.setdefault(hand.side, frame.timestamp)
             rec = recognizers.setdefault(hand.side, GestureRecognizer())
             state = rec.update(hand, frame.timestamp)
-            rows.append((k, hand.side, state, original.classify(hand), frame.timestamp, hand))
+            row = Row((k, hand.side, state, original.classify(hand), frame.timestamp))
+            row.hand = hand
+            rows.append(row)
         for side, rec in recognizers.items():
             if side not in seen:
                 rec.reset()
@@ -278,7 +286,9 @@ def score_take(take, rows):
     counts = {who: {g: [0, 0, 0, 0] for g in GESTURES} for who in ('recognizer', 'original')}
     forbidden = {'recognizer': 0, 'original': 0}
     labels = LABELS.get(take, ())
-    for k, side, rec, orig, _, hand in rows:
+    for row in rows:
+        k, side, rec, orig, _ = row
+        hand = row.hand
         for lside, frames, expect in labels:
             if lside != side or k not in frames:
                 continue
