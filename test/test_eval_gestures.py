@@ -9,7 +9,8 @@ from leap_teleop.tools import evaluate
 
 @pytest.fixture(autouse=True, scope='module')
 def data():
-    assert os.path.isdir(evaluate.DEFAULT_DATA), 'no recordings at %s (set LEAPJS_DATA)' % evaluate.DEFAULT_DATA
+    assert os.path.isdir(evaluate.DEFAULT_DATA), \
+        'no recordings at %s (set LEAPJS_DATA)' % evaluate.DEFAULT_DATA
 
 
 @pytest.fixture(scope='module')

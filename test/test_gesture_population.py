@@ -124,7 +124,8 @@ def test_population_is_seeded_and_spans_adult_hands():
                and x.missing == y.missing for x, y in zip(a, b))
     widths = np.array([x.palm_width for x in a])
     assert widths.min() <= 0.62 * 74 and widths.max() >= 0.62 * 95
-    for attr, values in (('fist_thumb', {'tucked', 'alongside'}), ('horns_thumb', {'folded', 'out'}),
+    for attr, values in (('fist_thumb', {'tucked', 'alongside'}),
+                         ('horns_thumb', {'folded', 'out'}),
                          ('missing', {'', 'knuckles', 'joints', 'strengths', 'timestamps'}),
                          ('side', {'right', 'left'})):
         assert {getattr(x, attr) for x in a} == values

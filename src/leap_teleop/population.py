@@ -110,7 +110,8 @@ def _flex(rng, kind, loose):
 _SHAPES = {   # pose -> (finger kinds index..pinky, thumb placement)
     'open': (None, 'open'), 'fist': (('curled',) * 4, None),
     'thumbs_up': (('curled',) * 4, 'up'), 'thumbs_down': (('curled',) * 4, 'up'),
-    'sideways_thumb': (('curled',) * 4, 'up'), 'horns': (('straight', 'folded', 'folded', 'straight'), None),
+    'sideways_thumb': (('curled',) * 4, 'up'),
+    'horns': (('straight', 'folded', 'folded', 'straight'), None),
     'ok': (None, 'meet'), 'index': (('straight', 'folded', 'folded', 'folded'), 'tucked'),
     'two': (('straight', 'straight', 'folded', 'folded'), 'tucked'),
     'three': (('straight', 'straight', 'straight', 'folded'), 'over_pinky'),
@@ -210,7 +211,8 @@ def orientation(person, pose, rng):
     if kind == 'down':
         return _rot([0, 1, 0], rng.uniform(-20, 20)) @ base
     if kind == 'sideways':
-        return _rot([0, 1, 0], rng.uniform(-20, 20)) @ _rot(d, -sgn * 90.0 + rng.uniform(-15, 15)) @ base
+        return (_rot([0, 1, 0], rng.uniform(-20, 20))
+                @ _rot(d, -sgn * 90.0 + rng.uniform(-15, 15)) @ base)
     return (_rot([0, 1, 0], rng.uniform(-30, 30)) @ _rot([1, 0, 0], rng.uniform(-60, 60))
             @ _rot(d, rng.uniform(-60, 60)) @ base)
 
@@ -228,8 +230,6 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
     pose and orientation, tremor and tracking noise per frame."""
     joints, flex = local_pose(person, pose, rng)
     rot = orientation(person, pose, rng)
-    if person.side == 'left':
-        joints = joints.copy()              # the hand frame's x is thumbward either side
     s = person.palm_width
     palm = np.array([rng.uniform(-80, 80), rng.uniform(150, 300), rng.uniform(-60, 60)])
     mistracked = rng.integers(1, 5) if rng.random() < person.mistrack_rate else None
@@ -240,9 +240,8 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
         if mistracked is not None and pose == 'open':
             j = joints.copy()
             i = int(mistracked)
-            if True:
-                j[i] = _finger_chain(_KNUCKLES[i - 1], person.lengths[i - 1],
-                                     _flex(rng, 'mistracked', 0.0), 0.0)
+            j[i] = _finger_chain(_KNUCKLES[i - 1], person.lengths[i - 1],
+                                 _flex(rng, 'mistracked', 0.0), 0.0)
         # tremor: a slow wobble of the whole hand, a degree or two
         wob = _rot(rng.normal(size=3), rng.normal(0.0, 1.5)) @ rot
         world = (j * s) @ wob.T + palm + rng.normal(0.0, person.tip_noise, j.shape)
@@ -260,13 +259,15 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
                 mcp = pip = dip = None
             true_ext = i == 0 or flex[i - 1].sum() < 60
             ext = true_ext if rng.random() > 0.05 else not true_ext
-            fingers.append(Finger(tip=w[3], direction=u, extended=bool(ext), mcp=mcp, pip=pip, dip=dip))
+            fingers.append(Finger(tip=w[3], direction=u, extended=bool(ext), mcp=mcp, pip=pip,
+                                  dip=dip))
         g = float(np.clip(grab + rng.normal(0, 0.04), 0, 1))
         gap = np.linalg.norm(joints[0, 3] - joints[1, 3])
         p = float(np.clip(1.0 - (gap - 0.3) / 0.8, 0.0, 1.0))
         if person.missing == 'strengths':
             g = p = math.nan
-        conf = float(rng.uniform(0.02, 0.3)) if rng.random() < person.dip_rate else float(rng.uniform(0.6, 1.0))
+        dipped = rng.random() < person.dip_rate
+        conf = float(rng.uniform(0.02, 0.3) if dipped else rng.uniform(0.6, 1.0))
         hand = Hand(side=person.side, palm_position=palm_seen, palm_normal=n, direction=d,
                     grab_strength=g, pinch_strength=p, confidence=conf, fingers=tuple(fingers))
         t = t0 + k / rate
@@ -339,7 +340,8 @@ def motion_take(person, kind, rng, rate=60.0):
         for i in range(5):
             w = world[i]
             dvec = (w[3] - w[2]) / np.linalg.norm(w[3] - w[2])
-            fingers.append(Finger(tip=w[3], direction=dvec, extended=True, mcp=w[0], pip=w[1], dip=w[2]))
+            fingers.append(Finger(tip=w[3], direction=dvec, extended=True, mcp=w[0], pip=w[1],
+                                  dip=w[2]))
         hand = Hand(side=person.side, palm_position=path[k] + rng.normal(0.0, 1.0, 3),
                     palm_normal=r[:, 1], direction=r[:, 2], grab_strength=0.0,
                     pinch_strength=0.0, confidence=1.0, fingers=tuple(fingers))

@@ -242,7 +242,8 @@ def _cornered(q, normal):
     q = (c[w:] - c[:-w]) / w
     q = q[np.linspace(0, len(q) - 1, 25).astype(int)]
     step = np.diff(q, axis=0)
-    head = np.arctan2(np.cross(step[:-1], step[1:]) @ normal, np.einsum('ij,ij->i', step[:-1], step[1:]))
+    head = np.arctan2(np.cross(step[:-1], step[1:]) @ normal,
+                      np.einsum('ij,ij->i', step[:-1], step[1:]))
     total = abs(float(head.sum()))
     m = max(2, len(head) // 8)
     window = np.abs(np.convolve(head, np.ones(m), 'valid'))

@@ -211,8 +211,9 @@ def hand_geometry(hand):
     return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
                         thumb_dir=thumb_dir, pinch_gap=_mdist(th, ix) * inv,
                         middle_gap=_mdist(th, tips[2]) * inv,
-                        thumb_to_fingers=min(_mdist(th, j) for j in (
-                            ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None) * inv,
+                        thumb_to_fingers=min(
+                            _mdist(th, j) for j in (ix, tips[2], pips[1], pips[2], dips[1], dips[2])
+                            if j is not None) * inv,
                         finger_joints=None not in (pips[1], pips[2], dips[1], dips[2]),
                         grab=grab, tips_world=tips,
                         basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)

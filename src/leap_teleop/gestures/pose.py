@@ -148,7 +148,8 @@ def classify_geometry(g, hand, active=None, opening=False):
             opn = flat and not grab > 0.8
         elif g.thumb_out > OPEN_FORGIVE_THUMB_OUT and not grab >= OPEN_FORGIVE_GRAB:
             # mean over the three that look extended
-            opn = len(b) == 4 and sum(x for x, e in zip(b, ext[1:]) if e) < 3.0 * OPEN_MEAN_BEND[ext_k]
+            opn = (len(b) == 4
+                   and sum(x for x, e in zip(b, ext[1:]) if e) < 3.0 * OPEN_MEAN_BEND[ext_k])
     value = 0.0
     if pinch:
         strength = num(hand.pinch_strength, -1.0)

@@ -67,8 +67,9 @@ from ..gestures import FINGER_NAMES, GestureRecognizer
 from .original_rules import OriginalRules
 from ..sources import leapjs
 
-DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
-                                             'shared', 'data', 'leapjs'))
+DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.normpath(
+    os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
+                 'shared', 'data', 'leapjs'))
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 ALL = range(0, 10 ** 6)
 

@@ -55,7 +55,8 @@ def run(data_dir=evaluate.DEFAULT_DATA):
         with contextlib.ExitStack() as stack:
             for name, f in choice.items():
                 stack.enter_context(scaled(name, f))
-            res = evaluate.score_take(held, evaluate.run_take(evaluate.find_file(data_dir, held))[0])
+            rows = evaluate.run_take(evaluate.find_file(data_dir, held))[0]
+            res = evaluate.score_take(held, rows)
         for g, c in res['recognizer'].items():
             for i in range(4):
                 pooled[g][i] += c[i]
@@ -68,6 +69,7 @@ def print_table(res):
     print('leave-one-take-out (%d labelled takes; thresholds %s refitted from x%s):'
           % (len(res['takes']), ', '.join(res['fitted']), '/'.join(str(f) for f in res['factors'])))
     for g, r in res['held_out'].items():
-        print('  %-10s held-out P / R %5.3f / %5.3f (%d)' % (g, r['precision'], r['recall'], r['n']))
+        print('  %-10s held-out P / R %5.3f / %5.3f (%d)'
+              % (g, r['precision'], r['recall'], r['n']))
     moved = {t: {k: v for k, v in c.items() if v != 1.0} for t, c in res['chosen_factors'].items()}
     print('  refits that moved a threshold: %s' % ({t: c for t, c in moved.items() if c} or 'none'))
