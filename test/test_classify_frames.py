@@ -10,10 +10,10 @@ from hypothesis import given, settings, strategies as st
 from leap_teleop.frame import Frame
 from leap_teleop.hand_model import render_hand
 from leap_teleop.sources import leapjs
+from leap_teleop.tools import evaluate
 from leap_teleop.tools.classify_frames import Classifier
 
-DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..',
-                                     'shared', 'data', 'leapjs'))
+DATA = evaluate.DEFAULT_DATA
 KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down', 'events']
 
 
@@ -72,8 +72,8 @@ def test_garbage_lines_never_stop_the_run():
     assert out[4]['hands'][0]['type'] == 'right' and not out[4]['hands'][0]['open']
 
 
-@pytest.mark.skipif(not os.path.isdir(DATA), reason='shared/data/leapjs absent')
 def test_every_shared_recording_classifies():
+    assert os.path.isdir(DATA), 'no recordings at %s (set LEAPJS_DATA)' % DATA
     for name in sorted(os.listdir(DATA)):
         if name.endswith('.json.lz'):
             out = run_cli([os.path.join(DATA, name)])
