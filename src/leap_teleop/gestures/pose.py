@@ -29,6 +29,9 @@ CURLED_BEND = (95.0, 85.0)
 # Folded enough for rock's middle and ring (a horns hand rarely folds them as deep).
 FOLDED_CHORD = 0.8
 FOLDED_BEND = 85.0
+# ... but a finger bent down at the knuckle alone (tapping) keeps a straight chord: folded
+# needs its chord below this too when the joints are there.
+FOLDED_MAX_CHORD = 0.88
 # Thumb tip to the nearest index / middle joint in a fist (palm widths): ~0.2..0.8; in a
 # C it faces the fingertips across an opening.
 FIST_THUMB_NEAR = (0.9, 1.05)
@@ -82,6 +85,10 @@ def _curled(c, b, chord_th, bend_th):
     return c < chord_th or b > bend_th
 
 
+def _folded(c, b):
+    return _curled(c, b, FOLDED_CHORD, FOLDED_BEND) and not c >= FOLDED_MAX_CHORD
+
+
 def classify_geometry(g, hand, active=None, opening=False):
     """Per-frame decisions {gesture: bool}, 'pinch_value' and 'extended' (5 bools) from a
     HandGeometry. `active` = gestures currently on: they are judged on the stay-on
@@ -123,8 +130,7 @@ def classify_geometry(g, hand, active=None, opening=False):
     fist = curled and not out and near
     thumb_up = thumb_curled and out and ty > vert and ('thumb_up' in active or not opening)
     thumb_down = thumb_curled and out and ty < -vert
-    rock = (ext[1] and ext[4] and _curled(chord[2], bend[2], FOLDED_CHORD, FOLDED_BEND)
-            and _curled(chord[3], bend[3], FOLDED_CHORD, FOLDED_BEND))
+    rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))
     pinch = False
     gap = g.pinch_gap
     pk = 1 if 'pinch' in active else 0
