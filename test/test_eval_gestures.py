@@ -140,3 +140,11 @@ def test_no_hand_sized_circle_on_takes_without_circles():
         rows, _ = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, take))
         events = [e for r in rows for e in r[2].events if e.gesture.startswith('circle')]
         assert not [e for e in events if e.source == 'palm' or e.value >= 0.025], take
+
+
+def test_no_take_shows_rock_or_a_thumbs_down():
+    # No one makes horns or a thumbs-down in the shared takes; Waiting's finger taps (the
+    # SDK's flags read them as rock) bend the fingers at the knuckle only.
+    for take in evaluate.EVERY_TAKE:
+        rows, _ = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, take))
+        assert not any(r[2].rock or r[2].thumb_down for r in rows), take
