@@ -291,6 +291,13 @@ class CircleDetector:
         if hit is not None:
             found = (hit[0][1] > 0, hit[1], 'palm', hit[2])
         for i, tip in enumerate(geometry.tips_world):
+            if i > 0 and not extended[i]:
+                # A curled finger's loop is no circle: forget its path (cheaper than
+                # tracking it, and a circle must be drawn extended from its start).
+                tr = tracks[1 + i]
+                if len(tr.pts) > tr.head:
+                    tr.reset()
+                continue
             if not _isfinite(tip[0] + tip[1] + tip[2]):
                 continue
             hit = tracks[1 + i].add(timestamp, tip)

@@ -136,12 +136,25 @@ def hand_geometry(hand):
         tips, bend, chord, mcps, pips, dips = [], [], [], [], [], []
         dirs = []
         for i, f in enumerate(fingers):
-            tip = _joint(f.tip)
-            if tip is None:
+            # (the ndarray case inline: this runs for 20 joints of every hand of every frame)
+            v = f.tip
+            tip = v.tolist() if v.__class__ is _ndarray and v.shape == (3,) else f3(v)
+            if tip is None or not _isfinite(tip[0] + tip[1] + tip[2]):
                 return None
             tips.append(tip)
             ax, ay, az = tip
-            dip, pip, mcp = _joint(f.dip), _joint(f.pip), _joint(f.mcp)
+            v = f.dip
+            dip = v.tolist() if v.__class__ is _ndarray and v.shape == (3,) else _joint(v)
+            if dip is not None and not _isfinite(dip[0] + dip[1] + dip[2]):
+                dip = None
+            v = f.pip
+            pip = v.tolist() if v.__class__ is _ndarray and v.shape == (3,) else _joint(v)
+            if pip is not None and not _isfinite(pip[0] + pip[1] + pip[2]):
+                pip = None
+            v = f.mcp
+            mcp = v.tolist() if v.__class__ is _ndarray and v.shape == (3,) else _joint(v)
+            if mcp is not None and not _isfinite(mcp[0] + mcp[1] + mcp[2]):
+                mcp = None
             mcps.append(mcp)
             pips.append(pip)
             dips.append(dip)
@@ -211,9 +224,8 @@ def hand_geometry(hand):
     return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
                         thumb_dir=thumb_dir, pinch_gap=_mdist(th, ix) * inv,
                         middle_gap=_mdist(th, tips[2]) * inv,
-                        thumb_to_fingers=min(
-                            _mdist(th, j) for j in (ix, tips[2], pips[1], pips[2], dips[1], dips[2])
-                            if j is not None) * inv,
+                        thumb_to_fingers=min([_mdist(th, j) for j in (
+                            ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None]) * inv,
                         finger_joints=None not in (pips[1], pips[2], dips[1], dips[2]),
                         grab=grab, tips_world=tips,
                         basis=((tx, ty, tz), (nx, ny, nz), (dx, dy, dz)), palm=palm)
