@@ -48,7 +48,7 @@ DEFAULT_HFOV_DEG = 60.0            # a typical laptop webcam
 # Extended: a finger whose tip points along the hand (angle between the hand direction
 # and knuckle -> tip) under this and whose joints are nearly straight.
 EXTENDED_MAX_DEG = 60.0
-EXTENDED_MAX_BEND_DEG = 75.0       # sum of the pip and dip bends (fists: > 140)
+EXTENDED_MAX_BEND_DEG = 70.0       # sum of the pip and dip bends (fists: > 140)
 # Thumb extended: its tip beyond the index knuckle, thumbward, by this fraction of the palm
 # length, and the thumb pointing thumbward rather than across the palm or along the index
 # (on the shared photos: open palms and thumbs-up 0.34..0.83 and 44..69 deg, fists with
