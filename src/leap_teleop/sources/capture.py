@@ -161,8 +161,10 @@ class CaptureThread:
     """Reads `media` on its own thread into a queue the consumer pulls with get().
 
     latest_only: keep only the newest capture (live data: when detection falls behind,
-    stale frames are dropped, counted in .dropped); else a short blocking queue (every
-    frame is processed, decoding runs ahead by a few frames).
+    stale frames are dropped, counted in .dropped); else a blocking queue, so every frame
+    is processed: one slot when paced (a frame waits at most one processing time after
+    its capture stamp; playback slows down when processing cannot keep up), a few when
+    unpaced (decoding runs ahead).
     pace_hz: > 0 releases file frames at their media time scaled to this rate, 0 at
     the file's own rate; None as fast as they decode.
     """
@@ -175,7 +177,7 @@ class CaptureThread:
         self.latest_only = latest_only
         self.pace_scale = None if pace_hz is None else (
             media.fps / pace_hz if pace_hz else 1.0)
-        self.q = queue.Queue(1 if latest_only else 4)
+        self.q = queue.Queue(1 if latest_only or pace_hz is not None else 4)
         self.dropped = 0
         self.error = None
         self._stop = threading.Event()
