@@ -238,3 +238,20 @@ def test_annotated_view(detections):
     msg = image_message(draw(bgr, found, False, states, 30.0), F.timestamp, 'leap_hands')
     assert (msg.width, msg.height, msg.encoding, msg.step) == (width, height, 'bgr8', width * 3)
     assert len(msg.data) == width * height * 3 and msg.header.stamp.to_sec() == 12.5
+
+
+def test_record_frames_and_bag_from_camera_footage(tmp_path):
+    """record_frames and recording_to_bag take the video source like any other."""
+    import rosbag
+    from leap_teleop.sources.recording import RecordingSource
+    from leap_teleop.tools import record_frames, to_bag
+    out = tmp_path / 'thumbs.json.gz'
+    assert record_frames.main([str(out), '--source', 'video', '--realtime', '0', '--video',
+                               os.path.join(HANDS_DATA, 'thumbs_up__*')]) == 0
+    frames = list(RecordingSource(str(out), realtime=False).frames())
+    assert len(frames) == 4 and all(len(f.hands) == 1 for f in frames)
+    bag = tmp_path / 'palm.bag'
+    assert to_bag.main(['--video', data(CLIP_PALM), str(bag)]) == 0
+    with rosbag.Bag(str(bag)) as b:
+        msgs = [m for _, m, _ in b.read_messages(topics=['leapmotion/data_right'])]
+    assert len(msgs) == 202 and sum(m.is_right_hand for m in msgs) > 190
