@@ -35,7 +35,7 @@ CAMERA_PARAMS = {
     'model': Param('full', 'camera sources: MediaPipe hand landmark model',
                    choices=('full', 'lite')),
     'max_hands': Param(2, 'camera sources: hands tracked at most', ge=1, le=2),
-    'detect_every': Param(4, 'camera sources: while fewer than ~max_hands are tracked, look '
+    'detect_every': Param(8, 'camera sources: while fewer than ~max_hands are tracked, look '
                              'for another hand every this many frames', ge=1, le=60),
     'min_detection_confidence': Param(0.5, 'camera sources: MediaPipe palm detection '
                                            'threshold', gt=0.0, lt=1.0),

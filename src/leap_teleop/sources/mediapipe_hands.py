@@ -9,7 +9,8 @@ default strategy ('paired') instead gives each hand its own one-hand graph, whic
 the detector while its hand is tracked; the graph looking for a further hand sees the
 image with the tracked hands blanked out (so both never lock onto one hand) and looks
 only every `detect_every`-th frame. A new second hand is then found within
-`detect_every` frames; a lost hand's own graph looks again on the very next frame.
+`detect_every` frames; while no hand is tracked at all, the first graph looks on every
+frame.
 'single' is the plain legacy graph with max_num_hands (and static_image_mode for
 unrelated images).
 
@@ -74,7 +75,7 @@ class HandDetector:
     """detect(rgb) -> [HandLandmarks], for a stream of frames (or still images with
     static=True). rgb: (H, W, 3) uint8, RGB, C-contiguous."""
 
-    def __init__(self, max_hands=2, model='full', strategy='paired', detect_every=4,
+    def __init__(self, max_hands=2, model='full', strategy='paired', detect_every=8,
                  redetect_every=0, static=False, min_detection_confidence=0.5,
                  min_tracking_confidence=0.5):
         if model not in MODEL_COMPLEXITY:
