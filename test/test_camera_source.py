@@ -255,3 +255,19 @@ def test_record_frames_and_bag_from_camera_footage(tmp_path):
     with rosbag.Bag(str(bag)) as b:
         msgs = [m for _, m, _ in b.read_messages(topics=['leapmotion/data_right'])]
     assert len(msgs) == 202 and sum(m.is_right_hand for m in msgs) > 190
+
+
+def test_camera_sources_refuse_bad_input_with_the_fix(tmp_path):
+    from leap_teleop.sources import SourceError
+    with pytest.raises(SourceError, match='does not exist'):
+        make_source('webcam', device='/dev/video_absent')
+    with pytest.raises(SourceError, match='names no video file'):
+        make_source('video', path=str(tmp_path / 'nothing*.jpg'))
+    with pytest.raises(SourceError, match='names no video file'):
+        make_source('video', path=str(tmp_path / 'absent.mp4'))
+    bad = tmp_path / 'bad.mp4'
+    bad.write_bytes(b'not a video')
+    with pytest.raises(SourceError, match='cannot open video'):
+        make_source('video', path=str(bad))
+    with pytest.raises(SourceError, match='palm length'):
+        make_source('video', path=data('fist__htj__22.jpg'), palm_length_mm=0.0)

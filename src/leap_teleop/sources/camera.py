@@ -8,6 +8,7 @@ video read as fast as possible is stamped start + media time (the recording's ow
 timing, as the recording source does), so gesture timing matches the video.
 """
 import logging
+import os
 import time
 
 import numpy as np
@@ -35,6 +36,7 @@ class CameraSource(HandSource):
     """
 
     still = False
+    live = False                       # a device: running out of frames is a failure
 
     def __init__(self, open_media, realtime=True, latest_only=False, pace_hz=0.0, loop=False,
                  width=0, height=0, mirror=False, input_mirrored=False, camera=None,
@@ -191,6 +193,9 @@ class CameraSource(HandSource):
                     self.dropped += reader.dropped
                 if reader.error is not None:
                     raise SourceError('camera source: reading failed: %s' % reader.error)
+                if self.live and not self.stopped:
+                    raise SourceError('camera %s stopped delivering frames (unplugged?)'
+                                      % getattr(self, 'device', ''))
                 media = None
                 if not self.loop:
                     return
@@ -204,6 +209,8 @@ class CameraSource(HandSource):
 class WebcamSource(CameraSource):
     """A V4L2 webcam, live: every frame stamped at capture; a frame that arrives while
     the previous one is still being processed replaces the older one (lowest latency)."""
+
+    live = True
 
     def __init__(self, device='0', width=640, height=480, fps=30.0, mirror=True, **kwargs):
         kwargs.setdefault('input_mirrored', False)
@@ -227,7 +234,7 @@ class VideoSource(CameraSource):
         self.path = str(path)
         stills = capture.resolve_stills(self.path)
         if not stills and (any(c in self.path for c in '*?[')
-                           or not capture.os.path.isfile(self.path)):
+                           or not os.path.isfile(self.path)):
             raise SourceError('video source: %s names no video file, image, folder of '
                               'images or glob that matches images' % self.path)
         self.still = bool(stills)
