@@ -226,11 +226,13 @@ class VideoSource(CameraSource):
     """A video file or still images, paced at the file's timing (realtime, or at
     `rate_hz` frames/s when > 0) or as fast as they are processed; optional loop. Every
     frame is processed (a recording is not live: when processing cannot keep up, paced
-    playback slows down rather than skip frames). Still images (an image, a folder, a
-    glob) are unrelated pictures: each is detected on its own."""
+    playback slows down rather than skip frames), unless drop_late: then paced playback
+    behaves like a live camera (a frame that arrives while the previous one is being
+    processed replaces it). Still images (an image, a folder, a glob) are unrelated
+    pictures: each is detected on its own."""
 
     def __init__(self, path, realtime=True, loop=False, rate_hz=0.0, mirror=False,
-                 width=0, height=0, **kwargs):
+                 width=0, height=0, drop_late=False, **kwargs):
         self.path = str(path)
         stills = capture.resolve_stills(self.path)
         if not stills and (any(c in self.path for c in '*?[')
@@ -244,6 +246,7 @@ class VideoSource(CameraSource):
             if stills:
                 return capture.StillImages(stills, still_rate)
             return capture.VideoFile(self.path)
-        super().__init__(open_media, realtime=realtime, latest_only=False,
+        super().__init__(open_media, realtime=realtime,
+                         latest_only=bool(drop_late and realtime),
                          pace_hz=rate_hz if not stills else 0.0, loop=loop, width=width,
                          height=height, mirror=mirror, **kwargs)

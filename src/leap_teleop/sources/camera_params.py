@@ -39,6 +39,9 @@ CAMERA_PARAMS = {
                              'for another hand every this many frames', ge=1, le=60),
     'min_detection_confidence': Param(0.5, 'camera sources: MediaPipe palm detection '
                                            'threshold', gt=0.0, lt=1.0),
+    'video_drop_late': Param(False, 'video source, paced: behave like a live camera (a frame '
+                                   'that arrives while the previous one is being processed '
+                                   'replaces it) instead of processing every frame'),
     'annotated_image_topic': Param('', 'camera sources: publish the annotated camera view '
                                        '(sensor_msgs/Image: landmarks, side, gestures, fps) '
                                        'on this topic; empty = off'),
@@ -58,4 +61,5 @@ def camera_source_kwargs(name, p, clock, camera=None, on_image=None):
         return dict(common, device=p['device'], width=p['width'], height=p['height'],
                     fps=p['camera_fps'])
     return dict(common, path=p['video'], realtime=p['realtime'], loop=p['loop'],
-                rate_hz=p['rate'], width=p['width'], height=p['height'])
+                rate_hz=p['rate'], width=p['width'], height=p['height'],
+                drop_late=p['video_drop_late'])
