@@ -271,3 +271,25 @@ def test_camera_sources_refuse_bad_input_with_the_fix(tmp_path):
         make_source('video', path=str(bad))
     with pytest.raises(SourceError, match='palm length'):
         make_source('video', path=data('fist__htj__22.jpg'), palm_length_mm=0.0)
+
+
+def test_paired_trackers_find_both_hands_once_each():
+    """Video mode, 'paired': the two-hand photo as a still stream: the first hand on the
+    first frame, the second within detect_every frames, then both every frame, never the
+    same hand twice (the second graph sees the first hand blanked out)."""
+    import cv2
+    from leap_teleop.sources.mediapipe_hands import HandDetector
+    rgb = cv2.cvtColor(cv2.imread(data('open_palm__tfjs__hands.jpg')), cv2.COLOR_BGR2RGB)
+    with HandDetector(max_hands=2, strategy='paired', detect_every=4) as detector:
+        counts, runs = [], []
+        for _ in range(12):
+            before = detector.graph_runs
+            found = detector.detect(rgb)
+            counts.append(len(found))
+            runs.append(detector.graph_runs - before)
+            if len(found) == 2:
+                wrists = [lm.image[0, :2] for lm in found]
+                assert np.linalg.norm(wrists[0] - wrists[1]) > 0.1
+    assert counts[0] >= 1 and 2 in counts[:5] and counts[5:] == [2] * 7, counts
+    # While one hand is tracked the second graph runs on every 4th frame only.
+    assert runs[0] == 1 and runs[-1] == 2, runs
