@@ -293,3 +293,25 @@ def test_paired_trackers_find_both_hands_once_each():
     assert counts[0] >= 1 and 2 in counts[:5] and counts[5:] == [2] * 7, counts
     # While one hand is tracked the second graph runs on every 4th frame only.
     assert runs[0] == 1 and runs[-1] == 2, runs
+
+
+def test_a_frame_the_detector_fails_on_is_skipped_and_a_broken_detector_ends_the_source():
+    from leap_teleop.sources import SourceError
+    from leap_teleop.sources.camera import MAX_DETECTOR_FAILURES
+    source = make_source('video', path=data('fist__htj__22.jpg'))
+    real = source.detector
+
+    class Failing:
+        def detect(self, rgb):
+            raise RuntimeError('graph failed')
+
+        def close(self):
+            real.close()
+    source.detector = Failing()
+    bgr = np.zeros((48, 64, 3), np.uint8)
+    frame, landmarks, _ = source.process(bgr, 1.0, 1)
+    assert frame.hands == [] and landmarks == []
+    with pytest.raises(SourceError, match='failed on %d frames' % MAX_DETECTOR_FAILURES):
+        for k in range(MAX_DETECTOR_FAILURES):
+            source.process(bgr, 1.0 + k, 2 + k)
+    source.detector.close()

@@ -22,6 +22,9 @@ from .mediapipe_hands import HandDetector
 
 log = logging.getLogger(__name__)
 VELOCITY_SMOOTHING = 0.5            # weight of the newest finite difference
+# A frame the detector fails on is skipped (no hands: downstream holds, as for a lost
+# hand) with a warning; this many failures in a row end the source.
+MAX_DETECTOR_FAILURES = 30
 
 
 class CameraSource(HandSource):
@@ -149,7 +152,18 @@ class CameraSource(HandSource):
         if self.flip:
             bgr = cv2.flip(bgr, 1)
         rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-        landmarks = self.detector.detect(rgb)
+        try:
+            landmarks = self.detector.detect(rgb)
+            self._failures = 0
+        except (RuntimeError, ValueError) as e:
+            self._failures = getattr(self, '_failures', 0) + 1
+            if self._failures >= MAX_DETECTOR_FAILURES:
+                raise SourceError('hand detection failed on %d frames in a row: %s'
+                                  % (self._failures, e))
+            if self._failures == 1:
+                log.warning('camera source: hand detection failed on frame %d (skipped): %s',
+                            frame_id, e)
+            landmarks = []
         frame = Frame(id=frame_id, timestamp=stamp,
                       hands=self.hands_of(landmarks, self.camera_for(w, h, fit), stamp))
         self.frames_processed += 1
@@ -212,7 +226,7 @@ class WebcamSource(CameraSource):
 
     live = True
 
-    def __init__(self, device='0', width=640, height=480, fps=30.0, mirror=True, **kwargs):
+    def __init__(self, device='0', width=640, height=480, fps=30.0, mirror=False, **kwargs):
         kwargs.setdefault('input_mirrored', False)
 
         def open_media():
