@@ -12,6 +12,7 @@ drone looking along its heading, ground texture and horizon in view).
 """
 import math
 import os
+import signal
 import subprocess
 import sys
 from multiprocessing.connection import Connection
@@ -187,6 +188,8 @@ def _child_main():
     # to fd 1) goes to stderr instead.
     out_fd = os.dup(1)
     os.dup2(2, 1)
+    # Ctrl-C reaches the whole process group: the parent stops this process (None or EOF).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _serve(_Duplex(Connection(0, writable=False), Connection(out_fd, readable=False)))
 
 
