@@ -15,6 +15,8 @@ import os
 import signal
 import subprocess
 import sys
+import threading
+import time
 from multiprocessing.connection import Connection
 from dataclasses import dataclass
 
@@ -85,17 +87,19 @@ def chase_view(client, pos, yaw, width=480, height=360, behind=2.2, above=1.0, f
     view = pb.computeViewMatrix(eye, target, (0, 0, 1), physicsClientId=client)
     proj = pb.computeProjectionMatrixFOV(fov, width / float(height), 0.05, 200.0,
                                          physicsClientId=client)
-    return _rgb(client, width, height, view, proj)
+    # The drone's shadow on the ground shows its height: worth the second render pass here
+    # (the drone's own cameras skip it, it halves their cost).
+    return _rgb(client, width, height, view, proj, shadow=True)
 
 
 SKY_TOP, SKY_HORIZON = (110, 160, 225), (200, 222, 245)
 
 
-def _rgb(client, width, height, view, proj):
+def _rgb(client, width, height, view, proj, shadow=False):
     _, _, rgba, depth, _ = pb.getCameraImage(width, height, view, proj,
                                              renderer=pb.ER_TINY_RENDERER,
                                              flags=pb.ER_NO_SEGMENTATION_MASK,
-                                             physicsClientId=client)
+                                             shadow=int(shadow), physicsClientId=client)
     img = np.array(np.reshape(np.asarray(rgba, dtype=np.uint8), (height, width, 4))[:, :, :3])
     # The renderer leaves empty pixels white: paint a sky there, darker toward the top.
     sky = np.reshape(np.asarray(depth, dtype=np.float32), (height, width)) >= 0.99999
@@ -181,6 +185,72 @@ class RendererProcess:
         self._out.close()
         self._in.close()
         self.proc = None
+
+
+class CameraLoop:
+    """Renders the cameras at their rates (wall clock) in a thread of its own.
+
+    `get_pose()` returns (pos, quat, context) and is where the caller copies the drone
+    pose under its lock; `deliver(name, rgb, context)` receives each image. A camera whose
+    rate is 0 is never rendered; a late frame is not made up for (no bursts)."""
+
+    def __init__(self, rates, get_pose, deliver, on_error=None):
+        self.rates = {name: float(r) for name, r in rates.items() if r > 0}
+        self.get_pose, self.deliver, self.on_error = get_pose, deliver, on_error
+        self.frames = {name: 0 for name in self.rates}
+        self.renderer = None
+        self.thread = None
+        self.ready = threading.Event()     # set once the renderer has drawn a first frame
+        self._stop = threading.Event()
+
+    def start(self):
+        if not self.rates:
+            return
+        self.renderer = RendererProcess()
+        self.thread = threading.Thread(target=self._run, name='drone_cameras', daemon=True)
+        self.thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self.thread is not None:
+            self.thread.join(15.0)
+        if self.renderer is not None:
+            self.renderer.close()
+
+    @property
+    def stopping(self):
+        return self._stop.is_set()
+
+    def _run(self):
+        pos, quat, _ = self.get_pose()
+        try:                           # the first frame sets the renderer up: not counted
+            self.renderer.render(pos, quat, list(self.rates))
+        except (RuntimeError, OSError, EOFError) as e:
+            if self.on_error is not None and not self._stop.is_set():
+                self.on_error(e)
+        self.ready.set()
+        due = {name: time.monotonic() for name in self.rates}
+        while not self._stop.is_set():
+            now = time.monotonic()
+            names = [n for n, t in due.items() if t <= now]
+            if not names:
+                self._stop.wait(min(due.values()) - now)
+                continue
+            for n in names:
+                due[n] = max(due[n] + 1.0 / self.rates[n], now)
+            pos, quat, context = self.get_pose()
+            try:
+                images = self.renderer.render(pos, quat, names)
+            except (RuntimeError, OSError, EOFError) as e:
+                if self._stop.is_set():
+                    return
+                if self.on_error is not None:
+                    self.on_error(e)
+                self._stop.wait(1.0)
+                continue
+            for name, rgb in images.items():
+                self.frames[name] += 1
+                self.deliver(name, rgb, context)
 
 
 def _child_main():

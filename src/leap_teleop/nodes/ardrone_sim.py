@@ -339,7 +339,6 @@ class CameraStreams:
 
     def __init__(self, node, rates):
         self.node = node
-        self.rates = {name: r for name, r in rates.items() if r > 0}
         self.pubs, self.info_pubs, self.info = {}, {}, {}
         for name, spec in cameras.CAMERAS.items():
             self.pubs[name] = rospy.Publisher('ardrone/%s/image_raw' % name, Image, queue_size=2)
@@ -350,10 +349,7 @@ class CameraStreams:
                           lambda req, n=name: self.on_set_camera_info(n, req))
         self.active_pub = rospy.Publisher('ardrone/image_raw', Image, queue_size=2)
         self.active_info_pub = rospy.Publisher('ardrone/camera_info', CameraInfo, queue_size=2)
-        self.renderer = None
-        self.thread = None
-        self.frames = {name: 0 for name in cameras.CAMERAS}
-        self._stop = threading.Event()
+        self.loop = cameras.CameraLoop(rates, self._pose, self._deliver, self._error)
 
     @staticmethod
     def _ideal_info(spec, frame):
@@ -379,44 +375,24 @@ class CameraStreams:
         return SetCameraInfoResponse(success=True, status_message='')
 
     def start(self):
-        if not self.rates:
-            return
-        self.renderer = cameras.RendererProcess()
-        self.thread = threading.Thread(target=self._run, name='ardrone_cameras', daemon=True)
-        self.thread.start()
+        self.loop.start()
 
     def stop(self):
-        self._stop.set()
-        if self.thread is not None:
-            self.thread.join(5.0)
-        if self.renderer is not None:
-            self.renderer.close()
+        self.loop.stop()
 
-    def _run(self):
+    def _pose(self):
         node = self.node
-        due = {name: time.monotonic() for name in self.rates}
-        while not self._stop.is_set() and not rospy.is_shutdown():
-            now = time.monotonic()
-            names = [n for n, t in due.items() if t <= now]
-            if not names:
-                self._stop.wait(min(due.values()) - now)
-                continue
-            for n in names:
-                due[n] = max(due[n] + 1.0 / self.rates[n], now)   # no catch-up bursts
-            with node.lock:
-                pos, quat = node.sim.pos, node.sim.quat
-                active = 'front' if node.sim.camera_channel == 0 else 'bottom'
-                stamp = node.stamp()
-            try:
-                images = self.renderer.render(pos, quat, names)
-            except (RuntimeError, OSError, EOFError) as e:
-                if self._stop.is_set() or rospy.is_shutdown():
-                    return
-                self.node.log.warn('camera', 'ardrone_sim: camera rendering failed: %s', e)
-                self._stop.wait(1.0)
-                continue
-            for name, rgb in images.items():
-                self._publish(name, rgb, stamp, name == active)
+        with node.lock:
+            active = 'front' if node.sim.camera_channel == 0 else 'bottom'
+            return node.sim.pos, node.sim.quat, (node.stamp(), active)
+
+    def _deliver(self, name, rgb, context):
+        stamp, active = context
+        self._publish(name, rgb, stamp, name == active)
+
+    def _error(self, e):
+        if not rospy.is_shutdown():
+            self.node.log.warn('camera', 'ardrone_sim: camera rendering failed: %s', e)
 
     def _publish(self, name, rgb, stamp, active):
         msg = Image()
@@ -431,7 +407,6 @@ class CameraStreams:
         if active:
             self.active_pub.publish(msg)
             self.active_info_pub.publish(info)
-        self.frames[name] += 1
 
 
 def _quat_from_rpy(roll, pitch, yaw):
