@@ -87,19 +87,18 @@ def chase_view(client, pos, yaw, width=480, height=360, behind=2.2, above=1.0, f
     view = pb.computeViewMatrix(eye, target, (0, 0, 1), physicsClientId=client)
     proj = pb.computeProjectionMatrixFOV(fov, width / float(height), 0.05, 200.0,
                                          physicsClientId=client)
-    # The drone's shadow on the ground shows its height: worth the second render pass here
-    # (the drone's own cameras skip it, it halves their cost).
-    return _rgb(client, width, height, view, proj, shadow=True)
+    return _rgb(client, width, height, view, proj)
 
 
 SKY_TOP, SKY_HORIZON = (110, 160, 225), (200, 222, 245)
 
 
-def _rgb(client, width, height, view, proj, shadow=False):
+def _rgb(client, width, height, view, proj):
+    # No shadow pass: it doubles the cost.
     _, _, rgba, depth, _ = pb.getCameraImage(width, height, view, proj,
                                              renderer=pb.ER_TINY_RENDERER,
                                              flags=pb.ER_NO_SEGMENTATION_MASK,
-                                             shadow=int(shadow), physicsClientId=client)
+                                             shadow=0, physicsClientId=client)
     img = np.array(np.reshape(np.asarray(rgba, dtype=np.uint8), (height, width, 4))[:, :, :3])
     # The renderer leaves empty pixels white: paint a sky there, darker toward the top.
     sky = np.reshape(np.asarray(depth, dtype=np.float32), (height, width)) >= 0.99999
@@ -192,9 +191,13 @@ class CameraLoop:
 
     `get_pose()` returns (pos, quat, context) and is where the caller copies the drone
     pose under its lock; `deliver(name, rgb, context)` receives each image. A camera whose
-    rate is 0 is never rendered; a late frame is not made up for (no bursts)."""
+    rate is 0 is never rendered; a late frame is not made up for (no bursts). The
+    renderer works at most `max_duty` of the time (after a render of d seconds it rests
+    d * (1 / max_duty - 1)): on a loaded machine the rates drop instead of the cameras
+    taking a whole core from the flight and everything else."""
 
-    def __init__(self, rates, get_pose, deliver, on_error=None):
+    def __init__(self, rates, get_pose, deliver, on_error=None, max_duty=0.5):
+        self.max_duty = max_duty
         self.rates = {name: float(r) for name, r in rates.items() if r > 0}
         self.get_pose, self.deliver, self.on_error = get_pose, deliver, on_error
         self.frames = {name: 0 for name in self.rates}
@@ -239,6 +242,7 @@ class CameraLoop:
             for n in names:
                 due[n] = max(due[n] + 1.0 / self.rates[n], now)
             pos, quat, context = self.get_pose()
+            started = time.monotonic()
             try:
                 images = self.renderer.render(pos, quat, names)
             except (RuntimeError, OSError, EOFError) as e:
@@ -251,6 +255,10 @@ class CameraLoop:
             for name, rgb in images.items():
                 self.frames[name] += 1
                 self.deliver(name, rgb, context)
+            busy = time.monotonic() - started
+            rest_until = time.monotonic() + busy * (1.0 / self.max_duty - 1.0)
+            for n in due:
+                due[n] = max(due[n], rest_until)
 
 
 def _child_main():
