@@ -126,7 +126,7 @@ class Monitor:
     def hand_insets(self):
         """An inset per arm of the hand driving it, as it is now."""
         from leap_teleop.tools.demo_pictures import hand_inset
-        return [(HAND_CORNER[arm], hand_inset(self.hands.get(hand), '%s <- %s hand'
+        return [(HAND_CORNER[arm], hand_inset(self.hands.get(hand), '%s: %s hand'
                                               % (arm, hand)))
                 for arm, (hand, _) in UR10_TASKS.items()]
 

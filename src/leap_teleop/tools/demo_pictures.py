@@ -245,17 +245,24 @@ def hand_inset(hand, title, size=(118, 118)):
     w, h = size
     pic = Image.new('RGB', size, (245, 245, 240))
     draw = ImageDraw.Draw(pic)
+    if hand is not None and hand.present:
+        _draw_hand(draw, hand, w, h)
+    # Caption strips drawn last, over any fingertip.
+    draw.rectangle([0, 0, w, 15], fill=(225, 225, 215))
+    draw.text((4, 1), title, font=_font(11), fill=(30, 30, 30))
+    draw.rectangle([0, h - 19, w, h], fill=(225, 225, 215))
+    draw.text((4, h - 18), hand_label(hand), font=_font(12), fill=(180, 40, 30))
     draw.rectangle([0, 0, w - 1, h - 1], outline=(60, 60, 60), width=2)
-    draw.text((5, 3), title, font=_font(11), fill=(30, 30, 30))
-    label = hand_label(hand)
-    draw.text((5, h - 17), label, font=_font(12), fill=(180, 40, 30))
-    if hand is None or not hand.present:
-        return pic
+    return pic
+
+
+def _draw_hand(draw, hand, w, h):
     px, pz = hand.palm_position.x, hand.palm_position.z
-    scale = 0.36 * min(w, h) / 0.11            # ~11 cm from palm to fingertip
+    scale = 0.3 * min(w, h) / 0.11            # ~11 cm from palm to fingertip
+    cy = h / 2 + 14
 
     def to_px(x, z):
-        return (w / 2 + (x - px) * scale, h / 2 + 8 + (z - pz) * scale)
+        return (w / 2 + (x - px) * scale, cy + (z - pz) * scale)
 
     palm = to_px(px, pz)
     d = hand.direction
@@ -263,7 +270,7 @@ def hand_inset(hand, title, size=(118, 118)):
     draw.line([wrist, palm], fill=(120, 90, 70), width=7)
     for i, tip in enumerate(hand.finger_tips):
         extended = bool(hand.finger_extended[i])
-        colour = (40, 40, 40) if extended else (190, 190, 190)
+        colour = (40, 40, 40) if extended else (175, 175, 175)
         end = to_px(tip.x, tip.z)
         draw.line([palm, end], fill=colour, width=4 if extended else 2)
         r = 4 if extended else 3
@@ -271,7 +278,6 @@ def hand_inset(hand, title, size=(118, 118)):
     fill = (200, 60, 50) if hand.fist else (60, 110, 200) if hand.pinch else (90, 170, 90)
     draw.ellipse([palm[0] - 8, palm[1] - 8, palm[0] + 8, palm[1] + 8], fill=fill,
                  outline=(30, 30, 30))
-    return pic
 
 
 def arm_frame_with_insets(png_path, insets):
