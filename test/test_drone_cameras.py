@@ -60,3 +60,23 @@ def test_renderer_process_matches_in_process_rendering(renderer):
     assert proc.proc is None
     for name in ('front', 'bottom'):
         np.testing.assert_array_equal(out[name], renderer.render(name, *pose))
+
+
+def test_camera_loop_keeps_its_rate_delivers_and_stops():
+    got = []
+    pose = ((0.0, 0.0, 1.0), _yaw_quat(0.0), 'ctx')
+    loop = cameras.CameraLoop({'bottom': 4.0, 'front': 0.0}, lambda: pose,
+                              lambda name, rgb, ctx: got.append((name, rgb.shape, ctx)))
+    loop.start()
+    try:
+        assert loop.ready.wait(60.0)
+        n0 = loop.frames['bottom']
+        import time
+        time.sleep(2.0)
+        n = loop.frames['bottom'] - n0
+    finally:
+        loop.stop()
+    assert 'front' not in loop.frames                      # rate 0: never rendered
+    assert 2 <= n <= 9, n                                  # ~4 Hz, never a burst
+    assert got and all(g == ('bottom', (240, 320, 3), 'ctx') for g in got)
+    assert not loop.thread.is_alive() and loop.renderer.proc is None

@@ -164,7 +164,8 @@ class ArDroneSim:
         self.ground = pb.createMultiBody(0, plane, -1, physicsClientId=c)
         # A collision shape without a visual is drawn (checkered) by the renderer: hide it.
         pb.changeVisualShape(self.ground, -1, rgbaColor=(0, 0, 0, 0), physicsClientId=c)
-        scene.build(c)          # what the pictures show: visual only
+        self._scene = None      # the pictures' scene, built on the first picture: its
+                                # bodies would slow every physics step by about a third
         self._make_body(start_xyz)
         self._z_rest = self.p.hull[2]
         self.reset_state()
@@ -630,10 +631,16 @@ class ArDroneSim:
             'tm': self.time * 1e6,
         }
 
+    def show_scene(self):
+        """Add the gridded ground and landmarks (visual only) for pictures."""
+        if self._scene is None:
+            self._scene = scene.build(self.client)
+
     def snapshot(self, path=None, width=640, height=480):
         """Render the chase view (behind and above the drone); write a PNG when `path` is
         given. Returns (h, w, 3) uint8."""
         from leap_teleop.drone.cameras import chase_view
+        self.show_scene()
         img = chase_view(self.client, self.pos, self.yaw, width, height)
         if path:
             from PIL import Image

@@ -86,7 +86,8 @@ def chase_gif(track, states, gestures, path, camera_frames=(), size=(480, 360)):
     from leap_teleop.drone.cameras import chase_view
     from leap_teleop.drone.sim import ArDroneSim
     import pybullet as pb
-    drone = ArDroneSim()          # its client holds the scene and the drone body
+    drone = ArDroneSim()          # its client holds the drone body, and the scene:
+    drone.show_scene()
     frames, durations = [], []
     try:
         z_rest = drone.p.hull[2]
@@ -239,7 +240,7 @@ def hand_label(hand):
     return '%d fingers' % sum(bool(e) for e in hand.finger_extended)
 
 
-def hand_inset(hand, title, size=(118, 118)):
+def hand_inset(hand, title, size=(128, 118)):
     """The hand seen from above (Leap x right, fingers away from the user up): palm,
     fingers (folded ones faint), and the recognized pose."""
     w, h = size
