@@ -200,7 +200,7 @@ def flight_plot(track, states, gestures, path):
     ax.set_yticks(range(len(names)))
     ax.set_yticklabels(names)
     ax.set_ylim(-0.6, len(names) - 0.4)
-    ax.set_xlabel('time since the hand appeared (s)')
+    ax.set_xlabel('time since the gesture session started (s)')
     ax.grid(alpha=0.3, axis='x')
     for ts, g in gestures:
         if g not in GESTURE_ACTIONS:
