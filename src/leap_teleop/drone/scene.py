@@ -6,6 +6,7 @@ cameras and the pictures show motion against fixed references. Grid lines every 
 (bolder every 5 m) with a 0.5 m checker, coloured pillars round the start and a
 landing pad with an arrow pointing +x at the start.
 """
+import atexit
 import os
 import tempfile
 
@@ -67,8 +68,16 @@ def field_texture_path():
     fd, path = tempfile.mkstemp(prefix='leap_teleop_field_', suffix='.png')
     os.close(fd)
     pic.save(path)
+    atexit.register(_remove, path)
     _texture_file = path
     return path
+
+
+def _remove(path):
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
 
 
 def _quad(client, half, z, uv_repeat):
@@ -87,6 +96,7 @@ def _solid_texture_path():
         fd, _solid_file = tempfile.mkstemp(prefix='leap_teleop_ground_', suffix='.png')
         os.close(fd)
         Image.new('RGB', (64, 64), GROUND_RGB).save(_solid_file)
+        atexit.register(_remove, _solid_file)
     return _solid_file
 
 
