@@ -97,21 +97,24 @@ class Monitor:
     def _on_nav(self, msg):
         if not self.drone_states or self.drone_states[-1] != msg.state:
             self.drone_states.append(msg.state)
-            self.drone_state_times.append((time.monotonic(), msg.state))
+            # Header stamps (wall clock here): one clock for every source, unlike arrival
+            # times, which differ per connection.
+            self.drone_state_times.append((msg.header.stamp.to_sec(), msg.state))
 
     def _on_odom(self, msg):
         self.drone_odom = msg
         if 'drone' in self.first_frame:
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
-            self.drone_track.append((time.monotonic(), p.x, p.y, p.z, q.x, q.y, q.z, q.w))
+            self.drone_track.append((msg.header.stamp.to_sec(), p.x, p.y, p.z,
+                                     q.x, q.y, q.z, q.w))
 
     def _on_drone_gesture(self, msg):
         if msg.active:
-            self.drone_gestures.append((time.monotonic(), msg.gesture))
+            self.drone_gestures.append((msg.header.stamp.to_sec(), msg.gesture))
 
     def _on_camera(self, msg):
         # A small copy, at most twice a second: the chase GIF's inset.
-        now = time.monotonic()
+        now = msg.header.stamp.to_sec()
         if 'drone' not in self.first_frame or (
                 self.drone_camera and now - self.drone_camera[-1][0] < 0.5):
             return
