@@ -80,3 +80,22 @@ def test_camera_loop_keeps_its_rate_delivers_and_stops():
     assert 2 <= n <= 9, n                                  # ~4 Hz, never a burst
     assert got and all(g == ('bottom', (240, 320, 3), 'ctx') for g in got)
     assert not loop.thread.is_alive() and loop.renderer.proc is None
+
+
+def test_camera_loop_replaces_a_dead_renderer():
+    errors, got = [], []
+    loop = cameras.CameraLoop({'bottom': 5.0}, lambda: ((0.0, 0.0, 1.0), _yaw_quat(0.0), None),
+                              lambda name, rgb, ctx: got.append(name), errors.append)
+    loop.start()
+    try:
+        assert loop.ready.wait(60.0)
+        first = loop.renderer
+        first.proc.kill()                                   # the renderer process dies
+        import time
+        deadline = time.monotonic() + 30.0
+        n = len(got)
+        while time.monotonic() < deadline and not (errors and len(got) > n + 1):
+            time.sleep(0.1)
+    finally:
+        loop.stop()
+    assert errors and loop.renderer is not first and len(got) > n + 1

@@ -250,7 +250,10 @@ class CameraLoop:
                     return
                 if self.on_error is not None:
                     self.on_error(e)
+                # A late answer would pair with the next request: start a fresh renderer.
+                self.renderer.close()
                 self._stop.wait(1.0)
+                self.renderer = RendererProcess()
                 continue
             for name, rgb in images.items():
                 self.frames[name] += 1
