@@ -20,6 +20,8 @@ emulated onboard controller:
   point sequences (tilts, yaw turns, dances) over the SDK's default durations. Types
   > 19 are refused. A flip's ``duration`` is ignored (the SDK's 15 ms is not the spin
   time either).
+- the driver's other commands: flat trim (on the ground only), LED animations 0..13,
+  video recording on / off and the video channel (front / bottom camera).
 - altitude limits (``altitude_min`` .. ``altitude_max`` while flying), a battery that
   drains with thrust-weighted flight time (lands at 0, refuses takeoff below
   ``battery_takeoff_min``), and an optional link-loss landing (``link_timeout``, off by
