@@ -45,6 +45,7 @@ class HandGeometry:
     palm_width: float           # mm, the unit of the rest
     thumb_out: float            # palm widths: thumb tip thumbward of the index knuckle
     thumb_dir: tuple            # unit (x, y, z), Leap axes: where the thumb points
+    thumb_along: float          # thumb_dir . hand direction (1: laid along the hand)
     pinch_gap: float            # palm widths, thumb tip to index tip
     middle_gap: float           # palm widths, thumb tip to middle tip
     thumb_to_fingers: float     # palm widths, thumb tip to the nearest index / middle
@@ -222,7 +223,9 @@ def hand_geometry(hand):
     except (TypeError, ValueError, AttributeError, IndexError, OverflowError):
         return None
     return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
-                        thumb_dir=thumb_dir, pinch_gap=_mdist(th, ix) * inv,
+                        thumb_dir=thumb_dir,
+                        thumb_along=thumb_dir[0] * dx + thumb_dir[1] * dy + thumb_dir[2] * dz,
+                        pinch_gap=_mdist(th, ix) * inv,
                         middle_gap=_mdist(th, tips[2]) * inv,
                         thumb_to_fingers=min([_mdist(th, j) for j in (
                             ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None]) * inv,

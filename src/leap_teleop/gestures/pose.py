@@ -51,6 +51,12 @@ THUMB_UP_CURLED_BEND = (110.0, 85.0)
 # ~0.1..0.4 (the shared takes: a thumb 0.41..0.46 out is already leaving the fist), out
 # (thumbs-up) ~0.5..1.3.
 THUMB_OUT = (0.4, 0.35)
+# A thumbs-up / down shows the thumb well out (camera photos of fists with the thumb laid
+# over the fingers reach 0.56..0.62, thumbs-up 0.69..1.1; the shared takes' 0.74..1.3), and
+# not laid along the hand (thumb . hand direction below THUMB_UP_MAX_ALONG; a fist's
+# alongside thumb 0.9..1).
+THUMB_UP_OUT = (0.65, 0.55)
+THUMB_UP_MAX_ALONG = 0.95
 # Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
 THUMB_VERTICAL = (45.0, 55.0)
 # Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
@@ -63,6 +69,9 @@ PINCH_CHORD_MARGIN = 0.1
 PINCH_BEND_MARGIN = 15.0
 PINCH_MIDDLE_CLEAR = 0.9             # palm widths
 PINCH_REST_BEND = (100.0, 110.0)     # an "O" bends every other finger more than this
+# The index reaches out to the thumb (~60..135 deg), not curled into the palm under a
+# thumb laid over the fist (~150 and up).
+PINCH_MAX_INDEX_BEND = 150.0
 # Open with one finger reported bent: the thumb must be out (not holding that finger down,
 # as in a "three"), and the tracker's grab strength, when it gives one, below this.
 OPEN_FORGIVE_GRAB = 0.15
@@ -120,6 +129,7 @@ def classify_geometry(g, hand, active=None, opening=False):
             ext[i] = True
             n_ext += 1
     out = g.thumb_out > THUMB_OUT[1 if (up_on or 'open' in active) else 0]
+    up_out = g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
     ty = g.thumb_dir[1]
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
@@ -128,8 +138,8 @@ def classify_geometry(g, hand, active=None, opening=False):
     near = (g.thumb_to_fingers < FIST_THUMB_NEAR[k]
             or (not g.finger_joints and g.grab >= FIST_GRAB_WITHOUT_JOINTS))
     fist = curled and not out and near
-    thumb_up = thumb_curled and out and ty > vert and ('thumb_up' in active or not opening)
-    thumb_down = thumb_curled and out and ty < -vert
+    thumb_up = thumb_curled and up_out and ty > vert and ('thumb_up' in active or not opening)
+    thumb_down = thumb_curled and up_out and ty < -vert
     rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))
     pinch = False
     gap = g.pinch_gap
@@ -141,8 +151,9 @@ def classify_geometry(g, hand, active=None, opening=False):
         rest_c = max(chord[2], chord[3], chord[4])
         b1, b2, b3, b4 = bend[1:]
         rest = min(b2, b3, b4)
-        pinch = (g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
-                 or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN)
+        pinch = (not b1 >= PINCH_MAX_INDEX_BEND
+                 and (g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
+                      or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN))
     # Horns never have the thumb on the index tip; a pinch with the pinky out does.
     rock = rock and not pinch
     opn = False
