@@ -15,7 +15,7 @@ from . import evaluate
 
 # Thresholds read off the recordings (pose module constants, (to turn on, to stay on)).
 FITTED = ('CURLED_BEND', 'EXTENDED_BEND', 'THUMB_UP_CURLED_BEND', 'THUMB_OUT', 'PINCH_GAP',
-          'FIST_THUMB_NEAR', 'OPEN_MEAN_BEND', 'PINCH_REST_BEND')
+          'FIST_THUMB_NEAR', 'OPEN_MEAN_BEND', 'PINCH_REST_BEND', 'THUMB_UP_OUT')
 FACTORS = (0.7, 0.85, 1.0, 1.15, 1.3)
 
 
