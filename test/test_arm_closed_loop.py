@@ -6,14 +6,17 @@ import yaml
 
 from leap_teleop.teleop.arm import DISARMED, TRACKING, ArmTeleopParams
 from leap_teleop.teleop.closed_loop import run_session
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_path
 
 
 def sim_params(**overrides):
     with open(config_path('ur10_teleop.yaml')) as f:
         values = yaml.safe_load(f)
-    values.update(max_joint_speed=1.0, **overrides)      # as the simulation launch files
-    for key in ('axis_map', 'workspace_min', 'workspace_max'):
+    # As the simulation launch files: faster joints, the UR10's acceleration limit.
+    values.update(max_joint_speed=1.0, max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
+    values.update(overrides)
+    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
         values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
     return ArmTeleopParams.from_dict(values)
 
