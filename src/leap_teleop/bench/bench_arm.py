@@ -33,7 +33,7 @@ def _latency():
         arm = harness.start_node(env, [
             sys.executable, package_path('scripts', 'ur10_arm.py'), '__name:=ur10_arm',
             '__ns:=ur10_1', '_hand:=right', '_hand_topic:=/leapmotion/data_right',
-            '_filter_cutoff_hz:=0.0', '_max_joint_speed:=1.0', '_input_timeout:=1.0',
+            '_filter_min_cutoff_hz:=0.0', '_max_joint_speed:=1.0', '_input_timeout:=1.0',
             '_joint_prefix:=ur10_1_'])
         try:
             arm_rt = _round_trips(env, [])
