@@ -224,3 +224,71 @@ def test_fuzzed_input_never_leaves_the_limits(palm, pinch_value, flags, mode):
         assert np.all(tcp <= np.array(t.p.workspace_max) + 1e-6)
     if cmd.gripper is not None:
         assert 0.0 <= cmd.gripper <= 0.8
+
+
+# -- orientation modes --------------------------------------------------------------------
+def _rotated(t, c, **angles):
+    return drive(t, c, hand(**angles))
+
+
+@pytest.mark.parametrize('side_sign', [1.0, -1.0])
+def test_yaw_mode_turns_the_tool_about_the_vertical_with_the_hand(side_sign):
+    # Both hands use the same code: only the angle's sign differs between the two runs.
+    t, c = armed_with_origin(orientation='yaw', orientation_scale=1.0)
+    cmd = _rotated(t, c, turn=-0.5 * side_sign, rotate=0.3, swing=0.2)
+    R = kin.fk(cmd.q)[:3, :3]
+    tilt, yaw = kin.tilt_and_yaw(R)
+    # Leap y maps to base z; a hand turning right (+turn) turns the tool clockwise.
+    assert yaw == pytest.approx(0.5 * side_sign, abs=1e-9)
+    assert tilt == pytest.approx(0.0, abs=1e-9)      # roll and pitch ignored
+
+
+def test_full_mode_follows_the_palm_through_the_axis_map_and_scale():
+    t, c = armed_with_origin(orientation='full', orientation_scale=0.5)
+    cmd = _rotated(t, c, swing=0.4)                  # pitch up about Leap x
+    R = kin.fk(cmd.q)[:3, :3]
+    # Leap x maps to base -y: the tool turns by -0.2 rad about base y, from pointing down.
+    expected = kin.rotation_from_vector([0.0, -0.2, 0.0]) @ kin.fk(HOME)[:3, :3]
+    np.testing.assert_allclose(R, expected, atol=1e-9)
+    np.testing.assert_allclose(kin.fk(cmd.q)[:3, 3], kin.fk(HOME)[:3, 3], atol=1e-9)
+
+
+def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
+    t, c = armed_with_origin(orientation='full', max_tool_tilt=0.3, max_tool_turn=0.4)
+    cmd = _rotated(t, c, swing=1.2, turn=-1.0)
+    tilt, yaw = kin.tilt_and_yaw(np.asarray(t.status.target_rotation))
+    assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+    tilt, yaw = kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])
+    assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+
+
+def test_orientation_is_captured_at_the_rock():
+    t, c = armed_with_origin(orientation='yaw', max_joint_speed=1.0, max_joint_accel=3.0)
+    drive(t, c, hand(turn=-0.6), periods=250)        # 2 s: the servo gets there
+    drive(t, c, hand(turn=-0.6, rock=True))          # new origin with the hand turned
+    cmd = drive(t, c, hand(turn=-0.6))
+    # The tool keeps the yaw it had at the rock; the hand's turn counts from there.
+    assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.6, abs=1e-6)
+    cmd = drive(t, c, hand(turn=-0.8))
+    assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.8, abs=1e-6)
+
+
+def test_fixed_mode_ignores_the_hand_rotation():
+    t, c = armed_with_origin()
+    cmd = _rotated(t, c, turn=0.7, rotate=0.5, swing=0.3)
+    np.testing.assert_allclose(kin.fk(cmd.q)[:3, :3], kin.tool_down(), atol=1e-9)
+
+
+def test_wrist_ranges_limit_the_ik():
+    # wrist 3 may not turn past +-0.3 rad: a 0.5 rad tool yaw has no solution -> hold.
+    t, c = armed_with_origin(orientation='yaw', wrist_lower=(-6.28, -6.28, -0.3),
+                             wrist_upper=(6.28, 6.28, 0.3))
+    _rotated(t, c, turn=-0.5)
+    assert t.status.state == HOLDING
+
+
+def test_non_angle_rotation_is_rejected():
+    t, c = armed_with_origin(orientation='full')
+    now = c.tick()
+    assert t.on_hand(hand(turn=float('nan'), stamp=now), now)
+    assert t.status.rejected_inputs == 1

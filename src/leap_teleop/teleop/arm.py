@@ -32,6 +32,9 @@ DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
 MODES = ('imitation', 'joystick')
 GRIPPER_MODES = ('binary', 'proportional')
 ORIENTATION_MODES = ('fixed', 'yaw', 'full')
+# While tracking, an IK answer this far (rad, any joint) from the last goal is another
+# arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
+MAX_GOAL_JUMP = 1.0
 _TWO_PI = 2 * math.pi
 
 
@@ -343,6 +346,9 @@ class ArmTeleop:
         seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
         q = kin.ik_nearest(kin.pose(target, rotation), seed,
                            lower=self._joint_lower, upper=self._joint_upper)
+        if (q is not None and self._goal is not None
+                and float(np.max(np.abs(q - self._goal[1]))) > MAX_GOAL_JUMP):
+            q = None
         if q is None:
             self.status.ik_failures += 1
             if self.status.state != HOLDING:
