@@ -69,7 +69,8 @@ def _peak_ratio(seg, vmax):
         return float(np.max(np.abs(q1 - q0) / (T * vmax))) if T > 0 else math.inf
     if T <= 0:
         return math.inf
-    return max(float(np.max(np.abs(_state(seg, t0 + s * T)[1]) / vmax)) for s in _SAMPLES)
+    # Not at s = 0: the start velocity is the current state's, whatever a retiming does.
+    return max(float(np.max(np.abs(_state(seg, t0 + s * T)[1]) / vmax)) for s in _SAMPLES[1:])
 
 
 def _retimed(seg, T):
@@ -166,7 +167,9 @@ class TrajectoryFollower:
                     T_new = float(np.max(np.abs(pos - q_prev) / self.vmax))
                 else:
                     T_new = max(T, 1e-3)
-                    while _peak_ratio(_retimed(seg, T_new), self.vmax) > 1.0 + 1e-9:
+                    for _ in range(100):      # bounded: a start above the limit never fits
+                        if _peak_ratio(_retimed(seg, T_new), self.vmax) <= 1.0 + 1e-9:
+                            break
                         T_new *= 1.1
                 shift += T_new - T
                 seg = _retimed(seg, T_new)
