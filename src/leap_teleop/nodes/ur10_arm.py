@@ -122,7 +122,9 @@ class ArmNode:
                 status = self.teleop.status
                 snapshot = (status.state, status.reason, status.origin_set)
             if cmd.points:
-                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points, cmd.stamp))
+                # Stamp 0 (start on receipt): a command delayed in transport still starts
+                # from the controller's current state instead of partly in the past.
+                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points))
             if cmd.gripper is not None:
                 self.gripper_pub.publish(self._trajectory([self.gripper_joint],
                                                           [(0.1, [cmd.gripper], None)]))
