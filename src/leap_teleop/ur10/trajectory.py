@@ -61,15 +61,33 @@ def _state(seg, t):
 _SAMPLES = np.linspace(0.0, 1.0, 21)
 
 
+def _hermite_peak(q0, q1, v0, v1, T):
+    """Per-joint max |v| over s in (0, 1] of a cubic Hermite: its velocity is the
+    quadratic A s^2 + B s + v0, so the end and the vertex are the only candidates."""
+    d = (q1 - q0) / T
+    A = 3 * v0 + 3 * v1 - 6 * d
+    B = 6 * d - 4 * v0 - 2 * v1
+    peak = np.abs(v1)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        s = np.where(np.abs(A) > 1e-12, -B / (2 * A), -1.0)
+    inside = (s > 0.0) & (s < 1.0)
+    if np.any(inside):
+        vs = (A * s + B) * s + v0
+        peak = np.where(inside, np.maximum(peak, np.abs(vs)), peak)
+    return peak
+
+
 def _peak_ratio(seg, vmax):
-    """max over joints and samples of |v| / vmax for a segment."""
-    t0, t1, q0, q1, v0 = seg[:5]
+    """max over joints and time of |v| / vmax for a segment (its start excluded: that
+    is the current state's velocity, whatever a retiming does)."""
+    t0, t1, q0, q1, v0, v1, a0 = seg[:7]
     T = t1 - t0
     if v0 is None:
         return float(np.max(np.abs(q1 - q0) / (T * vmax))) if T > 0 else math.inf
     if T <= 0:
         return math.inf
-    # Not at s = 0: the start velocity is the current state's, whatever a retiming does.
+    if a0 is None:
+        return float(np.max(_hermite_peak(q0, q1, v0, v1, T) / vmax))
     return max(float(np.max(np.abs(_state(seg, t0 + s * T)[1]) / vmax)) for s in _SAMPLES[1:])
 
 
