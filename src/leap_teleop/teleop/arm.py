@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from leap_teleop.params import Param, check_params
 from leap_teleop.teleop import orientation as ori
 from leap_teleop.teleop.input_check import InputStream
 from leap_teleop.teleop.one_euro import OneEuroFilter
@@ -72,7 +73,7 @@ class ArmTeleopParams:
     gripper_binary_closed: float = 0.43
     max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
     max_input_age: float = 0.25        # s a message may arrive later than the stream's
-                                       # best-case latency; 0 = no lateness check
+                                       # best-case latency
     joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
 
     @classmethod
@@ -88,51 +89,94 @@ class ArmTeleopParams:
         return p
 
     def validate(self):
-        if self.mode not in MODES:
-            raise ValueError('mode must be one of %s, got %r' % (MODES, self.mode))
-        if self.orientation not in ORIENTATION_MODES:
-            raise ValueError('orientation must be one of %s, got %r'
-                             % (ORIENTATION_MODES, self.orientation))
-        if self.gripper_mode not in GRIPPER_MODES:
-            raise ValueError('gripper_mode must be one of %s, got %r'
-                             % (GRIPPER_MODES, self.gripper_mode))
-        a = np.asarray(self.axis_map, dtype=float)
-        if a.shape != (3, 3) or not np.all(np.isfinite(a)):
-            raise ValueError('axis_map must be a 3x3 matrix')
+        """Check every field against TELEOP_PARAMS (ParamError, a ValueError, names the
+        first bad one), then what involves two fields."""
+        for name, value in check_params(TELEOP_PARAMS, vars(self)).items():
+            setattr(self, name, value)
         lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
-        if lo.shape != (3,) or hi.shape != (3,) or np.any(lo >= hi):
+        if np.any(lo >= hi):
             raise ValueError('workspace_min must be below workspace_max on every axis')
-        if np.linalg.matrix_rank(a) < 3:
-            raise ValueError('axis_map must be invertible')
-        wl, wu = np.asarray(self.wrist_lower, float), np.asarray(self.wrist_upper, float)
-        if (wl.shape != (3,) or wu.shape != (3,) or np.any(wl >= wu)
-                or np.any(wl < -_TWO_PI - 1e-3) or np.any(wu > _TWO_PI + 1e-3)):
-            raise ValueError('wrist_lower / wrist_upper: 3 ranges within [-2 pi, 2 pi], '
-                             'lower below upper')
-        for name in ('scale', 'max_joint_speed', 'min_duration', 'input_timeout',
-                     'max_tcp_speed', 'max_palm_mm', 'joint_timeout', 'orientation_scale',
-                     'max_tool_tilt', 'max_tool_turn', 'max_joint_accel', 'servo_gain',
-                     'command_horizon', 'filter_d_cutoff_hz', 'rotation_d_cutoff_hz'):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError('%s must be a positive number, got %r' % (name, v))
-        if not (isinstance(self.max_input_age, (int, float)) and 0 <= self.max_input_age < 1e9):
-            raise ValueError('max_input_age must be a number >= 0, got %r' % self.max_input_age)
-        for name in ('filter_min_cutoff_hz', 'filter_beta', 'rotation_min_cutoff_hz',
-                     'rotation_beta'):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ValueError('%s must be a number, got %r' % (name, v))
-        for name in ('filter_beta', 'rotation_beta'):
-            if getattr(self, name) < 0:
-                raise ValueError('%s must be >= 0' % name)
-        if self.max_joint_accel > float(np.min(kin.MAX_JOINT_ACCEL)) + 1e-9:
-            raise ValueError('max_joint_accel must be <= %.3g rad/s^2 (the UR10 limit)'
-                             % float(np.min(kin.MAX_JOINT_ACCEL)))
-        if self.max_tool_tilt > math.pi / 2 or self.max_tool_turn > math.pi:
-            raise ValueError('max_tool_tilt must be <= pi/2 and max_tool_turn <= pi')
-        if not 0.0 <= self.gripper_binary_closed <= 0.8:
-            raise ValueError('gripper_binary_closed must be in [0, 0.8]')
+        if not np.linalg.matrix_rank(np.asarray(self.axis_map, float)) == 3:
+            raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
+        if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
+            raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
+
+
+_P = ArmTeleopParams()
+# Every ArmTeleopParams field's declaration: ur10_arm's ~params (config/ur10_teleop.yaml)
+# and ArmTeleopParams.validate share it. Timeouts and speeds have upper bounds too.
+TELEOP_PARAMS = {
+    'mode': Param(_P.mode, 'imitation (TCP follows the palm) or joystick (speed beyond the '
+                           'dead zone)', choices=MODES),
+    'axis_map': Param([list(r) for r in _P.axis_map], 'Leap axes -> arm base axes, rows = '
+                      'base x, y, z', length=3,
+                      item=Param([0.0, 0.0, 0.0], '', length=3, ge=-1.0, le=1.0)),
+    'scale': Param(_P.scale, 'imitation: robot m per hand m', gt=0.0, le=10.0),
+    'deadzone_mm': Param(_P.deadzone_mm, 'joystick: radius around the origin that moves '
+                                         'nothing', unit='mm', gt=0.0, le=300.0),
+    'joystick_gain': Param(_P.joystick_gain, 'joystick: TCP m/s per m of palm beyond the '
+                                             'dead zone', unit='1/s', gt=0.0, le=20.0),
+    'max_tcp_speed': Param(_P.max_tcp_speed, 'joystick: TCP speed cap', unit='m/s',
+                           gt=0.0, le=1.0),
+    'workspace_min': Param(list(_P.workspace_min), 'TCP target box, low corner (base frame)',
+                           unit='m', length=3, ge=-3.0, le=3.0),
+    'workspace_max': Param(list(_P.workspace_max), 'TCP target box, high corner', unit='m',
+                           length=3, ge=-3.0, le=3.0),
+    'tool_yaw': Param(_P.tool_yaw, 'tool turned about z by this (pointing down)', unit='rad',
+                      ge=-2 * math.pi, le=2 * math.pi),
+    'orientation': Param(_P.orientation, 'fixed (tool down, turned by tool_yaw), yaw (tool '
+                                         'yaw follows the hand\'s turn) or full (the tool '
+                                         'turns as the palm)', choices=ORIENTATION_MODES),
+    'orientation_scale': Param(_P.orientation_scale, 'tool rotation per hand rotation',
+                               gt=0.0, le=5.0),
+    'max_tool_tilt': Param(_P.max_tool_tilt, 'tool axis at most this far from straight down',
+                           unit='rad', ge=0.0, le=math.pi / 2),
+    'max_tool_turn': Param(_P.max_tool_turn, 'tool yaw at most this far from its yaw at the '
+                                             'rock', unit='rad', ge=0.0, le=math.pi),
+    'wrist_lower': Param(list(_P.wrist_lower), 'wrist 1-3 lower limits the IK may use',
+                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
+    'wrist_upper': Param(list(_P.wrist_upper), 'wrist 1-3 upper limits the IK may use',
+                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
+    'filter_min_cutoff_hz': Param(_P.filter_min_cutoff_hz, 'One Euro on the palm: cutoff at '
+                                  'rest; 0 = off', unit='Hz', ge=0.0, le=100.0),
+    'filter_beta': Param(_P.filter_beta, 'One Euro on the palm: cutoff added per palm speed',
+                         unit='Hz/(mm/s)', ge=0.0, le=10.0),
+    'filter_d_cutoff_hz': Param(_P.filter_d_cutoff_hz, 'One Euro on the palm: cutoff of the '
+                                'speed estimate', unit='Hz', gt=0.0, le=100.0),
+    'rotation_min_cutoff_hz': Param(_P.rotation_min_cutoff_hz, 'One Euro on the hand\'s '
+                                    'rotation vector: cutoff at rest; 0 = off', unit='Hz',
+                                    ge=0.0, le=100.0),
+    'rotation_beta': Param(_P.rotation_beta, 'One Euro on the rotation: cutoff added per '
+                                             'turning speed', unit='Hz/(rad/s)', ge=0.0,
+                           le=1000.0),
+    'rotation_d_cutoff_hz': Param(_P.rotation_d_cutoff_hz, 'One Euro on the rotation: cutoff '
+                                  'of the speed estimate', unit='Hz', gt=0.0, le=100.0),
+    'max_joint_speed': Param(_P.max_joint_speed, 'every joint at most this fast',
+                             unit='rad/s', gt=0.0, le=float(min(kin.MAX_JOINT_SPEED))),
+    'max_joint_accel': Param(_P.max_joint_accel, 'every joint accelerates at most this much '
+                             '(the UR10 limit at most)', unit='rad/s^2', gt=0.0,
+                             le=float(min(kin.MAX_JOINT_ACCEL))),
+    'servo_gain': Param(_P.servo_gain, 'joint error -> velocity correction on top of the '
+                                       'goal\'s own velocity', unit='1/s', gt=0.0, le=100.0),
+    'command_horizon': Param(_P.command_horizon, 'time of each trajectory\'s first point '
+                             '(with its velocity; the second is rest)', unit='s',
+                             ge=0.004, le=0.5),
+    'min_duration': Param(_P.min_duration, 'shortest hold trajectory sent', unit='s',
+                          gt=0.0, le=5.0),
+    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold and disarm '
+                                             '(watchdog)', unit='s', gt=0.0, le=10.0),
+    'gripper_mode': Param(_P.gripper_mode, 'binary (closed while pinching) or proportional',
+                          choices=GRIPPER_MODES),
+    'gripper_binary_closed': Param(_P.gripper_binary_closed, 'binary: knuckle when closed',
+                                   unit='rad', ge=0.0, le=0.8),
+    'max_palm_mm': Param(_P.max_palm_mm, '|palm| beyond this is a tracking error, ignored',
+                         unit='mm', gt=0.0, le=2000.0),
+    'max_input_age': Param(_P.max_input_age, 'drop a message arriving this much later than '
+                                             'the stream\'s best latency', unit='s',
+                           gt=0.0, le=10.0),
+    'joint_timeout': Param(_P.joint_timeout, 'no joint states this long -> disarm (robot '
+                                             'gone)', unit='s', gt=0.0, le=10.0),
+}
 
 
 @dataclass
