@@ -29,6 +29,7 @@ import numpy as np
 from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.nodes.common import package_path
 from leap_teleop.sources.scripted import ScriptedSource
+from leap_teleop.teleop import orientation as ori
 from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, TRACKING
 from leap_teleop.teleop.closed_loop import hand_input
 from leap_teleop.ur10 import kinematics as kin
@@ -189,7 +190,6 @@ def orientation(results):
             noisy = clean + np.radians(0.3) * rng.normal(size=3)
             loop.period(HandInput(present=True, palm_mm=palm, rotate=noisy[0], turn=noisy[1],
                                   swing=noisy[2]))
-            from leap_teleop.teleop import orientation as ori
             want = tel._tool_rotation(kin.rotation_vector(ori.hand_rotation(*clean)))
             if t > 1.0:
                 errors.append(kin.rotation_error(want, loop.tcp()[:3, :3]))

@@ -213,11 +213,6 @@ class ArmCommand:
     stamp: float = 0.0                 # time the trajectory starts (the control period's)
     gripper: float = None              # knuckle 0 (open) .. 0.8 (closed)
 
-    @property
-    def duration(self):
-        """time_from_start of the last point (when the commanded motion is at rest)."""
-        return self.points[-1][0] if self.points else 0.0
-
 
 @dataclass
 class ArmStatus:
