@@ -55,15 +55,16 @@ def test_generated_sessions_are_up_to_date():
     assert main(['--check']) == 0
 
 
-def test_rotated_cubes_are_grasped_across_the_faces_and_placed_square_in_yaw_mode():
-    """Each arm picks a cube lying at 30 / 60 deg: the hand turns, the tool turns with it
-    (yaw mode), the jaws close across the faces and the cube lands square in the tray."""
+@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+def test_rotated_cubes_are_grasped_across_the_faces_and_placed_square(orientation):
+    """Each arm picks a cube lying at 30 / 60 deg: the hand turns, the tool turns with it,
+    the jaws close across the faces and the cube lands square in the tray."""
     import math
     arms = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
     cell, runs = run_session(config_path('gestures/ur10_pick_place_rotated.yaml'),
                              'ur10_dual_rotated_cell.yaml',
                              {arm: side for arm, (side, _) in arms.items()},
-                             sim_params(orientation='yaw'))
+                             sim_params(orientation=orientation))
     try:
         for arm, (_, cube) in arms.items():
             states = [s for _, s in runs[arm].states]
