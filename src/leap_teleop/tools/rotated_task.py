@@ -20,8 +20,9 @@ from leap_teleop.ur10 import kinematics as kin
 SCRIPT = 'ur10_pick_place_rotated.yaml'
 CELL = 'ur10_dual_rotated_cell.yaml'
 TASKS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
-# A close view of ur10_1's cube; the grasp picture is taken as the jaws close on it.
-GRASP_VIEW = {'eye': [1.25, -1.35, 1.15], 'target': [0.68, -0.88, 0.8], 'fov': 40}
+# A close view of ur10_1's cube, taken when the open jaws, turned with the hand, have come
+# down around it (the square cube beside it for comparison).
+GRASP_VIEW = {'eye': [1.2, -0.6, 1.1], 'target': [0.68, -0.92, 0.82], 'fov': 38}
 
 
 def sim_params(orientation='yaw'):
@@ -38,9 +39,10 @@ def run(png=None, orientation='yaw'):
     shot = {}
 
     def on_period(cell, t):
-        if png and 'done' not in shot and cell.grasped('ur10_1'):
-            shot.setdefault('t', t)
-            if t - shot['t'] >= 0.3:
+        if png and 'done' not in shot:
+            tcp = cell.tcp_pose('ur10_1')[:3, 3]
+            cube = cell.object_poses()['cube_red'][0]
+            if np.linalg.norm(tcp - cube) < 0.004:
                 cell.snapshot(png, width=800, height=600, **GRASP_VIEW)
                 shot['done'] = True
 
