@@ -42,7 +42,7 @@ def run(png=None, orientation='yaw'):
         if png and 'done' not in shot:
             tcp = cell.tcp_pose('ur10_1')[:3, 3]
             cube = cell.object_poses()['cube_red'][0]
-            if np.linalg.norm(tcp - cube) < 0.004:
+            if np.linalg.norm(tcp - cube) < 0.006:
                 cell.snapshot(png, width=800, height=600, **GRASP_VIEW)
                 shot['done'] = True
 
