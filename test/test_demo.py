@@ -16,7 +16,7 @@ def test_demo_succeeds_and_writes_its_outputs(tmp_path):
                                      'ur10_1_rotated_cube', 'ur10_2_rotated_cube',
                                      'drone_flight'}
     assert all(task['success'] for task in summary['tasks'].values()), summary
-    for name in ('ur10.gif', 'drone.gif'):
+    for name in ('ur10.gif', 'drone.gif', 'drone_flight.png'):
         assert (out / name).stat().st_size > 10000
     assert len(list(out.glob("ur10_*.png"))) > 15
     assert (out / 'rotated_grasp.png').stat().st_size > 10000
