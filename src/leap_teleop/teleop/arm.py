@@ -385,14 +385,14 @@ class ArmTeleop:
         seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
         q = kin.ik_nearest(kin.pose(target, rotation), seed,
                            lower=self._joint_lower, upper=self._joint_upper)
+        why = 'no IK solution within the joint limits for'
         if (q is not None and self._goal is not None
                 and float(np.max(np.abs(q - self._goal[1]))) > MAX_GOAL_JUMP):
-            q = None
+            q, why = None, 'only another arm configuration reaches'
         if q is None:
             self.status.ik_failures += 1
             if self.status.state != HOLDING:
-                self._set(HOLDING, 'no IK solution within the joint limits for %s'
-                          % np.round(target, 3).tolist())
+                self._set(HOLDING, '%s %s' % (why, np.round(target, 3).tolist()))
                 held = self._hold(now)
                 self._target = target
                 cmd.q, cmd.points, cmd.stamp = held.q, held.points, held.stamp
