@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from leap_teleop.tools.evaluate import DEFAULT_DATA
+from leap_teleop.tools.evaluate import DEFAULT_DATA, HANDS_DATA
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
@@ -23,6 +23,8 @@ def test_rostest(test_file, tmp_path):
             if not os.path.isdir(DEFAULT_DATA):
                 pytest.skip('shared/data/leapjs absent')
             args.append('leapjs_data:=%s' % DEFAULT_DATA)
+    if 'name="hands_data"' in open(test_file).read():   # real hand clips: fails if absent
+        args.append('hands_data:=%s' % HANDS_DATA)
     proc = subprocess.run(
         # Not --text: with it rostest exits 0 even when a test fails.
         ['rostest', '--results-base-dir', str(tmp_path / 'results'), test_file] + args,
