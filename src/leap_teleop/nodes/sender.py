@@ -9,7 +9,7 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from leap_teleop import conversions
-from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
 from leap_teleop.msg import GestureEvent, Hand
 from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SOURCES, SourceError, make_source
@@ -50,6 +50,9 @@ PARAMS = {
     'wait_for_subscribers': Param(False, 'start the source only once every leapcobot topic '
                                          'has a subscriber (so a session is not lost while '
                                          'its consumers start)'),
+    'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
+                                       '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
+                                       'the raw rotation since the origin'),
 }
 PARAMS.update(CAMERA_PARAMS)
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
@@ -177,7 +180,8 @@ def main(argv=None):
         return build_source(p, view.on_image if view is not None else None), view
     p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
                                    argv, errors=(SourceError, ValueError))
-    interface = LeapInterface(source, sides=list(p['sides']))
+    interface = LeapInterface(source, sides=list(p['sides']),
+                              dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None)
     sender = Sender(p, interface)
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
