@@ -21,6 +21,7 @@ from leap_teleop.leap_interface import hand_angles
 from leap_teleop.sources import leapjs
 from leap_teleop.teleop.orientation import hand_rotation
 from leap_teleop.tools.evaluate import DEFAULT_DATA, GESTURES, LABELS, find_file
+from leap_teleop.tools.evaluate import expected as label_value
 from leap_teleop.ur10 import kinematics as kin
 
 BINS_DEG = (0, 20, 40, 60, 90, 180)
@@ -61,7 +62,8 @@ def real(data_dir):
                 key = '%d-%d deg' % (BINS_DEG[b], BINS_DEG[b + 1])
                 right, total = out.get(key, (0, 0))
                 for g, value in want.items():
-                    if g in GESTURES:
+                    value = label_value(value, hand)    # a thumbs-up label: by thumb direction
+                    if g in GESTURES and value is not None:
                         right += bool(getattr(state, g)) == value
                         total += 1
                 out[key] = (right, total)
@@ -69,6 +71,21 @@ def real(data_dir):
                 if side not in seen:
                     recognizers[side].reset()
     return out
+
+
+def _turned_thumbs_up(rpy, side):
+    """Palm normal and direction of the hand model's thumbs-up turned by rpy (deg, as
+    rpy_to_basis turns the palm-down pose), or (None, None) when the turn leaves the
+    thumb more than 45 deg from up."""
+    n0, d0 = rpy_to_basis(0.0, 0.0, 0.0, side)
+    n1, d1 = rpy_to_basis(*np.radians(rpy), side)
+    r = np.column_stack([n1, d1, np.cross(n1, d1)]) @ np.column_stack([n0, d0, np.cross(n0, d0)]).T
+    up = render_hand(side, 'thumbs_up', (0.0, 0.0, 0.0))
+    normal, direction = r @ up.palm_normal, r @ up.direction
+    thumb = r @ (up.fingers[0].tip - up.fingers[0].pip)
+    if thumb[1] / np.linalg.norm(thumb) < math.cos(math.radians(45.0)):
+        return None, None
+    return normal, direction
 
 
 def synthetic(turns=((0, 0, 0), (0, 0, 40), (0, 0, -70), (30, 0, 0), (-30, 0, 0),
@@ -82,6 +99,12 @@ def synthetic(turns=((0, 0, 0), (0, 0, 40), (0, 0, -70), (30, 0, 0), (-30, 0, 0)
                 rec = GestureRecognizer()
                 normal, direction = rpy_to_basis(*np.radians(rpy), side)
                 render_pose = 'thumbs_up' if pose == 'thumb_up' else pose
+                if pose == 'thumb_up':
+                    # the thumbs-up's own pose (thumb up) turned: a thumbs-up is a thumb
+                    # pointing up, so only turns that keep it within 45 deg of up count
+                    normal, direction = _turned_thumbs_up(rpy, side)
+                    if normal is None:
+                        continue
                 for k in range(frames):
                     hand = render_hand(side, render_pose, (0.0, 250.0, 0.0), normal, direction,
                                        pinch_value=0.6)
