@@ -11,7 +11,7 @@ from geometry_msgs.msg import TransformStamped
 
 from leap_teleop import conversions
 from leap_teleop.leap_interface import LeapInterface
-from leap_teleop.msg import GestureEvent, Hand
+from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SourceError, make_source
 
@@ -36,6 +36,11 @@ PARAMS = {
     'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame, m'),
     'shutdown_on_end': Param(True, 'shut the node down when a finite source ends'),
     'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)'),
+    'leapros_topic': Param('', 'topic for the classic leap_motion/leapros message (as that '
+                               'driver: leapmotion/data); empty = not published'),
+    'leapros_side': Param('right', 'hand the leapros message carries', choices=('right', 'left')),
+    'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
+                              'graph should)'),
     'wait_for_subscribers': Param(False, 'start the source only once every leapcobot topic '
                                          'has a subscriber (so a session is not lost while '
                                          'its consumers start)'),
@@ -56,6 +61,8 @@ def check_params(p):
         raise ValueError('~queue_size must be an integer >= 0, got %r' % (p['queue_size'],))
     if not isinstance(p['freq'], (int, float)) or not 0.0 <= p['freq'] < math.inf:
         raise ValueError('~freq must be a period >= 0 s, got %r' % (p['freq'],))
+    if p['leapros_topic'] and p['leapros_side'] not in p['sides']:
+        raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
 
 
 def build_source(p):
@@ -89,6 +96,9 @@ class Sender:
         self.period = float(p['freq'])
         self._last_sent = {}
         self.published = 0
+        self.leapros_side = p['leapros_side']
+        self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
+                        if p['leapros_topic'] else None)
         interface.add_hand_listener(self.on_hand)
 
     def wait_for_subscribers(self, log_every=5.0):
@@ -119,6 +129,9 @@ class Sender:
         for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
+        if self.leapros is not None and side == self.leapros_side:
+            self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
+                                                        self.p['frame_id']))
         self.published += 1
 
 
@@ -143,7 +156,7 @@ def main(argv=None):
                            errors=(SourceError, ValueError))
     interface = LeapInterface(source, sides=list(p['sides']))
     sender = Sender(p, interface)
-    tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)
+    tf_broadcaster = publish_leap_tf(p) if p['publish_tf'] else None  # noqa: F841 (kept alive for the latched topic)
     rospy.loginfo('sender: publishing %s hands from the %s source on %s',
                   '/'.join(sender.sides), p['source'],
                   ', '.join(pubs['leapcobot'].resolved_name for pubs in sender.pubs.values()))
