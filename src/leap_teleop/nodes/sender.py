@@ -5,6 +5,7 @@ Publishes once per source frame from the source's thread (event-driven; no polli
 import gc
 import math
 
+import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
@@ -41,9 +42,12 @@ PARAMS = {
     'leapros_side': Param('right', 'hand the leapros message carries', choices=('right', 'left')),
     'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
                               'graph should)'),
-    'wait_for_subscribers': Param(False, 'start the source only once every leapcobot topic '
+    'wait_for_subscribers': Param(False, 'start the source only once every ~wait_topics topic '
                                          'has a subscriber (so a session is not lost while '
                                          'its consumers start)'),
+    'wait_topics': Param([], 'topics the consumers read, to wait for; any topic of the graph '
+                             '(e.g. the drone\'s ardrone/takeoff); empty = every published '
+                             'leapcobot topic', kind='list', item='str'),
 }
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
@@ -101,12 +105,27 @@ class Sender:
                         if p['leapros_topic'] else None)
         interface.add_hand_listener(self.on_hand)
 
-    def wait_for_subscribers(self, log_every=5.0):
-        """Block until every leapcobot topic has a subscriber; False on shutdown."""
+    def wait_for_subscribers(self, topics=(), log_every=5.0):
+        """Block until every topic in `topics` (default: every leapcobot topic) has a
+        subscriber; False on shutdown. The sender's own topics count once connected, any
+        other topic once the master lists a subscriber."""
+        own = {pub.resolved_name: pub for pubs in self.pubs.values() for pub in pubs.values()}
+        if self.leapros is not None:
+            own[self.leapros.resolved_name] = self.leapros
+        names = [rospy.resolve_name(t) for t in topics] or [
+            pubs['leapcobot'].resolved_name for pubs in self.pubs.values()]
+        master = rosgraph.Master(rospy.get_name())
         last_log = rospy.get_time()
         while not rospy.is_shutdown():
-            waiting = [pubs['leapcobot'].resolved_name for pubs in self.pubs.values()
-                       if pubs['leapcobot'].get_num_connections() == 0]
+            others = [t for t in names if t not in own]
+            listened = set()
+            if others:
+                try:
+                    listened = {t for t, nodes in master.getSystemState()[1] if nodes}
+                except (rosgraph.MasterError, OSError):
+                    pass
+            waiting = [t for t in names if (own[t].get_num_connections() == 0 if t in own
+                                            else t not in listened)]
             if not waiting:
                 return True
             if rospy.get_time() - last_log >= log_every:
@@ -165,7 +184,7 @@ def main(argv=None):
     # so its passes stay short on the per-frame path.
     gc.collect()
     gc.freeze()
-    if p['wait_for_subscribers'] and not sender.wait_for_subscribers():
+    if p['wait_for_subscribers'] and not sender.wait_for_subscribers(p['wait_topics']):
         return
     interface.start()
     while not rospy.is_shutdown() and not interface.finished.wait(0.2):

@@ -65,6 +65,14 @@ from ..sources import leapjs
 DEFAULT_DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
                                              'shared', 'data', 'leapjs'))
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
+
+
+def data_dir():
+    """The folder of the shared LeapJS recordings: $LEAPJS_DATA when set, else the
+    repository's sibling shared/data/leapjs."""
+    return os.environ.get('LEAPJS_DATA') or DEFAULT_DATA
+
+
 ALL = range(0, 10 ** 6)
 
 
@@ -339,7 +347,7 @@ def print_table(results):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--data', default=os.environ.get('LEAPJS_DATA', DEFAULT_DATA),
+    ap.add_argument('--data', default=data_dir(),
                     help='folder of the LeapJS recordings (default %(default)s)')
     ap.add_argument('--out', default='eval_results.json')
     args = ap.parse_args(argv)
