@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from leap_teleop.tools.evaluate import DEFAULT_DATA
+from leap_teleop.tools.evaluate import data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
@@ -19,10 +19,8 @@ def test_rostest(test_file, tmp_path):
     env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log'))
     args = []
     with open(test_file) as f:
-        if 'name="leapjs_data"' in f.read():      # it plays the shared recordings
-            if not os.path.isdir(DEFAULT_DATA):
-                pytest.skip('shared/data/leapjs absent')
-            args.append('leapjs_data:=%s' % DEFAULT_DATA)
+        if 'name="leapjs_data"' in f.read():      # it plays the shared recordings (and
+            args.append('leapjs_data:=%s' % data_dir())   # fails when they are missing)
     proc = subprocess.run(
         # Not --text: with it rostest exits 0 even when a test fails.
         ['rostest', '--results-base-dir', str(tmp_path / 'results'), test_file] + args,
