@@ -12,8 +12,9 @@ from leap_teleop.hand_model import render_hand
 from leap_teleop.sources import leapjs
 from leap_teleop.tools.classify_frames import Classifier
 
-DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..',
-                                     'shared', 'data', 'leapjs'))
+from leap_teleop.tools.evaluate import data_dir
+
+DATA = data_dir()
 KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'events']
 
 
@@ -72,7 +73,7 @@ def test_garbage_lines_never_stop_the_run():
     assert out[4]['hands'][0]['type'] == 'right' and not out[4]['hands'][0]['open']
 
 
-@pytest.mark.skipif(not os.path.isdir(DATA), reason='shared/data/leapjs absent')
+@pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
 def test_every_shared_recording_classifies():
     for name in sorted(os.listdir(DATA)):
         if name.endswith('.json.lz'):

@@ -1,17 +1,13 @@
-"""The evaluation on the real recordings meets the issue's targets (skips without data)."""
-import os
+"""The evaluation on the real recordings meets the issue's targets (fails without data)."""
 
 import pytest
 
 from leap_teleop.tools import evaluate
 
-pytestmark = pytest.mark.skipif(not os.path.isdir(evaluate.DEFAULT_DATA),
-                                reason='shared/data/leapjs absent')
-
 
 @pytest.fixture(scope='module')
-def results():
-    return evaluate.evaluate(evaluate.DEFAULT_DATA, verbose=False)
+def results(leapjs_data):
+    return evaluate.evaluate(leapjs_data, verbose=False)
 
 
 def test_all_takes_found(results):
@@ -57,13 +53,17 @@ def test_circle_figures_over_every_take_include_the_two_circle_takes(results):
     assert {t: v['sdk_circles_in_recording'] for t, v in per_take.items()
             if t not in evaluate.CIRCLE_TAKES and v['sdk_circles_in_recording']} == {
         'pinch': 1, 'rollAndPitchCropped': 5, 'test-paddle-rightwards': 1, 'three-claps': 2}
-    assert 0.0 <= every['precision'] <= 1.0 and 0.0 <= every['recall'] <= 1.0
+    assert every['sdk_circles_in_recording'] == 5 + 1 + 5 + 1 + 2
+    # The figures the README states: 27 events, 6 on an SDK circle; 6 of the 14 found.
+    assert (every['events'], every['agreeing_events'], every['matched']) == (27, 6, 6), every
+    assert every['precision'] == pytest.approx(6 / 27, abs=1e-4)
+    assert every['recall'] == pytest.approx(6 / 14, abs=1e-4)
 
 
-def test_circle_ground_truth_counts_what_the_recordings_show():
-    rows, sdk = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, 'flapping'))
+def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):
+    rows, sdk = evaluate.run_take(evaluate.find_file(leapjs_data, 'flapping'))
     assert len(sdk) == 8 and sum(c.in_recording for c in sdk.values()) == 4
-    rows, sdk = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, 'Waiting-110fps'))
+    rows, sdk = evaluate.run_take(evaluate.find_file(leapjs_data, 'Waiting-110fps'))
     assert len(sdk) == 2 and sum(c.in_recording for c in sdk.values()) == 1
     assert all(c.clockwise is not None for c in sdk.values())
 
