@@ -23,7 +23,7 @@ def fly_script(path, mode='tilt'):
         while drone.time < t:
             drone.step()
         nav = drone.navdata()
-        pilot.on_navdata(nav['state'], nav['altd'])
+        pilot.on_navdata(nav['state'], nav['altd'], t)
         st = li.on_frame(frame)['right']
         pilot.on_hand(HandInput(st.present, tuple(v * 1e-3 for v in st.palm_position),
                                 st.palm_normal, st.direction), t)

@@ -46,7 +46,7 @@ def test_leap_angles_match_the_sdk_definitions():
 
 def test_paper_mode_reproduces_algorithm_1():
     pilot = DronePilot(PilotConfig(mode='paper'))
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     tilted_n = (0.5, -math.sqrt(3) / 2, 0.0)                            # roll 30 deg
     tilted_d = (0.0, math.sin(math.radians(40)), -math.cos(math.radians(40)))   # pitch 40
     # Pitch 40 but roll only 20: no capture, nothing sent.
@@ -82,12 +82,12 @@ def test_shaped_dead_zone_and_full_scale():
 
 def test_tilt_mode_maps_offsets_from_the_reference():
     pilot = DronePilot(PilotConfig())
-    pilot.on_navdata(2, 0)
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     assert drain(pilot) == []                       # not engaged: nothing
     pilot.on_gesture('unfold', True, 0.0)
     assert kinds(drain(pilot)) == ['takeoff']
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     yaw = math.radians(-40)                            # hand turned left by 40 deg
     t = []
     for i, h in enumerate([hand((0.01, 0.21, -0.01)),          # inside the dead zone: hover
@@ -105,11 +105,11 @@ def test_tilt_mode_maps_offsets_from_the_reference():
 
 def test_no_hand_twists_while_landed_or_taking_off():
     pilot = DronePilot(PilotConfig())
-    pilot.on_navdata(2, 0)
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
     drain(pilot)
-    pilot.on_navdata(6, 300)
+    pilot.on_navdata(6, 300, 0.0)
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     assert drain(pilot) == []
 
@@ -122,7 +122,7 @@ def test_only_a_hand_sized_circle_flips():
     warnings = []
     pilot = DronePilot(PilotConfig(flip_min_radius=0.025),
                        warn=lambda key, text: warnings.append(text))
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     for radius in (0.004, 0.0199, -0.05, math.nan, math.inf, None, 'wide', True):
         pilot.on_gesture('circle_cw', True, 0.0, radius)
     assert drain(pilot) == []
@@ -130,7 +130,7 @@ def test_only_a_hand_sized_circle_flips():
     pilot.on_gesture('circle_ccw', True, 0.0, 0.025)
     pilot.on_gesture('circle_ccw', True, 0.0, np.float32(0.03))    # a message's float32
     assert kinds(drain(pilot)) == ['flip', 'flip']
-    pilot.on_navdata(2, 0)                  # landed: it says so, whatever the radius
+    pilot.on_navdata(2, 0, 0.0)                  # landed: it says so, whatever the radius
     pilot.on_gesture('circle_ccw', True, 0.0, 0.004)
     assert 'not flying' in warnings[-1]
     with pytest.raises(ValueError):
@@ -139,20 +139,20 @@ def test_only_a_hand_sized_circle_flips():
 
 def test_gestures_respect_the_drone_state():
     pilot = DronePilot(PilotConfig(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     pilot.on_gesture('unfold', True, 0.0)                 # flying: no takeoff
     pilot.on_gesture('circle_cw', True, 0.0, HAND_CIRCLE)
     assert [(c.kind, c.anim) for c in drain(pilot)] == [('flip', (18, 0))]
-    pilot.on_navdata(4, 400)                              # too low for a flip
+    pilot.on_navdata(4, 400, 0.0)                              # too low for a flip
     pilot.on_gesture('circle_ccw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
-    pilot.on_navdata(9, 1000)                             # looping: no second flip
+    pilot.on_navdata(9, 1000, 0.0)                             # looping: no second flip
     pilot.on_gesture('circle_ccw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
-    pilot.on_navdata(3, 1000)
+    pilot.on_navdata(3, 1000, 0.0)
     pilot.on_gesture('fold', True, 0.0)
     assert kinds(drain(pilot)) == ['land']
-    pilot.on_navdata(2, 0)
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_gesture('fold', True, 0.0)                   # landed: no land
     pilot.on_gesture('circle_cw', True, 0.0, HAND_CIRCLE)
     assert drain(pilot) == []
@@ -162,11 +162,11 @@ def test_gestures_respect_the_drone_state():
 
 # -- watchdog ---------------------------------------------------------------------------
 def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
-    pilot = DronePilot(PilotConfig(land_after=3.0))
-    pilot.on_navdata(2, 0)
+    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=10.0))   # navdata fresh
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(3, 1000)
+    pilot.on_navdata(3, 1000, 0.0)
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     assert twists(drain(pilot))[-1][0] == 1.0
     pilot.on_hand(hand((0, 0, 0), present=False), 0.2)
@@ -181,11 +181,11 @@ def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
 
 
 def test_silence_counts_as_a_lost_hand():
-    pilot = DronePilot(PilotConfig(hand_timeout=0.15, land_after=3.0))
-    pilot.on_navdata(2, 0)
+    pilot = DronePilot(PilotConfig(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(3, 1000)
+    pilot.on_navdata(3, 1000, 0.0)
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     drain(pilot)
     pilot.watchdog(0.2)
@@ -199,11 +199,11 @@ def test_silence_counts_as_a_lost_hand():
 
 
 def test_reference_recaptured_when_the_hand_comes_back():
-    pilot = DronePilot(PilotConfig())
-    pilot.on_navdata(2, 0)
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     pilot.on_hand(hand((0, 0, 0), present=False), 0.1)
     t = twists(drain(pilot))
     pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
@@ -257,7 +257,7 @@ def test_bad_config_rejected():
 def test_absurd_palm_positions_are_rejected_not_flown(mode):
     # Found by fuzzing: a finite but absurd palm (1.8e305 m) made paper mode's twist infinite.
     pilot = DronePilot(PilotConfig(mode=mode))
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, 0.0)
     pilot.on_hand(HandInput(False), 0.0)
     pilot.on_hand(HandInput(True, palm=(1.797693134862316e+305, 0.0, 0.0)), 0.01)
     pilot.on_hand(HandInput(True, palm=(0.0, 0.2, 0.0), normal=(0.0, -30.0, 0.0)), 0.02)
@@ -280,10 +280,10 @@ def test_fingertip_loops_on_real_recordings_never_flip_a_flying_drone(leapjs_dat
 
     def flips(config):
         pilot = DronePilot(config)
-        pilot.on_navdata(4, 1500)
+        pilot.on_navdata(4, 1500, 0.0)
         for e in circles:
             pilot.on_gesture(e.gesture, True, 0.0, e.value)
-            pilot.on_navdata(4, 1500)       # the flip is over before the next circle
+            pilot.on_navdata(4, 1500, 0.0)       # the flip is over before the next circle
         return kinds(drain(pilot)).count('flip')
     fingertip = [e for e in circles if e.source != 'palm']
     assert all(e.value < 0.025 for e in fingertip)

@@ -1,9 +1,12 @@
 """Bad input and property-based fuzzing: whatever arrives, nothing raises and no command
-leaves the joint, workspace, gripper or tilt limits. Also the stream checks (out of order,
-late, restarts) behind the fault rostests (test/fault_*.test).
+leaves the joint, workspace, gripper or tilt limits; any accepted watchdog setting still
+hovers, lands and disarms. Also the stream checks (out of order, late, restarts, backlog
+bursts), the pilot's worker and the live sources' queue behind the fault rostests
+(test/fault_*.test).
 
-Example budget (per `make test` run): 3000 + 2500 + 3000 here, on top of 3000 in
-test_arm_teleop.py and ~400 in test_gesture_recognizer.py / test_classify_frames.py.
+Example budget (per `make test` run): 3000 + 2500 + 3000 + 150 + 100 here, on top of 3000
+in test_arm_teleop.py, 1500 in test_params.py and ~400 in test_gesture_recognizer.py /
+test_classify_frames.py.
 """
 import logging
 import math
@@ -35,8 +38,24 @@ def test_stream_drops_out_of_order_and_late_messages_but_not_a_constant_offset()
     # A backlog: messages keep coming (no silence) but fall ever further behind.
     verdicts = [s.check(50.02 + 0.01 * k, 100.02 + 0.09 * k) for k in range(10)]
     assert verdicts[:4] == [None] * 4 and all('late' in v for v in verdicts[4:])
-    # Only a real silence (sender restarted, bag replayed again) starts a new stream.
-    assert s.check(50.2, 101.2) is None
+    # A silence, then the same timeline still late: a stalled source's backlog, refused.
+    assert 'late' in s.check(50.2, 101.2)
+    # Only a real restart (fresh stamps, or a bag replayed again) starts a new stream.
+    assert s.check(51.45, 101.5) is None
+    assert s.check(1.0, 102.0) is None
+
+
+def test_found_backlog_burst_after_a_stall_passes_only_its_last_max_age():
+    # Before: the silence of the stall reset the stream, so a 2 s old backlog was accepted.
+    s = InputStream(max_age=0.25, gap=0.2)
+    for k in range(100):                       # 100 Hz, 5 ms latency
+        assert s.check(10.0 + 0.01 * k, 10.005 + 0.01 * k) is None
+    # Stall 2 s, then the 200 messages captured meanwhile arrive within 0.1 s.
+    verdicts = [(stamp, s.check(stamp, 13.0 + 0.0005 * k))
+                for k, stamp in enumerate(11.0 + 0.01 * np.arange(200))]
+    passed = [stamp for stamp, why in verdicts if why is None]
+    assert passed and all(13.1 - stamp <= 0.25 + 0.005 + 0.1 for stamp in passed)
+    assert len(passed) <= 30 and all('late' in why for _, why in verdicts[:150])
 
 
 def test_stream_restarts_after_silence_or_a_clock_jump():
@@ -248,7 +267,7 @@ pilot_events = st.one_of(
 
 @settings(max_examples=3000, deadline=None, suppress_health_check=list(HealthCheck))
 @given(seq=st.lists(pilot_events, min_size=1, max_size=10),
-       mode=st.sampled_from(['tilt', 'paper']), max_cmd=st.sampled_from([1.0, 0.5, 7.0]))
+       mode=st.sampled_from(['tilt', 'paper']), max_cmd=st.sampled_from([1.0, 0.5, 0.25]))
 def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
     pilot = DronePilot(PilotConfig(mode=mode, max_cmd=max_cmd))
     now, mono = 0.0, 0.0
@@ -260,7 +279,7 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
             pilot.on_gesture(ev[1], True, now, ev[2])
         elif ev[0] == 'nav':
             try:
-                pilot.on_navdata(ev[1], ev[2])
+                pilot.on_navdata(ev[1], ev[2], now)
             except (ValueError, OverflowError):
                 pass                          # rospy would not deliver such a Navdata
         else:
@@ -286,7 +305,7 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
 def _engaged_pilot(t0):
     """A pilot flying at 1 m, engaged at t0 and steered by one hand sample 10 ms later."""
     pilot = DronePilot(PilotConfig())
-    pilot.on_navdata(4, 1000)
+    pilot.on_navdata(4, 1000, t0)
     pilot.on_gesture('unfold', True, t0)
     pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=t0), t0)
     pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t0 + 0.01), t0 + 0.01)
@@ -301,6 +320,7 @@ def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
         t += 0.01
         pilot.on_hand(PilotHand(True, (math.nan, 0.2, 0.0), stamp=t), t)
         pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t - 1.0), t)
+        pilot.on_navdata(4, 1000, t)
         pilot.watchdog(t)
         while True:
             cmd, _ = pilot.pop(1e6 + t * 1e3)
@@ -351,3 +371,223 @@ def test_flight_animation_type_200_refused_and_duration_overflow_harmless():
         assert worst <= d.p.euler_angle_max + 0.02 and math.isfinite(d.altitude)
     finally:
         d.close()
+
+
+# -- no parameter disables a watchdog: any accepted value keeps it working ------------------
+from leap_teleop.drone.pilot import PILOT_PARAMS, PilotWorker  # noqa: E402
+from leap_teleop.service_call import ServiceCall  # noqa: E402
+from leap_teleop.teleop.arm import TELEOP_PARAMS  # noqa: E402
+
+
+def _accepted(p):
+    lo = p.gt if p.gt is not None else p.ge
+    hi = p.lt if p.lt is not None else p.le
+    return st.floats(lo, hi, exclude_min=p.gt is not None, exclude_max=p.lt is not None)
+
+
+def _pilot_run(pilot, t0, until, dt=0.01, hand=False, navdata=True):
+    """Step the pilot from t0 to `until`; [(t, cmd)] of what it sends."""
+    out, t = [], t0
+    while t < until:
+        t += dt
+        if hand:
+            pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t), t)
+        if navdata:
+            pilot.on_navdata(4, 1000, t)
+        pilot.watchdog(t)
+        while True:
+            cmd, _ = pilot.pop(1e6 + t * 1e3 + len(out))
+            if cmd is None:
+                break
+            out.append((t, cmd))
+    return out
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+@given(hand_timeout=_accepted(PILOT_PARAMS['hand_timeout']),
+       land_after=_accepted(PILOT_PARAMS['land_after']),
+       navdata_timeout=_accepted(PILOT_PARAMS['navdata_timeout']),
+       lose=st.sampled_from(['hand', 'navdata']))
+def test_fuzz_any_accepted_pilot_timeouts_still_hover_then_land(hand_timeout, land_after,
+                                                                navdata_timeout, lose):
+    cfg = PilotConfig().update(dict(hand_timeout=hand_timeout, land_after=land_after,
+                                    navdata_timeout=navdata_timeout))
+    pilot = DronePilot(cfg)
+    pilot.on_navdata(4, 1000, 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    _pilot_run(pilot, 0.0, 0.05, hand=True)
+    limit = (hand_timeout if lose == 'hand' else navdata_timeout) + land_after + 0.05
+    out = _pilot_run(pilot, 0.05, 0.05 + limit, dt=0.02, hand=lose == 'navdata',
+                     navdata=lose == 'hand')
+    zero = [t for t, c in out if c.kind == 'twist' and c.twist == (0.0,) * 6]
+    assert zero and zero[0] <= 0.05 + limit - land_after
+    assert any(c.kind == 'land' for _, c in out)
+    first_zero = zero[0]
+    assert not any(c.kind == 'twist' and c.twist != (0.0,) * 6 for t, c in out
+                   if t > first_zero)
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=list(HealthCheck))
+@given(input_timeout=_accepted(TELEOP_PARAMS['input_timeout']))
+def test_fuzz_any_accepted_input_timeout_still_disarms_the_arm(input_timeout):
+    a = Arm(input_timeout=input_timeout)
+    a.arm_with_origin()
+    steps = int((input_timeout + 0.1) / 0.05) + 2
+    for _ in range(steps):
+        a.period(None, dt=0.05)
+    assert a.t.status.state == DISARMED
+
+
+# -- navdata staleness ---------------------------------------------------------------------
+def test_found_no_navdata_no_takeoff_and_no_twist_beyond_hover():
+    # Before: with no navdata at all an unfold took off and hand twists were sent.
+    warnings = []
+    pilot = DronePilot(PilotConfig(), warn=lambda key, text: warnings.append(text))
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    out = _pilot_run(pilot, 0.0, 2.0, hand=True, navdata=False)
+    assert not any(c.kind == 'takeoff' for _, c in out)
+    assert all(c.twist == (0.0,) * 6 for _, c in out if c.kind == 'twist')
+    assert any('no navdata' in w for w in warnings)
+    # Fresh navdata (landed): the next unfold takes off.
+    pilot.on_navdata(2, 0, 2.0)
+    pilot.on_gesture('unfold', True, 2.0)
+    assert any(c.kind == 'takeoff' for _, c in _pilot_run(pilot, 2.0, 2.05, hand=True))
+
+
+def test_found_navdata_stopping_mid_flight_hovers_then_lands():
+    # Before: the pilot kept believing the last navdata and kept sending hand twists.
+    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, land_after=3.0))
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    out = _pilot_run(pilot, 0.0, 1.0, hand=True)
+    assert any(c.kind == 'twist' and c.twist[0] > 0.5 for _, c in out)    # flying forward
+    out = _pilot_run(pilot, 1.0, 5.0, hand=True, navdata=False)          # navdata stops
+    zero = [t for t, c in out if c.kind == 'twist' and c.twist == (0.0,) * 6]
+    assert zero and 1.5 <= zero[0] <= 1.55
+    assert not any(c.kind == 'twist' and c.twist != (0.0,) * 6 for t, c in out if t >= zero[0])
+    assert len(zero) >= 3                                     # hover repeated while stale
+    land = [t for t, c in out if c.kind == 'land']
+    assert len(land) == 1 and 4.5 <= land[0] <= 4.55
+    assert pilot.navdata_lost_since is not None
+
+
+# -- the pilot's worker: a hung peer or a fault never stops the watchdog -----------------------
+class FakeClock:
+    def __init__(self, t=0.0):
+        self.t = t
+
+    def __call__(self):
+        return self.t
+
+
+def _worker(pilot, flip, clock, timeout=0.5):
+    sent, warnings = [], []
+    call = ServiceCall(flip, timeout, 'flip', clock=clock)
+    w = PilotWorker(pilot, lambda cmd: sent.append((clock.t, cmd)), call, clock,
+                    warn=lambda key, text: warnings.append(text), mono=lambda: 1e6 + clock.t)
+    return w, sent, warnings
+
+
+def test_found_hung_flip_call_never_blocks_the_watchdog():
+    # Before: the worker made the flip call itself; a peer that accepted the call and never
+    # answered stopped every hover and land command.
+    import threading
+    release = threading.Event()
+    clock = FakeClock()
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0, land_after=3.0))
+    w, sent, warnings = _worker(pilot, lambda *anim: release.wait(30.0), clock)
+    pilot.on_navdata(4, 1500, 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_gesture('circle_cw', True, 0.0, 0.035)
+    try:
+        while clock.t < 4.0:                   # the hand went silent right after the circle
+            clock.t += 0.01
+            pilot.on_navdata(4, 1500, clock.t)
+            w.step()
+        assert w.flip_call.busy                # the call still hangs on its own thread
+        assert w.flip_call.counts['timeout'] == 1
+        assert any('timed out' in text for text in warnings)
+        zero = [t for t, c in sent if c.kind == 'twist' and c.twist == (0.0,) * 6]
+        assert zero and zero[0] <= 0.17
+        land = [t for t, c in sent if c.kind == 'land']
+        assert land and 3.1 <= land[0] <= 3.2
+        # A second circle while the first call hangs: refused, nothing piles up.
+        pilot.on_navdata(4, 1500, clock.t)
+        pilot.on_gesture('circle_cw', True, clock.t, 0.035)
+        w.step()
+        assert w.flip_call.counts['refused'] == 1 and any('not returned' in x for x in warnings)
+    finally:
+        release.set()
+
+
+def test_found_any_worker_exception_is_answered_with_hover_then_land():
+    # Before: any exception other than ROSException killed the worker while the node
+    # looked alive.
+    clock = FakeClock()
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0, land_after=1.0))
+    w, sent, warnings = _worker(pilot, lambda *anim: True, clock)
+
+    def broken(now):
+        raise ZeroDivisionError('boom')
+    pilot.watchdog = broken
+    while clock.t < 1.5:
+        clock.t += 0.02
+        assert w.step() > 0
+    assert w.errors > 50 and 'ZeroDivisionError' in w.last_error
+    assert sent[0][1].kind == 'twist' and sent[0][1].twist == (0.0,) * 6
+    land = [t for t, c in sent if c.kind == 'land']
+    assert len(land) == 1 and 1.0 <= land[0] <= 1.05
+    assert any('worker fault' in text for text in warnings)
+
+
+def test_service_call_reports_failures_and_times_out_once():
+    clock = FakeClock()
+
+    def fails(*args):
+        raise OSError('connection refused')
+    call = ServiceCall(fails, 0.5, clock=clock)
+    assert call.submit(19, 0)
+    call._thread.join(2.0)
+    assert call.poll()[0] == 'failed' and call.poll() is None
+    ok = ServiceCall(lambda a, b: a + b, 0.5, clock=clock)
+    ok.submit(2, 3)
+    ok._thread.join(2.0)
+    assert ok.poll() == ('ok', 5)
+    with pytest.raises(ValueError):
+        ServiceCall(fails, math.nan)
+
+
+# -- live sources: the newest frame after a stall ------------------------------------------
+def test_found_live_queue_delivers_the_newest_frame_after_a_stall():
+    # Before: a 256-frame queue handed a 2 s old hand to the robots after a stall.
+    from types import SimpleNamespace
+
+    from leap_teleop.sources.live import PushQueue
+    clock = FakeClock(100.0)
+    pq = PushQueue(clock, maxsize=8, max_age=0.25)
+    for i in range(10):                       # the device runs at 120 Hz, the consumer keeps up
+        clock.t += 1 / 120
+        pq.put(SimpleNamespace(id=i, timestamp=pq.stamp(i * 1e6 / 120)))
+        assert pq.get(0.0).id == i
+    # The device's thread stalls 2 s, then bursts the 240 frames it captured meanwhile.
+    clock.t += 2.0
+    for i in range(10, 250):
+        pq.put(SimpleNamespace(id=i, timestamp=pq.stamp(i * 1e6 / 120)))
+    got = []
+    while True:
+        f = pq.get(0.0)
+        if f is None:
+            break
+        got.append(f)
+    assert all(clock.t - f.timestamp <= 0.25 for f in got)
+    assert got and got[-1].id == 249                    # the newest frame is delivered
+    assert pq.dropped == 240 - len(got)
+    # The consumer stalls instead: after it, only the newest maxsize frames are left.
+    for i in range(250, 500):
+        clock.t += 1 / 120
+        pq.put(SimpleNamespace(id=i, timestamp=pq.stamp(i * 1e6 / 120)))
+    assert len(pq) == 8 and pq.get(0.0).id == 492

@@ -39,3 +39,158 @@ def test_allowed_text():
     assert TABLE['count'].allowed() == 'an integer >= 0 and <= 10'
     assert TABLE['mode'].allowed() == 'one of: tilt, paper'
     assert TABLE['xyz'].allowed() == 'a list of 3 finite numbers (m)'
+
+
+# -- every node's table: declarations, bad values, bounds of the safety functions ----------
+from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
+
+from leap_teleop.tools.param_table import node_tables  # noqa: E402
+
+TABLES = {module: params for module, _, params in node_tables()}
+EVERY_PARAM = [(m, n) for m, params in sorted(TABLES.items()) for n in params]
+NOT_NUMBERS = [None, 'fast', [1.0], {'a': 1}, True]
+
+
+def test_every_node_declares_its_parameters():
+    assert set(TABLES) >= {'sender', 'ur10_arm', 'ur10_sim', 'drone_pilot', 'ardrone_sim',
+                           'hand_markers'}
+    for module, params in TABLES.items():
+        assert check_params(params, {}) is not None           # the defaults pass
+        for name, p in params.items():
+            assert p.doc and p.allowed(), (module, name)
+            if p.kind in ('int', 'float') or (p.kind == 'list' and p.item in ('int', 'float')):
+                # Every number has a finite range on both sides (or a fixed set of choices).
+                assert p.choices or ((p.gt is not None or p.ge is not None)
+                                     and (p.lt is not None or p.le is not None)), (module, name)
+
+
+def _scalar_bad(p, kind):
+    """Values the declaration `p` must refuse for a scalar of `kind`."""
+    if kind == 'bool':
+        return [1, 0, 'yes', None, 1.0]
+    if kind == 'str':
+        out = [5, None, 2.5, True]
+        if p.choices is not None:
+            out.append('no-such-choice')
+        if not p.empty_ok:
+            out.append('')
+        return out
+    out = list(NOT_NUMBERS)
+    if kind == 'float':
+        out += [math.nan, math.inf, -math.inf]
+    else:
+        out += [2.5, math.nan]
+    lo = p.gt if p.gt is not None else p.ge
+    hi = p.lt if p.lt is not None else p.le
+    if p.gt is not None:
+        out.append(p.gt)
+    if p.ge is not None:
+        out.append(p.ge - (1 if kind == 'int' else max(1e-6, abs(p.ge) * 1e-3)))
+    if p.lt is not None:
+        out.append(p.lt)
+    if p.le is not None:
+        out.append(p.le + (1 if kind == 'int' else max(1e-6, abs(p.le) * 1e-3)))
+    if lo is not None:
+        out += [lo - 1e9, -1e300] if kind == 'float' else [int(lo) - 10 ** 9]
+    if hi is not None:
+        out += [hi + 1e9, 1e300] if kind == 'float' else [int(hi) + 10 ** 9]
+    return out
+
+
+def bad_values(p):
+    if p.kind != 'list':
+        return _scalar_bad(p, p.kind)
+    good = list(p.default)
+    out = [3, None, 2.5, {'x': 1}]
+    if p.item != 'str':
+        out.append('text')
+    if p.length is not None:
+        out += [good[:-1], good + good[-1:], []]
+    if p.min_length:
+        out.append([])
+    item = p.item if isinstance(p.item, Param) else None
+    bad_items = bad_values(item) if item else _scalar_bad(p, p.item)
+    for i in range(len(good)):
+        out += [good[:i] + [b] + good[i + 1:] for b in bad_items]
+    return out
+
+
+@st.composite
+def bad_assignments(draw):
+    module, name = draw(st.sampled_from(EVERY_PARAM))
+    p = TABLES[module][name]
+    return module, name, draw(st.sampled_from(bad_values(p)))
+
+
+@settings(max_examples=1500, deadline=None, suppress_health_check=list(HealthCheck))
+@given(case=bad_assignments())
+def test_fuzz_every_bad_parameter_value_is_refused(case):
+    module, name, value = case
+    with pytest.raises(ParamError) as e:
+        check_params(TABLES[module], {name: value})
+    msg = str(e.value)
+    assert msg.startswith('~%s = ' % name) and 'allowed: ' in msg and '\n' not in msg
+
+
+def test_every_bad_value_of_every_parameter_is_refused():
+    """The exhaustive companion of the fuzz test: each listed bad value, each parameter."""
+    n = 0
+    for module, name in EVERY_PARAM:
+        for value in bad_values(TABLES[module][name]):
+            with pytest.raises(ParamError):
+                check_params(TABLES[module], {name: value})
+            n += 1
+    assert n > 1000
+
+
+# -- the library configurations share the declarations ------------------------------------
+from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotConfig  # noqa: E402
+from leap_teleop.teleop.arm import TELEOP_PARAMS, ArmTeleop, ArmTeleopParams  # noqa: E402
+
+
+def test_every_config_field_is_declared():
+    from dataclasses import fields
+    assert {f.name for f in fields(PilotConfig)} == set(PILOT_PARAMS)
+    assert {f.name for f in fields(ArmTeleopParams)} == set(TELEOP_PARAMS)
+
+
+@pytest.mark.parametrize('table, build', [
+    (PILOT_PARAMS, lambda values: PilotConfig().update(values)),
+    (TELEOP_PARAMS, lambda values: ArmTeleopParams.from_dict(values)),
+])
+def test_library_configs_refuse_every_bad_value(table, build):
+    for name, p in table.items():
+        for value in bad_values(p):
+            with pytest.raises(ValueError):
+                build({name: value})
+
+
+def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():
+    # Before: PilotConfig.update turned 'nan' into float('nan') and the watchdog compared
+    # with NaN (never lost, never landed); the dataclasses built directly took anything.
+    for key in ('hand_timeout', 'land_after', 'navdata_timeout'):
+        for value in ('nan', math.nan, math.inf, 0.0, -1.0, 1e6):
+            with pytest.raises(ValueError):
+                PilotConfig().update({key: value})
+            with pytest.raises(ValueError):
+                DronePilot(PilotConfig(**{key: value}))
+    for key in ('input_timeout', 'joint_timeout', 'max_input_age', 'deadzone_mm'):
+        for value in (math.nan, math.inf, 0.0, -5.0):
+            with pytest.raises(ValueError):
+                ArmTeleop(ArmTeleopParams(**{key: value}))
+
+
+@pytest.mark.parametrize('key, value', [('physics_hz', 0), ('physics_hz', math.nan),
+                                        ('physics_hz', 'fast'), ('cube_size', -0.05),
+                                        ('cube_mass', math.inf)])
+def test_cell_config_scalars_are_checked(key, value):
+    # A physics rate of 0 divided by zero when the cell started; NaN corrupted the physics.
+    import yaml
+    from leap_teleop.ur10.config import config_path, load_config, parse_config
+    with open(config_path('ur10_cell.yaml')) as f:
+        data = yaml.safe_load(f)
+    assert load_config('ur10_cell.yaml').physics_hz == data['physics_hz']
+    data[key] = value
+    with pytest.raises(ValueError) as e:
+        parse_config(data, 'cell.yaml')
+    assert ('%s = ' % key) in str(e.value) and 'allowed' in str(e.value)

@@ -23,16 +23,30 @@ def test_rosrun_script_help(script):
 # A bad ~param ends the node at start-up: exit status 1 and one fatal line naming it.
 BAD_PARAMS = [
     ('sender.py', ['_source:=recording'], 'needs ~recording'),
-    ('sender.py', ['_source:=telepathy'], 'telepathy'),
-    ('sender.py', ['_leap_xyz:=[1,2]'], 'leap_xyz must be 3 numbers'),
-    ('sender.py', ['_queue_size:=-3'], 'queue_size must be an integer >= 0'),
-    ('ur10_arm.py', ['_hand:=middle'], 'hand must be right or left'),
-    ('hand_markers.py', ['_max_rate:=fast'], 'fast'),
-    ('drone_subscriber.py', ['_mode:=loop'], 'mode must be tilt or paper'),
-    ('drone_subscriber.py', ['_flip_type:=42'], 'flip_type'),
-    ('ur10_sim.py', ['_realtime_factor:=-1'], 'realtime_factor must be >= 0'),
-    ('ardrone_sim.py', ['_looprate:=0'], 'looprate must be > 0'),
-    ('ardrone_sim.py', ['_realtime_factor:=nan'], '~realtime_factor = '),
+    ('sender.py', ['_source:=telepathy'], "~source = 'telepathy': not one of the choices"),
+    ('sender.py', ['_leap_xyz:=[1,2]'], '~leap_xyz = [1, 2]: 2 items'),
+    ('sender.py', ['_queue_size:=-3'], '~queue_size = -3: out of range'),
+    ('sender.py', ['_sides:=[middle]'], "~sides = ['middle']"),
+    ('ur10_arm.py', ['_hand:=middle'], "~hand = 'middle': not one of the choices"),
+    ('ur10_arm.py', ['_rate:=0'], '~rate = 0: out of range; allowed: a finite number >= 10'),
+    ('ur10_arm.py', ['_status_rate:=0'], '~status_rate = 0: out of range'),
+    ('ur10_arm.py', ['_deadzone_mm:=-5'], '~deadzone_mm = -5: out of range'),
+    ('ur10_arm.py', ['_input_timeout:=.nan'], '~input_timeout = nan: not finite'),
+    ('ur10_arm.py', ['_workspace_min:=[0, 0]'], '~workspace_min = [0, 0]: 2 items'),
+    ('hand_markers.py', ['_max_rate:=fast'], "~max_rate = 'fast': not a number"),
+    ('hand_markers.py', ['_hand_topics:=[]'], '~hand_topics = []: 0 items'),
+    ('hand_markers.py', ['_scale:=0'], '~scale = 0: out of range'),
+    ('drone_subscriber.py', ['_mode:=loop'], "~mode = 'loop': not one of the choices"),
+    ('drone_subscriber.py', ['_flip_type:=42'], '~flip_type = 42: out of range'),
+    ('drone_subscriber.py', ['_hand_timeout:=.nan'], '~hand_timeout = nan: not finite'),
+    ('drone_subscriber.py', ['_hand_timeout:=nan'], "~hand_timeout = 'nan': not a number"),
+    ('drone_subscriber.py', ['_land_after:=.inf'], '~land_after = inf: not finite'),
+    ('drone_subscriber.py', ['_land_after:=1000000.0'], '~land_after = 1000000.0: out of range'),
+    ('drone_subscriber.py', ['_navdata_timeout:=0'], '~navdata_timeout = 0: out of range'),
+    ('ur10_sim.py', ['_realtime_factor:=-1'], '~realtime_factor = -1: out of range'),
+    ('ur10_sim.py', ['_snapshot_size:=[640]'], '~snapshot_size = [640]: 1 items'),
+    ('ardrone_sim.py', ['_looprate:=0'], '~looprate = 0: out of range'),
+    ('ardrone_sim.py', ['_realtime_factor:=.nan'], '~realtime_factor = nan: not finite'),
 ]
 
 
@@ -54,3 +68,14 @@ def test_bad_parameter_ends_the_node_with_a_clear_error(master, script, args, sa
     assert run.returncode == 1, out
     assert 'bad parameter' in out and says in out, out
     assert 'Traceback' not in out, out
+
+
+@pytest.mark.skipif(shutil.which('rosrun') is None, reason='rosrun not on PATH')
+def test_sender_with_one_side_given_as_a_string_runs(master):
+    # _sides:=right is the string 'right': a list of one side, not a KeyError traceback.
+    run = subprocess.run(['rosrun', 'leap_teleop', 'sender.py', '__name:=one_side',
+                          '_sides:=right', '_realtime:=false'], env=master,
+                         stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+    out = run.stdout + run.stderr
+    assert run.returncode == 0, out
+    assert 'publishing right hands' in out and 'Traceback' not in out, out

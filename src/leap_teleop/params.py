@@ -17,7 +17,9 @@ class Param:
 
     Numbers (and list items) must be finite and within `gt` / `ge` / `lt` / `le`; `choices`
     lists the allowed values; `length` fixes a list's length (`min_length` bounds it);
-    `item` is a list's item kind ('float', 'int', 'str'); `empty_ok=False` refuses ''.
+    `item` is a list's item kind ('float', 'int', 'str') or a Param (a list of lists:
+    each item is checked against it); `empty_ok=False` refuses ''. A single string given
+    for a list of strings is a list of one (`_sides:=right` means ['right']).
     """
 
     KINDS = ('bool', 'int', 'float', 'str', 'list')
@@ -35,6 +37,8 @@ class Param:
         self.length = length
         self.min_length = min_length
         self.item = item or (_kind_of(default[0]) if self.kind == 'list' and default else 'str')
+        if isinstance(self.item, Param):
+            self.item.unit = self.item.unit or unit
         self.empty_ok = empty_ok
 
     # -- checking -------------------------------------------------------------------------
@@ -48,12 +52,19 @@ class Param:
             raise ParamError('~%s = %r: %s; allowed: %s' % (name, value, e, self.allowed()))
 
     def _check_list(self, value):
+        if isinstance(value, str) and self.item == 'str':
+            value = [value]
         if not isinstance(value, (list, tuple)):
             raise ParamError('not a list')
         if self.length is not None and len(value) != self.length:
             raise ParamError('%d items' % len(value))
         if self.min_length is not None and len(value) < self.min_length:
             raise ParamError('%d items' % len(value))
+        if isinstance(self.item, Param):
+            try:
+                return [self.item.check('item', v) for v in value]
+            except ParamError:
+                raise ParamError('an item is not %s' % self.item.allowed())
         return [self._check_scalar(v, self.item) for v in value]
 
     def _check_scalar(self, value, kind):
@@ -91,6 +102,10 @@ class Param:
         if self.kind == 'list':
             n = ('%d ' % self.length if self.length is not None
                  else '>= %d ' % self.min_length if self.min_length else '')
+            if isinstance(self.item, Param):
+                return 'a list of %sitems, each %s' % (n, self.item.allowed())
+            if self.choices is not None:
+                return 'a list of %sitems, each %s' % (n, self._scalar_text(self.item))
             return 'a list of %s%s' % (n, self._scalar_text(self.item, plural=True))
         return self._scalar_text(self.kind)
 

@@ -29,8 +29,10 @@ Modes:
   value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
   Nothing is sent before the first capture.
 
-Safety added in both modes: hand twists are only sent while the drone flies or hovers
-(when navdata is known); hand lost (Hand.present false, a hand_lost event, or no Hand
+Safety added in both modes: hand twists are only sent while fresh navdata (no older
+than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
+says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
+the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present false, a hand_lost event, or no Hand
 message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
@@ -44,8 +46,10 @@ import collections
 import math
 import numbers
 import threading
+import time
 from dataclasses import dataclass, fields
 
+from leap_teleop.params import Param, check_params
 from leap_teleop.teleop.input_check import InputStream
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
@@ -53,6 +57,7 @@ MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
 ZERO_TWIST = (0.0,) * 6
+HOVER_REPEAT = 1.0                   # s between hover commands while navdata is stale
 
 
 @dataclass
@@ -65,7 +70,8 @@ class PilotConfig:
     flip_min_altitude: float = 0.6      # m, no flip below this
     flip_min_radius: float = 0.025      # m, no flip on a smaller circle
     hand_timeout: float = 0.15          # s without a Hand message = hand lost
-    land_after: float = 3.0             # s of lost hand before landing
+    land_after: float = 3.0             # s of lost hand (or navdata) before landing
+    navdata_timeout: float = 0.5        # s without navdata = drone state unknown
     dead_zone: float = 0.03             # m, palm offset ignored around the reference
     full_scale: float = 0.10            # m beyond the dead zone for a full command
     z_dead_zone: float = 0.03           # m, vertical
@@ -76,26 +82,69 @@ class PilotConfig:
     paper_angle: float = 25.0           # deg, Algorithm 1's capture threshold
     paper_scale: float = 3000.0         # mm per unit command, Algorithm 1
     max_input_age: float = 0.25         # s a Hand may arrive later than the stream's best
-                                        # latency; 0 = no lateness check
+                                        # latency
 
     def update(self, values):
+        """Set the known keys from `values`, then check every field against PILOT_PARAMS
+        (ParamError, a ValueError, names the first bad one)."""
         known = {f.name for f in fields(self)}
         for key, value in values.items():
             if key in known:
-                setattr(self, key, type(getattr(self, key))(value))
-        if self.mode not in ('tilt', 'paper'):
-            raise ValueError('mode must be tilt or paper, got %r' % self.mode)
-        if self.rate <= 0 or self.queue_size < 1:
-            raise ValueError('rate must be > 0 and queue_size >= 1')
-        if self.full_scale <= 0 or self.z_full_scale <= 0 or self.yaw_full_scale <= 0:
-            raise ValueError('full scales must be > 0')
-        if not (math.isfinite(self.max_input_age) and self.max_input_age >= 0):
-            raise ValueError('max_input_age must be >= 0, got %r' % self.max_input_age)
-        if not 0 <= self.flip_type <= 19:
-            raise ValueError('flip_type must be in 0..19')
-        if not (math.isfinite(self.flip_min_radius) and self.flip_min_radius >= 0):
-            raise ValueError('flip_min_radius must be >= 0, got %r' % self.flip_min_radius)
+                setattr(self, key, value)
+        return self.validate()
+
+    def validate(self):
+        for name, value in check_params(PILOT_PARAMS, vars(self)).items():
+            setattr(self, name, value)
         return self
+
+
+_C = PilotConfig()
+# Every PilotConfig field's declaration: the node's ~params and PilotConfig.update share it.
+# Watchdog times have upper bounds too: a huge timeout is a disabled watchdog.
+PILOT_PARAMS = {
+    'mode': Param(_C.mode, 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
+                           '(Algorithm 1 exactly)', choices=('tilt', 'paper')),
+    'rate': Param(_C.rate, 'max twist publishing rate (queue drain rate)', unit='Hz',
+                  ge=1.0, le=1000.0),
+    'queue_size': Param(_C.queue_size, 'command FIFO bound (oldest twist dropped when full)',
+                        ge=1, le=1000),
+    'flip_type': Param(_C.flip_type, 'flight animation for a circle gesture (19 = flip '
+                                     'right)', ge=0, le=19),
+    'flip_duration': Param(_C.flip_duration, 'its duration (0 = default)', unit='ms',
+                           ge=0, le=10000),
+    'flip_min_altitude': Param(_C.flip_min_altitude, 'no flip below this altitude', unit='m',
+                               ge=0.3, le=10.0),
+    'flip_min_radius': Param(_C.flip_min_radius, 'no flip on a smaller circle (fingertip '
+                                                 'loops are 4-20 mm)', unit='m',
+                             ge=0.0, le=0.5),
+    'hand_timeout': Param(_C.hand_timeout, 'no Hand message this long = hand lost (hover)',
+                          unit='s', gt=0.0, le=10.0),
+    'land_after': Param(_C.land_after, 'lost hand or navdata this long -> land', unit='s',
+                        gt=0.0, le=120.0),
+    'navdata_timeout': Param(_C.navdata_timeout, 'no navdata this long = drone state '
+                                                 'unknown: no takeoff, hover, then land',
+                             unit='s', gt=0.0, le=10.0),
+    'dead_zone': Param(_C.dead_zone, 'tilt: horizontal palm dead zone', unit='m',
+                       ge=0.0, le=0.5),
+    'full_scale': Param(_C.full_scale, 'tilt: offset beyond the dead zone for full tilt',
+                        unit='m', gt=0.0, le=1.0),
+    'z_dead_zone': Param(_C.z_dead_zone, 'tilt: vertical dead zone', unit='m', ge=0.0, le=0.5),
+    'z_full_scale': Param(_C.z_full_scale, 'tilt: offset beyond it for full climb rate',
+                          unit='m', gt=0.0, le=1.0),
+    'yaw_dead_zone': Param(_C.yaw_dead_zone, 'tilt: hand yaw dead zone', unit='deg',
+                           ge=0.0, lt=180.0),
+    'yaw_full_scale': Param(_C.yaw_full_scale, 'tilt: yaw beyond it for full yaw rate',
+                            unit='deg', gt=0.0, le=180.0),
+    'max_cmd': Param(_C.max_cmd, 'tilt: cap on every cmd_vel component', gt=0.0, le=1.0),
+    'paper_angle': Param(_C.paper_angle, 'paper: pitch and roll above this capture the '
+                                         'reference', unit='deg', ge=0.0, lt=90.0),
+    'paper_scale': Param(_C.paper_scale, 'paper: palm mm per unit command', unit='mm',
+                         ge=100.0, le=100000.0),
+    'max_input_age': Param(_C.max_input_age, 'drop a Hand arriving this much later than the '
+                                             'stream\'s best latency', unit='s',
+                           gt=0.0, le=10.0),
+}
 
 
 @dataclass
@@ -191,12 +240,16 @@ class CommandQueue:
 
 class DronePilot:
     def __init__(self, config=None, warn=None):
-        self.cfg = config or PilotConfig()
+        self.cfg = (config or PilotConfig()).validate()
         self._warn = warn or (lambda key, text: None)
         self.queue = CommandQueue(self.cfg.queue_size)
         self._lock = threading.Lock()
         self.drone_state = None          # navdata state, None until known
         self.altitude = 0.0              # m
+        self.last_navdata_time = None
+        self.navdata_lost_since = None   # set while navdata is stale (watchdog)
+        self._landed_for_navdata = False
+        self._last_hover = None          # when the navdata watchdog last sent a hover
         self.last_hand_time = None
         self.hand_present = False
         self.lost_since = None
@@ -211,10 +264,21 @@ class DronePilot:
         self.rejected_inputs = 0         # non-finite, out-of-order or late Hand messages
 
     # -- inputs (callbacks: quick, never block) --------------------------------------
-    def on_navdata(self, state, altd_mm, now=None):
+    def on_navdata(self, state, altd_mm, now):
         with self._lock:
             self.drone_state = int(state)
             self.altitude = float(altd_mm) / 1000.0
+            self.last_navdata_time = now
+            if self.navdata_lost_since is not None:
+                self._warn('navdata_back', 'navdata back after %.2f s'
+                           % (now - self.navdata_lost_since))
+            self.navdata_lost_since = None
+            self._landed_for_navdata = False
+
+    def navdata_fresh(self, now):
+        """Navdata arrived within navdata_timeout (and the clock did not jump back)."""
+        t = self.last_navdata_time
+        return t is not None and -1e-6 <= now - t <= self.cfg.navdata_timeout
 
     def on_hand(self, hand, now):
         with self._lock:
@@ -250,8 +314,8 @@ class DronePilot:
             twist = self._twist(hand)
             if twist is None:
                 return
-            if self.drone_state is not None and self.drone_state not in FLYING_STATES:
-                return
+            if not self.navdata_fresh(now) or self.drone_state not in FLYING_STATES:
+                return      # unknown or not flying: the navdata watchdog owns hovering
             self._zero_sent = all(v == 0.0 for v in twist)
             self.queue.push(Command('twist', twist, stamp=now))
 
@@ -259,7 +323,7 @@ class DronePilot:
         """A GestureEvent: its name, active flag, arrival time and value (for a circle,
         its radius in m)."""
         with self._lock:
-            state = self.drone_state
+            state = self.drone_state if self.navdata_fresh(now) else None
             if name == 'hand_lost':
                 self._lose(now)
             elif name == 'unfold':
@@ -267,8 +331,10 @@ class DronePilot:
                     self.engaged = True
                     if self._last_hand is not None and self.hand_present:
                         self._capture(self._last_hand)
-                if state is None or state == LANDED:
+                if state == LANDED:
                     self.queue.push(Command('takeoff', stamp=now))
+                elif state is None:
+                    self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
                 else:
                     self._warn('unfold', 'unfold: no takeoff, the drone is not landed (state %s)'
                                % state)
@@ -323,6 +389,11 @@ class DronePilot:
                 0.0, 0.0,
                 -shaped(dyaw, cfg.yaw_dead_zone, cfg.yaw_full_scale, cap))
 
+    def _no_navdata(self, now):
+        if self.last_navdata_time is None:
+            return 'no navdata yet'
+        return 'no navdata for %.2f s' % (now - self.last_navdata_time)
+
     # -- watchdog ----------------------------------------------------------------------
     def _lose(self, now):
         if self.hand_present or self.lost_since is None:
@@ -349,14 +420,40 @@ class DronePilot:
                 self._warn('stale', 'no Hand message for %.2f s: hovering'
                            % (now - self.last_hand_time))
                 self._lose(self.last_hand_time + self.cfg.hand_timeout)
+            self._navdata_watchdog(now)
             if (self.lost_since is not None and not self._landed_for_loss
                     and now - self.lost_since >= self.cfg.land_after
-                    and self.drone_state in AIRBORNE_STATES):
+                    and (self.drone_state in AIRBORNE_STATES
+                         or self.navdata_lost_since is not None)):
                 self._landed_for_loss = True
                 self.engaged = False
                 self.reference = None
                 self._warn('lost', 'hand lost for %.1f s: landing' % (now - self.lost_since))
                 self.queue.push(Command('land', stamp=now))
+
+    def _navdata_watchdog(self, now):
+        """Stale navdata: hover at once (again every HOVER_REPEAT s), land after land_after
+        unless the last fresh navdata said landed; the state counts as unknown meanwhile."""
+        if self.navdata_fresh(now):
+            return
+        if self.navdata_lost_since is None:
+            self.navdata_lost_since = now
+            self._last_hover = None
+            self._warn('navdata', '%s: drone state unknown, hovering' % self._no_navdata(now))
+        if self.drone_state == LANDED or self._landed_for_navdata:
+            return
+        if self._last_hover is None or not 0.0 <= now - self._last_hover < HOVER_REPEAT:
+            self._last_hover = now
+            self._zero_sent = True
+            self.queue.push(Command('twist', ZERO_TWIST, stamp=now))
+        if (self.drone_state is not None
+                and now - self.navdata_lost_since >= self.cfg.land_after):
+            self._landed_for_navdata = True
+            self.engaged = False
+            self.reference = None
+            self._warn('navdata_land', 'no navdata for %.1f s: landing'
+                       % (now - self.navdata_lost_since))
+            self.queue.push(Command('land', stamp=now))
 
     # -- output ------------------------------------------------------------------------
     def pop(self, mono_now):
@@ -372,3 +469,78 @@ class DronePilot:
         if cmd is not None and cmd.kind == 'twist':
             self._last_twist_out = mono_now
         return cmd, 0.0
+
+
+class PilotWorker:
+    """The one thread that acts: runs the watchdog and drains the queue. Twists, takeoff
+    and land go out through `send(cmd)` (publishing, never blocking); a flip goes to
+    `flip_call` (a ServiceCall: its own thread and timeout), so a peer that never answers
+    cannot stop the watchdog. Any exception in a step is caught, counted and answered
+    with the safe action: hover at once, land once the fault has lasted land_after."""
+
+    def __init__(self, pilot, send, flip_call, clock, warn=None, info=None,
+                 mono=None, extra=None):
+        self.pilot = pilot
+        self.send = send
+        self.flip_call = flip_call
+        self.clock = clock                      # the watchdog's clock (ROS time)
+        self.mono = mono or time.monotonic      # the queue's pacing clock
+        self.warn = warn or (lambda key, text: None)
+        self.info = info or (lambda text: None)
+        self.extra = extra                      # called every step (diagnostics)
+        self.errors = 0
+        self.last_error = ''
+        self.fault_since = None
+        self._fault_landed = False
+
+    def step(self):
+        """One pass; returns how long to wait for the next (s, at most 0.02)."""
+        now = self.clock()
+        try:
+            self.pilot.watchdog(now)
+            self._poll_flip()
+            if self.extra is not None:
+                self.extra()
+            cmd, wait = self.pilot.pop(self.mono())
+            if cmd is not None:
+                if cmd.kind == 'flip':
+                    if not self.flip_call.submit(*cmd.anim):
+                        self.warn('flip_busy', 'no flip: the previous flight animation call '
+                                  'has not returned')
+                else:
+                    self.send(cmd)
+            self.fault_since, self._fault_landed = None, False
+            return 0.0 if cmd is not None else min(wait or 0.02, 0.02)
+        except Exception as e:          # the worker must outlive any fault
+            self._fault(now, e)
+            return 0.02
+
+    def _poll_flip(self):
+        outcome = self.flip_call.poll()
+        if outcome is None:
+            return
+        kind, value = outcome
+        if kind == 'ok':
+            self.info('flight animation -> %s' % (value,))
+        elif kind == 'timeout':
+            self.warn('flip_timeout', 'flight animation call timed out after %.2f s (still '
+                      'hovering / flying on)' % value)
+        else:
+            self.warn('flip_failed', 'flight animation call failed: %s' % (value,))
+
+    def _fault(self, now, e):
+        self.errors += 1
+        self.last_error = '%s: %s' % (type(e).__name__, e)
+        if self.fault_since is None or now < self.fault_since:
+            self.fault_since = now
+        self.warn('worker', 'pilot worker fault (%s): hovering' % self.last_error)
+        try:
+            self.send(Command('twist', ZERO_TWIST, stamp=now))
+            if (not self._fault_landed
+                    and now - self.fault_since >= self.pilot.cfg.land_after):
+                self._fault_landed = True
+                self.warn('worker_land', 'pilot worker faulty for %.1f s: landing'
+                          % (now - self.fault_since))
+                self.send(Command('land', stamp=now))
+        except Exception as e2:
+            self.warn('worker_send', 'pilot worker could not send the safe action: %s' % e2)

@@ -26,45 +26,60 @@ from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
 from leap_teleop.msg import Navdata
-from leap_teleop.nodes.common import Param, check_rates, start_node
+from leap_teleop.nodes.common import Param, start_node
 from leap_teleop.srv import FlightAnim, FlightAnimResponse
 from leap_teleop.visualization import PathTrail, drone_markers
 
 _D = DroneParams()
 PARAMS = {
-    'euler_angle_max': Param(_D.euler_angle_max, 'max tilt for linear.x/y = 1, rad (driver)'),
-    'control_vz_max': Param(_D.control_vz_max, 'climb rate for linear.z = 1, mm/s (driver)'),
-    'control_yaw': Param(_D.control_yaw, 'yaw rate for angular.z = 1, rad/s (driver)'),
-    'altitude_max': Param(_D.altitude_max, 'altitude ceiling, mm (driver)'),
-    'altitude_min': Param(_D.altitude_min, 'altitude floor while flying, mm (driver)'),
-    'looprate': Param(50.0, 'navdata / imu / odometry / TF rate, Hz (driver)'),
-    'takeoff_altitude': Param(_D.takeoff_altitude, 'where a takeoff levels off, m'),
-    'physics_rate': Param(_D.physics_rate, 'physics and onboard controller rate, Hz'),
-    'battery_flight_time': Param(_D.battery_flight_time, 's of hover on a full battery'),
-    'link_timeout': Param(_D.link_timeout, 's without any command -> land (firmware '
-                                           'link loss); 0 = off, as with a live driver'),
+    'euler_angle_max': Param(_D.euler_angle_max, 'max tilt for linear.x/y = 1 (driver)',
+                             unit='rad', gt=0.0, le=0.52),
+    'control_vz_max': Param(_D.control_vz_max, 'climb rate for linear.z = 1 (driver)',
+                            unit='mm/s', gt=0.0, le=2000.0),
+    'control_yaw': Param(_D.control_yaw, 'yaw rate for angular.z = 1 (driver)',
+                         unit='rad/s', gt=0.0, le=6.11),
+    'altitude_max': Param(_D.altitude_max, 'altitude ceiling (driver)', unit='mm',
+                          gt=0.0, le=100000.0),
+    'altitude_min': Param(_D.altitude_min, 'altitude floor while flying (driver)',
+                          unit='mm', ge=0.0, le=100000.0),
+    'looprate': Param(50.0, 'navdata / imu / odometry / TF rate (driver)', unit='Hz',
+                      ge=5.0, le=1000.0),
+    'takeoff_altitude': Param(_D.takeoff_altitude, 'where a takeoff levels off', unit='m',
+                              gt=0.0, le=10.0),
+    'physics_rate': Param(_D.physics_rate, 'physics and onboard controller rate', unit='Hz',
+                          ge=50.0, le=2000.0),
+    'battery_flight_time': Param(_D.battery_flight_time, 'hover time on a full battery',
+                                 unit='s', gt=0.0, le=100000.0),
+    'link_timeout': Param(_D.link_timeout, 'no command this long -> land (firmware link '
+                                           'loss); 0 = off, as with a live driver', unit='s',
+                          ge=0.0, le=60.0),
     'gui': Param(False, 'open the PyBullet GUI window'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
-                                  '(only sensible with /use_sim_time)'),
+                                  '(only sensible with /use_sim_time)', ge=0.0, le=100.0),
     'snapshot_dir': Param('', 'where ardrone/snapshot writes PNGs (default ROS_HOME or /tmp)'),
-    'snapshot_size': Param([640, 480], 'snapshot width, height in pixels'),
-    'base_frame': Param('ardrone_base_link', 'drone body frame'),
-    'odom_frame': Param('odom', 'odometry frame'),
-    'start_xy': Param([0.0, 0.0], 'start position in odom, m'),
-    'path_length': Param(2000, 'poses kept in ardrone/path (oldest dropped)'),
-    'path_min_step': Param(0.02, 'm moved before the path gets a new pose'),
-    'path_rate': Param(5.0, 'ardrone/path publish rate, Hz (only when it changed); 0 = off'),
+    'snapshot_size': Param([640, 480], 'snapshot width, height', unit='px', length=2,
+                           ge=16, le=4096),
+    'base_frame': Param('ardrone_base_link', 'drone body frame', empty_ok=False),
+    'odom_frame': Param('odom', 'odometry frame', empty_ok=False),
+    'start_xy': Param([0.0, 0.0], 'start position in odom', unit='m', length=2,
+                      ge=-1000.0, le=1000.0),
+    'path_length': Param(2000, 'poses kept in ardrone/path (oldest dropped)', ge=1,
+                         le=100000),
+    'path_min_step': Param(0.02, 'moved this far before the path gets a new pose', unit='m',
+                           ge=0.0, le=100.0),
+    'path_rate': Param(5.0, 'ardrone/path publish rate (only when it changed); 0 = off',
+                       unit='Hz', ge=0.0, le=100.0),
     'markers': Param(True, 'publish the drone body markers on ardrone/markers (latched)'),
     'world_frame': Param('', 'if set, publish a static TF world_frame -> odom_frame '
                              '(so RViz can show the hands next to the drone)'),
-    'odom_in_world': Param([1.0, 0.0, 0.0], 'odom_frame origin in world_frame, m'),
+    'odom_in_world': Param([1.0, 0.0, 0.0], 'odom_frame origin in world_frame', unit='m',
+                           length=3, ge=-1000.0, le=1000.0),
 }
 
 
 class ArDroneSimNode:
     def __init__(self, p):
         self.p = p
-        check_rates(p, positive=('looprate',))
         names = ('euler_angle_max', 'control_vz_max', 'control_yaw', 'altitude_max',
                  'altitude_min', 'takeoff_altitude', 'physics_rate', 'battery_flight_time',
                  'link_timeout')

@@ -1,5 +1,4 @@
 """What every node shares: a parameter table that is both read and shown by --help."""
-import math
 import sys
 import textwrap
 
@@ -35,24 +34,6 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     except (ParamError,) + tuple(errors) as e:
         rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
         raise SystemExit(1)
-
-
-def check_rates(p, positive=(), realtime_factor='realtime_factor'):
-    """ValueError unless every `positive` ~param is a finite number > 0 and the
-    simulators' ~realtime_factor (when present) is a finite number >= 0."""
-    for key in positive:
-        if not 0.0 < _number(p, key) < math.inf:
-            raise ValueError('~%s must be > 0, got %r' % (key, p[key]))
-    if realtime_factor in p and not 0.0 <= _number(p, realtime_factor) < math.inf:
-        raise ValueError('~%s must be >= 0 (0 = as fast as possible), got %r'
-                         % (realtime_factor, p[realtime_factor]))
-
-
-def _number(p, key):
-    try:
-        return float(p[key])
-    except (TypeError, ValueError):
-        return math.nan
 
 
 def read_params(params):

@@ -16,13 +16,15 @@ from leap_teleop.visualization import HandMarkerThrottle
 
 PARAMS = {
     'hand_topics': Param(['leapmotion/hand_right', 'leapmotion/hand_left'],
-                         'leap_teleop/Hand topics to draw'),
-    'marker_topic': Param('leapmotion/hand_markers', 'MarkerArray output topic'),
-    'max_rate': Param(30.0, 'max marker updates per hand per second (state changes and '
-                            'deletes always go out); 0 = every message'),
-    'lifetime': Param(0.5, 'marker lifetime in s, so markers vanish when input stops; 0 = forever'),
+                         'leap_teleop/Hand topics to draw', min_length=1, empty_ok=False),
+    'marker_topic': Param('leapmotion/hand_markers', 'MarkerArray output topic',
+                          empty_ok=False),
+    'max_rate': Param(30.0, 'max marker updates per hand (state changes and deletes always '
+                            'go out); 0 = every message', unit='Hz', ge=0.0, le=1000.0),
+    'lifetime': Param(0.5, 'marker lifetime, so markers vanish when input stops; 0 = forever',
+                      unit='s', ge=0.0, le=3600.0),
     'frame_id': Param('', 'frame for the markers; empty = the Hand message\'s frame'),
-    'scale': Param(1.0, 'size factor for spheres, lines and text'),
+    'scale': Param(1.0, 'size factor for spheres, lines and text', gt=0.0, le=100.0),
 }
 
 
@@ -33,8 +35,6 @@ class HandMarkersNode:
         self.pub = rospy.Publisher(p['marker_topic'], MarkerArray, queue_size=10)
         self.log = RateLimitedLog()
         topics = p['hand_topics']
-        if isinstance(topics, str):
-            topics = [topics]
         self.subs = [rospy.Subscriber(t, Hand, self.on_hand, queue_size=5) for t in topics]
 
     def on_hand(self, msg):

@@ -3,7 +3,6 @@
 Publishes once per source frame from the source's thread (event-driven; no polling).
 """
 import gc
-import math
 
 import rosgraph
 import rospy
@@ -14,32 +13,43 @@ from leap_teleop import conversions
 from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
-from leap_teleop.sources import SourceError, make_source
+from leap_teleop.sources import SOURCES, SourceError, make_source
 
 PARAMS = {
-    'source': Param('scripted', 'hand source: scripted, recording, leap, leapc'),
+    'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
     'script': Param('', 'gesture script YAML for the scripted source '
                         '(default config/gestures/wave_hello.yaml)'),
     'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source'),
-    'rate': Param(0.0, 'scripted source frame rate in Hz; 0 = the script\'s own'),
+    'rate': Param(0.0, 'scripted source frame rate; 0 = the script\'s own', unit='Hz',
+                  ge=0.0, le=1000.0),
     'loop': Param(False, 'restart the script / recording when it ends'),
     'realtime': Param(True, 'pace frames at their recorded / scripted timing'),
-    'freq': Param(0.0, 'the original sender\'s period in s; > 0 throttles publishing to at '
-                       'most one frame per period; 0 = every frame'),
-    'sides': Param(['right', 'left'], 'hands to publish'),
-    'leapcobot_topic_right': Param('leapmotion/data_right', 'leapcobotright topic'),
-    'leapcobot_topic_left': Param('leapmotion/data_left', 'leapcobotleft topic'),
-    'hand_topic_right': Param('leapmotion/hand_right', 'rich Hand topic, right'),
-    'hand_topic_left': Param('leapmotion/hand_left', 'rich Hand topic, left'),
-    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic (both hands)'),
-    'frame_id': Param('leap_hands', 'frame of the hand messages'),
-    'world_frame': Param('world', 'parent frame of the static TF to frame_id'),
-    'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame, m'),
+    'freq': Param(0.0, 'the original sender\'s period; > 0 throttles publishing to at '
+                       'most one frame per period; 0 = every frame', unit='s',
+                  ge=0.0, le=10.0),
+    'sides': Param(['right', 'left'], 'hands to publish (one side: right, or [right])',
+                   min_length=1, choices=('right', 'left')),
+    'leapcobot_topic_right': Param('leapmotion/data_right', 'leapcobotright topic',
+                                   empty_ok=False),
+    'leapcobot_topic_left': Param('leapmotion/data_left', 'leapcobotleft topic',
+                                  empty_ok=False),
+    'hand_topic_right': Param('leapmotion/hand_right', 'rich Hand topic, right',
+                              empty_ok=False),
+    'hand_topic_left': Param('leapmotion/hand_left', 'rich Hand topic, left', empty_ok=False),
+    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic (both hands)',
+                           empty_ok=False),
+    'frame_id': Param('leap_hands', 'frame of the hand messages', empty_ok=False),
+    'world_frame': Param('world', 'parent frame of the static TF to frame_id', empty_ok=False),
+    'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame', unit='m',
+                      length=3, ge=-100.0, le=100.0),
     'shutdown_on_end': Param(True, 'shut the node down when a finite source ends'),
-    'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)'),
+    # Bounded: a slow subscriber holds at most this many frames (~2 s at 120 Hz) per topic.
+    'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)',
+                        ge=1, le=1000),
     'leapros_topic': Param('', 'topic for the classic leap_motion/leapros message (as that '
                                'driver: leapmotion/data); empty = not published'),
-    'leapros_side': Param('right', 'hand the leapros message carries', choices=('right', 'left')),
+    'leapros_side': Param('right', 'hand the leapros message carries (one of ~sides)',
+                          choices=('right', 'left')),
     'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
                               'graph should)'),
     'wait_for_subscribers': Param(False, 'start the source only once every ~wait_topics topic '
@@ -53,18 +63,8 @@ PARAMS = {
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 
-def check_params(p):
-    """ValueError for the ~params the publishers and the TF use, before anything starts."""
-    try:
-        xyz = [float(v) for v in p['leap_xyz']]
-    except (TypeError, ValueError):
-        xyz = []
-    if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
-        raise ValueError('~leap_xyz must be 3 numbers (m), got %r' % (p['leap_xyz'],))
-    if not isinstance(p['queue_size'], int) or p['queue_size'] < 0:
-        raise ValueError('~queue_size must be an integer >= 0, got %r' % (p['queue_size'],))
-    if not isinstance(p['freq'], (int, float)) or not 0.0 <= p['freq'] < math.inf:
-        raise ValueError('~freq must be a period >= 0 s, got %r' % (p['freq'],))
+def check_leapros(p):
+    """ValueError when leapros would carry a hand the sender does not publish."""
     if p['leapros_topic'] and p['leapros_side'] not in p['sides']:
         raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
 
@@ -169,7 +169,7 @@ def publish_leap_tf(p):
 
 def main(argv=None):
     def checked_source(p):
-        check_params(p)
+        check_leapros(p)
         return build_source(p)
     p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, checked_source, argv,
                            errors=(SourceError, ValueError))

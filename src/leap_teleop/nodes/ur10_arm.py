@@ -19,27 +19,27 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from leap_teleop import conversions
 from leap_teleop.msg import ArmStatus
 from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
-from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput, HOLDING
+from leap_teleop.teleop.arm import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
+                                   HandInput)
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
 PARAMS = {
-    'hand': Param('right', 'which hand drives this arm: right | left'),
+    'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
     'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
-    'rate': Param(125.0, 'control loop rate, Hz (it also runs on each new hand message)'),
+    # The loop is also the watchdog's clock: at least 10 Hz.
+    'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
+                  unit='Hz', ge=10.0, le=1000.0),
     'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
-    'status_rate': Param(10.0, 'ArmStatus publishing rate, Hz (also on every change)'),
+    'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
+                         ge=0.1, le=1000.0),
+    **TELEOP_PARAMS,          # config/ur10_teleop.yaml, loaded into the node's namespace
 }
-TELEOP_KEYS = [f for f in ArmTeleopParams.__dataclass_fields__]
 
 
-def teleop_params():
-    """ArmTeleopParams from the node's private namespace (config/ur10_teleop.yaml)."""
-    values = {k: rospy.get_param('~' + k) for k in TELEOP_KEYS if rospy.has_param('~' + k)}
-    for k in ('axis_map', 'workspace_min', 'workspace_max'):
-        if k in values:
-            values[k] = tuple(tuple(r) if isinstance(r, list) else r for r in values[k])
-    return ArmTeleopParams.from_dict(values)
+def teleop_params(p):
+    """ArmTeleopParams from the node's checked ~params."""
+    return ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
 
 
 class ArmNode:
@@ -54,8 +54,6 @@ class ArmNode:
         self.gripper_joint = prefix + GRIPPER_JOINT
         self._joint_index = None
         side = p['hand']
-        if side not in conversions.LEAPCOBOT_TYPES:
-            raise ValueError('~hand must be right or left, got %r' % side)
         topic = p['hand_topic'] or 'leapmotion/data_%s' % side
         self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
         self.gripper_pub = rospy.Publisher('gripper/command', JointTrajectory, queue_size=10)
@@ -166,7 +164,7 @@ class ArmNode:
 
 def main(argv=None):
     p, node = start_node('ur10_arm.py', 'ur10_arm', __doc__, PARAMS,
-                         lambda p: ArmNode(p, teleop_params()), argv,
+                         lambda p: ArmNode(p, teleop_params(p)), argv,
                          hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
     if node.wait_for_robot():
         node.loop()

@@ -25,25 +25,33 @@ from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
-from leap_teleop.nodes.common import Param, RateLimitedLog, check_rates, start_node
+from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
 from leap_teleop.ur10.model import build_urdf
+from leap_teleop.ur10.snapshot import SnapshotRenderer
 from leap_teleop.ur10.ros_interface import (ARM_JOINTS, GRIPPER_JOINTS, CommandError,
                                             joint_state_msg, object_poses_msg,
                                             trajectory_points)
 from leap_teleop.ur10.trajectory import TrajectoryError
 
 PARAMS = {
-    'config': Param('ur10_cell.yaml', 'cell YAML: a path or a file name in config/'),
+    'config': Param('ur10_cell.yaml', 'cell YAML: a path or a file name in config/',
+                    empty_ok=False),
     'gui': Param(False, 'open the PyBullet GUI window (needs a display)'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
-                                  '(only with /use_sim_time)'),
-    'joint_state_rate': Param(125.0, 'joint_states rate per arm, Hz (UR CB3 controller)'),
-    'object_pose_rate': Param(30.0, '~object_poses rate, Hz'),
-    'clock_rate': Param(240.0, '/clock rate with /use_sim_time, Hz (at most the physics rate)'),
+                                  '(only with /use_sim_time)', ge=0.0, le=100.0),
+    # joint_states feed the arm nodes' joint watchdog: at least 10 Hz.
+    'joint_state_rate': Param(125.0, 'joint_states rate per arm (UR CB3 controller)',
+                              unit='Hz', ge=10.0, le=1000.0),
+    'object_pose_rate': Param(30.0, '~object_poses rate', unit='Hz', gt=0.0, le=1000.0),
+    'clock_rate': Param(240.0, '/clock rate with /use_sim_time (at most the physics rate)',
+                        unit='Hz', ge=10.0, le=10000.0),
     'snapshot_dir': Param('', 'where ~snapshot writes PNGs (default ROS_HOME or /tmp)'),
-    'snapshot_size': Param([640, 480], 'snapshot width, height in pixels'),
+    'snapshot_size': Param([640, 480], 'snapshot width, height', unit='px', length=2,
+                           ge=16, le=4096),
 }
 
+MAX_PENDING = 100               # commands queued for the physics loop (bounded)
+SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
 KINDS = {'arm': ('arm_controller/command', ARM_JOINTS),
          'gripper': ('gripper/command', GRIPPER_JOINTS)}
 
@@ -52,10 +60,12 @@ class UR10SimNode:
     def __init__(self, p):
         from leap_teleop.ur10.cell import UR10Cell     # pybullet: after --help / --urdf
         self.p = p
-        check_rates(p, positive=('joint_state_rate', 'object_pose_rate', 'clock_rate'))
         self.cell = UR10Cell(p['config'], gui=bool(p['gui']))
-        self.lock = threading.Lock()               # guards self.cell
+        self.lock = threading.Lock()               # guards self.cell (physics)
+        self.render_lock = threading.Lock()        # one snapshot at a time
+        self.renderer = SnapshotRenderer(self.cell.config)
         self.pending = collections.deque()         # validated commands for the loop
+        self.dropped_commands = 0
         self.log = RateLimitedLog(2.0)
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
@@ -83,6 +93,11 @@ class UR10SimNode:
         except CommandError as e:
             self._reject(arm, kind, e)
             return
+        if len(self.pending) >= MAX_PENDING:       # the loop stalled: newer commands win
+            self.pending.popleft()
+            self.dropped_commands += 1
+            self.log.warn('pending', 'ur10_sim: %d command(s) dropped, the physics loop is '
+                          'behind', self.dropped_commands)
         self.pending.append((arm, kind, points, stamp))
 
     def _reject(self, arm, kind, why):
@@ -110,14 +125,18 @@ class UR10SimNode:
         return TriggerResponse(success=True, message='reset')
 
     def on_snapshot(self, _req):
+        """Copy the poses under the physics lock; a renderer process draws them, so a slow
+        render never delays joint_states."""
         folder = self.p['snapshot_dir'] or os.environ.get('ROS_HOME') or '/tmp'
         try:
-            w, h = (int(v) for v in self.p['snapshot_size'])
+            w, h = self.p['snapshot_size']
             os.makedirs(folder, exist_ok=True)
             with self.lock:
-                path = os.path.join(folder, 'ur10_sim_%08.3f.png' % self.cell.time)
-                self.cell.snapshot(path, w, h)
-        except (OSError, ValueError, TypeError) as e:
+                t, state = self.cell.time, self.cell.pose_state()
+            path = os.path.join(folder, 'ur10_sim_%08.3f.png' % t)
+            with self.render_lock:
+                self.renderer.render(state, path, w, h, SNAPSHOT_TIMEOUT)
+        except (OSError, ValueError, TypeError, RuntimeError, TimeoutError) as e:
             return TriggerResponse(success=False, message='snapshot failed: %s' % e)
         return TriggerResponse(success=True, message=path)
 
@@ -170,6 +189,7 @@ class UR10SimNode:
     def close(self):
         with self.lock:
             self.cell.close()
+        self.renderer.close()
 
 
 def print_urdf(argv):

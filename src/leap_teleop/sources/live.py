@@ -1,8 +1,9 @@
 """What the device-driven sources share: frames pushed from the SDK's thread into a
-bounded queue, stamped on the caller's clock, pulled by frames()."""
+short queue that keeps the newest, stamped on the caller's clock, pulled by frames()."""
 import logging
+import collections
 import math
-import queue
+import threading
 import time
 
 import numpy as np
@@ -27,17 +28,29 @@ def attr(obj, name, default=None):
 
 
 class PushQueue:
-    """Frames from an SDK callback thread to the consumer; the oldest frame is dropped
-    when the consumer falls behind (live data: the newest matters)."""
+    """Frames from an SDK callback thread to the consumer, newest first in importance: a
+    short queue (`maxsize` frames, ~67 ms at 120 Hz) whose oldest frame is dropped when
+    the consumer falls behind, and frames older than `max_age` s (by their stamp, on the
+    caller's clock) are dropped when read. After any stall the consumer gets the newest
+    frames, never a backlog; `dropped` counts what it never saw."""
 
-    def __init__(self, clock, maxsize=256):
-        self.q = queue.Queue(maxsize)
+    def __init__(self, clock, maxsize=8, max_age=0.25, leak=1e-3):
+        self.frames = collections.deque()
+        self.maxsize = maxsize
+        self.max_age = max_age
         self.clock = clock
         self.dropped = 0
-        self._sync = None            # (device seconds, clock seconds)
+        self._cond = threading.Condition()
+        self._offset = None          # clock - device time of the least-delayed frame
+        self._last_dev = None
+        self._last_now = None
+        self._leak = leak            # s per s the offset may drift (device vs host clock)
 
     def stamp(self, device_us):
-        """Map a device timestamp (us) onto the clock, re-syncing on drift > 0.2 s."""
+        """Map a device timestamp (us) onto the clock, keeping the device's spacing. Late
+        frames move the mapping only slowly (it absorbs clock drift), so a backlog
+        delivered late keeps its capture time and reads as old; a device clock that
+        jumps back (device restart), runs > 0.2 s ahead or an absurd offset re-syncs."""
         now = self.clock()
         try:
             dev = float(device_us) * 1e-6
@@ -45,30 +58,51 @@ class PushQueue:
             return now
         if not math.isfinite(dev):
             return now
-        if self._sync is None or abs(self._sync[1] + dev - self._sync[0] - now) > 0.2:
-            self._sync = (dev, now)
-        return self._sync[1] + dev - self._sync[0]
+        offset = now - dev
+        if (self._offset is None or dev < self._last_dev or offset < self._offset - 0.2
+                or offset - self._offset > 60.0 or now < self._last_now):
+            self._offset = offset         # first frame, device restart or clock jump
+        elif offset > self._offset:       # a late frame moves the mapping only slowly
+            self._offset = min(offset, self._offset + self._leak * (now - self._last_now))
+        self._last_dev, self._last_now = dev, now
+        return self._offset + dev
 
     def put(self, frame):
-        while True:
-            try:
-                self.q.put_nowait(frame)
-                return
-            except queue.Full:
-                try:
-                    self.q.get_nowait()
-                    self.dropped += 1
-                    if self.dropped in (1, 100) or self.dropped % 10000 == 0:
-                        log.warning('hand source: consumer too slow, dropped %d frame(s)',
-                                    self.dropped)
-                except queue.Empty:
-                    pass
+        with self._cond:
+            if len(self.frames) >= self.maxsize:
+                self.frames.popleft()
+                self._count_drop(1)
+            self.frames.append(frame)
+            self._cond.notify()
 
     def get(self, timeout=0.1):
-        try:
-            return self.q.get(timeout=timeout)
-        except queue.Empty:
-            return None
+        """The oldest frame not older than max_age, or None after `timeout` s."""
+        with self._cond:
+            deadline = None
+            while True:
+                while self.frames:
+                    frame = self.frames.popleft()
+                    stamp = getattr(frame, 'timestamp', None)
+                    if (stamp is None or self.max_age is None
+                            or self.clock() - stamp <= self.max_age):
+                        return frame
+                    self._count_drop(1)
+                if deadline is None:
+                    deadline = time.monotonic() + timeout
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return None
+                self._cond.wait(left)
+
+    def __len__(self):
+        return len(self.frames)
+
+    def _count_drop(self, n):
+        before = self.dropped
+        self.dropped += n
+        if before == 0 or before // 1000 != self.dropped // 1000:
+            log.warning('hand source: consumer or device behind, dropped %d frame(s) so far '
+                        '(only the newest frames are delivered)', self.dropped)
 
 
 def wait_loop(source, pq):

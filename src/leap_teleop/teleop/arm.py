@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from leap_teleop.params import Param, check_params
 from leap_teleop.teleop.filters import LowPass
 from leap_teleop.teleop.input_check import InputStream
 from leap_teleop.ur10 import kinematics as kin
@@ -36,7 +37,7 @@ class ArmTeleopParams:
     workspace_min: tuple = (0.25, -0.9, 0.0)    # m, arm base frame
     workspace_max: tuple = (1.15, 0.9, 0.9)
     tool_yaw: float = 0.0              # rad, fixed tool orientation: pointing down, turned by this
-    filter_cutoff_hz: float = 4.0      # low-pass on the palm position; <= 0 disables
+    filter_cutoff_hz: float = 4.0      # low-pass on the palm position; 0 disables
     max_joint_speed: float = 0.05      # rad/s: trajectory duration = max|dq| / this
     min_duration: float = 0.05         # s, shortest trajectory sent
     input_timeout: float = 0.2         # s without hand input -> hold and disarm
@@ -44,7 +45,7 @@ class ArmTeleopParams:
     gripper_binary_closed: float = 0.43
     max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
     max_input_age: float = 0.25        # s a message may arrive later than the stream's
-                                       # best-case latency; 0 = no lateness check
+                                       # best-case latency
     joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
 
     @classmethod
@@ -60,26 +61,59 @@ class ArmTeleopParams:
         return p
 
     def validate(self):
-        if self.mode not in MODES:
-            raise ValueError('mode must be one of %s, got %r' % (MODES, self.mode))
-        if self.gripper_mode not in GRIPPER_MODES:
-            raise ValueError('gripper_mode must be one of %s, got %r'
-                             % (GRIPPER_MODES, self.gripper_mode))
-        a = np.asarray(self.axis_map, dtype=float)
-        if a.shape != (3, 3) or not np.all(np.isfinite(a)):
-            raise ValueError('axis_map must be a 3x3 matrix')
+        """Check every field against TELEOP_PARAMS (ParamError, a ValueError, names the
+        first bad one), then what involves two fields."""
+        for name, value in check_params(TELEOP_PARAMS, vars(self)).items():
+            setattr(self, name, value)
         lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
-        if lo.shape != (3,) or hi.shape != (3,) or np.any(lo >= hi):
+        if np.any(lo >= hi):
             raise ValueError('workspace_min must be below workspace_max on every axis')
-        for name in ('scale', 'max_joint_speed', 'min_duration', 'input_timeout',
-                     'max_tcp_speed', 'max_palm_mm', 'joint_timeout'):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError('%s must be a positive number, got %r' % (name, v))
-        if not (isinstance(self.max_input_age, (int, float)) and 0 <= self.max_input_age < 1e9):
-            raise ValueError('max_input_age must be a number >= 0, got %r' % self.max_input_age)
-        if not 0.0 <= self.gripper_binary_closed <= 0.8:
-            raise ValueError('gripper_binary_closed must be in [0, 0.8]')
+        if not np.linalg.matrix_rank(np.asarray(self.axis_map, float)) == 3:
+            raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
+
+
+_P = ArmTeleopParams()
+# Every ArmTeleopParams field's declaration: ur10_arm's ~params (config/ur10_teleop.yaml)
+# and ArmTeleopParams.validate share it. Timeouts and speeds have upper bounds too.
+TELEOP_PARAMS = {
+    'mode': Param(_P.mode, 'imitation (TCP follows the palm) or joystick (speed beyond the '
+                           'dead zone)', choices=MODES),
+    'axis_map': Param([list(r) for r in _P.axis_map], 'Leap axes -> arm base axes, rows = '
+                      'base x, y, z', length=3,
+                      item=Param([0.0, 0.0, 0.0], '', length=3, ge=-1.0, le=1.0)),
+    'scale': Param(_P.scale, 'imitation: robot m per hand m', gt=0.0, le=10.0),
+    'deadzone_mm': Param(_P.deadzone_mm, 'joystick: radius around the origin that moves '
+                                         'nothing', unit='mm', gt=0.0, le=300.0),
+    'joystick_gain': Param(_P.joystick_gain, 'joystick: TCP m/s per m of palm beyond the '
+                                             'dead zone', unit='1/s', gt=0.0, le=20.0),
+    'max_tcp_speed': Param(_P.max_tcp_speed, 'joystick: TCP speed cap', unit='m/s',
+                           gt=0.0, le=1.0),
+    'workspace_min': Param(list(_P.workspace_min), 'TCP target box, low corner (base frame)',
+                           unit='m', length=3, ge=-3.0, le=3.0),
+    'workspace_max': Param(list(_P.workspace_max), 'TCP target box, high corner', unit='m',
+                           length=3, ge=-3.0, le=3.0),
+    'tool_yaw': Param(_P.tool_yaw, 'tool turned about z by this (pointing down)', unit='rad',
+                      ge=-2 * math.pi, le=2 * math.pi),
+    'filter_cutoff_hz': Param(_P.filter_cutoff_hz, 'low-pass on the palm position; 0 = off',
+                              unit='Hz', ge=0.0, le=1000.0),
+    'max_joint_speed': Param(_P.max_joint_speed, 'trajectory duration = max|dq| / this',
+                             unit='rad/s', gt=0.0, le=float(min(kin.MAX_JOINT_SPEED))),
+    'min_duration': Param(_P.min_duration, 'shortest trajectory sent', unit='s',
+                          gt=0.0, le=5.0),
+    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold and disarm '
+                                             '(watchdog)', unit='s', gt=0.0, le=10.0),
+    'gripper_mode': Param(_P.gripper_mode, 'binary (closed while pinching) or proportional',
+                          choices=GRIPPER_MODES),
+    'gripper_binary_closed': Param(_P.gripper_binary_closed, 'binary: knuckle when closed',
+                                   unit='rad', ge=0.0, le=0.8),
+    'max_palm_mm': Param(_P.max_palm_mm, '|palm| beyond this is a tracking error, ignored',
+                         unit='mm', gt=0.0, le=2000.0),
+    'max_input_age': Param(_P.max_input_age, 'drop a message arriving this much later than '
+                                             'the stream\'s best latency', unit='s',
+                           gt=0.0, le=10.0),
+    'joint_timeout': Param(_P.joint_timeout, 'no joint states this long -> disarm (robot '
+                                             'gone)', unit='s', gt=0.0, le=10.0),
+}
 
 
 @dataclass

@@ -7,8 +7,10 @@ the stream's own best case, not against the absolute clock, keeps replayed bags 
 stamps) and hosts with unsynchronised clocks working while still catching messages
 that were held up. A silence longer than ``gap`` (no message at all, accepted or not)
 or the clock jumping back (a simulator publishing /clock restarted) starts a new stream:
-a restarted sender or a replayed bag is judged afresh, while a stream that stays
-delayed keeps being refused (the consumers' watchdogs then stop the robots). Unstamped
+a restarted sender (fresh stamps) or a replayed bag (stamps jump back) is judged afresh,
+while a stream that stays delayed keeps being refused (the consumers' watchdogs then stop
+the robots) - also across a silence: a source that stalled and then bursts its backlog
+(stamps continue, but late) is not a new stream, so only its last max_age s pass. Unstamped
 messages (stamp <= 0, as the original sender sent them) are only checked for order.
 """
 
@@ -27,7 +29,12 @@ class InputStream:
     def check(self, stamp, now):
         """None if the message is in order and on time (it is then recorded), else why not."""
         if self.last_rx is not None and (now < self.last_rx or now - self.last_rx > self.gap):
-            self.reset()
+            backlog = (now >= self.last_rx and stamp > 0 and self.max_age > 0
+                       and self.last_stamp is not None and stamp >= self.last_stamp
+                       and self.best_lag is not None
+                       and now - stamp - self.best_lag > self.max_age)
+            if not backlog:
+                self.reset()
         self.last_rx = now
         if self.last_stamp is not None and stamp < self.last_stamp:
             return 'out of order: %.3f s older than the last message' % (self.last_stamp - stamp)

@@ -302,6 +302,24 @@ class UR10Cell:
                                               physicsClientId=c)
             p.resetBaseVelocity(self.cubes[cube.name], [0, 0, 0], [0, 0, 0], physicsClientId=c)
 
+    def pose_state(self):
+        """What a picture needs, copied: every body's base pose and joint positions."""
+        c, out = self.client, []
+        for b in range(p.getNumBodies(physicsClientId=c)):
+            n = p.getNumJoints(b, physicsClientId=c)
+            q = [s[0] for s in p.getJointStates(b, range(n), physicsClientId=c)] if n else []
+            out.append((b, p.getBasePositionAndOrientation(b, physicsClientId=c), q))
+        return out
+
+    def set_pose_state(self, state):
+        """Pose every body as in `state` (from pose_state of a cell of the same config);
+        for a render-only cell, which never steps."""
+        c = self.client
+        for body, (xyz, quat), q in state:
+            p.resetBasePositionAndOrientation(body, xyz, quat, physicsClientId=c)
+            for j, v in enumerate(q):
+                p.resetJointState(body, j, v, physicsClientId=c)
+
     def snapshot(self, path=None, width=640, height=480, eye=None, target=None, fov=None):
         """Render the cell (TinyRenderer, works headless); PNG bytes, also written to path."""
         from PIL import Image

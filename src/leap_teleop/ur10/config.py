@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
+from leap_teleop.params import Param, ParamError, check_params
 from leap_teleop.ur10.kinematics import HOME_Q
 
 
@@ -127,13 +128,27 @@ def _vec(v, n, what):
     return a
 
 
+# The cell file's scalars (a physics rate of 0 or NaN would stop or corrupt the simulation).
+CELL_PARAMS = {
+    'physics_hz': Param(240.0, 'physics steps per simulated second', unit='Hz',
+                        ge=60.0, le=2000.0),
+    'cube_size': Param(0.05, 'cube edge', unit='m', gt=0.0, le=0.5),
+    'cube_mass': Param(0.1, 'cube mass', unit='kg', gt=0.0, le=10.0),
+    'table_height': Param(0.75, 'z of the table top', unit='m', ge=0.0, le=2.0),
+}
+
+
 def parse_config(data, path=''):
     """CellConfig from the YAML's dict; ValueError on a malformed file."""
     if not isinstance(data, dict) or not data.get('arms'):
         raise ValueError('cell config %s: needs a non-empty "arms" list' % path)
     table = data.get('table', {})
-    height = float(table.get('height', 0.75))
-    size = float(data.get('cube_size', 0.05))
+    try:
+        scalars = check_params(CELL_PARAMS, {k: v for k, v in dict(
+            data, table_height=table.get('height', 0.75)).items() if k in CELL_PARAMS})
+    except ParamError as e:
+        raise ValueError('cell config %s: %s' % (path, str(e).lstrip('~')))
+    height, size = scalars['table_height'], scalars['cube_size']
     arms = []
     for a in data['arms']:
         tray = a.get('tray', {})
@@ -160,8 +175,7 @@ def parse_config(data, path=''):
                       table_center=tuple(table.get('center', (0.45, 0.0))),
                       table_size=tuple(table.get('size', (1.4, 1.4))),
                       table_height=height, cube_size=size,
-                      cube_mass=float(data.get('cube_mass', 0.1)),
-                      physics_hz=float(data.get('physics_hz', 240.0)),
+                      cube_mass=scalars['cube_mass'], physics_hz=scalars['physics_hz'],
                       camera=dict(data.get('camera', {})), path=path)
 
 

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""rostest node (fault_hand_burst.test): a hand source stalls for 2 s, then bursts the
+200 messages it captured meanwhile (stamped at capture): for 1.5 s a thumbs-up, a rock
+and a palm far up and forward, then 0.5 s of the neutral palm. ur10_1 tracks and the
+drone (navdata from here, flying) is engaged before the stall. No robot may act on a
+message older than max_input_age: the arm stays disarmed (its watchdog disarmed it
+during the stall) and gets no command; the pilot sends nothing beyond hover; both count
+the refused messages."""
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Twist
+from sensor_msgs.msg import JointState
+
+from fault_common import Watch, wait_for
+from leap_teleop.msg import GestureEvent, Hand, Navdata, leapcobotright
+
+ARM = 'ur10_1'
+NEUTRAL = dict(palm=(0.0, 250.0, 0.0))
+FAR = dict(palm=(0.0, 400.0, -150.0))
+
+
+class Hands:
+    """Right hand on the arm's leapcobot topic and the pilot's Hand topic, one pose."""
+
+    def __init__(self):
+        self.arm_pub = rospy.Publisher('/leapmotion/data_right', leapcobotright, queue_size=500)
+        self.hand_pub = rospy.Publisher('/leapmotion/hand_right', Hand, queue_size=500)
+
+    def publish(self, stamp, palm, thumb_up=False, rock=False):
+        m = leapcobotright()
+        m.header.stamp = rospy.Time.from_sec(stamp)
+        m.is_right_hand = True
+        m.right_hand_palmpos.x, m.right_hand_palmpos.y, m.right_hand_palmpos.z = palm
+        m.right_hand_thumb_up = thumb_up
+        m.right_hand_set_origin_frame_detected = rock
+        h = Hand()
+        h.header.stamp = m.header.stamp
+        h.side, h.present = Hand.SIDE_RIGHT, True
+        h.palm_position.x, h.palm_position.y, h.palm_position.z = (v / 1000.0 for v in palm)
+        h.palm_normal.y, h.direction.z = -1.0, -1.0
+        self.arm_pub.publish(m)
+        self.hand_pub.publish(h)
+
+
+class Rejected:
+    def __init__(self):
+        self.values = {}
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.cb, queue_size=20)
+
+    def cb(self, msg):
+        for st in msg.status:
+            for kv in st.values:
+                if kv.key == 'rejected inputs':
+                    self.values[st.name] = int(kv.value)
+
+    def get(self, part):
+        return next((v for k, v in self.values.items() if part in k), None)
+
+
+class FaultHandBurst(unittest.TestCase):
+    def test_stall_then_backlog_burst(self):
+        w = Watch(arm=ARM)
+        rejected = Rejected()
+        twists = []
+        rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m)),
+                         queue_size=500)
+        nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
+        gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
+        hands = Hands()
+        pose = {'now': dict(NEUTRAL)}
+        stop = threading.Event()
+
+        def navdata():            # a drone hovering at 1 m, 50 Hz
+            while not stop.is_set() and not rospy.is_shutdown():
+                nav_pub.publish(Navdata(state=4, altd=1000))
+                time.sleep(0.02)
+
+        def stream():             # the live hand, 100 Hz, unless stalled (pose None)
+            while not stop.is_set() and not rospy.is_shutdown():
+                p = pose['now']
+                if p is not None:
+                    hands.publish(rospy.get_time(), **p)
+                time.sleep(0.01)
+        threading.Thread(target=navdata, daemon=True).start()
+        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
+        self.assertTrue(wait_for(lambda: hands.arm_pub.get_num_connections() > 0
+                                 and hands.hand_pub.get_num_connections() > 0
+                                 and gesture_pub.get_num_connections() > 0, 30.0))
+        threading.Thread(target=stream, daemon=True).start()
+        try:
+            # Arm tracking, pilot engaged.
+            t0 = time.monotonic()
+            pose['now'] = dict(NEUTRAL, thumb_up=True)
+            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None, 5.0))
+            pose['now'] = dict(NEUTRAL, rock=True)
+            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None, 5.0))
+            pose['now'] = dict(NEUTRAL)
+            ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
+            ev.header.stamp = rospy.Time.now()
+            gesture_pub.publish(ev)
+            self.assertTrue(wait_for(lambda: twists, 3.0), 'the pilot sends nothing')
+            time.sleep(1.2)                         # diagnostics (1 Hz) before the stall
+            arm_rej0, pilot_rej0 = rejected.get(ARM) or 0, rejected.get('pilot') or 0
+
+            # The stall: 2 s of capture, nothing delivered.
+            pose['now'] = None
+            t_stall = time.monotonic()
+            backlog, start = [], rospy.get_time()
+            for k in range(200):
+                time.sleep(max(0.0, start + 0.01 * k - rospy.get_time()))
+                p = (dict(FAR, thumb_up=k < 30) if k < 60 else dict(FAR, rock=k < 90)
+                     if k < 150 else dict(NEUTRAL))
+                backlog.append((rospy.get_time(), p))
+            # The burst, then the live hand again (neutral, no gesture).
+            t_burst = time.monotonic()
+            for stamp, p in backlog:
+                hands.publish(stamp, **p)
+                time.sleep(0.0005)
+            pose['now'] = dict(NEUTRAL)
+            time.sleep(2.5)
+
+            t_dis, st = w.first_status('disarmed', t_stall)
+            self.assertIsNotNone(t_dis, 'the watchdog did not disarm during the stall')
+            self.assertLess(t_dis, t_burst)
+            states = [s.state for t, s in w.status if t > t_dis]
+            self.assertNotIn('armed', states, 'the backlog re-armed the arm')
+            self.assertNotIn('tracking', states)
+            late_cmds = [t for t, _ in w.arm_cmds if t > t_burst]
+            self.assertEqual(late_cmds, [], 'arm commands after the burst')
+            moving = [m for t, m in twists if t > t_burst and (abs(m.linear.x) > 1e-6
+                                                               or abs(m.linear.z) > 1e-6)]
+            self.assertEqual(moving, [], 'the pilot flew toward the backlog')
+            arm_rej, pilot_rej = rejected.get(ARM) - arm_rej0, rejected.get('pilot') - pilot_rej0
+            rospy.loginfo('FAULT hand burst: arm refused %d, pilot refused %d of 200',
+                          arm_rej, pilot_rej)
+            self.assertGreaterEqual(arm_rej, 150)
+            self.assertGreaterEqual(pilot_rej, 150)
+        finally:
+            stop.set()
+
+
+if __name__ == '__main__':
+    rospy.init_node('fault_hand_burst_check')
+    rostest.rosrun('leap_teleop', 'fault_hand_burst_check', FaultHandBurst, sys.argv)
