@@ -145,6 +145,7 @@ DOCUMENTED_VALUES = [
     ('ur10_dual_sim.launch', [], {'/ur10_sim', '/ur10_1/robot_state_publisher'}),
     ('ardrone_sim.launch', [], {'/ardrone_sim'}),
     ('replay.launch', ['bag:=/tmp/x.bag'], {'/gesture_player'}),
+    ('record.launch', [], {'/gesture_recorder'}),
 ]
 
 

@@ -1,6 +1,7 @@
-"""A bag recorded from the two-arm layout (leapcobotright on /leapmotion/data_right,
-leapcobotleft on /leapmotion/data_left) replays into ur10_single.launch through
-replay.launch's remap:, as the README shows, and the arm places its cube."""
+"""Bags of the original systems replay into ur10_single.launch through replay.launch as the
+README shows, and the arm places its cube: the one-arm layout (leapcobotright on
+/leapmotion/data) as recorded, the two-arm layout (leapcobotright on /leapmotion/data_right,
+leapcobotleft on /leapmotion/data_left) through remap_from / remap_to."""
 import os
 
 import pytest
@@ -9,20 +10,26 @@ from leap_teleop.sources.scripted import ScriptedSource
 from leap_teleop.tools.to_bag import write_bag
 from test_launch_smoke import GESTURES, run_launches
 
+LAYOUTS = {
+    'one_arm': ({'right': '/leapmotion/data'}, ['topics:=/leapmotion/data']),
+    'two_arm': ({'right': '/leapmotion/data_right', 'left': '/leapmotion/data_left'},
+                ['topics:=/leapmotion/data_right', 'remap_from:=/leapmotion/data_right',
+                 'remap_to:=/leapmotion/data']),
+}
+
 
 @pytest.mark.rostest
-def test_two_arm_bag_remapped_into_the_single_arm(tmp_path):
-    bag = str(tmp_path / 'two_arm.bag')
+@pytest.mark.parametrize('layout', sorted(LAYOUTS))
+def test_original_bag_replays_into_the_single_arm(layout, tmp_path):
+    recorded, replay_args = LAYOUTS[layout]
+    bag = str(tmp_path / (layout + '.bag'))
     # As rosbag record stores them: absolute names.
-    topics = {side: {'leapcobot': '/leapmotion/data_' + side} for side in ('right', 'left')}
     write_bag(ScriptedSource(os.path.join(GESTURES, 'ur10_pick_place_single.yaml'), realtime=False),
-              bag, ['right', 'left'], topics, kinds=('leapcobot',))
+              bag, list(recorded), {side: {'leapcobot': t} for side, t in recorded.items()},
+              kinds=('leapcobot',))
     import rosbag
     with rosbag.Bag(bag) as b:
-        assert set(b.get_type_and_topic_info().topics) == {'/leapmotion/data_right',
-                                                          '/leapmotion/data_left'}
-    run_launches(tmp_path, [
-        ['ur10_single.launch', 'sender:=false'],
-        ['replay.launch', 'bag:=' + bag, 'topics:=/leapmotion/data_right',
-         'remap_from:=/leapmotion/data_right', 'remap_to:=/leapmotion/data']],
-        ['--cube', 'ur10_1:cube_red'], 120)
+        assert set(b.get_type_and_topic_info().topics) == set(recorded.values())
+    run_launches(tmp_path, [['ur10_single.launch', 'sender:=false'],
+                            ['replay.launch', 'bag:=' + bag] + replay_args],
+                 ['--cube', 'ur10_1:cube_red'], 120)
