@@ -5,6 +5,9 @@
   --armed ARM         the arm node reports armed or tracking (its hand input arrives)
   --drone             the drone took off, flew and is landed again
   --topic T:PKG/MSG  (repeatable) at least --count messages arrive on T
+  --rosout TEXT       a node logs a line containing TEXT
+  --driver            stand in for the AR.Drone driver: navdata at 50 Hz, landed until a
+                      takeoff, hovering until a land
 Several conditions: all must hold. Prints what it saw either way.
 """
 import argparse
@@ -15,12 +18,14 @@ import time
 import numpy as np
 import rospy
 import roslib.message
+from rosgraph_msgs.msg import Log
+from std_msgs.msg import Empty
 
 from leap_teleop.msg import ArmStatus, Navdata
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.ros_interface import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 
-LANDED, TAKING_OFF = 2, 6
+LANDED, HOVERING, TAKING_OFF = 2, 4, 6
 
 
 class Watch:
@@ -29,6 +34,9 @@ class Watch:
         self.lock = threading.Lock()
         self.cubes, self.states, self.arm_states = {}, [], {}
         self.counts = {spec.rsplit(':', 1)[0]: 0 for spec in args.topic}
+        self.logged = []
+        if args.rosout:
+            rospy.Subscriber('/rosout', Log, self._log, queue_size=100)     # no rosout node here
         if args.cube:
             self.cell = load_config(args.cell)
             rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._objects, queue_size=2)
@@ -37,6 +45,13 @@ class Watch:
                              queue_size=20)
         if args.drone:
             rospy.Subscriber(args.navdata, Navdata, self._nav, queue_size=100)
+        if args.driver:
+            self.driver_state = LANDED
+            self.nav_pub = rospy.Publisher(args.navdata, Navdata, queue_size=10)
+            rospy.Subscriber('/ardrone/takeoff', Empty, self._drive, HOVERING)
+            rospy.Subscriber('/ardrone/land', Empty, self._drive, LANDED)
+            rospy.Timer(rospy.Duration(0.02), lambda _e: self.nav_pub.publish(
+                Navdata(state=self.driver_state, altd=1000 if self.driver_state != LANDED else 0)))
         for spec in args.topic:
             topic, msg_type = spec.rsplit(':', 1)
             msg_class = roslib.message.get_message_class(msg_type)
@@ -56,6 +71,14 @@ class Watch:
         with self.lock:
             if not self.states or self.states[-1] != msg.state:
                 self.states.append(msg.state)
+
+    def _drive(self, _msg, state):
+        self.driver_state = state
+
+    def _log(self, msg):
+        if self.args.rosout in msg.msg:
+            with self.lock:
+                self.logged.append('%s: %s' % (msg.name, msg.msg))
 
     def _msg(self, _msg, topic):
         with self.lock:
@@ -86,14 +109,16 @@ class Watch:
                 s = self.states
                 if TAKING_OFF not in s or s[-1] != LANDED or s.index(TAKING_OFF) == len(s) - 1:
                     return False
+            if self.args.rosout and not self.logged:
+                return False
             return all(n >= self.args.count for n in self.counts.values())
 
     def report(self):
         with self.lock:
             return ('cubes (xy error m, height over tray floor m): %s; arm states: %s; '
-                    'navdata states: %s; messages: %s'
+                    'navdata states: %s; messages: %s; logged: %s'
                     % (self.cube_errors() if self.args.cube else '-', self.arm_states,
-                       self.states, self.counts))
+                       self.states, self.counts, self.logged[:1]))
 
 
 def main():
@@ -106,6 +131,8 @@ def main():
     ap.add_argument('--navdata', default='ardrone/navdata')
     ap.add_argument('--topic', action='append', default=[])
     ap.add_argument('--count', type=int, default=1)
+    ap.add_argument('--rosout', default='')
+    ap.add_argument('--driver', action='store_true')
     args = ap.parse_args(rospy.myargv()[1:])
     rospy.init_node('launch_check', anonymous=True, disable_signals=True)
     watch = Watch(args)
