@@ -15,6 +15,6 @@ def test_demo_succeeds_and_writes_its_outputs(tmp_path):
     assert set(summary['tasks']) == {'ur10_pick_place_ur10_1', 'ur10_pick_place_ur10_2',
                                      'drone_flight'}
     assert all(task['success'] for task in summary['tasks'].values()), summary
-    for name in ('ur10.gif', 'drone.gif'):
+    for name in ('ur10.gif', 'drone.gif', 'drone_flight.png'):
         assert (out / name).stat().st_size > 10000
     assert len(list(out.glob("ur10_*.png"))) > 15

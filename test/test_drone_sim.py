@@ -220,3 +220,29 @@ def test_snapshot_png(drone, tmp_path):
     img = drone.snapshot(str(tmp_path / 'drone.png'), 160, 120)
     assert img.shape == (120, 160, 3) and (tmp_path / 'drone.png').stat().st_size > 500
     assert img.std() > 5        # not a blank frame
+
+
+def test_state_events_are_bounded(drone):
+    # Every reset toggles the state twice; the history keeps only the latest changes.
+    for _ in range(ds.EVENTS_KEPT):
+        drone.reset()
+    assert len(drone.events) == ds.EVENTS_KEPT
+    assert drone.events[-1][1] == ds.LANDED and drone.events[-2][1] == ds.UNKNOWN
+
+
+def test_driver_commands_flat_trim_leds_record_camera(drone, warnings):
+    assert drone.flat_trim() and drone.flat_trims == 1          # landed: done
+    assert drone.set_led_animation(3, 2.0, 4) and drone.led_active
+    assert drone.led_animation[0] == 'BLINK_ORANGE'
+    drone.advance(4.1)
+    assert not drone.led_active
+    assert not drone.set_led_animation(14, 2.0, 1)              # no such animation
+    assert drone.set_record(True) and drone.recording
+    assert drone.set_record(False) and not drone.recording
+    assert drone.camera_channel == ds.CAMERA_FRONT
+    assert drone.toggle_camera() and drone.camera_channel == ds.CAMERA_BOTTOM
+    assert drone.toggle_camera() and drone.camera_channel == ds.CAMERA_FRONT
+    assert drone.set_camera_channel(3) and drone.camera_channel == ds.CAMERA_BOTTOM  # mod 2
+    fly(drone)
+    assert not drone.flat_trim() and drone.flat_trims == 1      # the firmware refuses aloft
+    assert any(key == 'flattrim' for key, _ in warnings)

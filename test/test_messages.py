@@ -1,6 +1,7 @@
 """The wire formats: the original messages and ardrone_autonomy's keep their MD5 sums."""
-from leap_teleop.msg import GestureEvent, Hand, Navdata, leapcobotleft, leapcobotright, leapros
-from leap_teleop.srv import FlightAnim
+from leap_teleop.msg import (GestureEvent, Hand, Navdata, leapcobotleft, leapcobotright, leapros,
+                             navdata_altitude, vector21, vector31)
+from leap_teleop.srv import CamSelect, FlightAnim, LedAnim, RecordEnable
 
 
 def test_original_and_driver_md5_sums():
@@ -23,6 +24,21 @@ def test_leapros_md5_computed_by_genmsg_from_the_msg_file():
     search = {pkg: [os.path.join('/usr/share', pkg, 'msg')] for pkg in ('std_msgs', 'geometry_msgs')}
     genmsg.msg_loader.load_depends(ctx, spec, search)
     assert genmsg.gentools.compute_md5(ctx, spec) == 'e37447f7532c765d6c587f418fd5dd03'
+
+
+def test_the_drivers_other_services_and_navdata_altitude_md5_sums():
+    # ardrone_autonomy's generated code carries these sums (service, request, response).
+    assert CamSelect._md5sum == 'bbeb5212f8ee1d6da7ff0d1169124280'
+    assert CamSelect._request_class._md5sum == 'c27320df100593b008f1bb2e1302dbb6'
+    assert LedAnim._md5sum == '0447d1620f8ba70a5b1fc2d89e406549'
+    assert LedAnim._request_class._md5sum == '23392fc8200b12a3585ff6a32d597821'
+    assert RecordEnable._md5sum == '29d58f387352c15c4e4f5763022ae875'
+    assert RecordEnable._request_class._md5sum == '8c1211af706069c994c06e00eb59ac9e'
+    for srv in (CamSelect, LedAnim, RecordEnable, FlightAnim):
+        assert srv._response_class._md5sum == 'eb13ac1f1354ccecb7941ee8fa2192e8'
+    assert navdata_altitude._md5sum == 'f0fd1fd20697e6083c6bc3a308a260dc'
+    assert vector31._md5sum == 'cc153912f1453b708d221682bc23d9ac'
+    assert vector21._md5sum == 'ff8d7d66dd3e4b731ef14a45d38888b6'
 
 
 def test_rich_messages_have_documented_fields():

@@ -2,6 +2,13 @@
 
 sim.drone_rtf         headless ArDroneSim real-time factor over a mixed flight (takeoff,
                       hover, tilts, yaw, a flip, landing) at the default 200 Hz physics.
+sim.drone_rtf_cameras the same flight while both cameras render at the node's default
+                      rates (front 640x360, bottom 320x240; the node's camera thread and
+                      renderer process, poses copied under a lock as in the node).
+                      sim.camera_front_hz / sim.camera_bottom_hz: the rates achieved while
+                      the flight runs in real time as in the node (and
+                      sim.drone_rtf_realtime_cameras, 1.0 when real time held); the
+                      *_at_full_speed rates: while the flight runs as fast as possible.
 pilot.latency_p99_ms  Hand message -> cmd_vel: a client process publishes Hand at 120 Hz
                       (each with a distinct palm offset, hence a distinct linear.x) to the
                       pilot node in another process and times the matching cmd_vel back.
@@ -20,28 +27,70 @@ import numpy as np
 from leap_teleop.bench import harness
 
 LATENCY_SECONDS = 10.0
+CAMERA_WALL_S = 10.0       # wall time of the camera run (flights repeated), for the rates
 HAND_RATE = 120.0
 
 
-def sim_rtf():
-    from leap_teleop.drone.sim import ArDroneSim, FLIP_AHEAD
+def sim_rtf(rates=None, min_wall_s=0.0, paced=False):
+    """Physics real-time factor of the mixed flight (repeated until `min_wall_s` of wall
+    time has passed); with camera `rates` (Hz per camera) the cameras render meanwhile.
+    `paced`: the flight runs in real time as in the node (sleeping between chunks).
+    Returns (rtf, {camera: frames per wall second})."""
+    import threading
+    from leap_teleop.drone.cameras import CameraLoop
+    from leap_teleop.drone.sim import ArDroneSim
     drone = ArDroneSim()
+    lock = threading.Lock()
+
+    def pose():
+        with lock:
+            return drone.pos, drone.quat, None
+
+    loop = CameraLoop(rates or {}, pose, lambda name, rgb, ctx: None)
+    loop.start()
+    if loop.thread is not None:             # renderer up and warm before the clock starts
+        loop.ready.wait(60.0)
     try:
-        t0 = time.perf_counter()
-        drone.takeoff()
-        drone.advance(4.0)
-        for cmd in ((0.5, 0, 0, 0, 0, 0), (0, 0, 0, 0, 0, 0), (0, -0.5, 0.3, 0, 0, 0.5),
-                    (0, 0, 0, 0, 0, 0)):
-            drone.set_cmd_vel(*cmd)
-            drone.advance(3.0)
-        drone.flight_animation(FLIP_AHEAD, 0)
-        drone.advance(4.0)
-        drone.land()
-        drone.advance(4.0)
-        wall = time.perf_counter() - t0
-        return drone.time / wall
+        frames0 = dict(loop.frames)
+        sim_s, t0 = 0.0, time.perf_counter()
+        while True:
+            drone.reset_state()
+            _flight(drone, lock, (t0, sim_s) if paced else None)
+            sim_s += drone.time
+            wall = time.perf_counter() - t0
+            if wall >= min_wall_s:
+                break
+        return sim_s / wall, {n: (loop.frames[n] - frames0[n]) / wall for n in loop.rates}
     finally:
+        loop.stop()
         drone.close()
+
+
+def _flight(drone, lock, pace=None):
+    """Takeoff, tilts, yaw, climb, a flip, landing: 24 s of flight in 0.1 s chunks, each
+    under the lock the camera thread takes to copy the pose (as in the node). With
+    `pace` = (wall start, sim seconds flown before) each chunk waits for the wall clock."""
+    from leap_teleop.drone.sim import FLIP_AHEAD
+
+    def advance(seconds):
+        for _ in range(int(round(seconds / 0.1))):
+            with lock:
+                drone.advance(0.1)
+            if pace is not None:
+                delay = pace[0] + pace[1] + drone.time - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+
+    drone.takeoff()
+    advance(4.0)
+    for cmd in ((0.5, 0, 0, 0, 0, 0), (0, 0, 0, 0, 0, 0), (0, -0.5, 0.3, 0, 0, 0.5),
+                (0, 0, 0, 0, 0, 0)):
+        drone.set_cmd_vel(*cmd)
+        advance(3.0)
+    drone.flight_animation(FLIP_AHEAD, 0)
+    advance(4.0)
+    drone.land()
+    advance(4.0)
 
 
 def latency_client(out, seconds):
@@ -127,19 +176,47 @@ def subprocess_run(args, env):
     subprocess.run(args, env=env, check=True, timeout=LATENCY_SECONDS + 90)
 
 
+def camera_rates():
+    from leap_teleop.nodes.ardrone_sim import BOTTOM_RATE, FRONT_RATE
+    return {'front': FRONT_RATE, 'bottom': BOTTOM_RATE}
+
+
+def cameras_figures(rates=None):
+    """Both cameras at `rates` (default: the node's): the RTF of the flight run as fast as
+    possible, then the camera rates achieved while it flies in real time (as in the node)
+    and the RTF it kept meanwhile (1.0 = real time held)."""
+    rates = rates or camera_rates()
+    rtf, achieved_fast = sim_rtf(rates, CAMERA_WALL_S)
+    rtf_paced, achieved = sim_rtf(rates, CAMERA_WALL_S, paced=True)
+    return {'sim.drone_rtf_cameras': rtf,
+            'sim.camera_front_hz': achieved.get('front', 0.0),
+            'sim.camera_bottom_hz': achieved.get('bottom', 0.0),
+            'sim.drone_rtf_realtime_cameras': rtf_paced,
+            'sim.camera_front_hz_at_full_speed': achieved_fast.get('front', 0.0),
+            'sim.camera_bottom_hz_at_full_speed': achieved_fast.get('bottom', 0.0)}
+
+
 def run():
-    rtf = sim_rtf()
+    rtf, _ = sim_rtf()
     p50, p99, answered = pilot_latency()
-    return {'sim.drone_rtf': rtf, 'pilot.latency_p50_ms': p50, 'pilot.latency_p99_ms': p99,
-            'pilot.answered_fraction': answered}
+    out = {'sim.drone_rtf': rtf}
+    out.update(cameras_figures())
+    out.update({'pilot.latency_p50_ms': p50, 'pilot.latency_p99_ms': p99,
+                'pilot.answered_fraction': answered})
+    return out
 
 
 if __name__ == '__main__':
     ap = argparse.ArgumentParser()
     ap.add_argument('--latency-client', metavar='OUT')
     ap.add_argument('--seconds', type=float, default=LATENCY_SECONDS)
+    ap.add_argument('--cameras', metavar='FRONT_HZ,BOTTOM_HZ',
+                    help='only the camera figures, at these rates (default: the node\'s)')
     a = ap.parse_args()
-    if a.latency_client:
+    if a.cameras:
+        front, bottom = (float(v) for v in a.cameras.split(','))
+        print(json.dumps(cameras_figures({'front': front, 'bottom': bottom}), indent=1))
+    elif a.latency_client:
         latency_client(a.latency_client, a.seconds)
     else:
         print(json.dumps(run(), indent=1))

@@ -20,6 +20,8 @@ emulated onboard controller:
   point sequences (tilts, yaw turns, dances) over the SDK's default durations. Types
   > 19 are refused. A flip's ``duration`` is ignored (the SDK's 15 ms is not the spin
   time either).
+- the driver's other commands: flat trim (on the ground only), LED animations 0..13,
+  video recording on / off and the video channel (front / bottom camera).
 - altitude limits (``altitude_min`` .. ``altitude_max`` while flying), a battery that
   drains with thrust-weighted flight time (lands at 0, refuses takeoff below
   ``battery_takeoff_min``), and an optional link-loss landing (``link_timeout``, off by
@@ -30,11 +32,14 @@ World frame: x forward and y left of the start pose, z up (the driver's ``odom``
 Navdata follows the driver's conversions: rotX/rotY/rotZ ROS roll/pitch/yaw in degrees,
 vx/vy/vz body-frame mm/s, altd mm, ax/ay/az specific force in g (az = +1 at rest).
 """
+import collections
 import logging
 import math
 from dataclasses import dataclass, field, fields
 
 import pybullet as pb
+
+from leap_teleop.drone import scene
 
 log = logging.getLogger(__name__)
 
@@ -55,6 +60,13 @@ DEFAULT_DURATION_MS = (1000, 1000, 1000, 1000, 1000, 1000, 5000, 5000, 2000, 500
 FLIP_AXES = {FLIP_AHEAD: (1, 1.0), FLIP_BEHIND: (1, -1.0), FLIP_LEFT: (0, -1.0),
              FLIP_RIGHT: (0, 1.0)}
 HOVER_EPS = 1e-4        # a command component below this counts as zero
+EVENTS_KEPT = 1000      # state changes remembered in ArDroneSim.events (oldest dropped)
+# The firmware's LED animations (ardrone/setledanimation types 0..13).
+LED_ANIMATION_NAMES = (
+    'BLINK_GREEN_RED', 'BLINK_GREEN', 'BLINK_RED', 'BLINK_ORANGE', 'SNAKE_GREEN_RED', 'FIRE',
+    'STANDARD', 'RED', 'GREEN', 'RED_SNAKE', 'BLANK', 'LEFT_GREEN_RIGHT_RED',
+    'LEFT_RED_RIGHT_GREEN', 'BLINK_STANDARD')
+CAMERA_FRONT, CAMERA_BOTTOM = 0, 1    # AR.Drone 2.0 video channels
 
 
 @dataclass
@@ -151,9 +163,11 @@ class ArDroneSim:
         pb.setTimeStep(self.dt, physicsClientId=c)
         pb.setPhysicsEngineParameter(numSolverIterations=10, physicsClientId=c)
         plane = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
-        plane_vis = pb.createVisualShape(pb.GEOM_BOX, halfExtents=(10, 10, 0.001),
-                                         rgbaColor=(0.55, 0.6, 0.55, 1), physicsClientId=c)
-        self.ground = pb.createMultiBody(0, plane, plane_vis, physicsClientId=c)
+        self.ground = pb.createMultiBody(0, plane, -1, physicsClientId=c)
+        # A collision shape without a visual is drawn (checkered) by the renderer: hide it.
+        pb.changeVisualShape(self.ground, -1, rgbaColor=(0, 0, 0, 0), physicsClientId=c)
+        self._scene = None      # the pictures' scene, built on the first picture: its
+                                # bodies would slow every physics step by about a third
         self._make_body(start_xyz)
         self._z_rest = self.p.hull[2]
         self.reset_state()
@@ -212,7 +226,12 @@ class ArDroneSim:
         self.flip_count = 0
         self.last_flip_angle = 0.0        # rad turned by the last finished flip
         self.last_flip_min_altitude = None  # m, lowest point of the last finished flip
-        self.events = []                  # (time, state) at every state change
+        # (time, state) at every state change, the latest EVENTS_KEPT of them.
+        self.events = collections.deque(maxlen=EVENTS_KEPT)
+        self.camera_channel = CAMERA_FRONT   # which camera the video stream carries
+        self.recording = False            # ardrone/setrecord (video onto the USB stick)
+        self.led_animation = None         # (name, freq Hz, ends at sim time s) or None
+        self.flat_trims = 0               # flat trims done (landed only)
         self._read()
 
     # -- warnings -------------------------------------------------------------------
@@ -293,7 +312,8 @@ class ArDroneSim:
         return all(abs(v) <= HOVER_EPS for v in self.cmd)
 
     def flight_animation(self, anim_type, duration_ms=0):
-        """ardrone/setflightanimation. True when the animation starts."""
+        """ardrone/setflightanimation. True when the animation starts (the driver answers
+        true whatever this returns: the firmware ignores what it cannot do)."""
         self.last_input_time = self.time
         try:
             anim_type = int(anim_type)
@@ -316,6 +336,52 @@ class ArDroneSim:
             self._set_state(LOOPING)
         self._pos_hold = None
         return True
+
+    def flat_trim(self):
+        """ardrone/flattrim: re-level the attitude reference; the firmware only does it
+        on the ground. True when done."""
+        self.last_input_time = self.time
+        if self.state != LANDED or self.emergency:
+            self._warn('flattrim', 'flat trim ignored: drone is %s', STATE_NAMES[self.state])
+            return False
+        self.flat_trims += 1
+        return True
+
+    def set_led_animation(self, anim_type, freq, duration_s):
+        """ardrone/setledanimation. True when the type is one of the firmware's 0..13."""
+        try:
+            anim_type, freq, duration_s = int(anim_type), float(freq), int(duration_s)
+        except (TypeError, ValueError):
+            anim_type = -1
+        if not 0 <= anim_type < len(LED_ANIMATION_NAMES) or not math.isfinite(freq):
+            self._warn('led', 'LED animation ignored: type %r is not in 0..13', anim_type)
+            return False
+        self.led_animation = (LED_ANIMATION_NAMES[anim_type], freq, self.time + max(0, duration_s))
+        return True
+
+    def set_record(self, enable):
+        """ardrone/setrecord: start / stop recording video onto the USB stick."""
+        self.recording = bool(enable)
+        return True
+
+    def set_camera_channel(self, channel):
+        """ardrone/setcamchannel: the AR.Drone 2.0 has two channels; like the driver, the
+        channel is taken modulo 2."""
+        try:
+            self.camera_channel = int(channel) % 2
+        except (TypeError, ValueError):
+            self._warn('camera', 'camera channel ignored: %r', channel)
+            return False
+        return True
+
+    def toggle_camera(self):
+        """ardrone/togglecam: front <-> bottom."""
+        self.camera_channel = 1 - self.camera_channel
+        return True
+
+    @property
+    def led_active(self):
+        return self.led_animation is not None and self.time < self.led_animation[2]
 
     # -- state ----------------------------------------------------------------------
     def _read(self):
@@ -567,18 +633,17 @@ class ArDroneSim:
             'tm': self.time * 1e6,
         }
 
-    def snapshot(self, path=None, width=640, height=480, distance=2.5):
-        """Render a chase-camera view; write a PNG when `path` is given. Returns (h, w, 3) uint8."""
-        import numpy as np
-        target = self.pos
-        view = pb.computeViewMatrixFromYawPitchRoll(target, distance, math.degrees(self.yaw) - 90,
-                                                    -25, 0, 2, physicsClientId=self.client)
-        proj = pb.computeProjectionMatrixFOV(60, width / float(height), 0.05, 50,
-                                             physicsClientId=self.client)
-        _, _, rgba, _, _ = pb.getCameraImage(width, height, view, proj,
-                                             renderer=pb.ER_TINY_RENDERER,
-                                             physicsClientId=self.client)
-        img = np.reshape(np.asarray(rgba, dtype=np.uint8), (height, width, 4))[:, :, :3]
+    def show_scene(self):
+        """Add the gridded ground and landmarks (visual only) for pictures."""
+        if self._scene is None:
+            self._scene = scene.build(self.client)
+
+    def snapshot(self, path=None, width=640, height=480):
+        """Render the chase view (behind and above the drone); write a PNG when `path` is
+        given. Returns (h, w, 3) uint8."""
+        from leap_teleop.drone.cameras import chase_view
+        self.show_scene()
+        img = chase_view(self.client, self.pos, self.yaw, width, height)
         if path:
             from PIL import Image
             Image.fromarray(img).save(path)

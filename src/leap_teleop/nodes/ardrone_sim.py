@@ -1,12 +1,22 @@
 """ardrone_sim: a simulated AR.Drone 2.0 behind the ardrone_autonomy driver's interface.
 
-Subscribes cmd_vel (Twist), ardrone/takeoff, ardrone/land, ardrone/reset (Empty);
-publishes ardrone/navdata (leap_teleop/Navdata, the driver's MD5), ardrone/imu,
-ardrone/odometry and TF odom -> ardrone_base_link (+ static front / bottom camera
-frames) at ~looprate, the flown path (nav_msgs/Path, ardrone/path, bounded) at ~path_rate
-and, latched, a drone body of primitive markers (ardrone/markers) for RViz; serves
-ardrone/setflightanimation (FlightAnim) and ardrone/snapshot (std_srvs/Trigger: writes a PNG, returns its path). With
+Offers every endpoint the driver offers by default, with the driver's names and types
+(leap_teleop.drone.interface.DRIVER_ENDPOINTS): subscribes cmd_vel (Twist),
+ardrone/takeoff, ardrone/land, ardrone/reset (Empty); publishes ardrone/navdata
+(Navdata), ardrone/imu, ardrone/mag, ardrone/odometry and TF odom -> ardrone_base_link
+(+ static front / bottom camera frames) at ~looprate, the cameras (ardrone/front/*,
+ardrone/bottom/*: image_raw + camera_info, rendered by PyBullet in a process of their
+own at ~front_rate / ~bottom_rate) and the active camera again on ardrone/image_raw +
+ardrone/camera_info; serves ardrone/setflightanimation, ardrone/flattrim,
+ardrone/togglecam, ardrone/setcamchannel, ardrone/setledanimation, ardrone/setrecord and
+ardrone/front|bottom/set_camera_info. Like the driver, the services answer true (the
+firmware ignores what it cannot do; the reason is logged). With ~enable_navdata_altitude
+it also publishes ardrone/navdata_altitude. Extras: the flown path (nav_msgs/Path,
+ardrone/path, bounded) at ~path_rate, a latched drone body of markers (ardrone/markers)
+and ardrone/snapshot (std_srvs/Trigger: writes a chase-view PNG, returns its path). With
 /use_sim_time true it publishes /clock and can run faster than real time.
+Everything is relative to the node's namespace, so drones run side by side in their own
+namespaces (~tf_prefix keeps their TF frames apart, as with the driver).
 """
 import math
 import os
@@ -15,22 +25,28 @@ import time
 
 import rospy
 import tf2_ros
-from geometry_msgs.msg import TransformStamped
+from geometry_msgs.msg import TransformStamped, Twist, Vector3Stamped
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import CameraInfo, Image, Imu
+from sensor_msgs.srv import SetCameraInfo, SetCameraInfoResponse
 from std_msgs.msg import Empty
-from std_srvs.srv import Trigger, TriggerResponse
-from geometry_msgs.msg import Twist
+from std_srvs.srv import Empty as EmptySrv, EmptyResponse, Trigger, TriggerResponse
 from visualization_msgs.msg import MarkerArray
 
+from leap_teleop.drone import cameras
+from leap_teleop.drone.interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_TAG
 from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
-from leap_teleop.msg import Navdata
-from leap_teleop.nodes.common import Param, start_node
-from leap_teleop.srv import FlightAnim, FlightAnimResponse
+from leap_teleop.msg import Navdata, navdata_altitude
+from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
+from leap_teleop.srv import (CamSelect, CamSelectResponse, FlightAnim, FlightAnimResponse,
+                             LedAnim, LedAnimResponse, RecordEnable, RecordEnableResponse)
 from leap_teleop.visualization import PathTrail, drone_markers
 
 _D = DroneParams()
+# Default camera rates: what 2 shared cores render (in the camera process) while the
+# flight keeps real time; measured by bench_drone's sim.drone_rtf_cameras.
+FRONT_RATE, BOTTOM_RATE = 5.0, 5.0
 PARAMS = {
     'euler_angle_max': Param(_D.euler_angle_max, 'max tilt for linear.x/y = 1 (driver)',
                              unit='rad', gt=0.0, le=0.52),
@@ -74,6 +90,15 @@ PARAMS = {
                              '(so RViz can show the hands next to the drone)'),
     'odom_in_world': Param([1.0, 0.0, 0.0], 'odom_frame origin in world_frame', unit='m',
                            length=3, ge=-1000.0, le=1000.0),
+    # Cameras and the driver's options.
+    'front_rate': Param(FRONT_RATE, 'ardrone/front/image_raw rate (wall clock); 0 = off',
+                        unit='Hz', ge=0.0, le=30.0),
+    'bottom_rate': Param(BOTTOM_RATE, 'ardrone/bottom/image_raw rate (wall clock); 0 = off',
+                         unit='Hz', ge=0.0, le=30.0),
+    'camera_channel': Param(0, 'camera on ardrone/image_raw at start: 0 front, 1 bottom',
+                            choices=(0, 1)),
+    'enable_navdata_altitude': Param(False, 'publish ardrone/navdata_altitude (driver option)'),
+    'tf_prefix': Param('', 'prefix of every TF frame published (driver param), e.g. drone1'),
 }
 
 
@@ -88,10 +113,22 @@ class ArDroneSimNode:
                               start_xyz=tuple(p['start_xy']))
         self.lock = threading.Lock()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
-        self.base, self.odom = p['base_frame'], p['odom_frame']
+        self.sim.set_camera_channel(int(p['camera_channel']))
+        prefix = p['tf_prefix'].strip('/')
+        self.frame = (lambda name: '%s/%s' % (prefix, name)) if prefix else (lambda name: name)
+        self.base, self.odom = self.frame(p['base_frame']), self.frame(p['odom_frame'])
+        self.camera_frames = {'front': self.frame('ardrone_base_frontcam'),
+                              'bottom': self.frame('ardrone_base_bottomcam')}
         self.nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=25)
         self.imu_pub = rospy.Publisher('ardrone/imu', Imu, queue_size=25)
+        self.mag_pub = rospy.Publisher('ardrone/mag', Vector3Stamped, queue_size=25)
         self.odom_pub = rospy.Publisher('ardrone/odometry', Odometry, queue_size=25)
+        self.alt_pub = (rospy.Publisher('ardrone/navdata_altitude', navdata_altitude,
+                                        queue_size=25)
+                        if p['enable_navdata_altitude'] else None)
+        self.log = RateLimitedLog()
+        self.cameras = CameraStreams(self, {'front': float(p['front_rate']),
+                                            'bottom': float(p['bottom_rate'])})
         self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
                           if self.use_sim_time else None)
         self.tf = tf2_ros.TransformBroadcaster()
@@ -110,6 +147,11 @@ class ArDroneSimNode:
         rospy.Subscriber('ardrone/land', Empty, lambda _: self._call(self.sim.land))
         rospy.Subscriber('ardrone/reset', Empty, lambda _: self._call(self.sim.reset))
         rospy.Service('ardrone/setflightanimation', FlightAnim, self.on_flight_animation)
+        rospy.Service('ardrone/flattrim', EmptySrv, self.on_flat_trim)
+        rospy.Service('ardrone/togglecam', EmptySrv, self.on_toggle_camera)
+        rospy.Service('ardrone/setcamchannel', CamSelect, self.on_camera_channel)
+        rospy.Service('ardrone/setledanimation', LedAnim, self.on_led_animation)
+        rospy.Service('ardrone/setrecord', RecordEnable, self.on_record)
         rospy.Service('ardrone/snapshot', Trigger, self.on_snapshot)
         self._last_state = None
 
@@ -122,9 +164,37 @@ class ArDroneSimNode:
         self._call(self.sim.set_cmd_vel, msg.linear.x, msg.linear.y, msg.linear.z,
                    msg.angular.x, msg.angular.y, msg.angular.z)
 
+    # The driver answers true whatever the firmware does with a command; the simulated
+    # firmware logs why it ignored one.
     def on_flight_animation(self, req):
-        return FlightAnimResponse(result=bool(self._call(self.sim.flight_animation,
-                                                         req.type, req.duration)))
+        self._call(self.sim.flight_animation, req.type, req.duration)
+        return FlightAnimResponse(result=True)
+
+    def on_flat_trim(self, _req):
+        if self._call(self.sim.flat_trim):
+            rospy.loginfo('ardrone_sim: flat trim done')
+        return EmptyResponse()
+
+    def on_toggle_camera(self, _req):
+        self._call(self.sim.toggle_camera)
+        rospy.loginfo('ardrone_sim: video channel %d', self.sim.camera_channel)
+        return EmptyResponse()
+
+    def on_camera_channel(self, req):
+        self._call(self.sim.set_camera_channel, req.channel)
+        rospy.loginfo('ardrone_sim: video channel %d', self.sim.camera_channel)
+        return CamSelectResponse(result=True)
+
+    def on_led_animation(self, req):
+        if self._call(self.sim.set_led_animation, req.type, req.freq, req.duration):
+            rospy.loginfo('ardrone_sim: LED animation %s at %.1f Hz for %d s',
+                          self.sim.led_animation[0], req.freq, req.duration)
+        return LedAnimResponse(result=True)
+
+    def on_record(self, req):
+        self._call(self.sim.set_record, req.enable)
+        rospy.loginfo('ardrone_sim: video recording %s', 'on' if req.enable else 'off')
+        return RecordEnableResponse(result=True)
 
     def on_snapshot(self, _req):
         folder = self.p['snapshot_dir'] or os.environ.get('ROS_HOME') or '/tmp'
@@ -144,16 +214,18 @@ class ArDroneSimNode:
         if self.p['world_frame']:
             t = TransformStamped()
             t.header.stamp = rospy.Time.now()
-            t.header.frame_id, t.child_frame_id = self.p['world_frame'], self.odom
+            t.header.frame_id, t.child_frame_id = self.p['world_frame'], self.odom   # shared
             xyz = [float(v) for v in self.p['odom_in_world']]
             if len(xyz) != 3:
                 raise ValueError('~odom_in_world needs [x, y, z]')
             t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = xyz
             t.transform.rotation.w = 1.0
             frames.append(t)
-        for child, xyz, rpy in (('ardrone_base_frontcam', (0.21, 0.0, 0.0),
+        # Optical frames (z along the view, x right, y down in the image), mounted where
+        # cameras.FRONT / cameras.BOTTOM render from.
+        for child, xyz, rpy in ((self.camera_frames['front'], cameras.FRONT.mount,
                                  (-math.pi / 2, 0.0, -math.pi / 2)),
-                                ('ardrone_base_bottomcam', (0.0, -0.02, 0.0),
+                                (self.camera_frames['bottom'], cameras.BOTTOM.mount,
                                  (math.pi, 0.0, -math.pi / 2))):
             t = TransformStamped()
             t.header.stamp = rospy.Time.now()
@@ -187,6 +259,12 @@ class ArDroneSimNode:
         msg.pressure = int(101325 - 12.0 * alt)
         msg.temp = 25
         self.nav_pub.publish(msg)
+        mag = Vector3Stamped()
+        mag.header = msg.header
+        mag.vector.x, mag.vector.y, mag.vector.z = msg.magX, msg.magY, msg.magZ
+        self.mag_pub.publish(mag)
+        if self.alt_pub is not None:
+            self.alt_pub.publish(self._navdata_altitude(msg, nav, alt))
         if nav['state'] != self._last_state:
             rospy.loginfo('ardrone_sim: state %d (%s)', nav['state'], STATE_NAMES[nav['state']])
             self._last_state = nav['state']
@@ -219,6 +297,21 @@ class ArDroneSimNode:
         self.tf.sendTransform(t)
         self._publish_path(stamp, (pos[0], pos[1], alt), quat)
 
+    def _navdata_altitude(self, msg, nav, alt):
+        """The altitude option: vision / raw / reference altitude (mm) are the sim's
+        true one, the observer's state its altitude (m) and climb rate (m/s)."""
+        out = navdata_altitude()
+        out.header = msg.header
+        out.drone_time = nav['tm'] / 1e6
+        out.tag, out.size = NAVDATA_ALTITUDE_TAG, NAVDATA_ALTITUDE_SIZE
+        out.altitude_vision = out.altitude_raw = out.altitude_ref = nav['altd']
+        out.altitude_vz = nav['vz']
+        out.obs_accZ = nav['az'] * 9.81
+        out.obs_alt = max(alt, 0.0)
+        out.obs_x.x, out.obs_x.y = max(alt, 0.0), nav['vz'] / 1000.0
+        out.est_vb.x = nav['vz'] / 1000.0
+        return out
+
     def _publish_path(self, stamp, xyz, quat):
         if self.path_period is None:
             return
@@ -239,6 +332,7 @@ class ArDroneSimNode:
             rtf = 1.0
         t0_wall, t0_sim = time.monotonic(), self.sim.time
         self.publish()
+        self.cameras.start()
         while not rospy.is_shutdown():
             with self.lock:
                 for _ in range(steps):
@@ -252,6 +346,82 @@ class ArDroneSimNode:
                     t0_wall, t0_sim = time.monotonic(), self.sim.time
             else:
                 time.sleep(0)               # let the callbacks in
+
+
+class CameraStreams:
+    """The cameras' topics, fed from a thread of their own: it copies the drone pose under
+    the node's lock, has the renderer process draw it and publishes the images."""
+
+    def __init__(self, node, rates):
+        self.node = node
+        self.pubs, self.info_pubs, self.info = {}, {}, {}
+        for name, spec in cameras.CAMERAS.items():
+            self.pubs[name] = rospy.Publisher('ardrone/%s/image_raw' % name, Image, queue_size=2)
+            self.info_pubs[name] = rospy.Publisher('ardrone/%s/camera_info' % name, CameraInfo,
+                                                   queue_size=2)
+            self.info[name] = self._ideal_info(spec, node.camera_frames[name])
+            rospy.Service('ardrone/%s/set_camera_info' % name, SetCameraInfo,
+                          lambda req, n=name: self.on_set_camera_info(n, req))
+        self.active_pub = rospy.Publisher('ardrone/image_raw', Image, queue_size=2)
+        self.active_info_pub = rospy.Publisher('ardrone/camera_info', CameraInfo, queue_size=2)
+        self.loop = cameras.CameraLoop(rates, self._pose, self._deliver, self._error)
+
+    @staticmethod
+    def _ideal_info(spec, frame):
+        info = CameraInfo()
+        info.header.frame_id = frame
+        info.width, info.height = spec.width, spec.height
+        info.distortion_model = 'plumb_bob'
+        info.D = [0.0] * 5
+        info.K, info.P = spec.intrinsics()
+        info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+        return info
+
+    def on_set_camera_info(self, name, req):
+        """Like camera_info_manager: any calibration of the camera's size is taken (kept
+        for this run; the simulated lens stays ideal)."""
+        spec, info = cameras.CAMERAS[name], req.camera_info
+        if (info.width, info.height) != (spec.width, spec.height):
+            return SetCameraInfoResponse(
+                success=False, status_message='%s camera is %dx%d, got %dx%d' % (
+                    name, spec.width, spec.height, info.width, info.height))
+        info.header.frame_id = self.node.camera_frames[name]
+        self.info[name] = info
+        return SetCameraInfoResponse(success=True, status_message='')
+
+    def start(self):
+        self.loop.start()
+
+    def stop(self):
+        self.loop.stop()
+
+    def _pose(self):
+        node = self.node
+        with node.lock:
+            active = 'front' if node.sim.camera_channel == 0 else 'bottom'
+            return node.sim.pos, node.sim.quat, (node.stamp(), active)
+
+    def _deliver(self, name, rgb, context):
+        stamp, active = context
+        self._publish(name, rgb, stamp, name == active)
+
+    def _error(self, e):
+        if not rospy.is_shutdown():
+            self.node.log.warn('camera', 'ardrone_sim: camera rendering failed: %s', e)
+
+    def _publish(self, name, rgb, stamp, active):
+        msg = Image()
+        msg.header.stamp, msg.header.frame_id = stamp, self.node.camera_frames[name]
+        msg.height, msg.width = rgb.shape[:2]
+        msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
+        msg.data = rgb.tobytes()
+        info = self.info[name]
+        info.header.stamp = stamp
+        self.pubs[name].publish(msg)
+        self.info_pubs[name].publish(info)
+        if active:
+            self.active_pub.publish(msg)
+            self.active_info_pub.publish(info)
 
 
 def _quat_from_rpy(roll, pitch, yaw):
@@ -271,4 +441,5 @@ def main(argv=None):
     except rospy.ROSInterruptException:
         pass
     finally:
+        node.cameras.stop()
         node.sim.close()

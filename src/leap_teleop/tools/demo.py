@@ -1,7 +1,10 @@
 """The headless demo: scripted hands -> the real sender -> two UR10 arms picking and
 placing cubes, and the AR.Drone taking off, flying, flipping and landing, all in
 PyBullet. Ends by itself, prints a summary table and writes demo_output/: summary.json,
-PNG frames and an animated GIF per robot.
+ur10.gif (+ its PNG frames, each with an inset of the hand driving each arm), drone.gif
+(a chase view of the flight with the drone's front camera inset, re-rendered from the
+recorded odometry) and drone_flight.png (altitude, x, y and state against time, with
+the gestures that caused each change).
 
 usage: python -m leap_teleop.tools.demo [--gui 0|1] [--out demo_output] [--tasks ur10,drone]
 """
@@ -22,6 +25,8 @@ UR10_SCRIPT = 'ur10_pick_place_dual.yaml'
 DRONE_SCRIPT = 'drone_flight.yaml'
 # arm -> (hand, cube it picks)
 UR10_TASKS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+# Where each arm's hand inset goes on the cell snapshot: next to that arm.
+HAND_CORNER = {'ur10_1': 'left', 'ur10_2': 'right'}
 SNAPSHOT_PERIOD_S = 1.0
 SETTLE_S = 3.0
 MAX_WAIT_S = 240.0          # give up on sessions that never start
@@ -49,6 +54,10 @@ class Monitor:
         rospy.init_node('demo_monitor', disable_signals=True)
         self.tasks = tasks
         self.drone_states, self.drone_odom = [], None
+        self.drone_track, self.drone_state_times, self.drone_gestures = [], [], []
+        self.drone_camera = []
+        self.hands = {}                   # side -> latest Hand (the arms' sender)
+        self.hand_events = {}             # side -> (time, gesture) of the latest event
         self.arm_states = {arm: [] for arm in UR10_TASKS}
         self.cubes = {}
         self.first_frame = {}
@@ -62,8 +71,21 @@ class Monitor:
                              lambda m: self.first_frame.setdefault('drone', time.monotonic()),
                              queue_size=1)
         if 'drone' in tasks:
+            from leap_teleop.msg import GestureEvent
+            from sensor_msgs.msg import Image
             rospy.Subscriber('/drone/ardrone/navdata', Navdata, self._on_nav, queue_size=50)
-            rospy.Subscriber('/drone/ardrone/odometry', Odometry, self._on_odom, queue_size=5)
+            rospy.Subscriber('/drone/ardrone/odometry', Odometry, self._on_odom, queue_size=50)
+            rospy.Subscriber('/drone/leapmotion/gestures', GestureEvent, self._on_drone_gesture,
+                             queue_size=50)
+            rospy.Subscriber('/drone/ardrone/front/image_raw', Image, self._on_camera,
+                             queue_size=1, buff_size=2 ** 22)
+        if 'ur10' in tasks:
+            from leap_teleop.msg import GestureEvent
+            for side in ('right', 'left'):
+                rospy.Subscriber('/leapmotion/hand_%s' % side, Hand,
+                                 lambda m, s=side: self.hands.__setitem__(s, m), queue_size=1)
+            rospy.Subscriber('/leapmotion/gestures', GestureEvent, self._on_arm_gesture,
+                             queue_size=50)
         if 'ur10' in tasks:
             from leap_teleop.ur10.ros_interface import OBJECT_POSES_TYPE, OBJECT_POSES_TOPIC
             rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._on_objects,
@@ -75,9 +97,41 @@ class Monitor:
     def _on_nav(self, msg):
         if not self.drone_states or self.drone_states[-1] != msg.state:
             self.drone_states.append(msg.state)
+            # Header stamps (wall clock here): one clock for every source, unlike arrival
+            # times, which differ per connection.
+            self.drone_state_times.append((msg.header.stamp.to_sec(), msg.state))
 
     def _on_odom(self, msg):
         self.drone_odom = msg
+        if 'drone' in self.first_frame:
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            self.drone_track.append((msg.header.stamp.to_sec(), p.x, p.y, p.z,
+                                     q.x, q.y, q.z, q.w))
+
+    def _on_drone_gesture(self, msg):
+        if msg.active:
+            self.drone_gestures.append((msg.header.stamp.to_sec(), msg.gesture))
+
+    def _on_camera(self, msg):
+        # A small copy, at most twice a second: the chase GIF's inset.
+        now = msg.header.stamp.to_sec()
+        if 'drone' not in self.first_frame or (
+                self.drone_camera and now - self.drone_camera[-1][0] < 0.5):
+            return
+        rgb = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
+        self.drone_camera.append((now, np.ascontiguousarray(rgb[::2, ::2])))
+
+    def _on_arm_gesture(self, msg):
+        if msg.active:
+            side = 'right' if msg.side == 0 else 'left'
+            self.hand_events[side] = (time.monotonic(), msg.gesture)
+
+    def hand_insets(self):
+        """An inset per arm of the hand driving it, as it is now."""
+        from leap_teleop.tools.demo_pictures import hand_inset
+        return [(HAND_CORNER[arm], hand_inset(self.hands.get(hand), '%s: %s hand'
+                                              % (arm, hand)))
+                for arm, (hand, _) in UR10_TASKS.items()]
 
     def _on_arm(self, arm, msg):
         if not self.arm_states[arm] or self.arm_states[arm][-1] != msg.state:
@@ -201,13 +255,14 @@ def run_demo(tasks, out, durations):
     if 'ur10' in tasks:
         services['ur10'] = '/ur10_sim/snapshot'
     if 'drone' in tasks:
-        services['drone'] = '/drone/ardrone/snapshot'
+        mon.rospy.wait_for_service('/drone/ardrone/snapshot', 120)
     say('waiting for the simulations to come up')
     for service in services.values():
         mon.rospy.wait_for_service(service, 120)
     say('playing the gesture sessions (%s)' % ', '.join(
         '%s %.0f s' % kv for kv in durations.items()))
     pngs = {name: [] for name in services}
+    insets = {}
     t0 = time.monotonic()
     next_shot, last_print = t0, t0
     while True:
@@ -219,7 +274,10 @@ def run_demo(tasks, out, durations):
         if now >= next_shot:
             next_shot += SNAPSHOT_PERIOD_S
             for name, service in services.items():
-                pngs[name].append(mon.snapshot(service))
+                png = mon.snapshot(service)
+                pngs[name].append(png)
+                if png and name == 'ur10':
+                    insets[png] = mon.hand_insets()
         if now - last_print >= 5.0:
             last_print = now
             parts = ['%.0f s' % (now - t0)]
@@ -234,6 +292,10 @@ def run_demo(tasks, out, durations):
         summary['tasks'].update(evaluate_ur10(mon))
     if 'drone' in tasks:
         summary['tasks'].update(evaluate_drone(mon))
+    for png, hand_pics in insets.items():
+        from leap_teleop.tools.demo_pictures import arm_frame_with_insets
+        if os.path.exists(png):
+            arm_frame_with_insets(png, hand_pics)
     for name, files in pngs.items():
         frames = [f for f in files if f]
         for i, f in enumerate(frames):
@@ -241,10 +303,35 @@ def run_demo(tasks, out, durations):
         kept = [os.path.join(out, '%s_%03d.png' % (name, i)) for i in range(len(frames))]
         if make_gif(kept, os.path.join(out, '%s.gif' % name)):
             summary.setdefault('gifs', []).append('%s.gif' % name)
+    if 'drone' in tasks:
+        summary.setdefault('gifs', []).extend(drone_pictures(mon, out))
     for name, task in summary['tasks'].items():
         task['session_s'] = round(durations['drone' if name.startswith('drone') else 'ur10'], 1)
     mon.rospy.signal_shutdown('demo done')
     return summary
+
+
+def drone_pictures(mon, out):
+    """The chase-view GIF and the flight plot of the recorded flight."""
+    from leap_teleop.tools import demo_pictures
+    if len(mon.drone_track) < 10:
+        say('no drone track recorded: no drone pictures')
+        return []
+    say('rendering the drone pictures (%d poses, %d camera frames)'
+        % (len(mon.drone_track), len(mon.drone_camera)))
+    track = mon.drone_track
+    written = []
+    try:
+        demo_pictures.flight_plot(track, mon.drone_state_times, mon.drone_gestures,
+                                  os.path.join(out, 'drone_flight.png'))
+        written.append('drone_flight.png')
+    except ImportError as e:                      # matplotlib missing: the GIF still comes
+        say('no flight plot: %s' % e)
+    frames = demo_pictures.chase_gif(track, mon.drone_state_times, mon.drone_gestures,
+                                     os.path.join(out, 'drone.gif'), mon.drone_camera)
+    if frames:
+        written.append('drone.gif')
+    return written
 
 
 def report(summary, out):

@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""rostest node: the simulator offers the driver's endpoints, and a client written against
+the driver's types uses each of them (in the namespace uav, TF frames prefixed uav/)."""
+import sys
+import unittest
+
+import rosgraph
+import rospy
+import rosservice
+import rostest
+from geometry_msgs.msg import Vector3Stamped
+from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.srv import SetCameraInfo
+from std_msgs.msg import Empty
+from std_srvs.srv import Empty as EmptySrv
+
+import ardrone_driver_types as driver
+from leap_teleop.drone.interface import (DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER,
+                                         SERVICE, SUBSCRIBER)
+
+NODE = '/uav/ardrone_sim'
+Navdata = driver.message('Navdata')
+NavdataAltitude = driver.message('navdata_altitude', ('vector31', 'vector21'))
+FlightAnim, CamSelect = driver.service('FlightAnim'), driver.service('CamSelect')
+LedAnim, RecordEnable = driver.service('LedAnim'), driver.service('RecordEnable')
+
+
+def wait(topic, kind, timeout=30.0):
+    return rospy.wait_for_message(topic, kind, timeout)
+
+
+class DriverInterface(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        # The driver-typed client's first step: wait for the flat-trim service.
+        rospy.wait_for_service('ardrone/flattrim', 60.0)
+        wait('ardrone/front/image_raw', Image, 60.0)
+
+    def test_1_endpoint_table_matches_the_running_node(self):
+        master = rosgraph.Master(rospy.get_name())
+        pubs, subs, services = master.getSystemState()
+        pubs, subs = dict(pubs), dict(subs)
+        services = dict(services)
+        types = dict(master.getTopicTypes())
+        offered = 0
+        for kind, name, msg_type, _ in DRIVER_ENDPOINTS + OPTIONAL_ENDPOINTS:
+            full = rospy.resolve_name(name)
+            if kind == SERVICE:
+                self.assertIn(NODE, services.get(full, []), full)
+                self.assertEqual(rosservice.get_service_type(full), msg_type, full)
+            else:
+                table = pubs if kind == PUBLISHER else subs
+                self.assertIn(NODE, table.get(full, []), '%s %s' % (kind, full))
+                self.assertEqual(types[full], msg_type, full)
+            offered += 1
+        self.assertEqual(offered, 24)      # 23 default-on + navdata_altitude, enabled here
+        self.assertEqual(len(DRIVER_ENDPOINTS), 23)
+
+    def test_2_cameras_and_the_active_channel(self):
+        front = wait('ardrone/front/image_raw', Image)
+        self.assertEqual((front.width, front.height, front.encoding), (640, 360, 'rgb8'))
+        self.assertEqual(front.header.frame_id, 'uav/ardrone_base_frontcam')
+        self.assertEqual(len(front.data), 640 * 360 * 3)
+        bottom = wait('ardrone/bottom/image_raw', Image)
+        self.assertEqual((bottom.width, bottom.height), (320, 240))
+        info = wait('ardrone/front/camera_info', CameraInfo)
+        self.assertEqual((info.width, info.height), (640, 360))
+        self.assertAlmostEqual(info.K[0], 354.5, delta=1.0)    # 92 deg diagonal FOV
+        self.assertEqual(wait('ardrone/bottom/camera_info', CameraInfo).width, 320)
+        self.assertEqual(wait('ardrone/image_raw', Image).width, 640)    # front at start
+        self.assertEqual(wait('ardrone/camera_info', CameraInfo).width, 640)
+        rospy.ServiceProxy('ardrone/togglecam', EmptySrv)()
+        self.assertTrue(self._active_becomes(320))
+        self.assertTrue(rospy.ServiceProxy('ardrone/setcamchannel', CamSelect)(channel=0).result)
+        self.assertTrue(self._active_becomes(640))
+
+    def _active_becomes(self, width, timeout=10.0):
+        deadline = rospy.get_time() + timeout
+        while rospy.get_time() < deadline:
+            if wait('ardrone/image_raw', Image).width == width:
+                return True
+        return False
+
+    def test_3_set_camera_info(self):
+        setter = rospy.ServiceProxy('ardrone/bottom/set_camera_info', SetCameraInfo)
+        info = wait('ardrone/bottom/camera_info', CameraInfo)
+        info.K = list(info.K)
+        info.K[0] = info.K[4] = 300.0
+        self.assertTrue(setter(camera_info=info).success)
+        deadline = rospy.get_time() + 10.0
+        while rospy.get_time() < deadline:
+            if wait('ardrone/bottom/camera_info', CameraInfo).K[0] == 300.0:
+                break
+        else:
+            self.fail('the new calibration was not published')
+        info.width = 640                      # 640 x 240: neither camera's size
+        front = rospy.ServiceProxy('ardrone/front/set_camera_info', SetCameraInfo)
+        for service in (setter, front):
+            res = service(camera_info=info)
+            self.assertFalse(res.success)
+            self.assertIn('got 640x240', res.status_message)
+
+    def test_4_navdata_mag_altitude_leds_record_flat_trim_flight(self):
+        nav = wait('ardrone/navdata', Navdata)
+        self.assertEqual(nav.state, 2)
+        mag = wait('ardrone/mag', Vector3Stamped)
+        self.assertEqual(mag.header.frame_id, 'uav/ardrone_base_link')
+        self.assertLess(mag.vector.z, 0)
+        alt = wait('ardrone/navdata_altitude', NavdataAltitude)
+        self.assertEqual((alt.tag, alt.size), (10, 56))
+        self.assertLess(alt.altitude_raw, 20)
+        self.assertTrue(rospy.ServiceProxy('ardrone/setledanimation', LedAnim)(
+            type=3, freq=2.0, duration=2).result)
+        self.assertTrue(rospy.ServiceProxy('ardrone/setrecord', RecordEnable)(enable=True).result)
+        rospy.ServiceProxy('ardrone/flattrim', EmptySrv)()
+        # The driver answers true even where the firmware ignores the animation (landed).
+        anim = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
+        self.assertTrue(anim(type=19, duration=0).result)
+        rospy.sleep(0.5)
+        self.assertEqual(wait('ardrone/navdata', Navdata).state, 2)
+        takeoff = rospy.Publisher('ardrone/takeoff', Empty, queue_size=1, latch=True)
+        takeoff.publish(Empty())
+        deadline = rospy.get_time() + 20.0
+        while rospy.get_time() < deadline and wait('ardrone/navdata', Navdata).state != 4:
+            pass
+        self.assertEqual(wait('ardrone/navdata', Navdata).state, 4)
+        alt = wait('ardrone/navdata_altitude', NavdataAltitude)
+        self.assertAlmostEqual(alt.altitude_raw, 1000, delta=150)
+        rospy.ServiceProxy('ardrone/flattrim', EmptySrv)()     # aloft: answered, ignored
+        self.assertIn(wait('ardrone/navdata', Navdata).state, (3, 4))
+
+
+if __name__ == '__main__':
+    rospy.init_node('driver_client')
+    rostest.rosrun('leap_teleop', 'drone_driver_interface_check', DriverInterface, sys.argv)

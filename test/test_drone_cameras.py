@@ -1,0 +1,101 @@
+"""The drone's cameras: the AR.Drone 2.0's geometry, rendered views that show motion."""
+import math
+
+import numpy as np
+import pytest
+
+from leap_teleop.drone import cameras
+from leap_teleop.drone.cameras import BOTTOM, FRONT
+
+
+def test_camera_geometry_is_the_ar_drone_2s():
+    assert (FRONT.width, FRONT.height) == (640, 360)
+    assert (BOTTOM.width, BOTTOM.height) == (320, 240)
+    for spec, fov in ((FRONT, 92.0), (BOTTOM, 64.0)):
+        half_diag = math.hypot(spec.width, spec.height) / 2
+        assert math.degrees(2 * math.atan(half_diag / spec.focal_px)) == pytest.approx(fov)
+        k, p = spec.intrinsics()
+        assert k[0] == k[4] == p[0] == p[5] == pytest.approx(spec.focal_px)
+
+
+@pytest.fixture(scope='module')
+def renderer():
+    r = cameras.SceneRenderer()
+    yield r
+    r.close()
+
+
+def _yaw_quat(yaw):
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+def test_front_camera_sees_the_horizon_and_moves_with_the_drone(renderer):
+    a = renderer.render('front', (0.0, 0.0, 1.0), _yaw_quat(0.0))
+    assert a.shape == (360, 640, 3)
+    # Sky above, ground below: the top rows are blue-ish, the bottom rows green-ish.
+    top, bottom = a[:20].reshape(-1, 3).mean(0), a[-20:].reshape(-1, 3).mean(0)
+    assert top[2] > top[1] and bottom[1] > bottom[2]
+    b = renderer.render('front', (0.5, 0.0, 1.0), _yaw_quat(0.0))      # 0.5 m forward
+    c = renderer.render('front', (0.0, 0.0, 1.0), _yaw_quat(0.5))      # turned left
+    for other in (b, c):
+        assert np.abs(a.astype(int) - other).mean() > 3.0
+
+
+def test_bottom_camera_looks_down_at_the_gridded_field(renderer):
+    a = renderer.render('bottom', (0.3, 0.3, 1.0), _yaw_quat(0.0))
+    assert a.shape == (240, 320, 3)
+    assert a[:, :, 1].mean() > a[:, :, 2].mean()        # ground, no sky
+    assert a.std() > 10                                 # grid lines / checker, not flat
+    b = renderer.render('bottom', (0.6, 0.3, 1.0), _yaw_quat(0.0))
+    assert np.abs(a.astype(int) - b).mean() > 3.0
+
+
+def test_renderer_process_matches_in_process_rendering(renderer):
+    proc = cameras.RendererProcess()
+    try:
+        pose = ((1.0, -0.5, 1.2), _yaw_quat(0.3))
+        out = proc.render(*pose, ['front', 'bottom'])
+    finally:
+        proc.close()
+    assert proc.proc is None
+    for name in ('front', 'bottom'):
+        np.testing.assert_array_equal(out[name], renderer.render(name, *pose))
+
+
+def test_camera_loop_keeps_its_rate_delivers_and_stops():
+    got = []
+    pose = ((0.0, 0.0, 1.0), _yaw_quat(0.0), 'ctx')
+    loop = cameras.CameraLoop({'bottom': 4.0, 'front': 0.0}, lambda: pose,
+                              lambda name, rgb, ctx: got.append((name, rgb.shape, ctx)))
+    loop.start()
+    try:
+        assert loop.ready.wait(60.0)
+        n0 = loop.frames['bottom']
+        import time
+        time.sleep(2.0)
+        n = loop.frames['bottom'] - n0
+    finally:
+        loop.stop()
+    assert 'front' not in loop.frames                      # rate 0: never rendered
+    assert 2 <= n <= 9, n                                  # ~4 Hz, never a burst
+    assert got and all(g == ('bottom', (240, 320, 3), 'ctx') for g in got)
+    assert not loop.thread.is_alive() and loop.renderer.proc is None
+
+
+def test_camera_loop_replaces_a_dead_renderer():
+    errors, got = [], []
+    loop = cameras.CameraLoop({'bottom': 5.0}, lambda: ((0.0, 0.0, 1.0), _yaw_quat(0.0), None),
+                              lambda name, rgb, ctx: got.append(name), errors.append)
+    loop.start()
+    try:
+        assert loop.ready.wait(60.0)
+        first = loop.renderer
+        first.proc.kill()                                   # the renderer process dies
+        import time
+        deadline = time.monotonic() + 30.0
+        n = len(got)
+        while time.monotonic() < deadline and not (errors and len(got) > n + 1):
+            time.sleep(0.1)
+    finally:
+        loop.stop()
+    assert errors and loop.renderer is not first and len(got) > n + 1
