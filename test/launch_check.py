@@ -3,7 +3,7 @@
 
   --cube ARM:CUBE     (repeatable) the cube rests in the arm's tray (--cell YAML)
   --armed ARM         the arm node reports armed or tracking (its hand input arrives)
-  --drone             the drone took off, flew and is landed again
+  --drone             every --navdata drone took off, flew and is landed again
   --topic T:PKG/MSG  (repeatable) at least --count messages arrive on T
   --rosout TEXT       a node logs a line containing TEXT
   --driver            stand in for the AR.Drone driver: navdata at 50 Hz, landed until a
@@ -32,7 +32,8 @@ class Watch:
     def __init__(self, args):
         self.args = args
         self.lock = threading.Lock()
-        self.cubes, self.states, self.arm_states = {}, [], {}
+        self.cubes, self.arm_states = {}, {}
+        self.states = {topic: [] for topic in args.navdata}
         self.counts = {spec.rsplit(':', 1)[0]: 0 for spec in args.topic}
         self.logged = []
         if args.rosout:
@@ -44,10 +45,11 @@ class Watch:
             rospy.Subscriber('/%s/ur10_arm/status' % arm, ArmStatus, self._status, arm,
                              queue_size=20)
         if args.drone:
-            rospy.Subscriber(args.navdata, Navdata, self._nav, queue_size=100)
+            for topic in args.navdata:
+                rospy.Subscriber(topic, Navdata, self._nav, topic, queue_size=100)
         if args.driver:
             self.driver_state = LANDED
-            self.nav_pub = rospy.Publisher(args.navdata, Navdata, queue_size=10)
+            self.nav_pub = rospy.Publisher(args.navdata[0], Navdata, queue_size=10)
             rospy.Subscriber('/ardrone/takeoff', Empty, self._drive, HOVERING)
             rospy.Subscriber('/ardrone/land', Empty, self._drive, LANDED)
             rospy.Timer(rospy.Duration(0.02), lambda _e: self.nav_pub.publish(
@@ -67,10 +69,11 @@ class Watch:
         with self.lock:
             self.arm_states.setdefault(arm, set()).add(msg.state)
 
-    def _nav(self, msg):
+    def _nav(self, msg, topic):
         with self.lock:
-            if not self.states or self.states[-1] != msg.state:
-                self.states.append(msg.state)
+            states = self.states[topic]
+            if not states or states[-1] != msg.state:
+                states.append(msg.state)
 
     def _drive(self, _msg, state):
         self.driver_state = state
@@ -105,8 +108,7 @@ class Watch:
             for arm in self.args.armed:
                 if not self.arm_states.get(arm, set()) & {'armed', 'tracking'}:
                     return False
-            if self.args.drone:
-                s = self.states
+            for s in (self.states.values() if self.args.drone else ()):
                 if TAKING_OFF not in s or s[-1] != LANDED or s.index(TAKING_OFF) == len(s) - 1:
                     return False
             if self.args.rosout and not self.logged:
@@ -128,12 +130,14 @@ def main():
     ap.add_argument('--cell', default='ur10_cell.yaml')
     ap.add_argument('--armed', action='append', default=[])
     ap.add_argument('--drone', action='store_true')
-    ap.add_argument('--navdata', default='ardrone/navdata')
+    ap.add_argument('--navdata', action='append', default=[],
+                    help='navdata topic (repeatable; default ardrone/navdata)')
     ap.add_argument('--topic', action='append', default=[])
     ap.add_argument('--count', type=int, default=1)
     ap.add_argument('--rosout', default='')
     ap.add_argument('--driver', action='store_true')
     args = ap.parse_args(rospy.myargv()[1:])
+    args.navdata = args.navdata or ['ardrone/navdata']
     rospy.init_node('launch_check', anonymous=True, disable_signals=True)
     watch = Watch(args)
     t0 = time.monotonic()

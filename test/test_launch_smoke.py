@@ -85,6 +85,9 @@ CASES = [
      ['--cube', 'ur10_1:cube_red', '--cube', 'ur10_2:cube_yellow',
       '--cell', 'ur10_dual_cell.yaml'], 120),
     ('ardrone', [['ardrone.launch']], ['--drone'], 120),
+    ('ardrone_dual', [['ardrone_dual.launch']],
+     ['--drone', '--navdata', '/drone1/ardrone/navdata', '--navdata', '/drone2/ardrone/navdata'],
+     120),
     # Next to a real driver: launch_check stands in for it (navdata, takeoff, land).
     ('ardrone_sim_false', [['ardrone.launch', 'sim:=false']],
      ['--driver', '--navdata', '/ardrone/navdata', '--topic', '/ardrone/takeoff:std_msgs/Empty',
