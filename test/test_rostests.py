@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from leap_teleop.tools.evaluate import data_dir
+from leap_teleop.tools.evaluate import HANDS_DATA, data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
@@ -21,6 +21,8 @@ def test_rostest(test_file, tmp_path):
     with open(test_file) as f:
         if 'name="leapjs_data"' in f.read():      # it plays the shared recordings (and
             args.append('leapjs_data:=%s' % data_dir())   # fails when they are missing)
+    if 'name="hands_data"' in open(test_file).read():   # real hand clips: fails if absent
+        args.append('hands_data:=%s' % HANDS_DATA)
     proc = subprocess.run(
         # Not --text: with it rostest exits 0 even when a test fails.
         ['rostest', '--results-base-dir', str(tmp_path / 'results'), test_file] + args,

@@ -27,13 +27,21 @@ if [ ! -x .venv/bin/python ]; then
   say "creating .venv from /usr/bin/python3"
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
-req_hash=$(sha256sum tools/requirements.txt | cut -d' ' -f1)
+# tools/requirements.txt resolves normally; tools/requirements-camera.txt (MediaPipe for the
+# camera sources) is fully pinned and installed with --no-deps: mediapipe declares jax,
+# jaxlib and more that its Hands solution never imports.
+req_hash=$(cat tools/requirements.txt tools/requirements-camera.txt | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.requirements.sha256 2>/dev/null)" != "$req_hash" ]; then
-  say "installing pinned pip packages (tools/requirements.txt) into .venv"
+  say "installing pinned pip packages (tools/requirements.txt, tools/requirements-camera.txt) into .venv"
   .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt 2>&1 \
+    | grep -v "is ignored: it is neither a file nor a directory" || true
+  .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps \
+    -r tools/requirements-camera.txt 2>&1 \
     | grep -v "is ignored: it is neither a file nor a directory" || true
   .venv/bin/python -c "import pybullet, numpy, lzstring, yaml, hypothesis, pytest" >/dev/null 2>&1 \
     || { echo "[setup] pip install failed (see above)" >&2; exit 1; }
+  .venv/bin/python -c "import mediapipe, cv2" >/dev/null 2>&1 \
+    || { echo "[setup] pip install of tools/requirements-camera.txt failed (see above)" >&2; exit 1; }
   echo "$req_hash" > .venv/.requirements.sha256
 else
   say "pip packages: up to date"

@@ -14,13 +14,15 @@ from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SOURCES, SourceError, make_source
+from leap_teleop.sources.camera_params import CAMERA_PARAMS, CAMERA_SOURCES, camera_source_kwargs
 
 PARAMS = {
     'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
     'script': Param('', 'gesture script YAML for the scripted source '
                         '(default config/gestures/wave_hello.yaml)'),
     'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source'),
-    'rate': Param(0.0, 'scripted source frame rate; 0 = the script\'s own', unit='Hz',
+    'rate': Param(0.0, 'scripted source frame rate; 0 = the script\'s own (video source: pace '
+                       'at this many frames/s; 0 = the file\'s own)', unit='Hz',
                   ge=0.0, le=1000.0),
     'loop': Param(False, 'restart the script / recording when it ends'),
     'realtime': Param(True, 'pace frames at their recorded / scripted timing'),
@@ -59,6 +61,7 @@ PARAMS = {
                              '(e.g. the drone\'s ardrone/takeoff); empty = every published '
                              'leapcobot topic', kind='list', item='str'),
 }
+PARAMS.update(CAMERA_PARAMS)
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
@@ -69,8 +72,31 @@ def check_leapros(p):
         raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
 
 
-def build_source(p):
+def camera_model(p, timeout=10.0):
+    """CameraModel from one sensor_msgs/CameraInfo on ~camera_info_topic; None when unset."""
+    if not p['camera_info_topic']:
+        return None
+    from sensor_msgs.msg import CameraInfo
+    from leap_teleop.sources.landmarks import CameraModel
+    try:
+        info = rospy.wait_for_message(p['camera_info_topic'], CameraInfo, timeout)
+    except rospy.ROSException:
+        raise SourceError('no sensor_msgs/CameraInfo on %s within %.0f s (~camera_info_topic)'
+                          % (p['camera_info_topic'], timeout))
+    try:
+        return CameraModel.from_matrix(info.width, info.height, info.K)
+    except ValueError as e:
+        raise SourceError('~camera_info_topic %s: %s' % (p['camera_info_topic'], e))
+
+
+def build_source(p, on_image=None):
     name = p['source']
+    if name in CAMERA_SOURCES:
+        if name == 'video' and not p['video']:
+            raise SourceError('~source video needs ~video:=PATH (a video, an image, a folder '
+                              'or a glob of images)')
+        return make_source(name, **camera_source_kwargs(name, p, rospy.get_time,
+                                                        camera_model(p), on_image))
     if name == 'scripted':
         script = p['script'] or package_path('config', 'gestures', 'wave_hello.yaml')
         return make_source('scripted', script=script, rate_hz=p['rate'] or None,
@@ -167,14 +193,32 @@ def publish_leap_tf(p):
     return broadcaster
 
 
+def camera_view(p):
+    """The annotated camera view (CameraView publishing on ~annotated_image_topic) when
+    that is set and the source is a camera; else None."""
+    if p['source'] not in CAMERA_SOURCES or not p['annotated_image_topic']:
+        return None
+    from sensor_msgs.msg import Image
+    from leap_teleop.camera_view import CameraView, image_message
+    pub = rospy.Publisher(p['annotated_image_topic'], Image, queue_size=2)
+    view = CameraView(p['mirror'] != p['input_mirrored'],
+                      lambda frame, img: pub.publish(image_message(img, frame.timestamp,
+                                                                   p['frame_id'])),
+                      wanted=lambda: pub.get_num_connections() > 0)
+    return view
+
+
 def main(argv=None):
-    def checked_source(p):
+    def build(p):
         check_leapros(p)
-        return build_source(p)
-    p, source = start_node('sender.py', 'leap_sender', __doc__, PARAMS, checked_source, argv,
-                           errors=(SourceError, ValueError))
+        view = camera_view(p)
+        return build_source(p, view.on_image if view is not None else None), view
+    p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
+                                   argv, errors=(SourceError, ValueError))
     interface = LeapInterface(source, sides=list(p['sides']))
     sender = Sender(p, interface)
+    if view is not None:
+        interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
     tf_broadcaster = publish_leap_tf(p) if p['publish_tf'] else None  # noqa: F841 (kept alive for the latched topic)
     rospy.loginfo('sender: publishing %s hands from the %s source on %s',
                   '/'.join(sender.sides), p['source'],

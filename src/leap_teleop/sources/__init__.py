@@ -9,6 +9,8 @@ SOURCES = {
     'recording': ('leap_teleop.sources.recording', 'RecordingSource'),
     'leap': ('leap_teleop.sources.leap_sdk', 'LeapSdkSource'),
     'leapc': ('leap_teleop.sources.leapc', 'LeapCSource'),
+    'webcam': ('leap_teleop.sources.camera', 'WebcamSource'),
+    'video': ('leap_teleop.sources.camera', 'VideoSource'),
 }
 
 

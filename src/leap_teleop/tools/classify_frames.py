@@ -3,6 +3,14 @@
 usage: python -m leap_teleop.tools.classify_frames [INPUT] [--stateless] [--out FILE]
        rosrun leap_teleop classify_frames [INPUT] [--stateless]
 
+INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
+.mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
+images (.jpg, .jpeg, .png, ...: a file, a folder or a quoted glob; one line per image,
+each classified on its own as with --stateless). Hands come from the camera source's
+pipeline (MediaPipe Hands, then the landmark conversion) with its defaults: frames
+letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does not
+mirror.
+
 INPUT is a LeapJS Playback recording (.json, .json.gz, .json.lz; formatVersion 0.1, 1 or
 packed 2), or JSON Lines: one LeapJS frame dict per line (fields as in a recording:
 id, timestamp [us], hands[] with id, type, palmPosition, palmNormal, direction,
@@ -103,7 +111,29 @@ def looks_like_recording(path):
         and b'"metadata"' in head
 
 
+def camera_input(path):
+    """'video' or 'stills' when `path` names camera footage (by extension), else None."""
+    from ..sources import capture
+    if path in (None, '-'):
+        return None
+    if capture.is_video_path(path):
+        return 'video'
+    if capture.resolve_stills(path) or capture.is_image_path(path):
+        return 'stills'
+    return None
+
+
+def camera_frames(path):
+    """LeapJS frame dicts of the hands the camera pipeline finds in a video or images,
+    stamped from the footage's start."""
+    from ..sources import make_source
+    source = make_source('video', path=path, realtime=False, clock=lambda: 0.0)
+    return (leapjs.frame_to_dict(frame) for frame in source.frames())
+
+
 def frames_of(path):
+    if camera_input(path):
+        return camera_frames(path)
     if path in (None, '-'):
         return iter_json_lines(sys.stdin)
     if looks_like_recording(path):
@@ -126,7 +156,8 @@ def main(argv=None):
         print('classify_frames: %s' % e, file=sys.stderr)
         return 2
     out = sys.stdout if args.out == '-' else open(args.out, 'w')
-    classifier = Classifier(stateless=args.stateless)
+    # Still images are unrelated pictures: each is judged on its own.
+    classifier = Classifier(stateless=args.stateless or camera_input(args.input) == 'stills')
     n = 0
     try:
         for d in frames:

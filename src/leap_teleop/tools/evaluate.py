@@ -64,6 +64,8 @@ from ..sources import leapjs
 
 DEFAULT_DATA = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..',
                                              'shared', 'data', 'leapjs'))
+# Real hand photos and clips for the camera sources ($HANDS_DATA overrides).
+HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(os.path.dirname(DEFAULT_DATA), 'hands')
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 
 

@@ -1,4 +1,5 @@
-"""Turn a gesture script or a LeapJS recording into a bag of the sender's topics.
+"""Turn a gesture script, a LeapJS recording or camera footage into a bag of the sender's
+topics.
 
 The frames go through the real sender logic (LeapInterface, the gesture recognizer,
 the same message conversion), as fast as possible, so the gestures in the bag are what
@@ -7,6 +8,7 @@ the recognizer saw. Message times are the frames' capture times, starting at --s
 
 usage: rosrun leap_teleop recording_to_bag RECORDING.json[.lz|.gz] OUT.bag
        python -m leap_teleop.tools.to_bag --script config/gestures/X.yaml OUT.bag
+       python -m leap_teleop.tools.to_bag --video CLIP.mp4 OUT.bag   (also images / a glob)
 """
 import argparse
 import sys
@@ -54,6 +56,8 @@ def main(argv=None):
     ap.add_argument('recording', nargs='?', help='LeapJS recording (.json, .json.lz, .json.gz)')
     ap.add_argument('out', help='output bag')
     ap.add_argument('--script', help='a gesture script instead of a recording')
+    ap.add_argument('--video', help='camera footage instead of a recording: a video, an image, '
+                                    'a folder or a glob of images (the video source)')
     ap.add_argument('--sides', default='right,left')
     ap.add_argument('--kinds', default='leapcobot,hand,gesture',
                     help='which of leapcobot, hand, gesture to write')
@@ -61,10 +65,12 @@ def main(argv=None):
     ap.add_argument('--left-topic', default='leapmotion/data_left')
     ap.add_argument('--start', type=float, default=None, help='time of the first frame, s (epoch)')
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
-    if bool(args.script) == bool(args.recording):
-        ap.error('give either a recording or --script')
+    if sum(bool(x) for x in (args.script, args.recording, args.video)) != 1:
+        ap.error('give one of: a recording, --script, --video')
     try:
-        if args.script:
+        if args.video:
+            source = make_source('video', path=args.video, realtime=False)
+        elif args.script:
             source = make_source('scripted', script=args.script, realtime=False)
         else:
             source = make_source('recording', path=args.recording, realtime=False)

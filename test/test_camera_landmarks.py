@@ -1,0 +1,226 @@
+"""Camera landmarks -> Frame conversion (sources.landmarks), without MediaPipe: on the
+detections stored in shared/data/hands/hands.json and on synthetic projections of them."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from leap_teleop.sources.landmarks import (CameraModel, HandLandmarks, camera_to_leap,
+                                           chirality, hand_from_landmarks, hand_side,
+                                           person_side, project, reprojection_rms_px)
+from leap_teleop.tools.evaluate import HANDS_DATA
+
+
+@pytest.fixture(scope='module')
+def hands_json():
+    path = os.path.join(HANDS_DATA, 'hands.json')
+    assert os.path.isfile(path), 'shared hand photos absent: %s' % path
+    with open(path) as f:
+        return json.load(f)
+
+
+def photo_hands(hands_json):
+    for name, entry in hands_json['images'].items():
+        cam = CameraModel.from_hfov(entry['width'], entry['height'])
+        for d in entry['hands']:
+            yield name, cam, HandLandmarks.from_dict(d)
+
+
+def synthetic(lm, cam, t_mm, palm_mm=95.0):
+    """HandLandmarks of lm's world shape (scaled to palm_mm) placed at t_mm, projected."""
+    world = np.asarray(lm.world)
+    shape = world * (palm_mm / np.linalg.norm(world[9] - world[0]))
+    px = project(shape + t_mm, cam)
+    image = np.column_stack((px[:, 0] / cam.width, px[:, 1] / cam.height,
+                             (shape[:, 2] - shape[0, 2]) / cam.fx * cam.fx / cam.width))
+    return HandLandmarks(image, world, lm.label, lm.score)
+
+
+def test_side_follows_mirroring():
+    assert person_side('Left', mirrored=False) == 'right'
+    assert person_side('Right', mirrored=False) == 'left'
+    assert person_side('Left', mirrored=True) == 'left'
+    for mirrored in (False, True):
+        assert np.isclose(np.linalg.det(camera_to_leap(mirrored)), 1.0 if not mirrored else -1.0)
+
+
+def test_side_from_the_landmarks_chirality(hands_json):
+    """The world landmarks' own chirality agrees with MediaPipe's label on 28 of the 30
+    photographed hands; the other two are the same person's hand as fist__fp__fullcurl,
+    labelled the other way at 0.69, and chirality gives all three the same side."""
+    sides, agree = {}, 0
+    for name, cam, lm in photo_hands(hands_json):
+        assert abs(chirality(lm.world)) > 0.1, name
+        side = hand_side(lm, mirrored=False)
+        agree += side == person_side(lm.label, mirrored=False)
+        sides[name] = side
+        assert hand_from_landmarks(lm, cam).side == side
+    assert agree == 28
+    assert sides['fist__fp__fullcurl.jpg'] == sides['pointing__fp__nocurl.jpg'] \
+        == sides['neg_half_curl__fp__halfcurl.jpg'] == 'left'
+
+
+def test_every_photo_hand_converts_to_a_complete_leap_hand(hands_json):
+    n = 0
+    for name, cam, lm in photo_hands(hands_json):
+        hand = hand_from_landmarks(lm, cam)
+        assert hand is not None, name
+        n += 1
+        assert len(hand.fingers) == 5
+        assert np.isclose(np.linalg.norm(hand.palm_normal), 1.0)
+        assert np.isclose(np.linalg.norm(hand.direction), 1.0)
+        assert abs(np.dot(hand.palm_normal, hand.direction)) < 1e-9
+        assert 0.0 <= hand.grab_strength <= 1.0 and 0.0 <= hand.pinch_strength <= 1.0
+        for f in hand.fingers:
+            for joint in (f.mcp, f.pip, f.dip, f.tip):
+                assert np.all(np.isfinite(joint))
+            assert np.isclose(np.linalg.norm(f.direction), 1.0)
+        # The palm is where the camera sees it: in front of the virtual Leap, within reach.
+        assert 0 < hand.palm_position[1] < 500 and abs(hand.palm_position[0]) < 400, name
+        # World shape and image agree once placed: a check of the axes and the solver.
+        assert reprojection_rms_px(lm, cam) < 0.12 * max(cam.width, cam.height), name
+    assert n == 30
+
+
+def test_thumb_points_up_in_thumbs_up_and_down_in_thumbs_down(hands_json):
+    """Leap axes: +y is up; the thumb direction says which way the thumb points."""
+    seen = set()
+    for name, cam, lm in photo_hands(hands_json):
+        thumb = hand_from_landmarks(lm, cam).fingers[0]
+        if name.startswith('thumbs_up'):
+            assert thumb.direction[1] > 0.6, name
+            seen.add('up')
+        elif name.startswith('thumbs_down'):
+            assert thumb.direction[1] < -0.6, name
+            seen.add('down')
+    assert seen == {'up', 'down'}
+
+
+def test_extended_flags_follow_the_labels(hands_json):
+    """The SDK-style per-finger flags (thumb, index, middle, ring, pinky)."""
+    expected = {'open_palm': '11111', 'fist': '00000', 'thumbs_up': '10000',
+                'thumbs_down': '10000', 'pointing': '01000', 'neg_pinky': '00001',
+                'neg_half_curl': '00000'}
+    checked = 0
+    for name, cam, lm in photo_hands(hands_json):
+        want = expected.get(name.split('__')[0])
+        if want is None:
+            continue
+        got = ''.join('1' if f.extended else '0' for f in hand_from_landmarks(lm, cam).fingers)
+        assert got == want, name
+        checked += 1
+    assert checked == 23
+    # Flat hands and OK signs: the four / three fingers that are out are extended.
+    for name, cam, lm in photo_hands(hands_json):
+        flags = [f.extended for f in hand_from_landmarks(lm, cam).fingers]
+        if name.startswith('flat_hand'):
+            assert flags[1:] == [True] * 4, name
+        if name.startswith('ok'):
+            assert flags[2:] == [True] * 3 and not flags[1], name
+
+
+def test_grab_and_pinch_strengths(hands_json):
+    for name, cam, lm in photo_hands(hands_json):
+        hand = hand_from_landmarks(lm, cam)
+        kind = name.split('__')[0]
+        if kind in ('fist', 'thumbs_up', 'thumbs_down'):
+            assert hand.grab_strength > 0.7, name
+        if kind in ('open_palm', 'flat_hand'):
+            assert hand.grab_strength < 0.2, name
+            assert hand.pinch_strength < 0.2, name
+
+
+def test_depth_from_hand_size_on_synthetic_projections(hands_json):
+    """Known hands placed at known points, projected by a known camera: the palm comes
+    back where it was (exactly without noise; within a few % of the depth with 1 px of
+    landmark noise at 640x480), and a palm length 10 % off moves the depth by 10 %."""
+    cam = CameraModel.from_hfov(640, 480, 60.0)
+    rng = np.random.default_rng(1)
+    rel_err = []
+    for name, _, lm in photo_hands(hands_json):
+        for t in ([0.0, 0.0, 400.0], [-120.0, 60.0, 600.0], [80.0, -40.0, 900.0]):
+            t = np.array(t)
+            clean = synthetic(lm, cam, t)
+            exact = hand_from_landmarks(clean, cam, mirrored=False)
+            ref = hand_from_landmarks(synthetic(lm, cam, np.array([0.0, 0.0, 500.0])), cam)
+            # Moving the hand by t - (0, 0, 500) in camera axes moves it by R (t - ...) in Leap.
+            want = ref.palm_position + camera_to_leap(False) @ (t - [0.0, 0.0, 500.0])
+            assert np.allclose(exact.palm_position, want, atol=1e-6), name
+            noisy = HandLandmarks(clean.image + np.column_stack(
+                (rng.normal(0, 1.0 / cam.width, 21), rng.normal(0, 1.0 / cam.height, 21),
+                 np.zeros(21))), clean.world, clean.label, clean.score)
+            got = hand_from_landmarks(noisy, cam)
+            rel_err.append(abs(got.palm_position[2] - want[2]) / t[2])
+            small = hand_from_landmarks(clean, cam, palm_length_mm=95.0 * 0.9)
+            # z_leap = z_cam - 500: the camera distance scales with the assumed size.
+            assert np.isclose(small.palm_position[2] + 500.0,
+                              0.9 * (exact.palm_position[2] + 500.0), rtol=1e-6), name
+    assert np.percentile(rel_err, 95) < 0.05, np.percentile(rel_err, 95)
+
+
+def test_mirrored_image_gives_the_same_hand(hands_json):
+    """The same hand seen in a mirrored image (flipped landmarks, detector's label kept
+    as the person's) converts to the same side, position and orientation."""
+    cam = CameraModel.from_hfov(640, 480)
+    for name, _, lm in photo_hands(hands_json):
+        plain = synthetic(lm, cam, np.array([30.0, -20.0, 500.0]))
+        flip = np.diag([-1.0, 1.0, 1.0])
+        mirrored = HandLandmarks(np.column_stack((1.0 - plain.image[:, 0], plain.image[:, 1:])),
+                                 plain.world @ flip,
+                                 'Right' if plain.label == 'Left' else 'Left', plain.score)
+        a = hand_from_landmarks(plain, cam, mirrored=False)
+        b = hand_from_landmarks(mirrored, cam, mirrored=True)
+        assert a.side == b.side, name
+        assert np.allclose(a.palm_position, b.palm_position, atol=1e-6), name
+        assert np.allclose(a.palm_normal, b.palm_normal, atol=1e-9), name
+        assert np.allclose(a.direction, b.direction, atol=1e-9), name
+
+
+def test_bad_landmarks_give_no_hand(hands_json):
+    cam = CameraModel.from_hfov(640, 480)
+    _, _, lm = next(photo_hands(hands_json))
+    nan = HandLandmarks(np.full((21, 3), np.nan), lm.world, lm.label, lm.score)
+    assert hand_from_landmarks(nan, cam) is None
+    flat = HandLandmarks(lm.image, np.zeros((21, 3)), lm.label, lm.score)
+    assert hand_from_landmarks(flat, cam) is None
+    with pytest.raises(ValueError):
+        CameraModel.from_hfov(640, 480, 0.0)
+    with pytest.raises(ValueError):
+        CameraModel.from_matrix(640, 480, [0, 0, 320, 0, 0, 240, 0, 0, 1])
+
+
+def test_camera_matrix_and_letterbox():
+    k = [500.0, 0, 320.0, 0, 510.0, 240.0, 0, 0, 1]
+    cam = CameraModel.from_matrix(640, 480, k)
+    assert (cam.fx, cam.fy, cam.cx, cam.cy) == (500.0, 510.0, 320.0, 240.0)
+    half = cam.scaled_to(320, 240)
+    assert (half.fx, half.cx) == (250.0, 160.0)
+    box = CameraModel.from_hfov(1280, 720).letterboxed(0.5, 0, 60, 640, 480)
+    assert np.isclose(box.cx, 320.0) and np.isclose(box.cy, 240.0)
+
+
+def test_camera_modules_load_without_mediapipe_or_opencv():
+    """Nodes that do not use the camera must not pay for MediaPipe or OpenCV at start-up."""
+    code = ('import sys; import leap_teleop.sources.camera, leap_teleop.sources.camera_params, '
+            'leap_teleop.camera_view, leap_teleop.nodes.sender; '
+            'bad = [m for m in ("mediapipe", "cv2") if m in sys.modules]; '
+            'sys.exit("imported: %s" % bad if bad else 0)')
+    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_missing_mediapipe_names_what_to_install(tmp_path):
+    code = ('import sys; sys.modules["mediapipe"] = None\n'
+            'from leap_teleop.sources import make_source, SourceError\n'
+            'try:\n'
+            '    make_source("video", path=%r)\n'
+            'except SourceError as e:\n'
+            '    print(e); sys.exit(0)\n'
+            'sys.exit("no SourceError")\n'
+            % os.path.join(HANDS_DATA, 'fist__htj__22.jpg'))
+    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert 'requirements-camera.txt' in proc.stdout and 'MediaPipe' in proc.stdout
