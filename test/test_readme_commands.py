@@ -7,7 +7,7 @@ import re
 HERE = os.path.dirname(os.path.abspath(__file__))
 README = os.path.join(HERE, '..', 'README.md')
 PREFIX = re.compile(r'(?:\./env\.sh |sudo )?(?:roslaunch|rosrun|rostest|python3? -m|make|'
-                    r'catkin_make|catkin|catkin_lint|git clone|pip install|apt-get|source)\b')
+                    r'catkin_make|catkin|catkin_lint|git clone|pip install|apt-get|source)(?=\s|$)')
 
 SMOKE = 'test_launch_smoke.py::test_launch_reaches_its_purpose'
 WORKSPACE = 'test_catkin_workspace.py::test_builds_tests_installs_and_runs_in_a_users_workspace'
@@ -17,6 +17,11 @@ COVERED = {
     './env.sh roslaunch leap_teleop ardrone.launch': SMOKE,
     './env.sh roslaunch leap_teleop ur10_dual.launch': SMOKE,
     './env.sh rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
+    'rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
+    "./env.sh python -m leap_teleop.tools.classify_frames 'photos/*.jpg'":
+        'test_camera_source.py::test_classify_frames_reads_images_and_videos',
+    './env.sh roslaunch leap_teleop ur10_dual.launch source:=video video:=clip.mp4 '
+    'annotated_image_topic:=/camera/annotated': 'camera_video_ur10.test',
     'rosrun leap_teleop NODE --help': 'test_scripts.py::test_rosrun_script_help',
     'rosrun leap_teleop classify_frames': 'test_scripts.py::test_rosrun_script_help',
     './env.sh rostest leap_teleop sender.test': 'test_rostests.py::test_rostest',
@@ -71,6 +76,11 @@ NOT_RUN = {
     'make clean': 'deletes the build the other tests use',
     'rosrun leap_teleop record_frames my_take.json.gz --source leap': 'needs a Leap device; '
         'record_frames with the scripted source is in test_sources_recording.py',
+    './env.sh roslaunch leap_teleop ur10_dual.launch source:=webcam': 'needs a webcam; the '
+        'video source through the same launch is camera_video_ur10.test',
+    './env.sh roslaunch leap_teleop ardrone.launch source:=webcam device:=/dev/video2 '
+    'mirror:=true': 'needs a webcam; the video source through ardrone.launch is '
+        'camera_video_drone.test',
 }
 
 
@@ -78,6 +88,7 @@ def readme_commands():
     text = open(README).read()
     found = set()
     for block in re.findall(r'```bash\n(.*?)```', text, re.S):
+        block = re.sub(r'\\\n\s*', '', block)          # continued lines
         for line in block.splitlines():
             line = line.split(' #')[0].strip()
             line = re.sub(r'^cd [^&]+&& ', '', line)
