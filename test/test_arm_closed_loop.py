@@ -6,14 +6,17 @@ import yaml
 
 from leap_teleop.teleop.arm import DISARMED, TRACKING, ArmTeleopParams
 from leap_teleop.teleop.closed_loop import run_session
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_path
 
 
 def sim_params(**overrides):
     with open(config_path('ur10_teleop.yaml')) as f:
         values = yaml.safe_load(f)
-    values.update(max_joint_speed=1.0, **overrides)      # as the simulation launch files
-    for key in ('axis_map', 'workspace_min', 'workspace_max'):
+    # As the simulation launch files: faster joints, the UR10's acceleration limit.
+    values.update(max_joint_speed=1.0, max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
+    values.update(overrides)
+    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
         values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
     return ArmTeleopParams.from_dict(values)
 
@@ -50,3 +53,24 @@ def test_scripted_sessions_pick_and_place(session, cell_file, arms):
 def test_generated_sessions_are_up_to_date():
     from leap_teleop.tools.make_sessions import main
     assert main(['--check']) == 0
+
+
+@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+def test_rotated_cubes_are_grasped_across_the_faces_and_placed_square(orientation):
+    """Each arm picks a cube lying at 30 / 60 deg: the hand turns, the tool turns with it,
+    the jaws close across the faces and the cube lands square in the tray."""
+    import math
+    arms = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+    cell, runs = run_session(config_path('gestures/ur10_pick_place_rotated.yaml'),
+                             'ur10_dual_rotated_cell.yaml',
+                             {arm: side for arm, (side, _) in arms.items()},
+                             sim_params(orientation=orientation))
+    try:
+        for arm, (_, cube) in arms.items():
+            states = [s for _, s in runs[arm].states]
+            assert states == [DISARMED, 'armed', TRACKING, DISARMED], states
+            assert cell.in_tray(cube, arm), cell.object_poses()[cube]
+            assert tray_error(cell, cube, arm) < 0.02
+            assert math.degrees(cell.cube_yaw_error(cube)) < 5.0
+    finally:
+        cell.close()

@@ -41,7 +41,7 @@ def drive(teleop, clock, h, periods=1, q=None):
 
 
 def armed_with_origin(mode='imitation', **params):
-    t = ArmTeleop(ArmTeleopParams(mode=mode, filter_cutoff_hz=0.0, **params))
+    t = ArmTeleop(ArmTeleopParams(mode=mode, filter_min_cutoff_hz=0.0, rotation_min_cutoff_hz=0.0, **params))
     c = Clock()
     t.on_joints(HOME)
     drive(t, c, hand(thumb_up=True))
@@ -72,12 +72,30 @@ def test_imitation_maps_palm_offset_through_axis_map_and_scale():
     np.testing.assert_allclose(kin.fk(cmd.q)[:3, :3], kin.tool_down(), atol=1e-9)
 
 
-def test_trajectory_duration_respects_the_joint_speed_limit():
-    t, c = armed_with_origin(max_joint_speed=0.05)
-    cmd = drive(t, c, hand(palm_mm=(60.0, 200.0, 0.0)))
-    dq = np.max(np.abs(cmd.q - HOME))
-    assert dq > 0.01
-    assert cmd.duration == pytest.approx(dq / 0.05)
+def check_points(cmd, speed, accel):
+    """A command's trajectory: inside the joint limits, no joint faster than speed, no
+    acceleration between its points above accel, at rest at its end."""
+    t_prev, v_prev = 0.0, None
+    for tfs, q, v in cmd.points:
+        assert np.all(q <= kin.JOINT_UPPER) and np.all(q >= kin.JOINT_LOWER)
+        assert np.all(np.abs(v) <= speed + 1e-9)
+        if v_prev is not None:
+            assert np.all(np.abs(v - v_prev) <= accel * (tfs - t_prev) + 1e-9)
+        t_prev, v_prev = tfs, v
+    np.testing.assert_array_equal(cmd.points[-1][2], np.zeros(6))
+
+
+def test_commands_respect_the_joint_speed_and_acceleration_limits():
+    t, c = armed_with_origin(max_joint_speed=0.05, max_joint_accel=0.5)
+    speeds = []
+    for _ in range(125):                                  # 1 s toward a far target
+        cmd = drive(t, c, hand(palm_mm=(60.0, 200.0, 0.0)))
+        check_points(cmd, 0.05, 0.5)
+        speeds.append(np.max(np.abs(cmd.points[0][2])))
+        assert np.max(np.abs(cmd.q - HOME)) > 0.01       # the goal: the target's IK
+    # Accelerates at 0.5 rad/s^2 (one horizon ahead) up to 0.05 rad/s, then cruises.
+    assert speeds[0] == pytest.approx(0.5 * t.p.command_horizon)
+    assert speeds[-1] == pytest.approx(0.05)
 
 
 def test_target_is_clamped_to_the_workspace_box():
@@ -110,7 +128,9 @@ def test_fist_disarms_holds_and_later_pinch_moves_nothing():
     t.on_joints(q_now)
     cmd = drive(t, c, hand(fist=True), q=q_now)
     assert t.status.state == DISARMED and t.status.reason == 'fist'
-    np.testing.assert_array_equal(cmd.q, q_now)             # hold where the arm is
+    # Hold: decelerate within the UR10's limit and stay where the motion stops.
+    check_points(cmd, t.p.max_joint_speed, kin.MAX_JOINT_ACCEL[0])
+    assert np.max(np.abs(cmd.q - HOME)) < 0.01
     for _ in range(20):
         cmd = drive(t, c, hand(pinch=True, pinch_value=0.6, palm_mm=(90, 260, -50)), q=q_now)
         assert cmd.q is None and cmd.gripper is None
@@ -125,7 +145,8 @@ def test_watchdog_holds_and_disarms_when_input_stops():
     now = c.tick(0.15)                                      # 0.25 s since the last input
     cmd = t.step(now)
     assert t.status.state == DISARMED and 'watchdog' in t.status.reason
-    np.testing.assert_array_equal(cmd.q, t._q)
+    check_points(cmd, t.p.max_joint_speed, kin.MAX_JOINT_ACCEL[0])
+    assert np.max(np.abs(cmd.q - t._q)) < 0.01
 
 
 def test_hand_leaving_disarms():
@@ -198,9 +219,77 @@ def test_fuzzed_input_never_leaves_the_limits(palm, pinch_value, flags, mode):
     if cmd.q is not None:
         assert np.all(np.isfinite(cmd.q))
         assert np.all(cmd.q <= kin.JOINT_UPPER) and np.all(cmd.q >= kin.JOINT_LOWER)
-        assert cmd.duration >= np.max(np.abs(cmd.q - HOME)) / t.p.max_joint_speed - 1e-9
+        check_points(cmd, t.p.max_joint_speed, kin.MAX_JOINT_ACCEL[0])
         tcp = kin.fk(cmd.q)[:3, 3]
         assert np.all(tcp >= np.array(t.p.workspace_min) - 1e-6)
         assert np.all(tcp <= np.array(t.p.workspace_max) + 1e-6)
     if cmd.gripper is not None:
         assert 0.0 <= cmd.gripper <= 0.8
+
+
+# -- orientation modes --------------------------------------------------------------------
+def _rotated(t, c, **angles):
+    return drive(t, c, hand(**angles))
+
+
+@pytest.mark.parametrize('side_sign', [1.0, -1.0])
+def test_yaw_mode_turns_the_tool_about_the_vertical_with_the_hand(side_sign):
+    # Both hands use the same code: only the angle's sign differs between the two runs.
+    t, c = armed_with_origin(orientation='yaw', orientation_scale=1.0)
+    cmd = _rotated(t, c, turn=-0.5 * side_sign, rotate=0.3, swing=0.2)
+    R = kin.fk(cmd.q)[:3, :3]
+    tilt, yaw = kin.tilt_and_yaw(R)
+    # Leap y maps to base z; a hand turning right (+turn) turns the tool clockwise.
+    assert yaw == pytest.approx(0.5 * side_sign, abs=1e-9)
+    assert tilt == pytest.approx(0.0, abs=1e-9)      # roll and pitch ignored
+
+
+def test_full_mode_follows_the_palm_through_the_axis_map_and_scale():
+    t, c = armed_with_origin(orientation='full', orientation_scale=0.5)
+    cmd = _rotated(t, c, swing=0.4)                  # pitch up about Leap x
+    R = kin.fk(cmd.q)[:3, :3]
+    # Leap x maps to base -y: the tool turns by -0.2 rad about base y, from pointing down.
+    expected = kin.rotation_from_vector([0.0, -0.2, 0.0]) @ kin.fk(HOME)[:3, :3]
+    np.testing.assert_allclose(R, expected, atol=1e-9)
+    np.testing.assert_allclose(kin.fk(cmd.q)[:3, 3], kin.fk(HOME)[:3, 3], atol=1e-9)
+
+
+def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
+    t, c = armed_with_origin(orientation='full', max_tool_tilt=0.3, max_tool_turn=0.4)
+    cmd = _rotated(t, c, swing=1.2, turn=-1.0)
+    tilt, yaw = kin.tilt_and_yaw(np.asarray(t.status.target_rotation))
+    assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+    tilt, yaw = kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])
+    assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+
+
+def test_orientation_is_captured_at_the_rock():
+    t, c = armed_with_origin(orientation='yaw', max_joint_speed=1.0, max_joint_accel=3.0)
+    drive(t, c, hand(turn=-0.6), periods=250)        # 2 s: the servo gets there
+    drive(t, c, hand(turn=-0.6, rock=True))          # new origin with the hand turned
+    cmd = drive(t, c, hand(turn=-0.6))
+    # The tool keeps the yaw it had at the rock; the hand's turn counts from there.
+    assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.6, abs=1e-6)
+    cmd = drive(t, c, hand(turn=-0.8))
+    assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.8, abs=1e-6)
+
+
+def test_fixed_mode_ignores_the_hand_rotation():
+    t, c = armed_with_origin()
+    cmd = _rotated(t, c, turn=0.7, rotate=0.5, swing=0.3)
+    np.testing.assert_allclose(kin.fk(cmd.q)[:3, :3], kin.tool_down(), atol=1e-9)
+
+
+def test_wrist_ranges_limit_the_ik():
+    # wrist 3 may not turn past +-0.3 rad: a 0.5 rad tool yaw has no solution -> hold.
+    t, c = armed_with_origin(orientation='yaw', wrist_lower=(-6.28, -6.28, -0.3),
+                             wrist_upper=(6.28, 6.28, 0.3))
+    _rotated(t, c, turn=-0.5)
+    assert t.status.state == HOLDING
+
+
+def test_non_angle_rotation_is_rejected():
+    t, c = armed_with_origin(orientation='full')
+    now = c.tick()
+    assert t.on_hand(hand(turn=float('nan'), stamp=now), now)
+    assert t.status.rejected_inputs == 1

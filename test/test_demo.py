@@ -13,8 +13,10 @@ def test_demo_succeeds_and_writes_its_outputs(tmp_path):
     assert proc.returncode == 0, log[-4000:]
     summary = json.loads((out / 'summary.json').read_text())
     assert set(summary['tasks']) == {'ur10_pick_place_ur10_1', 'ur10_pick_place_ur10_2',
+                                     'ur10_1_rotated_cube', 'ur10_2_rotated_cube',
                                      'drone_flight'}
     assert all(task['success'] for task in summary['tasks'].values()), summary
     for name in ('ur10.gif', 'drone.gif', 'drone_flight.png'):
         assert (out / name).stat().st_size > 10000
     assert len(list(out.glob("ur10_*.png"))) > 15
+    assert (out / 'rotated_grasp.png').stat().st_size > 10000

@@ -79,7 +79,7 @@ class Arm:
     """An ArmTeleop fed like the node feeds it: hand + joints + step per period."""
 
     def __init__(self, **params):
-        self.t = ArmTeleop(ArmTeleopParams(filter_cutoff_hz=0.0, **params))
+        self.t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, rotation_min_cutoff_hz=0.0, **params))
         self.now = 100.0
         self.q = HOME.copy()
 
@@ -206,7 +206,8 @@ def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
 # -- fuzz: arm mapping over event sequences --------------------------------------------------
 events = st.one_of(
     st.tuples(st.just('hand'), st.tuples(wild, wild, wild), wild,
-              st.tuples(*[st.booleans()] * 5), st.floats(-1.0, 0.01)),
+              st.tuples(*[st.booleans()] * 5), st.floats(-1.0, 0.01),
+              st.tuples(*[st.one_of(st.floats(-3.5, 3.5), wild)] * 3)),
     st.tuples(st.just('joints'), st.one_of(
         st.tuples(*[st.floats(-6.2, 6.2)] * 6),
         st.tuples(*[wild] * 6))),
@@ -217,10 +218,13 @@ events = st.one_of(
 @given(seq=st.lists(events, min_size=1, max_size=8),
        mode=st.sampled_from(['imitation', 'joystick']),
        gripper_mode=st.sampled_from(['binary', 'proportional']),
-       cutoff=st.sampled_from([0.0, 4.0]))
-def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cutoff):
-    t = ArmTeleop(ArmTeleopParams(mode=mode, gripper_mode=gripper_mode, filter_cutoff_hz=cutoff,
-                                  max_joint_speed=1.0))
+       cutoff=st.sampled_from([0.0, 0.3]),
+       orientation=st.sampled_from(['fixed', 'yaw', 'full']))
+def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cutoff, orientation):
+    t = ArmTeleop(ArmTeleopParams(mode=mode, gripper_mode=gripper_mode,
+                                  filter_min_cutoff_hz=cutoff, rotation_min_cutoff_hz=cutoff,
+                                  orientation=orientation, max_joint_speed=1.0,
+                                  max_joint_accel=2.0))
     lo, hi = np.asarray(t.p.workspace_min), np.asarray(t.p.workspace_max)
     now = 100.0
     t.on_joints(HOME, now)
@@ -231,10 +235,11 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
         t.step(now)
     for ev in seq:
         if ev[0] == 'hand':
-            _, palm, pinch_value, (present, fist, thumb, pinch, rock), age = ev
+            _, palm, pinch_value, (present, fist, thumb, pinch, rock), age, angles = ev
             t.on_hand(HandInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
                                 pinch=pinch, pinch_value=pinch_value, rock=rock,
-                                stamp=now + age), now)
+                                stamp=now + age, rotate=angles[0], turn=angles[1],
+                                swing=angles[2]), now)
         elif ev[0] == 'joints':
             t.on_joints(ev[1], now)
         else:
@@ -245,8 +250,17 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
             assert q_before is not None
             assert np.all(np.isfinite(cmd.q))
             assert np.all(cmd.q <= kin.JOINT_UPPER) and np.all(cmd.q >= kin.JOINT_LOWER)
-            assert cmd.duration >= np.max(np.abs(cmd.q - q_before)) / 1.0 - 1e-9
-            assert cmd.duration >= t.p.min_duration
+            t_prev, v_prev = 0.0, None
+            for tfs, q, v in cmd.points:
+                assert np.all(q <= kin.JOINT_UPPER) and np.all(q >= kin.JOINT_LOWER)
+                assert np.all(np.abs(v) <= 1.0 + 1e-9)
+                if v_prev is not None:     # within the UR10's acceleration limit
+                    assert np.all(np.abs(v - v_prev) <= np.pi * (tfs - t_prev) + 1e-9)
+                t_prev, v_prev = tfs, v
+            np.testing.assert_array_equal(cmd.points[-1][2], np.zeros(6))
+        if len(t.status.target_rotation) == 3:
+            tilt, _ = kin.tilt_and_yaw(np.asarray(t.status.target_rotation))
+            assert tilt <= t.p.max_tool_tilt + 1e-6
         if cmd.gripper is not None:
             assert 0.0 <= cmd.gripper <= 0.8
         if len(t.status.target) == 3:

@@ -9,7 +9,7 @@ import pytest
 from leap_teleop.frame import Frame
 from leap_teleop.hand_model import render_hand, rpy_to_basis
 from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface, dead_band
+from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface, dead_band, hand_angles
 from leap_teleop.sources.base import HandSource
 
 
@@ -79,6 +79,19 @@ def test_rotation_since_origin_applies_the_dead_bands():
     normal, direction = rpy_to_basis(math.radians(-60), 0.0, 0.0, 'right')
     li.on_frame(frame(4, render_hand('right', 'open', [0, 200, 0], normal, direction)))
     assert abs(li.get_right_hand_rotate_value()) == pytest.approx(math.radians(60) - 0.40, abs=1e-6)
+
+
+def test_rotation_since_origin_without_dead_bands_is_the_raw_rotation():
+    li = LeapInterface(recognizer_factory=per_frame, dead_bands=None)
+    li.on_frame(frame(1, render_hand('right', 'rock', [0, 200, 0])))
+    normal, direction = rpy_to_basis(math.radians(-20), math.radians(10), math.radians(40),
+                                     'right')
+    li.on_frame(frame(2, render_hand('right', 'open', [0, 200, 0], normal, direction)))
+    angles = hand_angles(normal, direction)
+    assert li.get_right_hand_rotate_value() == pytest.approx(angles[0], abs=1e-6)
+    assert li.get_right_hand_turn_value() == pytest.approx(angles[1], abs=1e-6)
+    assert li.get_right_hand_swing_value() == pytest.approx(angles[2], abs=1e-6)
+    assert abs(angles[0]) > 0.3 and abs(angles[2]) > 0.1      # inside the bands otherwise
 
 
 @pytest.mark.parametrize('angle, expected', [(0.3, 0.0), (0.5, 0.05), (-0.1, -0.05), (0.0, 0.0)])

@@ -3,11 +3,13 @@
 real sender logic (or takes a recorded ~bag), replays it with `rosbag play` into the
 running nodes, and checks what the simulated arms did. ~scenario picks the check:
 
-  pick_place  every arm's cube ends within 3 cm of its tray's centre
+  pick_place  every arm's cube ends within 3 cm of its tray's centre (and, with
+              ~max_cube_yaw_deg, that close to square)
   watchdog    the input is cut mid-motion: joint velocities ~0 within 0.3 s, disarmed
   fist        a fist mid-motion stops the arm; a later pinch without re-arming moves nothing
   joystick    a hand inside the dead zone moves nothing; beyond it the arm moves
 """
+import math
 import os
 import signal
 import subprocess
@@ -30,6 +32,18 @@ from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.ros_interface import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 
+def square_error(quaternion):
+    """Angle (rad, 0..pi/4) of a cube lying on a face from square to the world axes."""
+    x, y, z, w = quaternion
+    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                  [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    up = int(np.argmax(np.abs(R[2, :])))
+    side = R[:, (up + 1) % 3]
+    yaw = math.atan2(side[1], side[0])
+    return abs((yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4)
+
+
 STILL = 0.02          # rad/s: "~0" joint speed
 ARM_JOINTS = kin.JOINT_NAMES
 
@@ -44,6 +58,7 @@ class Recorder:
         self.arm_cmds = {arm: [] for arm in arms}     # (t, q)
         self.gripper_cmds = {arm: [] for arm in arms}
         self.cubes = {}
+        self.cube_quaternions = {}
         self.first_hand = None
         for arm in arms:
             rospy.Subscriber('/%s/joint_states' % arm, JointState, self._joints, arm, queue_size=50)
@@ -76,6 +91,8 @@ class Recorder:
     def _objects(self, msg):
         with self.lock:
             self.cubes = object_positions(msg)
+            self.cube_quaternions = {n: (p.orientation.x, p.orientation.y, p.orientation.z,
+                                         p.orientation.w) for n, p in zip(msg.names, msg.poses)}
 
     def _hand(self, _msg):
         if self.first_hand is None:
@@ -153,6 +170,11 @@ class Ur10Teleop(unittest.TestCase):
             rospy.loginfo('%s placed %s %.3f m from the tray centre', arm, cube, err)
             self.assertLess(err, 0.03, '%s: %s at %s' % (arm, cube, pos))
             self.assertLess(pos[2], tray.floor_z + self.cell.cube_size, 'not resting in the tray')
+            max_yaw = rospy.get_param('~max_cube_yaw_deg', 0.0)
+            if max_yaw > 0:       # placed square: faces along the tray's walls
+                yaw = math.degrees(square_error(self.rec.cube_quaternions[cube]))
+                rospy.loginfo('%s: %s %.1f deg from square', arm, cube, yaw)
+                self.assertLess(yaw, max_yaw, '%s lands %.1f deg from square' % (cube, yaw))
 
     def check_watchdog(self):
         arm = next(iter(self.arms))

@@ -99,9 +99,10 @@ def _unit_interval(x):
 class HandTracker:
     """State of one side across frames: gestures, origin, rotation since origin."""
 
-    def __init__(self, side, recognizer=None):
+    def __init__(self, side, recognizer=None, dead_bands=DEAD_BANDS):
         self.side = side
         self.recognizer = recognizer or GestureRecognizer()
+        self.dead_bands = dead_bands    # None: the raw rotation since the origin
         self.state = HandState(side)
         self._origin_angles = None
         self.rejected_frames = 0
@@ -143,7 +144,9 @@ class HandTracker:
         rotation = {'rotate': 0.0, 'turn': 0.0, 'swing': 0.0}
         if self._origin_angles is not None:
             for key, now, ref in zip(('rotate', 'turn', 'swing'), angles, self._origin_angles):
-                rotation[key] = dead_band(_wrap(now - ref), *DEAD_BANDS[key])
+                angle = _wrap(now - ref)
+                rotation[key] = (angle if self.dead_bands is None
+                                 else dead_band(angle, *self.dead_bands[key]))
         tips = tuple((_finite_tuple(f.tip) or (0.0, 0.0, 0.0)) for f in hand.fingers[:5])
         tips = tips + ((0.0, 0.0, 0.0),) * (5 - len(tips))
         velocity = _finite_tuple(hand.palm_velocity) or (0.0, 0.0, 0.0)
@@ -165,9 +168,12 @@ class LeapInterface:
     """Listener over a HandSource. Call start() to run the source on a thread, or
     feed frames yourself with on_frame(frame)."""
 
-    def __init__(self, source=None, recognizer_factory=GestureRecognizer, sides=SIDES):
+    def __init__(self, source=None, recognizer_factory=GestureRecognizer, sides=SIDES,
+                 dead_bands=DEAD_BANDS):
+        """dead_bands: per rotation angle (low, high) rad, or None for the raw rotation."""
         self.source = source
-        self._trackers = {side: HandTracker(side, recognizer_factory()) for side in sides}
+        self._trackers = {side: HandTracker(side, recognizer_factory(), dead_bands)
+                          for side in sides}
         self._lock = threading.Lock()
         self._states = {side: HandState(side) for side in sides}
         self._listeners = []

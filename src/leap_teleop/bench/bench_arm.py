@@ -1,5 +1,5 @@
-"""Arm teleop: latency of the real node against a bare rospy echo, and tracking error
-of the closed loop on the simulated cell (sim profile: max_joint_speed 1 rad/s)."""
+"""Arm teleop: latency of the real node against a bare rospy echo (the closed loop's
+tracking, jitter, orientation and onset figures: bench_arm_motion)."""
 import json
 import math
 import os
@@ -42,8 +42,10 @@ def _latency(rounds=10, count=150):
         arm = harness.start_node(env, [
             sys.executable, package_path('scripts', 'ur10_arm.py'), '__name:=ur10_arm',
             '__ns:=ur10_1', '_hand:=right', '_hand_topic:=/leapmotion/data_right',
-            '_filter_cutoff_hz:=0.0', '_max_joint_speed:=1.0', '_input_timeout:=1.0',
-            '_joint_prefix:=ur10_1_'])
+            '_filter_min_cutoff_hz:=0.0', '_max_joint_speed:=1.0', '_input_timeout:=1.0',
+            # The servo's command changes every period while it moves: with the periodic
+            # loop at its slowest (10 Hz), a command answers a hand message, not the timer.
+            '_rate:=10.0', '_joint_prefix:=ur10_1_'])
         echo = harness.start_node(env, [sys.executable, '-m', 'leap_teleop.bench.echo'])
         try:
             data = _round_trips(env, rounds, count)
@@ -76,21 +78,6 @@ def _latency(rounds=10, count=150):
     return figures
 
 
-def _tracking():
-    from leap_teleop.teleop.closed_loop import run_session
-    sys.path.insert(0, package_path('test'))
-    from test_arm_closed_loop import sim_params   # the same profile the tests use
-    cell, runs = run_session(package_path('config', 'gestures', 'ur10_pick_place_single.yaml'),
-                             'ur10_cell.yaml', {'ur10_1': 'right'}, sim_params())
-    cell.close()
-    errors = np.asarray(runs['ur10_1'].tracking_errors)
-    return {'arm.tracking_rms_m': float(np.sqrt(np.mean(errors ** 2)))}
-
-
 def run():
-    results = _latency()
-    tracking = _tracking()
-    results.update(tracking)
-    results['_sources'].update({key: 'closed loop on the simulated cell, session '
-                                'config/gestures/ur10_pick_place_single.yaml' for key in tracking})
-    return results
+    # arm.tracking_rms_m and the other motion figures: bench_arm_motion.
+    return _latency()

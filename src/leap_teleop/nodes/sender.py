@@ -10,7 +10,7 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from leap_teleop import conversions
-from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
 from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SOURCES, SourceError, make_source
@@ -60,6 +60,9 @@ PARAMS = {
     'wait_topics': Param([], 'topics the consumers read, to wait for; any topic of the graph '
                              '(e.g. the drone\'s ardrone/takeoff); empty = every published '
                              'leapcobot topic', kind='list', item='str'),
+    'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
+                                       '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
+                                       'the raw rotation since the origin'),
 }
 PARAMS.update(CAMERA_PARAMS)
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
@@ -215,7 +218,8 @@ def main(argv=None):
         return build_source(p, view.on_image if view is not None else None), view
     p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
                                    argv, errors=(SourceError, ValueError))
-    interface = LeapInterface(source, sides=list(p['sides']))
+    interface = LeapInterface(source, sides=list(p['sides']),
+                              dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None)
     sender = Sender(p, interface)
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency

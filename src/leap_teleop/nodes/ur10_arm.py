@@ -66,10 +66,11 @@ class ArmNode:
         self.diagnostics = diagnostic_updater.Updater()
         self.diagnostics.setHardwareID('ur10_arm_%s' % side)
         self.diagnostics.add('teleop', self.diagnose)
-        rospy.loginfo('ur10_arm: %s hand on %s drives %s (mode %s, gripper %s, max joint speed '
-                      '%.3g rad/s)', side, rospy.resolve_name(topic),
-                      self.arm_pub.resolved_name, params.mode, params.gripper_mode,
-                      params.max_joint_speed)
+        rospy.loginfo('ur10_arm: %s hand on %s drives %s (mode %s, orientation %s, gripper %s, '
+                      'max joint speed %.3g rad/s, acceleration %.3g rad/s^2)', side,
+                      rospy.resolve_name(topic), self.arm_pub.resolved_name, params.mode,
+                      params.orientation, params.gripper_mode, params.max_joint_speed,
+                      params.max_joint_accel)
 
     # Callbacks: store and wake, nothing else.
     def on_hand(self, msg):
@@ -138,21 +139,27 @@ class ArmNode:
                 cmd = self.teleop.step(now)
                 status = self.teleop.status
                 snapshot = (status.state, status.reason, status.origin_set)
-            if cmd.q is not None:
-                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.q, cmd.duration))
+            if cmd.points:
+                # Stamp 0 (start on receipt): a command delayed in transport still starts
+                # from the controller's current state instead of partly in the past.
+                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points))
             if cmd.gripper is not None:
-                self.gripper_pub.publish(self._trajectory([self.gripper_joint], [cmd.gripper],
-                                                          0.1))
+                self.gripper_pub.publish(self._trajectory([self.gripper_joint],
+                                                          [(0.1, [cmd.gripper], None)]))
             self._publish_status(snapshot, now)
             self.diagnostics.update()
 
     @staticmethod
-    def _trajectory(names, positions, duration):
+    def _trajectory(names, points, stamp=0.0):
+        """points [(time_from_start, positions, velocities|None)], starting at stamp
+        (the control period's time; 0 = on receipt, the ros_control convention)."""
         msg = JointTrajectory()
-        msg.header.stamp = rospy.Time(0)     # start now (ros_control convention)
+        msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
         msg.joint_names = list(names)
-        msg.points = [JointTrajectoryPoint(positions=[float(x) for x in positions],
-                                           time_from_start=rospy.Duration.from_sec(duration))]
+        msg.points = [JointTrajectoryPoint(
+            positions=[float(x) for x in q],
+            velocities=[] if v is None else [float(x) for x in v],
+            time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
         return msg
 
     def _publish_status(self, snapshot, now):

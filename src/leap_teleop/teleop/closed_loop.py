@@ -15,7 +15,8 @@ def hand_input(state):
     """The leapcobot view of a HandState, as the arm node receives it."""
     return HandInput(present=state.present, palm_mm=state.palm_position, fist=state.fist,
                      thumb_up=state.thumb_up, pinch=state.pinch, pinch_value=state.pinch_value,
-                     rock=state.rock, stamp=state.timestamp)
+                     rock=state.rock, stamp=state.timestamp, rotate=state.rotate,
+                     turn=state.turn, swing=state.swing)
 
 
 @dataclass
@@ -51,8 +52,8 @@ def run_session(script, cell_config, arms, params=None, control_hz=120.0, settle
             q, qd, _, _ = cell.joint_state(arm)
             teleop.on_joints(q)
             cmd = teleop.step(t)
-            if cmd.q is not None:
-                cell.command_arm(arm, [(cmd.duration, cmd.q, None)])
+            if cmd.points:
+                cell.command_arm(arm, cmd.points, cmd.stamp)
             if cmd.gripper is not None:
                 cell.set_gripper(arm, cmd.gripper, 0.1)
             run = runs[arm]

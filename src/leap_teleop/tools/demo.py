@@ -246,6 +246,11 @@ def main(argv=None):
                 launch.wait(20)
             except subprocess.TimeoutExpired:
                 launch.kill()
+    if 'ur10' in tasks:
+        # The rotated-cube task (yaw orientation mode), in the closed loop in simulated time.
+        from leap_teleop.tools import rotated_task
+        say('rotated cubes (30 / 60 deg), yaw orientation mode, closed loop')
+        summary['tasks'].update(rotated_task.run(os.path.join(out, 'rotated_grasp.png')))
     return report(summary, out)
 
 

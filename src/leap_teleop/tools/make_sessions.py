@@ -5,6 +5,11 @@ the origin with the arm at home), move over a cube, descend, pinch (grip), carry
 tray, release, lift, fist (disarm), leave. Palm waypoints are the inverse of the arm
 node's imitation mapping (config/ur10_teleop.yaml: axis_map, scale) applied to TCP
 waypoints computed from the cell config, so the sessions stay right when either changes.
+For a cube lying turned (the rotated cell), the hand also turns about the vertical on the
+way to the cube so that, in the arm's yaw orientation mode, the gripper closes across the
+cube's faces, and turns back on the way to the tray so that the cube lands square: the
+hand angle is the inverse of the mapping too (axis_map, orientation_scale and the
+sender's dead band on the turn).
 
 usage: python -m leap_teleop.tools.make_sessions [--check]
 """
@@ -12,9 +17,13 @@ import argparse
 import os
 import sys
 
+import math
+
 import numpy as np
 import yaml
 
+from leap_teleop.leap_interface import DEAD_BANDS
+from leap_teleop.teleop import orientation as ori
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_dir, load_config
 
@@ -34,6 +43,25 @@ def palm_for(tcp_base, tcp_ref, palm_ref, axis_map, scale):
     return [round(float(x), 1) for x in np.asarray(palm_ref) + offset_mm]
 
 
+def hand_turn_for(tool_yaw, axis_map, scale):
+    """Hand yaw (deg, the scripted source's rpy yaw = the sender's turn) that turns the
+    tool by tool_yaw (rad) in yaw mode: the inverse of the turn's dead band, the axis map
+    and the scale."""
+    if abs(tool_yaw) < 1e-9:
+        return 0.0
+    A = ori.axis_rotation(axis_map)
+    eps = 1e-3
+    per_turn = kin.rotation_vector(ori.map_rotation(ori.hand_rotation(0.0, eps, 0.0), A))[2] / eps
+    value = tool_yaw / (per_turn * scale)
+    low, high = DEAD_BANDS['turn']
+    return round(math.degrees(value + (high if value > 0 else low)), 1)
+
+
+def square_yaw(cube_yaw):
+    """The tool yaw nearest 0 that closes the jaws across a cube's faces."""
+    return (cube_yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+
+
 def arm_segments(cell, arm_name, cube_name, side, teleop, start_delay):
     arm = cell.arm(arm_name)
     cube = cell.cube(cube_name)
@@ -49,16 +77,23 @@ def arm_segments(cell, arm_name, cube_name, side, teleop, start_delay):
     def palm(tcp):
         return palm_for(tcp, tcp_ref, ref, teleop['axis_map'], teleop['scale'])
 
+    turn = {}
+    if abs(cube.yaw) > 1e-9:
+        yaw = hand_turn_for(square_yaw(cube.yaw), teleop['axis_map'],
+                            teleop.get('orientation_scale', 1.0))
+        turn = {'rpy': [0.0, 0.0, yaw]}
+    back = {'rpy': [0.0, 0.0, 0.0]} if turn else {}
     return [
         {'pose': 'absent', 'duration': start_delay},
         {'pose': 'thumbs_up', 'palm': list(ref), 'duration': 1.0},
         {'pose': 'rock', 'duration': 0.8},
-        {'pose': 'open', 'palm': palm(cube_base + up), 'duration': 3.0},
+        dict({'pose': 'open', 'palm': palm(cube_base + up), 'duration': 3.0}, **turn),
         {'pose': 'open', 'palm': palm(cube_base), 'duration': 2.0},
         {'pose': 'open', 'duration': 0.7},
         {'pose': 'pinch', 'value': 0.6, 'duration': 1.2},
         {'pose': 'pinch', 'value': 0.6, 'palm': palm(cube_base + up), 'duration': 1.5},
-        {'pose': 'pinch', 'value': 0.6, 'palm': palm(drop_base + up), 'duration': 3.0},
+        dict({'pose': 'pinch', 'value': 0.6, 'palm': palm(drop_base + up), 'duration': 3.0},
+             **back),
         {'pose': 'pinch', 'value': 0.6, 'palm': palm(drop_base), 'duration': 1.5},
         {'pose': 'pinch', 'value': 0.6, 'duration': 0.5},
         {'pose': 'open', 'duration': 1.2},
@@ -73,6 +108,10 @@ SESSIONS = {
     'ur10_pick_place_single.yaml': ('ur10_cell.yaml', [('ur10_1', 'cube_red', 'right', 1.0)]),
     'ur10_pick_place_dual.yaml': ('ur10_dual_cell.yaml', [('ur10_1', 'cube_red', 'right', 1.0),
                                                           ('ur10_2', 'cube_yellow', 'left', 1.3)]),
+    # Cubes at 30 and 60 deg: for the arms' yaw orientation mode.
+    'ur10_pick_place_rotated.yaml': ('ur10_dual_rotated_cell.yaml',
+                                     [('ur10_1', 'cube_red', 'right', 1.0),
+                                      ('ur10_2', 'cube_yellow', 'left', 1.3)]),
 }
 
 

@@ -275,6 +275,17 @@ class UR10Cell:
         """(cubes touched by the left finger, by the right finger) at the last check."""
         return self.arm(name).touching
 
+    def cube_yaw_error(self, cube):
+        """How far (rad, 0..pi/4) the cube's faces are from the world axes, about the
+        vertical: 0 for a cube lying square to a tray."""
+        q = self.object_poses()[cube][1]
+        R = np.array(p.getMatrixFromQuaternion(q)).reshape(3, 3)
+        # The cube axis closest to horizontal-x decides; square = a multiple of 90 deg.
+        up = int(np.argmax(np.abs(R[2, :])))
+        side = R[:, (up + 1) % 3]
+        yaw = float(np.arctan2(side[1], side[0]))
+        return abs((yaw + np.pi / 4) % (np.pi / 2) - np.pi / 4)
+
     def in_tray(self, cube, arm_name):
         """True when the cube rests inside the arm's tray."""
         t = self.arm(arm_name).cfg.tray
@@ -298,7 +309,7 @@ class UR10Cell:
             arm.gripper_follower.hold([0.0])
             arm.touching = ([], [])
         for cube in self.config.cubes:
-            p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, [0, 0, 0, 1],
+            p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, cube.quaternion,
                                               physicsClientId=c)
             p.resetBaseVelocity(self.cubes[cube.name], [0, 0, 0], [0, 0, 0], physicsClientId=c)
 

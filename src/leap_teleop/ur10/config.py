@@ -93,6 +93,12 @@ class CubeConfig:
     xyz: np.ndarray           # initial centre, world
     rgba: tuple
     arm: str = ''
+    yaw: float = 0.0          # rad about the vertical, lying on a face
+
+    @property
+    def quaternion(self):
+        """(x, y, z, w) of the cube's initial orientation."""
+        return (0.0, 0.0, math.sin(self.yaw / 2), math.cos(self.yaw / 2))
 
 
 @dataclass
@@ -170,7 +176,7 @@ def parse_config(data, path=''):
             xyz.append(height + size / 2)
         cubes.append(CubeConfig(name=str(c['name']), xyz=_vec(xyz, 3, 'cube xyz'),
                                 rgba=tuple(c.get('rgba', (0.8, 0.2, 0.2, 1))),
-                                arm=str(c.get('arm', ''))))
+                                arm=str(c.get('arm', '')), yaw=float(c.get('yaw', 0.0))))
     return CellConfig(arms=arms, cubes=cubes,
                       table_center=tuple(table.get('center', (0.45, 0.0))),
                       table_size=tuple(table.get('size', (1.4, 1.4))),

@@ -28,6 +28,11 @@ JOINT_UPPER = -JOINT_LOWER
 # UR10 joint speed limits: 120 deg/s base and shoulder, 180 deg/s the others.
 MAX_JOINT_SPEED = np.radians([120.0, 120.0, 180.0, 180.0, 180.0, 180.0])
 
+# Joint acceleration limit used for every motion we command, rad/s^2. The robot limits
+# torque, not acceleration; pi rad/s^2 is the conservative figure MoveIt configurations
+# of the UR10 use for time parametrisation.
+MAX_JOINT_ACCEL = np.full(6, math.pi)
+
 # Flange (tool0) -> TCP along tool0 z, m. Matches the gripper built in ur10/model.py.
 TCP_OFFSET = 0.105
 
@@ -47,6 +52,72 @@ def tool_down(yaw=0.0):
     """Rotation (base_link frame) with the tool z pointing down, turned by yaw about z."""
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ TOOL_DOWN
+
+
+def rot_z(angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_from_vector(w):
+    """Rotation matrix of the rotation vector w (axis * angle, rad): Rodrigues."""
+    w = np.asarray(w, dtype=float)
+    angle = float(np.linalg.norm(w))
+    if angle < 1e-12:
+        return np.eye(3)
+    k = w / angle
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+
+
+def rotation_vector(R):
+    """Rotation vector (axis * angle, angle in [0, pi]) of a rotation matrix."""
+    R = np.asarray(R, dtype=float)
+    c = max(-1.0, min(1.0, (np.trace(R) - 1.0) / 2.0))
+    angle = math.acos(c)
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    if angle < 1e-9:
+        return 0.5 * v
+    if math.pi - angle < 1e-6:
+        # Near pi the antisymmetric part vanishes: take the axis from R + I.
+        B = (R + np.eye(3)) / 2.0
+        k = B[:, int(np.argmax(np.diag(B)))]
+        k = k / np.linalg.norm(k)
+        return k * angle
+    return v * (angle / (2.0 * math.sin(angle)))
+
+
+def tilt_and_yaw(R):
+    """(tilt, yaw) of a tool rotation: tilt = angle of the tool z from straight down
+    (rad), yaw = turn about the vertical of the tool once the tilt is undone (the yaw
+    of tool_down(yaw)). Together with the tilt axis this is a swing-twist split."""
+    R = np.asarray(R, dtype=float)
+    z = R[:, 2]
+    down = np.array([0.0, 0.0, -1.0])
+    tilt = math.acos(max(-1.0, min(1.0, float(z @ down))))
+    axis = np.cross(down, z)
+    n = float(np.linalg.norm(axis))
+    swing = np.eye(3) if n < 1e-12 else rotation_from_vector(axis / n * tilt)
+    level = swing.T @ R            # pointing straight down: tool_down(yaw)
+    upright = level @ TOOL_DOWN.T  # = rot_z(yaw)
+    return tilt, math.atan2(upright[1, 0], upright[0, 0])
+
+
+def limit_tool_rotation(R, max_tilt, yaw_center, max_turn):
+    """R with its tilt from vertical limited to max_tilt and its yaw to
+    yaw_center +- max_turn (rad): the orientation counterpart of the workspace box."""
+    R = np.asarray(R, dtype=float)
+    tilt, yaw = tilt_and_yaw(R)
+    turn = (yaw - yaw_center + math.pi) % (2 * math.pi) - math.pi
+    if tilt <= max_tilt and abs(turn) <= max_turn:
+        return R
+    z = R[:, 2]
+    down = np.array([0.0, 0.0, -1.0])
+    axis = np.cross(down, z)
+    n = float(np.linalg.norm(axis))
+    swing = np.eye(3) if n < 1e-12 else rotation_from_vector(axis / n * min(tilt, max_tilt))
+    yaw = yaw_center + max(-max_turn, min(max_turn, turn))
+    return swing @ tool_down(yaw)
 
 
 def pose(position, rotation=TOOL_DOWN):

@@ -101,7 +101,9 @@ def joint_order(names, expected, prefix):
 
 def trajectory_points(msg, expected, prefix):
     """(points, stamp_s) from a JointTrajectory for joints `expected`: points are
-    [(time_from_start s, positions in expected order, velocities or None)]; stamp_s is
+    [(time_from_start s, positions in expected order, velocities or None[,
+    accelerations])] (accelerations only where velocities are given, as the JTC reads them);
+    stamp_s is
     header.stamp in seconds (0 = start now). CommandError when malformed: bad names,
     no points, NaN / inf, wrong lengths, times not strictly increasing or negative."""
     order = joint_order(list(msg.joint_names), expected, prefix)
@@ -126,5 +128,12 @@ def trajectory_points(msg, expected, prefix):
                 raise CommandError('point %d: %d velocities for %d joints'
                                    % (k, len(pt.velocities), n))
             vel = _finite(pt.velocities, 'point %d velocities' % k)[order]
+        if vel is not None and len(pt.accelerations):
+            if len(pt.accelerations) != n:
+                raise CommandError('point %d: %d accelerations for %d joints'
+                                   % (k, len(pt.accelerations), n))
+            points.append((t, pos, vel, _finite(pt.accelerations,
+                                                'point %d accelerations' % k)[order]))
+            continue
         points.append((t, pos, vel))
     return points, msg.header.stamp.to_sec()

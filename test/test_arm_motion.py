@@ -1,0 +1,134 @@
+"""Smoothing and motion of the arm teleop: the One Euro filter, the joint servo and the
+trajectory follower it feeds (no ROS, no physics)."""
+import math
+
+import numpy as np
+import pytest
+
+from leap_teleop.teleop.one_euro import OneEuroFilter, smoothing_factor
+from leap_teleop.teleop.orientation import hand_rotation
+from leap_teleop.teleop.servo import JointServo
+from leap_teleop.leap_interface import hand_angles
+from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.trajectory import TrajectoryFollower, _hermite, _hermite_peak
+
+
+# -- One Euro filter --------------------------------------------------------------------
+def test_one_euro_is_a_first_order_low_pass_at_min_cutoff_when_beta_is_zero():
+    f = OneEuroFilter(min_cutoff_hz=2.0, beta=0.0)
+    f.update([0.0], 0.0)
+    y = f.update([1.0], 0.01)
+    assert y[0] == pytest.approx(smoothing_factor(2.0, 0.01))
+    assert smoothing_factor(2.0, 0.01) == pytest.approx(1 / (1 + 1 / (2 * math.pi * 2.0 * 0.01)))
+
+
+def test_one_euro_smooths_noise_at_rest_and_follows_motion_with_little_lag():
+    rng = np.random.default_rng(0)
+    fs = 120.0
+    still = OneEuroFilter(0.3, 0.08, 1.0)
+    out = [still.update(rng.normal(0, 1.0, 3), k / fs) for k in range(600)]
+    assert np.std(np.asarray(out[240:])) < 0.35         # 1 mm noise -> about a third
+    moving = OneEuroFilter(0.3, 0.08, 1.0)
+    t = np.arange(600) / fs
+    path = np.stack([100 * np.sin(2 * math.pi * 0.3 * t)] * 3, 1)
+    out = np.asarray([moving.update(p, tk).copy() for p, tk in zip(path, t)])
+    fixed = OneEuroFilter(0.3, 0.0, 1.0)                # the same filter without beta
+    slow = np.asarray([fixed.update(p, tk).copy() for p, tk in zip(path, t)])
+    err = np.sqrt(np.mean((out[120:] - path[120:]) ** 2))
+    assert err < 0.2 * np.sqrt(np.mean((slow[120:] - path[120:]) ** 2))
+
+
+def test_one_euro_ignores_repeated_and_older_times_and_passes_through_when_disabled():
+    f = OneEuroFilter(1.0, 0.1, 1.0)
+    f.update([0.0], 1.0)
+    assert f.update([5.0], 1.0)[0] == 0.0
+    assert f.update([5.0], 0.5)[0] == 0.0
+    off = OneEuroFilter(0.0, 0.1, 1.0)
+    off.update([0.0], 0.0)
+    assert off.update([5.0], 0.01)[0] == 5.0
+    with pytest.raises(ValueError):
+        OneEuroFilter(1.0, -1.0, 1.0)
+
+
+# -- hand rotation ------------------------------------------------------------------------
+def test_hand_rotation_reproduces_the_angles_the_sender_measures():
+    rng = np.random.default_rng(1)
+    for rotate, turn, swing in rng.uniform(-1.3, 1.3, size=(300, 3)):
+        R = hand_rotation(rotate, turn, swing)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+        normal, direction = R @ [0.0, -1.0, 0.0], R @ [0.0, 0.0, -1.0]
+        np.testing.assert_allclose(hand_angles(normal, direction), (rotate, turn, swing),
+                                   atol=1e-9)
+
+
+# -- servo and follower ---------------------------------------------------------------------
+def _follow(servo, goals, dt=0.008, substeps=4, delay_steps=0):
+    """Drive a follower with the servo's commands; returns desired (q, qd) per substep."""
+    q0 = kin.HOME_Q.copy()
+    follower = TrajectoryFollower(q0, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    t, out, queue = 0.0, [], []
+    for goal in goals:
+        points = servo.track(t, follower.q, goal)
+        queue.append(points)
+        if len(queue) > delay_steps:
+            follower.command(t, queue.pop(0))
+        for _ in range(substeps):
+            t += dt / substeps
+            q, qd = follower.sample(t)
+            out.append((q.copy(), qd.copy()))
+    return out
+
+
+@pytest.mark.parametrize('delay_steps', [0, 1])
+def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps):
+    servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0,
+                       lower=kin.JOINT_LOWER, upper=kin.JOINT_UPPER)
+    t = np.arange(400) * 0.008
+    goals = [kin.HOME_Q + 0.4 * np.sin(2 * math.pi * 0.5 * tk) * np.ones(6) for tk in t]
+    goals[200:] = [goals[200] + 0.3] * 200                 # and a step
+    states = _follow(servo, goals, delay_steps=delay_steps)
+    qd = np.asarray([s[1] for s in states])
+    accel = np.abs(np.diff(qd, axis=0)) / 0.002
+    assert np.max(np.abs(qd)) <= 1.0 + 1e-9
+    # A delayed command starts from the controller's state: a small correction only.
+    assert np.max(accel) <= math.pi * (1.0 if delay_steps == 0 else 1.6) + 1e-6
+    np.testing.assert_allclose(states[-1][0], goals[-1], atol=1e-3)     # gets there
+
+
+def test_servo_stops_by_itself_when_commands_stop():
+    servo = JointServo(np.full(6, 1.0), np.full(6, 2.0), horizon=0.032)
+    q = kin.HOME_Q.copy()
+    for k in range(100):
+        points = servo.track(k * 0.008, q, kin.HOME_Q + 1.0)
+    (t1, q1, v1), (t2, q2, v2) = points
+    assert np.max(np.abs(v1)) > 0.5
+    # The last point is rest, reached at the acceleration bound: a silent node's robot stops.
+    np.testing.assert_array_equal(v2, np.zeros(6))
+    assert t2 - t1 == pytest.approx(np.max(np.abs(v1)) / 2.0)
+    np.testing.assert_allclose(q2, q1 + v1 * (t2 - t1) / 2)
+    follower = TrajectoryFollower(kin.HOME_Q, kin.MAX_JOINT_SPEED)
+    follower.command(0.0, points)
+    follower.sample(follower.end_time + 0.01)
+    np.testing.assert_array_equal(follower.qd, np.zeros(6))
+    np.testing.assert_allclose(follower.q, q2)      # (from rest: stretched in time)
+
+
+def test_cubic_peak_speed_in_closed_form_matches_dense_sampling():
+    rng = np.random.default_rng(2)
+    s = np.linspace(0.0, 1.0, 2001)
+    for _ in range(200):
+        q0, q1, v0, v1 = rng.normal(size=(4, 6))
+        T = rng.uniform(0.01, 2.0)
+        dense = np.max(np.abs([_hermite(q0, q1, v0, v1, T, x)[1] for x in s]), axis=0)
+        np.testing.assert_allclose(np.maximum(_hermite_peak(q0, q1, v0, v1, T), np.abs(v0)),
+                                   dense, rtol=1e-4, atol=1e-6)
+
+
+def test_follower_interpolates_quintic_segments_with_accelerations():
+    f = TrajectoryFollower(np.zeros(1), [10.0])
+    f.command(0.0, [(1.0, [1.0], [0.0], [0.0])])
+    q, qd = f.sample(0.5)
+    assert q[0] == pytest.approx(0.5) and qd[0] == pytest.approx(1.875)   # 30/16
+    assert f.qdd[0] == pytest.approx(0.0, abs=1e-9)
+    q, _ = f.sample(0.25)
+    assert q[0] == pytest.approx(10 * 0.25 ** 3 - 15 * 0.25 ** 4 + 6 * 0.25 ** 5)
