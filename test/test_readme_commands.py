@@ -38,6 +38,8 @@ COVERED = {
     'python -m leap_teleop.tools.classify_frames':
         'test_classify_frames.py::test_json_lines_on_stdin_stream_and_stateless',
     'python -m leap_teleop.tools.make_sessions': 'test_arm_closed_loop.py',
+    # make demo runs rotated_task.run, which the module's main() calls.
+    'python -m leap_teleop.tools.rotated_task': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     'python -m leap_teleop.tools.param_table':
         'test_param_table.py::test_readme_parameter_tables_match_the_declarations',
     'python -m leap_teleop.tools.to_bag --script config/gestures/ur10_pick_place_dual.yaml '
@@ -72,6 +74,8 @@ BY_CI = {'make test', 'make setup',
 # Not run by any test, and why.
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
+    'python -m leap_teleop.bench --only arm_motion': 'a benchmark, part of make bench (the '
+        'integrator runs it); test_bench_harness.py checks the bench runner itself',
     'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
     'make clean': 'deletes the build the other tests use',
     'rosrun leap_teleop record_frames my_take.json.gz --source leap': 'needs a Leap device; '
