@@ -10,11 +10,13 @@ from hypothesis import given, settings, strategies as st
 from leap_teleop.frame import Frame
 from leap_teleop.hand_model import render_hand
 from leap_teleop.sources import leapjs
-from leap_teleop.tools import evaluate
 from leap_teleop.tools.classify_frames import Classifier
 
-DATA = evaluate.DEFAULT_DATA
-KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down', 'events']
+from leap_teleop.tools.evaluate import data_dir
+
+DATA = data_dir()
+KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down',
+        'events']
 
 
 def run_cli(args, stdin=None):
@@ -72,8 +74,8 @@ def test_garbage_lines_never_stop_the_run():
     assert out[4]['hands'][0]['type'] == 'right' and not out[4]['hands'][0]['open']
 
 
+@pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
 def test_every_shared_recording_classifies():
-    assert os.path.isdir(DATA), 'no recordings at %s (set LEAPJS_DATA)' % DATA
     for name in sorted(os.listdir(DATA)):
         if name.endswith('.json.lz'):
             out = run_cli([os.path.join(DATA, name)])

@@ -79,3 +79,30 @@ def test_gesture_events_carry_name_side_and_stamp():
     assert names[0] == 'hand_found' and 'fist' in names
     assert all(e.side == Hand.SIDE_RIGHT for e in events)
     assert events[0].header.stamp.to_sec() == 5.0
+
+
+def test_leapros_has_the_classic_drivers_units_and_angles():
+    hand = render_hand('right', 'open', [12.5, 210.0, -30.0])
+    hand.direction = direction = [0.0, 0.5, -0.5 * 3 ** 0.5]     # pitched 30 deg up
+    hand.palm_normal = [-0.5, -0.5 * 3 ** 0.5, 0.0]             # roll atan2(x, -y) = -30 deg
+    s = states(hand)['right']
+    msg = conversions.to_leapros(s, hand)
+    assert msg._type == 'leap_teleop/leapros'
+    assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
+    assert (msg.palmpos.x, msg.palmpos.y, msg.palmpos.z) == (12.5, 210.0, -30.0)    # mm
+    assert (msg.direction.x, msg.direction.y, msg.direction.z) == pytest.approx(direction)
+    assert msg.normal.x == pytest.approx(-0.5)
+    # (yaw, pitch, roll) in degrees, as the Leap SDK's Vector angles.
+    assert (msg.ypr.x, msg.ypr.y, msg.ypr.z) == pytest.approx((0.0, 30.0, -30.0), abs=1e-9)
+    index = hand.fingers[1]
+    assert (msg.index_tip.x, msg.index_tip.y, msg.index_tip.z) == pytest.approx(tuple(s.finger_tips[1]))
+    assert (msg.index_proximal.x, msg.index_proximal.z) == pytest.approx((index.mcp[0], index.mcp[2]))
+    assert msg.index_distal.z == pytest.approx(index.dip[2])
+    assert msg.index_intermediate.z == pytest.approx(index.pip[2])
+    assert (msg.index_metacarpal.x, msg.index_metacarpal.y, msg.index_metacarpal.z) == (0, 0, 0)
+
+
+def test_leapros_of_an_absent_hand_is_all_zero_but_the_header():
+    msg = conversions.to_leapros(states()['right'])
+    assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
+    assert (msg.palmpos.x, msg.ypr.y, msg.thumb_tip.z, msg.direction.z) == (0, 0, 0, 0)

@@ -269,13 +269,11 @@ def test_absurd_palm_positions_are_rejected_not_flown(mode):
         assert all(math.isfinite(v) for v in cmd.twist)
 
 
-def test_fingertip_loops_on_real_recordings_never_flip_a_flying_drone():
+def test_fingertip_loops_on_real_recordings_never_flip_a_flying_drone(leapjs_data):
     from leap_teleop.tools import evaluate
-    if not os.path.isdir(evaluate.DEFAULT_DATA):
-        pytest.skip('shared/data/leapjs absent')
     circles = []
     for take in evaluate.EVERY_TAKE:
-        rows, _ = evaluate.run_take(evaluate.find_file(evaluate.DEFAULT_DATA, take))
+        rows, _ = evaluate.run_take(evaluate.find_file(leapjs_data, take))
         circles += [e for (_, _, st, _, _) in rows for e in st.events
                     if e.gesture.startswith('circle')]
     assert len(circles) >= 20

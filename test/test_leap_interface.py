@@ -30,10 +30,20 @@ def test_getters_exist_for_both_sides_and_read_the_latest_frame():
     assert li.get_right_hand_palmpos() == (10.0, 200.0, 5.0)
     assert li.get_left_hand_palmpos() == (-10.0, 180.0, 0.0)
     assert li.get_right_hand_fist() and not li.get_left_hand_fist()
-    for side in ('right', 'left'):
-        for name in ('thumb_up', 'pinch', 'pinch_value', 'origin_frame',
-                     'set_origin_frame_detected', 'rotate_value', 'turn_value', 'swing_value'):
-            getattr(li, 'get_%s_hand_%s' % (side, name))()
+    names = ('thumb_up', 'pinch', 'pinch_value', 'origin_frame', 'set_origin_frame_detected',
+             'rotate_value', 'turn_value', 'swing_value')
+
+    def read(side):
+        return {name: getattr(li, 'get_%s_hand_%s' % (side, name))() for name in names}
+    idle = dict.fromkeys(names, False) | dict.fromkeys(('pinch_value', 'rotate_value',
+                                                        'turn_value', 'swing_value'), 0.0)
+    assert read('right') == idle and read('left') == idle
+    # The next frame: a right pinch, a left rock (which sets the origin).
+    li.on_frame(frame(2, render_hand('right', 'pinch', [10, 200, 5], pinch_value=0.5),
+                      render_hand('left', 'rock', [-10, 180, 0])))
+    assert read('right') == idle | {'pinch': True, 'pinch_value': pytest.approx(0.5)}
+    assert read('left') == idle | {'origin_frame': True, 'set_origin_frame_detected': True}
+    assert not li.get_right_hand_fist()
 
 
 def test_every_flag_clears_when_the_hand_leaves():

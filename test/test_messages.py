@@ -1,5 +1,5 @@
 """The wire formats: the original messages and ardrone_autonomy's keep their MD5 sums."""
-from leap_teleop.msg import (GestureEvent, Hand, Navdata, leapcobotleft, leapcobotright,
+from leap_teleop.msg import (GestureEvent, Hand, Navdata, leapcobotleft, leapcobotright, leapros,
                              navdata_altitude, vector21, vector31)
 from leap_teleop.srv import CamSelect, FlightAnim, LedAnim, RecordEnable
 
@@ -9,6 +9,21 @@ def test_original_and_driver_md5_sums():
     assert leapcobotleft._md5sum == 'c8e1001e2314fcf4a06c83cc02625a74'
     assert Navdata._md5sum == 'e1169f766234363125ac62c9a3f87eeb'
     assert FlightAnim._md5sum == 'b67c0059d7339761bcde13f61a58763f'
+    assert leapros._md5sum == 'e37447f7532c765d6c587f418fd5dd03'   # ros-drivers leap_motion's
+
+
+def test_leapros_md5_computed_by_genmsg_from_the_msg_file():
+    # Not only the generated class: the .msg file itself hashes to the classic sum.
+    import os
+    import genmsg.gentools
+    import genmsg.msg_loader
+    here = os.path.dirname(os.path.abspath(__file__))
+    ctx = genmsg.msg_loader.MsgContext.create_default()
+    spec = genmsg.msg_loader.load_msg_from_file(
+        ctx, os.path.join(here, '..', 'msg', 'leapros.msg'), 'leap_motion/leapros')
+    search = {pkg: [os.path.join('/usr/share', pkg, 'msg')] for pkg in ('std_msgs', 'geometry_msgs')}
+    genmsg.msg_loader.load_depends(ctx, spec, search)
+    assert genmsg.gentools.compute_md5(ctx, spec) == 'e37447f7532c765d6c587f418fd5dd03'
 
 
 def test_the_drivers_other_services_and_navdata_altitude_md5_sums():

@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from leap_teleop.tools.evaluate import DEFAULT_DATA, HANDS_DATA
+from leap_teleop.tools.evaluate import HANDS_DATA, data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
@@ -19,10 +19,8 @@ def test_rostest(test_file, tmp_path):
     env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log'))
     args = []
     with open(test_file) as f:
-        if 'name="leapjs_data"' in f.read():      # it plays the shared recordings
-            if not os.path.isdir(DEFAULT_DATA):
-                pytest.skip('shared/data/leapjs absent')
-            args.append('leapjs_data:=%s' % DEFAULT_DATA)
+        if 'name="leapjs_data"' in f.read():      # it plays the shared recordings (and
+            args.append('leapjs_data:=%s' % data_dir())   # fails when they are missing)
     if 'name="hands_data"' in open(test_file).read():   # real hand clips: fails if absent
         args.append('hands_data:=%s' % HANDS_DATA)
     proc = subprocess.run(

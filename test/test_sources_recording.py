@@ -16,9 +16,10 @@ from leap_teleop.hand_model import render_hand
 from leap_teleop.sources import SourceError, leapjs, make_source
 from leap_teleop.tools import record_frames
 
-DATA = os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', 'shared', 'data', 'leapjs')
-DATA = os.path.normpath(DATA)
-need_data = pytest.mark.skipif(not os.path.isdir(DATA), reason='shared/data/leapjs absent')
+from leap_teleop.tools.evaluate import data_dir
+
+DATA = data_dir()
+need_data = pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
 
 
 def test_lz_decoder_matches_the_reference_package():
@@ -370,7 +371,7 @@ def _same_frames(a, b):
 
 
 @pytest.mark.parametrize('fast', [True, False])
-def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast):
+def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast, leapjs_data):
     """load_frames (pysimdjson when installed, else the orjson/json tree) decodes exactly
     what load + frame_from_dict does, bad frames included."""
     if not fast:
@@ -383,10 +384,9 @@ def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast
     frames[6] = dict(frames[6], hands=[{'type': 'right', 'palmPosition': 'oops'}], pointables=5)
     frames[8] = dict(frames[8], pointables=[dict(p, tipPosition=[1, 2]) for p in frames[8]['pointables']])
     frames[9] = dict(frames[9], hands=[dict(h, palmNormal='abc') for h in frames[9]['hands']])
-    paths = [_write(tmp_path, 'm.json', frames), _write(tmp_path, 'm.json.lz', frames)]
-    if os.path.isdir(DATA):
-        paths += [os.path.join(DATA, 'decoded', 'flapping.json.gz'),
-                  os.path.join(DATA, 'finger-tap-54fps.json.lz')]
+    paths = [_write(tmp_path, 'm.json', frames), _write(tmp_path, 'm.json.lz', frames),
+             os.path.join(leapjs_data, 'decoded', 'flapping.json.gz'),
+             os.path.join(leapjs_data, 'finger-tap-54fps.json.lz')]
     for path in paths:
         meta, got, errors = leapjs.load_frames(path)
         meta2, dicts = leapjs.load(path)

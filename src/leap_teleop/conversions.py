@@ -1,8 +1,11 @@
 """HandState -> ROS messages. One function per message type, both hands alike."""
+import math
+
 import rospy
 from geometry_msgs.msg import Point, Vector3
 
-from leap_teleop.msg import GestureEvent, Hand, leapcobotleft, leapcobotright
+from leap_teleop.frame import FINGER_NAMES
+from leap_teleop.msg import GestureEvent, Hand, leapcobotleft, leapcobotright, leapros
 
 LEAP_FRAME = 'leap_hands'
 LEAPCOBOT_TYPES = {'right': leapcobotright, 'left': leapcobotleft}
@@ -58,6 +61,39 @@ def from_leapcobot(msg):
     p = out['palmpos']
     out['palmpos'] = (p.x, p.y, p.z)
     return out
+
+
+# leapros bone field -> frame.Finger joint: a Leap bone's position is its base (the joint
+# nearer the wrist); the metacarpal's base (the carpal joint) is in no source's frames.
+_LEAPROS_BONES = (('proximal', 'mcp'), ('intermediate', 'pip'), ('distal', 'dip'))
+
+
+def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
+    """The classic leap_motion/leapros message for one side, in that driver's units: Leap
+    axes, millimetres, ypr in degrees as (yaw, pitch, roll), yaw and pitch of the hand's
+    direction, roll of its palm normal. Finger tips come from the state; bone bases
+    (proximal = knuckle, intermediate, distal) from `hand` (the frame's frame.Hand) where
+    its source tracks joints; a metacarpal base and anything untracked stays 0. A frame
+    without the hand gives a message with only the header set."""
+    msg = _header(leapros(), state, frame_id)
+    if not state.present:
+        return msg
+    d, n = state.direction, state.palm_normal
+    msg.direction = Vector3(*d)
+    msg.normal = Vector3(*n)
+    msg.palmpos = Point(*state.palm_position)
+    # The Leap SDK's Vector.yaw / pitch / roll.
+    msg.ypr = Vector3(math.degrees(math.atan2(d[0], -d[2])), math.degrees(math.atan2(d[1], -d[2])),
+                      math.degrees(math.atan2(n[0], -n[1])))
+    fingers = hand.fingers if hand is not None else ()
+    for i, name in enumerate(FINGER_NAMES):
+        setattr(msg, name + '_tip', Point(*state.finger_tips[i]))
+        if i < len(fingers):
+            for bone, joint in _LEAPROS_BONES:
+                xyz = getattr(fingers[i], joint)
+                if xyz is not None and all(math.isfinite(float(v)) for v in xyz):
+                    setattr(msg, '%s_%s' % (name, bone), Point(*(float(v) for v in xyz)))
+    return msg
 
 
 def to_hand(state, frame_id=LEAP_FRAME):

@@ -1,4 +1,6 @@
-"""Run every benchmark module, print a table, write bench_results.json.
+"""Run every benchmark module, print a table, write bench_results.json afresh: this run's
+figures only, with the data each came from (`_sources`) and the modules that failed
+(`_failed`).
 
 usage: python -m leap_teleop.bench [--only AREA ...] [--out bench_results.json]
 """
@@ -20,6 +22,36 @@ def discover():
                   if m.name.startswith('bench_'))
 
 
+def collect(modules, load=None):
+    """Run each module's run(); returns (figures, sources, failed). A module that raises or
+    returns a non-finite figure is recorded as failed and contributes no figure; a figure
+    without a stated source gets its module's first docstring line."""
+    load = load or (lambda name: importlib.import_module('leap_teleop.bench.' + name))
+    figures, sources, failed = {}, {}, {}
+    for name in modules:
+        print('[bench] %s ...' % name, flush=True)
+        t0 = time.monotonic()
+        try:
+            module = load(name)
+            got = dict(module.run())
+        except Exception as e:
+            traceback.print_exc()
+            failed[name] = '%s: %s' % (type(e).__name__, e)
+            continue
+        stated = got.pop('_sources', {})
+        bad = {k: v for k, v in got.items()
+               if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)}
+        if bad:
+            failed[name] = 'non-finite or non-number figures: %r' % (bad,)
+            continue
+        doc = (module.__doc__ or name).strip().splitlines()[0]
+        for key, value in got.items():
+            figures[key] = value
+            sources[key] = '%s: %s' % (name, stated.get(key, doc))
+        print('[bench] %s done in %.1f s' % (name, time.monotonic() - t0), flush=True)
+    return figures, sources, failed
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('--only', nargs='*', default=None,
@@ -29,37 +61,26 @@ def main(argv=None):
     modules = discover()
     if args.only:
         modules = [m for m in modules if m[len('bench_'):] in args.only]
-    results = {}
-    if os.path.exists(args.out):
-        try:
-            with open(args.out) as f:
-                results = json.load(f)     # keep the other areas' figures on --only
-        except (OSError, ValueError):
-            results = {}
-    failed = []
-    for name in modules:
-        print('[bench] %s ...' % name, flush=True)
-        t0 = time.monotonic()
-        try:
-            figures = importlib.import_module('leap_teleop.bench.' + name).run()
-        except Exception:
-            traceback.print_exc()
-            failed.append(name)
-            continue
-        for key, value in figures.items():
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise SystemExit('benchmark %s returned a non-number for %s: %r' % (name, key, value))
-        results.update(figures)
-        print('[bench] %s done in %.1f s' % (name, time.monotonic() - t0), flush=True)
-    width = max([len(k) for k in results] or [10])
+    started = time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())
+    figures, sources, failed = collect(modules)
+    width = max([len(k) for k in figures] or [10])
     print('\n%-*s  %s' % (width, 'key', 'value'))
-    for key in sorted(results):
-        print('%-*s  %.6g' % (width, key, results[key]))
-    with open(args.out, 'w') as f:
+    for key in sorted(figures):
+        print('%-*s  %.6g' % (width, key, figures[key]))
+    # A fresh file per run: only this run's figures, what each came from, what failed.
+    results = dict(figures)
+    results['_run'] = {'started': started, 'modules': modules,
+                       'finished': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}
+    results['_sources'] = sources
+    results['_failed'] = failed
+    tmp = args.out + '.tmp'
+    with open(tmp, 'w') as f:
         json.dump(results, f, indent=1, sort_keys=True)
-    print('\nwrote %s (%d keys)' % (args.out, len(results)))
+    os.replace(tmp, args.out)
+    print('\nwrote %s (%d figures from this run)' % (args.out, len(figures)))
     if failed:
-        print('failed benchmarks: %s' % ', '.join(failed), file=sys.stderr)
+        print('failed benchmarks: %s' % '; '.join('%s (%s)' % kv for kv in failed.items()),
+              file=sys.stderr)
         return 1
     return 0
 

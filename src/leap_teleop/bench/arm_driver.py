@@ -1,9 +1,11 @@
 """Benchmark driver for the arm node's latency (run as its own process).
 
-Publishes joint_states and leapcobotright messages (arm, set the origin, then a palm
-that moves on every message) and times each message until the first arm command with a
-new target comes back. With --echo it times a bare rospy echo node instead (same two
-hops, no teleop logic). Writes the round-trip times (s) as JSON.
+Publishes joint_states and leapcobotright messages and times each message until its
+reply comes back, in alternating rounds: the arm node (arm, set the origin, then a palm
+that moves on every message; the reply is the first arm command with a new target), then
+a bare rospy echo node (same two hops, no teleop logic). Each message waits for its own
+reply (up to --reply-timeout s: slow replies stay in the tails; none later counts as
+lost). Writes the per-round round-trip times (s) as JSON.
 """
 import argparse
 import json
@@ -21,32 +23,31 @@ from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--count', type=int, default=500)
+    ap.add_argument('--rounds', type=int, default=10)
+    ap.add_argument('--count', type=int, default=150, help='messages per round and node')
     ap.add_argument('--rate', type=float, default=50.0)
-    ap.add_argument('--echo', action='store_true')
+    ap.add_argument('--reply-timeout', type=float, default=5.0)
     ap.add_argument('--out', required=True)
     args = ap.parse_args(rospy.myargv()[1:])
     rospy.init_node('arm_bench_driver')
-    hand_pub = rospy.Publisher('leapmotion/data_right', leapcobotright, queue_size=10,
-                               tcp_nodelay=True)
+    pubs = {'arm': rospy.Publisher('leapmotion/data_right', leapcobotright, queue_size=10,
+                                   tcp_nodelay=True),
+            'bare': rospy.Publisher('bench/echo_in', leapcobotright, queue_size=10,
+                                    tcp_nodelay=True)}
     joints_pub = rospy.Publisher('ur10_1/joint_states', JointState, queue_size=10)
-    got = threading.Event()
+    got = {'arm': threading.Event(), 'bare': threading.Event()}
     last_q = [None]
 
     def on_command(msg):
         q = tuple(msg.points[0].positions) if msg.points else None
         if q != last_q[0]:
             last_q[0] = q
-            got.set()
+            got['arm'].set()
 
-    def on_echo(_msg):
-        got.set()
-
-    if args.echo:
-        rospy.Subscriber('bench/echo', leapcobotright, on_echo, tcp_nodelay=True)
-    else:
-        rospy.Subscriber('ur10_1/arm_controller/command', JointTrajectory, on_command,
-                         tcp_nodelay=True)
+    rospy.Subscriber('bench/echo', leapcobotright, lambda _m: got['bare'].set(),
+                     tcp_nodelay=True)
+    rospy.Subscriber('ur10_1/arm_controller/command', JointTrajectory, on_command,
+                     tcp_nodelay=True)
     js = JointState(name=['ur10_1_' + n for n in JOINT_NAMES], position=list(HOME_Q))
 
     def publish_joints():
@@ -64,28 +65,36 @@ def main():
         msg.header.stamp = rospy.Time.now()
         return msg
 
-    # Wait for the graph, then arm and set the origin.
     deadline = time.time() + 20
-    while hand_pub.get_num_connections() == 0 and time.time() < deadline:
+    while any(p.get_num_connections() == 0 for p in pubs.values()) and time.time() < deadline:
         time.sleep(0.05)
     time.sleep(1.0)
-    for _ in range(20):
-        hand_pub.publish(hand(0, thumb_up=True))
-        time.sleep(0.01)
-    for _ in range(20):
-        hand_pub.publish(hand(0, set_origin_frame_detected=True))
-        time.sleep(0.01)
-    times = []
-    for i in range(1, args.count + 1):
-        got.clear()
-        msg = hand(i)
-        t0 = time.perf_counter()
-        hand_pub.publish(msg)
-        if got.wait(0.5):
-            times.append(time.perf_counter() - t0)
-        time.sleep(1.0 / args.rate)
+    rounds = {'arm': [], 'bare': []}
+    lost = {'arm': 0, 'bare': 0}
+    i = 0
+    for _ in range(args.rounds):
+        for node in ('arm', 'bare'):
+            if node == 'arm':       # (re-)arm: the watchdog disarmed it during the bare round
+                for flags in ({'thumb_up': True}, {'set_origin_frame_detected': True}):
+                    for _ in range(20):
+                        pubs['arm'].publish(hand(i, **flags))
+                        time.sleep(0.01)
+                time.sleep(0.2)
+            times = []
+            for _ in range(args.count):
+                i += 1
+                got[node].clear()
+                msg = hand(i)
+                t0 = time.perf_counter()
+                pubs[node].publish(msg)
+                if got[node].wait(args.reply_timeout):
+                    times.append(time.perf_counter() - t0)
+                else:
+                    lost[node] += 1
+                time.sleep(1.0 / args.rate)
+            rounds[node].append(times)
     with open(args.out, 'w') as f:
-        json.dump({'round_trip_s': times, 'sent': args.count}, f)
+        json.dump({'rounds': rounds, 'lost': lost, 'count': args.count}, f)
 
 
 if __name__ == '__main__':

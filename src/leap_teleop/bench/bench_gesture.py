@@ -1,7 +1,9 @@
 """Gesture recognition and recording decoding speed.
 
 gesture.us_per_hand_frame: GestureRecognizer.update per hand frame (stream mode, circles
-on), over real recorded hands when the shared recordings exist, else synthetic poses.
+on), over the real recorded hands of the shared recordings ($LEAPJS_DATA or
+../shared/data/leapjs; without them this benchmark fails rather than measure something
+else under the same name).
 recording.frames_per_s: read + decode + convert to Frames (leapjs.load_frames, what
 RecordingSource runs), all shared .json.gz takes.
 recording.lz_frames_per_s: the same from the original .json.lz files.
@@ -17,20 +19,22 @@ PASSES = 5
 _clock = time.process_time
 
 from ..gestures import GestureRecognizer
-from ..hand_model import POSES, render_hand
 from ..sources import leapjs
-from ..tools.evaluate import DEFAULT_DATA
+from ..tools.evaluate import data_dir
 
 
-def _hands():
-    files = sorted(glob.glob(os.path.join(DEFAULT_DATA, 'decoded', '*.json.gz')))
+def _files(pattern):
+    files = sorted(glob.glob(os.path.join(data_dir(), pattern)))
+    if not files:
+        raise FileNotFoundError('no %s in %s (set $LEAPJS_DATA)' % (pattern, data_dir()))
+    return files
+
+
+def _hands(files):
     hands = []
     for path in files:
         for f in leapjs.load_frames(path)[1]:
             hands.extend((h, f.timestamp) for h in f.hands)
-    if not hands:
-        hands = [(render_hand('right', pose, (0.0, 200.0 + i % 50, 0.0)), i / 120.0)
-                 for i, pose in enumerate(list(POSES) * 200)]
     return hands
 
 
@@ -51,7 +55,9 @@ def _decode_rate(files):
 
 def run():
     out = {}
-    hands = _hands()
+    gz = _files(os.path.join('decoded', '*.json.gz'))
+    lz = _files('*.json.lz')
+    hands = _hands(gz)
     best = None
     for _ in range(PASSES):
         rec = {'right': GestureRecognizer(), 'left': GestureRecognizer()}
@@ -61,22 +67,17 @@ def run():
         us = (_clock() - t0) * 1e6 / len(hands)
         best = us if best is None else min(best, us)
     out['gesture.us_per_hand_frame'] = best
+    n_hands = len(hands)
     # Let go of the hands first: thousands of live Hands would only slow the garbage
     # collector during the decoding measured next.
     del hands, rec
-    gz = sorted(glob.glob(os.path.join(DEFAULT_DATA, 'decoded', '*.json.gz')))
-    rate = _decode_rate(gz)
-    if rate is None:    # no shared data: a recording of synthetic frames written here
-        import tempfile
-        from ..frame import Frame
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, 'synthetic.json.gz')
-            frames = [leapjs.frame_to_dict(Frame(i, i / 120.0, [render_hand('right', 'open', (0, 200, 0))]))
-                      for i in range(2000)]
-            leapjs.save(path, frames)
-            rate = _decode_rate([path])
-    out['recording.frames_per_s'] = rate
-    lz = sorted(glob.glob(os.path.join(DEFAULT_DATA, '*.json.lz')))
-    if lz:
-        out['recording.lz_frames_per_s'] = _decode_rate(lz)
+    out['recording.frames_per_s'] = _decode_rate(gz)
+    out['recording.lz_frames_per_s'] = _decode_rate(lz)
+    out['_sources'] = {
+        'gesture.us_per_hand_frame': '%d hand frames of %d takes in %s/decoded, best of %d'
+                                     % (n_hands, len(gz), data_dir(), PASSES),
+        'recording.frames_per_s': '%d .json.gz takes in %s/decoded, best of %d'
+                                  % (len(gz), data_dir(), PASSES),
+        'recording.lz_frames_per_s': '%d .json.lz takes in %s, best of %d'
+                                     % (len(lz), data_dir(), PASSES)}
     return out

@@ -1,4 +1,5 @@
-"""Bare rospy echo: republish each leapcobotright at once (the latency baseline)."""
+"""Bare rospy echo: republish each leapcobotright from bench/echo_in on bench/echo at once
+(the latency baseline; its own input topic, so the arm node next to it sees none of it)."""
 import rospy
 
 from leap_teleop.msg import leapcobotright
@@ -7,7 +8,7 @@ from leap_teleop.msg import leapcobotright
 def main():
     rospy.init_node('bench_echo')
     pub = rospy.Publisher('bench/echo', leapcobotright, queue_size=10, tcp_nodelay=True)
-    rospy.Subscriber('leapmotion/data_right', leapcobotright, pub.publish, tcp_nodelay=True)
+    rospy.Subscriber('bench/echo_in', leapcobotright, pub.publish, tcp_nodelay=True)
     rospy.spin()
 
 

@@ -70,15 +70,17 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / ticks
 
 
-def probe(env, topic, msg_type, duration, warmup=1.0):
+def probe(env, topic, msg_type, duration, warmup=1.0, cpu_pid=0):
     """Run leap_teleop.bench.probe in its own process; returns its record dict:
-    per message receipt time, header stamp, and leap_frame_id where the type has one."""
+    per message receipt time, header stamp, and leap_frame_id where the type has one;
+    with cpu_pid, 'cpu_s': that process's CPU seconds over the same recording window."""
     with tempfile.NamedTemporaryFile(suffix='.json', delete=False) as f:
         out = f.name
     try:
         subprocess.run([sys.executable, '-m', 'leap_teleop.bench.probe', '--topic', topic,
                         '--type', msg_type, '--duration', str(duration), '--warmup', str(warmup),
-                        '--out', out], env=env, check=True, timeout=duration + warmup + 60)
+                        '--cpu-pid', str(cpu_pid), '--out', out], env=env, check=True,
+                       timeout=duration + warmup + 60)
         with open(out) as f:
             return json.load(f)
     finally:

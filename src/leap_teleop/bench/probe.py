@@ -10,6 +10,8 @@ import time
 import roslib.message
 import rospy
 
+from leap_teleop.bench.harness import cpu_seconds
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -19,6 +21,8 @@ def main(argv=None):
     ap.add_argument('--warmup', type=float, default=1.0,
                     help='s after the first message before recording starts')
     ap.add_argument('--timeout', type=float, default=30.0, help='s to wait for the first message')
+    ap.add_argument('--cpu-pid', type=int, default=0,
+                    help='also record this process\'s CPU seconds over the recording window')
     ap.add_argument('--out', required=True)
     args = ap.parse_args(rospy.myargv()[1:] if argv is None else argv)
     msg_class = roslib.message.get_message_class(args.type)
@@ -41,13 +45,19 @@ def main(argv=None):
         time.sleep(0.01)
     if state['record_from'] is None:
         raise SystemExit('no message on %s within %.0f s' % (args.topic, args.timeout))
+    cpu = [None, None]
     while time.time() < state['record_from'] + args.duration:
+        if args.cpu_pid and cpu[0] is None and time.time() >= state['record_from']:
+            cpu[0] = cpu_seconds(args.cpu_pid)
         time.sleep(0.01)
+    if args.cpu_pid:
+        cpu[1] = cpu_seconds(args.cpu_pid)
     recorded = list(rows)
     with open(args.out, 'w') as f:
         json.dump({'receipt': [r[0] for r in recorded], 'stamp': [r[1] for r in recorded],
                    'frame_id': [r[2] for r in recorded],
-                   'window': [state['record_from'], state['record_from'] + args.duration]}, f)
+                   'window': [state['record_from'], state['record_from'] + args.duration],
+                   'cpu_s': (cpu[1] - cpu[0]) if args.cpu_pid else None}, f)
     rospy.signal_shutdown('done')
 
 

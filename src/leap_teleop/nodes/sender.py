@@ -4,13 +4,14 @@ Publishes once per source frame from the source's thread (event-driven; no polli
 """
 import gc
 
+import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from leap_teleop import conversions
 from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
-from leap_teleop.msg import GestureEvent, Hand
+from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
 from leap_teleop.sources import SOURCES, SourceError, make_source
 from leap_teleop.sources.camera_params import CAMERA_PARAMS, CAMERA_SOURCES, camera_source_kwargs
@@ -47,9 +48,18 @@ PARAMS = {
     # Bounded: a slow subscriber holds at most this many frames (~2 s at 120 Hz) per topic.
     'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)',
                         ge=1, le=1000),
-    'wait_for_subscribers': Param(False, 'start the source only once every leapcobot topic '
+    'leapros_topic': Param('', 'topic for the classic leap_motion/leapros message (as that '
+                               'driver: leapmotion/data); empty = not published'),
+    'leapros_side': Param('right', 'hand the leapros message carries (one of ~sides)',
+                          choices=('right', 'left')),
+    'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
+                              'graph should)'),
+    'wait_for_subscribers': Param(False, 'start the source only once every ~wait_topics topic '
                                          'has a subscriber (so a session is not lost while '
                                          'its consumers start)'),
+    'wait_topics': Param([], 'topics the consumers read, to wait for; any topic of the graph '
+                             '(e.g. the drone\'s ardrone/takeoff); empty = every published '
+                             'leapcobot topic', kind='list', item='str'),
     'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
                                        '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
                                        'the raw rotation since the origin'),
@@ -57,6 +67,12 @@ PARAMS = {
 PARAMS.update(CAMERA_PARAMS)
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
+
+
+def check_leapros(p):
+    """ValueError when leapros would carry a hand the sender does not publish."""
+    if p['leapros_topic'] and p['leapros_side'] not in p['sides']:
+        raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
 
 
 def camera_model(p, timeout=10.0):
@@ -113,14 +129,32 @@ class Sender:
         self.period = float(p['freq'])
         self._last_sent = {}
         self.published = 0
+        self.leapros_side = p['leapros_side']
+        self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
+                        if p['leapros_topic'] else None)
         interface.add_hand_listener(self.on_hand)
 
-    def wait_for_subscribers(self, log_every=5.0):
-        """Block until every leapcobot topic has a subscriber; False on shutdown."""
+    def wait_for_subscribers(self, topics=(), log_every=5.0):
+        """Block until every topic in `topics` (default: every leapcobot topic) has a
+        subscriber; False on shutdown. The sender's own topics count once connected, any
+        other topic once the master lists a subscriber."""
+        own = {pub.resolved_name: pub for pubs in self.pubs.values() for pub in pubs.values()}
+        if self.leapros is not None:
+            own[self.leapros.resolved_name] = self.leapros
+        names = [rospy.resolve_name(t) for t in topics] or [
+            pubs['leapcobot'].resolved_name for pubs in self.pubs.values()]
+        master = rosgraph.Master(rospy.get_name())
         last_log = rospy.get_time()
         while not rospy.is_shutdown():
-            waiting = [pubs['leapcobot'].resolved_name for pubs in self.pubs.values()
-                       if pubs['leapcobot'].get_num_connections() == 0]
+            others = [t for t in names if t not in own]
+            listened = set()
+            if others:
+                try:
+                    listened = {t for t, nodes in master.getSystemState()[1] if nodes}
+                except (rosgraph.MasterError, OSError):
+                    pass
+            waiting = [t for t in names if (own[t].get_num_connections() == 0 if t in own
+                                            else t not in listened)]
             if not waiting:
                 return True
             if rospy.get_time() - last_log >= log_every:
@@ -143,6 +177,9 @@ class Sender:
         for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
+        if self.leapros is not None and side == self.leapros_side:
+            self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
+                                                        self.p['frame_id']))
         self.published += 1
 
 
@@ -176,6 +213,7 @@ def camera_view(p):
 
 def main(argv=None):
     def build(p):
+        check_leapros(p)
         view = camera_view(p)
         return build_source(p, view.on_image if view is not None else None), view
     p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
@@ -185,7 +223,7 @@ def main(argv=None):
     sender = Sender(p, interface)
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
-    tf_broadcaster = publish_leap_tf(p)  # noqa: F841 (kept alive for the latched topic)
+    tf_broadcaster = publish_leap_tf(p) if p['publish_tf'] else None  # noqa: F841 (kept alive for the latched topic)
     rospy.loginfo('sender: publishing %s hands from the %s source on %s',
                   '/'.join(sender.sides), p['source'],
                   ', '.join(pubs['leapcobot'].resolved_name for pubs in sender.pubs.values()))
@@ -194,7 +232,7 @@ def main(argv=None):
     # so its passes stay short on the per-frame path.
     gc.collect()
     gc.freeze()
-    if p['wait_for_subscribers'] and not sender.wait_for_subscribers():
+    if p['wait_for_subscribers'] and not sender.wait_for_subscribers(p['wait_topics']):
         return
     interface.start()
     while not rospy.is_shutdown() and not interface.finished.wait(0.2):

@@ -107,7 +107,27 @@ class ArmNode:
             rospy.loginfo('ur10_arm: waiting for %s', rospy.resolve_name('joint_states'))
         rospy.Subscriber(self.hand_topic, self.hand_type, self.on_hand, queue_size=50,
                          tcp_nodelay=True)
+        # Its own timer thread: the master lookup blocks, the control loop must not.
+        self._type_check = rospy.Timer(rospy.Duration(5.0), self.check_hand_type)
         return True
+
+    def check_hand_type(self, _event=None):
+        """Say so when the hand topic carries another type (e.g. the other hand's
+        leapcobot, or leapros): rospy drops such a connection with no word to this node,
+        and the arm would wait for a thumbs-up that never arrives."""
+        topic, want = rospy.resolve_name(self.hand_topic), self.hand_type._type
+        try:
+            published = dict(rospy.get_published_topics())
+        except Exception as e:      # the master gone or busy: try again next period
+            self.log.warn('type_check', 'ur10_arm: cannot ask the master for %s: %s', topic, e)
+            return None
+        got = published.get(topic)
+        if got is not None and got != want:
+            self.log.warn('type_check', 'ur10_arm: %s carries %s, but this arm (hand %s) reads '
+                          '%s: no hand input arrives; publish the %s hand there or set '
+                          '~hand_topic / the launch file\'s topic', topic, got, self.p['hand'],
+                          want, self.p['hand'])
+        return got
 
     def loop(self):
         period = 1.0 / float(self.p['rate'])

@@ -73,6 +73,14 @@ DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.normpath(
 # Real hand photos and clips for the camera sources ($HANDS_DATA overrides).
 HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(os.path.dirname(DEFAULT_DATA), 'hands')
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
+
+
+def data_dir():
+    """The folder of the shared LeapJS recordings: $LEAPJS_DATA when set, else the
+    repository's sibling shared/data/leapjs."""
+    return os.environ.get('LEAPJS_DATA') or DEFAULT_DATA
+
+
 ALL = range(0, 10 ** 6)
 
 
@@ -402,7 +410,7 @@ def print_table(results):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--data', default=os.environ.get('LEAPJS_DATA', DEFAULT_DATA),
+    ap.add_argument('--data', default=data_dir(),
                     help='folder of the LeapJS recordings (default %(default)s)')
     ap.add_argument('--out', default='eval_results.json')
     ap.add_argument('--people', type=int, default=200,

@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""rostest node: a classic consumer, reading leap_motion/leapros (the ros-drivers type
+name, built here from the message text) on leapmotion/data, gets well-formed messages
+from the sender: the classic units (mm, degrees), unit vectors, angles that agree with
+them, finger tips and knuckles, header-only messages while the hand is away, stamps in
+order."""
+import math
+import sys
+import unittest
+
+import genpy.dynamic
+import rospy
+import rostest
+
+from leap_teleop.msg import Hand, leapros
+
+CLASSIC = genpy.dynamic.generate_dynamic('leap_motion/leapros', leapros._full_text)[
+    'leap_motion/leapros']
+
+
+def norm(v):
+    return math.sqrt(v.x ** 2 + v.y ** 2 + v.z ** 2)
+
+
+class ClassicConsumer(unittest.TestCase):
+    def test_leapros_is_well_formed(self):
+        self.assertEqual(CLASSIC._type, 'leap_motion/leapros')
+        self.assertEqual(CLASSIC._md5sum, 'e37447f7532c765d6c587f418fd5dd03')
+        got, hands = [], []
+        rospy.Subscriber('leapmotion/data', CLASSIC, got.append, queue_size=5000)
+        rospy.Subscriber('leapmotion/hand_right', Hand, hands.append, queue_size=5000)
+        deadline = rospy.get_time() + rospy.get_param('~duration', 5.0)
+        while rospy.get_time() < deadline and not rospy.is_shutdown():
+            rospy.sleep(0.1)
+        self.assertGreater(len(got), 300, 'leapros messages received')
+        # One leapros per right-hand frame: as many as Hand messages, within the in-flight.
+        self.assertLess(abs(len(got) - len(hands)), 10, (len(got), len(hands)))
+        present = [m for m in got if norm(m.direction) > 0]
+        self.assertGreater(len(present), 0.5 * len(got))
+        for m in present:
+            self.assertEqual(m.header.frame_id, 'leap_hands')
+            self.assertTrue(100.0 < m.palmpos.y < 400.0, 'palm height %.1f: not mm' % m.palmpos.y)
+            self.assertAlmostEqual(norm(m.direction), 1.0, delta=1e-3)
+            self.assertAlmostEqual(norm(m.normal), 1.0, delta=1e-3)
+            d, n = m.direction, m.normal
+            self.assertAlmostEqual(m.ypr.x, math.degrees(math.atan2(d.x, -d.z)), delta=1e-3)
+            self.assertAlmostEqual(m.ypr.y, math.degrees(math.atan2(d.y, -d.z)), delta=1e-3)
+            self.assertAlmostEqual(m.ypr.z, math.degrees(math.atan2(n.x, -n.y)), delta=1e-3)
+            for finger in ('thumb', 'index', 'middle', 'ring', 'pinky'):
+                tip = getattr(m, finger + '_tip')
+                self.assertLess(math.dist((tip.x, tip.y, tip.z),
+                                          (m.palmpos.x, m.palmpos.y, m.palmpos.z)), 150.0)
+                self.assertGreater(norm(getattr(m, finger + '_proximal')), 0.0)
+        # The script's absent stretch: messages with only the header.
+        absent = [m for m in got if norm(m.direction) == 0]
+        self.assertTrue(absent and all(m.palmpos.y == 0 and m.index_tip.y == 0 for m in absent))
+        stamps = [m.header.stamp for m in got]
+        self.assertEqual(stamps, sorted(stamps))
+
+
+if __name__ == '__main__':
+    rospy.init_node('leapros_check')
+    rostest.rosrun('leap_teleop', 'leapros_check', ClassicConsumer, sys.argv)

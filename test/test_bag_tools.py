@@ -1,0 +1,46 @@
+"""The README's bag tools as commands: `rosrun leap_teleop recording_to_bag` on a shared
+recording and `python -m leap_teleop.tools.to_bag --script` on a session write the
+sender's topics, one message per frame and side."""
+import os
+import subprocess
+import sys
+
+import rosbag
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def topics(path):
+    with rosbag.Bag(path) as b:
+        return {t: (i.msg_type, i.message_count) for t, i in b.get_type_and_topic_info().topics.items()}
+
+
+def run(cmd):
+    proc = subprocess.run(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout
+    return proc.stdout
+
+
+def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
+    out = str(tmp_path / 'grab.bag')
+    said = run(['rosrun', 'leap_teleop', 'recording_to_bag',
+                os.path.join(leapjs_data, 'grab.json.lz'), out])
+    frames = int(said.split(':')[-1].split()[0])
+    assert frames == 374, said                      # grab.json.lz: 374 frames
+    got = topics(out)
+    assert got['leapmotion/data_right'] == ('leap_teleop/leapcobotright', frames)
+    assert got['leapmotion/hand_right'] == ('leap_teleop/Hand', frames)
+    assert got['leapmotion/gestures'][1] > 0
+
+
+def test_to_bag_writes_a_scripted_session(tmp_path):
+    out = str(tmp_path / 'dual.bag')
+    said = run([sys.executable, '-m', 'leap_teleop.tools.to_bag', '--script',
+                'config/gestures/ur10_pick_place_dual.yaml', out])
+    frames = int(said.split(':')[-1].split()[0])
+    assert frames == 2424, said                     # 20.2 s at 120 Hz
+    got = topics(out)
+    for side in ('right', 'left'):
+        assert got['leapmotion/data_' + side] == ('leap_teleop/leapcobot' + side, frames)
+        assert got['leapmotion/hand_' + side] == ('leap_teleop/Hand', frames)

@@ -1,0 +1,66 @@
+"""make bench reports only what it measured: a fresh results file per run, failures and
+the data behind each figure recorded, frames counted as received, slow replies kept."""
+import json
+import math
+import types
+
+import numpy as np
+import pytest
+
+from leap_teleop.bench import __main__ as bench_main
+from leap_teleop.bench.bench_arm import _p99_ms
+from leap_teleop.bench.bench_sender import max_rate_no_drop, received_hz
+
+
+def fake(run, doc='fake benchmark'):
+    return types.SimpleNamespace(run=run, __doc__=doc)
+
+
+def test_a_failing_module_is_recorded_and_leaves_no_figures():
+    def boom():
+        raise RuntimeError('no data')
+    modules = {'bench_ok': fake(lambda: {'ok.x': 1.5, '_sources': {'ok.x': '3 takes'}}),
+               'bench_boom': fake(boom),
+               'bench_nan': fake(lambda: {'nan.x': math.nan, 'nan.y': 2.0})}
+    figures, sources, failed = bench_main.collect(list(modules), load=modules.get)
+    assert figures == {'ok.x': 1.5}
+    assert sources == {'ok.x': 'bench_ok: 3 takes'}
+    assert failed['bench_boom'] == 'RuntimeError: no data'
+    assert 'nan.x' in failed['bench_nan']
+
+
+def test_a_figure_without_a_stated_source_names_its_module():
+    modules = {'bench_a': fake(lambda: {'a.x': 3}, doc='Sender throughput.\nmore')}
+    _, sources, _ = bench_main.collect(['bench_a'], load=modules.get)
+    assert sources == {'a.x': 'bench_a: Sender throughput.'}
+
+
+def test_each_run_writes_a_fresh_file(tmp_path):
+    out = tmp_path / 'bench_results.json'
+    out.write_text(json.dumps({'stale.figure': 42.0}))
+    assert bench_main.main(['--only', 'no_such_area', '--out', str(out)]) == 0
+    results = json.loads(out.read_text())
+    assert 'stale.figure' not in results
+    assert results['_failed'] == {} and results['_run']['modules'] == []
+
+
+def record(frame_ids, window=(0.0, 5.0)):
+    return {'frame_id': list(frame_ids), 'window': list(window)}
+
+
+def test_max_rate_counts_frames_received():
+    full = {120: record(range(600)), 200: record(range(1000))}
+    assert received_hz(full[200]) == pytest.approx(200.0)
+    assert max_rate_no_drop(full) == 200
+    # A gap (lost frames) or a sender that only managed 150 Hz (no gap) do not count.
+    assert max_rate_no_drop({120: record(range(600)),
+                             200: record(list(range(500)) + list(range(510, 1000)))}) == 120
+    assert max_rate_no_drop({120: record(range(600)), 200: record(range(750))}) == 120
+    assert max_rate_no_drop({120: record(range(100))}) == 0
+
+
+def test_a_lost_reply_weighs_in_the_tail():
+    times = np.full(98, 0.001)
+    assert _p99_ms(times) == pytest.approx(1.0)
+    assert _p99_ms(np.append(times, [0.8, 0.9])) > 700.0   # slow replies stay in the tail
+    assert _p99_ms(times, lost=2) == math.inf

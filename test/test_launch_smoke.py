@@ -1,0 +1,186 @@
+"""Every top-level launch file, started as the README shows (defaults, then each documented
+arg value), reaches its purpose within a time limit: the cube placed, the drone landed
+after its flight, the sender publishing. A private master per case; test/launch_check.py
+watches the graph. RViz itself (rviz:=true) only parses here: test_rviz_screenshot.py
+draws it under Xvfb."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from leap_teleop.bench import harness
+from leap_teleop.tools.evaluate import data_dir
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+CHECK = os.path.join(HERE, 'launch_check.py')
+GESTURES = os.path.join(ROOT, 'config', 'gestures')
+
+
+def wait_for_run_id(env, timeout=30.0):
+    """Block until a roslaunch has set /run_id: a second roslaunch started before that
+    sets its own and the first one then quits (run_id mismatch)."""
+    import xmlrpc.client
+    master = xmlrpc.client.ServerProxy(env['ROS_MASTER_URI'])
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if master.hasParam('/launch_smoke', '/run_id')[2]:
+            return
+        time.sleep(0.1)
+    raise AssertionError('no roslaunch set /run_id in %.0f s' % timeout)
+
+
+def run_launches(tmp_path, launches, check_args, timeout, others=()):
+    """Start each `roslaunch leap_teleop ARGS...` (in order) under one private master and
+    run launch_check.py with `check_args` (and the commands `others`, after the launches);
+    returns its output, asserts it succeeded."""
+    procs, logs = [], []
+    with harness.ros_master() as env:
+        env = dict(env, ROS_LOG_DIR=str(tmp_path / 'log'))
+        try:
+            checker = subprocess.Popen([sys.executable, CHECK, '--timeout', str(timeout)]
+                                       + check_args, env=env, stdout=subprocess.PIPE,
+                                       stderr=subprocess.STDOUT, text=True)
+            for i, args in enumerate(launches):
+                if i:
+                    wait_for_run_id(env)
+                log = tmp_path / ('roslaunch_%d.log' % i)
+                logs.append(log)
+                procs.append(subprocess.Popen(['roslaunch', 'leap_teleop'] + args, env=env,
+                                              stdout=open(log, 'wb'), stderr=subprocess.STDOUT,
+                                              start_new_session=True))
+            for cmd in others:
+                procs.append(subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL,
+                                              stderr=subprocess.STDOUT, start_new_session=True))
+            out, _ = checker.communicate(timeout=timeout + 30)
+        finally:
+            for proc in reversed(procs):
+                if proc.poll() is None:
+                    os.killpg(proc.pid, signal.SIGINT)
+                    try:
+                        proc.wait(30)
+                    except subprocess.TimeoutExpired:
+                        os.killpg(proc.pid, signal.SIGKILL)
+                        proc.wait()
+    tails = '\n'.join('--- %s\n%s' % (log, log.read_text(errors='replace')[-3000:]) for log in logs)
+    assert checker.returncode == 0, '%s\n%s' % (out, tails)
+    print(out)
+    return out
+
+
+# (id, launches, checker args, time limit s): the README's commands and documented values.
+CASES = [
+    ('ur10_single', [['ur10_single.launch']],
+     ['--cube', 'ur10_1:cube_red'], 120),
+    # The left hand drives the arm: its leapcobotleft reaches the arm, which arms on the
+    # thumbs-up (the dual session's left hand; the cube is the other cell's). The check
+    # must not subscribe to the hand topic: the sender would take it for the arm.
+    ('ur10_single_hand_left', [['ur10_single.launch', 'hand:=left',
+                                'script:=' + os.path.join(GESTURES, 'ur10_pick_place_dual.yaml')]],
+     ['--armed', 'ur10_1'], 90),
+    ('ur10_dual', [['ur10_dual.launch']],
+     ['--cube', 'ur10_1:cube_red', '--cube', 'ur10_2:cube_yellow',
+      '--cell', 'ur10_dual_cell.yaml'], 120),
+    ('ardrone', [['ardrone.launch']], ['--drone'], 120),
+    ('ardrone_dual', [['ardrone_dual.launch']],
+     ['--drone', '--navdata', '/drone1/ardrone/navdata', '--navdata', '/drone2/ardrone/navdata'],
+     120),
+    # Next to a real driver: launch_check stands in for it (navdata, takeoff, land).
+    ('ardrone_sim_false', [['ardrone.launch', 'sim:=false']],
+     ['--driver', '--navdata', '/ardrone/navdata', '--topic', '/ardrone/takeoff:std_msgs/Empty',
+      '--topic', '/ardrone/land:std_msgs/Empty'], 90),
+    # Real robots: ur10_arm.launch per arm next to a robot (here the simulated one) and a
+    # sender, each its own launch; the sim's speed, not the real-robot 0.05 rad/s default.
+    ('ur10_arm', [['ur10_sim.launch'], ['ur10_arm.launch', 'max_joint_speed:=1.0'],
+                  ['sender.launch', 'script:=' + os.path.join(GESTURES, 'ur10_pick_place_single.yaml'),
+                   'sides:=[right]', 'wait_for_subscribers:=true']],
+     ['--cube', 'ur10_1:cube_red'], 120),
+]
+
+
+@pytest.mark.rostest
+@pytest.mark.parametrize('launches, check_args, timeout', [c[1:] for c in CASES],
+                         ids=[c[0] for c in CASES])
+def test_launch_reaches_its_purpose(launches, check_args, timeout, tmp_path):
+    run_launches(tmp_path, launches, check_args, timeout)
+
+
+@pytest.mark.rostest
+def test_an_arm_fed_the_other_hands_type_says_so(tmp_path):
+    # hand:=left pointed at a topic that carries leapcobotright (an original one-arm bag):
+    # rospy drops the connection silently; the arm node names both types.
+    run_launches(tmp_path, [['ur10_single.launch', 'sender:=false', 'hand:=left',
+                             'topic:=/leapmotion/data']],
+                 ['--rosout', 'carries leap_teleop/leapcobotright, but this arm (hand left) '
+                  'reads leap_teleop/leapcobotleft'], 60,
+                 others=[['rostopic', 'pub', '-r', '10', '/leapmotion/data',
+                          'leap_teleop/leapcobotright', '{}']])
+
+
+@pytest.mark.rostest
+def test_sender_launch_plays_a_recording(tmp_path):
+    recording = os.path.join(data_dir(), 'grab.json.lz')
+    assert os.path.isfile(recording), recording
+    run_launches(tmp_path, [['sender.launch', 'source:=recording', 'recording:=' + recording]],
+                 ['--topic', '/leapmotion/hand_right:leap_teleop/Hand',
+                  '--topic', '/leapmotion/data_right:leap_teleop/leapcobotright',
+                  '--count', '240'], 60)
+
+
+@pytest.mark.rostest
+def test_record_launch_records_a_running_sender(tmp_path):
+    bag = tmp_path / 'session.bag'
+    # record.launch runs until Ctrl-C: run_launches stops it, which closes the bag.
+    run_launches(tmp_path, [['record.launch', 'output:=%s' % bag],
+                            ['sender.launch', 'leapros_topic:=leapmotion/data']],
+                 ['--topic', '/leapmotion/hand_right:leap_teleop/Hand', '--count', '300'], 60)
+    import rosbag
+    with rosbag.Bag(str(bag)) as b:
+        info = b.get_type_and_topic_info().topics
+    for topic, msg_type in (('/leapmotion/data_right', 'leap_teleop/leapcobotright'),
+                            ('/leapmotion/data', 'leap_teleop/leapros'),
+                            ('/leapmotion/gestures', 'leap_teleop/GestureEvent'),
+                            ('/tf_static', 'tf2_msgs/TFMessage')):
+        assert topic in info, sorted(info)
+        assert info[topic].msg_type == msg_type
+        assert info[topic].message_count > 0
+    assert info['/leapmotion/data_right'].message_count >= 300
+
+
+DOCUMENTED_VALUES = [
+    # (launch, args, nodes that must be in it): every arg value the README or the launch
+    # docs name, parsed by roslaunch itself.
+    ('ur10_dual.launch', ['rviz:=true'], {'/rviz', '/hand_markers', '/leap_sender'}),
+    ('ur10_single.launch', ['rviz:=true'], {'/rviz', '/hand_markers', '/leap_sender'}),
+    ('ardrone.launch', ['rviz:=true'], {'/rviz', '/hand_markers', '/ardrone_sim'}),
+    ('ur10_dual.launch', ['sender:=false'], {'/ur10_1/ur10_arm', '/ur10_2/ur10_arm'}),
+    ('ardrone.launch', ['sender:=false'], {'/drone_pilot', '/ardrone_sim'}),
+    ('ur10_single.launch', ['sender:=false', 'hand:=left'], {'/ur10_1/ur10_arm'}),
+    ('demo.launch', [], {'/leap_sender', '/drone/leap_sender', '/drone/ardrone_sim'}),
+    ('ur10_sim.launch', ['rviz:=true'], {'/rviz', '/ur10_sim'}),
+    ('ur10_dual_sim.launch', [], {'/ur10_sim', '/ur10_1/robot_state_publisher'}),
+    ('ardrone_sim.launch', [], {'/ardrone_sim'}),
+    ('replay.launch', ['bag:=/tmp/x.bag'], {'/gesture_player'}),
+    ('record.launch', [], {'/gesture_recorder'}),
+]
+
+
+@pytest.mark.parametrize('launch, args, nodes', DOCUMENTED_VALUES,
+                         ids=['%s %s' % (c[0], ' '.join(c[1])) for c in DOCUMENTED_VALUES])
+def test_documented_arg_values_parse(launch, args, nodes):
+    proc = subprocess.run(['roslaunch', '--nodes', 'leap_teleop', launch] + args,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout
+    assert nodes <= set(proc.stdout.split()), proc.stdout
+
+
+def test_every_launch_file_is_covered():
+    launches = {f for f in os.listdir(os.path.join(ROOT, 'launch')) if f.endswith('.launch')}
+    run = {args[0] for c in CASES for args in c[1]} | {'sender.launch', 'record.launch'}
+    parsed = {c[0] for c in DOCUMENTED_VALUES}
+    # replay.launch runs in test_replay_remap.py, demo.launch in test_demo.py.
+    assert launches <= run | parsed, launches - run - parsed
+    assert {'replay.launch', 'demo.launch'} <= parsed

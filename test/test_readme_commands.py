@@ -1,0 +1,122 @@
+"""Every command the README shows is exercised by a test: the commands are read out of the
+README (code blocks and inline code) and each must be listed here with the test that runs
+it, and that test must exist. A command added to the README without a test fails this."""
+import os
+import re
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+README = os.path.join(HERE, '..', 'README.md')
+PREFIX = re.compile(r'(?:\./env\.sh |sudo )?(?:roslaunch|rosrun|rostest|python3? -m|make|'
+                    r'catkin_make|catkin|catkin_lint|git clone|pip install|apt-get|source)(?=\s|$)')
+
+SMOKE = 'test_launch_smoke.py::test_launch_reaches_its_purpose'
+WORKSPACE = 'test_catkin_workspace.py::test_builds_tests_installs_and_runs_in_a_users_workspace'
+# README command (after `cd ... &&`, without comments) -> test file::function that runs it.
+COVERED = {
+    './env.sh python -m pytest test/test_arm_teleop.py': 'test_arm_teleop.py',
+    './env.sh roslaunch leap_teleop ardrone.launch': SMOKE,
+    './env.sh roslaunch leap_teleop ur10_dual.launch': SMOKE,
+    './env.sh rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
+    'rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
+    "./env.sh python -m leap_teleop.tools.classify_frames 'photos/*.jpg'":
+        'test_camera_source.py::test_classify_frames_reads_images_and_videos',
+    './env.sh roslaunch leap_teleop ur10_dual.launch source:=video video:=clip.mp4 '
+    'annotated_image_topic:=/camera/annotated': 'camera_video_ur10.test',
+    'rosrun leap_teleop NODE --help': 'test_scripts.py::test_rosrun_script_help',
+    'rosrun leap_teleop classify_frames': 'test_scripts.py::test_rosrun_script_help',
+    './env.sh rostest leap_teleop sender.test': 'test_rostests.py::test_rostest',
+    'catkin build': WORKSPACE,
+    'catkin_lint -W2 --strict': WORKSPACE,
+    'catkin_make': WORKSPACE,
+    'catkin_make install': WORKSPACE,
+    'catkin_make run_tests': WORKSPACE,
+    'git clone <this repository> leap_teleop': WORKSPACE,     # a copy of the tracked files
+    'source devel/setup.bash': WORKSPACE,
+    'make demo': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
+    'make eval': 'test_eval_gestures.py::test_main_writes_the_json',
+    'make bench': 'test_bench_harness.py::test_each_run_writes_a_fresh_file',
+    'python -m leap_teleop.tools.classify_frames':
+        'test_classify_frames.py::test_json_lines_on_stdin_stream_and_stateless',
+    'python -m leap_teleop.tools.make_sessions': 'test_arm_closed_loop.py',
+    # make demo runs rotated_task.run, which the module's main() calls.
+    'python -m leap_teleop.tools.rotated_task': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
+    'python -m leap_teleop.tools.param_table':
+        'test_param_table.py::test_readme_parameter_tables_match_the_declarations',
+    'python -m leap_teleop.tools.to_bag --script config/gestures/ur10_pick_place_dual.yaml '
+    '/tmp/dual.bag': 'test_bag_tools.py::test_to_bag_writes_a_scripted_session',
+    'rosrun leap_teleop recording_to_bag ../shared/data/leapjs/grab.json.lz /tmp/grab.bag':
+        'test_bag_tools.py::test_recording_to_bag_writes_the_take',
+    'roslaunch leap_teleop ardrone.launch sim:=false': SMOKE,
+    'roslaunch leap_teleop record.launch':
+        'test_launch_smoke.py::test_documented_arg_values_parse',
+    'roslaunch leap_teleop record.launch output:=/tmp/session.bag':
+        'test_launch_smoke.py::test_record_launch_records_a_running_sender',
+    'roslaunch leap_teleop replay.launch bag:=/tmp/session.bag '
+    'topics:="/leapmotion/data_right /leapmotion/data_left"':
+        'test_record_replay.py::test_recorded_drone_session_replays_into_the_pilot',
+    'roslaunch leap_teleop replay.launch bag:=one_arm.bag topics:=/leapmotion/data':
+        'test_replay_remap.py::test_original_bag_replays_into_the_single_arm',
+    'roslaunch leap_teleop replay.launch bag:=two_arm.bag topics:=/leapmotion/data_right '
+    'remap_from:=/leapmotion/data_right remap_to:=/leapmotion/data':
+        'test_replay_remap.py::test_original_bag_replays_into_the_single_arm',
+    'roslaunch leap_teleop sender.launch leapros_topic:=leapmotion/data': 'leapros.test',
+    'roslaunch leap_teleop sender.launch source:=recording recording:=PATH':
+        'test_launch_smoke.py::test_sender_launch_plays_a_recording',
+    'roslaunch leap_teleop ur10_dual.launch rviz:=true':
+        'test_launch_smoke.py::test_documented_arg_values_parse',
+    'roslaunch leap_teleop ur10_dual.launch sender:=false': 'ur10_teleop_dual.test',
+    'source env.sh': 'test_network_exposure.py',
+}
+# Run by CI itself (.ci/run: make test = make setup, then pytest test/), not by a test.
+BY_CI = {'make test', 'make setup',
+         'pip install -r leap_teleop/tools/requirements.txt',
+         "sudo apt-get install $(grep -vE '^\\s*(#|$)' leap_teleop/tools/debian-packages.txt)"}
+# Not run by any test, and why.
+NOT_RUN = {
+    'make soak': '20 wall minutes; the integrator runs it',
+    'python -m leap_teleop.bench --only arm_motion': 'a benchmark, part of make bench (the '
+        'integrator runs it); test_bench_harness.py checks the bench runner itself',
+    'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
+    'make clean': 'deletes the build the other tests use',
+    'rosrun leap_teleop record_frames my_take.json.gz --source leap': 'needs a Leap device; '
+        'record_frames with the scripted source is in test_sources_recording.py',
+    './env.sh roslaunch leap_teleop ur10_dual.launch source:=webcam': 'needs a webcam; the '
+        'video source through the same launch is camera_video_ur10.test',
+    './env.sh roslaunch leap_teleop ardrone.launch source:=webcam device:=/dev/video2 '
+    'mirror:=true': 'needs a webcam; the video source through ardrone.launch is '
+        'camera_video_drone.test',
+}
+
+
+def readme_commands():
+    text = open(README).read()
+    found = set()
+    for block in re.findall(r'```bash\n(.*?)```', text, re.S):
+        block = re.sub(r'\\\n\s*', '', block)          # continued lines
+        for line in block.splitlines():
+            line = line.split(' #')[0].strip()
+            line = re.sub(r'^cd [^&]+&& ', '', line)
+            if PREFIX.match(line):
+                found.add(line)
+    for inline in re.findall(r'`([^`\n]+)`', text):
+        if PREFIX.match(inline):
+            found.add(inline.strip())
+    return found
+
+
+def test_every_readme_command_has_a_test():
+    missing = sorted(readme_commands() - set(COVERED) - BY_CI - set(NOT_RUN))
+    assert not missing, 'README commands without a test (add one, list it in COVERED):\n' + \
+        '\n'.join(missing)
+
+
+def test_the_listed_tests_exist():
+    for command, where in COVERED.items():
+        path, _, func = where.partition('::')
+        text = open(os.path.join(HERE, path)).read()
+        assert not func or re.search(r'def %s\(' % re.escape(func), text), (command, where)
+
+
+def test_the_lists_hold_only_readme_commands():
+    stale = (set(COVERED) | BY_CI | set(NOT_RUN)) - readme_commands()
+    assert not stale, sorted(stale)
