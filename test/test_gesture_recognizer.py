@@ -173,7 +173,7 @@ def test_fit_circle_recovers_a_noisy_tilted_arc():
     assert fit_circle([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]]) is None     # a line
 
 
-def _fingertip_loop(plane, sense=1.0, radius=10.0, duration=0.3, rate=110.0, pose='open'):
+def _fingertip_loop(plane, sense=1.0, radius=12.0, duration=0.3, rate=110.0, pose='point'):
     """Events from a hand translated along a small circle (the fingertips trace it)."""
     rec = GestureRecognizer()
     events = []
@@ -192,9 +192,9 @@ def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(s
     # fingers (looking toward -z) is 'circle_ccw' (the SDK: cw when normal . finger > 0).
     events = _fingertip_loop('xy', sense)
     assert [e.gesture for e in events] == [expected]
-    assert events[0].value == pytest.approx(0.010, rel=0.2)
-    # it says where: which fingertip drew it and its centre (mm, Leap axes)
-    assert events[0].source in FINGER_NAMES
+    assert events[0].value == pytest.approx(0.012, rel=0.2)
+    # it says where: the pointing index drew it, about its centre (mm, Leap axes)
+    assert events[0].source == 'index'
     assert len(events[0].center) == 3 and all(math.isfinite(c) for c in events[0].center)
 
 
@@ -204,6 +204,13 @@ def test_fingertip_loop_at_swipe_speed_is_not_a_circle(duration, fires):
     # swipe velocity (1 m/s): that motion is a swipe, not a circle.
     events = _fingertip_loop('xy', 1.0, radius=25.0, duration=duration)
     assert [e.gesture for e in events] == (['circle_ccw'] if fires else [])
+
+
+@pytest.mark.parametrize('pose, radius', [('open', 12.0), ('two', 12.0), ('point', 6.0)])
+def test_fingertip_loops_of_a_whole_hand_or_a_few_mm_are_not_circles(pose, radius):
+    # An open hand moved round a small loop carries every fingertip with it (no one drew
+    # a circle), and a few-mm loop is what a tapping or flapping fingertip makes.
+    assert _fingertip_loop('xy', 1.0, radius=radius, pose=pose) == []
 
 
 def test_fingertip_loop_in_the_fingers_own_plane_is_not_a_circle():

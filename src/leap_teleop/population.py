@@ -276,23 +276,26 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
 
 
 # -- motions: what must and must not make a circle ----------------------------------------
-MOTIONS = ('swipe', 'tap', 'knob', 'translate', 'arc', 'circle')
+MOTIONS = ('swipe', 'tap', 'point_tap', 'knob', 'translate', 'arc', 'circle', 'finger_circle')
+CIRCLE_MOTIONS = ('circle', 'finger_circle')      # the motions that should fire a circle
 
 
 def motion_take(person, kind, rng, rate=60.0):
     """[(Hand, timestamp)] of `person` making a motion with an open hand (a pinch-grip
-    for the knob): 'swipe' (a fast stroke across and a slow return), 'tap' (the index
-    tapping down and up), 'knob' (turning the hand about its axis back and forth),
-    'translate' (straight moves between random points), 'arc' (along at most half a
-    circle), 'circle' (the palm once round a hand-sized circle: the one that should fire)."""
+    for the knob, pointing for the last two): 'swipe' (a fast stroke across and a slow
+    return), 'tap' (the index tapping down and up), 'point_tap' (the same while pointing),
+    'knob' (turning the hand about its axis back and forth), 'translate' (straight moves
+    between random points), 'arc' (along at most half a circle), 'circle' (the palm once
+    round a hand-sized circle), 'finger_circle' (the index tip once round a 12-35 mm
+    circle across the finger). Only the last two should fire."""
     u = rng.uniform
-    pose = 'ok' if kind == 'knob' else 'open'
+    pose = {'knob': 'ok', 'finger_circle': 'index', 'point_tap': 'index'}.get(kind, 'open')
     joints, flex = local_pose(person, pose, rng)
     rot = orientation(person, pose, rng)
     start = np.array([u(-60, 60), u(180, 260), u(-40, 40)])
     if kind == 'swipe':
         dur = u(0.25, 0.4) + u(0.5, 0.8)
-    elif kind == 'circle':
+    elif kind in ('circle', 'finger_circle'):
         dur = u(0.9, 1.5)
     else:
         dur = u(1.0, 2.0)
@@ -308,7 +311,7 @@ def motion_take(person, kind, rng, rate=60.0):
         length, t_out = u(150, 350), u(0.25, 0.4)
         s = np.where(t < t_out, t / t_out, 1.0 - (t - t_out) / (dur - t_out))
         path = start + np.outer(np.clip(s, 0, 1) * length, d)
-    elif kind == 'tap':
+    elif kind in ('tap', 'point_tap'):
         f = u(2.0, 4.0)
         tap = np.clip(np.sin(2 * np.pi * f * t), 0, None) * u(25, 45)
     elif kind == 'knob':
@@ -325,6 +328,16 @@ def motion_take(person, kind, rng, rate=60.0):
         sweep = u(0.5, 1.0) * math.pi if kind == 'arc' else u(1.1, 1.4) * 2 * math.pi
         a = np.linspace(0, sweep, n) * rng.choice([-1.0, 1.0])
         path = start + r * np.stack([np.cos(a) - 1, np.zeros(n), np.sin(a)], axis=1)
+    elif kind == 'finger_circle':
+        # the hand carries the index tip round a circle in the plane across the finger
+        axis = (joints[1][3] - joints[1][2]) @ rot.T
+        axis /= np.linalg.norm(axis)
+        e1 = np.cross(axis, [0.0, 1.0, 0.0] if abs(axis[1]) < 0.9 else [1.0, 0.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(axis, e1)
+        r = u(12, 35)
+        a = np.linspace(0, u(1.1, 1.4) * 2 * math.pi, n) * rng.choice([-1.0, 1.0])
+        path = start + r * (np.outer(np.cos(a) - 1, e1) + np.outer(np.sin(a), e2))
     s = person.palm_width
     d_axis = rot[:, 2]
     out = []

@@ -3,6 +3,7 @@ gate, a least-squares circle fit that decides, and the per-hand detector (one ev
 circle, with its sense, radius, centre and what traced it)."""
 import math
 from bisect import bisect_left
+from collections import deque
 
 import numpy as np
 
@@ -26,8 +27,18 @@ _isfinite = math.isfinite
 # (Gesture.Swipe.MinVelocity, 1000 mm/s) within the stretch holding the loop was swiping:
 # the SDK gives a pointable's motion to one gesture, and the loop a fast stroke closes on
 # its way back is no circle. (Palm circles are ours, not the SDK's: no limit.)
+# Fingertip circles: only the index, the finger people point and draw with, at least
+# 10 mm, drawn within 1.2 s. Thumb, pinky and ring tips loop by themselves while hands
+# clap, flap, tap or turn a knob (4-20 mm loops; the SDK called some of them circles).
 CIRCLE_TRACKS = (('palm', 2.0, 25.0, 300.0, (0.5, 0.8, 1.1, 1.6), math.inf),
-                 ('finger', 1.0, 4.0, 60.0, (0.2, 0.3, 0.4, 0.55), 1000.0))
+                 ('finger', 1.0, 10.0, 60.0, (0.3, 0.5, 0.8, 1.2), 1000.0))
+CIRCLE_FINGERS = (1,)              # fingers (0 thumb .. 4 pinky) whose tip can draw one
+# ... while pointing: with the middle and ring fingers out too, an open hand that moves or
+# turns carries every fingertip round loops nobody drew (palm circles cover whole hands).
+# A hand that rolls or pitches swings its fingertips round loops with the fingers still:
+# a drawn fingertip circle keeps the palm facing one way (largest angle between palm
+# normals over the track's longest stretch).
+CIRCLE_MAX_PALM_TURN_DEG = 30.0
 # Arc that makes a circle: 270 deg, the Leap SDK's (Gesture.Circle.MinArc 1.5 pi): its
 # circles start there (progress 0.76..0.95 turns on the recordings).
 CIRCLE_ARC = 1.5 * math.pi
@@ -267,12 +278,35 @@ class CircleDetector:
                        + [_CircleTrack(*finger[1:]) for _ in range(5)])
         self._last_event = -math.inf
         self._palm_smooth = None
+        self._tip_smooth = [None] * 5
+        self._tip_prev = [None] * 5
+        self._tip_fast_at = [-math.inf] * 5
+        self._normals = deque()                 # (t, palm normal) over the finger spans
+        self._normal_span = finger[4][-1]
+        self._tip_v_max = finger[5]
 
     def reset(self):
         for tr in self.tracks:
             tr.reset()
         self._last_event = -math.inf
         self._palm_smooth = None
+        self._tip_smooth = [None] * 5
+        self._tip_prev = [None] * 5
+        self._tip_fast_at = [-math.inf] * 5
+        self._normals.clear()
+
+    def _palm_turned(self):
+        """Whether the palm normal turned more than CIRCLE_MAX_PALM_TURN_DEG over the
+        recent stretch (compared with its mean direction, half the pairwise angle)."""
+        ns = np.array([n for _, n in self._normals])
+        if len(ns) < 2:
+            return False
+        mean = ns.sum(axis=0)
+        norm = float(np.linalg.norm(mean))
+        if norm == 0.0:
+            return True
+        half = math.cos(math.radians(CIRCLE_MAX_PALM_TURN_DEG / 2.0))
+        return float((ns @ (mean / norm)).min()) < half
 
     def update(self, hand, timestamp, geometry, extended):
         """GestureEvent or None, from the hand's HandGeometry (palm and tips) and the
@@ -290,16 +324,46 @@ class CircleDetector:
         hit = tracks[0].add(timestamp, sm)
         if hit is not None:
             found = (hit[0][1] > 0, hit[1], 'palm', hit[2])
+        a = PALM_SMOOTHING
+        normals = self._normals
+        normals.append((timestamp, geometry.basis[1]))
+        while normals and normals[0][0] < timestamp - self._normal_span:
+            normals.popleft()
+        pointing = not (extended[2] or extended[3])
         for i, tip in enumerate(geometry.tips_world):
+            if i not in CIRCLE_FINGERS:
+                continue
+            if not pointing:
+                tr = tracks[1 + i]
+                self._tip_smooth[i] = None
+                if len(tr.pts) > tr.head:
+                    tr.reset()
+                continue
             if i > 0 and not extended[i]:
                 # A curled finger's loop is no circle: forget its path (cheaper than
                 # tracking it, and a circle must be drawn extended from its start).
                 tr = tracks[1 + i]
+                self._tip_smooth[i] = None
                 if len(tr.pts) > tr.head:
                     tr.reset()
                 continue
             if not _isfinite(tip[0] + tip[1] + tip[2]):
                 continue
+            # Swipe speed is judged on the raw tip (smoothing rounds a fast stroke off).
+            prev = self._tip_prev[i]
+            self._tip_prev[i] = (timestamp, tip)
+            if prev is not None and timestamp > prev[0]:
+                pt = prev[1]
+                d2 = (tip[0] - pt[0]) ** 2 + (tip[1] - pt[1]) ** 2 + (tip[2] - pt[2]) ** 2
+                if d2 > (self._tip_v_max * (timestamp - prev[0])) ** 2:
+                    self._tip_fast_at[i] = timestamp
+            # Smoothed like the palm: frame-to-frame jitter of a few mm zig-zags a small
+            # circle's path and reads it as not round.
+            sm = self._tip_smooth[i]
+            if sm is not None:
+                tip = [sm[0] + a * (tip[0] - sm[0]), sm[1] + a * (tip[1] - sm[1]),
+                       sm[2] + a * (tip[2] - sm[2])]
+            self._tip_smooth[i] = tip
             hit = tracks[1 + i].add(timestamp, tip)
             if hit is None or found is not None:
                 continue
@@ -314,7 +378,9 @@ class CircleDetector:
             if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
                 ref = geometry.basis[2]
             along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
-            if abs(along) >= CIRCLE_MIN_ACROSS:
+            if timestamp - self._tip_fast_at[i] < self._normal_span:
+                continue                        # swiped within the stretch
+            if abs(along) >= CIRCLE_MIN_ACROSS and not self._palm_turned():
                 found = (along > 0, hit[1], FINGER_NAMES[i], hit[2])
         if found is None:
             return None

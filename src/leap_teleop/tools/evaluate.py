@@ -28,8 +28,9 @@ matter of opinion. Per take:
   unlabelled in between (THUMB_UP_BY_DIRECTION); a fist
   with the thumb tucked (262-282) -> fist, not thumb-up; open hand (84-100, 200-236,
   344-366) -> open.
-- Waiting-110fps and flapping: the SDK's own circle gestures are the ground truth for
-  circle events (see circle_agreement): 10 SDK circles, each reported by the SDK once its
+- Waiting-110fps and flapping: the SDK's own circle gestures, counted beside the circle
+  events (see circle_agreement; reported, not a target: nobody draws a circle in these
+  takes, the SDK's circles are loops of flapping thumbs and pinkies): 10 SDK circles, each reported by the SDK once its
   fingertip has swept >= 270 deg (its start event, progress 0.76..0.95 turns).
   Recall counts only the SDK circles whose arc lies inside the recording: an SDK circle
   whose start event comes less than CIRCLE_MIN_LEAD_S after the hand's first recorded
@@ -47,8 +48,8 @@ matter of opinion. Per take:
   ended, 49 mm from its centre. Precision counts events agreeing with any SDK circle,
   excluded ones included.
 
-The same circle matching also runs over every shared take (EVERY_TAKE): reported, not a
-target, since the issue names Waiting and flapping as the circle ground truth.
+The same circle matching also runs over every shared take (EVERY_TAKE); the target there
+is no circle event at all, since none of the takes draws one.
 
 No take shows the rock (horns) pose, so rock has no real-data row; it is covered by the
 synthetic-hand tests.

@@ -11,7 +11,8 @@ beside (o_read_as_fist). Worst 10 %: per gesture, the people sorted by their rec
 pooled recall of the lowest tenth and the lowest person's.
 
 Motions (population.motion_take): the fraction of takes with a circle event, per kind;
-only 'circle' should fire, and its palm circles should be hand-sized (>= 25 mm).
+only 'circle' (the palm, hand-sized: >= 25 mm) and 'finger_circle' (a pointing index)
+should fire.
 """
 import numpy as np
 
