@@ -324,16 +324,17 @@ def drone_pictures(mon, out):
         return []
     say('rendering the drone pictures (%d poses, %d camera frames)'
         % (len(mon.drone_track), len(mon.drone_camera)))
-    track = mon.drone_track
+    # Copies: the monitor's subscribers keep appending while the pictures are drawn.
+    track, states = list(mon.drone_track), list(mon.drone_state_times)
+    gestures, camera = list(mon.drone_gestures), list(mon.drone_camera)
     written = []
     try:
-        demo_pictures.flight_plot(track, mon.drone_state_times, mon.drone_gestures,
-                                  os.path.join(out, 'drone_flight.png'))
+        demo_pictures.flight_plot(track, states, gestures, os.path.join(out, 'drone_flight.png'))
         written.append('drone_flight.png')
     except ImportError as e:                      # matplotlib missing: the GIF still comes
         say('no flight plot: %s' % e)
-    frames = demo_pictures.chase_gif(track, mon.drone_state_times, mon.drone_gestures,
-                                     os.path.join(out, 'drone.gif'), mon.drone_camera)
+    frames = demo_pictures.chase_gif(track, states, gestures, os.path.join(out, 'drone.gif'),
+                                     camera)
     if frames:
         written.append('drone.gif')
     return written
