@@ -96,7 +96,8 @@ class Loop:
 
 
 def _arm(loop, palm=(60.0, 300.0, 0.0)):
-    for _ in range(30):
+    # Arming needs the thumbs-up held arm_hold_s (by capture time).
+    for _ in range(int(math.ceil((loop.teleop.p.arm_hold_s + 0.1) * FRAME_HZ))):
         loop.period(HandInput(present=True, palm_mm=palm, thumb_up=True))
     for _ in range(30):
         loop.period(HandInput(present=True, palm_mm=palm, rock=True))
