@@ -246,7 +246,7 @@ def run():
     results['arm.max_joint_accel_measured'] = max(loop.max_accel_measured for loop in loops)
     results['arm.ur10_joint_accel_limit'] = float(np.min(kin.MAX_JOINT_ACCEL))
     for key in sorted(results):
-        print('  %-32s %.4g' % (key, results[key]))
+        print('  %-32s %.5g' % (key, results[key]))
     return results
 
 
