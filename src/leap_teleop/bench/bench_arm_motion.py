@@ -20,7 +20,9 @@ arm.onset_latency_p99_ms     a 20 mm palm step at a random phase of the 120 Hz f
                              (> 1e-4 rad), over 100 steps.
 arm.max_joint_accel          largest commanded joint acceleration in all these runs (the
                              controller's desired state), rad/s^2; arm.max_joint_accel_measured
-                             from the simulated joints' velocities (3-step differences).
+                             from the velocities PyBullet reports for the simulated joints,
+                             differenced over 3 physics steps (12.5 ms; differentiating the
+                             positions twice would read numerics as motion).
 """
 import math
 
