@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """rostest node: the simulator offers the driver's endpoints, and a client written against
 the driver's types uses each of them (in the namespace uav, TF frames prefixed uav/)."""
+import os
 import sys
+import time
 import unittest
 
 import rosgraph
@@ -12,7 +14,7 @@ from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import CameraInfo, Image
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Empty
-from std_srvs.srv import Empty as EmptySrv
+from std_srvs.srv import Empty as EmptySrv, Trigger
 
 import ardrone_driver_types as driver
 from leap_teleop.drone.interface import (DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER,
@@ -128,6 +130,32 @@ class DriverInterface(unittest.TestCase):
         self.assertAlmostEqual(alt.altitude_raw, 1000, delta=150)
         rospy.ServiceProxy('ardrone/flattrim', EmptySrv)()     # aloft: answered, ignored
         self.assertIn(wait('ardrone/navdata', Navdata).state, (3, 4))
+
+    def test_5_snapshot_keeps_navdata_flowing(self):
+        # The simulator's own ardrone/snapshot: the picture is drawn outside the physics
+        # loop, so navdata never goes stale (the pilot hovers / lands after 0.5 s).
+        arrivals = []
+        sub = rospy.Subscriber('ardrone/navdata', Navdata,
+                               lambda _: arrivals.append(time.monotonic()))
+        try:
+            wait('ardrone/navdata', Navdata)
+            snapshot = rospy.ServiceProxy('ardrone/snapshot', Trigger)
+            for _ in range(2):        # the first one also starts the renderer process
+                t0 = time.monotonic()
+                res = snapshot()
+                t1 = time.monotonic()
+                self.assertTrue(res.success, res.message)
+                with open(res.message, 'rb') as f:
+                    self.assertEqual(f.read(8), b'\x89PNG\r\n\x1a\n')
+                os.remove(res.message)
+                rospy.sleep(0.3)
+                during = [t for t in arrivals if t0 - 0.3 <= t <= t1 + 0.3]
+                gaps = [b - a for a, b in zip(during, during[1:])]
+                rospy.loginfo('snapshot in %.2f s, longest navdata gap %.3f s', t1 - t0,
+                              max(gaps, default=float('nan')))
+                self.assertTrue(len(gaps) > 5 and max(gaps) < 0.5, (t1 - t0, gaps))
+        finally:
+            sub.unregister()
 
 
 if __name__ == '__main__':

@@ -8,7 +8,9 @@ the scene (`scene.build`), so rendering never touches the physics client.
 it renders, so a renderer thread would stall the physics loop for tens of milliseconds.
 
 Also here: `chase_view`, the picture a person reads (a camera behind and above the
-drone looking along its heading, ground texture and horizon in view).
+drone looking along its heading, ground texture and horizon in view), and
+`ChaseSnapshots`, which has a renderer process draw it (with the drone's body) from a
+copied pose, so a snapshot never holds the simulator.
 """
 import math
 import os
@@ -24,6 +26,7 @@ import numpy as np
 import pybullet as pb
 
 from leap_teleop.drone import scene
+from leap_teleop.drone.sim import body_visual
 
 
 @dataclass(frozen=True)
@@ -110,15 +113,37 @@ def _rgb(client, width, height, view, proj):
     return img
 
 
+HIDDEN = (0.0, 0.0, -1000.0)     # where the drawn drone waits: beyond every camera's far plane
+
+
 class SceneRenderer:
-    """A PyBullet client holding the scene, rendering the drone's cameras."""
+    """A PyBullet client holding the scene, rendering the drone's cameras, and the chase
+    view with a drawn drone (a visual-only body, placed for that picture only: the drone's
+    own cameras do not see its hull)."""
 
     def __init__(self):
         self.client = pb.connect(pb.DIRECT)
         scene.build(self.client)
+        self._drone, self._drone_arm = None, None
 
     def render(self, name, pos, quat):
         return render(self.client, CAMERAS[name], pos, quat)
+
+    def chase(self, pos, quat, width, height, arm):
+        c = self.client
+        if self._drone_arm != arm:
+            if self._drone is not None:
+                pb.removeBody(self._drone, physicsClientId=c)
+            self._drone = pb.createMultiBody(0, -1, body_visual(c, arm), HIDDEN,
+                                             physicsClientId=c)
+            self._drone_arm = arm
+        pb.resetBasePositionAndOrientation(self._drone, pos, quat, physicsClientId=c)
+        try:
+            rot = pb.getMatrixFromQuaternion(quat, physicsClientId=c)
+            return chase_view(c, pos, math.atan2(rot[3], rot[0]), width, height)
+        finally:
+            pb.resetBasePositionAndOrientation(self._drone, HIDDEN, (0, 0, 0, 1),
+                                               physicsClientId=c)
 
     def close(self):
         if self.client is not None:
@@ -127,7 +152,10 @@ class SceneRenderer:
 
 
 def _serve(conn):
-    """The renderer process: (pos, quat, names) in, [(name, rgb bytes)] out; None stops."""
+    """The renderer process; None stops it. Requests:
+    ('cameras', pos, quat, names) -> [(name, rgb bytes)];
+    ('chase', pos, quat, width, height, arm, path) -> ('ok', rgb bytes) or ('error', text),
+    the PNG written to `path` when it is not None."""
     renderer = SceneRenderer()
     try:
         while True:
@@ -137,10 +165,26 @@ def _serve(conn):
                 return
             if req is None:
                 return
-            pos, quat, names = req
-            conn.send([(n, renderer.render(n, pos, quat).tobytes()) for n in names])
+            if req[0] == 'cameras':
+                _, pos, quat, names = req
+                conn.send([(n, renderer.render(n, pos, quat).tobytes()) for n in names])
+                continue
+            _, pos, quat, width, height, arm, path = req
+            try:
+                img = renderer.chase(pos, quat, width, height, arm)
+                if path:
+                    from PIL import Image
+                    Image.fromarray(img).save(path)
+                reply = ('ok', img.tobytes())
+            except Exception as e:      # answered; the renderer lives on
+                reply = ('error', '%s: %s' % (type(e).__name__, e))
+            conn.send(reply)
     finally:
         renderer.close()
+
+
+class PictureError(RuntimeError):
+    """The renderer process could not draw or write a picture (and is still serving)."""
 
 
 class RendererProcess:
@@ -160,7 +204,7 @@ class RendererProcess:
 
     def render(self, pos, quat, names, timeout=10.0):
         """{name: (height, width, 3) uint8} for the cameras named."""
-        self._out.send((tuple(pos), tuple(quat), tuple(names)))
+        self._out.send(('cameras', tuple(pos), tuple(quat), tuple(names)))
         if not self._in.poll(timeout):
             raise RuntimeError('camera renderer did not answer in %.0f s' % timeout)
         out = {}
@@ -169,7 +213,23 @@ class RendererProcess:
             out[name] = np.frombuffer(data, np.uint8).reshape(spec.height, spec.width, 3)
         return out
 
-    def close(self):
+    def chase(self, pos, quat, width, height, arm, path=None, timeout=10.0):
+        """The chase view (height, width, 3) uint8 with the drone drawn at (pos, quat);
+        also a PNG at `path` when given. PictureError when the renderer answers that it
+        could not draw or write it; RuntimeError when it does not answer within `timeout`
+        (close it then: its late answer would pair with the next request)."""
+        width, height = int(width), int(height)
+        self._out.send(('chase', tuple(pos), tuple(quat), width, height, float(arm), path))
+        if not self._in.poll(timeout):
+            raise RuntimeError('snapshot renderer did not answer in %.1f s' % timeout)
+        status, value = self._in.recv()
+        if status != 'ok':
+            raise PictureError(value)
+        return np.frombuffer(value, np.uint8).reshape(height, width, 3)
+
+    def close(self, wait=5.0):
+        """Stop the process: asked to, killed after `wait` s (0 = at once, e.g. while it
+        is still busy with a picture nobody waits for)."""
         if self.proc is None:
             return
         try:
@@ -177,13 +237,56 @@ class RendererProcess:
         except OSError:
             pass
         try:
-            self.proc.wait(5)
+            self.proc.wait(wait)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait(5)
         self._out.close()
         self._in.close()
         self.proc = None
+
+
+class ChaseSnapshots:
+    """Chase-view snapshots drawn by a renderer process of their own, from a pose the
+    caller copied (under its lock): PyBullet holds the GIL while it renders, so a snapshot
+    drawn in the simulator's process stalls its physics for the whole picture.
+
+    `take(pos, quat, path, width, height, arm)` blocks only the calling thread. The
+    process starts on the first snapshot and is replaced after a failure or a timeout."""
+
+    def __init__(self, timeout=20.0):
+        self.timeout = timeout
+        self.renderer = None
+        self._lock = threading.Lock()   # one snapshot at a time (service threads)
+
+    def take(self, pos, quat, path=None, width=640, height=480, arm=0.18):
+        """The picture (height, width, 3) uint8, written to `path` as a PNG when given;
+        RuntimeError (with the reason) when it cannot be drawn in `timeout` s."""
+        with self._lock:
+            try:
+                if self.renderer is None:
+                    self.renderer = RendererProcess()
+                return self.renderer.chase(pos, quat, width, height, arm, path,
+                                           timeout=self.timeout)
+            except PictureError:
+                raise
+            except RuntimeError:                # no answer in time
+                self._drop()
+                raise
+            except (OSError, EOFError) as e:    # the process died
+                self._drop()
+                raise RuntimeError('snapshot renderer failed: %r' % e)
+
+    def _drop(self):
+        if self.renderer is not None:
+            self.renderer.close(wait=0.0)
+            self.renderer = None
+
+    def close(self):
+        with self._lock:
+            if self.renderer is not None:
+                self.renderer.close()
+                self.renderer = None
 
 
 class CameraLoop:

@@ -47,6 +47,9 @@ _D = DroneParams()
 # Default camera rates: what 2 shared cores render (in the camera process) while the
 # flight keeps real time; measured by bench_drone's sim.drone_rtf_cameras.
 FRONT_RATE, BOTTOM_RATE = 5.0, 5.0
+# ardrone/snapshot answers failure after this long (the first snapshot also starts its
+# renderer process and builds the scene there).
+SNAPSHOT_TIMEOUT = 30.0
 PARAMS = {
     'euler_angle_max': Param(_D.euler_angle_max, 'max tilt for linear.x/y = 1 (driver)',
                              unit='rad', gt=0.0, le=0.52),
@@ -127,6 +130,7 @@ class ArDroneSimNode:
                                         queue_size=25)
                         if p['enable_navdata_altitude'] else None)
         self.log = RateLimitedLog()
+        self.snapshots = cameras.ChaseSnapshots(SNAPSHOT_TIMEOUT)
         self.cameras = CameraStreams(self, {'front': float(p['front_rate']),
                                             'bottom': float(p['bottom_rate'])})
         self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
@@ -200,11 +204,12 @@ class ArDroneSimNode:
         folder = self.p['snapshot_dir'] or os.environ.get('ROS_HOME') or '/tmp'
         try:
             os.makedirs(folder, exist_ok=True)
-            path = os.path.join(folder, 'ardrone_%08.3f.png' % self.sim.time)
             w, h = (int(v) for v in self.p['snapshot_size'])
-            with self.lock:
-                self.sim.snapshot(path, w, h)
-        except (OSError, ValueError) as e:
+            with self.lock:     # only the pose: the picture is drawn in another process
+                t, pos, quat = self.sim.time, self.sim.pos, self.sim.quat
+            path = os.path.join(folder, 'ardrone_%08.3f.png' % t)
+            self.snapshots.take(pos, quat, path, w, h, self.sim.p.arm)
+        except (OSError, ValueError, RuntimeError) as e:
             return TriggerResponse(success=False, message='snapshot failed: %s' % e)
         return TriggerResponse(success=True, message=path)
 
@@ -442,4 +447,5 @@ def main(argv=None):
         pass
     finally:
         node.cameras.stop()
+        node.snapshots.close()
         node.sim.close()
