@@ -35,6 +35,43 @@ def follow(cell, arm, seconds):
     return worst
 
 
+def test_joints_follow_the_trajectory_with_its_acceleration(cell):
+    """A velocity-carrying point sent every 1/120 s (as the teleop sends them), reversing at the
+    UR10's acceleration limit: the simulated joints sit on the desired trajectory at every
+    step and accelerate no more than it does (from PyBullet's joint velocities, 3-step
+    differences, as bench_arm_motion measures)."""
+    a = math.pi
+    cell.run(0.5)                                     # settled at home
+    q_start = cell.joint_state(ARM)[0]
+    sign = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
+    qd_hist, worst_err, worst_cmd = [], 0.0, 0.0
+    T = 2 / 120.0                    # each command ends after the next one replaces it
+    for k in range(120):
+        t = k / 120.0
+        # a bang-bang sine-like motion: +a for 0.25 s, -a for 0.5 s, +a for 0.25 s
+        phase = (t % 1.0)
+        acc = a if phase < 0.25 or phase >= 0.75 else -a
+        follower = cell.arm(ARM).arm_follower
+        follower.sample(cell.time)
+        q_goal = follower.q + follower.qd * T + 0.5 * acc * sign * T ** 2
+        qd_goal = follower.qd + acc * sign * T
+        cell.command_arm(ARM, [(T, q_goal, qd_goal)])
+        for _ in range(2):
+            cell.step()
+            q, qd = cell.joint_state(ARM)[:2]
+            worst_err = max(worst_err, float(np.max(np.abs(q - follower.q))))
+            worst_cmd = max(worst_cmd, float(np.max(np.abs(follower.qdd))))
+            qd_hist.append(qd)
+    qd_hist = np.asarray(qd_hist)
+    measured = np.abs(qd_hist[3:] - qd_hist[:-3]) / (3 * cell.dt)
+    assert worst_cmd <= a + 1e-9
+    assert np.max(measured) > 0.9 * a                 # it did accelerate
+    assert np.max(measured) <= a * 1.001, np.max(measured)
+    assert worst_err < 1e-4, worst_err
+    # one full period of the motion: back at the start, at rest
+    assert np.max(np.abs(cell.joint_state(ARM)[0] - q_start)) < 1e-3
+
+
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
     q0 = cell.joint_state(ARM)[0]
     target = q0 + np.array([1.2, -0.4, 0.6, 0.8, -0.9, 1.5])

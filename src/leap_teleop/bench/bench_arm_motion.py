@@ -20,7 +20,9 @@ arm.onset_latency_p99_ms     a 20 mm palm step at a random phase of the 120 Hz f
                              (> 1e-4 rad), over 100 steps.
 arm.max_joint_accel          largest commanded joint acceleration in all these runs (the
                              controller's desired state), rad/s^2; arm.max_joint_accel_measured
-                             from the simulated joints' velocities (3-step differences).
+                             from the velocities PyBullet reports for the simulated joints,
+                             differenced over 3 physics steps (12.5 ms; differentiating the
+                             positions twice would read numerics as motion).
 """
 import math
 
@@ -96,7 +98,8 @@ class Loop:
 
 
 def _arm(loop, palm=(60.0, 300.0, 0.0)):
-    for _ in range(30):
+    # Arming needs the thumbs-up held arm_hold_s (by capture time).
+    for _ in range(int(math.ceil((loop.teleop.p.arm_hold_s + 0.1) * FRAME_HZ))):
         loop.period(HandInput(present=True, palm_mm=palm, thumb_up=True))
     for _ in range(30):
         loop.period(HandInput(present=True, palm_mm=palm, rock=True))
@@ -245,7 +248,7 @@ def run():
     results['arm.max_joint_accel_measured'] = max(loop.max_accel_measured for loop in loops)
     results['arm.ur10_joint_accel_limit'] = float(np.min(kin.MAX_JOINT_ACCEL))
     for key in sorted(results):
-        print('  %-32s %.4g' % (key, results[key]))
+        print('  %-32s %.5g' % (key, results[key]))
     return results
 
 

@@ -152,10 +152,10 @@ def raw_replay(cell, targets):
     """Bare PyBullet stepping of the cell's scene doing the same motion: one motor call
     per arm and per gripper with the recorded targets, then stepSimulation; no trajectory
     following, grasp checks or state reads. Returns the wall time."""
-    from leap_teleop.ur10.cell import ARM_FORCE, GRIPPER_FORCE
+    from leap_teleop.ur10.cell import ARM_FORCE, ARM_POSITION_GAIN, GRIPPER_FORCE
     from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_CLOSED
     c, arms = cell.client, list(cell.arms.values())
-    forces, kp, kd = ARM_FORCE.tolist(), [0.5] * 6, [1.0] * 6
+    forces, kp, kd = ARM_FORCE.tolist(), [ARM_POSITION_GAIN] * 6, [1.0] * 6
     t0 = time.perf_counter()
     for per_arm in targets:
         for arm, (q, qd, g) in zip(arms, per_arm):

@@ -59,7 +59,7 @@ class ArmTeleopParams:
     wrist_upper: tuple = (_TWO_PI, _TWO_PI, _TWO_PI)
     filter_min_cutoff_hz: float = 0.2  # One Euro on the palm: cutoff at rest; <= 0 disables
     filter_beta: float = 0.05          # Hz of cutoff per mm/s of palm speed
-    filter_d_cutoff_hz: float = 0.3    # cutoff of the palm speed estimate
+    filter_d_cutoff_hz: float = 0.35   # cutoff of the palm speed estimate
     rotation_min_cutoff_hz: float = 0.3    # One Euro on the hand's rotation vector
     rotation_beta: float = 4.0         # Hz per rad/s
     rotation_d_cutoff_hz: float = 1.0

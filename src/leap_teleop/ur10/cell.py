@@ -2,8 +2,9 @@
 
 Plain Python (no ROS). Time is simulated time: step() advances the physics by one
 1/physics_hz step and every arm's trajectory follower with it. Arms are driven by
-PyBullet position control (target position + feed-forward velocity from the follower,
-motor speed capped at the UR10 limits), fingers by force-limited position control.
+PyBullet position control (the desired position now + the desired motion over the step
+as feed-forward velocity, motor speed capped at the UR10 limits), fingers by
+force-limited position control.
 
 Grasping is by contact only: when both fingers of a closing gripper touch the same cube,
 a helper fixed constraint ties the cube to the TCP; it is removed as soon as the gripper
@@ -23,6 +24,11 @@ from leap_teleop.ur10.trajectory import TrajectoryFollower
 GRIPPER_MAX_SPEED = 1.6        # knuckle rad/s: about 0.5 s from open to closed (2F-85-like)
 GRIPPER_FORCE = 60.0           # N per finger
 ARM_FORCE = np.array([330.0, 330.0, 150.0, 54.0, 54.0, 54.0])   # URDF efforts
+ARM_POSITION_GAIN = 0.5        # share of the joint's position error removed per physics step
+# The constraint solver's defaults (residual 1e-7, 50 iterations) stop early, leaving joint
+# velocities ~5e-4 rad/s off their motor targets: 2 % spurious acceleration.
+SOLVER_RESIDUAL = 1e-14
+SOLVER_ITERATIONS = 100
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -66,6 +72,8 @@ class UR10Cell:
         c = self.client
         p.setGravity(0, 0, -9.81, physicsClientId=c)
         p.setTimeStep(self.dt, physicsClientId=c)
+        p.setPhysicsEngineParameter(solverResidualThreshold=SOLVER_RESIDUAL,
+                                    numSolverIterations=SOLVER_ITERATIONS, physicsClientId=c)
         if self.gui:
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=c)
         self._build_scene()
@@ -152,15 +160,23 @@ class UR10Cell:
     def step(self, n=1):
         c = self.client
         for _ in range(n):
-            t = self.time + self.dt      # targets for the end of this step
+            t = self.time + self.dt
             for arm in self.arms.values():
-                q, qd = arm.arm_follower.sample(t)
-                for j, qj, vj, fj, vmax in zip(arm.arm_joints, q, qd, ARM_FORCE,
+                # PyBullet's motor sets the step's velocity to targetVelocity +
+                # positionGain * (targetPosition - q) / dt. The feed-forward is the desired
+                # motion over this step and the correction acts on the error now, so a joint
+                # on its trajectory lands on the next desired position and its acceleration
+                # is the trajectory's (a target for the end of the step with the velocity
+                # there counts that step twice: ~30 % acceleration overshoot).
+                q_now = arm.arm_follower.sample(self.time)[0].copy()
+                q_next, _ = arm.arm_follower.sample(t)
+                v_step = (q_next - q_now) / self.dt
+                for j, qj, vj, fj, vmax in zip(arm.arm_joints, q_now, v_step, ARM_FORCE,
                                                kin.MAX_JOINT_SPEED):
                     p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=qj,
-                                            targetVelocity=vj, force=fj, positionGain=0.5,
-                                            velocityGain=1.0, maxVelocity=vmax,
-                                            physicsClientId=c)
+                                            targetVelocity=vj, force=fj,
+                                            positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
+                                            maxVelocity=vmax, physicsClientId=c)
                 g, _ = arm.gripper_follower.sample(t)
                 f = float(g[0]) * FINGER_TRAVEL / GRIPPER_CLOSED
                 p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],
