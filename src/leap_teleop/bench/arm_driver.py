@@ -75,8 +75,9 @@ def main():
     for _ in range(args.rounds):
         for node in ('arm', 'bare'):
             if node == 'arm':       # (re-)arm: the watchdog disarmed it during the bare round
+                # 0.5 s each: arming needs the thumbs-up held arm_hold_s (0.3 s by default)
                 for flags in ({'thumb_up': True}, {'set_origin_frame_detected': True}):
-                    for _ in range(20):
+                    for _ in range(50):
                         pubs['arm'].publish(hand(i, **flags))
                         time.sleep(0.01)
                 time.sleep(0.2)

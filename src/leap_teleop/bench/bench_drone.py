@@ -20,6 +20,7 @@ import json
 import os
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
@@ -97,6 +98,7 @@ def latency_client(out, seconds):
     """Runs in its own process: publish Hand, time the cmd_vel that answers each."""
     import rospy
     from geometry_msgs.msg import Twist
+    from std_msgs.msg import Header
     from leap_teleop.msg import GestureEvent, Hand
 
     rospy.init_node('bench_drone_client', disable_signals=True)
@@ -112,9 +114,24 @@ def latency_client(out, seconds):
             latencies.append(now - sent[k])
 
     rospy.Subscriber('cmd_vel', Twist, on_twist, queue_size=1000, tcp_nodelay=True)
+    # A flying drone's navdata at the driver's 50 Hz: without fresh navdata the pilot
+    # sends nothing beyond hover.
+    from leap_teleop.msg import Navdata
+    nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
+
+    def navdata_loop():
+        while not rospy.is_shutdown():
+            try:
+                nav_pub.publish(Navdata(header=Header(stamp=rospy.Time.now()), state=3,
+                                        altd=1000, batteryPercent=90.0))
+            except rospy.ROSException:          # closed at shutdown
+                return
+            time.sleep(0.02)
+    threading.Thread(target=navdata_loop, daemon=True).start()
     deadline = time.monotonic() + 30
     while time.monotonic() < deadline and (hand_pub.get_num_connections() == 0
-                                           or gesture_pub.get_num_connections() == 0):
+                                           or gesture_pub.get_num_connections() == 0
+                                           or nav_pub.get_num_connections() == 0):
         time.sleep(0.05)
 
     def hand(z):
