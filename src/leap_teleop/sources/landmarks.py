@@ -83,7 +83,9 @@ FINGERTIPS = (8, 12, 16, 20)
 # or below which the tips touch (two fingertip pads side by side: ~0.2 palm lengths) and
 # their depth gap is removed; beyond the second it is left alone, between in proportion.
 # Shared photos: OK signs and the "O" 0.06..0.21; a fist's thumb over the index 0.13; other
-# poses (fists, pinky-only, hooked index) 0.26 and up.
+# poses (fists, pinky-only, hooked index) 0.26 and up. A relaxed hand seen edge-on (the
+# palm clip's first frames) also has its thumb tip on the index in the image (0.09..0.13):
+# joined too, it reads as before once filtered (a fist, then open).
 TIP_TOUCH_GAP = (0.2, 0.3)
 
 
