@@ -10,7 +10,8 @@ import pytest
 
 from leap_teleop.sources.landmarks import (CameraModel, HandLandmarks, camera_to_leap,
                                            chirality, hand_from_landmarks, hand_side,
-                                           person_side, project, reprojection_rms_px)
+                                           join_touching_tips, person_side, project,
+                                           reprojection_rms_px, solve_translation)
 from leap_teleop.tools.evaluate import HANDS_DATA
 
 
@@ -131,6 +132,63 @@ def test_grab_and_pinch_strengths(hands_json):
         if kind in ('open_palm', 'flat_hand'):
             assert hand.grab_strength < 0.2, name
             assert hand.pinch_strength < 0.2, name
+
+
+def placed(lm, cam, palm_mm=95.0):
+    """lm's world shape scaled to palm_mm and placed where the camera sees it, and the
+    landmarks' pixels."""
+    world = np.asarray(lm.world)
+    shape = world * (palm_mm / np.linalg.norm(world[9] - world[0]))
+    pixels = lm.image[:, :2] * (cam.width, cam.height)
+    return shape + solve_translation(shape, pixels, cam), pixels
+
+
+def tip_gap_mm(hand):
+    return float(np.linalg.norm(hand.fingers[0].tip - hand.fingers[1].tip))
+
+
+def test_touching_fingertips_meet_in_depth(hands_json):
+    """Thumb and index tips touching in the image but parted in depth by the world
+    landmarks (ok__htj__21: 64 mm, the "O": 49 mm) meet in the Frame; every landmark keeps
+    its pixel and the palm (wrist, knuckles) does not move; hands whose thumb tip is clear
+    of every fingertip in the image are left as they were."""
+    gaps = {}
+    for name, cam, lm in photo_hands(hands_json):
+        p, pixels = placed(lm, cam)
+        q = join_touching_tips(p, pixels, cam, 95.0)
+        assert np.allclose(project(q, cam), project(p, cam), atol=1e-9), name
+        assert np.array_equal(q[[0, 5, 9, 13, 17]], p[[0, 5, 9, 13, 17]]), name
+        hand = hand_from_landmarks(lm, cam)
+        if name.startswith(('ok', 'pinch_o')):
+            gaps[name] = tip_gap_mm(hand)
+            assert hand.pinch_strength > 0.8, (name, hand.pinch_strength)
+        if name.split('__')[0] in ('open_palm', 'flat_hand', 'thumbs_up', 'thumbs_down'):
+            assert np.array_equal(q, p), name
+    assert gaps['ok__htj__21.jpg'] < 25.0 and gaps['pinch_o__sld__IMG_1138.JPG'] < 30.0, gaps
+    assert max(gaps.values()) < 30.0, gaps
+
+
+def test_a_thumb_misplaced_in_depth_is_brought_back_to_the_finger(hands_json):
+    """A photographed OK sign (tips touching in both world and image) with its world thumb
+    moved 30..60 mm along the camera ray, nearer or farther (the image cannot tell): the
+    Frame's tips touch again, within a few mm of the unmoved hand's."""
+    cam = CameraModel.from_hfov(640, 480, 60.0)
+    lm = next(h for name, _, h in photo_hands(hands_json) if name == 'ok__sld__IMG_1137.JPG')
+    t = np.array([20.0, -10.0, 450.0])
+    clean = synthetic(lm, cam, t)
+    want = tip_gap_mm(hand_from_landmarks(clean, cam))
+    world = np.asarray(lm.world)
+    scale = 95.0 / np.linalg.norm(world[9] - world[0])
+    thumb = (4, 3)
+    for dz in (-60.0, -30.0, 30.0, 60.0):
+        moved = world.copy()
+        for i in thumb:                  # the thumb's tip and IP joint, along their rays
+            cam_pt = world[i] * scale + t
+            moved[i] = (cam_pt * (cam_pt[2] + dz * (1.0 if i == 4 else 0.5)) / cam_pt[2] - t) \
+                / scale
+        hand = hand_from_landmarks(HandLandmarks(clean.image, moved, lm.label, lm.score), cam)
+        assert abs(tip_gap_mm(hand) - want) < 6.0, (dz, tip_gap_mm(hand), want)
+        assert hand.pinch_strength > 0.8, dz
 
 
 def test_depth_from_hand_size_on_synthetic_projections(hands_json):

@@ -25,6 +25,13 @@ that rescaled hand where the camera sees it, by least squares over all 21 image
 landmarks with the camera's intrinsics (a pinhole PnP whose rotation is known, so
 linear in the translation). Depth is then exact up to the ratio of the true palm length
 to the configured one (10 % off -> 10 % farther or nearer) plus landmark noise.
+
+Touching fingertips. The world landmarks are weakest in depth: on photos of OK signs they
+put thumb and index tips 5-6 cm apart in depth while the image shows them touching. Where
+the thumb tip and fingertips touch in the image (their image gap, back-projected to the
+tips' depth, within a fingertip's width) the depth between them is the only thing parting
+them, and it is the least certain number: those fingers are turned about their base
+joints, along the camera's rays (so the image is unchanged), until the tips meet in depth.
 """
 import math
 from dataclasses import dataclass
@@ -70,6 +77,16 @@ GRAB_FLEX_DEG = (40.0, 150.0)
 # Pinch strength: thumb tip to the nearest fingertip, 1 at or below the first distance,
 # 0 at or beyond the second (fractions of the palm length).
 PINCH_GAP_FRACTION = (0.2, 0.65)
+THUMB_TIP = 4
+FINGERTIPS = (8, 12, 16, 20)
+# Thumb tip to fingertip gap in the image (mm at the tips' depth, over the palm length) at
+# or below which the tips touch (two fingertip pads side by side: ~0.2 palm lengths) and
+# their depth gap is removed; beyond the second it is left alone, between in proportion.
+# Shared photos: OK signs and the "O" 0.06..0.21; a fist's thumb over the index 0.13; other
+# poses (fists, pinky-only, hooked index) 0.26 and up. A relaxed hand seen edge-on (the
+# palm clip's first frames) also has its thumb tip on the index in the image (0.09..0.13):
+# joined too, it reads as before once filtered (a fist, then open).
+TIP_TOUCH_GAP = (0.2, 0.3)
 
 
 @dataclass
@@ -210,6 +227,42 @@ def _angle_deg(u, v):
     return math.degrees(math.acos(min(1.0, max(-1.0, c)))) if math.isfinite(c) else math.nan
 
 
+def image_gap(points_mm, pixels, camera, i, j):
+    """The image distance between landmarks i and j, in mm at their mean depth."""
+    du = (pixels[i, 0] - pixels[j, 0]) / camera.fx
+    dv = (pixels[i, 1] - pixels[j, 1]) / camera.fy
+    return math.hypot(du, dv) * 0.5 * (points_mm[i, 2] + points_mm[j, 2])
+
+
+def join_touching_tips(points_mm, pixels, camera, palm_length_mm):
+    """The placed hand (21, 3) (camera axes, mm) with the thumb tip and the fingertips it
+    touches in the image brought to one depth: each touching fingertip gets a weight w
+    from its image gap (1 touching, 0 apart: TIP_TOUCH_GAP), the tips meet at the
+    w-weighted mean depth of the thumb tip and those tips (the thumb tip with the largest
+    w), a pair with weight w keeping (1 - w) of its depth gap. Each finger is turned about
+    its base joint along the camera's rays, its inner joints in proportion to their place
+    on the finger, so every landmark keeps its pixel."""
+    p = np.array(points_mm, dtype=float)
+    g0, g1 = TIP_TOUCH_GAP
+    weights = [min(max((g1 - image_gap(p, pixels, camera, THUMB_TIP, j) / palm_length_mm)
+                       / (g1 - g0), 0.0), 1.0) for j in FINGERTIPS]
+    if not max(weights) > 0.0:
+        return p
+    z = p[:, 2]
+    meet = (z[THUMB_TIP] + sum(w * z[j] for w, j in zip(weights, FINGERTIPS))) \
+        / (1.0 + sum(weights))
+    moves = [(FINGER_JOINTS[0], max(weights) * (meet - z[THUMB_TIP]))]
+    moves += [(FINGER_JOINTS[k + 1], w * (meet - z[j]))
+              for k, (w, j) in enumerate(zip(weights, FINGERTIPS)) if w > 0.0]
+    for chain, dz in moves:
+        for n, i in enumerate(chain):
+            depth = p[i, 2]
+            moved = depth + dz * n / (len(chain) - 1)
+            if depth > 0.0 and moved > 0.0:
+                p[i] *= moved / depth
+    return p
+
+
 def hand_basis(joints, side):
     """(palm normal, hand direction) unit vectors from (21, 3) joints in a right-handed
     frame: direction wrist -> middle knuckle, normal out of the palm (orthogonalised)."""
@@ -248,7 +301,8 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
         return None
     rot = camera_to_leap(mirrored)
     side = hand_side(lm, mirrored)
-    joints = (shape_cam + t) @ rot.T + np.asarray(camera_position_mm, dtype=float)
+    placed = join_touching_tips(shape_cam + t, pixels, camera, palm_length_mm)
+    joints = placed @ rot.T + np.asarray(camera_position_mm, dtype=float)
     normal, direction = hand_basis(joints, side)
     if not (np.all(np.isfinite(normal)) and np.all(np.isfinite(direction))):
         return None
