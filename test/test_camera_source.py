@@ -80,9 +80,10 @@ def on(state):
 
 # Photos the recognizer gets wrong although the Frame is faithful (see the reasons).
 RECOGNIZER_LIMITS = {
-    'neg_half_curl__fp__halfcurl.jpg': 'hooked index (bend 102 deg, chord 0.78) beside three '
-                                       'curled fingers reads as a fist: the tracker\'s own fists '
-                                       'in the shared takes show index chords up to 0.77',
+    'neg_half_curl__fp__halfcurl.jpg': 'hooked index (bend 102 deg, past the 95 deg curl bar; '
+                                       'chord 0.78) beside three curled fingers reads as a '
+                                       'fist: the tracker\'s own loose fists in the shared '
+                                       'takes bend the index as far',
     'fist__fp__fullcurl.jpg': 'fist held upright with the thumb laid along the fingers, '
                               '0.50 palm widths thumbward of the index knuckle: past the 0.4 '
                               'thumb-out bar the shared takes need (their thumbs leaving a fist '
