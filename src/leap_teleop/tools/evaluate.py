@@ -140,8 +140,8 @@ LABELS = {
 NO_PINCH_NO_FIST = ('gun', 'HandSplay-110fps', 'three-claps')
 CIRCLE_TAKES = ('Waiting-110fps', 'flapping')
 # Every shared take. The SDK reported circles on six of them; the same circle matching run
-# over all of them is reported beside the two-take figure (not a target): it shows
-# what a user sees on hands that are not asked to circle (clapping, grabbing, splaying).
+# over all of them shows what a user sees on hands that are not asked to circle (clapping,
+# grabbing, splaying): no circle event is the target.
 EVERY_TAKE = ('grab', 'pinch', 'gun', 'wave', 'three-claps', 'confidence2',
               'test-paddle-rightwards', 'Waiting-110fps', 'HandSplay-110fps', 'brian',
               'flapping', 'rollAndPitchCropped', 'finger-tap-54fps')
@@ -397,8 +397,9 @@ def print_table(results):
               % (c['events'], c['agreeing_events'], c['sdk_circles_in_recording'], c['matched']))
     c = results.get('circle_all_takes')
     if c:
-        print('circle events on all %d takes (not a target): %d, %d on an SDK circle '
-              '(precision %.3f); SDK circles drawn inside them: %d, %d found (recall %.3f)'
+        print('circle events on all %d takes (none draws a circle: the target is 0): %d, %d '
+              'on an SDK circle (precision %.3f); SDK circles drawn inside them: %d, %d found '
+              '(recall %.3f)'
               % (len(c['per_take']), c['events'], c['agreeing_events'], c['precision'],
                  c['sdk_circles_in_recording'], c['matched'], c['recall']))
         print('  per take (events / agreeing; SDK circles / found): ' + ', '.join(
