@@ -45,8 +45,8 @@ class CameraSource(HandSource):
                  width=0, height=0, mirror=False, input_mirrored=False, camera=None,
                  hfov_deg=DEFAULT_HFOV_DEG, palm_length_mm=DEFAULT_PALM_LENGTH_MM,
                  camera_position_mm=DEFAULT_CAMERA_POSITION_MM, max_hands=2, model='full',
-                 strategy='paired', detect_every=8, min_detection_confidence=0.5,
-                 clock=time.time, on_image=None):
+                 strategy='paired', detect_every=8, search_thread=True,
+                 min_detection_confidence=0.5, clock=time.time, on_image=None):
         if not 0.0 < float(palm_length_mm) < 300.0:
             raise SourceError('palm length must be in (0, 300) mm, got %r' % (palm_length_mm,))
         self._open_media = open_media
@@ -67,6 +67,7 @@ class CameraSource(HandSource):
         self.cv2 = capture.import_cv2()
         self.detector = HandDetector(max_hands=max_hands, model=model, strategy=strategy,
                                      detect_every=detect_every, static=self.still,
+                                     search_thread=search_thread,
                                      min_detection_confidence=min_detection_confidence)
         media = open_media()             # fails now, not later, on a bad device or file
         self.rate_hz = media.fps

@@ -37,6 +37,10 @@ CAMERA_PARAMS = {
     'max_hands': Param(2, 'camera sources: hands tracked at most', ge=1, le=2),
     'detect_every': Param(8, 'camera sources: while fewer than ~max_hands are tracked, look '
                              'for another hand every this many frames', ge=1, le=60),
+    'search_thread': Param(True, 'camera sources: look for another hand on a worker thread '
+                                 '(the other core) while the tracked hands are published; '
+                                 'off = in the frame\'s own processing, which makes that '
+                                 'frame late'),
     'min_detection_confidence': Param(0.5, 'camera sources: MediaPipe palm detection '
                                            'threshold', gt=0.0, lt=1.0),
     'video_drop_late': Param(False, 'video source, paced: behave like a live camera (a frame '
@@ -54,6 +58,7 @@ def camera_source_kwargs(name, p, clock, camera=None, on_image=None):
     common = dict(hfov_deg=p['hfov_deg'], palm_length_mm=p['palm_length_mm'],
                   camera_position_mm=p['camera_position_mm'], max_hands=p['max_hands'],
                   model=p['model'], detect_every=p['detect_every'],
+                  search_thread=p['search_thread'],
                   min_detection_confidence=p['min_detection_confidence'],
                   mirror=p['mirror'], input_mirrored=p['input_mirrored'], camera=camera,
                   clock=clock, on_image=on_image)

@@ -11,6 +11,14 @@ image with the tracked hands blanked out (so both never lock onto one hand) and 
 only every `detect_every`-th frame. A new second hand is then found within
 `detect_every` frames; while no hand is tracked at all, the first graph looks on every
 frame.
+Search thread. Looking for a further hand costs a palm detector run on top of tracking;
+done in the caller's call it makes every `detect_every`-th frame late. With
+`search_thread` (the default) that search runs on a worker thread (the graph releases the
+GIL while it runs, so it uses the other core) while the caller tracks the hands it has
+and returns; the next detect() collects it (waiting if it is still running, so results do
+not depend on timing) and a hand it found is tracked by its graph from that frame on.
+A graph is only ever run by one thread at a time: a graph searching is not touched until
+collected. A failed search is logged and counted (search_failures), never raised.
 'single' is the plain legacy graph with max_num_hands (and static_image_mode for
 unrelated images).
 
@@ -23,6 +31,9 @@ palm detector starts it afresh on the next real frame. On the shared thumbs-up c
 processing every 3rd frame, that turns 1 of 44 thumbs-up frames read right into 30 (every
 15 frames), but processing every frame 135 of 135 into 77: off by default.
 """
+import concurrent.futures
+import logging
+
 import numpy as np
 
 from .base import SourceError
@@ -34,6 +45,7 @@ MODEL_COMPLEXITY = {'lite': 0, 'full': 1}
 # Blanked box around a tracked hand for the graph looking for another: landmark box
 # grown by this fraction of its size on every side (landmarks lie inside the skin).
 MASK_MARGIN = 0.15
+log = logging.getLogger(__name__)
 
 
 def import_mediapipe():
@@ -77,7 +89,7 @@ class HandDetector:
 
     def __init__(self, max_hands=2, model='full', strategy='paired', detect_every=8,
                  redetect_every=0, static=False, min_detection_confidence=0.5,
-                 min_tracking_confidence=0.5):
+                 min_tracking_confidence=0.5, search_thread=True):
         if model not in MODEL_COMPLEXITY:
             raise SourceError('model must be one of %s, got %r' % (sorted(MODEL_COMPLEXITY), model))
         if strategy not in ('paired', 'single'):
@@ -103,8 +115,19 @@ class HandDetector:
         self._tracked_runs = [0] * n_graphs      # frames each graph has tracked since detecting
         self._blank = None
         self.graph_runs = 0                      # for benchmarks: graph invocations
+        self._pool = (concurrent.futures.ThreadPoolExecutor(1, 'hand-search')
+                      if search_thread and self.strategy == 'paired' and n_graphs > 1
+                      else None)
+        self._searching = {}                     # graph -> Future of its search
+        self.search_failures = 0
+        self._failed_in_row = 0
 
     def close(self):
+        """Waits for a running search (its graph is closed after it), closes the graphs."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+        self._searching = {}
         for g in self._graphs:
             g.close()
         self._graphs = []
@@ -125,14 +148,37 @@ class HandDetector:
         self.graph_runs += 1
         return _landmarks(graph.process(image))
 
+    def _search(self, k, image):
+        """Graph k looking for a hand (on the worker thread: touches no shared state)."""
+        return _landmarks(self._graphs[k].process(image))
+
+    def _collect(self):
+        """Adopt the searches started with the previous frame (waiting for them)."""
+        for k, future in sorted(self._searching.items()):
+            try:
+                hands = future.result()
+                self._failed_in_row = 0
+            except Exception as e:      # logged and counted; the tracked hands go on
+                hands = []
+                self.search_failures += 1
+                self._failed_in_row += 1
+                if self._failed_in_row == 1:
+                    log.warning('hand detector: looking for a further hand failed (tracking '
+                                'goes on; logged again after a success): %s', e)
+            self._tracked[k] = hands[0] if hands else None
+        self._searching = {}
+
     def detect(self, rgb):
         if self.strategy == 'single':
             found = self._process(0, rgb, self._tracked[0] is not None and not self.static)
             self._tracked[0] = found[0] if found else None
             return found
+        self._collect()
         height, width = rgb.shape[:2]
-        found = []
-        for k in range(len(self._graphs)):
+        found = {}
+        # Graphs with nothing to track first: a search is then under way on the worker
+        # while this thread tracks.
+        for k in sorted(range(len(self._graphs)), key=lambda j: self._tracked[j] is not None):
             others = [lm for j, lm in enumerate(self._tracked) if j != k and lm is not None]
             # The first graph that has nothing to track looks every frame while no hand
             # is tracked at all; any other idle graph every detect_every frames.
@@ -148,10 +194,15 @@ class HandDetector:
                 for lm in others:
                     x0, y0, x1, y1 = _box(lm, width, height)
                     image[y0:y1, x0:x1] = 0
+            if self._pool is not None and self._tracked[k] is None and others:
+                self.graph_runs += 1
+                self._tracked_runs[k] = 0
+                self._searching[k] = self._pool.submit(self._search, k, image)
+                continue
             hands = self._process(k, image, self._tracked[k] is not None)
             self._tracked[k] = hands[0] if hands else None
-            found.extend(hands[:1])
-        return found
+            found[k] = hands[:1]
+        return [lm for k in sorted(found) for lm in found[k]]
 
     def __enter__(self):
         return self
