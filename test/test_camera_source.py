@@ -289,14 +289,21 @@ def test_camera_sources_refuse_bad_input_with_the_fix(tmp_path):
         make_source('video', path=data('fist__htj__22.jpg'), palm_length_mm=0.0)
 
 
-def test_paired_trackers_find_both_hands_once_each():
-    """Video mode, 'paired': the two-hand photo as a still stream: the first hand on the
-    first frame, the second within detect_every frames, then both every frame, never the
-    same hand twice (the second graph sees the first hand blanked out)."""
+def two_hand_photo():
     import cv2
+    return cv2.cvtColor(cv2.imread(data('open_palm__tfjs__hands.jpg')), cv2.COLOR_BGR2RGB)
+
+
+@pytest.mark.parametrize('search_thread', [True, False])
+def test_paired_trackers_find_both_hands_once_each(search_thread):
+    """Video mode, 'paired': the two-hand photo as a still stream: the first hand on the
+    first frame, the second within detect_every frames (one more with the search on its
+    thread: adopted from the frame after), then both every frame, never the same hand
+    twice (the second graph sees the first hand blanked out)."""
     from leap_teleop.sources.mediapipe_hands import HandDetector
-    rgb = cv2.cvtColor(cv2.imread(data('open_palm__tfjs__hands.jpg')), cv2.COLOR_BGR2RGB)
-    with HandDetector(max_hands=2, strategy='paired', detect_every=4) as detector:
+    rgb = two_hand_photo()
+    with HandDetector(max_hands=2, strategy='paired', detect_every=4,
+                      search_thread=search_thread) as detector:
         counts, runs = [], []
         for _ in range(12):
             before = detector.graph_runs
@@ -306,9 +313,50 @@ def test_paired_trackers_find_both_hands_once_each():
             if len(found) == 2:
                 wrists = [lm.image[0, :2] for lm in found]
                 assert np.linalg.norm(wrists[0] - wrists[1]) > 0.1
-    assert counts[0] >= 1 and 2 in counts[:5] and counts[5:] == [2] * 7, counts
+    first_pair = counts.index(2)
+    assert counts[0] >= 1 and first_pair <= 4 - (not search_thread), counts
+    assert counts[first_pair:] == [2] * (12 - first_pair), counts
     # While one hand is tracked the second graph runs on every 4th frame only.
     assert runs[0] == 1 and runs[-1] == 2, runs
+    assert detector.search_failures == 0
+
+
+def search_threads():
+    import threading
+    return [t for t in threading.enumerate() if t.name.startswith('hand-search')]
+
+
+def test_close_waits_for_the_search_and_stops_its_thread():
+    from leap_teleop.sources.mediapipe_hands import HandDetector
+    import cv2
+    rgb = cv2.cvtColor(cv2.imread(data('fist__htj__22.jpg')), cv2.COLOR_BGR2RGB)
+    detector = HandDetector(max_hands=2, strategy='paired', detect_every=1)
+    assert len(detector.detect(rgb)) == 1
+    assert len(detector.detect(rgb)) == 1  # one hand: a search for another is under way
+    assert detector._searching and search_threads()
+    detector.close()
+    assert not search_threads() and not detector._searching
+
+
+def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
+    from leap_teleop.sources.mediapipe_hands import HandDetector
+    rgb = two_hand_photo()
+
+    class Failing:
+        def process(self, image):
+            raise RuntimeError('search graph failed')
+
+        def close(self):
+            pass
+    with HandDetector(max_hands=2, strategy='paired', detect_every=2) as detector:
+        detector._graphs[1].close()
+        detector._graphs[1] = Failing()
+        with caplog.at_level('WARNING', logger='leap_teleop.sources.mediapipe_hands'):
+            counts = [len(detector.detect(rgb)) for _ in range(9)]
+    assert counts == [1] * 9, counts
+    assert detector.search_failures == 4     # searches started on frames 1, 3, 5, 7
+    warnings = [r for r in caplog.records if 'search graph failed' in r.getMessage()]
+    assert len(warnings) == 1, [r.getMessage() for r in caplog.records]
 
 
 def test_a_frame_the_detector_fails_on_is_skipped_and_a_broken_detector_ends_the_source():
