@@ -2,13 +2,17 @@
 
 webcam.fps: frames per second through the whole video source (decode, letterbox to
 640x480, MediaPipe Hands full model looking for up to two hands, landmark conversion),
-as fast as possible, both clips; next to it the plain legacy graph (max_num_hands=2, palm
-detector on every frame with fewer than two hands), alternating rounds.
+as fast as possible, both clips; next to it, alternating rounds, the same with the
+further-hand search in the frame's own processing (webcam.fps_search_inline) and the plain
+legacy graph (max_num_hands=2, palm detector on every frame with fewer than two hands).
 webcam.latency_p99_ms: frame captured -> leapcobot message received, the sender running
 as a node on the clips paced at 30 frames/s and behaving like a webcam (a frame that
 arrives while the previous one is processed replaces it: ~video_drop_late), probed on
 leapmotion/data_right; webcam.processed_fraction: the share of the clip's frames it
-processed meanwhile.
+processed meanwhile. Every published message counts (none is left out of the tail).
+Latency is measured with the further-hand search on its worker thread (the default) and,
+alternating rounds, in the frame's own processing (~search_thread false:
+webcam.latency_*_search_inline), to show what the thread buys.
 """
 import os
 import sys
@@ -34,14 +38,15 @@ def _clip(name):
     return path
 
 
-def _throughput(strategy):
+def _throughput(strategy, search_thread=True):
     """(frames/s, CPU ms per frame, hands found) over both clips, as fast as possible."""
     from leap_teleop.sources import make_source
     frames = hands = 0
     wall = cpu = 0.0
     for name in CLIPS:
         source = make_source('video', path=_clip(name), realtime=False, width=640, height=480,
-                             max_hands=2, model='full', strategy=strategy)
+                             max_hands=2, model='full', strategy=strategy,
+                             search_thread=search_thread)
         t0, c0 = time.perf_counter(), time.process_time()
         for frame in source.frames():
             frames += 1
@@ -51,43 +56,63 @@ def _throughput(strategy):
     return frames / wall, cpu / frames * 1e3, hands
 
 
-def _sender_cmd(video):
+def _sender_cmd(video, search_thread):
     return [sys.executable, package_path('scripts', 'sender.py'), '__name:=leap_sender',
             '_source:=video', '_video:=%s' % video, '_loop:=true', '_rate:=%d' % PACE_HZ,
-            '_video_drop_late:=true']
+            '_video_drop_late:=true', '_search_thread:=%s' % str(search_thread).lower()]
 
 
 def run():
     results = {}
-    fps = {'paired': [], 'single': []}
-    cpu = {'paired': [], 'single': []}
+    strategies = {'paired': ('paired', True), 'paired_search_inline': ('paired', False),
+                  'single': ('single', True)}
+    fps = {k: [] for k in strategies}
+    cpu = {k: [] for k in strategies}
     for _ in range(ROUNDS):
-        for strategy in ('paired', 'single'):
-            f, c, hands = _throughput(strategy)
-            fps[strategy].append(f)
-            cpu[strategy].append(c)
+        for name, (strategy, search_thread) in strategies.items():
+            f, c, hands = _throughput(strategy, search_thread)
+            fps[name].append(f)
+            cpu[name].append(c)
             print('  %s: %.1f frames/s, %.1f ms CPU per frame, %d hands'
-                  % (strategy, f, c, hands))
+                  % (name, f, c, hands))
     results['webcam.fps'] = float(np.median(fps['paired']))
+    results['webcam.fps_search_inline'] = float(np.median(fps['paired_search_inline']))
     results['webcam.fps_single_graph'] = float(np.median(fps['single']))
     results['webcam.cpu_ms_per_frame'] = float(np.median(cpu['paired']))
 
-    latencies, received = [], 0
+    variants = {'thread': True, 'inline': False}
+    latencies = {v: [] for v in variants}
+    p99s = {v: [] for v in variants}
+    received = 0
     with harness.ros_master() as env:
-        for name in CLIPS:
-            node = harness.start_node(env, _sender_cmd(_clip(name)))
-            try:
-                cobot = harness.probe(env, 'leapmotion/data_right', 'leap_teleop/leapcobotright',
-                                      WINDOW_S, warmup=2.0)
-            finally:
-                harness.stop_node(node)
-            lat = np.subtract(cobot['receipt'], cobot['stamp'])
-            print('  sender on %s at %d Hz: %d messages (%.1f/s), latency p50 %.1f ms, '
-                  'p99 %.1f ms' % (name, PACE_HZ, len(lat), len(lat) / WINDOW_S,
-                                   *harness.percentiles_ms(lat)))
-            latencies.extend(lat)
-            received += len(lat)
-    results['webcam.processed_fraction'] = received / (PACE_HZ * WINDOW_S * len(CLIPS))
+        for _ in range(ROUNDS):
+            for variant, search_thread in variants.items():
+                lats = []
+                for name in CLIPS:
+                    node = harness.start_node(env, _sender_cmd(_clip(name), search_thread))
+                    try:
+                        cobot = harness.probe(env, 'leapmotion/data_right',
+                                              'leap_teleop/leapcobotright', WINDOW_S,
+                                              warmup=2.0)
+                    finally:
+                        harness.stop_node(node)
+                    lat = np.subtract(cobot['receipt'], cobot['stamp'])
+                    print('  sender (search %s) on %s at %d Hz: %d messages (%.1f/s), latency '
+                          'p50 %.1f ms, p99 %.1f ms'
+                          % (variant, name, PACE_HZ, len(lat), len(lat) / WINDOW_S,
+                             *harness.percentiles_ms(lat)))
+                    lats.extend(lat)
+                    if search_thread:
+                        received += len(lat)
+                latencies[variant].extend(lats)
+                p99s[variant].append(harness.percentiles_ms(lats)[1])
+    for variant in variants:
+        print('  search %s: p99 per round %s ms' % (
+            variant, ', '.join('%.1f' % v for v in p99s[variant])))
+    results['webcam.processed_fraction'] = received / (PACE_HZ * WINDOW_S * len(CLIPS) * ROUNDS)
     results['webcam.latency_p50_ms'], results['webcam.latency_p99_ms'] = \
-        harness.percentiles_ms(latencies)
+        harness.percentiles_ms(latencies['thread'])
+    results['webcam.latency_p50_ms_search_inline'], \
+        results['webcam.latency_p99_ms_search_inline'] = \
+        harness.percentiles_ms(latencies['inline'])
     return results
