@@ -338,6 +338,34 @@ def test_close_waits_for_the_search_and_stops_its_thread():
     assert not search_threads() and not detector._searching
 
 
+def test_live_tracking_does_not_wait_for_a_slow_search():
+    """wait_for_search=False (live and paced sources): a search still running is left to
+    run, the tracked hand is returned meanwhile; its hand is adopted once it has ended."""
+    import time
+    from leap_teleop.sources.mediapipe_hands import HandDetector
+    rgb = two_hand_photo()
+
+    class Slow:
+        def __init__(self, graph):
+            self.graph = graph
+
+        def process(self, image):
+            time.sleep(0.5)
+            return self.graph.process(image)
+
+        def close(self):
+            self.graph.close()
+    with HandDetector(max_hands=2, strategy='paired', detect_every=1,
+                      wait_for_search=False) as detector:
+        detector._graphs[1] = Slow(detector._graphs[1])
+        assert len(detector.detect(rgb)) == 1          # first hand; the search starts
+        t0 = time.perf_counter()
+        counts = [len(detector.detect(rgb)) for _ in range(3)]
+        assert time.perf_counter() - t0 < 0.4 and counts == [1, 1, 1], counts
+        time.sleep(0.6)
+        assert len(detector.detect(rgb)) == 2          # the search has ended: adopted
+
+
 def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
     from leap_teleop.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()

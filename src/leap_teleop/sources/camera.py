@@ -68,6 +68,8 @@ class CameraSource(HandSource):
         self.detector = HandDetector(max_hands=max_hands, model=model, strategy=strategy,
                                      detect_every=detect_every, static=self.still,
                                      search_thread=search_thread,
+                                     # offline: results independent of timing
+                                     wait_for_search=not self.realtime,
                                      min_detection_confidence=min_detection_confidence)
         media = open_media()             # fails now, not later, on a bad device or file
         self.rate_hz = media.fps

@@ -15,8 +15,11 @@ Search thread. Looking for a further hand costs a palm detector run on top of tr
 done in the caller's call it makes every `detect_every`-th frame late. With
 `search_thread` (the default) that search runs on a worker thread (the graph releases the
 GIL while it runs, so it uses the other core) while the caller tracks the hands it has
-and returns; the next detect() collects it (waiting if it is still running, so results do
-not depend on timing) and a hand it found is tracked by its graph from that frame on.
+and returns; a later detect() collects it and a hand it found is tracked by its graph from
+that frame on. With `wait_for_search` (offline processing) the next detect() waits for it,
+so results do not depend on timing; without (live and paced sources) a search still
+running is collected at the first detect() after it ends, and its graph sits out until
+then.
 A graph is only ever run by one thread at a time: a graph searching is not touched until
 collected. A failed search is logged and counted (search_failures), never raised.
 'single' is the plain legacy graph with max_num_hands (and static_image_mode for
@@ -89,7 +92,7 @@ class HandDetector:
 
     def __init__(self, max_hands=2, model='full', strategy='paired', detect_every=8,
                  redetect_every=0, static=False, min_detection_confidence=0.5,
-                 min_tracking_confidence=0.5, search_thread=True):
+                 min_tracking_confidence=0.5, search_thread=True, wait_for_search=True):
         if model not in MODEL_COMPLEXITY:
             raise SourceError('model must be one of %s, got %r' % (sorted(MODEL_COMPLEXITY), model))
         if strategy not in ('paired', 'single'):
@@ -119,6 +122,7 @@ class HandDetector:
                       if search_thread and self.strategy == 'paired' and n_graphs > 1
                       else None)
         self._searching = {}                     # graph -> Future of its search
+        self.wait_for_search = bool(wait_for_search)
         self.search_failures = 0
         self._failed_in_row = 0
 
@@ -153,8 +157,11 @@ class HandDetector:
         return _landmarks(self._graphs[k].process(image))
 
     def _collect(self):
-        """Adopt the searches started with the previous frame (waiting for them)."""
+        """Adopt the searches that have ended (all of them, waiting, if wait_for_search)."""
         for k, future in sorted(self._searching.items()):
+            if not self.wait_for_search and not future.done():
+                continue
+            del self._searching[k]
             try:
                 hands = future.result()
                 self._failed_in_row = 0
@@ -166,7 +173,6 @@ class HandDetector:
                     log.warning('hand detector: looking for a further hand failed (tracking '
                                 'goes on; logged again after a success): %s', e)
             self._tracked[k] = hands[0] if hands else None
-        self._searching = {}
 
     def detect(self, rgb):
         if self.strategy == 'single':
@@ -179,6 +185,8 @@ class HandDetector:
         # Graphs with nothing to track first: a search is then under way on the worker
         # while this thread tracks.
         for k in sorted(range(len(self._graphs)), key=lambda j: self._tracked[j] is not None):
+            if k in self._searching:
+                continue
             others = [lm for j, lm in enumerate(self._tracked) if j != k and lm is not None]
             # The first graph that has nothing to track looks every frame while no hand
             # is tracked at all; any other idle graph every detect_every frames.
