@@ -182,9 +182,10 @@ class HandDetector:
         self._collect()
         height, width = rgb.shape[:2]
         found = {}
-        # Graphs with nothing to track first: a search is then under way on the worker
-        # while this thread tracks.
-        for k in sorted(range(len(self._graphs)), key=lambda j: self._tracked[j] is not None):
+        # Tracking first, then the searches: one on the worker then runs while this frame
+        # is published and the next one awaited, not beside this frame's tracking (which
+        # it would slow down when the other core is busy).
+        for k in sorted(range(len(self._graphs)), key=lambda j: self._tracked[j] is None):
             if k in self._searching:
                 continue
             others = [lm for j, lm in enumerate(self._tracked) if j != k and lm is not None]
