@@ -44,6 +44,33 @@ def test_each_run_writes_a_fresh_file(tmp_path):
     assert results['_failed'] == {} and results['_run']['modules'] == []
 
 
+@pytest.mark.parametrize('outcome', ['measured', 'raised'])
+def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
+    from leap_teleop.tools import soak
+
+    def run(minutes, rtf, rate_hz=None, log=print):
+        if outcome == 'raised':
+            raise SystemExit('[soak] the graph died: ur10_sim')
+        return ({'soak.dropped_msgs': 0, 'soak.rss_growth_pct': 1.5,
+                 'soak.arm_latency_drift_ms': math.nan},
+                {'soak.dropped_msgs': 'sent minus received', 'soak.rss_growth_pct': 'VmRSS',
+                 'soak.arm_latency_drift_ms': 'medians'})
+    monkeypatch.setattr(soak, 'run', run)
+    out = tmp_path / 'soak_results.json'
+    out.write_text(json.dumps({'soak.dropped_msgs': 7, 'soak.sim_minutes': 30.0}))
+    assert soak.main(['--minutes', '0.5', '--out', str(out)]) == 1
+    results = json.loads(out.read_text())
+    assert 'soak.sim_minutes' not in results and results['_run']['minutes'] == 0.5
+    if outcome == 'raised':
+        assert 'soak.dropped_msgs' not in results
+        assert results['_failed'] == {'soak': 'SystemExit: [soak] the graph died: ur10_sim'}
+    else:
+        assert results['soak.dropped_msgs'] == 0 and results['soak.rss_growth_pct'] == 1.5
+        assert results['_sources'] == {'soak.dropped_msgs': 'sent minus received',
+                                       'soak.rss_growth_pct': 'VmRSS'}
+        assert list(results['_failed']) == ['soak.arm_latency_drift_ms']
+
+
 def record(frame_ids, window=(0.0, 5.0)):
     return {'frame_id': list(frame_ids), 'window': list(window)}
 
