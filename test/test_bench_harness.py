@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.bench import __main__ as bench_main
-from leap_teleop.bench.bench_arm import _p99_ms
+from leap_teleop.bench.bench_arm import _p99_ms, median_ci
 from leap_teleop.bench.bench_sender import max_rate_no_drop, received_hz
 
 
@@ -69,6 +69,18 @@ def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome
         assert results['_sources'] == {'soak.dropped_msgs': 'sent minus received',
                                        'soak.rss_growth_pct': 'VmRSS'}
         assert list(results['_failed']) == ['soak.arm_latency_drift_ms']
+
+
+def test_the_median_interval_narrows_with_rounds_and_holds_the_median():
+    rng = np.random.default_rng(7)
+    few, many = rng.normal(1.0, 2.0, 10), rng.normal(1.0, 2.0, 40)
+    lo10, hi10 = median_ci(few)
+    lo40, hi40 = median_ci(many)
+    assert lo10 <= np.median(few) <= hi10 and lo40 <= np.median(many) <= hi40
+    assert hi40 - lo40 < hi10 - lo10
+    assert hi40 - lo40 < 2.0               # what 40 rounds of this spread resolve
+    assert median_ci(many) == (lo40, hi40)  # fixed seed: the same figures every run
+    assert median_ci([1.5] * 12) == (1.5, 1.5)
 
 
 def record(frame_ids, window=(0.0, 5.0)):
