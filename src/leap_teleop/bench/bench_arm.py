@@ -46,8 +46,9 @@ def median_ci(values, level=0.95, resamples=10000, seed=0):
     return float(low), float(high)
 
 
-# 40 rounds: with the per-round spread seen here (about 2 ms standard deviation) the 95 %
-# interval of the median comes out narrower than the 2 ms goal; 10 rounds gave about 4 ms.
+# 40 rounds (about 5 minutes): with the per-round spread of a shared 2-core machine (about
+# 3 ms standard deviation) the 95 % interval of the median came out 1.6 ms wide, narrower
+# than the 2 ms goal; 10-round stretches of the same run gave 1.5 to 4.3 ms.
 ROUNDS = 40
 
 
