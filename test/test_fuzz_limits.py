@@ -196,10 +196,14 @@ def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
                 assert math.isfinite(getattr(state, key)), key
             for flag in ('fist', 'thumb_up', 'pinch'):
                 assert isinstance(getattr(state, flag), bool)
+            kinds = []
             for kind, msg in conversions.hand_messages(state):
-                if kind == 'leapcobot':
+                kinds.append(kind)
+                if kind == 'leapcobot':       # the message carries the state's values
                     d = conversions.from_leapcobot(msg)
-                    assert 0.0 <= d['pinch_value'] <= 0.8
+                    assert d['pinch_value'] == pytest.approx(state.pinch_value, abs=1e-6)
+                    assert d['present'] == state.present and d['side'] == side
+            assert kinds[:2] == ['leapcobot', 'hand']
     finally:
         log.setLevel(level)
 
