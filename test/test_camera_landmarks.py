@@ -74,7 +74,8 @@ def test_every_photo_hand_converts_to_a_complete_leap_hand(hands_json):
         assert np.isclose(np.linalg.norm(hand.palm_normal), 1.0)
         assert np.isclose(np.linalg.norm(hand.direction), 1.0)
         assert abs(np.dot(hand.palm_normal, hand.direction)) < 1e-9
-        # (grab and pinch strengths: by pose in test_grab_and_pinch_strengths)
+        # The SDK's 0..1 (the conversion clips them); by pose in test_grab_and_pinch_strengths.
+        assert 0.0 <= hand.grab_strength <= 1.0 and 0.0 <= hand.pinch_strength <= 1.0
         for f in hand.fingers:
             for joint in (f.mcp, f.pip, f.dip, f.tip):
                 assert np.all(np.isfinite(joint))
