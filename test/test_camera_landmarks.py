@@ -116,12 +116,16 @@ def test_extended_flags_follow_the_labels(hands_json):
         checked += 1
     assert checked == 23
     # Flat hands and OK signs: the four / three fingers that are out are extended.
+    checked = 0
     for name, cam, lm in photo_hands(hands_json):
         flags = [f.extended for f in hand_from_landmarks(lm, cam).fingers]
         if name.startswith('flat_hand'):
             assert flags[1:] == [True] * 4, name
+            checked += 1
         if name.startswith('ok'):
             assert flags[2:] == [True] * 3 and not flags[1], name
+            checked += 1
+    assert checked == 6                 # 2 flat hands, 4 OK signs
 
 
 def test_grab_and_pinch_strengths(hands_json):
