@@ -231,9 +231,9 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
     assert sorted(os.listdir(share / 'launch')) == sorted(
         f for f in os.listdir(os.path.join(ROOT, 'launch')) if f.endswith('.launch'))
     for launch in sorted(os.listdir(share / 'launch')):
-        args, check = signs_of_life(launch, tmp_path)
+        launch_args, check = signs_of_life(launch, tmp_path)
         (tmp_path / launch).mkdir()
-        run_launches(tmp_path / launch, [[launch] + args], check, 90, env=installed,
+        run_launches(tmp_path / launch, [[launch] + launch_args], check, 90, env=installed,
                      clean_exit=True)
     # The installed sender feeds the classic consumer (leap_motion/leapros, same MD5).
     port = free_port()
