@@ -37,6 +37,10 @@ import xmlrpc.client
 import numpy as np
 
 ARMS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+# The graph's own nodes: one that is gone (refused a parameter, crashed) ends the soak
+# rather than leaving its figures out.
+NODES = ('/ur10_sim', '/ur10_1/ur10_arm', '/ur10_2/ur10_arm', '/drone/drone_pilot',
+         '/drone/ardrone_sim')
 LAUNCH = """<launch>
   <param name="/use_sim_time" value="true"/>
   <include file="$(find leap_teleop)/launch/ur10_dual_sim.launch">
@@ -64,7 +68,8 @@ LAUNCH = """<launch>
     <node pkg="leap_teleop" type="drone_subscriber.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
       <param name="realtime_factor" value="{rtf}"/>
-      <param name="battery_flight_time" value="1e6"/>
+      <!-- The longest battery the node accepts: it never runs flat during a soak. -->
+      <param name="battery_flight_time" value="100000.0"/>
       <remap from="/clock" to="/drone/sim_clock"/>
     </node>
   </group>
@@ -316,6 +321,10 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
             flights = sum(1 for c, s in mon.nav_states if s == 6)
         if cycle == 0 or cycle == cycles - 1 or cycle % 5 == 4:
             pids = node_pids(master_uri)
+            gone = [n for n in NODES if n not in pids]
+            if gone:
+                raise SystemExit('[soak] nodes not running after cycle %d: %s'
+                                 % (cycle + 1, ', '.join(gone)))
             sample = {n: rss_kb(p) for n, p in pids.items()}
             for n, kb in sample.items():
                 if kb:
