@@ -67,9 +67,9 @@ class CameraSource(HandSource):
         self.cv2 = capture.import_cv2()
         self.detector = HandDetector(max_hands=max_hands, model=model, strategy=strategy,
                                      detect_every=detect_every, static=self.still,
-                                     search_thread=search_thread,
-                                     # offline: results independent of timing
-                                     wait_for_search=not self.realtime,
+                                     # offline: in the call, so results do not
+                                     # depend on timing
+                                     search_thread=search_thread and self.realtime,
                                      min_detection_confidence=min_detection_confidence)
         media = open_media()             # fails now, not later, on a bad device or file
         self.rate_hz = media.fps

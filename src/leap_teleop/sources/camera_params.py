@@ -37,10 +37,10 @@ CAMERA_PARAMS = {
     'max_hands': Param(2, 'camera sources: hands tracked at most', ge=1, le=2),
     'detect_every': Param(8, 'camera sources: while fewer than ~max_hands are tracked, look '
                              'for another hand every this many frames', ge=1, le=60),
-    'search_thread': Param(True, 'camera sources: look for another hand on a worker thread '
-                                 '(the other core) while the tracked hands are published; '
-                                 'off = in the frame\'s own processing, which makes that '
-                                 'frame late'),
+    'search_thread': Param(True, 'camera sources, live or paced: look for hands on a worker '
+                                 'thread (the other core) and publish each frame after '
+                                 'tracking only; off = in the frame\'s own processing, which '
+                                 'makes that frame late'),
     'min_detection_confidence': Param(0.5, 'camera sources: MediaPipe palm detection '
                                            'threshold', gt=0.0, lt=1.0),
     'video_drop_late': Param(False, 'video source, paced: behave like a live camera (a frame '

@@ -11,15 +11,16 @@ image with the tracked hands blanked out (so both never lock onto one hand) and 
 only every `detect_every`-th frame. A new second hand is then found within
 `detect_every` frames; while no hand is tracked at all, the first graph looks on every
 frame.
-Search thread. Looking for a further hand costs a palm detector run on top of tracking;
-done in the caller's call it makes every `detect_every`-th frame late. With
-`search_thread` (the default) that search runs on a worker thread (the graph releases the
-GIL while it runs, so it uses the other core) while the caller tracks the hands it has
-and returns; a later detect() collects it and a hand it found is tracked by its graph from
-that frame on. With `wait_for_search` (offline processing) the next detect() waits for it,
-so results do not depend on timing; without (live and paced sources) a search still
-running is collected at the first detect() after it ends, and its graph sits out until
-then.
+Search thread. Looking for a hand runs the palm detector: on top of tracking when
+looking for a further hand (every `detect_every`-th frame), alone but costlier than
+tracking while no hand is tracked; in the caller's call either makes that frame late.
+With `search_thread` (for live and paced sources) every search runs on a worker thread
+instead (the graph releases the GIL while it runs, so it uses the other core), started
+after the frame's tracking so it runs while the frame is published and the next one
+awaited: detect() returns the tracked hands only, and a hand a search found is tracked
+by its graph from the first detect() after the search has ended (never waited for; the
+graph sits out until then). Without it (processing a file as fast as possible, tests)
+the search runs in the call, so results never depend on timing.
 A graph is only ever run by one thread at a time: a graph searching is not touched until
 collected. A failed search is logged and counted (search_failures), never raised.
 'single' is the plain legacy graph with max_num_hands (and static_image_mode for
@@ -92,7 +93,7 @@ class HandDetector:
 
     def __init__(self, max_hands=2, model='full', strategy='paired', detect_every=8,
                  redetect_every=0, static=False, min_detection_confidence=0.5,
-                 min_tracking_confidence=0.5, search_thread=True, wait_for_search=True):
+                 min_tracking_confidence=0.5, search_thread=False):
         if model not in MODEL_COMPLEXITY:
             raise SourceError('model must be one of %s, got %r' % (sorted(MODEL_COMPLEXITY), model))
         if strategy not in ('paired', 'single'):
@@ -119,10 +120,8 @@ class HandDetector:
         self._blank = None
         self.graph_runs = 0                      # for benchmarks: graph invocations
         self._pool = (concurrent.futures.ThreadPoolExecutor(1, 'hand-search')
-                      if search_thread and self.strategy == 'paired' and n_graphs > 1
-                      else None)
+                      if search_thread and self.strategy == 'paired' else None)
         self._searching = {}                     # graph -> Future of its search
-        self.wait_for_search = bool(wait_for_search)
         self.search_failures = 0
         self._failed_in_row = 0
 
@@ -152,14 +151,15 @@ class HandDetector:
         self.graph_runs += 1
         return _landmarks(graph.process(image))
 
-    def _search(self, k, image):
-        """Graph k looking for a hand (on the worker thread: touches no shared state)."""
-        return _landmarks(self._graphs[k].process(image))
+    @staticmethod
+    def _search(graph, image):
+        """A graph looking for a hand (on the worker thread: touches no shared state)."""
+        return _landmarks(graph.process(image))
 
     def _collect(self):
-        """Adopt the searches that have ended (all of them, waiting, if wait_for_search)."""
+        """Adopt the searches that have ended."""
         for k, future in sorted(self._searching.items()):
-            if not self.wait_for_search and not future.done():
+            if not future.done():
                 continue
             del self._searching[k]
             try:
@@ -170,7 +170,7 @@ class HandDetector:
                 self.search_failures += 1
                 self._failed_in_row += 1
                 if self._failed_in_row == 1:
-                    log.warning('hand detector: looking for a further hand failed (tracking '
+                    log.warning('hand detector: looking for a hand failed (tracking '
                                 'goes on; logged again after a success): %s', e)
             self._tracked[k] = hands[0] if hands else None
 
@@ -203,10 +203,10 @@ class HandDetector:
                 for lm in others:
                     x0, y0, x1, y1 = _box(lm, width, height)
                     image[y0:y1, x0:x1] = 0
-            if self._pool is not None and self._tracked[k] is None and others:
+            if self._pool is not None and self._tracked[k] is None:
                 self.graph_runs += 1
                 self._tracked_runs[k] = 0
-                self._searching[k] = self._pool.submit(self._search, k, image)
+                self._searching[k] = self._pool.submit(self._search, self._graphs[k], image)
                 continue
             hands = self._process(k, image, self._tracked[k] is not None)
             self._tracked[k] = hands[0] if hands else None
