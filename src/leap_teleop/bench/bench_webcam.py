@@ -2,15 +2,15 @@
 
 webcam.fps: frames per second through the whole video source (decode, letterbox to
 640x480, MediaPipe Hands full model looking for up to two hands, landmark conversion),
-as fast as possible, both clips; next to it, alternating rounds, the same with the
-further-hand search in the frame's own processing (webcam.fps_search_inline) and the plain
-legacy graph (max_num_hands=2, palm detector on every frame with fewer than two hands).
+as fast as possible, both clips (searching for hands in the call: offline processing does
+not use the search thread); next to it, alternating rounds, the plain legacy graph
+(max_num_hands=2, palm detector on every frame with fewer than two hands).
 webcam.latency_p99_ms: frame captured -> leapcobot message received, the sender running
 as a node on the clips paced at 30 frames/s and behaving like a webcam (a frame that
 arrives while the previous one is processed replaces it: ~video_drop_late), probed on
 leapmotion/data_right; webcam.processed_fraction: the share of the clip's frames it
 processed meanwhile. Every published message counts (none is left out of the tail).
-Latency is measured with the further-hand search on its worker thread (the default) and,
+Latency is measured with the hand searches on their worker thread (the default) and,
 alternating rounds, in the frame's own processing (~search_thread false:
 webcam.latency_*_search_inline), to show what the thread buys.
 """
@@ -38,15 +38,14 @@ def _clip(name):
     return path
 
 
-def _throughput(strategy, search_thread=True):
+def _throughput(strategy):
     """(frames/s, CPU ms per frame, hands found) over both clips, as fast as possible."""
     from leap_teleop.sources import make_source
     frames = hands = 0
     wall = cpu = 0.0
     for name in CLIPS:
         source = make_source('video', path=_clip(name), realtime=False, width=640, height=480,
-                             max_hands=2, model='full', strategy=strategy,
-                             search_thread=search_thread)
+                             max_hands=2, model='full', strategy=strategy)
         t0, c0 = time.perf_counter(), time.process_time()
         for frame in source.frames():
             frames += 1
@@ -64,19 +63,17 @@ def _sender_cmd(video, search_thread):
 
 def run():
     results = {}
-    strategies = {'paired': ('paired', True), 'paired_search_inline': ('paired', False),
-                  'single': ('single', True)}
+    strategies = ('paired', 'single')
     fps = {k: [] for k in strategies}
     cpu = {k: [] for k in strategies}
     for _ in range(ROUNDS):
-        for name, (strategy, search_thread) in strategies.items():
-            f, c, hands = _throughput(strategy, search_thread)
+        for name in strategies:
+            f, c, hands = _throughput(name)
             fps[name].append(f)
             cpu[name].append(c)
             print('  %s: %.1f frames/s, %.1f ms CPU per frame, %d hands'
                   % (name, f, c, hands))
     results['webcam.fps'] = float(np.median(fps['paired']))
-    results['webcam.fps_search_inline'] = float(np.median(fps['paired_search_inline']))
     results['webcam.fps_single_graph'] = float(np.median(fps['single']))
     results['webcam.cpu_ms_per_frame'] = float(np.median(cpu['paired']))
 
