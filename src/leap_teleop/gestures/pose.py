@@ -62,6 +62,11 @@ THUMB_OUT = (0.4, 0.35)
 # alongside thumb 0.9..1).
 THUMB_UP_OUT = (0.65, 0.55)
 THUMB_UP_MAX_ALONG = 0.95
+# ... and pointing out from the side of the fist: thumb . thumbward above this (thumbs-up
+# photos 0.40..0.81, 0.26 and up with 4 mm of landmark noise; the shared takes' >= 0.48; a
+# thumb laid along an upright fist's fingers points up with them: ~0.06, with noise
+# up to ~0.25, where it may also pass the other thumbs-up bars).
+THUMB_UP_MIN_THUMBWARD = 0.25
 # A thumb lying over the curled fingers: its tip this far (palm widths) out of the palm
 # beyond the index's middle joint (a fist's tucked or laid-over thumb 0.2..0.7; a thumb
 # swung out beside a fist, the shared takes' -0.7..-0.04). Such a thumb closes a fist
@@ -162,7 +167,9 @@ def classify_geometry(g, hand, active=None, opening=False):
             n_ext += 1
     out = g.thumb_out > THUMB_OUT[1 if (up_on or 'open' in active) else 0]
     over = g.thumb_over > THUMB_OVER
-    up_out = g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
+    tw, td = g.basis[0], g.thumb_dir
+    up_out = (g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
+              and tw[0] * td[0] + tw[1] * td[1] + tw[2] * td[2] > THUMB_UP_MIN_THUMBWARD)
     ty = g.thumb_dir[1]
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
