@@ -23,7 +23,10 @@ class SenderFollowsScript(unittest.TestCase):
         deadline = rospy.Time.now() + rospy.Duration(rospy.get_param('~duration', 6.0))
         while rospy.Time.now() < deadline and not rospy.is_shutdown():
             rospy.sleep(0.1)
+        # The script has a right hand and no left one; both sides are published each frame.
         self.assertGreater(len(hands), 300)
+        self.assertGreater(len(cobots_right), 300)
+        self.assertGreater(len(cobots_left), 300)
 
         # Palm positions follow the script within 1 mm; presence matches.
         n_frames = int(round(script.duration * script.rate_hz))   # the sender loops

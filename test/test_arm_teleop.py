@@ -125,7 +125,6 @@ def test_target_is_clamped_to_the_workspace_box():
 
 def test_joystick_dead_zone_moves_nothing_and_excess_moves_at_capped_speed():
     t, c = armed_with_origin(mode='joystick', deadzone_mm=30.0, max_tcp_speed=0.1)
-    start = np.array(t.status.target or kin.fk(HOME)[:3, 3])
     for _ in range(50):
         drive(t, c, hand(palm_mm=(20.0, 210.0, 0.0)))      # 22 mm from the origin
     np.testing.assert_allclose(t.status.target, kin.fk(HOME)[:3, 3], atol=1e-12)
@@ -134,7 +133,6 @@ def test_joystick_dead_zone_moves_nothing_and_excess_moves_at_capped_speed():
     moved = np.array(t.status.target) - kin.fk(HOME)[:3, 3]
     assert moved[0] == pytest.approx(0.1, rel=0.02)        # forward at the 0.1 m/s cap
     assert abs(moved[1]) < 1e-9 and abs(moved[2]) < 1e-9
-    del start
 
 
 def test_fist_disarms_holds_and_later_pinch_moves_nothing():
@@ -182,14 +180,17 @@ def test_unreachable_target_holds_then_recovers():
     assert t.status.state == TRACKING and cmd.q is not None
 
 
-@pytest.mark.parametrize('bad', [
-    dict(palm_mm=(math.nan, 200.0, 0.0)), dict(palm_mm=(0.0, math.inf, 0.0)),
-    dict(palm_mm=(1e9, 0.0, 0.0)), dict(pinch_value=math.nan)])
-def test_bad_input_is_rejected_and_counted(bad):
+@pytest.mark.parametrize('bad, why', [
+    (dict(palm_mm=(math.nan, 200.0, 0.0)), 'not a trackable hand'),
+    (dict(palm_mm=(0.0, math.inf, 0.0)), 'not a trackable hand'),
+    (dict(palm_mm=(1e9, 0.0, 0.0)), 'not a trackable hand'),
+    (dict(pinch_value=math.nan), 'pinch value nan is not finite')])
+def test_bad_input_is_rejected_and_counted(bad, why):
     t, c = armed_with_origin()
     before = t.status.target
+    assert len(before) == 3                      # a target to compare with (set at the rock)
     now = c.tick()
-    assert t.on_hand(hand(stamp=now, **bad), now) is not None
+    assert why in t.on_hand(hand(stamp=now, **bad), now)
     assert t.status.rejected_inputs == 1
     t.step(now)
     assert t.status.target == before
@@ -197,8 +198,14 @@ def test_bad_input_is_rejected_and_counted(bad):
 
 def test_out_of_order_messages_are_dropped():
     t, c = armed_with_origin()
+    before = t.status.target
     now = c.tick()
-    assert t.on_hand(hand(stamp=now - 1.0), now) is not None
+    # the rock arrived 8 ms ago; a hand stamped 1 s earlier (far up) is older than it
+    why = t.on_hand(hand(stamp=now - 1.0, palm_mm=(0.0, 300.0, 0.0)), now)
+    assert why.startswith('out of order: 0.99')
+    assert t.status.rejected_inputs == 1
+    t.step(now)
+    assert t.status.target == before             # the dropped hand moved nothing
 
 
 def test_proportional_gripper_follows_pinch_value_and_sends_changes_only():
@@ -307,5 +314,5 @@ def test_wrist_ranges_limit_the_ik():
 def test_non_angle_rotation_is_rejected():
     t, c = armed_with_origin(orientation='full')
     now = c.tick()
-    assert t.on_hand(hand(turn=float('nan'), stamp=now), now)
+    assert 'is not an angle' in t.on_hand(hand(turn=float('nan'), stamp=now), now)
     assert t.status.rejected_inputs == 1

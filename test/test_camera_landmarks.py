@@ -74,6 +74,7 @@ def test_every_photo_hand_converts_to_a_complete_leap_hand(hands_json):
         assert np.isclose(np.linalg.norm(hand.palm_normal), 1.0)
         assert np.isclose(np.linalg.norm(hand.direction), 1.0)
         assert abs(np.dot(hand.palm_normal, hand.direction)) < 1e-9
+        # The SDK's 0..1 (the conversion clips them); by pose in test_grab_and_pinch_strengths.
         assert 0.0 <= hand.grab_strength <= 1.0 and 0.0 <= hand.pinch_strength <= 1.0
         for f in hand.fingers:
             for joint in (f.mcp, f.pip, f.dip, f.tip):
@@ -115,23 +116,31 @@ def test_extended_flags_follow_the_labels(hands_json):
         checked += 1
     assert checked == 23
     # Flat hands and OK signs: the four / three fingers that are out are extended.
+    checked = 0
     for name, cam, lm in photo_hands(hands_json):
         flags = [f.extended for f in hand_from_landmarks(lm, cam).fingers]
         if name.startswith('flat_hand'):
             assert flags[1:] == [True] * 4, name
+            checked += 1
         if name.startswith('ok'):
             assert flags[2:] == [True] * 3 and not flags[1], name
+            checked += 1
+    assert checked == 6                 # 2 flat hands, 4 OK signs
 
 
 def test_grab_and_pinch_strengths(hands_json):
+    closed = opened = 0
     for name, cam, lm in photo_hands(hands_json):
         hand = hand_from_landmarks(lm, cam)
         kind = name.split('__')[0]
         if kind in ('fist', 'thumbs_up', 'thumbs_down'):
             assert hand.grab_strength > 0.7, name
+            closed += 1
         if kind in ('open_palm', 'flat_hand'):
             assert hand.grab_strength < 0.2, name
             assert hand.pinch_strength < 0.2, name
+            opened += 1
+    assert (closed, opened) == (10, 7)          # every such photographed hand was checked
 
 
 def placed(lm, cam, palm_mm=95.0):

@@ -86,16 +86,21 @@ def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
     assert evaluate.circle_agreement(rows(palm), {1: sdk}) == (1, 1, 1, 1)
 
 
-def test_main_writes_the_json(tmp_path):
+def test_main_writes_the_json(tmp_path, results, leapjs_data):
     import json
+    from leap_teleop.tools import evaluate_population
     out = tmp_path / 'eval_results.json'
-    assert evaluate.main(['--out', str(out), '--no-loto', '--people', '10']) == 0
+    assert evaluate.main(['--data', leapjs_data, '--out', str(out), '--no-loto',
+                          '--people', '10']) == 0
     data = json.loads(out.read_text())
     for who in ('recognizer', 'original'):
         for g in evaluate.GESTURES:
             assert set(data[who][g]) == {'precision', 'recall', 'n'}
+        # the figures evaluate() computes, not just their names
+        assert data[who] == results[who], who
     assert set(data['population']['gestures']) == {'fist', 'thumb_up', 'thumb_down', 'pinch',
                                                    'rock', 'open'}
+    assert data['population'] == evaluate_population.run(10, 1)      # --people 10, seed 1
 
 
 def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):

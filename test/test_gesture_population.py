@@ -105,6 +105,7 @@ def test_missing_fields_degrade_not_fail(missing):
 
 def test_thumbs_down_never_thumbs_up_and_never_arms():
     rng = np.random.default_rng(5)
+    frames = shown_down = 0
     for p in pop.make_people(20, seed=5):
         rec = GestureRecognizer()
         arm = ArmTeleop()
@@ -117,6 +118,10 @@ def test_thumbs_down_never_thumbs_up_and_never_arms():
                                   thumb_up=s.thumb_up, stamp=100.0 + t), 100.0 + t)
             arm.step(100.0 + t)
             assert arm.status.state == DISARMED
+            frames += 1
+        shown_down += s.thumb_down
+    # It was a thumbs-down the arm saw (not no hand at all): every person's is recognised.
+    assert frames == 20 * 90 and shown_down == 20
 
 
 def test_a_held_thumbs_up_arms():

@@ -193,9 +193,11 @@ def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(s
     events = _fingertip_loop('xy', sense)
     assert [e.gesture for e in events] == [expected]
     assert events[0].value == pytest.approx(0.012, rel=0.2)
-    # it says where: the pointing index drew it, about its centre (mm, Leap axes)
+    # it says where: the pointing index drew it, about its centre (mm, Leap axes): the
+    # index tip of the hand at the loop's centre
     assert events[0].source == 'index'
-    assert len(events[0].center) == 3 and all(math.isfinite(c) for c in events[0].center)
+    tip = render_hand('right', 'point', (0.0, 200.0, 0.0)).fingers[1].tip
+    np.testing.assert_allclose(events[0].center, tip, atol=1.0)       # 0.27 mm here
 
 
 @pytest.mark.parametrize('duration,fires', [(0.3, True), (0.12, False)])

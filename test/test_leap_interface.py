@@ -117,7 +117,7 @@ def test_out_of_range_strengths_are_clamped():
     li.on_frame(frame(1, hand))
     s = li.get_right_hand_state()
     assert (s.grab_strength, s.pinch_strength, s.confidence) == (1.0, 0.0, 0.0)
-    assert 0.0 <= s.pinch_value <= 0.8
+    assert not s.pinch and s.pinch_value == 0.0          # a NaN pinch strength is no pinch
 
 
 class _CountingSource(HandSource):
@@ -136,7 +136,7 @@ class _CountingSource(HandSource):
 
 def test_snapshots_are_consistent_under_a_concurrent_writer():
     li = LeapInterface(_CountingSource(2000))
-    errors, reads = [], [0]
+    errors, reads, checked = [], [0], [0]
 
     def reader():
         last = 0
@@ -144,6 +144,7 @@ def test_snapshots_are_consistent_under_a_concurrent_writer():
             both = li.snapshot()
             right, left = both['right'], both['left']
             if right.present:
+                checked[0] += 1
                 if not (right.frame_id == left.frame_id == 2 * right.palm_position[0]
                         == 2 * left.palm_position[0]):
                     errors.append((right.frame_id, left.frame_id, right.palm_position))
@@ -161,7 +162,8 @@ def test_snapshots_are_consistent_under_a_concurrent_writer():
     for t in readers:
         t.join(5)
     assert li.error is None and li.frames_seen == 2000
-    assert reads[0] > 100 and not errors, errors[:5]
+    # the consistency check ran on many snapshots with both hands in them
+    assert reads[0] > 100 and checked[0] > 100 and not errors, (checked, errors[:5])
 
 
 def test_listeners_get_every_frame_in_order_and_source_errors_are_reported():

@@ -46,9 +46,9 @@ def _listening(pids):
     return sockets
 
 
-@pytest.mark.skipif(shutil.which('ss') is None, reason='ss (iproute2) is not installed')
 @pytest.mark.parametrize('launch, args', LAUNCHES)
 def test_every_listening_socket_is_on_loopback(launch, args, tmp_path):
+    assert shutil.which('ss'), 'ss not on PATH (Debian package iproute2)'
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
                ROS_LOG_DIR=str(tmp_path))

@@ -55,7 +55,8 @@ def test_every_node_declares_its_parameters():
     assert set(TABLES) >= {'sender', 'ur10_arm', 'ur10_sim', 'drone_pilot', 'ardrone_sim',
                            'hand_markers'}
     for module, params in TABLES.items():
-        assert check_params(params, {}) is not None           # the defaults pass
+        # the defaults pass, unchanged
+        assert check_params(params, {}) == {n: p.default for n, p in params.items()}, module
         for name, p in params.items():
             assert p.doc and p.allowed(), (module, name)
             if p.kind in ('int', 'float') or (p.kind == 'list' and p.item in ('int', 'float')):

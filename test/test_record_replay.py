@@ -10,6 +10,7 @@ import pytest
 
 from leap_teleop.bench import harness
 from leap_teleop.nodes.common import package_path
+from test_rostests import check_every_test_passed
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -43,6 +44,7 @@ def rostest(test_file, tmp_path, **args):
                           env=dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log')))
     out = proc.stdout.decode(errors='replace')
     assert proc.returncode == 0, out[-6000:]
+    check_every_test_passed(test_file, out)
 
 
 @pytest.mark.rostest

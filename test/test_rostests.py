@@ -3,6 +3,7 @@ import glob
 import os
 import re
 import subprocess
+from xml.etree import ElementTree
 
 import pytest
 
@@ -30,4 +31,18 @@ def test_rostest(test_file, tmp_path):
     output = proc.stdout.decode(errors='replace')
     assert proc.returncode == 0, 'rostest %s failed:\n%s' % (os.path.basename(test_file),
                                                            output[-8000:])
+    check_every_test_passed(test_file, output)
+
+
+def check_every_test_passed(test_file, output):
+    """rostest's summary says SUCCESS, and every <test> node of the file ran at least one
+    test case that passed: a node that ran none (no test methods, a bad test-name) would
+    still give SUCCESS."""
     assert re.search(r'RESULT: (\x1b\[\d+m)?SUCCESS', output), output[-8000:]
+    names = [t.get('test-name') for t in ElementTree.parse(test_file).getroot().iter('test')]
+    assert names, '%s has no <test>' % test_file
+    for name in names:
+        assert re.search(r'\[[\w.]+-%s/\w+\]\[passed\]' % re.escape(name), output), (
+            'no passed test case of %s:\n%s' % (name, output[-8000:]))
+    total = int(re.search(r'\* TESTS: (\d+)', output).group(1))
+    assert total >= len(names), output[-8000:]

@@ -4,8 +4,8 @@ Two network namespaces joined by a veth pair (10.231.0.1/24 ground station, 10.2
 robot). The ground station runs the master and the sender (scripted single-arm pick and
 place); the robot runs the UR10 arm node and the simulator, each host with its own
 ROS_IP. The cube must end within 3 cm of its tray's centre. Skips where namespaces
-cannot be created (not root, no CAP_NET_ADMIN, no iproute2). The namespaces are
-always deleted.
+cannot be created (not root, no CAP_NET_ADMIN); fails without iproute2 (a setup package).
+The namespaces are always deleted.
 
 Run as a script with --check inside the ground station namespace, this file is the
 checker: it waits for the robot, starts the sender, waits for it to end and prints the
@@ -88,8 +88,8 @@ def _stop(proc):
             pass
 
 
-@pytest.mark.skipif(shutil.which('ip') is None, reason='iproute2 (ip) is not installed')
 def test_pick_and_place_across_two_hosts(tmp_path):
+    assert shutil.which('ip'), 'ip not on PATH (Debian package iproute2)'
     nets = Namespaces()
     try:
         nets.create()

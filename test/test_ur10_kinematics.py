@@ -167,12 +167,22 @@ def test_bad_reference_joints_fail_quietly():
 
 def test_fuzzed_poses_never_raise():
     rng = np.random.default_rng(RNG_SEED + 5)
+    solved = nearest = 0
     for _ in range(2000):
         T = np.eye(4)
         R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
         T[:3, :3] = R * np.sign(np.linalg.det(R))      # a rotation, not a reflection
         T[:3, 3] = rng.uniform(-2.0, 2.0, 3)
-        for s in kin.ik(T):
+        sols = kin.ik(T)
+        for s in sols:
             dp, dr = pose_error(kin.fk(s), T)
             assert dp < 1e-6 and dr < 1e-6
-        kin.ik_nearest(T, kin.HOME_Q)
+        solved += bool(sols)
+        best = kin.ik_nearest(T, kin.HOME_Q)
+        if best is not None:       # a solution within the limits: it reaches the pose
+            assert sols and np.all(best >= kin.JOINT_LOWER) and np.all(best <= kin.JOINT_UPPER)
+            dp, dr = pose_error(kin.fk(best), T)
+            assert dp < 1e-6 and dr < 1e-6
+            nearest += 1
+    # Positions in a 4 m cube around a 1.3 m reach: some reachable, most not.
+    assert 100 < solved < 1500 and nearest > 100, (solved, nearest)
