@@ -10,7 +10,7 @@ at all, no SDK strengths, no timestamps). Poses come from joint angles and thumb
 placements read off how hands are formed, in the hand's own size, never from the
 recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg
 (fists and the hooked index also upright, as raised to a camera, turned any way about the
-forearm); thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
+forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
 
     people = make_people(200, seed=1)
     for frames in take(person, 'fist', rng): ...   # (Hand, timestamp) per frame
@@ -27,7 +27,8 @@ from .frame import Finger, Hand
 
 GESTURE_POSES = {'fist': 'fist', 'thumb_up': 'thumbs_up', 'thumb_down': 'thumbs_down',
                  'pinch': 'ok', 'rock': 'horns', 'open': 'open'}
-CONFUSERS = ('index', 'two', 'three', 'L', 'hang_loose', 'C', 'O', 'sideways_thumb', 'hook')
+CONFUSERS = ('index', 'two', 'three', 'L', 'hang_loose', 'C', 'O', 'sideways_thumb', 'hook',
+             'raised_fist')
 POSES = tuple(GESTURE_POSES.values()) + CONFUSERS
 # What each pose should show (the rest: nothing).
 EXPECTED = {pose: gesture for gesture, pose in GESTURE_POSES.items()}
@@ -125,6 +126,9 @@ _SHAPES = {   # pose -> (finger kinds index..pinky, thumb placement)
     'hang_loose': (('folded', 'folded', 'folded', 'straight'), 'up'),
     'C': (('C',) * 4, 'C'), 'O': (('O',) * 4, 'meet'),
     'hook': (('hooked', 'curled', 'curled', 'curled'), 'tucked'),
+    # a fist raised with the fingers up, its thumb out to the side and toward the fingers:
+    # the thumb points up with the hand, it is not raised
+    'raised_fist': (('curled',) * 4, 'open'),
 }
 
 
@@ -232,7 +236,7 @@ def orientation(person, pose, rng):
         tilt = rng.uniform(-20, 20) if pose != 'sideways_thumb' else rng.uniform(-15, 15)
         r = _rot([1.0, 0.0, 0.0], rng.uniform(-20, 20)) @ _rot(d, tilt) @ r
         return r
-    if pose in ('fist', 'hook') and rng.random() < 0.25:
+    if pose == 'raised_fist' or (pose in ('fist', 'hook') and rng.random() < 0.25):
         # upright, as raised to a camera: fingers up, turned any way about the forearm
         return (_rot([0, 1, 0], rng.uniform(-30, 30)) @ _rot([1, 0, 0], rng.uniform(65, 90))
                 @ _rot(d, rng.uniform(-180, 180)) @ base)

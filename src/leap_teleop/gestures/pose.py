@@ -11,7 +11,9 @@ the joints for a ratio the rules fall back to bend angles.
   An index hooked at its middle joints with its knuckle straight, beside fingers bent at
   the knuckle, is held out of the fist, not curled.
 - thumb_up / thumb_down: the same curled fingers with the thumb out, pointing up / down
-  (Leap +y / -y, within THUMB_VERTICAL). A thumb out sideways is neither, nor a fist.
+  (Leap +y / -y, within THUMB_VERTICAL), out from the side of the fist, and more up /
+  down than the hand direction (a fist raised with its fingers up is no thumbs-up). A
+  thumb out sideways is neither, nor a fist.
 - rock: index and pinky extended, middle and ring folded, thumb either way.
 - pinch: thumb tip at the index tip, the other fingers in any state but all curled to
   the thumb like the index with their tips in a row across the hand (a loose fist) and
@@ -83,6 +85,10 @@ HOOK_OTHERS_KNUCKLE = 45.0
 # (a fist's index bends up to ~75 less than they do: its curl at the low end of the
 # range, theirs at the high end; a hooked index 80..130 less).
 HOOK_BEND_GAP = 80.0
+# ... and pointing up (down) more than the hand direction does, by this much of Leap y
+# (thumbs-up photos 0.32..0.66, thumbs-down 0.78, the shared takes' thumbs-up >= 0.34;
+# fists raised with the fingers up -0.5..0.03: their thumbs point up with the hand).
+THUMB_BEYOND_HAND = 0.15
 # Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
 THUMB_VERTICAL = (45.0, 55.0)
 # Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
@@ -166,10 +172,14 @@ def classify_geometry(g, hand, active=None, opening=False):
             ext[i] = True
             n_ext += 1
     out = g.thumb_out > THUMB_OUT[1 if (up_on or 'open' in active) else 0]
-    over = g.thumb_over > THUMB_OVER
     tw, td = g.basis[0], g.thumb_dir
+    thumbward = tw[0] * td[0] + tw[1] * td[1] + tw[2] * td[2]
+    # lying on the fist: over the fingers, or, without the index knuckle (thumb-out is
+    # then measured from the palm centre, with its tracking noise), pointing along them
+    no_knuckle = g.knuckle[1] != g.knuckle[1]
+    over = g.thumb_over > THUMB_OVER or (no_knuckle and thumbward < THUMB_UP_MIN_THUMBWARD)
     up_out = (g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
-              and tw[0] * td[0] + tw[1] * td[1] + tw[2] * td[2] > THUMB_UP_MIN_THUMBWARD)
+              and thumbward > THUMB_UP_MIN_THUMBWARD)
     ty = g.thumb_dir[1]
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
@@ -181,10 +191,17 @@ def classify_geometry(g, hand, active=None, opening=False):
     pk = 1 if 'pinch' in active else 0
     # every fingertip gathered at the thumb tip: an "O", not a fist
     o_shape = gap < PINCH_GAP[pk] and abs(g.tip_spread) < O_TIP_SPREAD
-    fist = (curled and near and not o_shape
-            and not (out and not (over and g.thumb_out <= THUMB_UP_OUT[0])))
-    thumb_up = thumb_curled and up_out and ty > vert and ('thumb_up' in active or not opening)
-    thumb_down = thumb_curled and up_out and ty < -vert
+    # the thumb, not the whole hand, points up (down): a fist raised with the fingers up
+    # shows its thumb pointing up with them
+    dy = g.basis[2][1]
+    thumb_up = (thumb_curled and up_out and ty > vert and ty - dy > THUMB_BEYOND_HAND
+                and ('thumb_up' in active or not opening))
+    thumb_down = thumb_curled and up_out and ty < -vert and dy - ty > THUMB_BEYOND_HAND
+    # A thumb lying on the fingers closes the fist up to the thumbs-up bar (without the
+    # index knuckle thumb-out is too noisy to bar it: then until a thumbs-up shows).
+    lying = over and (no_knuckle or g.thumb_out <= THUMB_UP_OUT[0])
+    fist = (curled and near and not o_shape and not (out and not lying)
+            and not (thumb_up or thumb_down))
     rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))
     pinch = False
     if gap < PINCH_GAP[pk] and not (fist or thumb_up or thumb_down):
