@@ -25,4 +25,4 @@ soak: setup
 	@$(ENV) python -m leap_teleop.tools.soak
 
 clean:
-	rm -rf .ws build devel bench_results.json eval_results.json demo_output
+	rm -rf .ws build devel bench_results.json soak_results.json eval_results.json demo_output

@@ -6,6 +6,8 @@
   --drone             every --navdata drone took off, flew and is landed again
   --topic T:PKG/MSG  (repeatable) at least --count messages arrive on T
   --rosout TEXT       a node logs a line containing TEXT
+  --advertised T      (repeatable) some node advertises topic T (the master's graph)
+  --subscribed T      (repeatable) some node subscribes to topic T
   --driver            stand in for the AR.Drone driver: navdata at 50 Hz, landed until a
                       takeoff, hovering until a land
 Several conditions: all must hold. Prints what it saw either way.
@@ -16,6 +18,7 @@ import threading
 import time
 
 import numpy as np
+import rosgraph
 import rospy
 import roslib.message
 from rosgraph_msgs.msg import Log
@@ -36,6 +39,8 @@ class Watch:
         self.states = {topic: [] for topic in args.navdata}
         self.counts = {spec.rsplit(':', 1)[0]: 0 for spec in args.topic}
         self.logged = []
+        self.graph = ({}, {})          # topic -> nodes: published, subscribed
+        self.master = rosgraph.Master('/launch_check')
         if args.rosout:
             rospy.Subscriber('/rosout', Log, self._log, queue_size=100)     # no rosout node here
         if args.cube:
@@ -100,8 +105,25 @@ class Watch:
             out[cube] = (xy, pos[2] - tray.floor_z)
         return out
 
+    def _poll_graph(self):
+        if not (self.args.advertised or self.args.subscribed):
+            return
+        try:
+            pubs, subs, _ = self.master.getSystemState()
+        except (OSError, rosgraph.MasterException):
+            return
+        self.graph = ({t: nodes for t, nodes in pubs}, {t: nodes for t, nodes in subs})
+
+    def graph_missing(self):
+        pubs, subs = self.graph
+        return ([t for t in self.args.advertised if not pubs.get(t)]
+                + [t for t in self.args.subscribed if not subs.get(t)])
+
     def done(self):
+        self._poll_graph()
         with self.lock:
+            if self.graph_missing():
+                return False
             for err in self.cube_errors().values():
                 if err is None or err[0] > 0.03 or err[1] > self.cell.cube_size:
                     return False
@@ -118,9 +140,9 @@ class Watch:
     def report(self):
         with self.lock:
             return ('cubes (xy error m, height over tray floor m): %s; arm states: %s; '
-                    'navdata states: %s; messages: %s; logged: %s'
+                    'navdata states: %s; messages: %s; logged: %s; not in the graph: %s'
                     % (self.cube_errors() if self.args.cube else '-', self.arm_states,
-                       self.states, self.counts, self.logged[:1]))
+                       self.states, self.counts, self.logged[:1], self.graph_missing()))
 
 
 def main():
@@ -136,6 +158,8 @@ def main():
     ap.add_argument('--count', type=int, default=1)
     ap.add_argument('--rosout', default='')
     ap.add_argument('--driver', action='store_true')
+    ap.add_argument('--advertised', action='append', default=[])
+    ap.add_argument('--subscribed', action='append', default=[])
     args = ap.parse_args(rospy.myargv()[1:])
     args.navdata = args.navdata or ['ardrone/navdata']
     rospy.init_node('launch_check', anonymous=True, disable_signals=True)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.bench import __main__ as bench_main
-from leap_teleop.bench.bench_arm import _p99_ms
+from leap_teleop.bench.bench_arm import _p99_ms, median_ci
 from leap_teleop.bench.bench_sender import max_rate_no_drop, received_hz
 
 
@@ -42,6 +42,45 @@ def test_each_run_writes_a_fresh_file(tmp_path):
     results = json.loads(out.read_text())
     assert 'stale.figure' not in results
     assert results['_failed'] == {} and results['_run']['modules'] == []
+
+
+@pytest.mark.parametrize('outcome', ['measured', 'raised'])
+def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
+    from leap_teleop.tools import soak
+
+    def run(minutes, rtf, rate_hz=None, log=print):
+        if outcome == 'raised':
+            raise SystemExit('[soak] the graph died: ur10_sim')
+        return ({'soak.dropped_msgs': 0, 'soak.rss_growth_pct': 1.5,
+                 'soak.arm_latency_drift_ms': math.nan},
+                {'soak.dropped_msgs': 'sent minus received', 'soak.rss_growth_pct': 'VmRSS',
+                 'soak.arm_latency_drift_ms': 'medians'})
+    monkeypatch.setattr(soak, 'run', run)
+    out = tmp_path / 'soak_results.json'
+    out.write_text(json.dumps({'soak.dropped_msgs': 7, 'soak.sim_minutes': 30.0}))
+    assert soak.main(['--minutes', '0.5', '--out', str(out)]) == 1
+    results = json.loads(out.read_text())
+    assert 'soak.sim_minutes' not in results and results['_run']['minutes'] == 0.5
+    if outcome == 'raised':
+        assert 'soak.dropped_msgs' not in results
+        assert results['_failed'] == {'soak': 'SystemExit: [soak] the graph died: ur10_sim'}
+    else:
+        assert results['soak.dropped_msgs'] == 0 and results['soak.rss_growth_pct'] == 1.5
+        assert results['_sources'] == {'soak.dropped_msgs': 'sent minus received',
+                                       'soak.rss_growth_pct': 'VmRSS'}
+        assert list(results['_failed']) == ['soak.arm_latency_drift_ms']
+
+
+def test_the_median_interval_narrows_with_rounds_and_holds_the_median():
+    rng = np.random.default_rng(7)
+    few, many = rng.normal(1.0, 2.0, 10), rng.normal(1.0, 2.0, 40)
+    lo10, hi10 = median_ci(few)
+    lo40, hi40 = median_ci(many)
+    assert lo10 <= np.median(few) <= hi10 and lo40 <= np.median(many) <= hi40
+    assert hi40 - lo40 < hi10 - lo10
+    assert hi40 - lo40 < 2.0               # what 40 rounds of this spread resolve
+    assert median_ci(many) == (lo40, hi40)  # fixed seed: the same figures every run
+    assert median_ci([1.5] * 12) == (1.5, 1.5)
 
 
 def record(frame_ids, window=(0.0, 5.0)):

@@ -5,8 +5,9 @@ builds it (the one slower test; a few minutes on two cores):
 * `catkin_make` builds it next to `leap_motion` (the classic driver's message package, with
   a leapros consumer), `catkin_make run_tests` targets run a rostest and the pytest suite
   (narrowed to the message tests) with passing results, `catkin_make install` installs it,
-  and from the install space alone every launch file resolves (robot_description
-  generated), and the installed sender feeds the classic consumer its leapros;
+  and from the install space alone every launch file starts with its defaults (a
+  private master each, headless), shows a sign of life of its own (SIGNS_OF_LIFE) and
+  stops cleanly on Ctrl-C, and the installed sender feeds the classic consumer its leapros;
 * `catkin build` (catkin-tools) builds the same sources in a second workspace.
 
 Builds run in a clean environment (Debian's ROS under /usr, the venv's python with the
@@ -14,6 +15,7 @@ dependencies first on PATH): nothing of the project's own .ws leaks in.
 PYTHON_EXECUTABLE is the venv's python, as tools/setup.sh sets it.
 """
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -23,6 +25,7 @@ import textwrap
 import pytest
 
 from leap_teleop.bench.harness import free_port
+from test_launch_smoke import run_launches
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -107,6 +110,7 @@ def clean_env(tmp_path):
             'LANG': 'C.UTF-8', 'ROS_HOME': str(tmp_path / 'ros_home'),
             'ROS_LOG_DIR': str(tmp_path / 'ros_log'), 'ROS_HOSTNAME': '127.0.0.1',
             'ROS_IP': '127.0.0.1', 'LEAPJS_DATA': os.environ.get('LEAPJS_DATA', ''),
+            'HANDS_DATA': os.environ.get('HANDS_DATA', ''),
             'PYTHONDONTWRITEBYTECODE': '1'}
 
 
@@ -117,6 +121,64 @@ def sh(cmd, env, cwd, timeout=900, setup=None):
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     assert proc.returncode == 0, '%s failed (%d):\n%s' % (cmd, proc.returncode, proc.stdout[-6000:])
     return proc.stdout
+
+
+def installed_env(env, setup):
+    """`env` with the install space's setup.bash sourced."""
+    out = subprocess.run(['bash', '-c', 'source %s && env -0' % setup], env=env,
+                         stdout=subprocess.PIPE, check=True).stdout.decode()
+    return dict(item.split('=', 1) for item in out.split('\0') if '=' in item)
+
+
+def gesture_bag(path):
+    """A short bag of right-hand leapcobot frames, as record.launch writes."""
+    import rosbag
+    import rospy
+    from leap_teleop.msg import leapcobotright
+    with rosbag.Bag(str(path), 'w') as bag:
+        for i in range(60):
+            stamp = rospy.Time(1000, 0) + rospy.Duration(i / 30.0)
+            msg = leapcobotright()
+            msg.header.stamp = stamp
+            bag.write('/leapmotion/data_right', msg, stamp)
+    return str(path)
+
+
+# Per top-level launch file (defaults): what shows it is running, in launch_check.py's
+# terms. Drone graphs: the simulator's navdata; UR10 graphs: the simulator's joint states
+# and, where a sender waits for its arms, the sender's hand frames (so the arms
+# subscribed); the arm alone: its command topic.
+SIGNS_OF_LIFE = {
+    'ardrone.launch': ['--topic', '/ardrone/navdata:leap_teleop/Navdata',
+                       '--advertised', '/cmd_vel'],
+    'ardrone_dual.launch': ['--topic', '/drone1/ardrone/navdata:leap_teleop/Navdata',
+                            '--topic', '/drone2/ardrone/navdata:leap_teleop/Navdata'],
+    'ardrone_sim.launch': ['--topic', '/ardrone/navdata:leap_teleop/Navdata'],
+    'demo.launch': ['--topic', '/ur10_2/joint_states:sensor_msgs/JointState',
+                    '--topic', '/drone/ardrone/navdata:leap_teleop/Navdata',
+                    '--topic', '/leapmotion/hand_left:leap_teleop/Hand'],
+    'record.launch': ['--subscribed', '/leapmotion/data_right', '--subscribed', '/tf_static'],
+    'replay.launch': ['--topic', '/leapmotion/data_right:leap_teleop/leapcobotright',
+                      '--count', '30'],
+    'sender.launch': ['--topic', '/leapmotion/hand_right:leap_teleop/Hand', '--count', '30'],
+    'ur10_arm.launch': ['--advertised', '/ur10_1/arm_controller/command',
+                        '--subscribed', '/ur10_1/joint_states'],
+    'ur10_dual.launch': ['--topic', '/ur10_2/joint_states:sensor_msgs/JointState',
+                         '--topic', '/leapmotion/hand_left:leap_teleop/Hand'],
+    'ur10_dual_sim.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState',
+                             '--topic', '/ur10_2/joint_states:sensor_msgs/JointState'],
+    'ur10_sim.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState'],
+    'ur10_single.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState',
+                           '--topic', '/leapmotion/hand_right:leap_teleop/Hand'],
+}
+
+
+def signs_of_life(launch, tmp_path):
+    """(launch args, launch_check.py args) to start `launch` with its defaults (replay.launch
+    needs its bag) and recognise it running."""
+    assert launch in SIGNS_OF_LIFE, 'no sign of life for %s: add one to SIGNS_OF_LIFE' % launch
+    args = ['bag:=' + gesture_bag(tmp_path / 'gestures.bag')] if launch == 'replay.launch' else []
+    return args, SIGNS_OF_LIFE[launch]
 
 
 @pytest.mark.rostest
@@ -134,6 +196,16 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
     args = '-DPYTHON_EXECUTABLE=%s -DCATKIN_ENABLE_TESTING=ON' % PYTHON
     sh('catkin_make %s' % args, env, ws)
     devel = ws / 'devel' / 'setup.bash'
+    # `catkin_make run_tests` runs every test/*.test rostest and the pytest suite: each has
+    # its run_tests target (rostests with args are named after them too).
+    targets = set(re.findall(r'^\.\.\. (run_tests_leap_teleop\S*)$',
+                             sh('make help', env, ws / 'build'), re.M))
+    assert 'run_tests_leap_teleop_pytest_suite' in targets, sorted(targets)
+    rostests = sorted(f[:-len('.test')] for f in os.listdir(HERE) if f.endswith('.test'))
+    for name in rostests:
+        pattern = r'run_tests_leap_teleop_rostest_(test_)?%s(__.*)?\.test$' % re.escape(name)
+        assert any(re.match(pattern, t) for t in targets), (name, sorted(targets))
+    assert len([t for t in targets if t.endswith('.test')]) == len(rostests), sorted(targets)
     # run_tests: one rostest target and the pytest target, narrowed to the message tests.
     out = sh('catkin_make %s run_tests_leap_teleop_rostest_test_sender.test '
              'run_tests_leap_teleop_pytest_suite && catkin_test_results build/test_results'
@@ -155,12 +227,14 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
                'print(leap_teleop.__file__)" && rosrun leap_teleop sender.py --help | head -1'
                % PYTHON, env, ws, setup=setup)
     assert str(share) in found and str(install / 'lib') in found, found
+    installed = installed_env(env, setup)
+    assert sorted(os.listdir(share / 'launch')) == sorted(
+        f for f in os.listdir(os.path.join(ROOT, 'launch')) if f.endswith('.launch'))
     for launch in sorted(os.listdir(share / 'launch')):
-        extra = 'bag:=/tmp/none.bag' if launch == 'replay.launch' else ''
-        out = sh('roslaunch --dump-params leap_teleop %s %s' % (launch, extra), env, ws,
-                 setup=setup, timeout=120)
-        if launch in ('ur10_sim.launch', 'ur10_dual_sim.launch', 'ur10_single.launch'):
-            assert 'robot_description' in out and '<robot' in out, out[-2000:]
+        launch_args, check = signs_of_life(launch, tmp_path)
+        (tmp_path / launch).mkdir()
+        run_launches(tmp_path / launch, [[launch] + launch_args], check, 90, env=installed,
+                     clean_exit=True)
     # The installed sender feeds the classic consumer (leap_motion/leapros, same MD5).
     port = free_port()
     env_run = dict(env, ROS_MASTER_URI='http://127.0.0.1:%d' % port)
@@ -189,3 +263,16 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
                'leapros as classic; print(leapros._md5sum, classic._md5sum)"' % PYTHON, env, ws2,
                setup=ws2 / 'devel' / 'setup.bash')
     assert built.split()[-2:] == [LEAPROS_MD5, LEAPROS_MD5], built
+
+
+def test_every_rostest_starts_without_args():
+    # `catkin_make run_tests` passes only leapjs_data / hands_data (CMakeLists.txt): any
+    # other arg of a test/*.test needs a default, or its run_tests target errors.
+    import xml.etree.ElementTree as ET
+    passed = {'leapjs_data', 'hands_data'}
+    names = sorted(f for f in os.listdir(HERE) if f.endswith('.test'))
+    assert names
+    for name in names:
+        for arg in ET.parse(os.path.join(HERE, name)).getroot().iter('arg'):
+            assert ('default' in arg.attrib or 'value' in arg.attrib
+                    or arg.get('name') in passed), '%s: arg %s has no default' % (name, arg.get('name'))

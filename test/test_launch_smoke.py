@@ -33,13 +33,17 @@ def wait_for_run_id(env, timeout=30.0):
     raise AssertionError('no roslaunch set /run_id in %.0f s' % timeout)
 
 
-def run_launches(tmp_path, launches, check_args, timeout, others=()):
+def run_launches(tmp_path, launches, check_args, timeout, others=(), env=None,
+                 clean_exit=False):
     """Start each `roslaunch leap_teleop ARGS...` (in order) under one private master and
     run launch_check.py with `check_args` (and the commands `others`, after the launches);
-    returns its output, asserts it succeeded."""
-    procs, logs = [], []
-    with harness.ros_master() as env:
-        env = dict(env, ROS_LOG_DIR=str(tmp_path / 'log'))
+    returns its output, asserts it succeeded. `env`: the environment to run in (default
+    this process's, e.g. an install space's); the launches run in tmp_path. `clean_exit`:
+    also assert that each launch, stopped with SIGINT as Ctrl-C does, ends with status 0
+    within 30 s and no node died or needed more than SIGINT."""
+    procs, logs, stops = [], [], []
+    with harness.ros_master(env) as env:
+        env = dict(env, ROS_LOG_DIR=str(tmp_path / 'log'), PWD=str(tmp_path))
         try:
             checker = subprocess.Popen([sys.executable, CHECK, '--timeout', str(timeout)]
                                        + check_args, env=env, stdout=subprocess.PIPE,
@@ -50,23 +54,34 @@ def run_launches(tmp_path, launches, check_args, timeout, others=()):
                 log = tmp_path / ('roslaunch_%d.log' % i)
                 logs.append(log)
                 procs.append(subprocess.Popen(['roslaunch', 'leap_teleop'] + args, env=env,
-                                              stdout=open(log, 'wb'), stderr=subprocess.STDOUT,
-                                              start_new_session=True))
+                                              cwd=str(tmp_path), stdout=open(log, 'wb'),
+                                              stderr=subprocess.STDOUT, start_new_session=True))
             for cmd in others:
                 procs.append(subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL,
                                               stderr=subprocess.STDOUT, start_new_session=True))
             out, _ = checker.communicate(timeout=timeout + 30)
         finally:
             for proc in reversed(procs):
-                if proc.poll() is None:
+                running = proc.poll() is None
+                if running:
                     os.killpg(proc.pid, signal.SIGINT)
                     try:
                         proc.wait(30)
                     except subprocess.TimeoutExpired:
                         os.killpg(proc.pid, signal.SIGKILL)
                         proc.wait()
+                        running = None
+                stops.append((proc.args, running, proc.returncode))
     tails = '\n'.join('--- %s\n%s' % (log, log.read_text(errors='replace')[-3000:]) for log in logs)
     assert checker.returncode == 0, '%s\n%s' % (out, tails)
+    if clean_exit:
+        for (args, running, code), log in zip(reversed(stops[-len(logs):]), logs):
+            text = log.read_text(errors='replace')
+            how = {False: 'had ended before SIGINT', None: 'still up 30 s after SIGINT'}
+            assert running and code == 0, '%s %s, status %s\n%s' % (
+                args, how.get(running, 'stopped'), code, tails)
+            for sign in ('process has died', 'escalating to SIG', 'Traceback'):
+                assert sign not in text, '%s: %r in its log\n%s' % (args, sign, tails)
     print(out)
     return out
 

@@ -6,15 +6,14 @@ usage: python -m leap_teleop.bench [--only AREA ...] [--out bench_results.json]
 """
 import argparse
 import importlib
-import json
 import math
-import os
 import pkgutil
 import sys
 import time
 import traceback
 
 import leap_teleop.bench as bench_pkg
+from leap_teleop.bench.results import utc_now, write_results
 
 
 def discover():
@@ -61,22 +60,14 @@ def main(argv=None):
     modules = discover()
     if args.only:
         modules = [m for m in modules if m[len('bench_'):] in args.only]
-    started = time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())
+    started = utc_now()
     figures, sources, failed = collect(modules)
     width = max([len(k) for k in figures] or [10])
     print('\n%-*s  %s' % (width, 'key', 'value'))
     for key in sorted(figures):
         print('%-*s  %.6g' % (width, key, figures[key]))
     # A fresh file per run: only this run's figures, what each came from, what failed.
-    results = dict(figures)
-    results['_run'] = {'started': started, 'modules': modules,
-                       'finished': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}
-    results['_sources'] = sources
-    results['_failed'] = failed
-    tmp = args.out + '.tmp'
-    with open(tmp, 'w') as f:
-        json.dump(results, f, indent=1, sort_keys=True)
-    os.replace(tmp, args.out)
+    write_results(args.out, figures, sources, failed, {'started': started, 'modules': modules})
     print('\nwrote %s (%d figures from this run)' % (args.out, len(figures)))
     if failed:
         print('failed benchmarks: %s' % '; '.join('%s (%s)' % kv for kv in failed.items()),

@@ -19,10 +19,11 @@ def free_port():
 
 
 @contextlib.contextmanager
-def ros_master():
-    """A private rosmaster on a free loopback port; yields the env to run nodes in."""
+def ros_master(base_env=None):
+    """A private rosmaster on a free loopback port; yields the env to run nodes in
+    (`base_env`, default this process's, pointed at that master)."""
     port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
+    env = dict(os.environ if base_env is None else base_env, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
                ROS_HOSTNAME='127.0.0.1', ROS_IP='127.0.0.1')
     master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -1,6 +1,6 @@
 """Soak test (`make soak`): the full dual-arm + drone graph for 30 simulated minutes.
 
-usage: python -m leap_teleop.tools.soak [--minutes 30] [--rtf 1.5] [--out bench_results.json]
+usage: python -m leap_teleop.tools.soak [--minutes 30] [--rtf 1.5] [--out soak_results.json]
 
 Runs on a private master with /use_sim_time: the dual UR10 simulator is the clock (at
 --rtf times real time), the drone simulator runs at the same factor (its own /clock is
@@ -17,12 +17,12 @@ tolerance. Measured: RSS of every node (after the first cycle vs the end), hand 
 and hand -> cmd_vel latency per cycle (wall clock) and its drift (median of the last
 cycles minus the first), lost messages (hand topics: sent vs received; joint_states,
 arm commands, navdata: sequence gaps), inputs the nodes rejected, pick and place and
-flight successes. Merges soak.* keys into bench_results.json (soak.rss_growth_pct, goal
-<= 5; soak.dropped_msgs = messages lost in transport, goal 0; soak.rejected_inputs =
-inputs the nodes refused as late / out of order / invalid; and the rest).
+flight successes. Writes soak_results.json afresh (soak.rss_growth_pct, goal <= 5;
+soak.dropped_msgs = messages lost in transport, goal 0; soak.rejected_inputs = inputs the
+nodes refused as late / out of order / invalid; and the rest), as `make bench` writes its
+file: this run's figures only, `_sources` and `_failed` (a soak that fails writes no figure).
 """
 import argparse
-import json
 import os
 import signal
 import statistics
@@ -30,12 +30,17 @@ import subprocess
 import sys
 import tempfile
 import threading
+import traceback
 import time
 import xmlrpc.client
 
 import numpy as np
 
 ARMS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+# The graph's own nodes: one that is gone (refused a parameter, crashed) ends the soak
+# rather than leaving its figures out.
+NODES = ('/ur10_sim', '/ur10_1/ur10_arm', '/ur10_2/ur10_arm', '/drone/drone_pilot',
+         '/drone/ardrone_sim')
 LAUNCH = """<launch>
   <param name="/use_sim_time" value="true"/>
   <include file="$(find leap_teleop)/launch/ur10_dual_sim.launch">
@@ -63,7 +68,8 @@ LAUNCH = """<launch>
     <node pkg="leap_teleop" type="drone_subscriber.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
       <param name="realtime_factor" value="{rtf}"/>
-      <param name="battery_flight_time" value="1e6"/>
+      <!-- The longest battery the node accepts: it never runs flat during a soak. -->
+      <param name="battery_flight_time" value="100000.0"/>
       <remap from="/clock" to="/drone/sim_clock"/>
     </node>
   </group>
@@ -218,7 +224,8 @@ def percentile(xs, q):
     return float(np.percentile(xs, q)) if xs else float('nan')
 
 
-def run(minutes, rtf, out, rate_hz=None, log=print):
+def run(minutes, rtf, rate_hz=None, log=print):
+    """Run the soak; returns (figures, {figure: what it was measured on})."""
     from leap_teleop.bench.harness import ros_master
     from leap_teleop.nodes.common import package_path
     with ros_master() as env:
@@ -234,7 +241,7 @@ def run(minutes, rtf, out, rate_hz=None, log=print):
                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                  start_new_session=True)
         try:
-            return _soak(env, minutes, rtf, out, rate_hz, log, package_path, graph)
+            return _soak(env, minutes, rtf, rate_hz, log, package_path, graph)
         finally:
             try:
                 os.killpg(graph.pid, signal.SIGINT)
@@ -244,7 +251,7 @@ def run(minutes, rtf, out, rate_hz=None, log=print):
             os.unlink(launch_file)
 
 
-def _soak(env, minutes, rtf, out, rate_hz, log, package_path, graph):
+def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     import rospy
     from leap_teleop import conversions
     from leap_teleop.msg import GestureEvent, Hand
@@ -314,6 +321,10 @@ def _soak(env, minutes, rtf, out, rate_hz, log, package_path, graph):
             flights = sum(1 for c, s in mon.nav_states if s == 6)
         if cycle == 0 or cycle == cycles - 1 or cycle % 5 == 4:
             pids = node_pids(master_uri)
+            gone = [n for n in NODES if n not in pids]
+            if gone:
+                raise SystemExit('[soak] nodes not running after cycle %d: %s'
+                                 % (cycle + 1, ', '.join(gone)))
             sample = {n: rss_kb(p) for n, p in pids.items()}
             for n, kb in sample.items():
                 if kb:
@@ -380,33 +391,58 @@ def _soak(env, minutes, rtf, out, rate_hz, log, package_path, graph):
         'soak.drone_latency_drift_ms': dr_drift,
         'soak.pick_place_success_pct': 100.0 * sum(placed) / (2 * cycles),
     }
-    figures = {k2: v for k2, v in figures.items() if np.isfinite(v)}
-    results = {}
-    if os.path.exists(out):
-        try:
-            with open(out) as f:
-                results = json.load(f)
-        except (OSError, ValueError):
-            results = {}
-    results.update(figures)
-    with open(out, 'w') as f:
-        json.dump(results, f, indent=1, sort_keys=True)
-    log('[soak] merged %s into %s' % (', '.join(sorted(figures)), out))
-    return figures
+    run_of = '%d cycles, %.1f sim minutes at x%.2f' % (cycles, sim / 60.0, sim / wall)
+    nodes = ', '.join(sorted(growth)) or 'no node sampled twice'
+    sources = {
+        'soak.rss_growth_pct': 'VmRSS of each node after cycle 1 vs the end, the largest '
+                               'growth (%s)' % nodes,
+        'soak.dropped_msgs': 'hand messages sent minus received %s, plus sequence gaps %s'
+                             % (lost_inputs, gaps),
+        'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'
+                                % rejected,
+        'soak.sim_minutes': '/clock of the UR10 simulator',
+        'soak.sim_wall_ratio': '/clock over monotonic wall time',
+        'soak.arm_latency_p50_ms': 'hand stamp -> arm command, median of the last %d cycles '
+                                   '(%d samples in all)' % (k, len(lat.get('arm', []))),
+        'soak.arm_latency_drift_ms': 'arm latency median: last %d cycles minus first %d' % (k, k),
+        'soak.drone_latency_drift_ms': 'hand stamp -> cmd_vel median: last %d cycles minus '
+                                       'first %d (%d samples)' % (k, k, len(lat.get('drone', []))),
+        'soak.pick_place_success_pct': 'cubes in their trays after each cycle (%d/%d)'
+                                       % (sum(placed), 2 * cycles),
+    }
+    return figures, {key: '%s; %s' % (text, run_of) for key, text in sources.items()}
 
 
 def main(argv=None):
+    from leap_teleop.bench.results import finite_figures, utc_now, write_results
     ap = argparse.ArgumentParser(prog='python -m leap_teleop.tools.soak',
                                  description=__doc__.split('\n\n')[0])
     ap.add_argument('--minutes', type=float, default=30.0, help='simulated minutes')
     ap.add_argument('--rtf', type=float, default=1.5, help='sim time / wall time target (1.5 keeps 2 cores below saturation)')
     ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
                     '(default the scripts\' 120)')
-    ap.add_argument('--out', default='bench_results.json')
+    ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
-    figures = run(args.minutes, args.rtf, args.out, args.rate,
-                  log=lambda s: print(s, flush=True))
-    return 0 if figures else 1
+    run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
+                'rate_hz': args.rate}
+    figures, sources, failed = {}, {}, {}
+    try:
+        figures, sources = run(args.minutes, args.rtf, args.rate,
+                               log=lambda s: print(s, flush=True))
+    except (Exception, SystemExit) as e:     # noqa: BLE001 - recorded in _failed, exit 1
+        traceback.print_exc()
+        failed['soak'] = '%s: %s' % (type(e).__name__, e)
+    figures, not_measured = finite_figures(figures)
+    failed.update(not_measured)
+    sources = {key: sources[key] for key in figures}
+    # A fresh file per run: a failed soak leaves no earlier run's figures behind.
+    write_results(args.out, figures, sources, failed, run_info)
+    print('[soak] wrote %s (%d figures from this run)' % (args.out, len(figures)), flush=True)
+    if failed:
+        print('[soak] failed: %s' % '; '.join('%s (%s)' % kv for kv in sorted(failed.items())),
+              file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == '__main__':
