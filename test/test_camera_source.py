@@ -14,7 +14,7 @@ from leap_teleop.camera_view import CameraView, draw, held_gestures, image_messa
 from leap_teleop.gestures import GestureRecognizer
 from leap_teleop.leap_interface import LeapInterface
 from leap_teleop.sources import make_source
-from leap_teleop.sources.landmarks import CameraModel, hand_from_landmarks
+from leap_teleop.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
 from leap_teleop.tools.evaluate import HANDS_DATA
 
 HELD = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
@@ -78,22 +78,11 @@ def on(state):
     return {g for g in HELD if getattr(state, g, False) is True}
 
 
-# Photos the recognizer gets wrong although the Frame is faithful (see the reasons).
-RECOGNIZER_LIMITS = {
-    'neg_half_curl__fp__halfcurl.jpg': 'hooked index (bend 102 deg, past the 95 deg curl bar; '
-                                       'chord 0.78) beside three curled fingers reads as a '
-                                       'fist: the tracker\'s own loose fists in the shared '
-                                       'takes bend the index as far',
-    'fist__fp__fullcurl.jpg': 'fist held upright with the thumb laid along the fingers, '
-                              '0.50 palm widths thumbward of the index knuckle: past the 0.4 '
-                              'thumb-out bar the shared takes need (their thumbs leaving a fist '
-                              'at 0.41..0.46), so neither fist nor thumbs-up',
-    'pinch_o__sld__IMG_1138.JPG': 'an "O", every fingertip rounded onto the thumb: the Frame '
-                                  'has the thumb at the index tip (0.39 palm widths) but all '
-                                  'four fingers bent 105..136 deg with the thumb at their tips, '
-                                  'which the recognizer reads as a fist (its pinch excludes an '
-                                  '"O")',
-}
+# Photos the recognizer gets wrong although the Frame is faithful, with the measured
+# reason: none at present (the upright fist with its thumb laid over the fingers, the
+# hooked index and the "O" were, until the rules judged where the thumb lies, the
+# knuckle's bend and gathered fingertips).
+RECOGNIZER_LIMITS = {}
 
 
 def expected(name):
@@ -157,6 +146,33 @@ def test_photo_gives_its_gesture(name, hands_json, detections):
             assert want in got, (name, got)
 
 
+def test_photos_keep_their_gesture_under_landmark_jitter(hands_json):
+    """Other people's hands differ from these by more than the detector's noise: each
+    photo's world landmarks jittered by 2 mm per coordinate (and 1 px in the image), 100
+    draws per hand, still give the photo's gesture in >= 90 % of readings, and no photo
+    but a thumbs-up ever reads as one (the margin that keeps a fist from arming)."""
+    rng = np.random.default_rng(0)
+    right = total = 0
+    for name, entry in sorted(hands_json['images'].items()):
+        want = expected(name)
+        if want == 'no_hand':
+            continue
+        cam = CameraModel.from_hfov(entry['width'], entry['height'])
+        for d in entry['hands']:
+            lm = HandLandmarks.from_dict(d)
+            for _ in range(100):
+                world = lm.world + rng.normal(0.0, 0.002, lm.world.shape)
+                image = lm.image + rng.normal(0.0, 1.0 / entry['width'], lm.image.shape) \
+                    * np.array([1.0, 1.0, 0.0])
+                hand = hand_from_landmarks(HandLandmarks(image, world, lm.label, lm.score), cam)
+                got = on(GestureRecognizer(stateless=True).update(hand, 0.0))
+                if want != 'thumb_up':
+                    assert 'thumb_up' not in got, name
+                right += (got == set()) if want is None else (want in got)
+                total += 1
+    assert right / total >= 0.9, (right, total)
+
+
 def clip_run(name, **kwargs):
     """Per frame (frame id, stamp, {side: HandState}) of a clip played through the
     video source (letterboxed to 640x480, as fast as possible) and LeapInterface."""
@@ -183,8 +199,9 @@ def test_clip_fist_then_thumbs_up():
     fists = [fid for fid, g in events if g == 'fist']
     thumbs = [fid for fid, g in events if g == 'thumb_up']
     assert fists and thumbs, events
-    # The raised fist comes first, then the thumbs-up, held to the end.
-    assert thumbs[-1] > fists[0], events
+    # The raised fist comes first, then the thumbs-up, held to the end; the fist raised
+    # with its fingers up as it enters (thumb up with the hand) is no thumbs-up.
+    assert thumbs[0] > fists[0], events
     held = [states['right'].thumb_up for fid, _, states in rows if fid > 100]
     assert np.mean(held) > 0.95, np.mean(held)
     # No hand in the first 22 frames.

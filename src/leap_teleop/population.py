@@ -1,14 +1,16 @@
 """A seeded synthetic population of hands and poses to test the recognizer against.
 
 Each person has a hand size (adult 5th-95th percentile), finger proportions, a handedness
-and the ways they form each gesture (fist with the thumb tucked or alongside, horns with
-the thumb folded or out, an OK sign with the other fingers straight or relaxed, ...), a
+and the ways they form each gesture (fist tight or loose with the thumb tucked, alongside
+or laid over the fingers, horns with the thumb folded or out, an OK sign with the other
+fingers straight, relaxed, curled or all rounded onto the thumb as an "O", ...), a
 tracking profile (palm noise 5-10 mm, fingertip jitter, confidence dips, a finger
 mis-tracked now and then) and the fields their tracker leaves out (no knuckles, no joints
 at all, no SDK strengths, no timestamps). Poses come from joint angles and thumb
 placements read off how hands are formed, in the hand's own size, never from the
-recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg;
-thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
+recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg
+(fists and the hooked index also upright, as raised to a camera, turned any way about the
+forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
 
     people = make_people(200, seed=1)
     for frames in take(person, 'fist', rng): ...   # (Hand, timestamp) per frame
@@ -25,7 +27,8 @@ from .frame import Finger, Hand
 
 GESTURE_POSES = {'fist': 'fist', 'thumb_up': 'thumbs_up', 'thumb_down': 'thumbs_down',
                  'pinch': 'ok', 'rock': 'horns', 'open': 'open'}
-CONFUSERS = ('index', 'two', 'three', 'L', 'hang_loose', 'C', 'O', 'sideways_thumb')
+CONFUSERS = ('index', 'two', 'three', 'L', 'hang_loose', 'C', 'O', 'sideways_thumb', 'hook',
+             'raised_fist')
 POSES = tuple(GESTURE_POSES.values()) + CONFUSERS
 # What each pose should show (the rest: nothing).
 EXPECTED = {pose: gesture for gesture, pose in GESTURE_POSES.items()}
@@ -48,9 +51,10 @@ class Person:
     palm_width: float            # mm, index-pinky knuckle distance
     lengths: np.ndarray          # (4,) knuckle -> tip, palm widths
     thumb_length: float          # thumb base -> tip when straight, palm widths
-    fist_thumb: str              # 'tucked' | 'alongside'
+    fist_thumb: str              # 'tucked' | 'alongside' | 'over' (laid over the fingers)
     horns_thumb: str             # 'folded' | 'out'
-    ok_fingers: str              # 'straight' | 'relaxed' | 'curled'
+    ok_fingers: str              # 'straight' | 'relaxed' | 'curled' | 'O' (all rounded
+                                 # onto the thumb tip, fingertips bunched)
     open_style: str              # 'flat' | 'relaxed'
     looseness: float             # 0 tight .. 1 loose curls
     palm_noise: float            # mm sd
@@ -73,9 +77,10 @@ def make_people(n, seed=0):
             id=i, side='right' if rng.random() < 0.85 else 'left',
             palm_width=0.62 * breadth, lengths=lengths,
             thumb_length=float(1.75 * rng.normal(1.0, 0.07)),
-            fist_thumb=str(rng.choice(['tucked', 'alongside'])),
+            fist_thumb=str(rng.choice(['tucked', 'alongside', 'over'], p=[0.4, 0.4, 0.2])),
             horns_thumb=str(rng.choice(['folded', 'out'])),
-            ok_fingers=str(rng.choice(['straight', 'relaxed', 'curled'], p=[0.35, 0.45, 0.2])),
+            ok_fingers=str(rng.choice(['straight', 'relaxed', 'curled', 'O'],
+                                      p=[0.3, 0.4, 0.15, 0.15])),
             open_style=str(rng.choice(['flat', 'relaxed'])),
             looseness=float(rng.random()),
             palm_noise=float(rng.uniform(5.0, 10.0)), tip_noise=float(rng.uniform(1.0, 3.0)),
@@ -102,6 +107,8 @@ def _flex(rng, kind, loose):
         return np.array([u(30, 50), u(45, 70), u(25, 45)])
     if kind == 'pinching':         # the index bent to meet the thumb
         return np.array([u(25, 45), u(30, 55), u(10, 35)])
+    if kind == 'hooked':           # bent to about a right angle at the middle and end
+        return np.array([u(-5, 20), u(40, 70), u(20, 50)])     # joints, the knuckle straight
     if kind == 'mistracked':       # the tracker shows it sharply bent
         return np.array([u(30, 60), u(60, 100), u(20, 50)])
     raise ValueError(kind)
@@ -118,6 +125,10 @@ _SHAPES = {   # pose -> (finger kinds index..pinky, thumb placement)
     'L': (('straight', 'folded', 'folded', 'folded'), 'open'),
     'hang_loose': (('folded', 'folded', 'folded', 'straight'), 'up'),
     'C': (('C',) * 4, 'C'), 'O': (('O',) * 4, 'meet'),
+    'hook': (('hooked', 'curled', 'curled', 'curled'), 'tucked'),
+    # a fist raised with the fingers up, its thumb out to the side and toward the fingers:
+    # the thumb points up with the hand, it is not raised
+    'raised_fist': (('curled',) * 4, 'open'),
 }
 
 
@@ -136,12 +147,13 @@ def _finger_chain(knuckle, length, flex, splay_deg):
     return np.array(pts)
 
 
-def _thumb_chain(tip, rng):
+def _thumb_chain(tip, rng, high=False):
     """(4, 3) base, knuckle, IP joint, tip of a thumb ending at `tip` (palm widths); the
-    joints bow out of the palm a little."""
+    joints bow out of the palm a little (high: a thumb lying over a fist rises from the
+    palm first, then runs along the fingers)."""
     base = _THUMB_BASE
     v = tip - base
-    bow = np.array([0.0, 1.0, 0.0]) * rng.uniform(0.05, 0.15)
+    bow = np.array([0.0, 1.0, 0.0]) * (rng.uniform(0.3, 0.5) if high else rng.uniform(0.05, 0.15))
     return np.array([base, base + 0.45 * v + bow, base + 0.75 * v + 0.6 * bow, tip])
 
 
@@ -152,9 +164,11 @@ def local_pose(person, pose, rng):
     loose = person.looseness
     if pose == 'open':
         kinds = (person.open_style if person.open_style == 'relaxed' else 'straight',) * 4
+    bunched = pose == 'ok' and person.ok_fingers == 'O'
     if pose == 'ok':
-        other = {'straight': 'straight', 'relaxed': 'relaxed', 'curled': 'C'}[person.ok_fingers]
-        kinds = ('pinching', other, other, other)
+        other = {'straight': 'straight', 'relaxed': 'relaxed', 'curled': 'C',
+                 'O': 'O'}[person.ok_fingers]
+        kinds = ('O' if bunched else 'pinching', other, other, other)
     if pose == 'fist':
         thumb = person.fist_thumb
     if pose == 'horns':
@@ -163,6 +177,14 @@ def local_pose(person, pose, rng):
     splay = _SPLAY * (1.0 if pose in ('open', 'three', 'horns', 'two', 'hang_loose') else 0.3)
     fingers = [_finger_chain(_KNUCKLES[i], person.lengths[i], flex[i], splay[i]) for i in range(4)]
     u = rng.uniform
+    if bunched:
+        # An "O": the other fingers lean in toward the index at each joint (with the palm
+        # cupped) so their tips gather at the index tip's side.
+        for i in (1, 2, 3):
+            c = fingers[i].copy()
+            shift = (fingers[0][3][0] - c[3][0]) * u(0.7, 1.0)
+            c[1:, 0] += shift * np.array([0.35, 0.7, 1.0])
+            fingers[i] = c
     tl = person.thumb_length
     if thumb in ('open', 'up'):
         # out from the hand: thumbward, a little forward (up: nearly straight out)
@@ -174,14 +196,21 @@ def local_pose(person, pose, rng):
         tip = np.array([u(-0.5, -0.2), u(0.5, 0.8), u(0.8, 1.1)])
     elif thumb == 'alongside':    # along the side of the curled index
         tip = np.array([0.5 + u(0.1, 0.3), u(0.45, 0.75), u(1.05, 1.35)])
+    elif thumb == 'over':         # laid over the curled fingers, pointing along them: its
+        # tip out of the palm beyond the index's middle joint, well thumbward of the knuckle
+        pip = fingers[0][1]
+        tip = np.array([0.5 + u(0.35, 0.6), pip[1] + u(0.3, 0.6), pip[2] + u(-0.15, 0.15)])
     elif thumb == 'meet':         # at the index tip (OK sign, O)
         d = rng.normal(size=3)
         tip = fingers[0][3] + d / np.linalg.norm(d) * u(0.15, 0.4)
+        if bunched:               # ... and the other fingertips round it
+            tip = np.mean([f[3] for f in fingers], axis=0) * 0.4 + tip * 0.6
     elif thumb == 'C':            # opposite the fingertips with an opening
         tip = fingers[0][3] + np.array([u(0.0, 0.2), u(-0.1, 0.2), -u(0.9, 1.5)])
     else:
         raise ValueError(thumb)
-    joints = np.concatenate([_thumb_chain(tip, rng)[None], np.array(fingers)])
+    joints = np.concatenate([_thumb_chain(tip, rng, high=thumb == 'over')[None],
+                             np.array(fingers)])
     return joints, flex
 
 
@@ -207,6 +236,10 @@ def orientation(person, pose, rng):
         tilt = rng.uniform(-20, 20) if pose != 'sideways_thumb' else rng.uniform(-15, 15)
         r = _rot([1.0, 0.0, 0.0], rng.uniform(-20, 20)) @ _rot(d, tilt) @ r
         return r
+    if pose == 'raised_fist' or (pose in ('fist', 'hook') and rng.random() < 0.25):
+        # upright, as raised to a camera: fingers up, turned any way about the forearm
+        return (_rot([0, 1, 0], rng.uniform(-30, 30)) @ _rot([1, 0, 0], rng.uniform(65, 90))
+                @ _rot(d, rng.uniform(-180, 180)) @ base)
     kind = rng.choice(['down', 'sideways', 'tilted'])
     if kind == 'down':
         return _rot([0, 1, 0], rng.uniform(-20, 20)) @ base

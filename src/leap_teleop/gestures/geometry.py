@@ -23,6 +23,10 @@ PALM_WIDTH_RANGE_MM = (25.0, 120.0)      # outside: the knuckles are mis-tracked
 # Where the index knuckle sits thumbward of the palm centre, in palm widths (when the
 # frame has no knuckles the thumb is measured from there).
 INDEX_KNUCKLE_THUMBWARD = 0.45
+# How far out of the palm a fist's index middle joint stands, in palm widths (its
+# proximal bone, ~0.7 long, turned 70..95 deg): where a thumb lying over the fingers is
+# measured from when the frame has no finger joints.
+FIST_INDEX_PIP_HEIGHT = 0.7
 
 # Signed flexion below this (deg) is a curl past 180, not a hyperextended finger.
 FLEX_WRAP_DEG = -60.0
@@ -42,11 +46,19 @@ class HandGeometry:
                                 # flexion from the hand direction toward the palm
                                 # (-60..300) and its angle to the proximal bone
     chord: Tuple[float, ...]    # 5 tip-to-knuckle distances / the finger's bone length
+    knuckle: Tuple[float, ...]  # 5 knuckle flexions, degrees: the proximal bone's turn
+                                # from the hand direction toward the palm (NaN: thumb, or
+                                # no knuckle / middle joint)
     palm_width: float           # mm, the unit of the rest
     thumb_out: float            # palm widths: thumb tip thumbward of the index knuckle
+    thumb_over: float           # palm widths: thumb tip out of the palm beyond the index's
+                                # middle joint (> 0: lying over the curled fingers; without
+                                # that joint, beyond where a fist holds it)
     thumb_dir: tuple            # unit (x, y, z), Leap axes: where the thumb points
     thumb_along: float          # thumb_dir . hand direction (1: laid along the hand)
     pinch_gap: float            # palm widths, thumb tip to index tip
+    tip_spread: float           # palm widths, index tip thumbward of the pinky tip (a
+                                # fist keeps them a knuckle row apart, an "O" gathers them)
     middle_gap: float           # palm widths, thumb tip to middle tip
     thumb_to_fingers: float     # palm widths, thumb tip to the nearest index / middle
                                 # joint (pip, dip, tip)
@@ -134,7 +146,7 @@ def hand_geometry(hand):
         # thumbward = d x n for a right hand, its negative for a left one
         s = -1.0 if hand.side == 'left' else 1.0
         tx, ty, tz = s * (dy * nz - dz * ny), s * (dz * nx - dx * nz), s * (dx * ny - dy * nx)
-        tips, bend, chord, mcps, pips, dips = [], [], [], [], [], []
+        tips, bend, chord, knuckle, mcps, pips, dips = [], [], [], [], [], [], []
         dirs = []
         for i, f in enumerate(fingers):
             # (the ndarray case inline: this runs for 20 joints of every hand of every frame)
@@ -176,17 +188,19 @@ def hand_geometry(hand):
             if i == 0:              # the rules read the thumb's position and direction only
                 bend.append(_NAN)
                 chord.append(_NAN)
+                knuckle.append(_NAN)
                 continue
             # Signed in the plane of the hand direction and the palm normal (fingers curl
             # toward the normal), so a fist's ~250 deg does not fold back to ~110.
             flex = _degrees(_atan2(ux * nx + uy * ny + uz * nz, ux * dx + uy * dy + uz * dz))
             if flex < FLEX_WRAP_DEG:
                 flex += 360.0
-            c = _NAN
+            c = kf = _NAN
             if pip is not None and mcp is not None:
                 vx, vy, vz = pip[0] - mcp[0], pip[1] - mcp[1], pip[2] - mcp[2]
                 lp = _sqrt(vx * vx + vy * vy + vz * vz)
                 if lp > 1e-3:
+                    kf = _degrees(_atan2(vx * nx + vy * ny + vz * nz, vx * dx + vy * dy + vz * dz))
                     curl = _angle_deg((vx * ux + vy * uy + vz * uz) / lp)
                     if curl > flex:                 # the larger of the two (NaN loses)
                         flex = curl
@@ -195,6 +209,7 @@ def hand_geometry(hand):
                         if length > 1e-3:
                             c = _mdist(tip, mcp) / length
             chord.append(c)
+            knuckle.append(kf)
             bend.append(flex)
         # Palm width from the index and pinky knuckles, when they are there and plausible.
         width = NOMINAL_PALM_WIDTH_MM
@@ -210,6 +225,12 @@ def hand_geometry(hand):
         else:
             out = ((th[0] - px) * tx + (th[1] - py) * ty + (th[2] - pz) * tz) * inv \
                 - INDEX_KNUCKLE_THUMBWARD
+        ip = pips[1]
+        if ip is not None:
+            over = ((th[0] - ip[0]) * nx + (th[1] - ip[1]) * ny + (th[2] - ip[2]) * nz) * inv
+        else:
+            over = ((th[0] - px) * nx + (th[1] - py) * ny + (th[2] - pz) * nz) * inv \
+                - FIST_INDEX_PIP_HEIGHT
         # Where the thumb points: its knuckle (the Leap's thumb 'pip', a camera's MCP) to
         # its tip, else its distal bone, else its direction.
         tp = pips[0]
@@ -222,10 +243,13 @@ def hand_geometry(hand):
             grab = _NAN
     except (TypeError, ValueError, AttributeError, IndexError, OverflowError):
         return None
-    return HandGeometry(bend=tuple(bend), chord=tuple(chord), palm_width=width, thumb_out=out,
+    return HandGeometry(bend=tuple(bend), chord=tuple(chord), knuckle=tuple(knuckle),
+                        palm_width=width, thumb_out=out, thumb_over=over,
                         thumb_dir=thumb_dir,
                         thumb_along=thumb_dir[0] * dx + thumb_dir[1] * dy + thumb_dir[2] * dz,
                         pinch_gap=_mdist(th, ix) * inv,
+                        tip_spread=((ix[0] - tips[4][0]) * tx + (ix[1] - tips[4][1]) * ty
+                                    + (ix[2] - tips[4][2]) * tz) * inv,
                         middle_gap=_mdist(th, tips[2]) * inv,
                         thumb_to_fingers=min([_mdist(th, j) for j in (
                             ix, tips[2], pips[1], pips[2], dips[1], dips[2]) if j is not None]) * inv,

@@ -5,12 +5,19 @@ looser one (hysteresis). Lengths are in palm widths, curl is the finger's chord 
 (see geometry), so the rules hold for small and large hands alike; where a frame lacks
 the joints for a ratio the rules fall back to bend angles.
 
-- fist: index..pinky curled, thumb tucked over them or lying alongside the index.
+- fist: index..pinky curled, thumb tucked over them, lying alongside the index, or laid
+  over the fingers toward their tips (then its tip may sit well thumbward of the index
+  knuckle: judged by where it lies, beyond the curled fingers, not only how far out).
+  An index hooked at its middle joints with its knuckle straight, beside fingers bent at
+  the knuckle, is held out of the fist, not curled.
 - thumb_up / thumb_down: the same curled fingers with the thumb out, pointing up / down
-  (Leap +y / -y, within THUMB_VERTICAL). A thumb out sideways is neither, nor a fist.
+  (Leap +y / -y, within THUMB_VERTICAL), out from the side of the fist, and more up /
+  down than the hand direction (a fist raised with its fingers up is no thumbs-up). A
+  thumb out sideways is neither, nor a fist.
 - rock: index and pinky extended, middle and ring folded, thumb either way.
 - pinch: thumb tip at the index tip, the other fingers in any state but all curled to
-  the thumb like the index (the "O") and not a fist.
+  the thumb like the index with their tips in a row across the hand (a loose fist) and
+  not a fist; an "O", every fingertip gathered at the thumb tip, is a pinch.
 - open: index..pinky extended, thumb either way, not pinching; one finger reported
   sharply bent is forgiven while the tracker's grab strength stays low and the thumb is
   out (a tracker's mis-tracked finger; a real "three" holds its fourth finger with the
@@ -57,6 +64,31 @@ THUMB_OUT = (0.4, 0.35)
 # alongside thumb 0.9..1).
 THUMB_UP_OUT = (0.65, 0.55)
 THUMB_UP_MAX_ALONG = 0.95
+# ... and pointing out from the side of the fist: thumb . thumbward above this (thumbs-up
+# photos 0.40..0.81, 0.26 and up with 4 mm of landmark noise; the shared takes' >= 0.48; a
+# thumb laid along an upright fist's fingers points up with them: ~0.06, with noise
+# up to ~0.25, where it may also pass the other thumbs-up bars).
+THUMB_UP_MIN_THUMBWARD = 0.25
+# A thumb lying over the curled fingers: its tip this far (palm widths) out of the palm
+# beyond the index's middle joint (a fist's tucked or laid-over thumb 0.2..0.7; a thumb
+# swung out beside a fist, the shared takes' -0.7..-0.04). Such a thumb closes a fist
+# while its tip stays within THUMB_UP_OUT thumbward: a thumb further out is a thumbs-up
+# or leaving the fist (raised thumbs stand out of the palm too: photos 0.16..0.37).
+THUMB_OVER = 0.2
+# A hooked index: its knuckle flexed less than this (deg) while the middle and ring
+# fingers' knuckles bend more than HOOK_OTHERS_KNUCKLE (a fist bends every knuckle alike:
+# the shared takes' loose fists keep all four nearly straight, a tight fist bends all
+# 50..95).
+HOOK_KNUCKLE = 30.0
+HOOK_OTHERS_KNUCKLE = 45.0
+# Without knuckles: the index bent this much less (deg) than the middle and ring fingers
+# (a fist's index bends up to ~75 less than they do: its curl at the low end of the
+# range, theirs at the high end; a hooked index 80..130 less).
+HOOK_BEND_GAP = 80.0
+# ... and pointing up (down) more than the hand direction does, by this much of Leap y
+# (thumbs-up photos 0.32..0.66, thumbs-down 0.78, the shared takes' thumbs-up >= 0.34;
+# fists raised with the fingers up -0.5..0.03: their thumbs point up with the hand).
+THUMB_BEYOND_HAND = 0.15
 # Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
 THUMB_VERTICAL = (45.0, 55.0)
 # Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
@@ -69,6 +101,10 @@ PINCH_CHORD_MARGIN = 0.1
 PINCH_BEND_MARGIN = 15.0
 PINCH_MIDDLE_CLEAR = 0.9             # palm widths
 PINCH_REST_BEND = (100.0, 110.0)     # an "O" bends every other finger more than this
+# An "O": the index and pinky tips gathered within this distance across the hand (palm
+# widths; an "O" ~0.05, a fist keeps its tips a knuckle row apart: the photos' 0.62..0.85,
+# the shared takes' loose fists 0.75..0.95).
+O_TIP_SPREAD = 0.4
 # The index reaches out to the thumb (~60..135 deg), not curled into the palm under a
 # thumb laid over the fist (~150 and up).
 PINCH_MAX_INDEX_BEND = 150.0
@@ -116,11 +152,18 @@ def classify_geometry(g, hand, active=None, opening=False):
     curled = thumb_curled = True
     ext = [False] * 5
     n_ext = 0
+    kn = g.knuckle
+    if kn[1] == kn[1] and kn[2] == kn[2] and kn[3] == kn[3]:
+        hooked = (kn[1] < HOOK_KNUCKLE and kn[2] > HOOK_OTHERS_KNUCKLE
+                  and kn[3] > HOOK_OTHERS_KNUCKLE)
+    else:       # (NaN compares False: without bends either, no index counts as hooked)
+        hooked = bend[1] < min(bend[2], bend[3]) - HOOK_BEND_GAP
     for i in (1, 2, 3, 4):
         c, b = chord[i], bend[i]
-        if c != c and b != b:
+        if (c != c and b != b) or (i == 1 and hooked):
             curled = thumb_curled = False
-            continue
+            if c != c and b != b:
+                continue
         if curled and not _curled(c, b, cc, cb):
             curled = False
         if thumb_curled and not _curled(c, b, uc, ub):
@@ -129,7 +172,14 @@ def classify_geometry(g, hand, active=None, opening=False):
             ext[i] = True
             n_ext += 1
     out = g.thumb_out > THUMB_OUT[1 if (up_on or 'open' in active) else 0]
-    up_out = g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
+    tw, td = g.basis[0], g.thumb_dir
+    thumbward = tw[0] * td[0] + tw[1] * td[1] + tw[2] * td[2]
+    # lying on the fist: over the fingers, or, without the index knuckle (thumb-out is
+    # then measured from the palm centre, with its tracking noise), pointing along them
+    no_knuckle = g.knuckle[1] != g.knuckle[1]
+    over = g.thumb_over > THUMB_OVER or (no_knuckle and thumbward < THUMB_UP_MIN_THUMBWARD)
+    up_out = (g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
+              and thumbward > THUMB_UP_MIN_THUMBWARD)
     ty = g.thumb_dir[1]
     vert = _VERT[ku]
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
@@ -137,13 +187,23 @@ def classify_geometry(g, hand, active=None, opening=False):
     # the tips as a C's: then a tracker's grab strength near 1 decides.
     near = (g.thumb_to_fingers < FIST_THUMB_NEAR[k]
             or (not g.finger_joints and g.grab >= FIST_GRAB_WITHOUT_JOINTS))
-    fist = curled and not out and near
-    thumb_up = thumb_curled and up_out and ty > vert and ('thumb_up' in active or not opening)
-    thumb_down = thumb_curled and up_out and ty < -vert
-    rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))
-    pinch = False
     gap = g.pinch_gap
     pk = 1 if 'pinch' in active else 0
+    # every fingertip gathered at the thumb tip: an "O", not a fist
+    o_shape = gap < PINCH_GAP[pk] and abs(g.tip_spread) < O_TIP_SPREAD
+    # the thumb, not the whole hand, points up (down): a fist raised with the fingers up
+    # shows its thumb pointing up with them
+    dy = g.basis[2][1]
+    thumb_up = (thumb_curled and up_out and ty > vert and ty - dy > THUMB_BEYOND_HAND
+                and ('thumb_up' in active or not opening))
+    thumb_down = thumb_curled and up_out and ty < -vert and dy - ty > THUMB_BEYOND_HAND
+    # A thumb lying on the fingers closes the fist up to the thumbs-up bar (without the
+    # index knuckle thumb-out is too noisy to bar it: then until a thumbs-up shows).
+    lying = over and (no_knuckle or g.thumb_out <= THUMB_UP_OUT[0])
+    fist = (curled and near and not o_shape and not (out and not lying)
+            and not (thumb_up or thumb_down))
+    rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))
+    pinch = False
     if gap < PINCH_GAP[pk] and not (fist or thumb_up or thumb_down):
         # Some other finger less curled than the index, or the middle tip clear of the
         # thumb: not every finger rounded to the thumb as in an "O".
@@ -152,7 +212,7 @@ def classify_geometry(g, hand, active=None, opening=False):
         b1, b2, b3, b4 = bend[1:]
         rest = min(b2, b3, b4)
         pinch = (not b1 >= PINCH_MAX_INDEX_BEND
-                 and (g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
+                 and (o_shape or g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
                       or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN))
     # Horns never have the thumb on the index tip; a pinch with the pinky out does.
     rock = rock and not pinch

@@ -13,16 +13,20 @@ import contextlib
 from ..gestures import pose
 from . import evaluate
 
-# Thresholds read off the recordings (pose module constants, (to turn on, to stay on)).
+# Thresholds read off the recordings (pose module constants: (to turn on, to stay on)
+# pairs or single values).
 FITTED = ('CURLED_BEND', 'EXTENDED_BEND', 'THUMB_UP_CURLED_BEND', 'THUMB_OUT', 'PINCH_GAP',
-          'FIST_THUMB_NEAR', 'OPEN_MEAN_BEND', 'PINCH_REST_BEND', 'THUMB_UP_OUT')
+          'FIST_THUMB_NEAR', 'OPEN_MEAN_BEND', 'PINCH_REST_BEND', 'THUMB_UP_OUT', 'THUMB_OVER',
+          'HOOK_OTHERS_KNUCKLE', 'O_TIP_SPREAD', 'THUMB_UP_MIN_THUMBWARD',
+          'THUMB_BEYOND_HAND')
 FACTORS = (0.7, 0.85, 1.0, 1.15, 1.3)
 
 
 @contextlib.contextmanager
 def scaled(name, factor):
     old = getattr(pose, name)
-    setattr(pose, name, tuple(v * factor for v in old))
+    setattr(pose, name, tuple(v * factor for v in old) if isinstance(old, tuple)
+            else old * factor)
     try:
         yield
     finally:
