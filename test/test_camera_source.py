@@ -374,6 +374,40 @@ def test_search_thread_finds_both_hands_from_a_following_frame():
     assert detector.search_failures == 0
 
 
+def test_search_thread_runs_one_search_at_a_time():
+    """A second graph searching beside the first sees the image without the first one's
+    hand blanked: it finds the same hand, and the masking then takes the hand from the
+    graph that had it (one hand, two detections, a graph change). Searches run one at a
+    time: the hand stays with the graph that found it. Made likely here: the second
+    graph's searches are slow and it may look on every frame."""
+    import time
+    import cv2
+    from leap_teleop.sources.mediapipe_hands import HandDetector
+    rgb = cv2.cvtColor(cv2.imread(data('fist__htj__22.jpg')), cv2.COLOR_BGR2RGB)
+
+    class Slow:
+        def __init__(self, graph):
+            self.graph = graph
+
+        def process(self, image):
+            time.sleep(0.3)
+            return self.graph.process(image)
+
+        def close(self):
+            self.graph.close()
+    with HandDetector(max_hands=2, strategy='paired', detect_every=1,
+                      search_thread=True) as detector:
+        paced_counts(detector, np.zeros_like(rgb), 20)     # both graphs load their models
+        detector._graphs[1] = Slow(detector._graphs[1])
+        counts, holder = [], []
+        for _ in range(25):
+            counts += paced_counts(detector, rgb, 1)
+            holder.append(tuple(t is not None for t in detector._tracked))
+    assert max(counts) == 1 and counts[-1] == 1, counts
+    first = holder.index((True, False))
+    assert holder[first:] == [(True, False)] * (25 - first), holder
+
+
 def search_threads():
     import threading
     return [t for t in threading.enumerate() if t.name.startswith('hand-search')]

@@ -196,6 +196,10 @@ class HandDetector:
                     and self._idle[k] + 1 < self.detect_every:
                 self._idle[k] += 1
                 continue
+            # One search at a time: a second one started beside it would see the image
+            # without the first one's hand blanked, and both graphs could lock onto it.
+            if self._tracked[k] is None and self._searching:
+                continue
             self._idle[k] = 0
             image = rgb
             if others:
