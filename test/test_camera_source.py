@@ -78,13 +78,6 @@ def on(state):
     return {g for g in HELD if getattr(state, g, False) is True}
 
 
-# Photos the recognizer gets wrong although the Frame is faithful, with the measured
-# reason: none at present (the upright fist with its thumb laid over the fingers, the
-# hooked index and the "O" were, until the rules judged where the thumb lies, the
-# knuckle's bend and gathered fingertips).
-RECOGNIZER_LIMITS = {}
-
-
 def expected(name):
     """What a photo must give, from its label (the part of the name before __)."""
     label = name.split('__')[0]
@@ -95,26 +88,15 @@ def expected(name):
 
 
 def photo_params():
+    """Every labelled photo; each must give its label (none is excused)."""
     names = sorted(n for n in os.listdir(HANDS_DATA) if not n.startswith('clip_')
                    and n.lower().endswith(('.jpg', '.jpeg', '.png'))) \
         if os.path.isdir(HANDS_DATA) else ['shared-data-missing']
-    out = []
-    for n in names:
-        why = RECOGNIZER_LIMITS.get(n)
-        marks = [pytest.mark.xfail(reason=why, strict=False)] if why else []
-        out.append(pytest.param(n, marks=marks, id=n))
-    return out
-
-
-# Of those, the ones the recognizer reads as a thumbs-up: none.
-READ_AS_THUMBS_UP = ()
+    return [pytest.param(n, id=n) for n in names]
 
 
 def not_thumbs_up_params():
-    return [pytest.param(p.values[0], marks=[pytest.mark.xfail(
-        reason=RECOGNIZER_LIMITS[p.values[0]], strict=False)]
-        if p.values[0] in READ_AS_THUMBS_UP else [], id=p.values[0])
-        for p in photo_params() if not p.values[0].startswith('thumbs_up')]
+    return [p for p in photo_params() if not p.values[0].startswith('thumbs_up')]
 
 
 @pytest.mark.parametrize('name', not_thumbs_up_params())
