@@ -356,31 +356,34 @@ def test_search_thread_finds_both_hands_from_a_following_frame():
     assert detector.search_failures == 0
 
 
+class SlowGraph:
+    """A MediaPipe graph whose every run takes `delay` seconds longer."""
+
+    def __init__(self, graph, delay):
+        self.graph, self.delay = graph, delay
+
+    def process(self, image):
+        import time
+        time.sleep(self.delay)
+        return self.graph.process(image)
+
+    def close(self):
+        self.graph.close()
+
+
 def test_search_thread_runs_one_search_at_a_time():
     """A second graph searching beside the first sees the image without the first one's
     hand blanked: it finds the same hand, and the masking then takes the hand from the
     graph that had it (one hand, two detections, a graph change). Searches run one at a
     time: the hand stays with the graph that found it. Made likely here: the second
     graph's searches are slow and it may look on every frame."""
-    import time
     import cv2
     from leap_teleop.sources.mediapipe_hands import HandDetector
     rgb = cv2.cvtColor(cv2.imread(data('fist__htj__22.jpg')), cv2.COLOR_BGR2RGB)
-
-    class Slow:
-        def __init__(self, graph):
-            self.graph = graph
-
-        def process(self, image):
-            time.sleep(0.3)
-            return self.graph.process(image)
-
-        def close(self):
-            self.graph.close()
     with HandDetector(max_hands=2, strategy='paired', detect_every=1,
                       search_thread=True) as detector:
         paced_counts(detector, np.zeros_like(rgb), 20)     # both graphs load their models
-        detector._graphs[1] = Slow(detector._graphs[1])
+        detector._graphs[1] = SlowGraph(detector._graphs[1], 0.3)
         counts, holder = [], []
         for _ in range(25):
             counts += paced_counts(detector, rgb, 1)
@@ -411,22 +414,11 @@ def test_tracking_does_not_wait_for_a_slow_search():
     import time
     from leap_teleop.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
-
-    class Slow:
-        def __init__(self, graph):
-            self.graph = graph
-
-        def process(self, image):
-            time.sleep(0.5)
-            return self.graph.process(image)
-
-        def close(self):
-            self.graph.close()
     with HandDetector(max_hands=2, strategy='paired', detect_every=100,
                       search_thread=True) as detector:
         until_tracking(detector, rgb, 1)
         detector.detect_every = 1
-        detector._graphs[1] = Slow(detector._graphs[1])
+        detector._graphs[1] = SlowGraph(detector._graphs[1], 0.5)
         t0 = time.perf_counter()
         counts = [len(detector.detect(rgb)) for _ in range(3)]
         assert time.perf_counter() - t0 < 0.4 and counts == [1, 1, 1], counts
