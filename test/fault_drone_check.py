@@ -88,6 +88,17 @@ class FaultDrone(unittest.TestCase):
                     return t, s
         return None, None
 
+    def forward_since(self, n):
+        """How many of the latest twists (after the first n) are all forward."""
+        with self.lock:
+            recent = [m.linear.x > 0.5 for _, m in self.rec['twist'][n:]]
+        count = 0
+        for forward in reversed(recent):
+            if not forward:
+                break
+            count += 1
+        return count
+
     def test_hung_simulator_and_missing_navdata(self):
         self.assertTrue(wait_for(lambda: self.state() == 2
                                  and self.hand_pub.get_num_connections() >= 2
@@ -109,15 +120,20 @@ class FaultDrone(unittest.TestCase):
         self.assertTrue(wait_for(lambda: self.diag('blind_pilot')[1] is not None, 5.0))
         self.assertIn('no navdata', self.diag('blind_pilot')[1].message)
 
-        # Climb to flip height, then hang the simulator and ask for a flip at once.
+        # Climb to flip height, fly forward again, then hang the simulator and ask for a
+        # flip at once. Forward must be the only hand command in flight at the hang: a
+        # centred hand's zero twist arriving after it would pass for the watchdog's hover.
         self.hand_z = 0.0
         self.assertTrue(wait_for(lambda: self.state() in (3, 4)
                                  and self.rec['nav'][-1][1].altd >= 700, 10.0), 'too low')
+        self.hand_z = -0.1                           # the user keeps asking for forward
+        n_twists = len(self.rec['twist'])
+        self.assertTrue(wait_for(lambda: self.forward_since(n_twists) >= 5, 5.0),
+                        'no steady forward command before the hang')
         os.kill(sim_pid, signal.SIGSTOP)
         t_stop = time.monotonic()
         try:
             self.gesture('circle_cw', 0.035)
-            self.hand_z = -0.1                       # the user keeps asking for forward
             land_after = rospy.get_param('/drone_pilot/land_after')
             timeout = rospy.get_param('/drone_pilot/navdata_timeout', 0.5)
             self.assertTrue(wait_for(lambda: self.rec['land']
