@@ -60,16 +60,19 @@ class FaultSender(unittest.TestCase):
         self.assertGreater(t_land - t_kill, land_after - 0.1)
         self.assertLess(t_land - t_kill, land_after + 1.0)
 
-        # Respawn: a new process, the script from the start.
+        # Respawn: a new process, the script from the start. Its gestures are looked for
+        # from the kill's disarm and the landing on, not from when this check sees the new
+        # pid: under load that can come after the new thumbs-up (only the new sender can
+        # have sent anything since the kill).
         self.assertTrue(wait_for(lambda: w.drone_state() == 2, 10.0), 'not landed')
+        t_landed = w.first_nav((2,), t_kill)
         self.assertTrue(wait_for(lambda: node_pid('/leap_sender', timeout=20.0) != pid, 15.0))
         new_pid = node_pid('/leap_sender')
         rospy.loginfo('sender respawned as pid %d', new_pid)
-        t_respawn = time.monotonic()
-        self.assertTrue(wait_for(lambda: w.first_status('tracking', t_respawn)[0] is not None,
+        self.assertTrue(wait_for(lambda: w.first_status('tracking', t_disarm)[0] is not None,
                                  20.0), 'no new origin after the respawn')
-        t_armed, _ = w.first_status('armed', t_respawn)
-        t_origin, _ = w.first_status('tracking', t_respawn)
+        t_armed, _ = w.first_status('armed', t_disarm)
+        t_origin, _ = w.first_status('tracking', t_disarm)
         self.assertIsNotNone(t_armed)
         # Disarmed from the kill until the new thumbs-up: no other state in between.
         states = [s.state for t, s in w.status if t_disarm <= t < t_armed]
@@ -87,9 +90,9 @@ class FaultSender(unittest.TestCase):
         self.assertLess(worst, 0.05, 'a command %.3f rad away from the arm\'s pose' % worst)
 
         # Drone: landed until the new unfold, then a takeoff.
-        self.assertTrue(wait_for(lambda: w.first_nav((6, 3, 4), t_respawn) is not None, 20.0),
+        self.assertTrue(wait_for(lambda: w.first_nav((6, 3, 4), t_landed) is not None, 20.0),
                         'no takeoff after the respawn')
-        t_up = w.first_nav((6, 3, 4), t_respawn)
+        t_up = w.first_nav((6, 3, 4), t_landed)
         unfolds = [t for t, g in w.gestures if t > t_kill and g.gesture == 'unfold'
                    and g.side == g.SIDE_LEFT]
         self.assertTrue(unfolds and unfolds[0] < t_up, 'took off before the new unfold')
