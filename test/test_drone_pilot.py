@@ -198,6 +198,27 @@ def test_silence_counts_as_a_lost_hand():
     assert kinds(drain(pilot)) == ['land']
 
 
+def test_a_hand_read_before_navdata_went_stale_flies_nothing_after_the_hover():
+    # A Hand callback reads the clock while navdata is still fresh, the worker's watchdog
+    # then finds it stale and hovers, and only then does the callback take the lock: its
+    # forward twist must not follow (nor replace, still queued) the hover.
+    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15, land_after=3.0))
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(3, 1000, 1.0)
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.45)
+    assert twists(drain(pilot))[-1][0] == 1.0
+    pilot.watchdog(1.51)                                  # navdata last at 1.0: stale
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.49)           # read the clock before that
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.52)           # and later hands, as before
+    assert drain(pilot) == []
+    pilot.on_navdata(3, 1000, 1.6)                        # navdata back: flying again
+    pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.61)
+    assert twists(drain(pilot))[-1][0] == 1.0
+
+
 def test_reference_recaptured_when_the_hand_comes_back():
     pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
     pilot.on_navdata(2, 0, 0.0)

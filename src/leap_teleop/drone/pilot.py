@@ -280,6 +280,12 @@ class DronePilot:
         t = self.last_navdata_time
         return t is not None and -1e-6 <= now - t <= self.cfg.navdata_timeout
 
+    def _navdata_ok(self, now):
+        """Fresh by a callback's clock reading and not declared stale meanwhile: the
+        callback reads the clock before it takes the lock, so the watchdog may have found
+        the navdata stale (and hovered) in between."""
+        return self.navdata_lost_since is None and self.navdata_fresh(now)
+
     def on_hand(self, hand, now):
         with self._lock:
             why = None
@@ -314,7 +320,7 @@ class DronePilot:
             twist = self._twist(hand)
             if twist is None:
                 return
-            if not self.navdata_fresh(now) or self.drone_state not in FLYING_STATES:
+            if not self._navdata_ok(now) or self.drone_state not in FLYING_STATES:
                 return      # unknown or not flying: the navdata watchdog owns hovering
             self._zero_sent = all(v == 0.0 for v in twist)
             self.queue.push(Command('twist', twist, stamp=now))
@@ -323,7 +329,7 @@ class DronePilot:
         """A GestureEvent: its name, active flag, arrival time and value (for a circle,
         its radius in m)."""
         with self._lock:
-            state = self.drone_state if self.navdata_fresh(now) else None
+            state = self.drone_state if self._navdata_ok(now) else None
             if name == 'hand_lost':
                 self._lose(now)
             elif name == 'unfold':
