@@ -38,6 +38,7 @@ class HandStream(threading.Thread):
         self.lock = threading.Lock()
         self.pose = dict(present=False, palm=(0.0, 200.0, 0.0))
         self.sent = 0
+        self.last_stamp = None        # of the last live message handed to the publisher
 
     def message(self, stamp_offset=0.0, **pose):
         m = leapcobotright()
@@ -55,11 +56,20 @@ class HandStream(threading.Thread):
 
     def run(self):
         while not rospy.is_shutdown():
-            with self.lock:
-                pose = dict(self.pose)
-            self.pub.publish(self.message(**pose))
-            self.sent += 1
+            with self.lock:           # publish under the lock: see older_than_live
+                m = self.message(**self.pose)
+                self.pub.publish(m)
+                self.last_stamp = m.header.stamp.to_sec()
+                self.sent += 1
             time.sleep(0.01)
+
+    def older_than_live(self, age, **pose):
+        """Publish a message stamped `age` s before the last live one already queued on
+        the same connection: out of order however the live stream is paced."""
+        with self.lock:
+            m = self.message(**pose)
+            m.header.stamp = rospy.Time.from_sec(self.last_stamp - age)
+            self.pub.publish(m)
 
 
 class Diagnostics:
@@ -141,7 +151,9 @@ class FaultRobot(unittest.TestCase):
         for k in range(5):
             hand.pub.publish(hand.message(stamp_offset=-1.0, **pose))       # held up 1 s
             time.sleep(0.02)
-        hand.pub.publish(hand.message(stamp_offset=-0.05, **pose))          # out of order
+        # Out of order: older than a live message sent before it (a fixed offset from now
+        # is not, when the live stream has been starved for longer than the offset).
+        hand.older_than_live(0.05, **pose)
         hand.pub.publish(hand.message(**dict(palm=(float('nan'), 0.0, 0.0))))
         self.assertTrue(wait_for(lambda: w.status[-1][1].rejected_inputs >= before + 7, 3.0),
                         'rejected_inputs %d -> %d' % (before, w.status[-1][1].rejected_inputs))
