@@ -93,10 +93,19 @@ def test_realtime_pacing_loop_and_clock_mapping(tmp_path):
 def test_stop_from_another_thread(tmp_path):
     path = _write(tmp_path, 'r.json.gz', _frames(10, 100000))   # 1 s
     src = make_source('recording', path=path, loop=True)
-    threading.Timer(0.3, src.stop).start()
-    t0 = time.monotonic()
-    n = sum(1 for _ in src.frames())
-    assert time.monotonic() - t0 < 1.0 and 2 <= n <= 6
+    stopped_at = []
+
+    def stop():
+        src.stop()
+        stopped_at.append(time.monotonic())
+    # Judged from when stop() ran, not from when it was due: a loaded machine runs the
+    # timer late, and the frames played meanwhile are no fault of the source.
+    threading.Timer(0.3, stop).start()
+    yielded = [time.monotonic() for _ in src.frames()]
+    end = time.monotonic()
+    assert stopped_at and len(yielded) >= 2
+    assert sum(1 for t in yielded if t > stopped_at[0]) <= 1     # at most the frame under way
+    assert end - stopped_at[0] < 0.7
 
 
 @pytest.mark.parametrize('content,needle', [
