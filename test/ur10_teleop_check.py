@@ -19,6 +19,7 @@ import threading
 import unittest
 
 import numpy as np
+import rosgraph
 import rospy
 import rostest
 from sensor_msgs.msg import JointState
@@ -120,6 +121,7 @@ class Ur10Teleop(unittest.TestCase):
         self.rec = Recorder(list(self.arms), self.hand_topics)
         for arm in self.arms:
             rospy.wait_for_message('/%s/joint_states' % arm, JointState, timeout=60)
+        self.wait_for_arm_nodes(60.0)
         given_bag = rospy.get_param('~bag', '')        # a recorded session, else the script's
         if given_bag:
             self.bag, self.own_bag = given_bag, False
@@ -135,6 +137,24 @@ class Ur10Teleop(unittest.TestCase):
         self.player = subprocess.Popen(['rosbag', 'play', '--wait-for-subscribers', '-q',
                                         self.bag, '--topics'] + list(self.hand_topics.values()),
                                        stdout=subprocess.DEVNULL, start_new_session=True)
+
+    def wait_for_arm_nodes(self, timeout):
+        """Until every arm node subscribes to its hand topic (it does once it has its
+        robot's joints, after this node may have had them): `rosbag play
+        --wait-for-subscribers` counts this node's own subscription, and would start
+        the session while a slow arm node still misses its thumbs-up."""
+        master = rosgraph.Master(rospy.get_name())
+        want = {(rospy.resolve_name(self.hand_topics[hand]), '/%s/ur10_arm' % arm)
+                for arm, (hand, _) in self.arms.items()}
+        deadline = rospy.get_time() + timeout
+        while not rospy.is_shutdown():
+            subs = {(topic, node) for topic, nodes in master.getSystemState()[1]
+                    for node in nodes}
+            if want <= subs:
+                return
+            self.assertLess(rospy.get_time(), deadline, 'arm nodes not listening: %s'
+                            % sorted(want - subs))
+            rospy.sleep(0.1)
 
     def tearDown(self):
         if self.player.poll() is None:
