@@ -24,10 +24,12 @@ def record_session(tmp_path, script, topics, sides):
              'topics:=' + ' '.join(topics)],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)
         try:
-            time.sleep(4.0)          # the recorder subscribes before the first frame
+            # The script starts once the recorder subscribes to every topic (a fixed wait
+            # for roslaunch and rosbag to start can be outlasted on a loaded machine).
             sender = subprocess.run(
                 [sys.executable, package_path('scripts', 'sender.py'), '_script:=' + script,
-                 '_sides:=%s' % sides, '_shutdown_on_end:=true'],
+                 '_sides:=%s' % sides, '_shutdown_on_end:=true', '_wait_for_subscribers:=true',
+                 '_wait_topics:=[%s]' % ', '.join(topics)],
                 env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=120)
             assert sender.returncode == 0, sender.stderr.decode()[-2000:]
             time.sleep(1.0)
