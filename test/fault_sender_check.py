@@ -32,6 +32,7 @@ class FaultSender(unittest.TestCase):
                         'never both moving: drone %s, twists %d, arm status %s' % (
                             w.drone_state(), len(w.twists),
                             [s.state for _, s in w.status[-3:]]))
+        t_kill_stamp = rospy.get_time()      # the kill on the nodes' clock (stamps)
         t_kill = kill(pid)
         rospy.loginfo('sender killed')
 
@@ -47,9 +48,12 @@ class FaultSender(unittest.TestCase):
         zero = [t for t, m in list(w.twists) if t > t_kill and m.linear.x == 0.0
                 and m.linear.y == 0.0 and m.linear.z == 0.0 and m.angular.z == 0.0]
         self.assertTrue(zero, 'no zero twist after the kill')
-        rospy.loginfo('FAULT sender kill: arm disarmed %.3f s, drone zero twist %.3f s after',
-                      t_disarm - t_kill, zero[0] - t_kill)
-        self.assertLess(t_disarm - t_kill, 0.3)
+        # The arm node's disarm is timed by its status stamp, not by this node's receipt:
+        # how late a loaded machine schedules this check is no part of the arm's reaction.
+        disarm_after = st.header.stamp.to_sec() - t_kill_stamp
+        rospy.loginfo('FAULT sender kill: arm disarmed %.3f s (received %.3f s), drone zero '
+                      'twist %.3f s after', disarm_after, t_disarm - t_kill, zero[0] - t_kill)
+        self.assertLess(disarm_after, 0.3)
         self.assertLess(zero[0] - t_kill, 0.3)
         # ... and lands after land_after.
         self.assertTrue(wait_for(lambda: w.first_nav((8, 2), t_kill) is not None,
