@@ -156,9 +156,12 @@ def check():
             break
         except rosgraph.MasterError:
             time.sleep(0.2)
+    # The session starts once the arm node listens: it subscribes only after its robot's
+    # joints, which may come after this node has had them on a loaded machine.
     sender = subprocess.Popen(['roslaunch', 'leap_teleop', 'sender.launch',
                                'script:=%s' % SCRIPT, 'right_topic:=leapmotion/data',
-                               'shutdown_on_end:=true', 'required:=true'],
+                               'shutdown_on_end:=true', 'required:=true',
+                               'wait_for_subscribers:=true', 'wait_topics:=[leapmotion/data]'],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                               start_new_session=True)
     hosts = {}
