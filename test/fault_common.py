@@ -17,17 +17,35 @@ from leap_teleop.msg import ArmStatus, GestureEvent, Navdata
 from leap_teleop.ur10 import kinematics as kin
 
 
-def node_pid(name, timeout=30.0):
-    """The pid of a running node (asks the node itself through the master)."""
+class _TimedTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP with a time limit on each call."""
+
+    def __init__(self, timeout):
+        super().__init__()
+        self.timeout = timeout
+
+    def make_connection(self, host):
+        conn = super().make_connection(host)
+        conn.timeout = self.timeout
+        return conn
+
+
+def node_pid(name, timeout=30.0, call_timeout=2.0):
+    """The pid of a running node (asks the node itself through the master). Each call to
+    the node is bounded by call_timeout, so one that hangs (a node gone or stalled under
+    load) is retried instead of using up the whole timeout."""
     master = rosgraph.Master('/fault_check')
     deadline = time.monotonic() + timeout
+    last = None
     while time.monotonic() < deadline:
         try:
             uri = master.lookupNode(name)
-            return xmlrpc.client.ServerProxy(uri).getPid('/fault_check')[2]
-        except (rosgraph.MasterError, OSError, xmlrpc.client.Fault):
+            proxy = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(call_timeout))
+            return proxy.getPid('/fault_check')[2]
+        except (rosgraph.MasterError, OSError, xmlrpc.client.Error) as e:
+            last = e
             time.sleep(0.2)
-    raise AssertionError('node %s did not come up' % name)
+    raise AssertionError('node %s did not come up (last: %r)' % (name, last))
 
 
 def kill(pid):
