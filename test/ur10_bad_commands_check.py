@@ -78,7 +78,17 @@ class BadCommands(unittest.TestCase):
             n = len(self.warnings)
         q0, g0 = self.joints()
         pub.publish(msg)
-        rospy.sleep(2.2)        # past the warning rate limit, and time to move if it would
+
+        def warned():
+            with self.lock:
+                return any('rejected' in w and reason in w for w in self.warnings[n:])
+        deadline = rospy.get_time() + 30.0
+        while not warned() and rospy.get_time() < deadline and not rospy.is_shutdown():
+            rospy.sleep(0.05)
+        # Past the warning rate limit counted from the warning, not from the publish (on a
+        # loaded machine the command can reach the simulator late, and simulated time runs
+        # 8x), and time to move if it would.
+        rospy.sleep(2.2)
         q1, g1 = self.joints()
         with self.lock:
             new = self.warnings[n:]
