@@ -50,6 +50,7 @@ JPEG_QUALITY = 25
 BLUR_SIGMA = 1.5                    # px at 640 px wide, scaled with the photo
 PAD_FACTOR = 1.6                    # padded canvas size over the photo's
 CROP_KEEP = 0.6                     # off-centre crop: at least this share of each side
+LEAN_ROTATION = 20                  # deg, lean_views
 
 
 def photo_names(data_dir):
@@ -130,6 +131,13 @@ def views(cv2, bgr, label, box):
     return out
 
 
+def lean_views(cv2, bgr, label, box):
+    """The few views a quick check affords: mirrored, turned LEAN_ROTATION either way."""
+    return [('mirror', cv2.flip(bgr, 1)),
+            ('rot%+d' % LEAN_ROTATION, _rotate(cv2, bgr, LEAN_ROTATION)),
+            ('rot%+d' % -LEAN_ROTATION, _rotate(cv2, bgr, -LEAN_ROTATION))]
+
+
 def swapped(landmarks):
     """The detections with MediaPipe's handedness label swapped."""
     from ..sources.landmarks import HandLandmarks
@@ -184,9 +192,10 @@ class PhotoPipeline:
         self.source.detector.close()
 
 
-def run(data_dir=evaluate.HANDS_DATA, names=None, view_filter=None, log=None):
+def run(data_dir=evaluate.HANDS_DATA, names=None, make_views=views, log=None):
     """Per label: cases, right, fraction, false thumbs-up, no hand found, failures
-    [(photo, view, 'label as given' | 'label swapped', gestures read)]."""
+    [(photo, view, 'label as given' | 'label swapped', gestures read)]. make_views(cv2,
+    bgr, label, hand box) -> [(view name, BGR image)]: views (default) or lean_views."""
     names = photo_names(data_dir) if names is None else list(names)
     if not names:
         raise FileNotFoundError('no labelled hand photos in %s' % data_dir)
@@ -204,9 +213,7 @@ def run(data_dir=evaluate.HANDS_DATA, names=None, view_filter=None, log=None):
             box = _box(found, bgr.shape[1], bgr.shape[0])
             r = per_label.setdefault(label, {'cases': 0, 'right': 0, 'false_thumb_up': 0,
                                              'no_hand': 0, 'failures': []})
-            for view, img in views(cv2, bgr, label, box):
-                if view_filter is not None and not view_filter(label, view):
-                    continue
+            for view, img in make_views(cv2, bgr, label, box):
                 lms, cam = pipe.detect(img)
                 for how, marks in (('label as given', lms), ('label swapped', swapped(lms))):
                     hands = pipe.classify(marks, cam)
