@@ -24,3 +24,17 @@ def test_mirrored_and_turned_photos_keep_their_gesture():
     # when the others carry the total)
     for label, r in res['labels'].items():
         assert r['fraction'] >= 0.5, (label, r)
+
+
+def test_main_prints_and_writes_the_table(tmp_path, capsys):
+    import json
+    out = tmp_path / 'views.json'
+    name = 'fist__htj__22.jpg'
+    assert views.main(['--data', HANDS_DATA, '--photos', name, '--out', str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data['photos'] == 1 and list(data['labels']) == ['fist'], data
+    r = data['labels']['fist']
+    # every view twice (label as given, swapped); this photo's fist survives most
+    assert r['cases'] >= 30 and r['cases'] % 2 == 0 and r['fraction'] >= 0.9, r
+    assert r['false_thumb_up'] == 0
+    assert 'fist' in capsys.readouterr().out

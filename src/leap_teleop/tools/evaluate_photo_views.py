@@ -2,6 +2,7 @@
 them.
 
 usage: python -m leap_teleop.tools.evaluate_photo_views [--data DIR] [--out FILE]
+                                                      [--photos NAME,NAME,...]
 
 The photo rules were partly read off these photos, so the photos as they are say little
 about other people's. Here every labelled photo (shared/data/hands, label = the file name
@@ -261,11 +262,14 @@ def main(argv=None):
     ap.add_argument('--data', default=evaluate.HANDS_DATA,
                     help='folder of the labelled hand photos (default %(default)s)')
     ap.add_argument('--out', default='', help='also write the figures as JSON here')
+    ap.add_argument('--photos', default='',
+                    help='comma-separated file names: only these photos (default: all)')
     args = ap.parse_args(argv)
     if not os.path.isdir(args.data):
         print('evaluate_photo_views: no photo folder at %s' % args.data, file=sys.stderr)
         return 2
-    res = run(args.data)
+    names = [n for n in args.photos.split(',') if n] or None
+    res = run(args.data, names)
     print_table(res)
     if args.out:
         with open(args.out, 'w') as f:
