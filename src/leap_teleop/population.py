@@ -10,8 +10,9 @@ at all, no SDK strengths, no timestamps). Poses come from joint angles and thumb
 placements read off how hands are formed, in the hand's own size, never from the
 recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg
 (fists and the hooked index also upright, as raised to a camera, turned any way about the
-forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the thumb within 45 deg of vertical (leaning toward the fingers
-up to 45 deg, the hand pitched to match), a sideways thumb > 65 deg off.
+forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the
+thumb within 45 deg of vertical (leaning toward the fingers up to 45 deg, the hand pitched
+to match), a sideways thumb > 65 deg off.
 
     people = make_people(200, seed=1)
     for frames in take(person, 'fist', rng): ...   # (Hand, timestamp) per frame
@@ -345,20 +346,6 @@ def motion_take(person, kind, rng, rate=60.0):
     pose = {'knob': 'ok', 'finger_circle': 'index', 'point_tap': 'index'}.get(kind, 'open')
     joints, flex = local_pose(person, pose, rng)
     rot = orientation(person, pose, rng)
-    if pose in ('thumbs_up', 'thumbs_down'):
-        # A thumbs-up / down points the thumb (knuckle -> tip) within THUMB_POSE_DEG of
-        # vertical: a thumb leaning toward the fingers goes with a hand pitched the other
-        # way (drawn again until it does, from a generator of its own so that the other
-        # takes keep their draws).
-        redraw = None
-        for _ in range(50):
-            t = rot @ (joints[0, 3] - joints[0, 1])
-            if abs(t[1]) / np.linalg.norm(t) >= math.cos(math.radians(THUMB_POSE_DEG)):
-                break
-            if redraw is None:
-                redraw = np.random.default_rng([person.id, POSES.index(pose),
-                                                int(abs(joints[0, 3, 0]) * 1e6)])
-            rot = orientation(person, pose, redraw)
     start = np.array([u(-60, 60), u(180, 260), u(-40, 40)])
     if kind == 'swipe':
         dur = u(0.25, 0.4) + u(0.5, 0.8)
