@@ -1,5 +1,7 @@
 """The evaluation on the real recordings meets the issue's targets (fails without data)."""
 
+import os
+
 import pytest
 
 from leap_teleop.tools import evaluate
@@ -90,8 +92,13 @@ def test_main_writes_the_json(tmp_path, results, leapjs_data):
     import json
     from leap_teleop.tools import evaluate_population
     out = tmp_path / 'eval_results.json'
+    # one photo for the photo views (its full table is make eval's and test_photo_views')
+    photos = tmp_path / 'hands'
+    photos.mkdir()
+    os.symlink(os.path.join(evaluate.HANDS_DATA, 'open_palm__gestia__palm_open.jpg'),
+               str(photos / 'open_palm__gestia__palm_open.jpg'))
     assert evaluate.main(['--data', leapjs_data, '--out', str(out), '--no-loto',
-                          '--people', '10']) == 0
+                          '--people', '10', '--hands-data', str(photos)]) == 0
     data = json.loads(out.read_text())
     for who in ('recognizer', 'original'):
         for g in evaluate.GESTURES:
@@ -101,6 +108,9 @@ def test_main_writes_the_json(tmp_path, results, leapjs_data):
     assert set(data['population']['gestures']) == {'fist', 'thumb_up', 'thumb_down', 'pinch',
                                                    'rock', 'open'}
     assert data['population'] == evaluate_population.run(10, 1)      # --people 10, seed 1
+    views = data['photo_views']
+    assert views['photos'] == 1 and list(views['labels']) == ['open_palm'], views
+    assert views['total']['fraction'] >= 0.9 and views['total']['false_thumb_up'] == 0, views
 
 
 def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):

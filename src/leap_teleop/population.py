@@ -10,7 +10,9 @@ at all, no SDK strengths, no timestamps). Poses come from joint angles and thumb
 placements read off how hands are formed, in the hand's own size, never from the
 recognizer's thresholds. Orientation per take: palm down, sideways, tilted up to 60 deg
 (fists and the hooked index also upright, as raised to a camera, turned any way about the
-forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the thumb within ~40 deg of vertical, a sideways thumb > 65 deg off.
+forearm; a raised fist with its thumb out is always upright); thumbs-up / down point the
+thumb within 45 deg of vertical (leaning toward the fingers up to 45 deg, the hand pitched
+to match), a sideways thumb > 65 deg off.
 
     people = make_people(200, seed=1)
     for frames in take(person, 'fist', rng): ...   # (Hand, timestamp) per frame
@@ -187,8 +189,10 @@ def local_pose(person, pose, rng):
             fingers[i] = c
     tl = person.thumb_length
     if thumb in ('open', 'up'):
-        # out from the hand: thumbward, a little forward (up: nearly straight out)
-        a = math.radians(u(35, 65) if thumb == 'open' else u(0, 20))
+        # out from the hand: thumbward, a little forward (up: nearly straight out; a
+        # thumbs-up / down thumb leans toward the fingers as far as photos show, 45 deg)
+        a = math.radians(u(35, 65) if thumb == 'open' else
+                         u(0, 45) if pose in ('thumbs_up', 'thumbs_down') else u(0, 20))
         tip = _THUMB_BASE + tl * np.array([math.cos(a), u(-0.05, 0.15), math.sin(a)])
     elif thumb == 'tucked':       # across the curled index and middle
         tip = np.array([u(-0.3, 0.15), u(0.45, 0.75), u(0.7, 1.0)])
@@ -250,6 +254,9 @@ def orientation(person, pose, rng):
             @ _rot(d, rng.uniform(-60, 60)) @ base)
 
 
+THUMB_POSE_DEG = 45.0       # thumbs-up / down: the thumb this near vertical at most
+
+
 # -- frames -----------------------------------------------------------------------------
 def _sdk_grab(flex):
     """A tracker-like grab strength from the true finger flexions: 0 until the fingers
@@ -263,6 +270,20 @@ def take(person, pose, rng, frames=30, rate=60.0, t0=0.0):
     pose and orientation, tremor and tracking noise per frame."""
     joints, flex = local_pose(person, pose, rng)
     rot = orientation(person, pose, rng)
+    if pose in ('thumbs_up', 'thumbs_down'):
+        # A thumbs-up / down points the thumb (knuckle -> tip) within THUMB_POSE_DEG of
+        # vertical: a thumb leaning toward the fingers goes with a hand pitched the other
+        # way (drawn again until it does, from a generator of its own so that the other
+        # takes keep their draws).
+        redraw = None
+        for _ in range(50):
+            t = rot @ (joints[0, 3] - joints[0, 1])
+            if abs(t[1]) / np.linalg.norm(t) >= math.cos(math.radians(THUMB_POSE_DEG)):
+                break
+            if redraw is None:
+                redraw = np.random.default_rng([person.id, POSES.index(pose),
+                                                int(abs(joints[0, 3, 0]) * 1e6)])
+            rot = orientation(person, pose, redraw)
     s = person.palm_width
     palm = np.array([rng.uniform(-80, 80), rng.uniform(150, 300), rng.uniform(-60, 60)])
     mistracked = rng.integers(1, 5) if rng.random() < person.mistrack_rate else None

@@ -87,10 +87,15 @@ HOOK_OTHERS_KNUCKLE = 45.0
 HOOK_BEND_GAP = 80.0
 # ... and pointing up (down) more than the hand direction does, by this much of Leap y
 # (thumbs-up photos 0.32..0.66, thumbs-down 0.78, the shared takes' thumbs-up >= 0.34;
-# fists raised with the fingers up -0.5..0.03: their thumbs point up with the hand).
+# fists raised with the fingers up -0.5..0.03: their thumbs point up with the hand; as
+# an angle margin instead, 12 deg let the synthetic raised fists through).
 THUMB_BEYOND_HAND = 0.15
-# Thumbs-up / down: thumb within this angle of Leap +y / -y (deg).
-THUMB_VERTICAL = (45.0, 55.0)
+# Thumbs-up / down: thumb (knuckle -> tip) within this angle of Leap +y / -y (deg). Real
+# thumbs lean toward the fingers (photos: 22..44 deg off vertical as taken, MediaPipe's
+# depth adding up to ~10 on a re-shot view); a sideways thumb is 65 and more off (the
+# shared take's sideways thumbs, > 60 deg off by the SDK's thumb direction, read 55 and
+# up knuckle -> tip).
+THUMB_VERTICAL = (50.0, 55.0)
 # Thumb-index tip gap (palm widths): touching ~0.2..0.5, apart > 0.9.
 PINCH_GAP = (0.6, 0.75)
 PINCH_GAP_OPEN = 1.1                 # geometric pinch strength 0 at this gap, 1 at 0.35
@@ -112,7 +117,6 @@ PINCH_MAX_INDEX_BEND = 150.0
 # as in a "three"), and the tracker's grab strength, when it gives one, below this.
 OPEN_FORGIVE_GRAB = 0.15
 OPEN_FORGIVE_THUMB_OUT = 0.2
-_VERT = tuple(math.cos(math.radians(a)) for a in THUMB_VERTICAL)
 _isfinite = math.isfinite
 
 
@@ -149,7 +153,8 @@ def classify_geometry(g, hand, active=None, opening=False):
     cc, cb = CURLED_CHORD[k], CURLED_BEND[k]
     uc, ub = THUMB_UP_CURLED_CHORD[ku], THUMB_UP_CURLED_BEND[ku]
     ec, eb = EXTENDED_CHORD[ext_k], EXTENDED_BEND[ext_k]
-    curled = thumb_curled = True
+    dcc, dcb = CURLED_CHORD[ku], CURLED_BEND[ku]
+    curled = thumb_curled = down_curled = True
     ext = [False] * 5
     n_ext = 0
     kn = g.knuckle
@@ -161,13 +166,15 @@ def classify_geometry(g, hand, active=None, opening=False):
     for i in (1, 2, 3, 4):
         c, b = chord[i], bend[i]
         if (c != c and b != b) or (i == 1 and hooked):
-            curled = thumb_curled = False
+            curled = thumb_curled = down_curled = False
             if c != c and b != b:
                 continue
         if curled and not _curled(c, b, cc, cb):
             curled = False
         if thumb_curled and not _curled(c, b, uc, ub):
             thumb_curled = False
+        if down_curled and not _curled(c, b, dcc, dcb):
+            down_curled = False
         if b < eb and (c != c or c > ec):
             ext[i] = True
             n_ext += 1
@@ -181,7 +188,7 @@ def classify_geometry(g, hand, active=None, opening=False):
     up_out = (g.thumb_out > THUMB_UP_OUT[ku] and g.thumb_along < THUMB_UP_MAX_ALONG
               and thumbward > THUMB_UP_MIN_THUMBWARD)
     ty = g.thumb_dir[1]
-    vert = _VERT[ku]
+    vert = math.cos(math.radians(THUMB_VERTICAL[ku]))
     # The thumb of a fist lies on the fingers (tucked or alongside), not away from them
     # as in a C. Without the finger joints (tips only) an alongside thumb is as far from
     # the tips as a C's: then a tracker's grab strength near 1 decides.
@@ -196,10 +203,17 @@ def classify_geometry(g, hand, active=None, opening=False):
     dy = g.basis[2][1]
     thumb_up = (thumb_curled and up_out and ty > vert and ty - dy > THUMB_BEYOND_HAND
                 and ('thumb_up' in active or not opening))
-    thumb_down = thumb_curled and up_out and ty < -vert and dy - ty > THUMB_BEYOND_HAND
+    # Thumbs-down arms nothing: the fist's curl suffices (a fist seen from the back, as a
+    # thumbs-down mostly is, hides the fingers' middle joints and the camera's landmarks
+    # flatten them).
+    thumb_down = down_curled and up_out and ty < -vert and dy - ty > THUMB_BEYOND_HAND
     # A thumb lying on the fingers closes the fist up to the thumbs-up bar (without the
     # index knuckle thumb-out is too noisy to bar it: then until a thumbs-up shows).
-    lying = over and (no_knuckle or g.thumb_out <= THUMB_UP_OUT[0])
+    # A thumb over the fingers that points along the hand (a raised fist's thumb laid
+    # up its fingers) lies on them however far thumbward its tip sits.
+    lying = over and (no_knuckle or g.thumb_out <= THUMB_UP_OUT[0]
+                      or not (g.thumb_along < THUMB_UP_MAX_ALONG
+                              and thumbward > THUMB_UP_MIN_THUMBWARD))
     fist = (curled and near and not o_shape and not (out and not lying)
             and not (thumb_up or thumb_down))
     rock = (ext[1] and ext[4] and _folded(chord[2], bend[2]) and _folded(chord[3], bend[3]))

@@ -145,8 +145,9 @@ class CameraSource(HandSource):
             self._last[side] = (t, hand.palm_position, velocity, hand_id)
         return [by_side[s] for s in ('right', 'left') if s in by_side]
 
-    def process(self, bgr, stamp, frame_id):
-        """One image -> (Frame, landmarks, processed BGR image)."""
+    def prepare(self, bgr):
+        """A captured image as the detector sees it: (processed BGR, RGB, its CameraModel)
+        after the letterbox and the flip."""
         cv2 = self.cv2
         h, w = bgr.shape[:2]
         fit = None
@@ -154,7 +155,11 @@ class CameraSource(HandSource):
             bgr, fit = self.letterbox(bgr)
         if self.flip:
             bgr = cv2.flip(bgr, 1)
-        rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+        return bgr, cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), self.camera_for(w, h, fit)
+
+    def process(self, bgr, stamp, frame_id):
+        """One image -> (Frame, landmarks, processed BGR image)."""
+        bgr, rgb, cam = self.prepare(bgr)
         try:
             landmarks = self.detector.detect(rgb)
             self._failures = 0
@@ -168,7 +173,7 @@ class CameraSource(HandSource):
                             frame_id, e)
             landmarks = []
         frame = Frame(id=frame_id, timestamp=stamp,
-                      hands=self.hands_of(landmarks, self.camera_for(w, h, fit), stamp))
+                      hands=self.hands_of(landmarks, cam, stamp))
         self.frames_processed += 1
         return frame, landmarks, bgr
 

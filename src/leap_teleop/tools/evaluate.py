@@ -419,6 +419,10 @@ def main(argv=None):
                     help='synthetic population size (0: skip it; default %(default)s)')
     ap.add_argument('--seed', type=int, default=1, help='population seed (default %(default)s)')
     ap.add_argument('--no-loto', action='store_true', help='skip the leave-one-take-out refits')
+    ap.add_argument('--no-photos', action='store_true',
+                    help='skip the labelled photos under camera / person changes')
+    ap.add_argument('--hands-data', default=HANDS_DATA,
+                    help='folder of the labelled hand photos (default %(default)s)')
     args = ap.parse_args(argv)
     if not os.path.isdir(args.data):
         print('evaluate: no recordings folder at %s' % args.data, file=sys.stderr)
@@ -432,6 +436,13 @@ def main(argv=None):
         from . import evaluate_population
         results['population'] = evaluate_population.run(args.people, args.seed)
         evaluate_population.print_table(results['population'])
+    if not args.no_photos:
+        from . import evaluate_photo_views
+        if not os.path.isdir(args.hands_data):
+            print('evaluate: no hand photos at %s' % args.hands_data, file=sys.stderr)
+            return 2
+        results['photo_views'] = evaluate_photo_views.run(args.hands_data)
+        evaluate_photo_views.print_table(results['photo_views'])
     with open(args.out, 'w') as f:
         json.dump(results, f, indent=1, sort_keys=True)
     print('wrote %s' % args.out)

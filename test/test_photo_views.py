@@ -1,0 +1,40 @@
+"""Other people's photos: the labelled hand photos mirrored and turned 20 deg either way
+(each with MediaPipe's handedness label as given and swapped) through classify_frames'
+image path must keep their gesture in >= 90 % of cases and never read as a thumbs-up
+unless they show one (the full set of views is `make eval`'s photo table)."""
+import os
+
+from leap_teleop.tools import evaluate_photo_views as views
+from leap_teleop.tools.evaluate import HANDS_DATA
+
+
+def test_mirrored_and_turned_photos_keep_their_gesture():
+    assert os.path.isdir(HANDS_DATA), 'shared hand photos absent: %s' % HANDS_DATA
+    names = views.photo_names(HANDS_DATA)
+    assert len(names) == 29, names
+    res = views.run(HANDS_DATA, names, make_views=views.lean_views)
+    total = res['total']
+    false_up = [f for r in res['labels'].values() for f in r['failures']
+                if f[0].split('__')[0] != 'thumbs_up' and any('thumb_up' in g for g in f[3])]
+    assert total['false_thumb_up'] == 0 and not false_up, false_up
+    assert total['cases'] == 29 * 3 * 2, total
+    failures = [f for r in res['labels'].values() for f in r['failures']]
+    assert total['fraction'] >= 0.9, (total, failures)
+    # every label keeps at least half of its cases (a rule broken for one gesture shows here even
+    # when the others carry the total)
+    for label, r in res['labels'].items():
+        assert r['fraction'] >= 0.5, (label, r)
+
+
+def test_main_prints_and_writes_the_table(tmp_path, capsys):
+    import json
+    out = tmp_path / 'views.json'
+    name = 'fist__htj__22.jpg'
+    assert views.main(['--data', HANDS_DATA, '--photos', name, '--out', str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data['photos'] == 1 and list(data['labels']) == ['fist'], data
+    r = data['labels']['fist']
+    # every view twice (label as given, swapped); this photo's fist survives most
+    assert r['cases'] >= 30 and r['cases'] % 2 == 0 and r['fraction'] >= 0.9, r
+    assert r['false_thumb_up'] == 0
+    assert 'fist' in capsys.readouterr().out
