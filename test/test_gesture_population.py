@@ -78,6 +78,21 @@ def test_ok_sign_with_the_other_fingers_in_any_state_or_gathered_as_an_o(fingers
     assert all('pinch' not in s for s in shown(person(), 'O') + shown(person(), 'C'))
 
 
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+def test_an_o_whose_index_curls_past_150_deg_is_a_pinch(side):
+    """A round "O" may bend the index 150 deg and more (the pinch's index limit keeps a fist's
+    index curled under a laid-over thumb out; the O's gathered fingertips are no fist)."""
+    p = person(side=side, ok_fingers='O')
+    seeds = [s for s in range(400)
+             if pop.local_pose(p, 'ok', np.random.default_rng(s))[1][0].sum() >= 150.0][:6]
+    assert len(seeds) == 6
+    for s in seeds:
+        rec = GestureRecognizer()
+        states = [rec.update(hand, t) for hand, t in pop.take(p, 'ok', np.random.default_rng(s))]
+        assert all(st.pinch and not st.fist for st in states[6:]), s
+
+
 def test_thumbs_up_down_and_sideways():
     assert shown(person(), 'thumbs_up') == [{'thumb_up'}] * 6
     assert shown(person(), 'thumbs_down') == [{'thumb_down'}] * 6

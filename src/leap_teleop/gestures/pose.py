@@ -111,7 +111,8 @@ PINCH_REST_BEND = (100.0, 110.0)     # an "O" bends every other finger more than
 # the shared takes' loose fists 0.75..0.95).
 O_TIP_SPREAD = 0.4
 # The index reaches out to the thumb (~60..135 deg), not curled into the palm under a
-# thumb laid over the fist (~150 and up).
+# thumb laid over the fist (~150 and up). An "O" is exempt: its index rounds to the
+# gathered fingertips as far as a fist's (~100..175 deg), and a fist keeps its tips apart.
 PINCH_MAX_INDEX_BEND = 150.0
 # Open with one finger reported bent: the thumb must be out (not holding that finger down,
 # as in a "three"), and the tracker's grab strength, when it gives one, below this.
@@ -225,7 +226,7 @@ def classify_geometry(g, hand, active=None, opening=False):
         rest_c = max(chord[2], chord[3], chord[4])
         b1, b2, b3, b4 = bend[1:]
         rest = min(b2, b3, b4)
-        pinch = (not b1 >= PINCH_MAX_INDEX_BEND
+        pinch = ((o_shape or not b1 >= PINCH_MAX_INDEX_BEND)
                  and (o_shape or g.middle_gap > PINCH_MIDDLE_CLEAR or rest < PINCH_REST_BEND[pk]
                       or rest_c > c1 + PINCH_CHORD_MARGIN or b1 > rest + PINCH_BEND_MARGIN))
     # Horns never have the thumb on the index tip; a pinch with the pinky out does.
