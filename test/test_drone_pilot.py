@@ -37,6 +37,17 @@ def kinds(cmds):
     return [c.kind for c in cmds]
 
 
+def airborne(config, state=3, t_flying=0.0):
+    """A pilot engaged on a centred hand (navdata landed, unfold) whose drone then
+    reports `state` at 1 m, at time t_flying."""
+    pilot = DronePilot(config)
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(state, 1000, t_flying)
+    return pilot
+
+
 # -- paper mode: Algorithm 1 on hand-computed inputs -------------------------------------
 def test_leap_angles_match_the_sdk_definitions():
     p, r, y = leap_angles((math.sin(math.radians(30)), -math.cos(math.radians(30)), 0.0),
@@ -162,11 +173,7 @@ def test_gestures_respect_the_drone_state():
 
 # -- watchdog ---------------------------------------------------------------------------
 def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
-    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=10.0))   # navdata fresh
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(3, 1000, 0.0)
+    pilot = airborne(PilotConfig(land_after=3.0, navdata_timeout=10.0))   # navdata fresh
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     assert twists(drain(pilot))[-1][0] == 1.0
     pilot.on_hand(hand((0, 0, 0), present=False), 0.2)
@@ -181,11 +188,7 @@ def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
 
 
 def test_silence_counts_as_a_lost_hand():
-    pilot = DronePilot(PilotConfig(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(3, 1000, 0.0)
+    pilot = airborne(PilotConfig(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     drain(pilot)
     pilot.watchdog(0.2)
@@ -202,11 +205,8 @@ def test_a_hand_read_before_navdata_went_stale_flies_nothing_after_the_hover():
     # A Hand callback reads the clock while navdata is still fresh, the worker's watchdog
     # then finds it stale and hovers, and only then does the callback take the lock: its
     # forward twist must not follow (nor replace, still queued) the hover.
-    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15, land_after=3.0))
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(3, 1000, 1.0)
+    pilot = airborne(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15, land_after=3.0),
+                     t_flying=1.0)
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.45)
     assert twists(drain(pilot))[-1][0] == 1.0
     pilot.watchdog(1.51)                                  # navdata last at 1.0: stale
@@ -220,11 +220,7 @@ def test_a_hand_read_before_navdata_went_stale_flies_nothing_after_the_hover():
 
 
 def test_reference_recaptured_when_the_hand_comes_back():
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_navdata(4, 1000, 0.0)
+    pilot = airborne(PilotConfig(navdata_timeout=10.0), state=4)
     pilot.on_hand(hand((0, 0, 0), present=False), 0.1)
     t = twists(drain(pilot))
     pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
