@@ -18,6 +18,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import leapcobotright
+from leap_teleop.nodes.signals import init_node
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
 
 
@@ -29,7 +30,7 @@ def main():
     ap.add_argument('--reply-timeout', type=float, default=5.0)
     ap.add_argument('--out', required=True)
     args = ap.parse_args(rospy.myargv()[1:])
-    rospy.init_node('arm_bench_driver')
+    init_node('arm_bench_driver')
     pubs = {'arm': rospy.Publisher('leapmotion/data_right', leapcobotright, queue_size=10,
                                    tcp_nodelay=True),
             'bare': rospy.Publisher('bench/echo_in', leapcobotright, queue_size=10,

@@ -9,6 +9,7 @@ import time
 import rospy
 
 from leap_teleop.msg import leapcobotright
+from leap_teleop.nodes.signals import init_node
 
 
 def main():
@@ -16,7 +17,7 @@ def main():
     ap.add_argument('--rate', type=float, required=True)
     ap.add_argument('--topic', default='leapmotion/data_right')
     args = ap.parse_args(rospy.myargv()[1:])
-    rospy.init_node('bare_publisher')
+    init_node('bare_publisher')
     pub = rospy.Publisher(args.topic, leapcobotright, queue_size=200)
     period = 1.0 / args.rate
     msg = leapcobotright(is_right_hand=True)

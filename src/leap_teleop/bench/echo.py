@@ -3,10 +3,11 @@
 import rospy
 
 from leap_teleop.msg import leapcobotright
+from leap_teleop.nodes.signals import init_node
 
 
 def main():
-    rospy.init_node('bench_echo')
+    init_node('bench_echo')
     pub = rospy.Publisher('bench/echo', leapcobotright, queue_size=10, tcp_nodelay=True)
     rospy.Subscriber('bench/echo_in', leapcobotright, pub.publish, tcp_nodelay=True)
     rospy.spin()

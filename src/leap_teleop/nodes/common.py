@@ -5,6 +5,7 @@ import textwrap
 import rospkg
 import rospy
 
+from leap_teleop.nodes.signals import init_node
 from leap_teleop.params import Param, ParamError, check_params  # noqa: F401 (re-exported)
 
 
@@ -27,7 +28,7 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     parameter (build raising one of `errors`) ends the node with one fatal log line (plus
     `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
     handle_help(script, doc, params, argv)
-    rospy.init_node(name)
+    init_node(name)
     try:
         p = read_params(params)
         return p, build(p)

@@ -8,6 +8,7 @@ config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, 
 also a private parameter; the launch files load that file into the node's namespace.
 """
 import threading
+import time
 
 import diagnostic_updater
 import rospy
@@ -101,10 +102,13 @@ class ArmNode:
         """Listen to the hand only once the robot reports its joints, so no gesture
         (a thumbs-up) is spent while nothing could act on it; a sender started with
         ~wait_for_subscribers then starts its session exactly when the arm is ready."""
-        while not self.joints_seen.wait(5.0):
+        last_log = time.monotonic()
+        while not self.joints_seen.wait(0.2):
             if rospy.is_shutdown():
                 return False
-            rospy.loginfo('ur10_arm: waiting for %s', rospy.resolve_name('joint_states'))
+            if time.monotonic() - last_log >= 5.0:
+                last_log = time.monotonic()
+                rospy.loginfo('ur10_arm: waiting for %s', rospy.resolve_name('joint_states'))
         rospy.Subscriber(self.hand_topic, self.hand_type, self.on_hand, queue_size=50,
                          tcp_nodelay=True)
         # Its own timer thread: the master lookup blocks, the control loop must not.
