@@ -155,6 +155,25 @@ def test_photos_keep_their_gesture_under_landmark_jitter(hands_json):
     assert right / total >= 0.9, (right, total)
 
 
+def test_forget_hands_starts_a_new_track(hands_json):
+    """Between unrelated images (a cut, separate photos): a new hand id, no velocity."""
+    name = next(n for n, v in hands_json['images'].items() if len(v['hands']) == 1)
+    source = make_source('video', path=data(name), realtime=False, clock=lambda: 0.0)
+    try:
+        lm = [HandLandmarks.from_dict(hands_json['images'][name]['hands'][0])]
+        moved = [HandLandmarks(lm[0].image + [0.05, 0.0, 0.0], lm[0].world, lm[0].label,
+                               lm[0].score)]
+        cam = CameraModel.from_hfov(640, 480, 60.0)
+        first = source.hands_of(lm, cam, 0.0)[0]
+        tracked = source.hands_of(moved, cam, 0.1)[0]
+        assert tracked.id == first.id and np.linalg.norm(tracked.palm_velocity) > 0
+        source.forget_hands()
+        fresh = source.hands_of(moved, cam, 0.2)[0]
+        assert fresh.id != first.id and not np.any(fresh.palm_velocity)
+    finally:
+        source.detector.close()
+
+
 def clip_run(name, **kwargs):
     """Per frame (frame id, stamp, {side: HandState}) of a clip played through the
     video source (letterboxed to 640x480, as fast as possible) and LeapInterface."""

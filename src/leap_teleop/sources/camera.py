@@ -145,6 +145,11 @@ class CameraSource(HandSource):
             self._last[side] = (t, hand.palm_position, velocity, hand_id)
         return [by_side[s] for s in ('right', 'left') if s in by_side]
 
+    def forget_hands(self):
+        """Treat the next image as unrelated to the last: new hand ids, no velocity (a
+        cut in a video, or a set of separate photos)."""
+        self._last.clear()
+
     def prepare(self, bgr):
         """A captured image as the detector sees it: (processed BGR, RGB, its CameraModel)
         after the letterbox and the flip."""

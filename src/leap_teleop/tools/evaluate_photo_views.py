@@ -185,8 +185,8 @@ class PhotoPipeline:
 
     def classify(self, landmarks, cam):
         """The classify_frames output hands for these detections."""
+        self.source.forget_hands()         # unrelated pictures: no velocity between them
         frame = Frame(id=1, timestamp=0.0, hands=self.source.hands_of(landmarks, cam, 0.0))
-        self.source._last.clear()          # unrelated pictures: no velocity between them
         return Classifier(stateless=True).classify(leapjs.frame_to_dict(frame))['hands']
 
     def close(self):
