@@ -1,11 +1,14 @@
 """Ctrl-C / SIGTERM shut a node down even when they arrive while its main thread holds a
 lock that rospy's shutdown needs (a publisher's connection lock, mid-publish)."""
+import os
 import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
+import rosgraph
 
 # A shutdown hook stands in for rospy's cleanup: it needs a lock that the main thread
 # holds at the moment the signal arrives, and the main thread then waits for shutdown.
@@ -61,3 +64,71 @@ def test_a_second_signal_ends_the_process_at_once():
     assert 'shutdown True' in out.stdout, out.stdout + out.stderr
     assert 'still alive' not in out.stdout
     assert out.returncode == -signal.SIGINT, (out.returncode, out.stderr)
+
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
+
+
+def interrupt_runs(env, args, ready, runs, rng):
+    """Start `args(i)` for i in range(runs); once `ready` is in its output (or, when `ready` is a
+    function, once ready(i) returns true), after a random 0.1..0.8 s, SIGINT it. [(exit status
+    or None if still up 10 s later, output)]."""
+    out = []
+    for i in range(runs):
+        proc = subprocess.Popen(args(i), env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+        lines = []
+        try:
+            if callable(ready):
+                deadline = time.monotonic() + 20.0
+                while not ready(i) and time.monotonic() < deadline:
+                    time.sleep(0.05)
+            else:
+                for line in proc.stdout:
+                    lines.append(line)
+                    if ready in line:
+                        break
+            time.sleep(rng.uniform(0.1, 0.8))
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(10.0)
+                status = proc.returncode
+            except subprocess.TimeoutExpired:
+                status = None
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        out.append((status, ''.join(lines) + proc.stdout.read()))
+    return out
+
+
+def test_publishing_nodes_end_cleanly_on_ctrl_c():
+    """A node publishing from its main thread at 1 kHz, and the UR10 simulator (joint states
+    from its main thread), each stopped mid-run: status 0 within 10 s, no traceback (rospy
+    refuses publishes once it has closed the topics, before is_shutdown() turns true)."""
+    import random
+    from leap_teleop.bench.harness import ros_master
+    rng = random.Random(7)
+    with ros_master() as env:
+        master = rosgraph.Master('/signals_test', master_uri=env['ROS_MASTER_URI'])
+
+        # A subscriber makes closing the topic take a while (its connection ends).
+        echo = subprocess.Popen([sys.executable, '-m', 'leap_teleop.bench.echo'], env=env,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+        def publishing(i):
+            return any(t == '/bench/echo_in' and '/bare_publisher' in nodes
+                       for t, nodes in master.getSystemState()[0])
+        try:
+            runs = interrupt_runs(env, lambda i: [sys.executable, '-m',
+                                                  'leap_teleop.bench.bare_publisher', '--rate',
+                                                  '1000', '--topic', 'bench/echo_in'],
+                                  publishing, 8, rng)
+        finally:
+            echo.send_signal(signal.SIGINT)
+            echo.wait(10)
+        sim = [sys.executable, os.path.join(ROOT, 'scripts', 'ur10_sim.py')]
+        runs += interrupt_runs(env, lambda i: sim, 'ur10_sim: ready', 4, rng)
+    for status, text in runs:
+        assert status == 0 and 'Traceback' not in text, (status, text[-2000:])

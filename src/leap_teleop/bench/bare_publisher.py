@@ -9,7 +9,7 @@ import time
 import rospy
 
 from leap_teleop.msg import leapcobotright
-from leap_teleop.nodes.signals import init_node
+from leap_teleop.nodes.signals import closed_at_shutdown, init_node
 
 
 def main():
@@ -22,13 +22,14 @@ def main():
     period = 1.0 / args.rate
     msg = leapcobotright(is_right_hand=True)
     t0, k = time.monotonic(), 0
-    while not rospy.is_shutdown():
-        delay = t0 + k * period - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)
-        msg.header.stamp = rospy.Time.from_sec(time.time())
-        pub.publish(msg)
-        k += 1
+    with closed_at_shutdown():
+        while not rospy.is_shutdown():
+            delay = t0 + k * period - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            msg.header.stamp = rospy.Time.from_sec(time.time())
+            pub.publish(msg)
+            k += 1
 
 
 if __name__ == '__main__':

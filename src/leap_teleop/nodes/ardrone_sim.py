@@ -39,6 +39,7 @@ from leap_teleop.drone.interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_
 from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
 from leap_teleop.msg import Navdata, navdata_altitude
 from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
+from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.srv import (CamSelect, CamSelectResponse, FlightAnim, FlightAnimResponse,
                              LedAnim, LedAnimResponse, RecordEnable, RecordEnableResponse)
 from leap_teleop.visualization import PathTrail, drone_markers
@@ -442,7 +443,8 @@ def main(argv=None):
     rospy.loginfo('ardrone_sim: ready (%s, %s)', 'GUI' if p['gui'] else 'headless',
                   'sim time x%g' % p['realtime_factor'] if node.use_sim_time else 'wall time')
     try:
-        node.run()
+        with closed_at_shutdown():
+            node.run()
     except rospy.ROSInterruptException:
         pass
     finally:

@@ -25,6 +25,7 @@ from leap_teleop.drone.pilot import (PILOT_PARAMS, DronePilot, HandInput, PilotC
                                      PilotWorker)
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
+from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.service_call import ServiceCall
 from leap_teleop.srv import FlightAnim
 
@@ -88,12 +89,13 @@ class DronePilotNode:
 
     # -- worker: the only thread that publishes; service calls run on their own ---------
     def run_worker(self):
-        while not self._stop.is_set() and not rospy.is_shutdown():
-            wait = self.worker.step()
-            if wait and len(self.pilot.queue):
-                time.sleep(wait)               # a twist waits for its slot (pacing)
-            elif wait:
-                self.pilot.queue.wait(wait)
+        with closed_at_shutdown():
+            while not self._stop.is_set() and not rospy.is_shutdown():
+                wait = self.worker.step()
+                if wait and len(self.pilot.queue):
+                    time.sleep(wait)           # a twist waits for its slot (pacing)
+                elif wait:
+                    self.pilot.queue.wait(wait)
 
     def execute(self, cmd):
         """Publish one command (takeoff / land / twist); never blocks."""
@@ -152,6 +154,10 @@ def main(argv=None):
     p, node = start_node('drone_subscriber.py', 'drone_pilot', __doc__, PARAMS, DronePilotNode,
                          argv)
     rospy.on_shutdown(node.stop)
-    node.start()
-    rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
-    rospy.spin()
+    try:
+        if not rospy.core.is_shutdown_requested():
+            node.start()
+            rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
+            rospy.spin()
+    finally:
+        node.stop()             # also when a signal came before on_shutdown was registered

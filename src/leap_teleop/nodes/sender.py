@@ -232,11 +232,17 @@ def main(argv=None):
     # so its passes stay short on the per-frame path.
     gc.collect()
     gc.freeze()
-    if p['wait_for_subscribers'] and not sender.wait_for_subscribers(p['wait_topics']):
-        return
-    interface.start()
-    while not rospy.is_shutdown() and not interface.finished.wait(0.2):
-        pass
+    try:
+        if p['wait_for_subscribers'] and not sender.wait_for_subscribers(p['wait_topics']):
+            return
+        if rospy.core.is_shutdown_requested():
+            return
+        interface.start()
+        while not rospy.is_shutdown() and not interface.finished.wait(0.2):
+            pass
+    finally:
+        if rospy.core.is_shutdown_requested():
+            interface.stop()    # also when a signal came before on_shutdown was registered
     if interface.error is not None:
         rospy.logerr('sender: the hand source failed: %s', interface.error)
     if interface.finished.is_set() and not rospy.is_shutdown():

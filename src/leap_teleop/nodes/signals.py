@@ -8,7 +8,12 @@ a second signal deadlocks the same way, so only SIGKILL ends it. Here the handle
 writes a byte to a pipe; a daemon thread reads it and shuts rospy down, so the main thread
 runs on, releases its locks and ends its loop on rospy.is_shutdown(). A second signal,
 while that clean shutdown runs, ends the process at once (the default action).
+
+rospy closes every topic before is_shutdown() turns true, so a loop that publishes while
+another thread shuts rospy down runs into a refused publish: closed_at_shutdown() ends
+such a loop quietly.
 """
+import contextlib
 import os
 import signal
 import threading
@@ -44,3 +49,14 @@ def install_shutdown_handlers(signals=SIGNALS):
     for s in signals:
         signal.signal(s, handler)
     return thread
+
+
+@contextlib.contextmanager
+def closed_at_shutdown():
+    """Around a loop that publishes: a publish rospy refuses because the node is shutting
+    down ends the block quietly; any other error passes on."""
+    try:
+        yield
+    except rospy.ROSException:
+        if not rospy.core.is_shutdown_requested():
+            raise

@@ -20,6 +20,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from leap_teleop import conversions
 from leap_teleop.msg import ArmStatus
 from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.teleop.arm import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
                                    HandInput)
 from leap_teleop.ur10.kinematics import JOINT_NAMES
@@ -198,4 +199,5 @@ def main(argv=None):
                          lambda p: ArmNode(p, teleop_params(p)), argv,
                          hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
     if node.wait_for_robot():
-        node.loop()
+        with closed_at_shutdown():
+            node.loop()

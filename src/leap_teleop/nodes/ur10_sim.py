@@ -26,6 +26,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
 from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
+from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.ur10.model import build_urdf
 from leap_teleop.ur10.snapshot import SnapshotRenderer
 from leap_teleop.ur10.ros_interface import (ARM_JOINTS, GRIPPER_JOINTS, CommandError,
@@ -216,7 +217,8 @@ def main(argv=None):
                   'sim time x%g' % float(p['realtime_factor']) if node.use_sim_time
                   else 'wall time')
     try:
-        node.run()
+        with closed_at_shutdown():
+            node.run()
     except rospy.ROSInterruptException:
         pass
     finally:
