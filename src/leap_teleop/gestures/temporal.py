@@ -2,8 +2,11 @@
 
 A held gesture turns on after `on_frames` consistent frames (and `on_time` seconds, per
 gesture), off after `off_frames`; frames too unsure to judge hold the state for a moment,
-then let go. Events: start / stop of each held gesture, unfold (fist -> open), fold
-(open -> fist).
+then let go. Events: start / stop of each held gesture (and of a user's own gestures),
+unfold (fist -> open) and fold (open -> fist). Fold and unfold land or launch a drone, so
+they need a deliberate change: the first shape held FOLD_HOLD_S, the second one shown
+within FOLD_GAP_S of its end (a fist or an open hand misread for a moment while a hand
+swipes, pinches or turns is no fold).
 """
 import math
 from dataclasses import dataclass, field
@@ -11,6 +14,8 @@ from typing import List, Optional, Tuple
 
 HELD_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 HOLD_LOW_CONFIDENCE_S = 0.25       # held gestures survive this long on unusable frames
+FOLD_HOLD_S = 0.3
+FOLD_GAP_S = 0.5
 
 
 @dataclass
@@ -35,31 +40,38 @@ class GestureState:
     finger_extended: Tuple[bool, ...] = (False,) * 5
     events: List[GestureEvent] = field(default_factory=list)
     thumb_down: bool = False           # its own gesture: bound to nothing, never a thumbs-up
+    label: str = ''                    # the pose model's winning class this frame
+    probability: float = 0.0           # ... and its probability
+    user: Tuple[str, ...] = ()         # a user's own gestures held now
 
 
 class HeldFilter:
     """Per-frame decisions -> filtered held gestures and their start / stop, fold and
     unfold events."""
 
-    def __init__(self, on_frames=3, off_frames=3, on_time=None):
+    def __init__(self, on_frames=3, off_frames=3, on_time=None, extra=()):
         self.on_frames = max(1, int(on_frames))
         self.off_frames = max(1, int(off_frames))
         self.on_time = dict(on_time or {})
+        self.names = HELD_GESTURES + tuple(extra)
         self.reset()
 
     def reset(self):
         self.active = set()
-        self._count = {name: 0 for name in HELD_GESTURES}
-        self._since = {name: 0.0 for name in HELD_GESTURES}
+        self._count = {name: 0 for name in self.names}
+        self._since = {name: 0.0 for name in self.names}
         self._last_confident = -math.inf
-        self._last_shape = None
+        self._shape = None              # 'fist' / 'open' held now, or None
+        self._shape_since = 0.0
+        self._last_shape = None         # the last one that ended, its span
+        self._last_span = (0.0, 0.0)
 
     def update(self, raw, timestamp):
         """Feed one usable frame's decisions {gesture: bool}; the set of active ones."""
         self._last_confident = timestamp
         active, count = self.active, self._count
-        for name in HELD_GESTURES:
-            want = raw[name]
+        for name in self.names:
+            want = bool(raw.get(name))
             if want == (name in active):
                 count[name] = 0
                 continue
@@ -83,23 +95,28 @@ class HeldFilter:
         """An unusable frame: hold what we had for a moment, then let go."""
         if timestamp - self._last_confident > HOLD_LOW_CONFIDENCE_S:
             self.active.clear()
-        for name in HELD_GESTURES:
+        for name in self.names:
             self._count[name] = 0
         return self.active
 
-    def events(self, state, prev):
-        """Events of the change from `prev` to `state` (GestureStates)."""
+    def events(self, state, prev, timestamp):
+        """Events of the change from `prev` to `state` (GestureStates) at `timestamp`."""
         events = []
         for name in HELD_GESTURES:
             now = getattr(state, name)
             if now != getattr(prev, name):
                 events.append(GestureEvent(name, now,
                                            state.pinch_value if name == 'pinch' else 0.0))
+        for name in set(state.user) ^ set(prev.user):
+            events.append(GestureEvent(name, name in state.user))
         shape = 'fist' if state.fist else 'open' if state.open else None
-        if shape and shape != self._last_shape:
-            if self._last_shape == 'fist' and shape == 'open':
-                events.append(GestureEvent('unfold'))
-            elif self._last_shape == 'open' and shape == 'fist':
-                events.append(GestureEvent('fold'))
-            self._last_shape = shape
+        if shape != self._shape:
+            if self._shape is not None:
+                self._last_shape, self._last_span = self._shape, (self._shape_since, timestamp)
+            if shape is not None and self._last_shape not in (None, shape):
+                start, end = self._last_span
+                if end - start >= FOLD_HOLD_S and timestamp - end <= FOLD_GAP_S:
+                    events.append(GestureEvent('unfold' if shape == 'open' else 'fold'))
+                    self._last_shape = None
+            self._shape, self._shape_since = shape, timestamp
         return events

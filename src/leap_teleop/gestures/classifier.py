@@ -1,0 +1,93 @@
+"""A learned pose classifier stored as plain arrays: standardise, one hidden ReLU layer,
+softmax. Fitted by tools/train_gestures (scikit-learn, training only); evaluated here with
+numpy alone.
+
+The model file is a .npz of arrays (loaded with allow_pickle=False): `classes` (names),
+`family` ('leap' or 'keypoints'), `mean`, `scale`, `w0`, `b0`, `w1`, `b1`, and `card`
+(a JSON string: what it was fitted on and how it scored on people it never saw).
+"""
+import json
+import os
+
+import numpy as np
+
+MODEL_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'models')
+DEFAULT_MODELS = {'leap': os.path.join(MODEL_DIR, 'leap_poses.npz'),
+                  'keypoints': os.path.join(MODEL_DIR, 'keypoint_poses.npz')}
+_KEYS = ('classes', 'family', 'mean', 'scale', 'w0', 'b0', 'w1', 'b1')
+
+
+class ModelError(ValueError):
+    """A model file that is missing, malformed or of the wrong family."""
+
+
+class PoseClassifier:
+    """Feature vector -> probability per class."""
+
+    def __init__(self, classes, family, mean, scale, w0, b0, w1, b1, card=None):
+        self.classes = tuple(str(c) for c in classes)
+        self.family = str(family)
+        self.mean = np.asarray(mean, dtype=float)
+        self.inv_scale = 1.0 / np.asarray(scale, dtype=float)
+        self.w0, self.b0 = np.asarray(w0, dtype=float), np.asarray(b0, dtype=float)
+        self.w1, self.b1 = np.asarray(w1, dtype=float), np.asarray(b1, dtype=float)
+        self.card = dict(card or {})
+        n = self.mean.shape[0]
+        if (self.inv_scale.shape != (n,) or self.w0.shape[0] != n
+                or self.b0.shape != (self.w0.shape[1],) or self.w1.shape[0] != self.w0.shape[1]
+                or self.w1.shape[1] != len(self.classes) or self.b1.shape != (len(self.classes),)
+                or not all(np.isfinite(a).all() for a in (self.mean, self.inv_scale, self.w0,
+                                                          self.b0, self.w1, self.b1))):
+            raise ModelError('inconsistent model arrays')
+        self.index = {c: i for i, c in enumerate(self.classes)}
+
+    @property
+    def n_features(self):
+        return self.mean.shape[0]
+
+    def proba(self, x):
+        """Probabilities (n_classes,) for one feature vector, or (n, n_classes) for rows."""
+        z = (np.asarray(x, dtype=float) - self.mean) * self.inv_scale
+        h = z @ self.w0 + self.b0
+        np.maximum(h, 0.0, out=h)
+        s = h @ self.w1 + self.b1
+        s = s - s.max(axis=-1, keepdims=True)
+        e = np.exp(s)
+        return e / e.sum(axis=-1, keepdims=True)
+
+    def save(self, path):
+        tmp = path + '.tmp.npz'
+        np.savez(tmp, classes=np.array(self.classes), family=np.array(self.family),
+                 mean=self.mean, scale=1.0 / self.inv_scale, w0=self.w0, b0=self.b0,
+                 w1=self.w1, b1=self.b1, card=np.array(json.dumps(self.card, sort_keys=True)))
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, path, family=None):
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                missing = [k for k in _KEYS if k not in z.files]
+                if missing:
+                    raise ModelError('%s: not a pose model (missing %s)' % (path, ', '.join(missing)))
+                card = json.loads(str(z['card'])) if 'card' in z.files else {}
+                model = cls(z['classes'].tolist(), str(z['family']), z['mean'], z['scale'],
+                            z['w0'], z['b0'], z['w1'], z['b1'], card)
+        except (OSError, ValueError, KeyError) as e:
+            if isinstance(e, ModelError):
+                raise
+            raise ModelError('%s: cannot read a pose model (%s)' % (path, e)) from None
+        if family is not None and model.family != family:
+            raise ModelError('%s: a %s model, not a %s one' % (path, model.family, family))
+        return model
+
+
+_cache = {}
+
+
+def load_model(path=None, family='leap'):
+    """The model at `path` (default: the shipped one of `family`), loaded once."""
+    path = os.path.abspath(path or DEFAULT_MODELS[family])
+    key = (path, family)
+    if key not in _cache:
+        _cache[key] = PoseClassifier.load(path, family)
+    return _cache[key]
