@@ -1,10 +1,10 @@
-# make demo | make test | make bench | make eval | make setup | make clean
+# make demo | make test | make bench | make eval | make train | make setup | make clean
 SHELL := /bin/bash
 ENV := ./env.sh
 PYTEST_ARGS ?=
 GUI ?= 0
 
-.PHONY: setup demo test bench eval soak clean
+.PHONY: setup demo test bench eval train soak clean
 
 setup:
 	@bash tools/setup.sh
@@ -21,8 +21,13 @@ bench: setup
 eval: setup
 	@$(ENV) python -m leap_teleop.tools.evaluate
 
+# Refit the shipped pose models (arrays + model cards in src/leap_teleop/gestures/models/)
+# from ../shared/data, with their leave-one-person-out figures.
+train: setup
+	@$(ENV) python -m leap_teleop.tools.train_gestures
+
 soak: setup
 	@$(ENV) python -m leap_teleop.tools.soak
 
 clean:
-	rm -rf .ws build devel bench_results.json soak_results.json eval_results.json demo_output
+	rm -rf .ws build devel bench_results.json soak_results.json eval_results.json people_results.json demo_output

@@ -40,17 +40,18 @@ def _dicts(poses):
 
 
 def test_json_lines_on_stdin_stream_and_stateless(tmp_path):
-    frames = _dicts(['fist'] * 6 + ['open'] * 6)
+    # 10 ms apart: a fist held 0.4 s, then open (an unfold once open has held 0.15 s)
+    frames = _dicts(['fist'] * 40 + ['open'] * 30)
     text = '\n'.join(json.dumps(f) for f in frames) + '\n'
     out = run_cli([], stdin=text)
-    assert len(out) == 12 and [o['id'] for o in out] == list(range(12))
+    assert len(out) == 70 and [o['id'] for o in out] == list(range(70))
     for o in out:
         check_line(o)
-    assert out[5]['hands'][0]['fist'] and out[11]['hands'][0]['open']
+    assert out[39]['hands'][0]['fist'] and out[69]['hands'][0]['open']
     events = [e for o in out for e in o['hands'][0]['events']]
     assert events == ['fist', 'open', 'unfold']
     out = run_cli(['--stateless'], stdin=text)
-    assert out[0]['hands'][0]['fist'] and out[6]['hands'][0]['open']
+    assert out[0]['hands'][0]['fist'] and out[40]['hands'][0]['open']
     assert all(o['hands'][0]['events'] == [] for o in out)
 
 
@@ -116,3 +117,49 @@ def test_frame_parsing_never_raises(frames, stateless):
         line = c.classify(d)
         json.dumps(line, allow_nan=False)
         check_line(line)
+
+
+KEYPOINTS = os.path.join(os.path.dirname(DATA), 'keypoints')
+
+
+def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
+    from leap_teleop.tools import gesture_data
+    path = os.path.join(KEYPOINTS, 'Harikumar4.csv')
+    if not os.path.isfile(path):
+        pytest.fail('the shared keypoint files are not at %s' % KEYPOINTS)
+    _, labels, xy = gesture_data.read_keypoints(path)
+    # the community's own form: a class id, then 42 numbers, no header
+    community = tmp_path / 'keypoint.csv'
+    community.write_text(''.join('7,' + ','.join('%.4f' % v for v in row.ravel()) + '\n'
+                                 for row in xy[:20]))
+    a = run_cli(['--keypoints', str(community)])
+    b = run_cli(['--keypoints', path])[:20]
+    assert len(a) == 20 and [o['id'] for o in a] == list(range(20))
+    for line in a:
+        h, = line['hands']
+        assert h['type'] is None and set(h) == set(KEYS)
+    # the class id is ignored: both forms judge the same rows alike (4-decimal rounding)
+    assert [o['hands'][0]['thumb_up'] for o in a] == [o['hands'][0]['thumb_up'] for o in b]
+
+
+def test_keypoints_mirror_image_reads_the_same(tmp_path):
+    from leap_teleop.tools import gesture_data
+    _, _, xy = gesture_data.read_keypoints(os.path.join(KEYPOINTS, 'Kazuhito00.csv'))
+    rows = xy[::200]
+    mirrored = rows.copy()
+    mirrored[:, :, 0] *= -1
+    paths = []
+    for name, data in (('a.csv', rows), ('b.csv', mirrored)):
+        p = tmp_path / name
+        p.write_text(''.join('0,' + ','.join(repr(float(v)) for v in r.ravel()) + '\n' for r in data))
+        paths.append(str(p))
+    a, b = (run_cli(['--keypoints', p]) for p in paths)
+    assert [o['hands'] for o in a] == [o['hands'] for o in b]
+
+
+def test_malformed_keypoint_file_is_one_clear_error(tmp_path):
+    bad = tmp_path / 'bad.csv'
+    bad.write_text('1,0.0,0.0,0.5\n')
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.tools.classify_frames', '--keypoints',
+                        str(bad)], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and 'row 1' in p.stderr and 'Traceback' not in p.stderr

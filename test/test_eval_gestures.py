@@ -16,10 +16,11 @@ def test_all_takes_found(results):
     assert results['missing_takes'] == []
 
 
-# Thumbs-up recall: its positives are the 30 paddle frames whose SDK thumb direction is
-# within 45 deg of +y, in two runs that start the frame the thumb crosses 45 deg; the
-# temporal filter needs 3 frames and the thumb's knuckle-to-tip direction crosses 1-2
-# frames after the SDK's: 21 of 30 (0.70). Precision stays the bar that matters (it arms).
+# A secondary check: the pose model is fitted on these takes' labelled frames too (their
+# people are judged unseen in test_people_eval). Thumbs-up recall: its positives are the
+# 30 paddle frames whose SDK thumb direction is within 45 deg of +y, in two runs that
+# start the frame the thumb crosses 45 deg; the temporal filter needs 3 frames: 0.70 at
+# most. Precision stays the bar that matters (it arms).
 MIN_RECALL = {'thumb_up': 0.65}
 
 
@@ -90,24 +91,22 @@ def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
 
 def test_main_writes_the_json(tmp_path, results, leapjs_data):
     import json
-    from leap_teleop.tools import evaluate_population
+    from leap_teleop.tools import evaluate_invariance
     out = tmp_path / 'eval_results.json'
     # one photo for the photo views (its full table is make eval's and test_photo_views')
     photos = tmp_path / 'hands'
     photos.mkdir()
     os.symlink(os.path.join(evaluate.HANDS_DATA, 'open_palm__gestia__palm_open.jpg'),
                str(photos / 'open_palm__gestia__palm_open.jpg'))
-    assert evaluate.main(['--data', leapjs_data, '--out', str(out), '--no-loto',
-                          '--people', '10', '--hands-data', str(photos)]) == 0
+    assert evaluate.main(['--data', leapjs_data, '--out', str(out), '--no-people',
+                          '--hands-data', str(photos)]) == 0
     data = json.loads(out.read_text())
     for who in ('recognizer', 'original'):
         for g in evaluate.GESTURES:
             assert set(data[who][g]) == {'precision', 'recall', 'n'}
         # the figures evaluate() computes, not just their names
         assert data[who] == results[who], who
-    assert set(data['population']['gestures']) == {'fist', 'thumb_up', 'thumb_down', 'pinch',
-                                                   'rock', 'open'}
-    assert data['population'] == evaluate_population.run(10, 1)      # --people 10, seed 1
+    assert data['invariance'] == json.loads(json.dumps(evaluate_invariance.run()))
     views = data['photo_views']
     assert views['photos'] == 1 and list(views['labels']) == ['open_palm'], views
     assert views['total']['fraction'] >= 0.9 and views['total']['false_thumb_up'] == 0, views
@@ -120,18 +119,6 @@ def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):
                 if r[0] in fr]
     # thumb up, sideways (> 60 deg off vertical) and in between all occur on this take
     assert verdicts.count(True) == 30 and verdicts.count(False) == 41 and None in verdicts
-
-
-def test_leave_one_take_out_refits_hold_up_on_the_held_out_take(monkeypatch, leapjs_data):
-    from leap_teleop.tools import evaluate_loto
-    # two of the fitted thresholds keep the test short; make eval refits all of them
-    monkeypatch.setattr(evaluate_loto, 'FITTED', ('CURLED_BEND', 'PINCH_GAP'))
-    res = evaluate_loto.run(leapjs_data)
-    assert len(res['takes']) == len(evaluate.LABELS)
-    for g in ('fist', 'pinch', 'open'):
-        assert res['held_out'][g]['precision'] >= 0.95
-        assert res['held_out'][g]['recall'] >= 0.95
-    assert res['held_out']['thumb_up']['precision'] >= 0.95
 
 
 def test_no_hand_sized_circle_on_takes_without_circles(leapjs_data):

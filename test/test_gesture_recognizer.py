@@ -60,21 +60,46 @@ def test_temporal_filter_needs_consistent_frames_and_emits_start_stop():
     # A 2-frame blip of open does not switch anything (hysteresis / off filter).
     states = feed(rec, [opn, opn, fist, fist], t0=1.0)
     assert all(s.fist and not s.open for s in states)
-    states = feed(rec, [opn] * 4, t0=2.0)
-    assert [s.fist for s in states] == [True, True, False, False]
+    states = feed(rec, [opn] * 40, t0=2.0)
+    assert [s.fist for s in states[:4]] == [True, True, False, False]
     events = [(e.gesture, e.active) for e in states[2].events]
-    assert ('fist', False) in events and ('open', True) in events and ('unfold', True) in events
+    assert ('fist', False) in events and ('open', True) in events
+    # the unfold once the open hand has held FOLD_CONFIRM_S
+    from leap_teleop.gestures.temporal import FOLD_CONFIRM_S
+    unfolds = [i for i, s in enumerate(states) if any(e.gesture == 'unfold' for e in s.events)]
+    assert len(unfolds) == 1 and (unfolds[0] - 2) / 120.0 == pytest.approx(FOLD_CONFIRM_S, abs=0.01)
 
 
 def test_fold_event_and_reset():
     rec = GestureRecognizer()
     opn = render_hand('left', 'open', (0, 200, 0))
     fist = render_hand('left', 'fist', (0, 200, 0))
-    names = [e.gesture for s in feed(rec, [opn] * 5 + [fist] * 5) for e in s.events]
+    names = [e.gesture for s in feed(rec, [opn] * 50 + [fist] * 25) for e in s.events]
     assert 'fold' in names and 'unfold' not in names
     rec.reset()
     names = [e.gesture for s in feed(rec, [opn] * 5, t0=5.0) for e in s.events]
     assert names == ['open']          # no fold / unfold across a reset
+
+
+def test_fold_and_unfold_need_the_first_shape_held():
+    from leap_teleop.gestures.temporal import FOLD_CONFIRM_S, FOLD_GAP_S
+    opn = render_hand('right', 'open', (0, 200, 0))
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    brief = int(FOLD_CONFIRM_S * 120 * 0.5)
+    # an open hand misread as a fist for a moment, and back: no fold, no unfold
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [opn] * 60 + [fist] * brief + [opn] * 60) for e in s.events]
+    assert 'fold' not in names and 'unfold' not in names
+    # a held fist, then a pause longer than FOLD_GAP_S with neither shape: no unfold
+    point = render_hand('right', 'point', (0, 200, 0))
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [fist] * 60 + [point] * int(FOLD_GAP_S * 120 + 20)
+                                     + [opn] * 20) for e in s.events]
+    assert 'unfold' not in names
+    # a held fist opening at once: one unfold
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [fist] * 60 + [opn] * 40) for e in s.events]
+    assert names.count('unfold') == 1
 
 
 def test_low_confidence_frames_do_not_turn_gestures_on():
@@ -230,6 +255,7 @@ def test_original_rules_are_the_baseline():
     s = rules.classify(p)
     assert s.pinch and s.pinch_value == pytest.approx(0.3)
     rock = render_hand('right', 'rock', (0, 200, 0))
+    rock.fingers[0].extended = True     # the original's horns: thumb, index and pinky out
     assert rules.classify(rock).rock
 
 

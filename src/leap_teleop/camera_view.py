@@ -42,8 +42,12 @@ def draw(bgr, landmarks, mirrored, states=None, fps=None):
         for p in pts:
             cv2.circle(out, tuple(p), thick + 2, (255, 255, 255), -1, cv2.LINE_AA)
             cv2.circle(out, tuple(p), thick + 2, colour, 1, cv2.LINE_AA)
-        gestures = held_gestures((states or {}).get(side))
+        state = (states or {}).get(side)
+        gestures = held_gestures(state)
         label = '%s %.2f%s' % (side, lm.score, (': ' + ' '.join(gestures)) if gestures else '')
+        pose = getattr(state, 'pose_class', '')
+        if pose:        # what the pose model sees this frame, held or not
+            label += ' [%s %.2f]' % (pose, getattr(state, 'pose_probability', 0.0))
         x, y = int(pts[:, 0].min()), int(pts[:, 1].min()) - 8
         _text(out, label, (max(2, x), max(16, y)), colour, thick)
     if fps is not None:

@@ -112,7 +112,7 @@ def to_hand(state, frame_id=LEAP_FRAME):
     msg.finger_extended = list(state.finger_extended)
     msg.finger_tips = [Point(*(x * MM for x in tip)) for tip in state.finger_tips]
     for name in ('fist', 'thumb_up', 'thumb_down', 'pinch', 'pinch_value', 'rock', 'open', 'origin_set',
-                 'rotate', 'turn', 'swing'):
+                 'rotate', 'turn', 'swing', 'pose_class', 'pose_probability'):
         setattr(msg, name, getattr(state, name))
     return msg
 

@@ -42,6 +42,9 @@ class Hand:
     confidence: float = 1.0                                 # 0..1
     fingers: Tuple[Finger, ...] = ()                        # FINGER_NAMES order, 5 or none
     id: int = 0
+    # Camera sources: the 21 landmarks as seen in the picture ((21, 2) pixels, y down,
+    # MediaPipe order), which the keypoint pose model reads; None for other trackers.
+    image_landmarks: Optional[np.ndarray] = None
 
     def finger(self, name):
         i = FINGER_NAMES.index(name)

@@ -41,7 +41,9 @@ _STRAIGHT = {'thumb': ((42.4, 7.1, -15.8), (61.6, 8.0, 3.3), (75.1, 5.7, 9.0)),
              'pinky': ((-48.3, -2.0, 31.3), (-57.3, -1.5, 44.0), (-63.1, -0.3, 52.6))}
 # Fingers whose shape differs from both in a pose (a finger alone out points ahead).
 _SHAPED = {
-    'thumbs_up': {'thumb': ((37.9, 10.0, -13.0), (45.7, 17.4, 12.2), (49.5, 21.3, 24.4)),
+    # (the thumb: the captures' knuckle, then a thumb raised 40 deg ahead of the thumb
+    # side, as the real thumbs-up takes hold it)
+    'thumbs_up': {'thumb': ((37.9, 10.0, -13.0), (50.7, 12.5, -2.1), (60.5, 14.4, 6.2)),
                   'index': ((20.8, 31.7, 31.0), (19.3, 44.7, 20.6), (18.5, 48.5, 11.5)),
                   'middle': ((7.7, 33.8, 32.1), (9.9, 49.2, 19.7), (10.5, 53.2, 10.6)),
                   'ring': ((-10.3, 30.1, 28.6), (-5.3, 46.1, 18.7), (-3.4, 50.4, 10.1)),

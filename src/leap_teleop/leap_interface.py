@@ -68,6 +68,8 @@ class HandState:
     open: bool = False
     origin_set: bool = False
     thumb_down: bool = False
+    pose_class: str = ''                 # the pose model's winning class and probability
+    pose_probability: float = 0.0
     origin_palm: Tuple[float, float, float] = (0.0, 0.0, 0.0)
     rotate: float = 0.0
     turn: float = 0.0
@@ -161,6 +163,7 @@ class HandTracker:
             fist=g.fist, thumb_up=g.thumb_up, pinch=g.pinch,
             pinch_value=min(max(float(g.pinch_value), 0.0), 0.8) if g.pinch else 0.0,
             rock=g.rock, open=g.open, thumb_down=g.thumb_down, origin_set=self._origin_angles is not None,
+            pose_class=g.label, pose_probability=float(g.probability),
             origin_palm=origin_palm, events=tuple(events), **rotation)
         return self.state
 

@@ -40,6 +40,9 @@ class PoseClassifier:
                                                           self.b0, self.w1, self.b1))):
             raise ModelError('inconsistent model arrays')
         self.index = {c: i for i, c in enumerate(self.classes)}
+        # the standardisation folded into the first layer: one product per call
+        self._w0 = self.w0 * self.inv_scale[:, None]
+        self._b0 = self.b0 - (self.mean * self.inv_scale) @ self.w0
 
     @property
     def n_features(self):
@@ -47,13 +50,15 @@ class PoseClassifier:
 
     def proba(self, x):
         """Probabilities (n_classes,) for one feature vector, or (n, n_classes) for rows."""
-        z = (np.asarray(x, dtype=float) - self.mean) * self.inv_scale
-        h = z @ self.w0 + self.b0
+        h = np.asarray(x, dtype=float) @ self._w0
+        h += self._b0
         np.maximum(h, 0.0, out=h)
-        s = h @ self.w1 + self.b1
-        s = s - s.max(axis=-1, keepdims=True)
-        e = np.exp(s)
-        return e / e.sum(axis=-1, keepdims=True)
+        s = h @ self.w1
+        s += self.b1
+        s -= s.max(axis=-1, keepdims=True)
+        np.exp(s, out=s)
+        s /= s.sum(axis=-1, keepdims=True)
+        return s
 
     def save(self, path):
         tmp = path + '.tmp.npz'
@@ -85,7 +90,12 @@ _cache = {}
 
 
 def load_model(path=None, family='leap'):
-    """The model at `path` (default: the shipped one of `family`), loaded once."""
+    """The model at `path` (default: the shipped one of `family`), loaded once; a
+    PoseClassifier passes through."""
+    if isinstance(path, PoseClassifier):
+        if path.family != family:
+            raise ModelError('a %s model, not a %s one' % (path.family, family))
+        return path
     path = os.path.abspath(path or DEFAULT_MODELS[family])
     key = (path, family)
     if key not in _cache:

@@ -32,23 +32,6 @@ _MP_TIPS = np.array([4, 8, 12, 16, 20])
 _isfinite = math.isfinite
 
 
-def hand_joints(hand):
-    """(5, 4, 3) array of (mcp, pip, dip, tip) per finger, mm, or None when any is
-    missing or not finite."""
-    try:
-        rows = []
-        for f in hand.fingers:
-            rows.append((f.mcp, f.pip, f.dip, f.tip))
-        if len(rows) != 5:
-            return None
-        j = np.array(rows, dtype=float)
-    except (TypeError, ValueError, AttributeError):
-        return None
-    if j.shape != (5, 4, 3) or not np.isfinite(j).all():
-        return None
-    return j
-
-
 def _unit_rows(v):
     n = np.sqrt((v * v).sum(axis=-1, keepdims=True))
     return v / np.maximum(n, 1e-9)
@@ -57,11 +40,9 @@ def _unit_rows(v):
 def leap_features(hand, geometry=None):
     """Feature vector (LEAP_FEATURES,) of a Hand with 3-D joints, or None."""
     g = geometry if geometry is not None else hand_geometry(hand)
-    if g is None:
+    if g is None or g.joints is None:
         return None
-    j = hand_joints(hand)
-    if j is None:
-        return None
+    j = g.joints
     basis = np.array(g.basis)                       # rows: thumbward, normal, direction
     inv = 1.0 / g.palm_width
     local = j @ basis.T * inv                       # (5, 4, 3) in the hand frame
@@ -131,10 +112,7 @@ def hand_landmarks(hand, geometry=None):
     """(21, 3) MediaPipe-ordered landmarks of a Hand with 3-D joints, in its own frame
     (thumbward, normal, direction) and palm widths, or None."""
     g = geometry if geometry is not None else hand_geometry(hand)
-    if g is None:
+    if g is None or g.joints is None:
         return None
-    j = hand_joints(hand)
-    if j is None:
-        return None
-    local = (j - np.array(g.palm)) @ np.array(g.basis).T / g.palm_width
+    local = (g.joints - np.array(g.palm)) @ np.array(g.basis).T / g.palm_width
     return np.vstack((np.array(WRIST_FROM_PALM)[None], local.reshape(20, 3)))

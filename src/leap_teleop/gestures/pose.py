@@ -10,11 +10,13 @@ either hand).
 
 Guards that no model can lift:
 - thumbs-up (it arms a robot) needs the model's thumb class at THUMB_UP_MIN_P or more
-  AND the thumb measured pointing up: the thumb (knuckle -> tip) rising and the hand's
-  thumb side turned up, each by at least THUMB_AXIS_MIN and together by THUMB_UP_SCORE
-  (real thumbs-up takes: 1.19..1.67; the same fist with its thumb out forward, palm up or
-  down: 95 % below 0.64; thumbs-down: -1.36 and below). A thumb out sideways or down is
-  never a thumbs-up. Camera hands: the thumb tip above every other landmark and pointing
+  AND the thumb measured pointing up: the thumb (knuckle -> tip) rising by THUMB_RISE_MIN
+  and the hand's thumb side turned up by THUMB_SIDE_MIN, together by THUMB_UP_SCORE, in
+  Leap y of unit vectors. Real thumbs-up takes (two people): rise 0.34 and up, side 0.21
+  and up, together 1.19..1.67; the same fist with its thumb out forward, palm up or down:
+  95 % below 0.64 together; a thumb out sideways from a fist turned thumb side up (the
+  LeapJS paddle take): rise -0.01..0.40; thumbs-down: -1.36 and below together. A thumb
+  out sideways or down is never a thumbs-up; thumbs-down mirrors the rule. Camera hands: the thumb tip above every other landmark and pointing
   up in the picture.
 - a class wins only at MIN_P or more; below, the frame shows no gesture.
 """
@@ -30,16 +32,17 @@ PINCH_THRESHOLD = 0.2   # original: pinch when strength > 0.2; pinch_value = str
 PINCH_GAP_OPEN = 1.1
 PINCH_GAP_CLOSED = 0.35
 MIN_P = 0.5                 # a winning class below this is no gesture
-THUMB_UP_MIN_P = 0.9        # thumbs-up arms a robot: the model must be sure
-THUMB_UP_SCORE = 0.9        # thumb rise + thumb side up (Leap y of unit vectors), see above
-THUMB_AXIS_MIN = 0.15       # each of the two at least this
+# thumbs-up arms a robot: the model must be sure of a thumb out of a fist. People the
+# model never saw show one at 0.67..0.99 (a real thumbs-up take: 0.67..0.72); a fist whose
+# thumb rises above its fingers as it moves reaches it too, and the direction guard below
+# is what keeps those out.
+THUMB_UP_MIN_P = 0.65
+THUMB_UP_SCORE = 1.0        # thumb rise + thumb side up (Leap y of unit vectors), see above
+THUMB_RISE_MIN = 0.3
+THUMB_SIDE_MIN = 0.15
 # Camera thumbs-up: the thumb tip above every other landmark by this share of the hand's
 # extent in the picture, and its last two bones pointing up.
 CAMERA_THUMB_RISE = 0.05
-# Per-finger extension for the Hand message and circles: a finger nearly straight along
-# the hand (chord over bone length; bend fallback in degrees without joints).
-EXTENDED_CHORD = 0.85
-EXTENDED_BEND = 85.0
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 _isfinite = math.isfinite
 
@@ -52,28 +55,10 @@ def geometric_pinch_strength(gap):
     return min(max(s, 0.0), 1.0)
 
 
-def extended_fingers(g):
-    """5 bools: each finger nearly straight (the thumb: out of the palm thumbward)."""
-    ext = [g.thumb_out > 0.35]
-    for i in (1, 2, 3, 4):
-        c, b = g.chord[i], g.bend[i]
-        ext.append(b < EXTENDED_BEND and (c != c or c > EXTENDED_CHORD))
-    return tuple(ext)
-
-
 def thumb_up_score(g, hand):
     """(thumb rise, thumb side up) in Leap y: the thumb's knuckle -> tip direction and the
     hand's thumbward axis. Positive both: up; negative both: down."""
-    f = hand.fingers[0]
-    rise = g.thumb_dir[1]
-    try:
-        v = np.asarray(f.tip, dtype=float) - np.asarray(f.pip, dtype=float)
-        n = float(np.sqrt(v @ v))
-        if n > 1e-6 and _isfinite(n):
-            rise = float(v[1] / n)
-    except (TypeError, ValueError):
-        pass
-    return rise, g.basis[0][1]
+    return g.thumb_dir[1], g.basis[0][1]
 
 
 def thumb_points(g, hand):
@@ -81,9 +66,9 @@ def thumb_points(g, hand):
     rise, side = thumb_up_score(g, hand)
     if not (_isfinite(rise) and _isfinite(side)):
         return None
-    if rise >= THUMB_AXIS_MIN and side >= THUMB_AXIS_MIN and rise + side >= THUMB_UP_SCORE:
+    if rise >= THUMB_RISE_MIN and side >= THUMB_SIDE_MIN and rise + side >= THUMB_UP_SCORE:
         return 'up'
-    if rise <= -THUMB_AXIS_MIN and side <= -THUMB_AXIS_MIN and rise + side <= -THUMB_UP_SCORE:
+    if rise <= -THUMB_RISE_MIN and side <= -THUMB_SIDE_MIN and rise + side <= -THUMB_UP_SCORE:
         return 'down'
     return None
 
@@ -121,9 +106,10 @@ def pose_probabilities(hand, g, model):
 def classify_pose(hand, g, model):
     """Per-frame decisions {gesture: bool} for the held gestures, plus 'pinch_value',
     'extended' (5 bools), 'label' (the winning class or '') and 'probability'; user
-    classes appear under their own names."""
+    classes appear under their own names. `g` (the HandGeometry) may be None for a hand
+    known only by its image landmarks."""
     out = {name: False for name in HELD}
-    out['extended'] = extended_fingers(g)
+    out['extended'] = g.extended if g is not None else (False,) * 5
     out['pinch_value'] = 0.0
     out['label'], out['probability'] = '', 0.0
     scored = pose_probabilities(hand, g, model)
@@ -152,6 +138,6 @@ def classify_pose(hand, g, model):
     if best == 'pinch':
         strength = num(hand.pinch_strength, -1.0)
         if not 0.0 <= strength <= 1.0:
-            strength = geometric_pinch_strength(g.pinch_gap)
+            strength = geometric_pinch_strength(g.pinch_gap) if g is not None else 1.0
         out['pinch_value'] = min(max(strength - PINCH_THRESHOLD, 0.0), 0.8)
     return out

@@ -60,14 +60,14 @@ class GestureRecognizer:
             timestamp = self._prev_t + 0.01
         g = hand_geometry(hand)
         confidence = num(hand.confidence, 1.0)
-        usable = g is not None and confidence >= self.min_confidence
+        camera = getattr(hand, 'image_landmarks', None) is not None
+        usable = (g is not None or camera) and confidence >= self.min_confidence
         stateless = self.stateless
         prev = self._prev
         filt = self.filter
         label, probability = '', 0.0
         if usable:
-            family = 'keypoints' if getattr(hand, 'image_landmarks', None) is not None else 'leap'
-            raw = classify_pose(hand, g, self.models[family])
+            raw = classify_pose(hand, g, self.models['keypoints' if camera else 'leap'])
             label, probability = raw['label'], raw['probability']
             if stateless:
                 active = {n for n in filt.names if raw.get(n)}
@@ -89,7 +89,7 @@ class GestureRecognizer:
                              tuple(sorted(n for n in active if n in self.user_gestures)))
         if not stateless:
             state.events = filt.events(state, prev, timestamp)
-            if self.circles is not None and usable:
+            if self.circles is not None and usable and g is not None:
                 circle = self.circles.update(hand, timestamp, g, extended)
                 if circle is not None:
                     state.events.append(circle)

@@ -5,8 +5,9 @@ gesture), off after `off_frames`; frames too unsure to judge hold the state for 
 then let go. Events: start / stop of each held gesture (and of a user's own gestures),
 unfold (fist -> open) and fold (open -> fist). Fold and unfold land or launch a drone, so
 they need a deliberate change: the first shape held FOLD_HOLD_S, the second one shown
-within FOLD_GAP_S of its end (a fist or an open hand misread for a moment while a hand
-swipes, pinches or turns is no fold).
+within FOLD_GAP_S of its end and held FOLD_CONFIRM_S (a fist or an open hand misread for a
+moment while a hand swipes, pinches or turns is no fold; the event comes FOLD_CONFIRM_S
+after the second shape appears).
 """
 import math
 from dataclasses import dataclass, field
@@ -16,6 +17,7 @@ HELD_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 HOLD_LOW_CONFIDENCE_S = 0.25       # held gestures survive this long on unusable frames
 FOLD_HOLD_S = 0.3
 FOLD_GAP_S = 0.5
+FOLD_CONFIRM_S = 0.15
 
 
 @dataclass
@@ -63,7 +65,8 @@ class HeldFilter:
         self._last_confident = -math.inf
         self._shape = None              # 'fist' / 'open' held now, or None
         self._shape_since = 0.0
-        self._last_shape = None         # the last one that ended, its span
+        self._confirmed = False         # ... held FOLD_CONFIRM_S (a fold / unfold judged)
+        self._last_shape = None         # the last confirmed one that ended, its span
         self._last_span = (0.0, 0.0)
 
     def update(self, raw, timestamp):
@@ -111,12 +114,15 @@ class HeldFilter:
             events.append(GestureEvent(name, name in state.user))
         shape = 'fist' if state.fist else 'open' if state.open else None
         if shape != self._shape:
-            if self._shape is not None:
+            if self._shape is not None and self._confirmed:
                 self._last_shape, self._last_span = self._shape, (self._shape_since, timestamp)
-            if shape is not None and self._last_shape not in (None, shape):
-                start, end = self._last_span
-                if end - start >= FOLD_HOLD_S and timestamp - end <= FOLD_GAP_S:
-                    events.append(GestureEvent('unfold' if shape == 'open' else 'fold'))
-                    self._last_shape = None
-            self._shape, self._shape_since = shape, timestamp
+            self._shape, self._shape_since, self._confirmed = shape, timestamp, False
+        if shape is not None and not self._confirmed \
+                and timestamp - self._shape_since >= FOLD_CONFIRM_S - 1e-9:
+            self._confirmed = True
+            start, end = self._last_span
+            if self._last_shape not in (None, shape) and end - start >= FOLD_HOLD_S - 1e-9 \
+                    and self._shape_since - end <= FOLD_GAP_S:
+                events.append(GestureEvent('unfold' if shape == 'open' else 'fold'))
+            self._last_shape = None
         return events

@@ -331,7 +331,7 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
                 palm_velocity=np.zeros(3) if velocity is None else np.asarray(velocity, float),
                 palm_normal=normal, direction=direction, grab_strength=grab,
                 pinch_strength=pinch, confidence=float(min(max(lm.score, 0.0), 1.0)),
-                fingers=tuple(fingers), id=int(hand_id))
+                fingers=tuple(fingers), id=int(hand_id), image_landmarks=pixels)
 
 
 def reprojection_rms_px(lm, camera, palm_length_mm=DEFAULT_PALM_LENGTH_MM):

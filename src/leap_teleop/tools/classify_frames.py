@@ -1,7 +1,14 @@
 """Classify Leap frames offline: one JSON line of per-hand gestures per input frame.
 
 usage: python -m leap_teleop.tools.classify_frames [INPUT] [--stateless] [--out FILE]
+       python -m leap_teleop.tools.classify_frames --keypoints FILE.csv
        rosrun leap_teleop classify_frames [INPUT] [--stateless]
+
+--keypoints FILE.csv reads webcam hand keypoints: the community's keypoint.csv (a class
+id then 42 numbers, x0 y0 .. x20 y20, no header; the id is ignored) or the shared
+files' form with a header (person,label,source_label,x0,...,y20). Each row is one hand
+judged on its own by the keypoint model (a left hand is a mirrored right one: no side):
+one line per row, {"id": ROW, "timestamp": null, "hands": [{"type": null, "fist": ...}]}.
 
 INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
 .mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
@@ -46,20 +53,25 @@ import json
 import math
 import sys
 
+import numpy as np
+
+from ..frame import Frame, Hand
 from ..gestures import GestureRecognizer
 from ..sources import SourceError, leapjs
+from . import gesture_data
 
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
 
 class Classifier:
-    """Frame dict -> output dict, keeping one recognizer per hand side."""
+    """Frames -> output dicts, keeping one recognizer per hand side."""
 
     def __init__(self, stateless=False):
         self.stateless = stateless
         self.recognizers = {}
 
     def classify(self, d):
+        """A LeapJS frame dict -> output dict."""
         try:
             frame = leapjs.frame_from_dict(d)
         except leapjs.FrameError as e:
@@ -69,6 +81,10 @@ class Classifier:
             math.isfinite(ts) else None
         fid = d.get('id')
         fid = fid if isinstance(fid, (int, str)) and not isinstance(fid, bool) else None
+        return self.classify_frame(frame, fid, ts)
+
+    def classify_frame(self, frame, fid, ts):
+        """A Frame -> output dict (id and timestamp as given)."""
         t = frame.timestamp if math.isfinite(frame.timestamp) else None
         hands, seen = [], set()
         for hand in frame.hands:
@@ -79,16 +95,29 @@ class Classifier:
                 rec = GestureRecognizer(stateless=True)
             seen.add(hand.side)
             state = rec.update(hand, t if t is not None else math.nan)
-            out = {'type': hand.side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
-                   'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
-                   'rock': bool(state.rock), 'open': bool(state.open),
-                   'thumb_down': bool(state.thumb_down),
-                   'events': [e.gesture for e in state.events if e.active]}
-            hands.append(out)
+            hands.append(hand_output(hand.side, state))
         for side, rec in self.recognizers.items():
             if side not in seen:
                 rec.reset()
         return {'id': fid, 'timestamp': ts, 'hands': hands}
+
+
+def hand_output(side, state):
+    out = {'type': side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
+           'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
+           'rock': bool(state.rock), 'open': bool(state.open),
+           'thumb_down': bool(state.thumb_down),
+           'events': [e.gesture for e in state.events if e.active]}
+    return out
+
+
+def keypoint_lines(path):
+    """Output dicts of a keypoint CSV, one per row."""
+    _, _, xy = gesture_data.read_keypoints(path)
+    rec = GestureRecognizer(stateless=True)
+    for i, pts in enumerate(xy):
+        hand = Hand(side='right', image_landmarks=np.asarray(pts, dtype=float))
+        yield {'id': i, 'timestamp': None, 'hands': [hand_output(None, rec.update(hand, 0.0))]}
 
 
 def iter_json_lines(stream):
@@ -125,11 +154,11 @@ def camera_input(path):
 
 
 def camera_frames(path):
-    """LeapJS frame dicts of the hands the camera pipeline finds in a video or images,
-    stamped from the footage's start."""
+    """Frames of the hands the camera pipeline finds in a video or images, stamped from
+    the footage's start (kept as Frames: their hands carry the image landmarks)."""
     from ..sources import make_source
     source = make_source('video', path=path, realtime=False, clock=lambda: 0.0)
-    return (leapjs.frame_to_dict(frame) for frame in source.frames())
+    return source.frames()
 
 
 def frames_of(path):
@@ -148,12 +177,17 @@ def main(argv=None):
     ap.add_argument('input', nargs='?', default='-', help='recording or JSON Lines; - = stdin')
     ap.add_argument('--stateless', action='store_true', help='no temporal filtering / events')
     ap.add_argument('--out', default='-', help='output file; - = stdout')
+    ap.add_argument('--keypoints', default=None, metavar='FILE.csv',
+                    help='classify the rows of a webcam keypoint CSV instead of INPUT')
     if argv is None:   # drop ROS remappings that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
     try:
-        frames = frames_of(args.input)
-    except (SourceError, OSError) as e:
+        if args.keypoints:
+            frames = list(keypoint_lines(args.keypoints))
+        else:
+            frames = frames_of(args.input)
+    except (SourceError, OSError, gesture_data.DataError) as e:
         print('classify_frames: %s' % e, file=sys.stderr)
         return 2
     out = sys.stdout if args.out == '-' else open(args.out, 'w')
@@ -162,7 +196,12 @@ def main(argv=None):
     n = 0
     try:
         for d in frames:
-            if isinstance(d, Exception) or not isinstance(d, dict):
+            if args.keypoints:
+                result = d
+            elif isinstance(d, Frame):
+                ts = round(d.timestamp * 1e6) if math.isfinite(d.timestamp) else None
+                result = classifier.classify_frame(d, d.id, ts)
+            elif isinstance(d, Exception) or not isinstance(d, dict):
                 why = 'not JSON: %s' % d if isinstance(d, Exception) else 'not a frame object'
                 result = {'id': None, 'timestamp': None, 'hands': [], 'error': why}
             else:

@@ -18,6 +18,7 @@ figures, with the worst person, into the model's card.
 """
 import argparse
 import collections
+import dataclasses
 import datetime
 import os
 import sys
@@ -28,6 +29,7 @@ import numpy as np
 from ..gestures.classifier import DEFAULT_MODELS, PoseClassifier
 from ..gestures.features import (hand_landmarks, keypoint_features, leap_features,
                                  mirror_keypoints)
+from ..sources import leapjs
 from . import gesture_data as gd
 
 SEED = 0
@@ -37,6 +39,8 @@ MAX_ITER = 80
 # Consecutive frames of one pose are nearly the same: fitting on every other one halves the
 # time and loses nothing measurable.
 FIT_STRIDE = 2
+JOINT_NOISE_MM = 3.0
+FOLD_WORKERS = 2        # leave-one-person-out folds fitted at once (this machine: 2 cores)
 MIN_SCALE = 0.05        # features are unit vectors, cosines and palm widths
 # Guinevere takes whose every frame shows one pose: the thumbs takes (a fist with the thumb
 # out, judged up or down apart from the model) and the open-hand moves.
@@ -49,23 +53,50 @@ TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'op
 
 
 class Dataset:
-    """Feature rows with their class, person and source label."""
+    """Feature rows with their class, person and source label; `augmented` marks the
+    noisy copies (fitted on, never scored)."""
 
-    def __init__(self, family):
+    def __init__(self, family, seed=SEED):
         self.family = family
-        self.x, self.y, self.person, self.label = [], [], [], []
+        self.x, self.y, self.person, self.label, self.augmented = [], [], [], [], []
         self.sources = []
+        self.rng = np.random.default_rng(seed)
 
-    def add(self, x, cls, person, label):
+    def add(self, x, cls, person, label, augmented=False):
         if x is not None:
             self.x.append(x)
             self.y.append(cls)
             self.person.append(person)
             self.label.append(label)
+            self.augmented.append(augmented)
+
+    def add_hand(self, hand, cls, person, label):
+        """A Leap-family hand, and a copy with JOINT_NOISE_MM of tracker noise on every
+        joint (a model fitted on one tracker's exact proportions reads a fist as
+        something else once its joints move by a millimetre)."""
+        x = leap_features(hand)
+        if x is None:
+            return
+        self.add(x, cls, person, label)
+        self.add(leap_features(noisy_hand(hand, JOINT_NOISE_MM, self.rng)), cls, person, label,
+                 augmented=True)
 
     def arrays(self):
         return (np.array(self.x), np.array(self.y), np.array(self.person),
                 np.array(self.label))
+
+    def clean(self):
+        return ~np.array(self.augmented, dtype=bool)
+
+
+def noisy_hand(hand, sigma, rng):
+    """A copy of a Hand with Gaussian noise (mm) on every joint."""
+    fingers = tuple(dataclasses.replace(
+        f, tip=f.tip + rng.normal(0.0, sigma, 3), mcp=f.mcp + rng.normal(0.0, sigma, 3),
+        pip=f.pip + rng.normal(0.0, sigma, 3), dip=f.dip + rng.normal(0.0, sigma, 3))
+        if f.mcp is not None and f.pip is not None and f.dip is not None else f
+        for f in hand.fingers)
+    return dataclasses.replace(hand, fingers=fingers)
 
 
 def add_leap_poses(ds, path, label_map=None, label=None, person=None):
@@ -76,9 +107,58 @@ def add_leap_poses(ds, path, label_map=None, label=None, person=None):
         cls = label if label is not None else (label_map or gd.LEAP_LABELS).get(lab)
         if hand is None or cls is None:
             continue
-        ds.add(leap_features(hand), cls, person or p, lab)
+        ds.add_hand(hand, cls, person or p, lab)
         n += 1
     ds.sources.append('%s (%d hands)' % (os.path.basename(path), n))
+
+
+def take_class(want, hand):
+    """The pose class of a labelled frame of the shared LeapJS takes, or None."""
+    from .evaluate import UP
+    if want.get('fist') is True:
+        return 'fist'
+    if want.get('open') is True:
+        return 'open'
+    if want.get('pinch') is True:
+        return 'pinch'
+    if want.get('thumb_up') == UP:
+        return 'thumb'          # a thumb out of a fist, up or sideways: the guard decides
+    if all(v is False for v in want.values()) and len(want) == 4:
+        return 'none'           # the gun (thumb and index out)
+    return None
+
+
+def leapjs_take_hands(folder):
+    """(take, hand, pose class, labels) of every labelled hand of the shared LeapJS takes
+    (labels: tools/evaluate.LABELS)."""
+    from . import evaluate
+    for take, spans in sorted(evaluate.LABELS.items()):
+        path = evaluate.find_file(folder, take)
+        if path is None:
+            continue
+        dicts = evaluate._load(path)
+        for side, frames, want in spans:
+            for k in frames if frames is not evaluate.ALL else range(len(dicts)):
+                if k >= len(dicts) or dicts[k] is None:
+                    continue
+                try:
+                    frame = leapjs.frame_from_dict(dicts[k])
+                except leapjs.FrameError:
+                    continue
+                hand = frame.hand(side)
+                cls = take_class(want, hand) if hand is not None else None
+                if cls is not None:
+                    yield take, hand, cls, want
+
+
+def add_leapjs_takes(ds, folder):
+    """The labelled frames of the shared LeapJS takes (an older tracker's hand model:
+    fists curled at the middle joints, knuckles straight) as one more person."""
+    n = 0
+    for take, hand, cls, _ in leapjs_take_hands(folder):
+        ds.add_hand(hand, cls, 'leapjs_takes', take)
+        n += 1
+    ds.sources.append('the LeapJS takes of ../leapjs (%d labelled hands)' % n)
 
 
 def add_guinevere(ds, root):
@@ -90,7 +170,7 @@ def add_guinevere(ds, root):
         for frame in gd.read_take(path):
             hand = gd.first_hand(frame)
             if hand is not None:
-                ds.add(leap_features(hand), cls, 'guinevere_' + person, gesture)
+                ds.add_hand(hand, cls, 'guinevere_' + person, gesture)
                 n += 1
     ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
 
@@ -148,6 +228,13 @@ def add_leap_views(ds, path, seed=SEED):
     ds.sources.append('%s seen as a webcam would (%d views)' % (os.path.basename(path), n))
 
 
+def strided(rows, stride=FIT_STRIDE):
+    """Every stride-th pair of rows: rows come in pairs (a hand and its noisy copy, a
+    keypoint row and its mirror image), kept together."""
+    rows = np.asarray(rows)
+    return rows[(rows // 2) % stride == 0]
+
+
 def fit_rows(labels, persons, rows):
     """`rows` (indices) with the thumbs takes' frames repeated (see THUMB_TAKE_REPEAT)."""
     thumbs = rows[np.isin(labels[rows], ('thumbs_up', 'thumbs_down'))
@@ -174,22 +261,47 @@ def fit(x, y, seed=SEED):
                           m.intercepts_[0], m.coefs_[1], m.intercepts_[1])
 
 
-def predict(model, x, family):
-    """Winning class per row (keypoint rows: scored with their mirror image, as at run
-    time: the caller passes the pairs' mean probabilities)."""
-    return np.array(model.classes)[model.proba(x).argmax(axis=1)]
+_FOLD_DATA = None
 
 
-def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print):
+def _fit_without(person):
+    x, y, persons, labels, stride = _FOLD_DATA
+    rows = fit_rows(labels, persons, strided(np.where(persons != person)[0], stride))
+    return fit(x[rows], y[rows])
+
+
+def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print):
+    """{person: model fitted on everyone else} for each held-out person, two folds at a
+    time (one per core; each fit is seeded, so the result does not depend on the order)."""
+    global _FOLD_DATA
+    import multiprocessing
+    _FOLD_DATA = (x, y, persons, labels, stride)
+    held = sorted(held)
+    out = {}
+    try:
+        ctx = multiprocessing.get_context('fork')
+        with ctx.Pool(min(FOLD_WORKERS, len(held))) as pool:
+            for person, model in zip(held, pool.imap(_fit_without, held)):
+                out[person] = model
+                log('  fitted without %s' % person)
+    finally:
+        _FOLD_DATA = None
+    return out
+
+
+def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print, clean=None, held=None):
     """Leave-one-person-out: per class recall and false-positive rate per held-out person,
     their mean and worst, and the confusion of source labels into classes."""
     classes = sorted(set(y))
     per = {c: {} for c in classes}
     confusion = collections.defaultdict(collections.Counter)
-    for person in sorted(set(persons)):
-        train = fit_rows(labels, persons, np.where(persons != person)[0][::stride])
+    held = sorted(set(persons) if held is None else held)
+    models = models_without(x, y, persons, labels, held, stride, log)
+    for person in held:
         test = persons == person
-        model = fit(x[train], y[train])
+        model = models[person]
+        if clean is not None:
+            test = test & clean
         proba = model.proba(x[test])
         if family == 'keypoints':   # rows come in (image, mirror) pairs: score their mean
             proba = 0.5 * (proba[0::2] + proba[1::2])
@@ -206,7 +318,7 @@ def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print):
             confusion[str(lab)][str(p)] += 1
         log('  held out %s: %s' % (person, ', '.join(
             '%s %.2f' % (c, per[c][person]['recall']) for c in classes
-            if per[c][person]['recall'] is not None)))
+            if per[c][person].get('recall') is not None)))
     summary = {}
     for c in classes:
         rec = {p: v['recall'] for p, v in per[c].items() if v['recall'] is not None}
@@ -247,6 +359,8 @@ def build(family, data_dir, adds, log=print):
             add_leap_poses(ds, gti)
         if os.path.isdir(guin):
             add_guinevere(ds, guin)
+        if os.path.isdir(os.path.join(data_dir, 'leapjs')):
+            add_leapjs_takes(ds, os.path.join(data_dir, 'leapjs'))
     else:
         folder = os.path.join(data_dir, 'keypoints')
         gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
@@ -280,17 +394,31 @@ def train(family, data_dir, adds=(), report=True, log=print):
     card = {'family': family, 'fitted_on': ds.sources, 'people': sorted(set(persons.tolist())),
             'rows': int(len(y)), 'classes': sorted(set(y.tolist())),
             'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
-                     'MLPClassifier, alpha %g, %d iterations, seed %d, every %d%s row)'
-                     % (HIDDEN_UNITS, L2, MAX_ITER, SEED, FIT_STRIDE,
-                        'nd' if FIT_STRIDE == 2 else 'th'),
+                     'MLPClassifier, alpha %g, %d iterations, seed %d; fitted on every %s '
+                     'frame, %s)'
+                     % (HIDDEN_UNITS, L2, MAX_ITER, SEED, {1: '', 2: 'second'}.get(
+                         FIT_STRIDE, '%dth' % FIT_STRIDE),
+                        'each Leap hand also with %g mm of noise on every joint'
+                        % JOINT_NOISE_MM if family == 'leap' else
+                        'each row also as its mirror image'),
             'command': 'python -m leap_teleop.tools.train_gestures --family %s%s' % (
                 family, ''.join(' --add %s --label %s' % (p, l) for p, l in adds)),
             'date': datetime.date.today().isoformat()}
+    users = sorted(p for p in set(persons.tolist()) if p.startswith('user:'))
+    # a user's retrain holds out each of their own files (the shared people's figures
+    # are the shipped model's card); the shipped models hold out every person
+    held = users if adds else sorted(set(persons.tolist()))
     if report and len(set(persons)) > 1:
-        log('%s: leave-one-person-out over %d people (%d rows)'
-            % (family, len(set(persons)), len(y)))
-        card['leave_one_person_out'] = lopo(x, y, persons, labels, family, log=log)['per_class']
-    rows = fit_rows(labels, persons, np.arange(len(y))[::FIT_STRIDE if not adds else 1])
+        log('%s: leave-one-person-out over %d of %d people (%d rows)'
+            % (family, len(held), len(set(persons)), len(y)))
+        if adds and len(users) < 2:
+            log('  (one file of your own: held out, its gesture is unknown to the fit; '
+                'record a second session to judge it on data the fit never saw)')
+        card['leave_one_person_out'] = lopo(x, y, persons, labels, family, log=log,
+                                            clean=ds.clean(), held=held)['per_class']
+    mine = np.char.startswith(persons.astype(str), 'user:')
+    rows = np.union1d(strided(np.where(~mine)[0]), np.where(mine)[0])
+    rows = fit_rows(labels, persons, rows)
     model = fit(x[rows], y[rows])
     model.family = family
     model.card = card

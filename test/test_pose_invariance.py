@@ -1,0 +1,117 @@
+"""The shipped pose model under changes that must not move its decision (size, side,
+orientation, tracker noise, a missing joint), and the thumbs-up guard beside it: a
+thumbs-down or a sideways thumb never arms an arm, a held thumbs-up does."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from leap_teleop.gestures import GestureRecognizer, hand_geometry, load_model
+from leap_teleop.gestures.pose import classify_pose, thumb_points
+from leap_teleop.hand_model import render_hand
+from leap_teleop.teleop.arm import ARMED, DISARMED, ArmTeleop, HandInput
+from leap_teleop.tools import evaluate_invariance
+from leap_teleop.ur10 import kinematics as kin
+
+
+@pytest.fixture(scope='module')
+def figures():
+    return evaluate_invariance.run(draws=25, seed=3)
+
+
+@pytest.mark.parametrize('change', ['size', 'side', 'orientation', 'noise_1mm', 'noise_3mm'])
+def test_the_decision_ignores_size_side_orientation_and_noise(figures, change):
+    assert figures['per_change'][change] >= 0.95, figures['per_pose']
+    for pose, row in figures['per_pose'].items():
+        assert row[change] >= 0.8, (pose, row)
+
+
+def test_a_missing_joint_judges_nothing(figures):
+    assert figures['dropout_draws'] == 40 and figures['dropout_wrong'] == 0
+
+
+def _turned(pose, normal, direction, side='right'):
+    return render_hand(side, pose, (0.0, 200.0, 0.0), np.array(normal, float),
+                       np.array(direction, float))
+
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+def test_thumb_direction_decides_up_down_or_nothing(side):
+    s = 1.0 if side == 'right' else -1.0
+    # palm facing inward, fingers ahead: the thumb side is up, down or sideways
+    up = _turned('thumbs_up', (-s, 0, 0), (0, 0, -1), side)
+    down = _turned('thumbs_up', (s, 0, 0), (0, 0, -1), side)
+    flat = _turned('thumbs_up', (0, -1, 0), (0, 0, -1), side)     # palm down: thumb sideways
+    model = load_model(None, 'leap')
+    got = {}
+    for name, hand in (('up', up), ('down', down), ('flat', flat)):
+        g = hand_geometry(hand)
+        d = classify_pose(hand, g, model)
+        got[name] = (thumb_points(g, hand), d['thumb_up'], d['thumb_down'])
+    assert got == {'up': ('up', True, False), 'down': ('down', False, True),
+                   'flat': (None, False, False)}
+
+
+def _arm_with(hands, dt=1 / 60.0):
+    rec, arm = GestureRecognizer(), ArmTeleop()
+    arm.on_joints(kin.HOME_Q.copy())
+    states = []
+    for i, hand in enumerate(hands):
+        t = i * dt
+        st = rec.update(hand, t)
+        states.append(st)
+        arm.on_hand(HandInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+                              thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
+        arm.step(100.0 + t)
+    return arm.status.state, states
+
+
+def test_a_held_thumbs_down_or_sideways_thumb_never_arms():
+    rng = np.random.default_rng(5)
+    for normal in ((1, 0, 0), (0, -1, 0), (0.7, -0.7, 0)):
+        hands = [evaluate_invariance._noisy(_turned('thumbs_up', normal, (0, 0, -1)), 2.0, rng)
+                 for _ in range(90)]                                    # 1.5 s held
+        state, states = _arm_with(hands)
+        assert state == DISARMED and not any(s.thumb_up for s in states), normal
+
+
+def test_a_held_thumbs_up_arms_but_not_before_the_hold():
+    rng = np.random.default_rng(6)
+    hands = [evaluate_invariance._noisy(_turned('thumbs_up', (-1, 0, 0), (0, 0, -1)), 2.0, rng)
+             for _ in range(40)]
+    state, states = _arm_with(hands)
+    assert state == ARMED
+    state, _ = _arm_with(hands[:15])            # 0.25 s: shown, not yet held arm_hold_s
+    assert state == DISARMED
+
+
+def test_a_model_file_of_the_wrong_family_or_malformed_is_refused(tmp_path):
+    from leap_teleop.gestures import ModelError, PoseClassifier
+    bad = tmp_path / 'bad.npz'
+    bad.write_bytes(b'not a zip')
+    with pytest.raises(ModelError, match='cannot read'):
+        PoseClassifier.load(str(bad))
+    keypoints = load_model(None, 'keypoints')
+    path = str(tmp_path / 'k.npz')
+    keypoints.save(path)
+    with pytest.raises(ModelError, match='keypoints model, not a leap'):
+        PoseClassifier.load(path, 'leap')
+    # arrays that do not fit together
+    m = load_model(None, 'leap')
+    with pytest.raises(ModelError, match='inconsistent'):
+        PoseClassifier(m.classes, 'leap', m.mean, 1.0 / m.inv_scale, m.w0[:-1], m.b0, m.w1,
+                       m.b1)
+    with pytest.raises(ModelError, match='inconsistent'):
+        PoseClassifier(m.classes, 'leap', m.mean * math.nan, 1.0 / m.inv_scale, m.w0, m.b0,
+                       m.w1, m.b1)
+
+
+def test_the_shipped_models_are_arrays_with_a_card():
+    from leap_teleop.gestures.classifier import DEFAULT_MODELS
+    for family in ('leap', 'keypoints'):
+        m = load_model(None, family)
+        with np.load(DEFAULT_MODELS[family], allow_pickle=False) as z:
+            assert z['w0'].dtype == np.float64 and 'card' in z.files
+        assert m.card['family'] == family and m.card['people']
+        assert {'fist', 'open', 'pinch', 'rock', 'thumb', 'none'} <= set(m.classes)
