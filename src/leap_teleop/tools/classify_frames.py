@@ -1,7 +1,8 @@
 """Classify Leap frames offline: one JSON line of per-hand gestures per input frame.
 
 usage: python -m leap_teleop.tools.classify_frames [INPUT] [--stateless] [--out FILE]
-       rosrun leap_teleop classify_frames [INPUT] [--stateless]
+       rosrun leap_teleop classify_frames [INPUT] [--stateless] [--model MODEL]
+           [--keypoint-model MODEL]
 
 INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
 .mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
@@ -37,6 +38,10 @@ Output, one line per input frame, in input order:
   "error": "..."}; a frame with missing fields is classified from what is there (a hand
   without fingers shows every gesture false).
 
+--model MODEL (Leap frames) and --keypoint-model MODEL (camera hands) classify with a
+user's model (train_gestures --out MODEL) instead of the shipped one; each class of it
+that is no built-in gesture is one more key of every hand, true while it is held.
+
 --stateless classifies every frame on its own (no temporal filter, no events): for
 snapshot data whose frames are unrelated. Otherwise frames are a stream: a gesture
 turns on after 3 consistent frames and off after 3, per hand side.
@@ -46,18 +51,25 @@ import json
 import math
 import sys
 
-from ..gestures import GestureRecognizer
+from ..gestures import GestureRecognizer, ModelError
 from ..sources import SourceError, leapjs
 
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
 
 class Classifier:
-    """Frame dict -> output dict, keeping one recognizer per hand side."""
+    """Frame dict -> output dict, keeping one recognizer per hand side. model /
+    keypoint_model: pose model paths (None: the shipped ones); their own classes show as
+    one more key each, true while held."""
 
-    def __init__(self, stateless=False):
+    def __init__(self, stateless=False, model=None, keypoint_model=None):
         self.stateless = stateless
+        self.models = {'model': model, 'keypoint_model': keypoint_model}
+        self.user_gestures = self._recognizer(stateless).user_gestures
         self.recognizers = {}
+
+    def _recognizer(self, stateless):
+        return GestureRecognizer(stateless=stateless, **self.models)
 
     def classify(self, d):
         try:
@@ -74,9 +86,9 @@ class Classifier:
         for hand in frame.hands:
             rec = self.recognizers.get(hand.side)
             if rec is None:
-                rec = self.recognizers[hand.side] = GestureRecognizer(stateless=self.stateless)
+                rec = self.recognizers[hand.side] = self._recognizer(self.stateless)
             if hand.side in seen:       # a second hand of one side: judge it on its own
-                rec = GestureRecognizer(stateless=True)
+                rec = self._recognizer(True)
             seen.add(hand.side)
             state = rec.update(hand, t if t is not None else math.nan)
             out = {'type': hand.side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
@@ -84,6 +96,8 @@ class Classifier:
                    'rock': bool(state.rock), 'open': bool(state.open),
                    'thumb_down': bool(state.thumb_down),
                    'events': [e.gesture for e in state.events if e.active]}
+            for name in self.user_gestures:
+                out[name] = name in state.user
             hands.append(out)
         for side, rec in self.recognizers.items():
             if side not in seen:
@@ -148,17 +162,22 @@ def main(argv=None):
     ap.add_argument('input', nargs='?', default='-', help='recording or JSON Lines; - = stdin')
     ap.add_argument('--stateless', action='store_true', help='no temporal filtering / events')
     ap.add_argument('--out', default='-', help='output file; - = stdout')
+    ap.add_argument('--model', default=None, help='Leap-family pose model (.npz, from '
+                                                  'train_gestures); default: the shipped one')
+    ap.add_argument('--keypoint-model', default=None,
+                    help='camera keypoint pose model (.npz); default: the shipped one')
     if argv is None:   # drop ROS remappings that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
     try:
         frames = frames_of(args.input)
-    except (SourceError, OSError) as e:
+        # Still images are unrelated pictures: each is judged on its own.
+        classifier = Classifier(args.stateless or camera_input(args.input) == 'stills',
+                                args.model, args.keypoint_model)
+    except (SourceError, OSError, ModelError) as e:
         print('classify_frames: %s' % e, file=sys.stderr)
         return 2
     out = sys.stdout if args.out == '-' else open(args.out, 'w')
-    # Still images are unrelated pictures: each is judged on its own.
-    classifier = Classifier(stateless=args.stateless or camera_input(args.input) == 'stills')
     n = 0
     try:
         for d in frames:
