@@ -276,3 +276,22 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     assert train_gestures.main(['--data', str(tmp_path), '--add', str(bad_csv), '--label',
                                 'two', '--out', str(tmp_path / 'm.npz')]) == 2
     assert 'bad.csv row 1: not a keypoint row' in capsys.readouterr().err
+
+
+@pytest.mark.rostest
+def test_the_nodes_arm_on_a_bound_new_gesture(trained, tmp_path):
+    """The real graph: sender (the user's model and bindings, a scripted V sign) ->
+    ur10_arm (unchanged) on the simulated UR10: the arm node reports armed."""
+    from test_launch_smoke import run_launches
+    _, model, _ = trained
+    script = tmp_path / 'session.yaml'
+    script.write_text(yaml.safe_dump({'rate_hz': 60, 'noise_mm': 1.0, 'seed': 7, 'hands': {
+        'right': [{'pose': 'open', 'palm': [0, 200, 0], 'duration': 1.5},
+                  {'pose': 'two', 'palm': [10, 210, -10], 'duration': 3.0}]}}))
+    bindings = tmp_path / 'mine.yaml'
+    bindings.write_text('arm: {arm: two}\n')
+    run_launches(tmp_path, [['ur10_sim.launch'], ['ur10_arm.launch', 'max_joint_speed:=1.0'],
+                            ['sender.launch', 'script:=%s' % script, 'sides:=[right]',
+                             'wait_for_subscribers:=true', 'gesture_model:=%s' % model,
+                             'gesture_bindings:=%s' % bindings]],
+                 ['--armed', 'ur10_1'], 90)
