@@ -295,3 +295,22 @@ def test_the_nodes_arm_on_a_bound_new_gesture(trained, tmp_path):
                              'wait_for_subscribers:=true', 'gesture_model:=%s' % model,
                              'gesture_bindings:=%s' % bindings]],
                  ['--armed', 'ur10_1'], 90)
+
+
+def test_record_gestures_from_a_leap_recording(tmp_path, capsys):
+    """A recording (here a shared LeapJS take of a hand making an L / gun) is a source
+    too: one pose record per hand per frame, gzip by the name."""
+    from leap_teleop.tools.evaluate import data_dir
+    take = os.path.join(data_dir(), 'gun.json.lz')
+    assert os.path.isfile(take), 'shared data missing: %s' % take
+    out = tmp_path / 'gun.jsonl.gz'
+    assert record_gestures.main(['--source', 'recording', '--recording', take, '--label', 'gun',
+                                 '--seconds', '2', '--realtime', '0', '--side', 'right',
+                                 '--out', str(out)]) == 0
+    summary = capsys.readouterr().out
+    rows = gesture_data.read_pose_lines(str(out))
+    assert rows and {lab for _, lab, _ in rows} == {'gun'}
+    stamps = [f['timestamp'] for _, _, f in rows]
+    assert stamps == sorted(stamps) and stamps[-1] - stamps[0] < 2.0e6 and len(rows) > 50
+    assert all(len(f['hands']) == 1 and f['hands'][0]['type'] == 'right' for _, _, f in rows)
+    assert 'wrote %d hand poses' % len(rows) in summary

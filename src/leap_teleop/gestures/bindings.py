@@ -155,17 +155,29 @@ class BoundActions:
 
     def flags(self, g):
         """(arm, origin, stop, gripper, gripper_value) of a GestureState."""
+        if self.identity:
+            return g.thumb_up, g.rock, g.fist, g.pinch, g.pinch_value if g.pinch else 0.0
         user = g.user
-        arm, origin, stop, gripper = (
-            any(getattr(g, n) for n in builtin) or any(n in user for n in own)
-            for builtin, own in self._flags)
-        if not gripper:
+        out = []
+        for builtin, own in self._flags:
+            on = False
+            for n in builtin:
+                if getattr(g, n):
+                    on = True
+                    break
+            else:
+                for n in own:
+                    if n in user:
+                        on = True
+                        break
+            out.append(on)
+        if not out[3]:
             value = 0.0
         elif self._gripper_by_pinch and g.pinch:
             value = g.pinch_value
         else:
             value = GRIPPER_CLOSED
-        return arm, origin, stop, gripper, value
+        return out[0], out[1], out[2], out[3], value
 
     def events(self, events):
         """The events to send for a frame's recognizer events."""
