@@ -233,7 +233,8 @@ def main(argv=None):
         factory = recognizer_factory(p)
         bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
         view = camera_view(p)
-        return build_source(p, view.on_image if view is not None else None), view, factory, bindings
+        source = build_source(p, view.on_image if view is not None else None)
+        return source, view, factory, bindings
     p, (source, view, factory, bindings) = start_node(
         'sender.py', 'leap_sender', __doc__, PARAMS, build, argv, errors=(SourceError, ValueError))
     interface = LeapInterface(source, recognizer_factory=factory, sides=list(p['sides']),
