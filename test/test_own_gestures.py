@@ -314,3 +314,30 @@ def test_record_gestures_from_a_leap_recording(tmp_path, capsys):
     assert stamps == sorted(stamps) and stamps[-1] - stamps[0] < 2.0e6 and len(rows) > 50
     assert all(len(f['hands']) == 1 and f['hands'][0]['type'] == 'right' for _, _, f in rows)
     assert 'wrote %d hand poses' % len(rows) in summary
+
+
+@pytest.mark.rostest
+def test_the_nodes_fly_a_drone_on_bound_gestures(trained, tmp_path):
+    """The real graph: sender (the user's model; takeoff bound to the V sign, land to a
+    fist held) -> drone_subscriber (unchanged) -> simulated AR.Drone: it takes off,
+    flies and lands again, while the hand is still there (a lost hand lands only after
+    the check's time limit)."""
+    from test_launch_smoke import run_launches
+    _, model, _ = trained
+    script = tmp_path / 'flight.yaml'
+    script.write_text(yaml.safe_dump({'rate_hz': 60, 'noise_mm': 1.0, 'seed': 7, 'hands': {
+        'right': [{'pose': 'absent', 'duration': 3.0},
+                  {'pose': 'open', 'palm': [0, 200, 0], 'duration': 1.0},
+                  {'pose': 'two', 'duration': 1.5},            # takeoff
+                  {'pose': 'open', 'duration': 4.0},           # climb, hover
+                  {'pose': 'fist', 'duration': 1.0},           # land
+                  {'pose': 'open', 'duration': 120.0}]}}))
+    bindings = tmp_path / 'mine.yaml'
+    bindings.write_text('drone: {takeoff: two, land: fist}\n')
+    run_launches(tmp_path, [['ardrone.launch', 'sender:=false'],
+                            ['sender.launch', 'script:=%s' % script, 'sides:=[right]',
+                             'wait_for_subscribers:=true',
+                             'wait_topics:=[leapmotion/hand_right, leapmotion/gestures, '
+                             'ardrone/takeoff]',
+                             'gesture_model:=%s' % model, 'gesture_bindings:=%s' % bindings]],
+                 ['--drone'], 100)
