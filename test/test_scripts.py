@@ -32,6 +32,8 @@ BAD_PARAMS = [
     ('sender.py', ['_leap_xyz:=[1,2]'], '~leap_xyz = [1, 2]: 2 items'),
     ('sender.py', ['_queue_size:=-3'], '~queue_size = -3: out of range'),
     ('sender.py', ['_sides:=[middle]'], "~sides = ['middle']"),
+    ('sender.py', ['_gesture_model:=/no/such/model.npz'], 'model.npz: cannot read a pose model'),
+    ('sender.py', ['_gesture_bindings:=/no/such/bindings.yaml'], 'bindings.yaml: cannot read'),
     ('ur10_arm.py', ['_hand:=middle'], "~hand = 'middle': not one of the choices"),
     ('ur10_arm.py', ['_rate:=0'], '~rate = 0: out of range; allowed: a finite number >= 10'),
     ('ur10_arm.py', ['_status_rate:=0'], '~status_rate = 0: out of range'),

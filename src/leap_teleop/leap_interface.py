@@ -15,6 +15,7 @@ import numpy as np
 
 from .frame import SIDES
 from .gestures import GestureEvent, GestureRecognizer
+from .gestures.bindings import Bindings
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +61,8 @@ class HandState:
     confidence: float = 0.0
     finger_extended: Tuple[bool, ...] = (False,) * 5
     finger_tips: Tuple[Tuple[float, float, float], ...] = ((0.0, 0.0, 0.0),) * 5   # mm
+    # fist, thumb_up, pinch (+ value), rock: the arm's stop, arm, gripper, origin actions
+    # (their gestures by default; see gestures.bindings)
     fist: bool = False
     thumb_up: bool = False
     pinch: bool = False
@@ -100,11 +103,17 @@ def _unit_interval(x):
 
 
 class HandTracker:
-    """State of one side across frames: gestures, origin, rotation since origin."""
+    """State of one side across frames: gestures, origin, rotation since origin.
+    `bindings` (gestures.bindings.Bindings, default: the defaults) turn the recognizer's
+    gestures into the actions the consumers read: the fist / thumb_up / rock / pinch
+    flags and the pilot's events (BindingError when they name a gesture the recognizer
+    cannot report)."""
 
-    def __init__(self, side, recognizer=None, dead_bands=DEAD_BANDS):
+    def __init__(self, side, recognizer=None, dead_bands=DEAD_BANDS, bindings=None):
         self.side = side
         self.recognizer = recognizer or GestureRecognizer()
+        self.actions = (bindings or Bindings()).applier(
+            getattr(self.recognizer, 'user_gestures', ()))
         self.dead_bands = dead_bands    # None: the raw rotation since the origin
         self.state = HandState(side)
         self._origin_angles = None
@@ -134,12 +143,13 @@ class HandTracker:
             return self._lost(timestamp, frame_id)
         was_present = self.state.present
         g = self.recognizer.update(hand, timestamp)
-        events = list(g.events)
+        arm, origin, stop, gripper, gripper_value = self.actions.flags(g)
+        events = list(self.actions.events(g.events))
         if not was_present:
             events.insert(0, GestureEvent('hand_found'))
 
         angles = hand_angles(normal, direction)
-        if g.rock:
+        if origin:
             self._origin_angles = angles
             origin_palm = palm
         else:
@@ -160,9 +170,9 @@ class HandTracker:
             pinch_strength=_unit_interval(hand.pinch_strength),
             confidence=_unit_interval(hand.confidence),
             finger_extended=tuple(bool(x) for x in g.finger_extended), finger_tips=tips,
-            fist=g.fist, thumb_up=g.thumb_up, pinch=g.pinch,
-            pinch_value=min(max(float(g.pinch_value), 0.0), 0.8) if g.pinch else 0.0,
-            rock=g.rock, open=g.open, thumb_down=g.thumb_down, origin_set=self._origin_angles is not None,
+            fist=stop, thumb_up=arm, pinch=gripper,
+            pinch_value=min(max(float(gripper_value), 0.0), 0.8) if gripper else 0.0,
+            rock=origin, open=g.open, thumb_down=g.thumb_down, origin_set=self._origin_angles is not None,
             pose_class=g.label, pose_probability=float(g.probability),
             origin_palm=origin_palm, events=tuple(events), **rotation)
         return self.state
@@ -173,10 +183,11 @@ class LeapInterface:
     feed frames yourself with on_frame(frame)."""
 
     def __init__(self, source=None, recognizer_factory=GestureRecognizer, sides=SIDES,
-                 dead_bands=DEAD_BANDS):
-        """dead_bands: per rotation angle (low, high) rad, or None for the raw rotation."""
+                 dead_bands=DEAD_BANDS, bindings=None):
+        """dead_bands: per rotation angle (low, high) rad, or None for the raw rotation;
+        bindings: gesture -> action bindings (see HandTracker)."""
         self.source = source
-        self._trackers = {side: HandTracker(side, recognizer_factory(), dead_bands)
+        self._trackers = {side: HandTracker(side, recognizer_factory(), dead_bands, bindings)
                           for side in sides}
         self._lock = threading.Lock()
         self._states = {side: HandState(side) for side in sides}

@@ -10,6 +10,8 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from leap_teleop import conversions
+from leap_teleop.gestures import GestureRecognizer
+from leap_teleop.gestures.bindings import load_bindings
 from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
 from leap_teleop.msg import GestureEvent, Hand, leapros
 from leap_teleop.nodes.common import Param, package_path, start_node
@@ -63,6 +65,11 @@ PARAMS = {
     'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
                                        '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
                                        'the raw rotation since the origin'),
+    'gesture_model': Param('', 'Leap-family pose model (.npz, train_gestures --out); '
+                               'empty = the shipped one'),
+    'keypoint_model': Param('', 'camera keypoint pose model (.npz); empty = the shipped one'),
+    'gesture_bindings': Param('', 'gesture -> action bindings YAML (see config/gestures/'
+                                  'bindings/default.yaml); empty = those defaults'),
 }
 PARAMS.update(CAMERA_PARAMS)
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
@@ -211,15 +218,28 @@ def camera_view(p):
     return view
 
 
+def recognizer_factory(p):
+    """A GestureRecognizer per hand with the ~gesture_model / ~keypoint_model (each model
+    is loaded once; a bad one raises ModelError, a ValueError)."""
+    def make():
+        return GestureRecognizer(model=p['gesture_model'] or None,
+                                 keypoint_model=p['keypoint_model'] or None)
+    return make
+
+
 def main(argv=None):
     def build(p):
         check_leapros(p)
+        factory = recognizer_factory(p)
+        bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
         view = camera_view(p)
-        return build_source(p, view.on_image if view is not None else None), view
-    p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
-                                   argv, errors=(SourceError, ValueError))
-    interface = LeapInterface(source, sides=list(p['sides']),
-                              dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None)
+        source = build_source(p, view.on_image if view is not None else None)
+        return source, view, factory, bindings
+    p, (source, view, factory, bindings) = start_node(
+        'sender.py', 'leap_sender', __doc__, PARAMS, build, argv, errors=(SourceError, ValueError))
+    interface = LeapInterface(source, recognizer_factory=factory, sides=list(p['sides']),
+                              dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None,
+                              bindings=bindings)
     sender = Sender(p, interface)
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency

@@ -2,7 +2,8 @@
 
 usage: python -m leap_teleop.tools.classify_frames [INPUT] [--stateless] [--out FILE]
        python -m leap_teleop.tools.classify_frames --keypoints FILE.csv
-       rosrun leap_teleop classify_frames [INPUT] [--stateless]
+       rosrun leap_teleop classify_frames [INPUT] [--stateless] [--model MODEL]
+           [--keypoint-model MODEL]
 
 --keypoints FILE.csv reads webcam hand keypoints: the community's keypoint.csv (a class
 id then 42 numbers, x0 y0 .. x20 y20, no header; the id is ignored) or the shared
@@ -44,6 +45,11 @@ Output, one line per input frame, in input order:
   "error": "..."}; a frame with missing fields is classified from what is there (a hand
   without fingers shows every gesture false).
 
+--model MODEL (Leap frames) and --keypoint-model MODEL (camera hands, keypoint rows)
+classify with a user's model (train_gestures --out MODEL) instead of the shipped one;
+each class of it that is no built-in gesture is one more key of every hand, true while it
+is held.
+
 --stateless classifies every frame on its own (no temporal filter, no events): for
 snapshot data whose frames are unrelated. Otherwise frames are a stream: a gesture
 turns on after 3 consistent frames and off after 3, per hand side.
@@ -56,7 +62,7 @@ import sys
 import numpy as np
 
 from ..frame import Frame, Hand
-from ..gestures import GestureRecognizer
+from ..gestures import GestureRecognizer, ModelError
 from ..sources import SourceError, leapjs
 from . import gesture_data
 
@@ -64,11 +70,18 @@ HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
 
 class Classifier:
-    """Frames -> output dicts, keeping one recognizer per hand side."""
+    """Frames -> output dicts, keeping one recognizer per hand side. model /
+    keypoint_model: pose model paths (None: the shipped ones); their own classes show as
+    one more key each, true while held."""
 
-    def __init__(self, stateless=False):
+    def __init__(self, stateless=False, model=None, keypoint_model=None):
         self.stateless = stateless
+        self.models = {'model': model, 'keypoint_model': keypoint_model}
+        self.user_gestures = self._recognizer(stateless).user_gestures
         self.recognizers = {}
+
+    def _recognizer(self, stateless):
+        return GestureRecognizer(stateless=stateless, **self.models)
 
     def classify(self, d):
         """A LeapJS frame dict -> output dict."""
@@ -90,34 +103,37 @@ class Classifier:
         for hand in frame.hands:
             rec = self.recognizers.get(hand.side)
             if rec is None:
-                rec = self.recognizers[hand.side] = GestureRecognizer(stateless=self.stateless)
+                rec = self.recognizers[hand.side] = self._recognizer(self.stateless)
             if hand.side in seen:       # a second hand of one side: judge it on its own
-                rec = GestureRecognizer(stateless=True)
+                rec = self._recognizer(True)
             seen.add(hand.side)
             state = rec.update(hand, t if t is not None else math.nan)
-            hands.append(hand_output(hand.side, state))
+            hands.append(hand_output(hand.side, state, self.user_gestures))
         for side, rec in self.recognizers.items():
             if side not in seen:
                 rec.reset()
         return {'id': fid, 'timestamp': ts, 'hands': hands}
 
 
-def hand_output(side, state):
+def hand_output(side, state, user_gestures=()):
     out = {'type': side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
            'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
            'rock': bool(state.rock), 'open': bool(state.open),
            'thumb_down': bool(state.thumb_down),
            'events': [e.gesture for e in state.events if e.active]}
+    for name in user_gestures:
+        out[name] = name in state.user
     return out
 
 
-def keypoint_lines(path):
+def keypoint_lines(path, classifier):
     """Output dicts of a keypoint CSV, one per row."""
     _, _, xy = gesture_data.read_keypoints(path)
-    rec = GestureRecognizer(stateless=True)
+    rec = classifier._recognizer(True)
     for i, pts in enumerate(xy):
         hand = Hand(side='right', image_landmarks=np.asarray(pts, dtype=float))
-        yield {'id': i, 'timestamp': None, 'hands': [hand_output(None, rec.update(hand, 0.0))]}
+        yield {'id': i, 'timestamp': None,
+               'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
 
 
 def iter_json_lines(stream):
@@ -179,20 +195,26 @@ def main(argv=None):
     ap.add_argument('--out', default='-', help='output file; - = stdout')
     ap.add_argument('--keypoints', default=None, metavar='FILE.csv',
                     help='classify the rows of a webcam keypoint CSV instead of INPUT')
+    ap.add_argument('--model', default=None, help='Leap-family pose model (.npz, from '
+                                                  'train_gestures); default: the shipped one')
+    ap.add_argument('--keypoint-model', default=None,
+                    help='camera keypoint pose model (.npz); default: the shipped one')
     if argv is None:   # drop ROS remappings that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
     try:
+        # Still images are unrelated pictures: each is judged on its own.
+        classifier = Classifier(args.stateless or (not args.keypoints and
+                                                   camera_input(args.input) == 'stills'),
+                                args.model, args.keypoint_model)
         if args.keypoints:
-            frames = list(keypoint_lines(args.keypoints))
+            frames = list(keypoint_lines(args.keypoints, classifier))
         else:
             frames = frames_of(args.input)
-    except (SourceError, OSError, gesture_data.DataError) as e:
+    except (SourceError, OSError, ModelError, gesture_data.DataError) as e:
         print('classify_frames: %s' % e, file=sys.stderr)
         return 2
     out = sys.stdout if args.out == '-' else open(args.out, 'w')
-    # Still images are unrelated pictures: each is judged on its own.
-    classifier = Classifier(stateless=args.stateless or camera_input(args.input) == 'stills')
     n = 0
     try:
         for d in frames:
