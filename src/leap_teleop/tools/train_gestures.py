@@ -337,11 +337,11 @@ def print_lopo(title, report):
     print(title)
     print('  %-11s %-22s %-16s %s' % ('class', 'recall mean / worst', 'worst person', 'FPR mean / worst'))
     for c, s in report['per_class'].items():
-        if s['recall_mean'] is None:
+        if s['fpr_mean'] is None:
             continue
-        print('  %-11s %.3f / %.3f          %-16s %.4f / %.4f'
-              % (c, s['recall_mean'], s['recall_worst'], s['worst_person'], s['fpr_mean'],
-                 s['fpr_worst']))
+        rec = ('%.3f / %.3f          %-16s' % (s['recall_mean'], s['recall_worst'], s['worst_person'])
+               if s['recall_mean'] is not None else '%-39s' % '- (no held-out person shows it)')
+        print('  %-11s %s %.4f / %.4f' % (c, rec, s['fpr_mean'], s['fpr_worst']))
     print('  confusion (source label -> share read as each class):')
     for lab, row in report['confusion'].items():
         tot = sum(row.values())
@@ -370,6 +370,12 @@ def build(family, data_dir, adds, log=print):
             for name in sorted(os.listdir(folder)):
                 if name.endswith('.csv'):
                     add_keypoints(ds, os.path.join(folder, name))
+    # A user's new gesture that the shared people also recorded (a V sign is their 'two'
+    # or 'peace', trained as none): their rows join the user's class instead of opposing it.
+    for _, label in adds:
+        for i, lab in enumerate(ds.label):
+            if lab == label:
+                ds.y[i] = label
     for path, label in adds:
         person = 'user:' + os.path.splitext(os.path.basename(path))[0]
         if file_family(path) == 'keypoints':
@@ -489,11 +495,11 @@ def write_card(model_path, card):
                   '| class | recall mean | recall worst (person) | FPR mean | FPR worst |',
                   '|---|---|---|---|---|']
         for c, s in lo.items():
-            if s['recall_mean'] is None:
+            if s['fpr_mean'] is None:
                 continue
-            lines.append('| %s | %.3f | %.3f (%s) | %.4f | %.4f |' % (
-                c, s['recall_mean'], s['recall_worst'], s['worst_person'], s['fpr_mean'],
-                s['fpr_worst']))
+            rec = ('%.3f | %.3f (%s)' % (s['recall_mean'], s['recall_worst'], s['worst_person'])
+                   if s['recall_mean'] is not None else '- | - (no unseen person shows it)')
+            lines.append('| %s | %s | %.4f | %.4f |' % (c, rec, s['fpr_mean'], s['fpr_worst']))
         lines.append('')
     with open(os.path.splitext(model_path)[0] + '.md', 'w') as f:
         f.write('\n'.join(lines))
