@@ -170,6 +170,7 @@ class Command:
     twist: tuple = ZERO_TWIST   # (lx, ly, lz, ax, ay, az) for twist
     anim: tuple = ()            # (type, duration) for flip
     stamp: float = 0.0          # time of the input that caused it (latency accounting)
+    input_stamp: float = 0.0    # capture stamp of that input (0: none, a watchdog's)
 
 
 def leap_angles(normal, direction):
@@ -331,11 +332,11 @@ class DronePilot:
             if not self._navdata_ok(now) or self.drone_state not in FLYING_STATES:
                 return      # unknown or not flying: the navdata watchdog owns hovering
             self._zero_sent = all(v == 0.0 for v in twist)
-            self.queue.push(Command('twist', twist, stamp=now))
+            self.queue.push(Command('twist', twist, stamp=now, input_stamp=hand.stamp))
 
-    def on_gesture(self, name, active, now, value=0.0):
-        """A GestureEvent: its name, active flag, arrival time and value (for a circle,
-        its radius in m)."""
+    def on_gesture(self, name, active, now, value=0.0, stamp=0.0):
+        """A GestureEvent: its name, active flag, arrival time, value (for a circle,
+        its radius in m) and capture stamp."""
         with self._lock:
             state = self.drone_state if self._navdata_ok(now) else None
             if name == 'hand_lost':
@@ -346,7 +347,7 @@ class DronePilot:
                     if self._last_hand is not None and self.hand_present:
                         self._capture(self._last_hand)
                 if state == LANDED:
-                    self.queue.push(Command('takeoff', stamp=now))
+                    self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
                 else:
@@ -356,7 +357,7 @@ class DronePilot:
                 self.engaged = False
                 self.reference = None
                 if state is None or state in AIRBORNE_STATES:
-                    self.queue.push(Command('land', stamp=now))
+                    self.queue.push(Command('land', stamp=now, input_stamp=stamp))
                 else:
                     self._warn('fold', 'fold: no landing, the drone is not flying (state %s)'
                                % state)
@@ -373,7 +374,8 @@ class DronePilot:
                                % (name, value, self.cfg.flip_min_radius))
                 else:
                     self.queue.push(Command('flip', anim=(self.cfg.flip_type,
-                                                          self.cfg.flip_duration), stamp=now))
+                                                          self.cfg.flip_duration), stamp=now,
+                                            input_stamp=stamp))
 
     # -- mapping ---------------------------------------------------------------------
     def _capture(self, hand):

@@ -224,6 +224,8 @@ class ArmCommand:
     points: list = None                # trajectory [(time_from_start s, q, qd)] from `stamp`
     stamp: float = 0.0                 # time the trajectory starts (the control period's)
     gripper: float = None              # knuckle 0 (open) .. 0.8 (closed)
+    input_stamp: float = 0.0           # capture stamp of the hand behind it (0: none, a
+                                       # watchdog hold)
 
 
 @dataclass
@@ -235,6 +237,7 @@ class ArmStatus:
     target_rotation: tuple = ()        # tool orientation target (3x3 rows), base frame
     rejected_inputs: int = 0           # non-finite / absurd / out-of-order / late messages
     ik_failures: int = 0
+    input_stamp: float = 0.0           # capture stamp of the hand behind the latest command
     counters: dict = field(default_factory=dict)
 
 
@@ -351,6 +354,12 @@ class ArmTeleop:
 
     def step(self, now):
         """One control period: the command to send (possibly empty)."""
+        cmd = self._step(now)
+        if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
+            self.status.input_stamp = cmd.input_stamp
+        return cmd
+
+    def _step(self, now):
         jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
         self._last_step = now
@@ -376,14 +385,12 @@ class ArmTeleop:
             self._set(HOLDING, 'no hand input for %.2f s: holding, disarms after %.2f s '
                       '(watchdog)' % (self.p.input_timeout, self.p.disarm_after))
             return held
-        if not hand.present:
+        if not hand.present or hand.fist:
+            cmd = ArmCommand()
             if self.status.state != DISARMED:
-                return self._disarm('hand left the sensor', now)
-            return ArmCommand()
-        if hand.fist:
-            if self.status.state != DISARMED:
-                return self._disarm('fist', now)
-            return ArmCommand()
+                cmd = self._disarm('fist' if hand.present else 'hand left the sensor', now)
+            cmd.input_stamp = hand.stamp
+            return cmd
         if self.status.state == DISARMED:
             # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
             # be held arm_hold_s by the hand's own capture times.
@@ -412,7 +419,7 @@ class ArmTeleop:
                 self._set(ARMED, back + '; show rock to set the origin')
         if hand.rock:
             self._set_origin(palm, hand_rot, now)
-        cmd = ArmCommand(gripper=self._gripper_command(hand))
+        cmd = ArmCommand(gripper=self._gripper_command(hand), input_stamp=hand.stamp)
         if self._palm_ref is None:
             return cmd
         palm_f = self._filter.update(palm, now)
