@@ -150,17 +150,158 @@ def test_fist_disarms_holds_and_later_pinch_moves_nothing():
         assert cmd.q is None and cmd.gripper is None
 
 
-def test_watchdog_holds_and_disarms_when_input_stops():
+def stall(t, c, seconds, q=None):
+    """Control periods with no hand input for `seconds`; the commands once not tracking."""
+    cmds = []
+    end = c.t + seconds
+    while c.t < end - 1e-9:
+        now = c.tick()
+        t.on_joints(q if q is not None else t._q)
+        cmd = t.step(now)
+        if t.status.state != TRACKING:   # within input_timeout the last hand still counts
+            cmds.append(cmd)
+    return cmds
+
+
+def sent(cmd):
+    return cmd.q is not None or cmd.points is not None or cmd.gripper is not None
+
+
+def test_watchdog_holds_on_a_stall_and_disarms_after_disarm_after():
     t, c = armed_with_origin()
     drive(t, c, hand(palm_mm=(40.0, 220.0, 0.0)))
+    t_input = c.t
     now = c.tick(0.1)                                       # within input_timeout: still on
     t.step(now)
     assert t.status.state == TRACKING, t.status
     now = c.tick(0.15)                                      # 0.25 s since the last input
     cmd = t.step(now)
-    assert t.status.state == DISARMED and 'watchdog' in t.status.reason
+    assert t.status.state == HOLDING and 'no hand input' in t.status.reason
+    assert t.status.origin_set
     check_points(cmd, t.p.max_joint_speed, kin.MAX_JOINT_ACCEL[0])
     assert np.max(np.abs(cmd.q - t._q)) < 0.01
+    # Held: nothing more is commanded while the input stays stale ...
+    cmds = stall(t, c, t.p.disarm_after - (c.t - t_input) - 0.01)
+    assert t.status.state == HOLDING and not any(sent(x) for x in cmds)
+    # ... and the loss disarms once no input came for disarm_after.
+    cmds = stall(t, c, 0.02)
+    assert t.status.state == DISARMED and 'watchdog' in t.status.reason
+    assert not any(sent(x) for x in cmds)                  # the stall's hold was enough
+    assert not t.status.origin_set
+
+
+def follow(t, c, h, periods, q):
+    """Like drive, but the joints follow the servo's plan (a perfect controller)."""
+    cmd = None
+    for _ in range(periods):
+        now = c.tick()
+        h.stamp = now
+        t.on_hand(h, now)
+        t.on_joints(q)
+        cmd = t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+    return cmd, q
+
+
+def test_stall_shorter_than_disarm_after_resumes_from_the_current_pose_without_a_jump():
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=2.0)
+    q = HOME.copy()
+    cmd, q = follow(t, c, hand(palm_mm=(0.0, 260.0, -60.0)), 60, q)    # moving forward / up
+    assert np.max(np.abs(q - HOME)) > 0.05
+    # The sender stalls 0.5 s (< disarm_after) while the arm moves: the arm holds.
+    cmds = stall(t, c, 0.5, q=q)
+    holds = [x for x in cmds if sent(x)]
+    assert len(holds) == 1 and t.status.state == HOLDING
+    q = holds[0].points[-1][1]                 # where the hold comes to rest
+    # Meanwhile the hand moved 100 mm: the old origin would put the target 0.25 m away.
+    palm = (100.0, 260.0, -60.0)
+    old_target = t._tcp_ref + t._axes @ (np.array(palm) - t._palm_ref) * 0.001 * t.p.scale
+    assert np.linalg.norm(old_target - kin.fk(q)[:3, 3]) > 0.2
+    cmd, _ = follow(t, c, hand(palm_mm=palm), 1, q)
+    assert t.status.state == TRACKING and 'origin re-anchored' in t.status.reason
+    assert t.status.origin_set
+    # The commanded TCP position is where the arm is (the tool turns on toward pointing
+    # down, the fixed orientation it was heading for before the stall).
+    step_mm = 1000 * np.linalg.norm(kin.fk(cmd.q)[:3, 3] - kin.fk(q)[:3, 3])
+    assert step_mm < 0.5, step_mm
+    np.testing.assert_allclose(kin.fk(cmd.q)[:3, :3], kin.tool_down(), atol=1e-9)
+    # ... and its trajectory starts at rest from the current joints, accelerating within
+    # the limit: no step in position or velocity.
+    h, a = t.p.command_horizon, t.p.max_joint_accel
+    assert np.max(np.abs(cmd.points[0][1] - q)) <= 0.5 * a * h * h + 1e-9
+    assert np.max(np.abs(cmd.points[0][2])) <= a * h + 1e-9
+    # Motion resumes from there: 20 mm of hand up is 50 mm of TCP up (scale 2.5).
+    cmd, _ = follow(t, c, hand(palm_mm=(100.0, 280.0, -60.0)), 1, q)
+    np.testing.assert_allclose(np.array(t.status.target) - kin.fk(q)[:3, 3],
+                               [0.0, 0.0, 0.05], atol=1e-6)
+
+
+def test_stall_while_armed_without_origin_resumes_armed():
+    t = ArmTeleop()
+    c = Clock()
+    t.on_joints(HOME)
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    assert t.status.state == ARMED
+    stall(t, c, 0.4)
+    assert t.status.state == HOLDING
+    cmd = drive(t, c, hand(palm_mm=(60.0, 250.0, 0.0)))
+    assert t.status.state == ARMED and cmd.q is None and not t.status.origin_set
+    drive(t, c, hand(rock=True))
+    assert t.status.state == TRACKING
+
+
+def test_loss_longer_than_disarm_after_disarms_and_needs_a_new_thumbs_up():
+    t, c = armed_with_origin()
+    stall(t, c, t.p.disarm_after + 0.05)
+    assert t.status.state == DISARMED and 'watchdog' in t.status.reason
+    for _ in range(20):
+        cmd = drive(t, c, hand(palm_mm=(80.0, 260.0, -40.0), pinch=True, pinch_value=0.6))
+        assert not sent(cmd) and t.status.state == DISARMED
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    cmd = drive(t, c, hand(palm_mm=(80.0, 260.0, -40.0)))
+    assert t.status.state == ARMED and cmd.q is None          # a new rock is needed too
+
+
+@pytest.mark.parametrize('returning, reason', [(dict(present=False), 'hand left the sensor'),
+                                               (dict(fist=True), 'fist')])
+def test_lost_hand_or_fist_after_a_stall_disarms(returning, reason):
+    t, c = armed_with_origin()
+    stall(t, c, 0.4)
+    assert t.status.state == HOLDING
+    cmd = drive(t, c, hand(**returning))
+    assert t.status.state == DISARMED and t.status.reason == reason
+    assert not sent(cmd)                        # already held by the stall
+    cmd = drive(t, c, hand(palm_mm=(80.0, 260.0, -40.0)), periods=10)
+    assert not sent(cmd) and t.status.state == DISARMED
+
+
+def test_stale_input_never_moves_the_robot():
+    # A source that stalls and then bursts its backlog (stamps continue, arriving late):
+    # the backlog is refused, so it neither resumes nor moves the arm.
+    t, c = armed_with_origin()
+    drive(t, c, hand(palm_mm=(0.0, 210.0, 0.0)), periods=5)
+    t0 = c.t
+    cmds = stall(t, c, 0.6)
+    assert sum(sent(x) for x in cmds) == 1                   # the hold, nothing else
+    rejected = t.status.rejected_inputs
+    for k in range(30):         # captured in the stall's first 0.3 s: > max_input_age late
+        h = hand(palm_mm=(150.0, 400.0, -150.0), rock=k % 2 == 0)
+        h.stamp = t0 + 0.01 * k
+        now = c.tick(0.0005)
+        assert t.on_hand(h, now) is not None                 # late: refused
+        assert not sent(t.step(now))
+    assert t.status.rejected_inputs == rejected + 30 and t.status.state == HOLDING
+    cmds = stall(t, c, 0.5)
+    assert t.status.state == DISARMED and not any(sent(x) for x in cmds)
+
+
+def test_disarm_after_must_be_at_least_input_timeout():
+    with pytest.raises(ValueError, match='disarm_after'):
+        ArmTeleopParams.from_dict({'input_timeout': 0.5, 'disarm_after': 0.3})
+    with pytest.raises(ValueError, match='disarm_after'):
+        ArmTeleopParams.from_dict({'disarm_after': 11.0})
+    p = ArmTeleopParams.from_dict({'input_timeout': 0.5, 'disarm_after': 0.5})
+    assert p.disarm_after == 0.5          # equal: every stall disarms, as before
 
 
 def test_hand_leaving_disarms():

@@ -230,6 +230,98 @@ def test_reference_recaptured_when_the_hand_comes_back():
     assert t[-2] == (0.0,) * 6 and t[-1][0] == pytest.approx(0.7)
 
 
+# -- a stall holds (hovers), a loss disengages ------------------------------------------
+def stamped(palm, t, present=True):
+    return HandInput(present, tuple(palm), FLAT['normal'], FLAT['direction'], stamp=t)
+
+
+def silence(pilot, t0, t1, dt=0.02):
+    """Watchdog periods with no Hand from t0 to t1; the commands they queued."""
+    out, t = [], t0
+    while t < t1 - 1e-9:
+        t += dt
+        pilot.watchdog(t)
+        out += drain(pilot)
+    return out
+
+
+def flying_forward(config):
+    pilot = airborne(config)
+    for k in range(10):                                     # 100 mm forward, stamped
+        pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.1 + 0.01 * k), 0.1 + 0.01 * k)
+    assert twists(drain(pilot))[-1][0] > 0.5
+    return pilot, 0.19
+
+
+def test_a_stall_shorter_than_disarm_after_hovers_then_steers_on_without_a_jump():
+    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    out = silence(pilot, t, t + 0.6)                        # the sender stalls 0.6 s
+    assert out and all(c.kind == 'twist' and c.twist == (0.0,) * 6 for c in out)
+    t += 0.6
+    # Back 150 mm to the side and 100 mm up: no new unfold, and no jump (re-captured).
+    pilot.on_hand(stamped((0.15, 0.3, -0.1), t), t)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    pilot.on_hand(stamped((0.15, 0.3, -0.2), t + 0.01), t + 0.01)   # then 100 mm forward
+    tw = twists(drain(pilot))
+    assert tw[-1][0] == pytest.approx(0.7) and tw[-1][1:] == (0.0,) * 5
+    assert kinds(silence(pilot, t + 0.01, t + 0.05)) == []             # no landing
+
+
+@pytest.mark.parametrize('gone', ['silent', 'absent'])
+def test_a_loss_longer_than_disarm_after_needs_a_new_unfold_then_lands_after_land_after(gone):
+    warnings = []
+    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0,
+                                          land_after=3.0))
+    pilot._warn = lambda key, text: warnings.append(text)
+    if gone == 'absent':
+        pilot.on_hand(stamped((0.0, 0.0, 0.0), t, present=False), t)
+    out = silence(pilot, t, t + 1.3)
+    assert all(c.kind == 'twist' and c.twist == (0.0,) * 6 for c in out)
+    assert any('steering off until a new unfold' in w for w in warnings)
+    t += 1.3
+    for k in range(20):                                     # back, 100 mm forward: hover on
+        pilot.on_hand(stamped((0.0, 0.2, -0.2), t + 0.01 * k), t + 0.01 * k)
+    assert all(tw == (0.0,) * 6 for tw in twists(drain(pilot)))
+    # An unfold while flying steers again (no takeoff), from where the hand is.
+    t += 0.2
+    pilot.on_gesture('unfold', True, t)
+    pilot.on_hand(stamped((0.0, 0.2, -0.2), t), t)
+    out = drain(pilot)
+    assert 'takeoff' not in kinds(out) and twists(out)[-1] == (0.0,) * 6
+    pilot.on_hand(stamped((0.0, 0.2, -0.3), t + 0.01), t + 0.01)
+    assert twists(drain(pilot))[-1][0] == pytest.approx(0.7)
+    # A loss beyond land_after lands, as before.
+    out = silence(pilot, t + 0.01, t + 3.5)
+    assert kinds(out).count('land') == 1
+
+
+def test_stale_input_never_flies_the_drone():
+    # A stream that stalls and then bursts its backlog (stamps continue, late): the
+    # backlog is refused; the pilot keeps hovering and steers on only with fresh input.
+    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    silence(pilot, t, t + 0.6)
+    rejected = pilot.rejected_inputs
+    for k in range(30):                          # captured in the stall's first 0.3 s
+        pilot.on_hand(stamped((0.0, 0.4, -0.3), t + 0.01 * k), t + 0.6 + 0.0005 * k)
+    assert pilot.rejected_inputs == rejected + 30
+    assert drain(pilot) == []
+    assert pilot.hand_present is False
+
+
+def test_paper_mode_loss_longer_than_disarm_after_needs_the_capture_pose_again():
+    pilot = DronePilot(PilotConfig(mode='paper', navdata_timeout=10.0, disarm_after=1.0))
+    pilot.on_navdata(3, 1000, 0.0)
+    tilted = dict(normal=(0.6, -0.8, 0.0), direction=(0.0, 0.6, -0.8))
+    pilot.on_hand(HandInput(True, (0.0, 0.2, 0.0), **tilted), 0.0)     # captures
+    assert pilot.paper_ref is not None and twists(drain(pilot))
+    silence(pilot, 0.0, 0.5)
+    pilot.on_hand(hand((0.0, 0.2, -0.1)), 0.5)                         # short: steers on
+    assert twists(drain(pilot))
+    silence(pilot, 0.5, 2.0)
+    pilot.on_hand(hand((0.0, 0.2, -0.1)), 2.0)                         # long: nothing
+    assert pilot.paper_ref is None and drain(pilot) == []
+
+
 # -- queue ------------------------------------------------------------------------------
 def test_queue_is_bounded_and_keeps_discrete_commands():
     q = CommandQueue(3)

@@ -19,8 +19,8 @@ from leap_teleop import conversions
 from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
 from leap_teleop.frame import Finger, Hand
 from leap_teleop.leap_interface import HandTracker
-from leap_teleop.teleop.arm import (ARMED, DISARMED, TRACKING, ArmTeleop, ArmTeleopParams,
-                                    HandInput)
+from leap_teleop.teleop.arm import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
+                                    ArmTeleopParams, HandInput)
 from leap_teleop.teleop.input_check import InputStream
 from leap_teleop.ur10 import kinematics as kin
 
@@ -445,14 +445,22 @@ def test_fuzz_any_accepted_pilot_timeouts_still_hover_then_land(hand_timeout, la
 
 
 @settings(max_examples=100, deadline=None, suppress_health_check=list(HealthCheck))
-@given(input_timeout=_accepted(TELEOP_PARAMS['input_timeout']))
-def test_fuzz_any_accepted_input_timeout_still_disarms_the_arm(input_timeout):
-    a = Arm(input_timeout=input_timeout)
+@given(input_timeout=_accepted(TELEOP_PARAMS['input_timeout']),
+       disarm_after=_accepted(TELEOP_PARAMS['disarm_after']))
+def test_fuzz_any_accepted_input_timeout_still_holds_then_disarms_the_arm(input_timeout,
+                                                                         disarm_after):
+    disarm_after = max(disarm_after, input_timeout)     # validate() refuses less
+    a = Arm(input_timeout=input_timeout, disarm_after=disarm_after)
     a.arm_with_origin()
-    steps = int((input_timeout + 0.1) / 0.05) + 2
+    held, sent = False, 0
+    steps = int((disarm_after + 0.1) / 0.05) + 2
     for _ in range(steps):
-        a.period(None, dt=0.05)
-    assert a.t.status.state == DISARMED
+        cmd = a.period(None, dt=0.05)
+        held = held or a.t.status.state == HOLDING
+        if a.t.status.state != TRACKING:         # stale: one hold, nothing after it
+            sent += cmd.points is not None
+    assert a.t.status.state == DISARMED and sent == 1
+    assert held or disarm_after - input_timeout < 0.05
 
 
 # -- navdata staleness ---------------------------------------------------------------------

@@ -33,7 +33,10 @@ Safety added in both modes: hand twists are only sent while fresh navdata (no ol
 than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
 says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
 the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present false, a hand_lost event, or no Hand
-message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; lost for
+message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; back within
+``disarm_after`` -> steering resumes from where the hand is (tilt: the reference is
+re-captured, so nothing jumps), without a new unfold; lost for ``disarm_after`` ->
+steering is off until a new unfold (tilt) or capture pose (paper); lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
 watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded
@@ -71,6 +74,7 @@ class PilotConfig:
     flip_min_radius: float = 0.025      # m, no flip on a smaller circle
     hand_timeout: float = 0.15          # s without a Hand message = hand lost
     land_after: float = 3.0             # s of lost hand (or navdata) before landing
+    disarm_after: float = 1.0           # s of lost hand before steering needs a new unfold
     navdata_timeout: float = 0.5        # s without navdata = drone state unknown
     dead_zone: float = 0.03             # m, palm offset ignored around the reference
     full_scale: float = 0.10            # m beyond the dead zone for a full command
@@ -122,6 +126,9 @@ PILOT_PARAMS = {
                           unit='s', gt=0.0, le=10.0),
     'land_after': Param(_C.land_after, 'lost hand or navdata this long -> land', unit='s',
                         gt=0.0, le=120.0),
+    'disarm_after': Param(_C.disarm_after, 'lost hand this long -> steering off until a new '
+                                           'unfold; back sooner, it steers on from where it '
+                                           'is', unit='s', gt=0.0, le=120.0),
     'navdata_timeout': Param(_C.navdata_timeout, 'no navdata this long = drone state '
                                                  'unknown: no takeoff, hover, then land',
                              unit='s', gt=0.0, le=10.0),
@@ -163,6 +170,7 @@ class Command:
     twist: tuple = ZERO_TWIST   # (lx, ly, lz, ax, ay, az) for twist
     anim: tuple = ()            # (type, duration) for flip
     stamp: float = 0.0          # time of the input that caused it (latency accounting)
+    input_stamp: float = 0.0    # capture stamp of that input (0: none, a watchdog's)
 
 
 def leap_angles(normal, direction):
@@ -311,6 +319,7 @@ class DronePilot:
                 self._lose(now)
                 return
             if not self.hand_present:
+                self._disengage_after_loss(now)
                 self.hand_present = True
                 self.lost_since = None
                 self._landed_for_loss = False
@@ -323,11 +332,11 @@ class DronePilot:
             if not self._navdata_ok(now) or self.drone_state not in FLYING_STATES:
                 return      # unknown or not flying: the navdata watchdog owns hovering
             self._zero_sent = all(v == 0.0 for v in twist)
-            self.queue.push(Command('twist', twist, stamp=now))
+            self.queue.push(Command('twist', twist, stamp=now, input_stamp=hand.stamp))
 
-    def on_gesture(self, name, active, now, value=0.0):
-        """A GestureEvent: its name, active flag, arrival time and value (for a circle,
-        its radius in m)."""
+    def on_gesture(self, name, active, now, value=0.0, stamp=0.0):
+        """A GestureEvent: its name, active flag, arrival time, value (for a circle,
+        its radius in m) and capture stamp."""
         with self._lock:
             state = self.drone_state if self._navdata_ok(now) else None
             if name == 'hand_lost':
@@ -338,7 +347,7 @@ class DronePilot:
                     if self._last_hand is not None and self.hand_present:
                         self._capture(self._last_hand)
                 if state == LANDED:
-                    self.queue.push(Command('takeoff', stamp=now))
+                    self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
                 else:
@@ -348,7 +357,7 @@ class DronePilot:
                 self.engaged = False
                 self.reference = None
                 if state is None or state in AIRBORNE_STATES:
-                    self.queue.push(Command('land', stamp=now))
+                    self.queue.push(Command('land', stamp=now, input_stamp=stamp))
                 else:
                     self._warn('fold', 'fold: no landing, the drone is not flying (state %s)'
                                % state)
@@ -365,7 +374,8 @@ class DronePilot:
                                % (name, value, self.cfg.flip_min_radius))
                 else:
                     self.queue.push(Command('flip', anim=(self.cfg.flip_type,
-                                                          self.cfg.flip_duration), stamp=now))
+                                                          self.cfg.flip_duration), stamp=now,
+                                            input_stamp=stamp))
 
     # -- mapping ---------------------------------------------------------------------
     def _capture(self, hand):
@@ -426,6 +436,7 @@ class DronePilot:
                 self._warn('stale', 'no Hand message for %.2f s: hovering'
                            % (now - self.last_hand_time))
                 self._lose(self.last_hand_time + self.cfg.hand_timeout)
+            self._disengage_after_loss(now)
             self._navdata_watchdog(now)
             if (self.lost_since is not None and not self._landed_for_loss
                     and now - self.lost_since >= self.cfg.land_after
@@ -436,6 +447,19 @@ class DronePilot:
                 self.reference = None
                 self._warn('lost', 'hand lost for %.1f s: landing' % (now - self.lost_since))
                 self.queue.push(Command('land', stamp=now))
+
+    def _disengage_after_loss(self, now):
+        """A hand lost for disarm_after steers only after a new unfold (tilt) or capture
+        pose (paper); a shorter loss (a stalled stream) steers on from where it is."""
+        if (self.lost_since is None or now - self.lost_since < self.cfg.disarm_after
+                or not (self.engaged or self.paper_ref is not None)):
+            return
+        self.engaged = False
+        self.reference = None
+        self.paper_ref = None
+        self._warn('disengaged', 'hand lost for %.2f s: steering off until %s'
+                   % (now - self.lost_since, 'a new unfold' if self.cfg.mode == 'tilt'
+                      else 'the capture pose'))
 
     def _navdata_watchdog(self, now):
         """Stale navdata: hover at once (again every HOVER_REPEAT s), land after land_after

@@ -28,6 +28,7 @@ from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
 from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.service_call import ServiceCall
 from leap_teleop.srv import FlightAnim
+from leap_teleop.teleop.input_age import InputAgeWindow
 
 PARAMS = {
     'side': Param('right', 'hand to follow', choices=('right', 'left')),
@@ -57,6 +58,7 @@ class DronePilotNode:
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
         self.published = 0
+        self.input_age = InputAgeWindow()      # worker thread only (execute, diagnose)
         self.diagnostics = diagnostic_updater.Updater()
         self.diagnostics.setHardwareID('drone_pilot_%s' % p['side'])
         self.diagnostics.add('pilot', self.diagnose)
@@ -82,7 +84,8 @@ class DronePilotNode:
 
     def on_gesture(self, msg):
         if msg.side == self.side:
-            self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time(), msg.value)
+            self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time(), msg.value,
+                                  msg.header.stamp.to_sec())
 
     def on_navdata(self, msg):
         self.pilot.on_navdata(msg.state, msg.altd, rospy.get_time())
@@ -110,6 +113,7 @@ class DronePilotNode:
         elif cmd.kind == 'land':
             rospy.loginfo('pilot: land')
             self.land_pub.publish(Empty())
+        self.input_age.add(rospy.get_time(), cmd.input_stamp)
 
     def call_flip(self, anim_type, duration):
         """On the flip call's own thread (ServiceCall): may block, the worker does not wait."""
@@ -140,6 +144,8 @@ class DronePilotNode:
         stat.add('rejected inputs', pl.rejected_inputs)
         stat.add('twists superseded or dropped', pl.queue.dropped)
         stat.add('twists published', self.published)
+        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+            stat.add(key, value)
         return stat
 
     def start(self):

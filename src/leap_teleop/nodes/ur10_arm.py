@@ -23,6 +23,7 @@ from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_
 from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.teleop.arm import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
                                    HandInput)
+from leap_teleop.teleop.input_age import InputAgeWindow
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
@@ -65,6 +66,7 @@ class ArmNode:
         rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
         self._last_status = None
         self._last_status_pub = 0.0
+        self.input_age = InputAgeWindow()      # control loop thread only
         self.diagnostics = diagnostic_updater.Updater()
         self.diagnostics.setHardwareID('ur10_arm_%s' % side)
         self.diagnostics.add('teleop', self.diagnose)
@@ -151,6 +153,8 @@ class ArmNode:
             if cmd.gripper is not None:
                 self.gripper_pub.publish(self._trajectory([self.gripper_joint],
                                                           [(0.1, [cmd.gripper], None)]))
+            if cmd.points or cmd.gripper is not None:
+                self.input_age.add(rospy.get_time(), cmd.input_stamp)
             self._publish_status(snapshot, now)
             self.diagnostics.update()
 
@@ -182,6 +186,8 @@ class ArmNode:
         msg.header.stamp = rospy.Time.now()
         if len(s.target) == 3:
             msg.target = Point(*s.target)
+        if s.input_stamp > 0:
+            msg.input_stamp = rospy.Time.from_sec(s.input_stamp)
         self.status_pub.publish(msg)
 
     def diagnose(self, stat):
@@ -191,6 +197,8 @@ class ArmNode:
         stat.add('origin set', s.origin_set)
         stat.add('rejected inputs', s.rejected_inputs)
         stat.add('IK failures', s.ik_failures)
+        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+            stat.add(key, value)
         return stat
 
 

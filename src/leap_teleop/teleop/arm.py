@@ -12,10 +12,11 @@ workspace. Unlike the original: the input is smoothed by One Euro filters (posit
 rotation vector) and validated (out-of-order and late messages are dropped and counted,
 see input_check), the target is clamped to a workspace box, motion is commanded by a
 joint servo with speed and acceleration limits whose trajectories keep the velocity
-continuous (servo.py), IK failures hold the arm instead of raising, stale input or a lost
-hand holds and disarms (watchdog), stale joint states or the clock jumping back (a
-simulator restart) disarm without commanding the old pose, and every state change says
-why.
+continuous (servo.py), IK failures hold the arm instead of raising, stale input holds at
+once and resumes from the current pose when fresh input returns within disarm_after (the
+origin is re-anchored, so nothing jumps), while a longer silence, a lost hand or a fist
+disarms (watchdog), stale joint states or the clock jumping back (a simulator restart)
+disarm without commanding the old pose, and every state change says why.
 """
 import math
 from dataclasses import dataclass, field, fields
@@ -68,7 +69,8 @@ class ArmTeleopParams:
     servo_gain: float = 10.0           # 1/s, joint error -> velocity correction
     command_horizon: float = 0.032     # s, time of each trajectory's first point
     min_duration: float = 0.05         # s, shortest trajectory sent
-    input_timeout: float = 0.2         # s without hand input -> hold and disarm
+    input_timeout: float = 0.2         # s without hand input -> hold (a stall)
+    disarm_after: float = 1.0          # s without hand input -> disarm (a loss)
     gripper_mode: str = 'binary'
     gripper_binary_closed: float = 0.43
     max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
@@ -101,6 +103,9 @@ class ArmTeleopParams:
             raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
         if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
             raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
+        if self.disarm_after < self.input_timeout:
+            raise ValueError('disarm_after (%g s) must be at least input_timeout (%g s)'
+                             % (self.disarm_after, self.input_timeout))
 
 
 _P = ArmTeleopParams()
@@ -164,8 +169,12 @@ TELEOP_PARAMS = {
                              ge=0.004, le=0.5),
     'min_duration': Param(_P.min_duration, 'shortest hold trajectory sent', unit='s',
                           gt=0.0, le=5.0),
-    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold and disarm '
-                                             '(watchdog)', unit='s', gt=0.0, le=10.0),
+    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold (watchdog); '
+                                             'fresh input resumes from the current pose',
+                           unit='s', gt=0.0, le=10.0),
+    'disarm_after': Param(_P.disarm_after, 'no hand input this long -> disarm (a new '
+                                           'thumbs-up needed); at least input_timeout',
+                          unit='s', gt=0.0, le=10.0),
     'gripper_mode': Param(_P.gripper_mode, 'binary (closed while pinching) or proportional',
                           choices=GRIPPER_MODES),
     'gripper_binary_closed': Param(_P.gripper_binary_closed, 'binary: knuckle when closed',
@@ -215,6 +224,8 @@ class ArmCommand:
     points: list = None                # trajectory [(time_from_start s, q, qd)] from `stamp`
     stamp: float = 0.0                 # time the trajectory starts (the control period's)
     gripper: float = None              # knuckle 0 (open) .. 0.8 (closed)
+    input_stamp: float = 0.0           # capture stamp of the hand behind it (0: none, a
+                                       # watchdog hold)
 
 
 @dataclass
@@ -226,6 +237,7 @@ class ArmStatus:
     target_rotation: tuple = ()        # tool orientation target (3x3 rows), base frame
     rejected_inputs: int = 0           # non-finite / absurd / out-of-order / late messages
     ik_failures: int = 0
+    input_stamp: float = 0.0           # capture stamp of the hand behind the latest command
     counters: dict = field(default_factory=dict)
 
 
@@ -266,6 +278,7 @@ class ArmTeleop:
         self._last_step = None
         self._gripper_sent = None
         self._thumb_up_since = None       # capture time the current thumbs-up began
+        self._stalled = None              # holding for stale input: when input last came
 
     # -- input (cheap; called from subscriber callbacks) ----------------------------
     def on_hand(self, hand, now):
@@ -321,6 +334,7 @@ class ArmTeleop:
         """The robot's state is unknown (simulator or driver gone / restarted): forget it
         and disarm without a hold, which would command the old pose to a new robot."""
         self._q = self._joints_rx = self._hand = None
+        self._stalled = None
         self._stream.reset()
         self._servo.reset()
         if self.status.state != DISARMED:
@@ -330,7 +344,9 @@ class ArmTeleop:
         return ArmCommand()
 
     def _disarm(self, reason, now):
-        was_moving = self.status.state in (ARMED, TRACKING, HOLDING)
+        # A stall has already sent its hold: the arm is stopping or at rest.
+        was_moving = self.status.state in (ARMED, TRACKING, HOLDING) and self._stalled is None
+        self._stalled = None
         self._set(DISARMED, reason)
         self.status.origin_set = False
         self._palm_ref = self._tcp_ref = self._target = None
@@ -338,6 +354,12 @@ class ArmTeleop:
 
     def step(self, now):
         """One control period: the command to send (possibly empty)."""
+        cmd = self._step(now)
+        if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
+            self.status.input_stamp = cmd.input_stamp
+        return cmd
+
+    def _step(self, now):
         jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
         self._last_step = now
@@ -350,18 +372,25 @@ class ArmTeleop:
             return ArmCommand()
         hand = self._hand
         if hand is None or now - self._hand_rx > self.p.input_timeout:
-            if self.status.state != DISARMED:
+            if self.status.state == DISARMED:
+                return ArmCommand()
+            if hand is None or now - self._hand_rx > self.p.disarm_after:
                 return self._disarm('no hand input for %.2f s (watchdog)'
-                                    % self.p.input_timeout, now)
-            return ArmCommand()
-        if not hand.present:
+                                    % self.p.disarm_after, now)
+            if self._stalled is not None:     # the hold was sent: nothing moves meanwhile
+                return ArmCommand()
+            # A stall: stop at once, but stay armed for a while in case input resumes.
+            held = self._hold(now)
+            self._stalled = self._hand_rx
+            self._set(HOLDING, 'no hand input for %.2f s: holding, disarms after %.2f s '
+                      '(watchdog)' % (self.p.input_timeout, self.p.disarm_after))
+            return held
+        if not hand.present or hand.fist:
+            cmd = ArmCommand()
             if self.status.state != DISARMED:
-                return self._disarm('hand left the sensor', now)
-            return ArmCommand()
-        if hand.fist:
-            if self.status.state != DISARMED:
-                return self._disarm('fist', now)
-            return ArmCommand()
+                cmd = self._disarm('fist' if hand.present else 'hand left the sensor', now)
+            cmd.input_stamp = hand.stamp
+            return cmd
         if self.status.state == DISARMED:
             # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
             # be held arm_hold_s by the hand's own capture times.
@@ -379,9 +408,18 @@ class ArmTeleop:
             hand_rot = kin.rotation_vector(ori.hand_rotation(0.0, hand.turn, 0.0))
         else:
             hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
+        if self._stalled is not None:
+            back = 'hand input back after %.2f s' % (self._hand_rx - self._stalled)
+            self._stalled = None
+            if self._palm_ref is not None:
+                # Re-anchor: the hand where it is now maps to the pose the arm holds.
+                self._set_origin(palm, hand_rot, now)
+                self._set(TRACKING, back + ': origin re-anchored')
+            else:
+                self._set(ARMED, back + '; show rock to set the origin')
         if hand.rock:
             self._set_origin(palm, hand_rot, now)
-        cmd = ArmCommand(gripper=self._gripper_command(hand))
+        cmd = ArmCommand(gripper=self._gripper_command(hand), input_stamp=hand.stamp)
         if self._palm_ref is None:
             return cmd
         palm_f = self._filter.update(palm, now)

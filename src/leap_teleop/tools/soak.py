@@ -11,9 +11,9 @@ drone flight (Hand + GestureEvent, namespace drone/), pre-rendered through the s
 own code (LeapInterface + conversions), restamped with the sim time when sent, in a loop;
 each cycle resets the UR10 cell first.
 
-Input timeouts (arm input_timeout / max_input_age, pilot hand_timeout / max_input_age)
-are sim seconds; the soak scales them by --rtf so that they keep their real-time wall
-tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
+Input timeouts (arm input_timeout / disarm_after / max_input_age, pilot hand_timeout /
+disarm_after / max_input_age) are sim seconds; the soak scales them by --rtf so that they
+keep their real-time wall tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
 and hand -> cmd_vel latency per cycle (wall clock) and its drift (median of the last
 cycles minus the first), lost messages (hand topics: sent vs received; joint_states,
 arm commands, navdata: sequence gaps), inputs the nodes rejected, pick and place and
@@ -58,12 +58,15 @@ LAUNCH = """<launch>
   <!-- Input timeouts are sim seconds: scaled by the speed-up they keep their wall-clock
        tolerance (scheduling hiccups on a loaded machine are wall-clock). -->
   <param name="ur10_1/ur10_arm/input_timeout" value="{input_timeout}"/>
+  <param name="ur10_1/ur10_arm/disarm_after" value="{disarm_after}"/>
   <param name="ur10_1/ur10_arm/max_input_age" value="{max_age}"/>
   <param name="ur10_2/ur10_arm/input_timeout" value="{input_timeout}"/>
+  <param name="ur10_2/ur10_arm/disarm_after" value="{disarm_after}"/>
   <param name="ur10_2/ur10_arm/max_input_age" value="{max_age}"/>
   <group ns="drone">
     <rosparam command="load" file="$(find leap_teleop)/config/ardrone.yaml"/>
     <param name="drone_pilot/hand_timeout" value="{hand_timeout}"/>
+    <param name="drone_pilot/disarm_after" value="{disarm_after}"/>
     <param name="drone_pilot/max_input_age" value="{max_age}"/>
     <node pkg="leap_teleop" type="drone_subscriber.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
@@ -234,7 +237,7 @@ def run(minutes, rtf, rate_hz=None, log=print):
         env = dict(env, ROS_LOG_DIR=log_dir)
         with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
             f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
-                                  hand_timeout=0.15 * rtf))
+                                  hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf))
             launch_file = f.name
         subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
         graph = subprocess.Popen(['roslaunch', launch_file], env=env,

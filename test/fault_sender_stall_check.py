@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""rostest node (fault_sender_stall.test): SIGSTOP the sender for 0.5 s while ur10_1
+moves (a stall shorter than disarm_after), then SIGCONT. The arm holds within 0.3 s,
+commands nothing while the input is stale, resumes tracking when the input returns
+without a new thumbs-up (never disarmed), its first command after that starts at the pose
+it is at (no jump), and it moves on with the session."""
+import os
+import signal
+import sys
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+
+from fault_common import Watch, node_pid, wait_for
+
+ARM = 'ur10_1'
+STALL_S = 0.5
+
+
+class FaultSenderStall(unittest.TestCase):
+    def test_short_sender_stall_holds_then_resumes(self):
+        w = Watch(arm=ARM)
+        disarm_after = rospy.get_param('/%s/ur10_arm/disarm_after' % ARM)
+        self.assertLess(STALL_S + 0.2, disarm_after)
+        pid = node_pid('/leap_sender')
+        self.assertTrue(wait_for(lambda: (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
+                                          or 0) > 0.08, 45.0),
+                        'the arm never moved: %s' % [(s.state, s.reason)
+                                                     for _, s in w.status[-3:]])
+        t_stop_stamp = rospy.get_time()
+        os.kill(pid, signal.SIGSTOP)
+        t_stop = time.monotonic()
+        try:
+            time.sleep(STALL_S)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        t_cont = time.monotonic()
+        rospy.loginfo('sender stopped for %.2f s', t_cont - t_stop)
+        self.assertTrue(wait_for(lambda: w.first_status('tracking', t_stop, 'input back')[0]
+                                 is not None, 5.0),
+                        'no resume: %s' % [(s.state, s.reason) for _, s in w.status[-5:]])
+        t_resume, st_resume = w.first_status('tracking', t_stop, 'input back')
+        t_hold, st_hold = w.first_status('holding', t_stop, 'no hand input')
+        self.assertIsNotNone(t_hold)
+        held_in = st_hold.header.stamp.to_sec() - t_stop_stamp
+        rospy.loginfo('FAULT sender stall: held %.3f s after the stop; %s', held_in,
+                      st_resume.reason)
+        self.assertLess(held_in, 0.3)
+        self.assertLess(t_hold, t_resume)
+        time.sleep(2.0)
+        states = [s.state for t, s in list(w.status) if t >= t_stop]
+        self.assertNotIn('disarmed', states, 'a short stall disarmed the arm')
+        self.assertNotIn('armed', states, 'the arm needed a new thumbs-up')
+        # Stale input moves nothing: from the hold until the resume, only the hold itself.
+        cmds = list(w.arm_cmds)
+        during = [t for t, _ in cmds if t_hold + 0.05 < t < t_resume - 0.05]
+        self.assertEqual(during, [], 'arm commands while the input was stale')
+        # No jump: the first commands after the resume start where the arm is.
+        after = [(t, q) for t, q in cmds if t >= t_resume - 0.05][:10]
+        self.assertTrue(after, 'no command after the resume')
+        worst = max(float(np.max(np.abs(q - w.q_at(t)))) for t, q in after)
+        rospy.loginfo('FAULT sender stall: first commands after the resume at most %.4f rad '
+                      'from the arm\'s pose', worst)
+        self.assertLess(worst, 0.05, 'a command %.3f rad away from the arm\'s pose' % worst)
+        # ... and the session goes on: the arm moves again.
+        self.assertTrue(wait_for(lambda: (w.arm_speed(t_resume, time.monotonic()) or 0) > 0.05,
+                                 5.0), 'the arm did not move after the resume')
+
+
+if __name__ == '__main__':
+    rospy.init_node('fault_sender_stall_check')
+    rostest.rosrun('leap_teleop', 'fault_sender_stall_check', FaultSenderStall, sys.argv)

@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""rostest node (input_age.test): stamped hands at 100 Hz drive ur10_1 (tracking) and the
+pilot (engaged, navdata from here: hovering). ArmStatus.input_stamp is the capture stamp
+of one of the hands sent, a recent one; both nodes report the age of the input behind
+their commands (p50 / p99 over a window, and the sample count) on /diagnostics."""
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from sensor_msgs.msg import JointState
+
+from fault_common import Watch, wait_for
+from fault_hand_burst_check import Hands
+from leap_teleop.msg import GestureEvent, Navdata
+
+ARM = 'ur10_1'
+P50, P99, SAMPLES = ('input age p50 (ms, last 10 s)', 'input age p99 (ms, last 10 s)',
+                     'input age samples')
+
+
+class InputAge(unittest.TestCase):
+    def test_commands_carry_their_input_stamp_and_age(self):
+        w = Watch(arm=ARM)
+        diag = {}
+
+        def on_diag(msg):
+            for st in msg.status:
+                diag[st.name] = {kv.key: kv.value for kv in st.values}
+        rospy.Subscriber('/diagnostics', DiagnosticArray, on_diag, queue_size=20)
+        nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
+        gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
+        hands = Hands()
+        pose = {'now': dict(palm=(0.0, 250.0, 0.0))}
+        sent = []
+        stop = threading.Event()
+
+        def navdata():
+            while not stop.is_set() and not rospy.is_shutdown():
+                nav_pub.publish(Navdata(state=4, altd=1000))
+                time.sleep(0.02)
+
+        def stream():
+            k = 0
+            while not stop.is_set() and not rospy.is_shutdown():
+                stamp = rospy.get_time()
+                p = dict(pose['now'])
+                p['palm'] = (20.0 * (k % 100) / 100.0, p['palm'][1], p['palm'][2])
+                hands.publish(stamp, **p)
+                sent.append(rospy.Time.from_sec(stamp))
+                k += 1
+                time.sleep(0.01)
+        threading.Thread(target=navdata, daemon=True).start()
+        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
+        self.assertTrue(wait_for(lambda: hands.arm_pub.get_num_connections() > 0
+                                 and hands.hand_pub.get_num_connections() > 0
+                                 and gesture_pub.get_num_connections() > 0, 30.0))
+        threading.Thread(target=stream, daemon=True).start()
+        try:
+            t0 = time.monotonic()
+            pose['now'] = dict(palm=(0.0, 250.0, 0.0), thumb_up=True)
+            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None, 5.0))
+            pose['now'] = dict(palm=(0.0, 250.0, 0.0), rock=True)
+            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None, 5.0))
+            pose['now'] = dict(palm=(0.0, 250.0, 0.0))
+            ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
+            ev.header.stamp = rospy.Time.now()
+            gesture_pub.publish(ev)
+
+            def ready():
+                arm = next((v for k, v in diag.items() if ARM in k), {})
+                pilot = next((v for k, v in diag.items() if 'pilot' in k), {})
+                return (int(arm.get(SAMPLES, 0)) > 100 and int(pilot.get(SAMPLES, 0)) > 100,
+                        arm, pilot)
+            self.assertTrue(wait_for(lambda: ready()[0], 10.0), diag)
+            _, arm, pilot = ready()
+            for name, values in (('arm', arm), ('pilot', pilot)):
+                p50, p99 = float(values[P50]), float(values[P99])
+                rospy.loginfo('input age %s: p50 %.1f ms, p99 %.1f ms over %s commands',
+                              name, p50, p99, values[SAMPLES])
+                self.assertGreater(p50, 0.0)
+                self.assertLessEqual(p50, p99)
+                self.assertLess(p99, 500.0)            # wide: a loaded 2-core machine
+            status = [s for t, s in list(w.status) if t > t0][-1]
+            self.assertIn(status.input_stamp, set(sent))
+            self.assertLess((sent[-1] - status.input_stamp).to_sec(), 1.0)
+        finally:
+            stop.set()
+
+
+if __name__ == '__main__':
+    rospy.init_node('input_age_check')
+    rostest.rosrun('leap_teleop', 'input_age_check', InputAge, sys.argv)

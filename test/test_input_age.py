@@ -1,0 +1,82 @@
+"""Input age: the capture stamp behind each command, its age over a window (no ROS)."""
+import math
+
+import numpy as np
+import pytest
+
+from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
+from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput
+from leap_teleop.teleop.input_age import InputAgeWindow
+from leap_teleop.ur10 import kinematics as kin
+
+
+def test_window_percentiles_over_the_last_seconds_only():
+    w = InputAgeWindow(window_s=10.0)
+    for k in range(100):                       # 100 s ago: 1 s old inputs, outside
+        w.add(float(k) * 0.01, k * 0.01 - 1.0)
+    for k in range(1, 101):                    # the last 1 s: ages 1..100 ms
+        w.add(100.0 + k * 0.01, 100.0 + k * 0.01 - k * 0.001)
+    p50, p99, n = w.summary(101.0)
+    assert n == 100
+    assert p50 == pytest.approx(np.percentile(np.arange(1, 101) * 0.001, 50))
+    assert p99 == pytest.approx(np.percentile(np.arange(1, 101) * 0.001, 99))
+    assert w.last_stamp == pytest.approx(101.0 - 0.1)
+    values = dict(w.diagnostic_values(101.0))
+    assert values['input age p50 (ms, last 10 s)'] == '%.1f' % (p50 * 1000)
+    assert values['input age samples'] == '100'
+
+
+def test_window_ignores_unstamped_input_and_forgets_a_clock_jump_back():
+    w = InputAgeWindow(window_s=5.0)
+    assert w.add(10.0, 0.0) is None and w.add(10.0, math.nan) is None
+    assert w.summary(10.0) == (None, None, 0)
+    assert dict(w.diagnostic_values(10.0))['input age p99 (ms, last 5 s)'] == 'n/a'
+    assert w.add(10.0, 9.99) == pytest.approx(0.01)
+    assert w.summary(2.0) == (None, None, 0)          # /clock restarted: not this stream's
+    with pytest.raises(ValueError):
+        InputAgeWindow(window_s=0.0)
+
+
+def hand(stamp, **kw):
+    kw.setdefault('present', True)
+    kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
+    return HandInput(stamp=stamp, **kw)
+
+
+def test_arm_commands_and_status_carry_the_capture_stamp_of_their_hand():
+    t = ArmTeleop(ArmTeleopParams(arm_hold_s=0.0, filter_min_cutoff_hz=0.0))
+    t.on_joints(kin.HOME_Q)
+    now = 100.0
+    for h in (hand(99.95, thumb_up=True), hand(99.96, rock=True)):
+        now += 0.01
+        t.on_hand(h, now)
+        t.step(now)
+    now += 0.01
+    t.on_hand(hand(99.97, palm_mm=(0.0, 230.0, 0.0), pinch=True), now)
+    cmd = t.step(now)
+    assert cmd.points is not None and cmd.gripper is not None
+    assert cmd.input_stamp == 99.97 and t.status.input_stamp == 99.97
+    # A watchdog hold acts on no input: it carries none, the status keeps the last one.
+    cmd = t.step(now + 0.3)
+    assert cmd.points is not None and cmd.input_stamp == 0.0
+    assert t.status.input_stamp == 99.97
+    # A fist's hold is that hand's.
+    t.on_hand(hand(100.3, fist=True), now + 0.31)
+    cmd = t.step(now + 0.31)
+    assert t.status.state == 'disarmed' and cmd.input_stamp == 100.3
+
+
+def test_pilot_twists_and_gesture_commands_carry_the_capture_stamp():
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.05), 0.06)
+    pilot.on_gesture('unfold', True, 0.07, stamp=0.055)
+    cmd = pilot.queue.popleft()
+    assert cmd.kind == 'takeoff' and cmd.input_stamp == 0.055
+    pilot.on_navdata(3, 1000, 0.1)
+    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.1), stamp=0.11), 0.12)
+    cmd = pilot.queue.popleft()
+    assert cmd.kind == 'twist' and cmd.twist[0] > 0 and cmd.input_stamp == 0.11
+    pilot.watchdog(0.5)                                   # the watchdog's hover: no input
+    cmd = pilot.queue.popleft()
+    assert cmd.kind == 'twist' and cmd.twist == (0.0,) * 6 and cmd.input_stamp == 0.0
