@@ -10,7 +10,8 @@ frame, plus fingertip gaps and the cosines between successive bones.
   every hand, so where they sit says nothing), from a tracker's 3-D joints (Leap SDKs, recordings, scripts, a camera's
   lifted landmarks). None when the hand lacks the joints: such a hand shows no gesture.
 - `keypoint_features(xy)`: 21 2-D image landmarks (MediaPipe order), the only thing a
-  webcam's community keypoint files hold. Image y grows downward; a left hand is a
+  webcam's community keypoint files hold, in the picture's own orientation (the model
+  learns small turns from turned copies). Image y grows downward; a left hand is a
   mirrored right one, so callers score both the landmarks and their mirror image.
 """
 import math
@@ -69,21 +70,13 @@ def normalize_keypoints(xy):
 
 
 def keypoint_features(xy):
-    """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale, any turn in
-    the picture: the hand is turned so its wrist -> middle knuckle points up, in palm
-    lengths), or None. Not mirror-invariant by itself: see module doc."""
-    p = np.asarray(xy, dtype=float).reshape(21, 2)
-    if not np.isfinite(p).all():
+    """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale: normalised as
+    the community does, so the picture's up stays up: a thumbs-up and a thumbs-down differ
+    by it), or None. Not mirror-invariant by itself: see module doc."""
+    p = normalize_keypoints(xy)
+    if p is None:
         return None
-    p = p - p[0]
-    ax, ay = p[9]
-    length = math.hypot(ax, ay)
-    if not length > 1e-9:
-        return None
-    # rotate (ax, ay) onto (0, -1), image up, and scale it to 1
-    c, s = -ay / length, ax / length
-    p = p @ np.array([[c, -s], [s, c]]).T / length
-    w = math.hypot(*(p[5] - p[17]))
+    w = math.hypot(*(p[5] - p[17]))             # palm width, the unit of the gaps
     if not w > 1e-6:
         w = 1e-6
     chain = p[_CHAINS]                               # (5, 5, 2)
@@ -91,9 +84,14 @@ def keypoint_features(xy):
     tips = p[_MP_TIPS]
     gaps = np.sqrt(((tips[_TIP_A] - tips[_TIP_B]) ** 2).sum(axis=1)) / w
     cos = (bones[:, 1:] * bones[:, :-1]).sum(axis=2)  # (5, 3)
-    out = np.concatenate((np.clip(p.ravel(), -5.0, 5.0), bones.ravel(),
-                          np.minimum(gaps, 10.0), cos.ravel()))
+    out = np.concatenate((p.ravel(), bones.ravel(), np.minimum(gaps, 10.0), cos.ravel()))
     return out if np.isfinite(out).all() else None
+
+
+def rotate_keypoints(xy, angle):
+    """The landmarks turned in the picture by `angle` (rad)."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.asarray(xy, dtype=float).reshape(21, 2) @ np.array([[c, -s], [s, c]]).T
 
 
 def mirror_keypoints(xy):

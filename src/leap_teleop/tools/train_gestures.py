@@ -28,7 +28,7 @@ import numpy as np
 
 from ..gestures.classifier import DEFAULT_MODELS, PoseClassifier
 from ..gestures.features import (hand_landmarks, keypoint_features, leap_features,
-                                 mirror_keypoints)
+                                 mirror_keypoints, rotate_keypoints)
 from ..sources import leapjs
 from . import gesture_data as gd
 
@@ -175,6 +175,15 @@ def add_guinevere(ds, root):
     ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
 
 
+def add_keypoint_row(ds, pts, cls, person, label, copies=1):
+    """A keypoint row and its mirror image (a left hand is a mirrored right one), the
+    first copy as recorded, further copies turned in the picture by up to TURN_RAD."""
+    for k in range(copies):
+        q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
+        ds.add(keypoint_features(q), cls, person, label, augmented=k > 0)
+        ds.add(keypoint_features(mirror_keypoints(q)), cls, person, label, augmented=k > 0)
+
+
 def add_keypoints(ds, path, label=None, person=None):
     persons, labels, xy = gd.read_keypoints(path, label=label, person=person)
     n = 0
@@ -182,9 +191,9 @@ def add_keypoints(ds, path, label=None, person=None):
         cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
         if cls is None:
             continue
-        # a left hand is a mirrored right one: both images of every row
-        ds.add(keypoint_features(pts), cls, p, lab)
-        ds.add(keypoint_features(mirror_keypoints(pts)), cls, p, lab)
+        # the rarer gestures (few people recorded a thumb or an OK sign) count more
+        add_keypoint_row(ds, pts, cls, p, lab,
+                         RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
         n += 1
     ds.sources.append('%s (%d rows)' % (os.path.basename(path), n))
 
@@ -197,6 +206,10 @@ def add_keypoints(ds, path, label=None, person=None):
 VIEW_YAW_DEG = 80.0
 VIEW_PITCH_DEG = 35.0
 VIEW_STRIDE = 2
+# Keypoint rows are also fitted turned in the picture by up to this (rad, ~26 deg), and
+# the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
+TURN_RAD = 0.45
+RARE_KEYPOINT_COPIES = 4
 
 
 def camera_view(landmarks, yaw, pitch):
@@ -214,14 +227,15 @@ def add_leap_views(ds, path, seed=SEED):
     n = 0
     for i, (p, lab, frame) in enumerate(gd.read_pose_lines(path)):
         cls = gd.LEAP_LABELS.get(lab)
-        if i % VIEW_STRIDE or cls is None:
+        # their thumbs point ahead along the fingers, unlike a webcam's thumbs-up
+        if i % VIEW_STRIDE or cls is None or cls == 'thumb':
             continue
         hand = gd.first_hand(frame)
         lm = hand_landmarks(hand) if hand is not None else None
         if lm is None:
             continue
         yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
-        xy = camera_view(lm, yaw, pitch)
+        xy = rotate_keypoints(camera_view(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
         ds.add(keypoint_features(xy), cls, 'leap:' + p, lab)
         ds.add(keypoint_features(mirror_keypoints(xy)), cls, 'leap:' + p, lab)
         n += 1
