@@ -13,10 +13,13 @@ from geometry_msgs.msg import TransformStamped
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop import conversions
+from leap_teleop.gestures import GestureRecognizer
+from leap_teleop.gestures.recognizer import MIN_CONFIDENCE
 from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
 from leap_teleop.lowpass import DEFAULT_CUTOFF, LowPass
 from leap_teleop.msg import DriverHuman, GestureEvent, Hand, leap, leapros
 from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.nodes.reconfigure import Reconfigure
 from leap_teleop.sources import SOURCES, SourceError, make_source
 from leap_teleop.sources.camera_params import CAMERA_PARAMS, CAMERA_SOURCES, camera_source_kwargs
 from leap_teleop.visualization import driver_markers
@@ -82,8 +85,19 @@ PARAMS = {
     'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
                                        '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
                                        'the raw rotation since the origin'),
+    'recognizer_on_frames': Param(3, 'gesture recognizer: frames a held gesture must be seen '
+                                     'before it starts', ge=1, le=100),
+    'recognizer_off_frames': Param(3, 'gesture recognizer: frames it must be gone before it '
+                                      'stops', ge=1, le=100),
+    'recognizer_min_confidence': Param(MIN_CONFIDENCE, 'gesture recognizer: frames of a lower '
+                                                       'tracking confidence do not count',
+                                       ge=0.0, le=1.0),
 }
 PARAMS.update(CAMERA_PARAMS)
+# Changeable while running (dynamic_reconfigure): the recognizer's thresholds and the driver
+# filter's cutoff. Sources, topics, sides and modes are start-up only.
+RECONFIGURABLE = ('recognizer_on_frames', 'recognizer_off_frames', 'recognizer_min_confidence',
+                  'filter_cutoff')
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
@@ -259,6 +273,20 @@ class DriverInterface:
                               frame.id, e)
 
 
+def retune(interface, sender, changes):
+    """Apply checked changes of RECONFIGURABLE parameters to the running recognizers and
+    the driver filter (the source thread reads each per frame)."""
+    for recognizer in interface.recognizers().values():
+        if 'recognizer_on_frames' in changes:
+            recognizer.filter.on_frames = changes['recognizer_on_frames']
+        if 'recognizer_off_frames' in changes:
+            recognizer.filter.off_frames = changes['recognizer_off_frames']
+        if 'recognizer_min_confidence' in changes:
+            recognizer.min_confidence = changes['recognizer_min_confidence']
+    if 'filter_cutoff' in changes:
+        sender.driver.lowpass.set_cutoff(changes['filter_cutoff'])
+
+
 def publish_leap_tf(p):
     broadcaster = tf2_ros.StaticTransformBroadcaster()
     t = TransformStamped()
@@ -294,9 +322,13 @@ def main(argv=None):
         return build_source(p, view.on_image if view is not None else None), view
     p, (source, view) = start_node('sender.py', 'leap_sender', __doc__, PARAMS, build,
                                    argv, errors=(SourceError, ValueError))
-    interface = LeapInterface(source, sides=list(p['sides']),
-                              dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None)
+    interface = LeapInterface(source, recognizer_factory=lambda: GestureRecognizer(
+        on_frames=p['recognizer_on_frames'], off_frames=p['recognizer_off_frames'],
+        min_confidence=p['recognizer_min_confidence']), sides=list(p['sides']),
+        dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None)
     sender = Sender(p, interface)
+    reconfigure = Reconfigure('sender', PARAMS, RECONFIGURABLE, p,  # noqa: F841 (kept alive)
+                              lambda changes: retune(interface, sender, changes))
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
     tf_broadcaster = publish_leap_tf(p) if p['publish_tf'] else None  # noqa: F841 (kept alive for the latched topic)
