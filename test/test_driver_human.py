@@ -209,14 +209,18 @@ def test_filtered_human_smooths_palm_and_joints_and_keeps_bones_chained():
     assert raw[6].right_hand.palm_center.x == pytest.approx(0.04)
 
 
-def test_leap_message_is_leap_mm_and_sdk_radians():
+def test_leap_message_is_leap_mm_and_degrees_as_the_leapros():
     s = LeapInterface().on_frame(Frame(id=1, timestamp=2.0, hands=[
-        render_hand('right', 'open', [10.0, 220.0, -5.0])]))['right']
+        render_hand('right', 'open', [10.0, 220.0, -5.0], normal=[0.3, -0.9, 0.1],
+                    direction=[0.2, 0.3, -0.9])]))['right']
     msg = conversions.to_leap(s)
     assert list(msg.hand_palm_pos) == [10.0, 220.0, -5.0]
     n, d = s.palm_normal, s.direction
-    assert (msg.hand_roll, msg.hand_pitch, msg.hand_yaw) == pytest.approx(
-        (math.atan2(n[0], -n[1]), math.atan2(d[1], -d[2]), math.atan2(d[0], -d[2])))
+    assert (msg.hand_roll, msg.hand_pitch, msg.hand_yaw) == pytest.approx(tuple(
+        math.degrees(a) for a in (math.atan2(n[0], -n[1]), math.atan2(d[1], -d[2]),
+                                  math.atan2(d[0], -d[2]))))
+    ypr = conversions.to_leapros(s).ypr
+    assert (msg.hand_yaw, msg.hand_pitch, msg.hand_roll) == pytest.approx((ypr.x, ypr.y, ypr.z))
     absent = conversions.to_leap(HandState('right', timestamp=3.0))
     assert list(absent.hand_palm_pos) == [0.0, 0.0, 0.0] and absent.header.stamp.to_sec() == 3.0
 

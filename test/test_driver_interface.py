@@ -354,7 +354,7 @@ def test_a_recording_reaches_a_driver_consumer(driver_ws, leapjs_data, tmp_path)
     assert right[-1] > right[0] and right[-1] > 2.0
     check_filtered(raw, filtered)
     check_markers(by_topic(got, 'markers'), raw)
-    # The old leap message: Leap mm and the SDK's radians, for the right hand.
+    # The old leap message: Leap mm and degrees, for the right hand.
     leaps = [m for m in by_topic(got, 'leap') if m['palm'] != [0.0, 0.0, 0.0]]
     assert {m['md5'] for m in leaps} == {DRIVER_MD5['leap']}
     right_palms = [tuple(np.round(np.asarray(f.hand('right').palm_position), 6)) for f in frames
@@ -362,7 +362,8 @@ def test_a_recording_reaches_a_driver_consumer(driver_ws, leapjs_data, tmp_path)
     assert len(leaps) >= 0.9 * len(right_palms)
     for m in leaps:
         assert tuple(np.round(m['palm'], 6)) in set(right_palms)
-        np.testing.assert_allclose(m['rpy'], sdk_angles(m['normal'], m['direction']), atol=1e-9)
+        np.testing.assert_allclose(m['rpy'], np.degrees(sdk_angles(m['normal'], m['direction'])),
+                                   atol=1e-9)
 
 
 CIRCLE_SCRIPT = """\

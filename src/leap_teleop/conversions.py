@@ -342,14 +342,17 @@ class DriverHumanBuilder:
 
 
 def to_leap(state, frame_id=LEAP_FRAME):
-    """The old sender's leap message for one side: Leap axes, millimetres, SDK angles in
-    radians. A frame without the hand gives a message with only the header set."""
+    """The old sender's leap message for one side, in that sender's units (the same getters
+    fed its leapros): Leap axes, millimetres, degrees; the angles as to_leapros's (pitch and
+    yaw of the direction, roll of the palm normal). A frame without the hand gives a message
+    with only the header set."""
     msg = _header(leap(), state, frame_id)
     if not state.present:
         return msg
     msg.hand_direction = list(state.direction)
     msg.hand_normal = list(state.palm_normal)
     msg.hand_palm_pos = list(state.palm_position)
-    msg.hand_roll, msg.hand_yaw, msg.hand_pitch = hand_angles(state.palm_normal,
-                                                              state.direction)
+    roll, yaw, pitch = hand_angles(state.palm_normal, state.direction)
+    msg.hand_roll, msg.hand_yaw, msg.hand_pitch = (math.degrees(roll), math.degrees(yaw),
+                                                   math.degrees(pitch))
     return msg
