@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from leap_teleop import conversions, skeleton
-from leap_teleop.frame import Finger, Frame, Hand
+from leap_teleop.frame import Finger, Frame
 from leap_teleop.gestures import GestureEvent
 from leap_teleop.hand_model import render_hand
 from leap_teleop.leap_interface import HandState, LeapInterface
@@ -107,7 +107,8 @@ def test_human_is_in_metres_and_radians_with_the_drivers_frame():
     h = human.right_hand
     assert h.is_present and not human.left_hand.is_present
     assert h.lmc_hand_id == 7
-    assert (h.palm_center.x, h.palm_center.y, h.palm_center.z) == pytest.approx((0.012, 0.21, -0.03))
+    palm = (h.palm_center.x, h.palm_center.y, h.palm_center.z)
+    assert palm == pytest.approx((0.012, 0.21, -0.03))
     assert list(h.palm_velocity) == pytest.approx([0.1, 0.0, -0.05])
     n, d = right.palm_normal, right.direction
     assert h.roll == pytest.approx(math.atan2(n[0], -n[1]))

@@ -54,9 +54,12 @@ DRIVER_MESSAGES = {
              'float64 hand_yaw'],
 }
 # The sums the driver's generated code carries.
-DRIVER_MD5 = {'Human': '2817a017ab58b244566892058c4f6e6d', 'Hand': '9054fd3f5821eae3259c31fe94fd08a4',
-              'Finger': 'c62c3b47717473d8242b45f476fc55c7', 'Bone': 'ce39afad61bdb16ab802b0100be50795',
-              'Gesture': 'a3bf4fe2d0e707244a5a679250ea8eba', 'Arm': 'b93012a87e6395b9975695d8d7a942db',
+DRIVER_MD5 = {'Human': '2817a017ab58b244566892058c4f6e6d',
+              'Hand': '9054fd3f5821eae3259c31fe94fd08a4',
+              'Finger': 'c62c3b47717473d8242b45f476fc55c7',
+              'Bone': 'ce39afad61bdb16ab802b0100be50795',
+              'Gesture': 'a3bf4fe2d0e707244a5a679250ea8eba',
+              'Arm': 'b93012a87e6395b9975695d8d7a942db',
               'leap': '3e9a0dc7fd1a98f1d7489e9011c78807'}
 
 CONSUMER = r'''

@@ -72,7 +72,8 @@ def test_driver_types_md5_computed_by_genmsg_from_the_msg_files():
     import genmsg.msg_loader
     here = os.path.dirname(os.path.abspath(__file__))
     ctx = genmsg.msg_loader.MsgContext.create_default()
-    search = {pkg: [os.path.join('/usr/share', pkg, 'msg')] for pkg in ('std_msgs', 'geometry_msgs')}
+    search = {pkg: [os.path.join('/usr/share', pkg, 'msg')]
+              for pkg in ('std_msgs', 'geometry_msgs')}
     search['leap_teleop'] = [os.path.join(here, '..', 'msg')]
     for name, md5 in DRIVER_MD5.items():
         spec = genmsg.msg_loader.load_msg_by_type(ctx, 'leap_teleop/' + name, search)

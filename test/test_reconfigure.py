@@ -3,7 +3,6 @@ from the nodes' Param declarations (same bounds), only the runtime subset is off
 `dynparam set` changes behaviour live; an out-of-range or NaN value is refused, the previous
 value kept (a limit cannot be disabled that way)."""
 import json
-import math
 import os
 import subprocess
 import sys
@@ -259,7 +258,8 @@ rospy.Subscriber('leapmotion/gestures', GestureEvent,
                  queue_size=1000)
 
 def keep(store):
-    return lambda m: store.__setitem__(m.lmc_frame_id, (time.monotonic(), m.right_hand.palm_center.x))
+    return lambda m: store.__setitem__(m.lmc_frame_id,
+                                       (time.monotonic(), m.right_hand.palm_center.x))
 
 rospy.Subscriber('leap_motion/leap_device', DriverHuman, keep(raw), queue_size=1000)
 rospy.Subscriber('leap_motion/filtered_values', DriverHuman, keep(filtered), queue_size=1000)

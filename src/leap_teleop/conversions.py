@@ -1,6 +1,5 @@
 """HandState -> ROS messages. One function per message type, both hands alike; the leap_motion
 driver's Human from whole frames (DriverHumanBuilder)."""
-import copy
 import math
 
 import numpy as np

@@ -132,7 +132,8 @@ def hand_markers(hand, frame_id='', lifetime=0.5, scale=1.0):
 
 # The leap_motion driver's visualizer: per present hand of a DriverHuman, namespace "Right" /
 # "Left" for the palm and knuckle outline, "<side>_<Finger>" for each finger's bones and joints.
-DRIVER_PALM_RGB, DRIVER_JOINT_RGB, DRIVER_BONE_RGB = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (1.0, 1.0, 1.0)
+DRIVER_PALM_RGB, DRIVER_JOINT_RGB = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)
+DRIVER_BONE_RGB = (1.0, 1.0, 1.0)
 DRIVER_FINGER_NAMES = ('Thumb', 'Index', 'Middle', 'Ring', 'Pinky')
 
 

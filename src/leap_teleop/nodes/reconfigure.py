@@ -104,6 +104,7 @@ class Reconfigure:
     def _refuse(self, name, error, config):
         self.refused += 1
         # Rate-limited per parameter and value: a client repeating one bad value.
-        self.log.warn('refused %s %r' % (name, config[name]), '%s: dynamic_reconfigure refused %s; keeping ~%s = %r',
+        self.log.warn('refused %s %r' % (name, config[name]),
+                      '%s: dynamic_reconfigure refused %s; keeping ~%s = %r',
                       self.node, error, name, self.values[name])
         config[name] = self.values[name]

@@ -165,7 +165,8 @@ class Sender:
         self.leapros_side = p['leapros_side']
         self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
                         if p['leapros_topic'] else None)
-        self.leap = rospy.Publisher(p['leap_topic'], leap, queue_size=q) if p['leap_topic'] else None
+        self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
+                     if p['leap_topic'] else None)
         interface.add_hand_listener(self.on_hand)
         self.driver = DriverInterface(p, q)
         if self.driver.pubs:
