@@ -157,6 +157,8 @@ SIGNS_OF_LIFE = {
     'demo.launch': ['--topic', '/ur10_2/joint_states:sensor_msgs/JointState',
                     '--topic', '/drone/ardrone/navdata:leap_teleop/Navdata',
                     '--topic', '/leapmotion/hand_left:leap_teleop/Hand'],
+    'leap_motion.launch': ['--topic', '/leap_motion/leap_device:leap_teleop/DriverHuman',
+                           '--count', '30'],
     'record.launch': ['--subscribed', '/leapmotion/data_right', '--subscribed', '/tf_static'],
     'replay.launch': ['--topic', '/leapmotion/data_right:leap_teleop/leapcobotright',
                       '--count', '30'],

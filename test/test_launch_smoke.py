@@ -100,6 +100,12 @@ CASES = [
      ['--cube', 'ur10_1:cube_red', '--cube', 'ur10_2:cube_yellow',
       '--cell', 'ur10_dual_cell.yaml'], 120),
     ('ardrone', [['ardrone.launch']], ['--drone'], 120),
+    # The leap_motion driver's stand-in: its Human, filtered Human and markers.
+    ('leap_motion', [['leap_motion.launch']],
+     ['--topic', '/leap_motion/leap_device:leap_teleop/DriverHuman',
+      '--topic', '/leap_motion/filtered_values:leap_teleop/DriverHuman',
+      '--topic', '/leap_motion/visualization_marker_array:visualization_msgs/MarkerArray',
+      '--topic', '/leapmotion/data:leap_teleop/leapros'], 60),
     ('ardrone_dual', [['ardrone_dual.launch']],
      ['--drone', '--navdata', '/drone1/ardrone/navdata', '--navdata', '/drone2/ardrone/navdata'],
      120),
@@ -179,6 +185,10 @@ DOCUMENTED_VALUES = [
     ('ur10_dual_sim.launch', [], {'/ur10_sim', '/ur10_1/robot_state_publisher'}),
     ('ardrone_sim.launch', [], {'/ardrone_sim'}),
     ('replay.launch', ['bag:=/tmp/x.bag'], {'/gesture_player'}),
+    ('leap_motion.launch', ['rviz:=true'], {'/rviz', '/leap_sender'}),
+    ('leap_motion.launch', ['source:=recording', 'recording:=/tmp/x.json.lz', 'leap:=true',
+                            'enable_filter:=false', 'visualizer:=false', 'human:=false',
+                            'leapros:=false'], {'/leap_sender'}),
     ('record.launch', [], {'/gesture_recorder'}),
 ]
 

@@ -46,3 +46,42 @@ def test_rich_messages_have_documented_fields():
     assert len(hand.finger_extended) == 5 and len(hand.finger_tips) == 5
     assert (Hand.SIDE_RIGHT, Hand.SIDE_LEFT) == (GestureEvent.SIDE_RIGHT, GestureEvent.SIDE_LEFT)
     assert set(GestureEvent.__slots__) >= {'header', 'side', 'gesture', 'active', 'value'}
+
+
+# The leap_motion driver's current messages (its generated code carries these sums), under
+# leap_teleop's names: the Driver* prefix keeps its Hand apart from leap_teleop's Hand.
+DRIVER_MD5 = {'DriverHuman': '2817a017ab58b244566892058c4f6e6d',
+              'DriverHand': '9054fd3f5821eae3259c31fe94fd08a4',
+              'DriverFinger': 'c62c3b47717473d8242b45f476fc55c7',
+              'DriverBone': 'ce39afad61bdb16ab802b0100be50795',
+              'DriverGesture': 'a3bf4fe2d0e707244a5a679250ea8eba',
+              'DriverArm': 'b93012a87e6395b9975695d8d7a942db',
+              'leap': '3e9a0dc7fd1a98f1d7489e9011c78807'}
+
+
+def test_the_drivers_human_types_and_old_leap_md5_sums():
+    import leap_teleop.msg as msgs
+    for name, md5 in DRIVER_MD5.items():
+        assert getattr(msgs, name)._md5sum == md5, name
+
+
+def test_driver_types_md5_computed_by_genmsg_from_the_msg_files():
+    # The .msg files themselves hash to the sums, not only the generated classes.
+    import os
+    import genmsg.gentools
+    import genmsg.msg_loader
+    here = os.path.dirname(os.path.abspath(__file__))
+    ctx = genmsg.msg_loader.MsgContext.create_default()
+    search = {pkg: [os.path.join('/usr/share', pkg, 'msg')]
+              for pkg in ('std_msgs', 'geometry_msgs')}
+    search['leap_teleop'] = [os.path.join(here, '..', 'msg')]
+    for name, md5 in DRIVER_MD5.items():
+        spec = genmsg.msg_loader.load_msg_by_type(ctx, 'leap_teleop/' + name, search)
+        genmsg.msg_loader.load_depends(ctx, spec, search)
+        assert genmsg.gentools.compute_md5(ctx, spec) == md5, name
+
+
+def test_the_projects_hand_is_not_the_drivers():
+    from leap_teleop.msg import DriverHand
+    assert Hand._type == 'leap_teleop/Hand' and DriverHand._type == 'leap_teleop/DriverHand'
+    assert Hand._md5sum != DriverHand._md5sum

@@ -25,6 +25,10 @@ COVERED = {
     'rosrun leap_teleop NODE --help': 'test_scripts.py::test_rosrun_script_help',
     'rosrun leap_teleop classify_frames': 'test_scripts.py::test_rosrun_script_help',
     './env.sh rostest leap_teleop sender.test': 'test_rostests.py::test_rostest',
+    'rosrun dynamic_reconfigure dynparam set /ur10_1/ur10_arm max_joint_speed 0.02':
+        'test_reconfigure.py::test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit',
+    'roslaunch leap_teleop leap_motion.launch source:=recording recording:=FILE':
+        'test_driver_interface.py::test_a_recording_reaches_a_driver_consumer',
     'catkin build': WORKSPACE,
     'catkin_lint -W2 --strict': WORKSPACE,
     'catkin_make': WORKSPACE,

@@ -1,4 +1,5 @@
-"""RViz draws the UR10: rviz/ur10.rviz under Xvfb, screenshot, robot pixels counted.
+"""RViz draws the UR10: rviz/ur10.rviz under Xvfb, screenshot, robot pixels counted (and,
+last, the leap_motion driver's hand markers in rviz/leap_motion.rviz the same way).
 
 Two RViz windows on two virtual screens watch the same private-master graph
 (launch/ur10_sim.launch): one started by the launch file's rviz:=true with the shipped
@@ -160,6 +161,80 @@ def test_rviz_draws_the_ur10(tmp_path):
         # compared with itself shows nothing drawn.
         assert not robot_drawn(measure(ref_img, ref_img))
         assert m['ref_blue'] < MIN_BLUE_PIXELS / 3, m
+    finally:
+        _stop(ref, signal.SIGTERM)
+        _stop(launch)
+        for p in procs:
+            _stop(p, signal.SIGTERM, 5)
+
+
+DRIVER_CONFIG = os.path.join(HERE, '..', 'rviz', 'leap_motion.rviz')
+MIN_HAND_PIXELS = 400                 # bones, joints and palm of one hand at 0.8 m
+MIN_RED_PIXELS = 40                   # the joint spheres
+
+
+def _red(img):
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 150) & (g < 90) & (b < 90)
+
+
+def test_rviz_draws_the_leap_motion_driver_markers(tmp_path):
+    """leap_motion.launch rviz:=true: the driver visualizer's markers (the scripted hand)
+    show in the shipped config, against the same config with the MarkerArray off."""
+    _need('rviz', 'rviz')
+    _need('Xvfb', 'xvfb')
+    with open(DRIVER_CONFIG) as f:
+        ref_cfg = yaml.safe_load(f)
+    arrays = [d for d in ref_cfg['Visualization Manager']['Displays']
+              if d['Class'] == 'rviz/MarkerArray']
+    assert [d['Marker Topic'] for d in arrays] == ['/leap_motion/visualization_marker_array']
+    for d in arrays:
+        d['Enabled'] = False
+    ref_path = tmp_path / 'no_markers.rviz'
+    ref_path.write_text(yaml.safe_dump(ref_cfg))
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
+               ROS_LOG_DIR=str(tmp_path / 'log'), ROS_HOME=str(tmp_path),
+               LIBGL_ALWAYS_SOFTWARE='1', XDG_RUNTIME_DIR=str(tmp_path))
+    procs = []
+    launch = ref = None
+    try:
+        xa, display_a = _start_xvfb()
+        procs.append(xa)
+        xb, display_b = _start_xvfb()
+        procs.append(xb)
+        log = open(tmp_path / 'roslaunch.log', 'wb')
+        launch = subprocess.Popen(['roslaunch', '-p', str(port), 'leap_teleop',
+                                   'leap_motion.launch', 'rviz:=true', 'loop:=true'],
+                                  env=dict(env, DISPLAY=display_a), stdout=log,
+                                  stderr=subprocess.STDOUT, start_new_session=True)
+        ref = subprocess.Popen(['rviz', '-d', str(ref_path)], env=dict(env, DISPLAY=display_b),
+                               stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        start, best = time.monotonic(), None
+        while time.monotonic() - start < DEADLINE_S:
+            time.sleep(2.0)
+            assert launch.poll() is None, 'roslaunch ended: see %s' % (tmp_path / 'roslaunch.log')
+            assert ref.poll() is None, 'reference rviz ended'
+            hand_img, ref_img = _grab(display_a), _grab(display_b)
+            box = _view_box(ref_img)
+            if box is None or _view_box(hand_img) is None:
+                continue
+            r0, r1, c0, c1 = box
+            drawn = np.abs(hand_img[r0:r1, c0:c1] - ref_img[r0:r1, c0:c1]).sum(axis=2) > 60
+            m = {'pixels': int(drawn.sum()),
+                 'red': int((drawn & _red(hand_img[r0:r1, c0:c1])).sum()),
+                 'ref_red': int(_red(ref_img[r0:r1, c0:c1]).sum())}   # TF's x axes only
+            if best is None or m['pixels'] > best['pixels']:
+                best = m
+            if m['pixels'] >= MIN_HAND_PIXELS and m['red'] >= MIN_RED_PIXELS:
+                break
+        from PIL import Image
+        Image.fromarray(hand_img.astype(np.uint8)).save(tmp_path / 'rviz_hand.png')
+        Image.fromarray(ref_img.astype(np.uint8)).save(tmp_path / 'rviz_no_hand.png')
+        assert best is not None, 'no RViz 3D view found (screenshots in %s)' % tmp_path
+        assert best['pixels'] >= MIN_HAND_PIXELS and best['red'] >= MIN_RED_PIXELS, (
+            'hand not drawn: %r (screenshots in %s)' % (best, tmp_path))
+        assert best['ref_red'] < best['red'] / 3, best      # the red is the hand's joints
     finally:
         _stop(ref, signal.SIGTERM)
         _stop(launch)

@@ -1,11 +1,16 @@
-"""HandState -> ROS messages. One function per message type, both hands alike."""
+"""HandState -> ROS messages. One function per message type, both hands alike; the leap_motion
+driver's Human from whole frames (DriverHumanBuilder)."""
 import math
 
+import numpy as np
 import rospy
 from geometry_msgs.msg import Point, Vector3
 
+from leap_teleop import skeleton
 from leap_teleop.frame import FINGER_NAMES
-from leap_teleop.msg import GestureEvent, Hand, leapcobotleft, leapcobotright, leapros
+from leap_teleop.leap_interface import hand_angles
+from leap_teleop.msg import (DriverBone, DriverFinger, DriverGesture, DriverHuman, GestureEvent,
+                             Hand, leap, leapcobotleft, leapcobotright, leapros)
 
 LEAP_FRAME = 'leap_hands'
 LEAPCOBOT_TYPES = {'right': leapcobotright, 'left': leapcobotleft}
@@ -145,3 +150,208 @@ def default_topics(side):
     """The sender's default topic per kind for one side."""
     return {'leapcobot': 'leapmotion/data_%s' % side, 'hand': 'leapmotion/hand_%s' % side,
             'gesture': 'leapmotion/gestures'}
+
+
+# --- the leap_motion driver's interface (DriverHuman and friends, leap) ------------------
+# Gesture codes of the driver's Gesture message (the Leap SDK's enums).
+GESTURE_TYPES = {'swipe': 1, 'circle': 4, 'screenTap': 5, 'keyTap': 6}
+GESTURE_STATES = {'start': 1, 'update': 2, 'stop': 3}
+# Recognizer events with a driver counterpart: both circle directions are its circle.
+# fold / unfold, hand_found / hand_lost and the held poses have none.
+EVENT_GESTURE_TYPES = {'circle_cw': GESTURE_TYPES['circle'],
+                       'circle_ccw': GESTURE_TYPES['circle']}
+
+
+def _int32(x):
+    return ((int(x) + 2 ** 31) % 2 ** 32) - 2 ** 31
+
+
+def _sdk_gesture(g):
+    """DriverGesture from a recorded SDK gesture dict (LeapJS: type, state, id, duration in
+    us, pointableIds); None for a type the driver does not have."""
+    gtype = GESTURE_TYPES.get(g.get('type'))
+    if gtype is None:
+        return None
+    msg = DriverGesture()
+    msg.lmc_gesture_id = _int32(g.get('id', 0)) if isinstance(g.get('id'), int) else 0
+    msg.gesture_type = gtype
+    msg.gesture_state = GESTURE_STATES.get(g.get('state'), -1)
+    msg.is_valid = msg.gesture_state != -1
+    duration = g.get('duration', 0)
+    duration = int(duration) if isinstance(duration, (int, float)) and math.isfinite(duration) \
+        and duration >= 0 else 0
+    msg.duration_us = duration
+    msg.duration_s = duration * 1e-6
+    ids = g.get('pointableIds')
+    msg.pointable_ids = [_int32(i) for i in ids if isinstance(i, int)] if isinstance(ids, list) \
+        else []
+    msg.to_string = 'Gesture id:%d type:%s state:%s' % (msg.lmc_gesture_id, g.get('type'),
+                                                         g.get('state'))
+    return msg
+
+
+class DriverHumanBuilder:
+    """Frames + HandStates -> the leap_motion driver's Human (DriverHuman), metres and
+    radians, frame leap_hands. Stateful across frames: each hand's time_visible, the frame
+    rate, and ids for the recognizer's gestures.
+
+    Filled from every source: palm centre, velocity, normal, direction, roll / pitch / yaw,
+    grab / pinch strength, confidence, time_visible, the fingers' bones (skeleton), the
+    recognizer's circles as circle gestures. Filled only where the frames carry them: the
+    SDK's swipe, key tap, screen tap and circle gestures (recordings). Left empty (no
+    source's frames have them): palm_width, sphere_radius, sphere_center, finger and bone
+    widths, the metacarpal's base (the bone has length 0), the arm, bone orientations
+    (identity)."""
+
+    def __init__(self, frame_id=LEAP_FRAME):
+        self.frame_id = frame_id
+        self._found_at = {}
+        self._last_stamp = None
+        self._fps = 0.0
+        self._gesture_ids = 0
+
+    def _rate(self, stamp):
+        last, self._last_stamp = self._last_stamp, stamp
+        if last is not None and stamp > last:
+            fps = 1.0 / (stamp - last)
+            self._fps = fps if self._fps == 0.0 else 0.9 * self._fps + 0.1 * fps
+
+    @staticmethod
+    def _fingers(header, hand_id, joints):
+        """Five DriverFingers from (5, 4, 3) joints in mm (mcp, pip, dip, tip)."""
+        starts, ends = skeleton.bone_ends(joints)
+        lengths = (np.linalg.norm(ends - starts, axis=2) * MM).tolist()
+        centers = ((starts + ends) * (MM / 2.0)).tolist()
+        starts, ends = (starts * MM).tolist(), (ends * MM).tolist()
+        out = []
+        for i in range(5):
+            f = DriverFinger(header=header, type=i)
+            f.lmc_finger_id = _int32(hand_id * 10 + i)
+            for b in range(4):
+                bone = DriverBone(header=header, type=b, length=lengths[i][b],
+                                  center=centers[i][b])
+                for pose, xyz in ((bone.bone_start, starts[i][b]), (bone.bone_end, ends[i][b])):
+                    pose.position.x, pose.position.y, pose.position.z = xyz
+                    pose.orientation.w = 1.0
+                bone.to_string = '%s bone length:%.1f mm' % (skeleton.BONE_NAMES[b],
+                                                             lengths[i][b] / MM)
+                f.bone_list.append(bone)
+            f.length = sum(lengths[i])
+            f.to_string = '%s finger id:%d length:%.1f mm' % (FINGER_NAMES[i], f.lmc_finger_id,
+                                                              f.length / MM)
+            out.append(f)
+        return out
+
+    def _gestures(self, frame, hand, state):
+        out = []
+        for g in frame.gestures:
+            ids = g.get('handIds')
+            if isinstance(ids, list) and hand.id in ids:
+                msg = _sdk_gesture(g)
+                if msg is not None:
+                    out.append(msg)
+        for event in state.events:
+            gtype = EVENT_GESTURE_TYPES.get(event.gesture)
+            if gtype is None:
+                continue
+            self._gesture_ids += 1
+            # The recognizer reports a circle once, when it has been drawn: a stop.
+            out.append(DriverGesture(lmc_gesture_id=_int32(self._gesture_ids), is_valid=True,
+                                     gesture_state=GESTURE_STATES['stop'], gesture_type=gtype,
+                                     pointable_ids=[_int32(hand.id * 10 + 1)],
+                                     to_string='Gesture %s (leap_teleop recognizer)'
+                                               % event.gesture))
+        return out
+
+    def _hand(self, msg, hand, state, points, gestures, time_visible):
+        """Fill msg from the state; points: (21, 3) mm, the palm centre then each finger's
+        mcp, pip, dip, tip (or (1, 3): the palm only, when the source tracks no joints)."""
+        header = msg.header
+        msg.lmc_hand_id = _int32(hand.id)
+        msg.is_present = True
+        msg.time_visible = time_visible
+        msg.confidence = state.confidence
+        n, d = state.palm_normal, state.direction
+        roll, yaw, pitch = hand_angles(n, d)
+        msg.roll, msg.pitch, msg.yaw = roll, pitch, yaw
+        msg.direction = Vector3(*d)
+        msg.normal = Vector3(*n)
+        msg.grab_strength = state.grab_strength
+        msg.pinch_strength = state.pinch_strength
+        msg.palm_velocity = [x * MM for x in state.palm_velocity]
+        msg.palm_center = Point(*(float(x) * MM for x in points[0]))
+        if len(points) > 1:
+            msg.finger_list = self._fingers(header, hand.id, points[1:].reshape(5, 4, 3))
+        msg.gesture_list = gestures
+        msg.valid_gestures = bool(gestures)
+        msg.arm.header = header
+        msg.arm.elbow.orientation.w = msg.arm.wrist.orientation.w = 1.0
+        p = msg.palm_center
+        msg.to_string = 'Hand id:%d %s palm:(%.3f, %.3f, %.3f) m' % (hand.id, state.side, p.x,
+                                                                     p.y, p.z)
+
+    def _message(self, frame):
+        msg = DriverHuman()
+        msg.header.stamp = rospy.Time.from_sec(frame.timestamp)
+        msg.header.frame_id = self.frame_id
+        msg.lmc_frame_id = _int32(frame.id)
+        msg.current_frames_per_second = self._fps
+        msg.right_hand.header = msg.left_hand.header = msg.header
+        return msg
+
+    def build(self, frame, states, raw=True, lowpass=None):
+        """(raw, filtered) DriverHumans of one frame; states: side -> HandState (a
+        LeapInterface listener's). raw=False leaves the raw one out (None); `lowpass`
+        (lowpass.LowPass, one key per side) makes the filtered one, as the driver's filter
+        node does: the palm centre and every joint low-passed (else None). A side missing
+        from `states`, or not present in its state, is an absent hand."""
+        self._rate(frame.timestamp)
+        out = [self._message(frame) if raw else None,
+               self._message(frame) if lowpass is not None else None]
+        for side in ('right', 'left'):
+            state = states.get(side)
+            hand = frame.hand(side)
+            if state is None or not state.present or hand is None:
+                self._found_at.pop(side, None)
+                if lowpass is not None:
+                    lowpass.reset(side)
+                continue
+            found = self._found_at.setdefault(side, state.timestamp)
+            time_visible = max(state.timestamp - found, 0.0)
+            gestures = self._gestures(frame, hand, state)
+            joints = skeleton.hand_joints(hand)
+            points = np.asarray(state.palm_position, dtype=float).reshape(1, 3)
+            if joints is not None:
+                points = np.concatenate([points, joints.reshape(20, 3)])
+            for msg, pts in ((out[0], points),
+                             (out[1], lowpass(side, points) if lowpass is not None else None)):
+                if msg is None:
+                    continue
+                h = getattr(msg, side + '_hand')
+                self._hand(h, hand, state, pts, gestures, time_visible)
+                msg.nr_of_hands += 1
+                msg.nr_of_fingers += len(h.finger_list)
+                msg.nr_of_gestures += len(h.gesture_list)
+        for msg in out:
+            if msg is not None:
+                msg.to_string = 'Frame id:%d timestamp:%.3f hands:%d fingers:%d gestures:%d' % (
+                    msg.lmc_frame_id, frame.timestamp, msg.nr_of_hands, msg.nr_of_fingers,
+                    msg.nr_of_gestures)
+        return tuple(out)
+
+
+def to_leap(state, frame_id=LEAP_FRAME):
+    """The old sender's leap message for one side, in that sender's units (the same getters
+    fed its leapros): Leap axes, millimetres, degrees; the angles as to_leapros's (pitch and
+    yaw of the direction, roll of the palm normal). A frame without the hand gives a message
+    with only the header set."""
+    msg = _header(leap(), state, frame_id)
+    if not state.present:
+        return msg
+    msg.hand_direction = list(state.direction)
+    msg.hand_normal = list(state.palm_normal)
+    msg.hand_palm_pos = list(state.palm_position)
+    roll, yaw, pitch = hand_angles(state.palm_normal, state.direction)
+    msg.hand_roll, msg.hand_yaw, msg.hand_pitch = (math.degrees(roll), math.degrees(yaw),
+                                                   math.degrees(pitch))
+    return msg

@@ -259,6 +259,10 @@ class LeapInterface:
         if self._thread is not None:
             self._thread.join(timeout)
 
+    def recognizers(self):
+        """{side: GestureRecognizer}, for tuning while running."""
+        return {side: tracker.recognizer for side, tracker in self._trackers.items()}
+
     # -- getters ------------------------------------------------------------------
     def snapshot(self, side=None):
         """The latest HandState of `side`, or a dict of both (one consistent frame)."""

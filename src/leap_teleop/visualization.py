@@ -1,6 +1,7 @@
-"""RViz helpers: hand markers from the rich Hand message, a drone body made of primitive
-markers, and a bounded pose trail for nav_msgs/Path. Message building only: no node,
-no master needed (the ROS adapters are nodes/hand_markers.py and nodes/ardrone_sim.py)."""
+"""RViz helpers: hand markers from the rich Hand message and from the driver-compatible
+DriverHuman, a drone body made of primitive markers, and a bounded pose trail for
+nav_msgs/Path. Message building only: no node, no master needed (the ROS adapters are
+nodes/hand_markers.py, nodes/sender.py and nodes/ardrone_sim.py)."""
 import collections
 import math
 
@@ -126,6 +127,53 @@ def hand_markers(hand, frame_id='', lifetime=0.5, scale=1.0):
     m.text = '%s: %s' % (SIDE_NAMES[hand.side], state)
     m.color = _colour(rgb)
     out.markers.append(m)
+    return out
+
+
+# The leap_motion driver's visualizer: per present hand of a DriverHuman, namespace "Right" /
+# "Left" for the palm and knuckle outline, "<side>_<Finger>" for each finger's bones and joints.
+DRIVER_PALM_RGB, DRIVER_JOINT_RGB = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)
+DRIVER_BONE_RGB = (1.0, 1.0, 1.0)
+DRIVER_FINGER_NAMES = ('Thumb', 'Index', 'Middle', 'Ring', 'Pinky')
+
+
+def driver_markers(human, lifetime=0.1):
+    """MarkerArray for one DriverHuman, as the driver's visualizer draws it: a palm sphere,
+    lines across the knuckles, and per finger its bones as lines and its joints (and tip) as
+    spheres; metres, the message's frame. Absent hands get no markers: the short lifetime
+    (s) clears them. Raises ValueError for non-finite coordinates."""
+    out = MarkerArray()
+    for side, hand in (('Right', human.right_hand), ('Left', human.left_hand)):
+        if not hand.is_present:
+            continue
+
+        def marker(ns, marker_id, marker_type, rgb, size):
+            m = Marker()
+            m.header = human.header
+            m.ns, m.id, m.type, m.action = ns, marker_id, marker_type, Marker.ADD
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = m.scale.z = size
+            m.color = _colour(rgb)
+            m.lifetime = rospy.Duration.from_sec(lifetime)
+            out.markers.append(m)
+            return m
+
+        m = marker(side, 0, Marker.SPHERE, DRIVER_PALM_RGB, 0.025)
+        m.pose.position = _finite_point(hand.palm_center, 'palm_center')
+        fingers = hand.finger_list
+        if len(fingers) == 5 and all(len(f.bone_list) == 4 for f in fingers):
+            knuckles = [_finite_point(f.bone_list[1].bone_start.position, 'knuckle')
+                        for f in fingers]
+            m = marker(side, 1, Marker.LINE_LIST, DRIVER_BONE_RGB, 0.0075)
+            m.points = [q for a, b in zip(knuckles, knuckles[1:]) for q in (a, b)]
+        for f in fingers:
+            ns = '%s_%s' % (side, DRIVER_FINGER_NAMES[f.type % 5])
+            ends = [_finite_point(b.bone_end.position, 'bone_end') for b in f.bone_list]
+            starts = [_finite_point(b.bone_start.position, 'bone_start') for b in f.bone_list]
+            m = marker(ns, 0, Marker.LINE_LIST, DRIVER_BONE_RGB, 0.0075)
+            m.points = [q for a, b in zip(starts, ends) for q in (a, b)]
+            m = marker(ns, 1, Marker.SPHERE_LIST, DRIVER_JOINT_RGB, 0.015)
+            m.points = starts[1:] + ends[-1:]
     return out
 
 

@@ -10,7 +10,9 @@ simulator or driver never stops a hover or a landing. Without navdata for
 ~navdata_timeout the drone state is unknown: no takeoff, hover, land after ~land_after.
 See leap_teleop.drone.pilot for the mapping and the watchdogs. Rejected Hand messages
 (non-finite, out of order, late), worker faults and flip call outcomes are counted and
-reported on /diagnostics.
+reported on /diagnostics. RECONFIGURABLE parameters (dead zones, scales, the command cap,
+the flip's thresholds) can be changed while running with dynamic_reconfigure; modes, rates,
+watchdog times and topics are start-up only.
 """
 import threading
 import time
@@ -25,6 +27,7 @@ from leap_teleop.drone.pilot import (PILOT_PARAMS, DronePilot, HandInput, PilotC
                                      PilotWorker)
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.nodes.common import Param, RateLimitedLog, start_node
+from leap_teleop.nodes.reconfigure import Reconfigure
 from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.service_call import ServiceCall
 from leap_teleop.srv import FlightAnim
@@ -39,6 +42,10 @@ PARAMS = {
     **PILOT_PARAMS,
 }
 SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
+# Changeable while running (dynamic_reconfigure); the pilot reads each where it uses it.
+RECONFIGURABLE = ('dead_zone', 'full_scale', 'z_dead_zone', 'z_full_scale', 'yaw_dead_zone',
+                  'yaw_full_scale', 'max_cmd', 'paper_angle', 'paper_scale',
+                  'flip_min_altitude', 'flip_min_radius')
 
 
 class DronePilotNode:
@@ -148,6 +155,14 @@ class DronePilotNode:
             stat.add(key, value)
         return stat
 
+    def start_reconfigure(self):
+        def apply(changes):
+            for name, value in changes.items():
+                setattr(self.pilot.cfg, name, value)
+        self.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE,
+                                       {k: getattr(self.pilot.cfg, k) for k in RECONFIGURABLE},
+                                       apply)
+
     def start(self):
         self.thread.start()
 
@@ -162,6 +177,7 @@ def main(argv=None):
     rospy.on_shutdown(node.stop)
     try:
         if not rospy.core.is_shutdown_requested():
+            node.start_reconfigure()
             node.start()
             rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
             rospy.spin()

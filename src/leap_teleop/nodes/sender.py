@@ -1,4 +1,6 @@
-"""sender: hand source -> LeapInterface -> leapcobot / Hand / GestureEvent topics.
+"""sender: hand source -> LeapInterface -> leapcobot / Hand / GestureEvent topics, and on
+request the leap_motion driver's interface (DriverHuman raw and low-pass filtered, its RViz
+markers, the old leap and leapros messages).
 
 Publishes once per source frame from the source's thread (event-driven; no polling).
 """
@@ -8,15 +10,20 @@ import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
+from visualization_msgs.msg import MarkerArray
 
 from leap_teleop import conversions
 from leap_teleop.gestures import GestureRecognizer
 from leap_teleop.gestures.bindings import load_bindings
+from leap_teleop.gestures.recognizer import MIN_CONFIDENCE
 from leap_teleop.leap_interface import DEAD_BANDS, LeapInterface
-from leap_teleop.msg import GestureEvent, Hand, leapros
-from leap_teleop.nodes.common import Param, package_path, start_node
+from leap_teleop.lowpass import DEFAULT_CUTOFF, LowPass
+from leap_teleop.msg import DriverHuman, GestureEvent, Hand, leap, leapros
+from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.nodes.reconfigure import Reconfigure
 from leap_teleop.sources import SOURCES, SourceError, make_source
 from leap_teleop.sources.camera_params import CAMERA_PARAMS, CAMERA_SOURCES, camera_source_kwargs
+from leap_teleop.visualization import driver_markers
 
 PARAMS = {
     'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
@@ -52,8 +59,22 @@ PARAMS = {
                         ge=1, le=1000),
     'leapros_topic': Param('', 'topic for the classic leap_motion/leapros message (as that '
                                'driver: leapmotion/data); empty = not published'),
-    'leapros_side': Param('right', 'hand the leapros message carries (one of ~sides)',
+    'leapros_side': Param('right', 'hand the leapros and leap messages carry (one of ~sides)',
                           choices=('right', 'left')),
+    'leap_topic': Param('', 'topic for the old sender\'s leap_motion/leap message (that sender: '
+                            'leapmotion/raw); empty = not published'),
+    'human_topic': Param('', 'topic for the leap_motion driver\'s Human (DriverHuman; the '
+                             'driver: leap_motion/leap_device); empty = not published'),
+    'filtered_human_topic': Param('', 'topic for the low-pass filtered DriverHuman (the '
+                                      'driver\'s filter node: leap_motion/filtered_values); '
+                                      'empty = not published'),
+    'filter_cutoff': Param(DEFAULT_CUTOFF, 'the driver\'s filter_cutoff c = cot(pi f_c / '
+                                           'f_frames): 1 = a quarter of the frame rate, '
+                                           'larger smooths more', gt=0.0, le=1000.0),
+    'driver_marker_topic': Param('', 'topic for the driver visualizer\'s MarkerArray (the '
+                                     'driver: leap_motion/visualization_marker_array), drawn '
+                                     'from the filtered Human when that is published; empty = '
+                                     'not published'),
     'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
                               'graph should)'),
     'wait_for_subscribers': Param(False, 'start the source only once every ~wait_topics topic '
@@ -70,15 +91,26 @@ PARAMS = {
     'keypoint_model': Param('', 'camera keypoint pose model (.npz); empty = the shipped one'),
     'gesture_bindings': Param('', 'gesture -> action bindings YAML (see config/gestures/'
                                   'bindings/default.yaml); empty = those defaults'),
+    'recognizer_on_frames': Param(3, 'gesture recognizer: frames a held gesture must be seen '
+                                     'before it starts', ge=1, le=100),
+    'recognizer_off_frames': Param(3, 'gesture recognizer: frames it must be gone before it '
+                                      'stops', ge=1, le=100),
+    'recognizer_min_confidence': Param(MIN_CONFIDENCE, 'gesture recognizer: frames of a lower '
+                                                       'tracking confidence do not count',
+                                       ge=0.0, le=1.0),
 }
 PARAMS.update(CAMERA_PARAMS)
+# Changeable while running (dynamic_reconfigure): the recognizer's thresholds and the driver
+# filter's cutoff. Sources, topics, sides and modes are start-up only.
+RECONFIGURABLE = ('recognizer_on_frames', 'recognizer_off_frames', 'recognizer_min_confidence',
+                  'filter_cutoff')
 # Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 
 def check_leapros(p):
-    """ValueError when leapros would carry a hand the sender does not publish."""
-    if p['leapros_topic'] and p['leapros_side'] not in p['sides']:
+    """ValueError when leapros / leap would carry a hand the sender does not publish."""
+    if (p['leapros_topic'] or p['leap_topic']) and p['leapros_side'] not in p['sides']:
         raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
 
 
@@ -139,15 +171,21 @@ class Sender:
         self.leapros_side = p['leapros_side']
         self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
                         if p['leapros_topic'] else None)
+        self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
+                     if p['leap_topic'] else None)
         interface.add_hand_listener(self.on_hand)
+        self.driver = DriverInterface(p, q)
+        if self.driver.pubs:
+            interface.add_listener(self.driver.on_frame)
 
     def wait_for_subscribers(self, topics=(), log_every=5.0):
         """Block until every topic in `topics` (default: every leapcobot topic) has a
         subscriber; False on shutdown. The sender's own topics count once connected, any
         other topic once the master lists a subscriber."""
         own = {pub.resolved_name: pub for pubs in self.pubs.values() for pub in pubs.values()}
-        if self.leapros is not None:
-            own[self.leapros.resolved_name] = self.leapros
+        for pub in [self.leapros, self.leap] + list(self.driver.pubs.values()):
+            if pub is not None:
+                own[pub.resolved_name] = pub
         names = [rospy.resolve_name(t) for t in topics] or [
             pubs['leapcobot'].resolved_name for pubs in self.pubs.values()]
         master = rosgraph.Master(rospy.get_name())
@@ -184,10 +222,76 @@ class Sender:
         for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
-        if self.leapros is not None and side == self.leapros_side:
-            self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
-                                                        self.p['frame_id']))
+        if side == self.leapros_side:
+            if self.leapros is not None:
+                self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
+                                                            self.p['frame_id']))
+            if self.leap is not None:
+                self.leap.publish(conversions.to_leap(state, self.p['frame_id']))
         self.published += 1
+
+
+class DriverInterface:
+    """The leap_motion driver's topics: DriverHuman raw and filtered, and its visualizer's
+    markers. Each is built only while it has subscribers; the filter forgets its history
+    while nobody reads the filtered Human (it restarts from the next frame)."""
+
+    def __init__(self, p, queue_size):
+        self.builder = conversions.DriverHumanBuilder(p['frame_id'])
+        self.lowpass = LowPass(p['filter_cutoff'])
+        self.period = float(p['freq'])
+        self._last_sent = None
+        self.pubs = {}
+        for kind, topic, msg_type in (('raw', p['human_topic'], DriverHuman),
+                                      ('filtered', p['filtered_human_topic'], DriverHuman),
+                                      ('markers', p['driver_marker_topic'], MarkerArray)):
+            if topic:
+                self.pubs[kind] = rospy.Publisher(topic, msg_type, queue_size=queue_size)
+        self.log = RateLimitedLog()
+
+    def _wanted(self, kind):
+        pub = self.pubs.get(kind)
+        return pub is not None and pub.get_num_connections() > 0
+
+    def on_frame(self, frame, states):
+        if self.period > 0:
+            if self._last_sent is not None and frame.timestamp - self._last_sent < self.period:
+                return
+            self._last_sent = frame.timestamp
+        markers = self._wanted('markers')
+        filtered = self._wanted('filtered') or (markers and 'filtered' in self.pubs)
+        raw = self._wanted('raw') or (markers and not filtered)
+        if not (raw or filtered):
+            self.lowpass.reset()
+            return
+        if not filtered:
+            self.lowpass.reset()
+        human, smooth = self.builder.build(frame, states, raw=raw,
+                                           lowpass=self.lowpass if filtered else None)
+        if human is not None and 'raw' in self.pubs:
+            self.pubs['raw'].publish(human)
+        if smooth is not None and 'filtered' in self.pubs:
+            self.pubs['filtered'].publish(smooth)
+        if markers:
+            try:
+                self.pubs['markers'].publish(driver_markers(smooth or human))
+            except ValueError as e:
+                self.log.warn('markers', 'sender: no driver markers for frame %d: %s',
+                              frame.id, e)
+
+
+def retune(interface, sender, changes):
+    """Apply checked changes of RECONFIGURABLE parameters to the running recognizers and
+    the driver filter (the source thread reads each per frame)."""
+    for recognizer in interface.recognizers().values():
+        if 'recognizer_on_frames' in changes:
+            recognizer.filter.on_frames = changes['recognizer_on_frames']
+        if 'recognizer_off_frames' in changes:
+            recognizer.filter.off_frames = changes['recognizer_off_frames']
+        if 'recognizer_min_confidence' in changes:
+            recognizer.min_confidence = changes['recognizer_min_confidence']
+    if 'filter_cutoff' in changes:
+        sender.driver.lowpass.set_cutoff(changes['filter_cutoff'])
 
 
 def publish_leap_tf(p):
@@ -223,7 +327,10 @@ def recognizer_factory(p):
     is loaded once; a bad one raises ModelError, a ValueError)."""
     def make():
         return GestureRecognizer(model=p['gesture_model'] or None,
-                                 keypoint_model=p['keypoint_model'] or None)
+                                 keypoint_model=p['keypoint_model'] or None,
+                                 on_frames=p['recognizer_on_frames'],
+                                 off_frames=p['recognizer_off_frames'],
+                                 min_confidence=p['recognizer_min_confidence'])
     return make
 
 
@@ -241,6 +348,8 @@ def main(argv=None):
                               dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None,
                               bindings=bindings)
     sender = Sender(p, interface)
+    reconfigure = Reconfigure('sender', PARAMS, RECONFIGURABLE, p,  # noqa: F841 (kept alive)
+                              lambda changes: retune(interface, sender, changes))
     if view is not None:
         interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
     tf_broadcaster = publish_leap_tf(p) if p['publish_tf'] else None  # noqa: F841 (kept alive for the latched topic)

@@ -6,11 +6,14 @@ arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory) and
 loop, which runs at ~rate and right after each new hand message. Every key of
 config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, ...) is
 also a private parameter; the launch files load that file into the node's namespace.
+RECONFIGURABLE of them (gains, dead zone, filter constants, speed limits, the arming hold)
+can be changed while running with dynamic_reconfigure; the others are start-up only.
 """
 import threading
 import time
 
 import diagnostic_updater
+import numpy as np
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point
@@ -20,10 +23,12 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from leap_teleop import conversions
 from leap_teleop.msg import ArmStatus
 from leap_teleop.nodes.common import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.nodes.reconfigure import Reconfigure
 from leap_teleop.nodes.signals import closed_at_shutdown
 from leap_teleop.teleop.arm import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
                                    HandInput)
 from leap_teleop.teleop.input_age import InputAgeWindow
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
@@ -38,6 +43,30 @@ PARAMS = {
                          ge=0.1, le=1000.0),
     **TELEOP_PARAMS,          # config/ur10_teleop.yaml, loaded into the node's namespace
 }
+
+
+# Changeable while running (dynamic_reconfigure): gains, the dead zone, filter constants,
+# speed limits, the arming hold. Modes, geometry, watchdog times and topics stay start-up only.
+RECONFIGURABLE = ('scale', 'deadzone_mm', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
+                  'max_tool_tilt', 'max_tool_turn', 'filter_min_cutoff_hz', 'filter_beta',
+                  'filter_d_cutoff_hz', 'rotation_min_cutoff_hz', 'rotation_beta',
+                  'rotation_d_cutoff_hz', 'max_joint_speed', 'max_joint_accel', 'servo_gain',
+                  'gripper_binary_closed', 'arm_hold_s')
+
+
+def retune(teleop, changes):
+    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop: its params
+    (read where used) and the filters and servo it built from them at start-up."""
+    for name, value in changes.items():
+        setattr(teleop.p, name, value)
+    p = teleop.p
+    for filt, prefix in ((teleop._filter, 'filter_'), (teleop._rotation_filter, 'rotation_')):
+        filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
+        filt.beta = getattr(p, prefix + 'beta')
+        filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
+    teleop._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
+    teleop._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
+    teleop._servo.gain = float(p.servo_gain)
 
 
 def teleop_params(p):
@@ -100,6 +129,15 @@ class ArmNode:
         with self.lock:
             self.teleop.on_joints(q, rospy.get_time())
         self.joints_seen.set()
+
+    def start_reconfigure(self):
+        """dynamic_reconfigure on ~: RECONFIGURABLE, applied under the control loop's lock."""
+        def apply(changes):
+            with self.lock:
+                retune(self.teleop, changes)
+        self.reconfigure = Reconfigure('ur10_arm', PARAMS, RECONFIGURABLE,
+                                       {k: getattr(self.teleop.p, k) for k in RECONFIGURABLE},
+                                       apply)
 
     def wait_for_robot(self):
         """Listen to the hand only once the robot reports its joints, so no gesture
@@ -206,6 +244,7 @@ def main(argv=None):
     p, node = start_node('ur10_arm.py', 'ur10_arm', __doc__, PARAMS,
                          lambda p: ArmNode(p, teleop_params(p)), argv,
                          hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
+    node.start_reconfigure()
     if node.wait_for_robot():
         with closed_at_shutdown():
             node.loop()

@@ -2,7 +2,8 @@
 
 usage: python -m leap_teleop.tools.param_table [--check README.md]
 
-Prints one table per node (parameter, default, allowed values, meaning); README.md's
+Prints one table per node (parameter, default, allowed values, meaning; "live" marks
+what dynamic_reconfigure changes while the node runs); README.md's
 Safety section holds this output between the `<!-- param-table -->` markers. With
 --check FILE, exits 1 when FILE's copy differs from the declarations.
 """
@@ -45,12 +46,15 @@ def _default(value):
 
 def markdown():
     lines = []
-    for _, script, params in node_tables():
+    for module, script, params in node_tables():
+        live = getattr(importlib.import_module('leap_teleop.nodes.' + module), 'RECONFIGURABLE',
+                       ())
         lines += ['', '`%s`:' % script, '',
                   '| parameter | default | allowed | meaning |', '|---|---|---|---|']
         for name, p in params.items():
+            doc = p.doc + (' (live: dynamic_reconfigure)' if name in live else '')
             lines.append('| `~%s` | %s | %s | %s |' % (name, _cell(_default(p.default)),
-                                                      _cell(p.allowed()), _cell(p.doc)))
+                                                      _cell(p.allowed()), _cell(doc)))
     return '\n'.join(lines[1:]) + '\n'
 
 

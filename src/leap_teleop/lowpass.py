@@ -1,0 +1,50 @@
+"""The leap_motion driver's filter node, as a pure second-order low-pass (Butterworth,
+bilinear transform). Pure numpy: testable without ROS.
+
+`cutoff` is the driver's filter_cutoff c = cot(pi * f_c / f_s): c = 1 puts the cut-off at a
+quarter of the frame rate; larger c smooths more (the driver's default is 4). Each key (a
+hand, say) filters a vector of coordinates; its first sample sets the history, so the output
+starts at the input instead of rising from 0.
+"""
+import math
+
+import numpy as np
+
+DEFAULT_CUTOFF = 4.0
+
+
+class LowPass:
+    def __init__(self, cutoff=DEFAULT_CUTOFF):
+        self.set_cutoff(cutoff)
+        self._state = {}
+
+    def set_cutoff(self, cutoff):
+        """ValueError unless cutoff is a finite number > 0; the history is kept."""
+        c = float(cutoff)
+        if not (math.isfinite(c) and c > 0.0):
+            raise ValueError('cutoff must be a finite number > 0, got %r' % (cutoff,))
+        self.cutoff = c
+        gain = 1.0 + c * c + math.sqrt(2.0) * c
+        self._b = 1.0 / gain                                  # on x[n] + 2 x[n-1] + x[n-2]
+        self._a1 = (2.0 - 2.0 * c * c) / gain                 # on y[n-1]
+        self._a2 = (1.0 - math.sqrt(2.0) * c + c * c) / gain  # on y[n-2]
+
+    def reset(self, key=None):
+        """Forget one key's history (all keys when None)."""
+        if key is None:
+            self._state.clear()
+        else:
+            self._state.pop(key, None)
+
+    def __call__(self, key, values):
+        """The filtered copy of `values` (any shape of floats) for `key`. A key whose shape
+        changes starts over."""
+        x = np.asarray(values, dtype=float)
+        st = self._state.get(key)
+        if st is None or st[0].shape != x.shape:
+            self._state[key] = [x.copy(), x.copy(), x.copy(), x.copy()]    # x1, x2, y1, y2
+            return x.copy()
+        x1, x2, y1, y2 = st
+        y = self._b * (x + 2.0 * x1 + x2) - self._a1 * y1 - self._a2 * y2
+        self._state[key] = [x, x1, y, y1]
+        return y

@@ -1,0 +1,254 @@
+"""The leap_motion driver's interface without a master: bones from joints (skeleton), the
+filter node's low-pass (lowpass), Frame + HandState -> DriverHuman (conversions) and the
+visualizer's markers (visualization)."""
+import math
+
+import numpy as np
+import pytest
+
+from leap_teleop import conversions, skeleton
+from leap_teleop.frame import Finger, Frame
+from leap_teleop.gestures import GestureEvent
+from leap_teleop.hand_model import render_hand
+from leap_teleop.leap_interface import HandState, LeapInterface
+from leap_teleop.lowpass import LowPass
+from leap_teleop.visualization import driver_markers
+
+
+# --- skeleton ----------------------------------------------------------------------------
+def test_bones_run_knuckle_to_tip_and_the_metacarpal_has_no_length():
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    joints = skeleton.hand_joints(hand)
+    assert joints.shape == (5, 4, 3)
+    starts, ends = skeleton.bone_ends(joints)
+    f = hand.fingers[1]
+    np.testing.assert_array_equal(starts[1], [f.mcp, f.mcp, f.pip, f.dip])
+    np.testing.assert_array_equal(ends[1], [f.mcp, f.pip, f.dip, f.tip])
+    assert np.all(np.linalg.norm(ends[:, 0] - starts[:, 0], axis=1) == 0.0)
+    assert np.all(np.linalg.norm(ends[:, 1:] - starts[:, 1:], axis=2) > 5.0)     # mm
+
+
+@pytest.mark.parametrize('broken', [
+    lambda f: Finger(tip=f.tip, direction=f.direction),                     # no joints
+    lambda f: Finger(tip=f.tip, direction=f.direction, mcp=f.mcp, pip=f.pip,
+                     dip=np.array([math.nan, 0.0, 0.0])),                   # a NaN joint
+    lambda f: Finger(tip=f.tip, direction=f.direction, mcp=f.mcp, pip=[1.0, 2.0], dip=f.dip),
+])
+def test_a_finger_without_usable_joints_gives_no_bones(broken):
+    hand = render_hand('left', 'fist', [0.0, 200.0, 0.0])
+    hand.fingers = hand.fingers[:2] + (broken(hand.fingers[2]),) + hand.fingers[3:]
+    assert skeleton.hand_joints(hand) is None
+    hand.fingers = hand.fingers[:4]
+    assert skeleton.hand_joints(hand) is None
+
+
+# --- lowpass -----------------------------------------------------------------------------
+def test_lowpass_starts_at_the_input_and_settles_on_a_step():
+    lp = LowPass(4.0)
+    assert lp('a', [1.0, 2.0]).tolist() == [1.0, 2.0]
+    out = [lp('a', [3.0, 2.0])[0] for _ in range(60)]
+    assert 1.0 < out[0] < 1.2                          # slow start: smoothing
+    assert out[-1] == pytest.approx(3.0, abs=1e-3)     # unit gain at rest
+    assert max(out) < 3.1                              # barely overshoots (Butterworth)
+
+
+def test_lowpass_matches_the_second_order_difference_equation():
+    c = 2.5
+    lp = LowPass(c)
+    rng = np.random.default_rng(3)
+    xs = rng.normal(size=50)
+    x = [xs[0]] * 3
+    y = [xs[0]] * 2
+    for v in xs:
+        x = [v] + x[:2]
+        want = (x[0] + 2 * x[1] + x[2] - (c * c - math.sqrt(2) * c + 1) * y[1]
+                - (2 - 2 * c * c) * y[0]) / (1 + c * c + math.sqrt(2) * c)
+        y = [want, y[0]]
+        assert lp('k', [v])[0] == pytest.approx(want, abs=1e-12)
+
+
+def test_lowpass_keys_are_independent_and_reset_restarts():
+    lp = LowPass(4.0)
+    lp('right', [0.0])
+    lp('left', [10.0])
+    assert lp('right', [0.0])[0] == 0.0 and lp('left', [10.0])[0] == 10.0
+    lp.reset('right')
+    assert lp('right', [5.0])[0] == 5.0
+
+
+@pytest.mark.parametrize('bad', [0.0, -1.0, math.nan, math.inf, 'x'])
+def test_lowpass_refuses_a_cutoff_that_is_not_a_positive_number(bad):
+    lp = LowPass(3.0)
+    with pytest.raises(ValueError):
+        lp.set_cutoff(bad)
+    assert lp.cutoff == 3.0
+
+
+# --- DriverHuman -------------------------------------------------------------------------
+def run(frames, builder=None, lowpass=None):
+    """[(raw, filtered)] per frame through a LeapInterface and the builder."""
+    builder = builder or conversions.DriverHumanBuilder()
+    out = []
+    li = LeapInterface()
+    li.add_listener(lambda f, s: out.append(builder.build(f, s, lowpass=lowpass)))
+    for f in frames:
+        li.on_frame(f)
+    return out
+
+
+def test_human_is_in_metres_and_radians_with_the_drivers_frame():
+    right = render_hand('right', 'open', [12.0, 210.0, -30.0], velocity=[100.0, 0.0, -50.0],
+                        hand_id=7)
+    (human, filtered), = run([Frame(id=42, timestamp=100.25, hands=[right])])
+    assert filtered is None
+    assert human.header.frame_id == 'leap_hands'
+    assert human.header.stamp.to_sec() == pytest.approx(100.25)
+    assert (human.lmc_frame_id, human.nr_of_hands, human.nr_of_fingers) == (42, 1, 5)
+    h = human.right_hand
+    assert h.is_present and not human.left_hand.is_present
+    assert h.lmc_hand_id == 7
+    palm = (h.palm_center.x, h.palm_center.y, h.palm_center.z)
+    assert palm == pytest.approx((0.012, 0.21, -0.03))
+    assert list(h.palm_velocity) == pytest.approx([0.1, 0.0, -0.05])
+    n, d = right.palm_normal, right.direction
+    assert h.roll == pytest.approx(math.atan2(n[0], -n[1]))
+    assert h.pitch == pytest.approx(math.atan2(d[1], -d[2]))
+    assert h.yaw == pytest.approx(math.atan2(d[0], -d[2]))
+    assert [f.type for f in h.finger_list] == [0, 1, 2, 3, 4]
+    assert [f.lmc_finger_id for f in h.finger_list] == [70, 71, 72, 73, 74]
+    index = h.finger_list[1]
+    tip = index.bone_list[3].bone_end.position
+    assert (tip.x, tip.y, tip.z) == pytest.approx(tuple(right.fingers[1].tip / 1000.0))
+    assert index.length == pytest.approx(sum(b.length for b in index.bone_list))
+    assert index.bone_list[3].bone_end.orientation.w == 1.0
+    # Empty where no source measures it; the arm's poses are valid (identity).
+    assert (h.palm_width, h.sphere_radius, list(h.sphere_center)) == (0.0, 0.0, [])
+    assert h.arm.wrist.orientation.w == 1.0
+
+
+def test_time_visible_and_the_frame_rate_follow_the_stamps():
+    frames = [Frame(id=i, timestamp=10.0 + i / 50.0,
+                    hands=[render_hand('left', 'fist', [0.0, 200.0, 0.0])] if i != 5 else [])
+              for i in range(12)]
+    out = [h for h, _ in run(frames)]
+    assert out[4].left_hand.time_visible == pytest.approx(4 / 50.0)
+    assert not out[5].left_hand.is_present
+    assert out[6].left_hand.time_visible == 0.0           # found again
+    assert out[11].left_hand.time_visible == pytest.approx(5 / 50.0)
+    assert out[-1].current_frames_per_second == pytest.approx(50.0, rel=1e-3)
+
+
+def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
+    right = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
+    left = render_hand('left', 'open', [50.0, 200.0, 0.0], hand_id=4)
+    gestures = [{'id': 9, 'type': 'keyTap', 'state': 'stop', 'duration': 1500,
+                 'handIds': [4], 'pointableIds': [41]},
+                {'id': 10, 'type': 'swipe', 'state': 'update', 'handIds': [3]},
+                {'id': 11, 'type': 'unknownType', 'state': 'start', 'handIds': [3]},
+                {'id': 12, 'type': 'circle', 'state': 'start', 'handIds': [99]}]
+    (human, _), = run([Frame(id=1, timestamp=1.0, hands=[right, left], gestures=gestures)])
+    (key,) = human.left_hand.gesture_list
+    assert (key.lmc_gesture_id, key.gesture_type, key.gesture_state) == (9, 6, 3)
+    assert (key.duration_us, key.duration_s, list(key.pointable_ids)) == (1500, 0.0015, [41])
+    (swipe,) = human.right_hand.gesture_list
+    assert (swipe.gesture_type, swipe.gesture_state, swipe.is_valid) == (1, 2, True)
+    assert human.nr_of_gestures == 2
+    assert human.left_hand.valid_gestures and human.right_hand.valid_gestures
+
+
+def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture():
+    builder = conversions.DriverHumanBuilder()
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)
+    frame = Frame(id=1, timestamp=1.0, hands=[hand])
+    events = tuple(GestureEvent(g) for g in ('circle_cw', 'fold', 'hand_found', 'circle_ccw'))
+    state = HandState('right', present=True, timestamp=1.0, frame_id=1,
+                      palm_position=(0.0, 200.0, 0.0), palm_normal=(0.0, -1.0, 0.0),
+                      direction=(0.0, 0.0, -1.0), events=events)
+    human, _ = builder.build(frame, {'right': state})
+    got = human.right_hand.gesture_list
+    assert [(g.gesture_type, g.gesture_state) for g in got] == [(4, 3), (4, 3)]
+    assert got[0].lmc_gesture_id != got[1].lmc_gesture_id
+    assert list(got[0].pointable_ids) == [51]              # the index finger
+
+
+def test_a_side_that_is_not_published_or_not_placeable_is_absent():
+    right = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    bad = render_hand('left', 'open', [0.0, 200.0, 0.0])
+    bad.palm_position = np.array([math.nan, 0.0, 0.0])
+    out = []
+    li = LeapInterface(sides=['left'])
+    builder = conversions.DriverHumanBuilder()
+    li.add_listener(lambda f, s: out.append(builder.build(f, s)[0]))
+    li.on_frame(Frame(id=1, timestamp=1.0, hands=[right, bad]))
+    assert not out[0].right_hand.is_present and not out[0].left_hand.is_present
+    assert out[0].nr_of_hands == 0
+
+
+def test_a_hand_without_joints_has_no_fingers_but_its_palm():
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    hand.fingers = tuple(Finger(tip=f.tip, direction=f.direction) for f in hand.fingers)
+    (human, filtered), = run([Frame(id=1, timestamp=1.0, hands=[hand])], lowpass=LowPass())
+    for msg in (human, filtered):
+        assert msg.right_hand.is_present and msg.right_hand.finger_list == []
+        assert msg.nr_of_fingers == 0
+        assert msg.right_hand.palm_center.y == pytest.approx(0.2)
+
+
+def test_filtered_human_smooths_palm_and_joints_and_keeps_bones_chained():
+    frames = [Frame(id=i, timestamp=i / 100.0,
+                    hands=[render_hand('right', 'open', [0.0 if i < 5 else 40.0, 200.0, 0.0])])
+              for i in range(30)]
+    out = run(frames, lowpass=LowPass(4.0))
+    raw, smooth = zip(*out)
+    assert smooth[0].right_hand.palm_center == raw[0].right_hand.palm_center
+    assert 0.0 < smooth[6].right_hand.palm_center.x < raw[6].right_hand.palm_center.x
+    assert smooth[-1].right_hand.palm_center.x == pytest.approx(0.04, abs=1e-4)
+    for f in smooth[6].right_hand.finger_list:
+        for prev, bone in zip(f.bone_list, f.bone_list[1:]):
+            assert bone.bone_start.position == prev.bone_end.position
+    # The raw message is untouched by the filter.
+    assert raw[6].right_hand.palm_center.x == pytest.approx(0.04)
+
+
+def test_leap_message_is_leap_mm_and_degrees_as_the_leapros():
+    s = LeapInterface().on_frame(Frame(id=1, timestamp=2.0, hands=[
+        render_hand('right', 'open', [10.0, 220.0, -5.0], normal=[0.3, -0.9, 0.1],
+                    direction=[0.2, 0.3, -0.9])]))['right']
+    msg = conversions.to_leap(s)
+    assert list(msg.hand_palm_pos) == [10.0, 220.0, -5.0]
+    n, d = s.palm_normal, s.direction
+    assert (msg.hand_roll, msg.hand_pitch, msg.hand_yaw) == pytest.approx(tuple(
+        math.degrees(a) for a in (math.atan2(n[0], -n[1]), math.atan2(d[1], -d[2]),
+                                  math.atan2(d[0], -d[2]))))
+    ypr = conversions.to_leapros(s).ypr
+    assert (msg.hand_yaw, msg.hand_pitch, msg.hand_roll) == pytest.approx((ypr.x, ypr.y, ypr.z))
+    absent = conversions.to_leap(HandState('right', timestamp=3.0))
+    assert list(absent.hand_palm_pos) == [0.0, 0.0, 0.0] and absent.header.stamp.to_sec() == 3.0
+
+
+# --- the visualizer's markers --------------------------------------------------------------
+def test_driver_markers_draw_palm_knuckles_bones_and_joints_per_present_hand():
+    (human, _), = run([Frame(id=1, timestamp=1.0, hands=[
+        render_hand('left', 'open', [0.0, 200.0, 0.0])])])
+    markers = driver_markers(human).markers
+    names = {(m.ns, m.id) for m in markers}
+    assert ('Left', 0) in names and ('Left', 1) in names
+    assert not any(m.ns.startswith('Right') for m in markers)
+    for finger in ('Thumb', 'Index', 'Middle', 'Ring', 'Pinky'):
+        assert ('Left_' + finger, 0) in names and ('Left_' + finger, 1) in names
+    palm = next(m for m in markers if (m.ns, m.id) == ('Left', 0))
+    assert palm.pose.position.y == pytest.approx(0.2)
+    assert all(m.header.frame_id == 'leap_hands' and m.lifetime.to_sec() == pytest.approx(0.1)
+               for m in markers)
+    index = next(m for m in markers if (m.ns, m.id) == ('Left_Index', 0))
+    assert len(index.points) == 8                          # four bones, two ends each
+    joints = next(m for m in markers if (m.ns, m.id) == ('Left_Index', 1))
+    assert len(joints.points) == 4                         # mcp, pip, dip, tip
+
+
+def test_driver_markers_refuse_non_finite_points():
+    (human, _), = run([Frame(id=1, timestamp=1.0, hands=[
+        render_hand('right', 'open', [0.0, 200.0, 0.0])])])
+    human.right_hand.finger_list[2].bone_list[3].bone_end.position.x = math.nan
+    with pytest.raises(ValueError):
+        driver_markers(human)
