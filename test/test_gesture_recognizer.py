@@ -200,11 +200,13 @@ def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(s
     np.testing.assert_allclose(events[0].center, tip, atol=1.0)       # 0.27 mm here
 
 
-@pytest.mark.parametrize('duration,fires', [(0.3, True), (0.12, False)])
-def test_fingertip_loop_at_swipe_speed_is_not_a_circle(duration, fires):
-    # 25 mm radius: 0.52 m/s in 0.3 s, 1.3 m/s in 0.12 s, faster than the SDK's default
-    # swipe velocity (1 m/s): that motion is a swipe, not a circle.
-    events = _fingertip_loop('xy', 1.0, radius=25.0, duration=duration)
+@pytest.mark.parametrize('radius,duration,fires', [(25.0, 0.3, True), (100.0, 0.45, True),
+                                                   (100.0, 0.18, False)])
+def test_fingertip_loop_at_swipe_speed_is_not_a_circle(radius, duration, fires):
+    # 0.52 m/s (25 mm in 0.3 s) and 1.4 m/s (100 mm in 0.45 s) are how fast people draw
+    # circles (the shared strokes peak at 1.1..1.9 m/s); 3.5 m/s (100 mm in 0.18 s) is
+    # faster than the index tip's tip_v_max (3 m/s): a flick, not a circle.
+    events = _fingertip_loop('xy', 1.0, radius=radius, duration=duration)
     assert [e.gesture for e in events] == (['circle_ccw'] if fires else [])
 
 
