@@ -187,39 +187,43 @@ def _fingertip_loop(plane, sense=1.0, radius=12.0, duration=0.3, rate=110.0, pos
 
 
 @pytest.mark.parametrize('sense,expected', [(1.0, 'circle_ccw'), (-1.0, 'circle_cw')])
-def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(sense, expected):
+def test_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(sense, expected):
     # Fingers point -z; the loop is in the x-y plane. Counterclockwise seen along the
     # fingers (looking toward -z) is 'circle_ccw' (the SDK: cw when normal . finger > 0).
-    events = _fingertip_loop('xy', sense)
+    # 60 mm in 1 s: the smallest and quickest of the people's drawn circles.
+    events = _fingertip_loop('xy', sense, radius=60.0, duration=1.0)
     assert [e.gesture for e in events] == [expected]
-    assert events[0].value == pytest.approx(0.012, rel=0.2)
+    assert events[0].value == pytest.approx(0.060, rel=0.1)
     # it says where: the pointing index drew it, about its centre (mm, Leap axes): the
     # index tip of the hand at the loop's centre
     assert events[0].source == 'index'
     tip = render_hand('right', 'point', (0.0, 200.0, 0.0)).fingers[1].tip
-    np.testing.assert_allclose(events[0].center, tip, atol=1.0)       # 0.27 mm here
+    np.testing.assert_allclose(events[0].center, tip, atol=1.0)
 
 
-@pytest.mark.parametrize('radius,duration,fires', [(25.0, 0.3, True), (100.0, 0.45, True),
+@pytest.mark.parametrize('radius,duration,fires', [(40.0, 0.5, True), (100.0, 0.45, True),
                                                    (100.0, 0.18, False)])
 def test_fingertip_loop_at_swipe_speed_is_not_a_circle(radius, duration, fires):
-    # 0.52 m/s (25 mm in 0.3 s) and 1.4 m/s (100 mm in 0.45 s) are how fast people draw
+    # 0.5 m/s (40 mm in 0.5 s) and 1.4 m/s (100 mm in 0.45 s) are how fast people draw
     # circles (the shared strokes peak at 1.1..1.9 m/s); 3.5 m/s (100 mm in 0.18 s) is
     # faster than the index tip's tip_v_max (3 m/s): a flick, not a circle.
     events = _fingertip_loop('xy', 1.0, radius=radius, duration=duration)
     assert [e.gesture for e in events] == (['circle_ccw'] if fires else [])
 
 
-@pytest.mark.parametrize('pose, radius', [('open', 12.0), ('two', 12.0), ('point', 6.0)])
+@pytest.mark.parametrize('pose, radius', [('open', 12.0), ('two', 12.0), ('point', 6.0),
+                                          ('point', 20.0)])
 def test_fingertip_loops_of_a_whole_hand_or_a_few_mm_are_not_circles(pose, radius):
     # An open hand moved round a small loop carries every fingertip with it (no one drew
-    # a circle), and a few-mm loop is what a tapping or flapping fingertip makes.
+    # a circle), and a loop of a few mm is what a tapping or flapping fingertip makes:
+    # below 25 mm (the drone's flip_min_radius) nobody drew a circle.
     assert _fingertip_loop('xy', 1.0, radius=radius, pose=pose) == []
 
 
 def test_fingertip_loop_in_the_fingers_own_plane_is_not_a_circle():
-    # A loop whose plane holds the finger direction is what a tap or a fold traces.
-    assert _fingertip_loop('xz') == []
+    # A loop whose plane holds the finger direction is what a tap or a fold traces
+    # (the same loop across the finger fires: see above).
+    assert _fingertip_loop('xz', radius=60.0, duration=1.0) == []
 
 
 def test_original_rules_are_the_baseline():

@@ -340,8 +340,8 @@ def motion_take(person, kind, rng, rate=60.0):
     return), 'tap' (the index tapping down and up), 'point_tap' (the same while pointing),
     'knob' (turning the hand about its axis back and forth), 'translate' (straight moves
     between random points), 'arc' (along at most half a circle), 'circle' (the palm once
-    round a hand-sized circle), 'finger_circle' (the index tip once round a 12-35 mm
-    circle across the finger). Only the last two should fire."""
+    round a hand-sized circle), 'finger_circle' (the index tip once round a 40-120 mm
+    circle across the finger, as people draw one). Only the last two should fire."""
     u = rng.uniform
     pose = {'knob': 'ok', 'finger_circle': 'index', 'point_tap': 'index'}.get(kind, 'open')
     joints, flex = local_pose(person, pose, rng)
@@ -389,7 +389,7 @@ def motion_take(person, kind, rng, rate=60.0):
         e1 = np.cross(axis, [0.0, 1.0, 0.0] if abs(axis[1]) < 0.9 else [1.0, 0.0, 0.0])
         e1 /= np.linalg.norm(e1)
         e2 = np.cross(axis, e1)
-        r = u(12, 35)
+        r = u(40, 120)         # the shared strokes' drawn circles: 60-130 mm
         a = np.linspace(0, u(1.1, 1.4) * 2 * math.pi, n) * rng.choice([-1.0, 1.0])
         path = start + r * (np.outer(np.cos(a) - 1, e1) + np.outer(np.sin(a), e2))
     s = person.palm_width

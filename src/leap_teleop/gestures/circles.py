@@ -1,4 +1,4 @@
-"""Circles traced by the palm or a fingertip: per-track path buffers, a cheap roundness
+"""Circles traced by the palm or the index tip: per-track path buffers, a cheap roundness
 gate, a least-squares circle fit that decides, and the per-hand detector (one event per
 circle, with its sense, radius, centre and what traced it)."""
 import math
@@ -35,6 +35,10 @@ class CircleRules:
     arc: float = 1.5 * math.pi   # rad swept about the fitted centre
     min_roundness: float = 0.6   # isoperimetric quotient that triggers a fit
     tip_v_max: float = 1000.0    # mm/s, index tip: faster within the loop is a swipe
+    # |circle normal . finger direction| of an index circle, at least: a loop in the
+    # plane the finger bends in is a tap or a fold (default: cos 45 deg, the SDK's own
+    # circles on the recordings, 0.71..0.98 in 18 of 20)
+    min_across: float = 0.7
 
 
 # Fitted (evaluate_strokes.CircleFit, `python -m leap_teleop.tools.evaluate_strokes
@@ -48,12 +52,13 @@ DRAWN = CircleRules(
     max_s=2.5,              # s; 1.6 misses the slowest (~2 s to 290 deg)
     arc=1.625 * math.pi,    # 292.5 deg; 342 deg misses a loop closed short
     min_roundness=0.6,      # the gate only: the fit and the corner test decide
-    tip_v_max=3000.0)       # mm/s; drawn circles peak at 1.1..1.9 m/s (1 m/s missed 3)
-# Not fitted (the strokes hold no small loops to bound them): smallest radius, mm. The
-# palm's is the drone's flip_min_radius (25 mm; the scripted demo draws 35 mm); an index
-# tip's 10 mm, what the SDK's fingertip circles start at.
-PALM_R_MIN = 25.0
-TIP_R_MIN = 10.0
+    tip_v_max=3000.0,       # mm/s; drawn circles peak at 1.1..1.9 m/s (1 m/s missed 3)
+    min_across=0.5)         # within 60 deg of across the finger (a tap loops along it)
+# Smallest radius, mm, both tracks; not fitted (people's circles are all far larger):
+# the drone's flip_min_radius, the smallest circle anything acts on. Smaller loops are
+# what fingertips make by themselves, and what the cusp of a curly bracket drawn 1.5x
+# its size made (12 mm; the scripted demo's palm circle is 35 mm).
+CIRCLE_R_MIN = 25.0
 PALM_SPACING = 2.0                 # mm, path resampling (the palm is noisier)
 TIP_SPACING = 1.0
 # Stretches looked at, as fractions of rules.max_s.
@@ -63,16 +68,13 @@ SPAN_FRACTIONS = (0.25, 0.4, 0.6, 0.8, 1.0)
 # normals over the track's longest stretch).
 CIRCLE_MAX_PALM_TURN_DEG = 30.0
 CIRCLE_MIN_POINTS = 8
-# |circle normal . finger direction| of a fingertip circle; the SDK's own circles on the
-# recordings: 0.71..0.98 in 18 of 20 (cos 45 deg = 0.71)
-CIRCLE_MIN_ACROSS = 0.7
 CIRCLE_MAX_TRAVEL = 1.3            # angular travel / net sweep: more is back and forth
 CIRCLE_MAX_RESIDUAL = 0.35         # rms radial residual / radius
 CIRCLE_MAX_DEVIATION = 0.6         # largest radial deviation / radius
 CIRCLE_MAX_CORNER = 2.5            # most turning in an eighth of the path / an even share
 CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
 PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
-CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when several fingers trace it
+CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when the hand changes track
 
 
 def fit_circle(pts):
@@ -113,11 +115,9 @@ def fit_circle(pts):
 class _CircleTrack:
     """One point's path (the palm or a fingertip); see the circles section above."""
     __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
-                 'cross', 'length', 'speed', 'head', 'wait', 'v_max', 'check_corners',
-                 'arc', 'min_roundness')
+                 'cross', 'length', 'speed', 'head', 'wait', 'v_max', 'arc', 'min_roundness')
 
-    def __init__(self, spacing, r_min, rules, v_max=math.inf, check_corners=False):
-        self.check_corners = check_corners
+    def __init__(self, spacing, r_min, rules, v_max=math.inf):
         self.spacing2 = spacing * spacing
         self.r_min, self.r_max = r_min, rules.r_max
         self.spans = tuple(f * rules.max_s for f in SPAN_FRACTIONS)
@@ -256,10 +256,10 @@ class _CircleTrack:
         deviation = np.abs(np.sqrt(np.einsum('ij,ij->i', q, q)) - radius)
         if deviation.max() > CIRCLE_MAX_DEVIATION * radius:
             return None
-        # Palm: turning spread along the path, not gathered at corners: straight moves
-        # joined by turns (a hand moved between places) also close a round-enough loop.
-        # (Fingertip loops are a few mm: their heading is mostly jitter.)
-        if self.check_corners and _cornered(q, normal):
+        # Turning spread along the path, not gathered at corners: straight moves joined
+        # by turns (a hand moved between places; a rectangle, star or x drawn with the
+        # index) also close a round-enough loop.
+        if _cornered(q, normal):
             return None
         return (normal if sweep > 0 else -normal), radius, centre
 
@@ -299,12 +299,12 @@ class CircleDetector:
     def __init__(self, rules=None):
         rules = DRAWN if rules is None else rules
         self.rules = rules
-        self.palm_track = _CircleTrack(PALM_SPACING, PALM_R_MIN, rules, check_corners=True)
-        self.tip_track = _CircleTrack(TIP_SPACING, TIP_R_MIN, rules, rules.tip_v_max,
-                                      check_corners=True)
+        self.palm_track = _CircleTrack(PALM_SPACING, CIRCLE_R_MIN, rules)
+        self.tip_track = _CircleTrack(TIP_SPACING, CIRCLE_R_MIN, rules, rules.tip_v_max)
         self._normals = deque()                 # (t, palm normal) over the tip's stretch
         self._normal_span = rules.max_s
         self._tip_v_max = rules.tip_v_max
+        self._min_across = rules.min_across
         self.reset()
 
     def reset(self):
@@ -387,7 +387,7 @@ class CircleDetector:
         if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
             ref = geometry.basis[2]
         along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
-        if abs(along) < CIRCLE_MIN_ACROSS or self._palm_turned():
+        if abs(along) < self._min_across or self._palm_turned():
             return None
         return along > 0, hit[1], 'index', hit[2]
 

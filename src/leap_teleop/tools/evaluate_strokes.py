@@ -272,8 +272,9 @@ GRID = {'tip_v_max': (1000.0, 1500.0, 2000.0, 3000.0, 4000.0),
         'max_s': (1.6, 2.0, 2.5, 3.0),
         'r_max': (100.0, 125.0, 150.0, 200.0, 250.0, 300.0),
         'arc': tuple(math.pi * k for k in (1.5, 1.625, 1.75, 1.875)),
-        'min_roundness': (0.5, 0.6, 0.7, 0.8)}
-FIT_ORDER = ('tip_v_max', 'max_s', 'r_max', 'arc', 'min_roundness')
+        'min_roundness': (0.5, 0.6, 0.7, 0.8),
+        'min_across': (0.4, 0.5, 0.6, 0.7, 0.8, 0.9)}
+FIT_ORDER = ('tip_v_max', 'max_s', 'r_max', 'arc', 'min_roundness', 'min_across')
 FIT_PASSES = 2
 LOOP_FREE_WEIGHT = 2
 
