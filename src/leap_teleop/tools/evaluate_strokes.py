@@ -18,7 +18,7 @@ angular shapes and looped strokes that fire one (reported). Beside them: circle 
 on the Guinevere dynamic takes (leap_people/guinevere) and on the shared LeapJS takes,
 none of which draws a circle.
 
---loso: the circle rules refitted leave-one-person-out (see circle_fit): for each person,
+--loso: the circle rules refitted leave-one-person-out (CircleFit): for each person,
 the rules are chosen on the other six and scored on that person.
 """
 import argparse
@@ -32,7 +32,7 @@ import sys
 
 import numpy as np
 
-from ..frame import Finger, Hand
+from ..frame import Finger
 from ..gestures import CircleDetector, GestureRecognizer
 from ..gestures.circles import DRAWN, CircleRules
 from ..sources import leapjs
@@ -118,7 +118,8 @@ def template_hands(folder=LEAP_PEOPLE_DATA):
         frame = leapjs.frame_from_dict(best[(kind, person)][1], timestamp=0.0)
         out[kind].append(frame.hands[0])
     if not all(out.values()):
-        raise DataError('%s holds no usable frame for %s' % (path, [k for k, v in out.items() if not v]))
+        raise DataError('%s holds no usable frame for %s'
+                        % (path, [k for k, v in out.items() if not v]))
     return out
 
 
@@ -143,7 +144,8 @@ def draw(hand, t, xyz, recognizer=None):
     rec = recognizer or GestureRecognizer()
     out = []
     for k in range(len(t)):
-        out += [(float(t[k]), e) for e in circle_events(rec.update(hand_at(hand, xyz[k]), t[k]).events)]
+        state = rec.update(hand_at(hand, xyz[k]), t[k])
+        out += [(float(t[k]), e) for e in circle_events(state.events)]
     return out
 
 
@@ -242,8 +244,11 @@ def record_strokes(strokes, hands):
         for k, person in enumerate(sorted(strokes)):
             hand = hands[kind][k % len(hands[kind])]
             for symbol, (t, xyz) in sorted(strokes[person].items()):
-                calls = out[(kind, person, symbol)] = []
+                calls = []
                 draw(hand, t, xyz, _recording_recognizer(calls))
+                # the detector reads only the finger's direction off the Hand, which the
+                # translation keeps: one Hand for the stroke holds less memory
+                out[(kind, person, symbol)] = [c and (hand,) + c[1:] for c in calls]
     return out
 
 
@@ -428,11 +433,9 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
                                       {'t': round(t_, 3), 'gesture': e.gesture,
                                        'source': e.source, 'radius_mm': round(e.value * 1e3, 1)}
                                       for t_, e in events]})
-    takes = {}
-    for name, dicts in sorted(load_guinevere(leap_people_dir).items()):
-        takes['guinevere/' + name] = len(take_circles(dicts, make))
-    for name, dicts in sorted(leapjs_takes(leapjs_dir).items()):
-        takes['leapjs/' + name] = len(take_circles(dicts, make))
+    frames = {'guinevere/' + k: v for k, v in load_guinevere(leap_people_dir).items()}
+    frames.update(('leapjs/' + k, v) for k, v in leapjs_takes(leapjs_dir).items())
+    takes = {name: len(take_circles(dicts, make)) for name, dicts in sorted(frames.items())}
     out = {'rules': _rules_dict(rules or DRAWN), 'people': people, 'total': total,
            'per_person': per_person, 'per_symbol': per_symbol, 'fired': fired,
            'worst_person': min(people, key=lambda p: (_recall(per_person[p]),
@@ -442,8 +445,7 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
                      'leapjs': sum(k.startswith('leapjs/') for k in takes)},
            'takes_with_circles': sum(1 for v in takes.values() if v)}
     if loso:
-        fit = CircleFit(record_strokes(strokes, hands), record_takes(
-            {**load_guinevere(leap_people_dir), **leapjs_takes(leapjs_dir)}))
+        fit = CircleFit(record_strokes(strokes, hands), record_takes(frames))
         out['loso'] = fit.loso(people)
     return out
 
