@@ -85,9 +85,28 @@ def test_a_drawn_circle_fires_exactly_once_at_its_size(strokes, hands, hand_kind
             events = es.draw(hand, t, xyz)
             assert len(events) == 1, (person, hand_kind, events)
             e = events[0][1]
-            assert e.source == ('index' if hand_kind == 'pointing' else 'palm')
+            # a pointing hand's palm follows its finger: either may close the circle first
+            assert e.source in (('index', 'palm') if hand_kind == 'pointing' else ('palm',))
             # the people's circles are 120-260 mm across
             assert 50.0 <= e.value * 1e3 <= 140.0, (person, e)
+
+
+@pytest.mark.parametrize('symbol,fires', [('circle', 1), ('zig-zag', 0), ('check', 0)])
+def test_a_pointing_hand_read_as_not_pointing_now_and_then_keeps_its_circle(
+        strokes, hands, symbol, fires):
+    # The pose rules may read a moving pointing hand's middle finger as out on a frame:
+    # every 10th frame here. The circle still fires once (the palm keeps the path), and
+    # loop-free strokes still do not.
+    for k, person in enumerate(sorted(strokes)):
+        if symbol not in strokes[person]:
+            continue
+        t, xyz = strokes[person][symbol]
+        calls = []
+        es.draw(hands['pointing'][k], t, xyz, es._recording_recognizer(calls))
+        assert all(c[3][1] and not c[3][2] for c in calls)
+        flicker = [c[:3] + ((c[3][:2] + (True,) + c[3][3:]) if i % 10 == 5 else c[3],)
+                   for i, c in enumerate(calls)]
+        assert len(es.replay(flicker, es.DRAWN)) == fires, person
 
 
 def test_a_circle_drawn_twice_fires_twice_and_a_lost_hand_forgets(strokes, hands):

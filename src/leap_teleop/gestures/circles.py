@@ -20,8 +20,8 @@ _isfinite = math.isfinite
 # half circle, ~0 for straight or back-and-forth moves; prefix sums make it O(1)). The
 # roundest stretch past the gate is fitted with a circle (plane + least squares), which
 # decides: an arc of >= rules.arc about the fitted centre, swept one way, close to it.
-# Which tracks: the index tip while pointing (middle and ring folded), the palm for a
-# whole hand. Thumb, pinky and ring tips loop by themselves while hands clap, flap, tap or
+# Which tracks: the palm, and the index tip while pointing (middle and ring folded).
+# Thumb, pinky and ring tips loop by themselves while hands clap, flap, tap or
 # turn a knob (4-20 mm loops; the SDK called some of them circles); so do the fingertips
 # of an open hand that moves or turns.
 
@@ -46,14 +46,16 @@ class CircleRules:
 # 120-260 mm across, one loop in 1.7-2.5 s), drawn by translated real pointing and open
 # hands (GTI-UPM), with no circle event allowed on the Guinevere and LeapJS takes; each
 # value the middle of its grid range that recognizes the most circles and fires on no
-# loop-free stroke (ties: fewest closed angular shapes).
+# loop-free stroke (ties: fewest closed angular shapes). A translated hand's palm draws
+# the same circle as its index, so the index's own two rules (tip_v_max, min_across)
+# sit mid-grid: these people's strokes do not bound them.
 DRAWN = CircleRules(
     r_max=200.0,            # mm; the people's circles fit 64..119 mm
     max_s=2.5,              # s; 1.6 misses the slowest (~2 s to 290 deg)
     arc=1.625 * math.pi,    # 292.5 deg; 342 deg misses a loop closed short
     min_roundness=0.6,      # the gate only: the fit and the corner test decide
-    tip_v_max=3000.0,       # mm/s; drawn circles peak at 1.1..1.9 m/s (1 m/s missed 3)
-    min_across=0.5)         # within 60 deg of across the finger (a tap loops along it)
+    tip_v_max=2000.0,       # mm/s; drawn circles peak at 0.5..1.9 m/s
+    min_across=0.6)         # within 53 deg of across the finger (a tap loops along it)
 # Smallest radius, mm, both tracks; not fitted (people's circles are all far larger):
 # the drone's flip_min_radius, the smallest circle anything acts on. Smaller loops are
 # what fingertips make by themselves, and what the cusp of a curly bracket drawn 1.5x
@@ -288,9 +290,9 @@ _ZERO3 = (0.0, 0.0, 0.0)
 
 
 class CircleDetector:
-    """Circles of one hand: traced by the index tip while pointing, by the palm
-    otherwise; one event per circle (the path is forgotten when one fires), at most one
-    per CIRCLE_REFRACTORY_S. `rules`: a CircleRules (default DRAWN).
+    """Circles of one hand: traced by the palm, or by the index tip while pointing; one
+    event per circle (both paths are forgotten when one fires), at most one per
+    CIRCLE_REFRACTORY_S. `rules`: a CircleRules (default DRAWN).
 
     Direction: a fingertip circle is clockwise when it turns clockwise seen along the
     finger (the Leap SDK's convention: normal . pointable direction > 0); a palm circle
@@ -394,15 +396,18 @@ class CircleDetector:
     def update(self, hand, timestamp, geometry, extended):
         """GestureEvent or None, from the hand's HandGeometry (palm and tips) and the
         pose rules' extended verdict per finger."""
-        # Pointing (index out, middle and ring folded): the index tip draws. Otherwise
-        # the whole hand does: an open hand that moves or turns carries every fingertip
-        # round loops nobody drew.
+        # The palm always (a whole hand going round; a pointing hand's palm follows its
+        # finger, and keeps its circle when the pose reads a frame or two as not
+        # pointing: 3 % of such frames lost 6 of the 7 people's circles without it);
+        # the index tip while pointing (index out, middle and ring folded): an open hand
+        # that moves or turns carries every fingertip round loops nobody drew.
+        found = self._palm(timestamp, geometry)
         if extended[1] and not (extended[2] or extended[3]):
-            self._forget_palm()
-            found = self._tip(hand, timestamp, geometry)
+            tip = self._tip(hand, timestamp, geometry)
+            if found is None:
+                found = tip
         else:
             self._forget_tip()
-            found = self._palm(timestamp, geometry)
         if found is None:
             return None
         self.palm_track.clear()
