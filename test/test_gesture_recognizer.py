@@ -1,4 +1,5 @@
 """Gesture recognizer: synthetic poses, temporal filter, events, circles, robustness."""
+import dataclasses
 import math
 
 import numpy as np
@@ -211,38 +212,70 @@ def _fingertip_loop(plane, sense=1.0, radius=12.0, duration=0.3, rate=110.0, pos
     return events
 
 
+def _index_loop(plane, sense=1.0, radius=60.0, duration=1.0, rate=110.0):
+    """Circle events of a pointing hand whose index tip alone goes round a loop (the palm
+    still), fed to a CircleDetector as the recognizer feeds it."""
+    from leap_teleop.gestures import CircleDetector, hand_geometry
+    hand = render_hand('right', 'point', (0.0, 200.0, 0.0))
+    g0 = hand_geometry(hand)
+    det, events = CircleDetector(), []
+    n = int(duration * rate)
+    for i in range(-20, n + 20):
+        a = sense * 2 * math.pi * min(max(i, 0), n) / n
+        off = {'xy': (math.cos(a) - 1, math.sin(a), 0.0),
+               'xz': (math.cos(a) - 1, 0.0, math.sin(a))}[plane]
+        tips = [list(t) for t in g0.tips_world]
+        tips[1] = [tips[1][k] + radius * off[k] for k in range(3)]
+        e = det.update(hand, i / rate, dataclasses.replace(g0, tips_world=tips),
+                       (False, True, False, False, False))
+        events += [e] if e is not None else []
+    return events
+
+
 @pytest.mark.parametrize('sense,expected', [(1.0, 'circle_ccw'), (-1.0, 'circle_cw')])
-def test_small_fingertip_circle_across_the_fingers_fires_once_in_the_sdk_sense(sense, expected):
+def test_index_circle_across_the_finger_fires_once_in_the_sdk_sense(sense, expected):
     # Fingers point -z; the loop is in the x-y plane. Counterclockwise seen along the
     # fingers (looking toward -z) is 'circle_ccw' (the SDK: cw when normal . finger > 0).
-    events = _fingertip_loop('xy', sense)
+    # 60 mm in 1 s: the smallest and quickest of the people's drawn circles.
+    events = _index_loop('xy', sense)
     assert [e.gesture for e in events] == [expected]
-    assert events[0].value == pytest.approx(0.012, rel=0.2)
-    # it says where: the pointing index drew it, about its centre (mm, Leap axes): the
-    # index tip of the hand at the loop's centre
+    assert events[0].value == pytest.approx(0.060, rel=0.1)
+    # it says where: the pointing index drew it, about its centre (mm, Leap axes)
     assert events[0].source == 'index'
     tip = render_hand('right', 'point', (0.0, 200.0, 0.0)).fingers[1].tip
-    np.testing.assert_allclose(events[0].center, tip, atol=1.0)       # 0.27 mm here
+    np.testing.assert_allclose(events[0].center, tip + np.array([-60.0, 0.0, 0.0]), atol=1.0)
 
 
-@pytest.mark.parametrize('duration,fires', [(0.3, True), (0.12, False)])
-def test_fingertip_loop_at_swipe_speed_is_not_a_circle(duration, fires):
-    # 25 mm radius: 0.52 m/s in 0.3 s, 1.3 m/s in 0.12 s, faster than the SDK's default
-    # swipe velocity (1 m/s): that motion is a swipe, not a circle.
-    events = _fingertip_loop('xy', 1.0, radius=25.0, duration=duration)
+def test_a_whole_pointing_hand_going_round_fires_once():
+    # The palm follows the finger: one event, whichever path closes the circle first.
+    events = _fingertip_loop('xy', 1.0, radius=60.0, duration=1.0)
+    assert len(events) == 1 and events[0].source in ('index', 'palm')
+
+
+@pytest.mark.parametrize('radius,duration,fires', [(40.0, 0.5, True), (100.0, 0.45, True),
+                                                   (100.0, 0.18, False)])
+def test_index_loop_at_swipe_speed_is_not_a_circle(radius, duration, fires):
+    # 0.5 m/s (40 mm in 0.5 s) and 1.4 m/s (100 mm in 0.45 s) are how fast people draw
+    # circles (the shared strokes peak at 1.1..1.9 m/s); 3.5 m/s (100 mm in 0.18 s) is
+    # faster than the index tip's tip_v_max (2 m/s): a flick, not a circle.
+    events = _index_loop('xy', 1.0, radius=radius, duration=duration)
     assert [e.gesture for e in events] == (['circle_ccw'] if fires else [])
 
 
-@pytest.mark.parametrize('pose, radius', [('open', 12.0), ('two', 12.0), ('point', 6.0)])
+@pytest.mark.parametrize('pose, radius', [('open', 12.0), ('two', 12.0), ('point', 6.0),
+                                          ('point', 20.0)])
 def test_fingertip_loops_of_a_whole_hand_or_a_few_mm_are_not_circles(pose, radius):
     # An open hand moved round a small loop carries every fingertip with it (no one drew
-    # a circle), and a few-mm loop is what a tapping or flapping fingertip makes.
+    # a circle), and a loop of a few mm is what a tapping or flapping fingertip makes:
+    # below 25 mm (the drone's flip_min_radius) nobody drew a circle.
     assert _fingertip_loop('xy', 1.0, radius=radius, pose=pose) == []
 
 
-def test_fingertip_loop_in_the_fingers_own_plane_is_not_a_circle():
-    # A loop whose plane holds the finger direction is what a tap or a fold traces.
-    assert _fingertip_loop('xz') == []
+def test_index_loop_in_the_fingers_own_plane_is_not_a_circle():
+    # A loop whose plane holds the finger direction is what a tap or a fold traces
+    # (the same loop across the finger fires: see above).
+    assert _index_loop('xz') == []
+    assert len(_index_loop('xy')) == 1
 
 
 def test_original_rules_are_the_baseline():

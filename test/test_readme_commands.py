@@ -38,6 +38,8 @@ COVERED = {
     'source devel/setup.bash': WORKSPACE,
     'make demo': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     'make eval': 'test_eval_gestures.py::test_main_writes_the_json',
+    './env.sh python -m leap_teleop.tools.evaluate_strokes --loso':
+        'test_eval_strokes.py::test_loso_command_meets_the_goals',
     './env.sh python -m leap_teleop.tools.evaluate_photo_views':
         'test_photo_views.py::test_main_prints_and_writes_the_table',
     'make bench': 'test_bench_harness.py::test_each_run_writes_a_fresh_file',
