@@ -438,6 +438,10 @@ def main(argv=None):
         results['people'] = evaluate_people.run(os.path.dirname(os.path.abspath(args.data)))
         evaluate_people.print_tables(results['people'])
     results.update(evaluate(args.data))
+    if not args.no_people:
+        from . import evaluate_strokes
+        results['strokes'] = evaluate_strokes.run(leapjs_dir=args.data, loso=True)
+        evaluate_strokes.print_table(results['strokes'])
     from . import evaluate_invariance
     results['invariance'] = evaluate_invariance.run()
     evaluate_invariance.print_table(results['invariance'])

@@ -32,7 +32,6 @@ import numpy as np
 from . import evaluate
 from .classify_frames import HELD, Classifier
 from ..frame import Frame
-from ..sources import leapjs
 
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
 EXPECTED = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist',
@@ -187,7 +186,7 @@ class PhotoPipeline:
         """The classify_frames output hands for these detections."""
         self.source.forget_hands()         # unrelated pictures: no velocity between them
         frame = Frame(id=1, timestamp=0.0, hands=self.source.hands_of(landmarks, cam, 0.0))
-        return Classifier(stateless=True).classify(leapjs.frame_to_dict(frame))['hands']
+        return Classifier(stateless=True).classify_frame(frame, 1, 0)['hands']
 
     def close(self):
         self.source.detector.close()

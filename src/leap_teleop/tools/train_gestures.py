@@ -52,6 +52,22 @@ TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'op
                'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
 
 
+# Where the fitted data comes from and under what terms (the data folders' READMEs).
+DATA_TERMS = {
+    'leap': ['GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
+             'de Madrid, Grupo de Tratamiento de Imagenes; Mantecon et al.), users 01-12, as '
+             'redistributed in sluyters/QuantumLeap: published by its authors for research, '
+             'no licence file',
+             'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
+             'research, no licence file',
+             'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0'],
+    'keypoints': ['hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
+                  'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
+                  '(their hand-gesture-recognition repositories): Apache-2.0',
+                  'GTI-UPM Leap captures seen as a camera would (see the Leap model)'],
+}
+
+
 class Dataset:
     """Feature rows with their class, person and source label; `augmented` marks the
     noisy copies (fitted on, never scored)."""
@@ -411,7 +427,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
     if len(set(y)) < 2:
         raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '
                          'data at %s?)' % (family, data_dir))
-    card = {'family': family, 'fitted_on': ds.sources, 'people': sorted(set(persons.tolist())),
+    card = {'family': family, 'fitted_on': ds.sources, 'data_terms': DATA_TERMS[family], 'people': sorted(set(persons.tolist())),
             'rows': int(len(y)), 'classes': sorted(set(y.tolist())),
             'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
                      'MLPClassifier, alpha %g, %d iterations, seed %d; fitted on every %s '
@@ -428,6 +444,10 @@ def train(family, data_dir, adds=(), report=True, log=print):
     # a user's retrain holds out each of their own files (the shared people's figures
     # are the shipped model's card); the shipped models hold out every person
     held = users if adds else sorted(set(persons.tolist()))
+    if family == 'keypoints' and not adds:
+        # the Leap people's camera views are judged in evaluate_people; the card holds the
+        # webcam people
+        held = [p for p in held if not p.startswith('leap:')]
     if report and len(set(persons)) > 1:
         log('%s: leave-one-person-out over %d of %d people (%d rows)'
             % (family, len(held), len(set(persons)), len(y)))
@@ -500,6 +520,7 @@ def write_card(model_path, card):
              '- family: %s' % card['family'],
              '- classes: %s' % ', '.join(card['classes']),
              '- fitted on: %s' % '; '.join(card['fitted_on']),
+             '- data and terms: %s' % '; '.join(card.get('data_terms', [])),
              '- people: %d (%s)' % (len(card['people']), ', '.join(card['people'])),
              '- rows: %d' % card['rows'], '- model: %s' % card['model'],
              '- made by: `%s` (%s, %s s)' % (card['command'], card['date'], card['seconds']), '']
