@@ -88,7 +88,9 @@ def expected(name):
 
 
 def photo_params():
-    """Every labelled photo; each must give its label (none is excused)."""
+    """Every labelled photo; each must give its label (none is excused). The keypoint model
+    is fitted on these photos too (one person per photo source): a regression check; how
+    it does on photos of people it never saw is make eval's leave-one-source-out table."""
     names = sorted(n for n in os.listdir(HANDS_DATA) if not n.startswith('clip_')
                    and n.lower().endswith(('.jpg', '.jpeg', '.png'))) \
         if os.path.isdir(HANDS_DATA) else ['shared-data-missing']

@@ -21,7 +21,8 @@ false thumbs-ups and false events). The shared LeapJS takes (one more person, an
 tracker): their labelled frames (tools/evaluate.LABELS; a thumb out of a fist is a
 thumbs-up where the SDK's thumb points up, nothing where it points sideways). Webcam keypoints: open, fist, thumb_up, thumb_down,
 ok -> pinch; pointing, peace, other -> nothing; the Leap people seen as a camera would
-(train_gestures.camera_view) score horns (heavy -> rock) and are reported apart.
+(train_gestures.camera_view) score horns (heavy -> rock) and are reported apart, and so
+are the labelled photos, one photo source held out at a time.
 """
 import argparse
 import collections
@@ -47,6 +48,8 @@ LEAP_EXPECT = {'fist_moved': 'fist', 'five': 'open', 'palm': 'open', 'palm_m': '
                'open_hand_left': 'open', 'open_hand_right': 'open'}
 KEYPOINT_EXPECT = {'open': 'open', 'fist': 'fist', 'thumb_up': 'thumb_up',
                    'thumb_down': 'thumb_down', 'ok': 'pinch', 'heavy': 'rock'}
+PHOTO_EXPECT = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist', 'thumbs_up': 'thumb_up',
+                'thumbs_down': 'thumb_down', 'ok': 'pinch', 'pinch_o': 'pinch'}
 GESTURES = ('fist', 'open', 'pinch', 'rock', 'thumb_up', 'thumb_down')
 
 
@@ -209,7 +212,9 @@ def keypoint_people(data_dir, log=print):
             ps, labs, xy = gd.read_keypoints(os.path.join(folder, name))
             for p, lab, pts in zip(ps, labs, xy):
                 real.setdefault(p, []).append((lab, pts))
-    tally, views = Tally(), Tally()
+    tally, views, photos = Tally(), Tally(), Tally()
+    photo_hands = gd.photo_hands(os.path.join(data_dir, 'hands')) \
+        if os.path.isfile(os.path.join(data_dir, 'hands', 'hands.json')) else []
     models = tg.models_without(x, y, persons, labels, set(persons), log=log)
     for person in sorted(set(persons)):
         t0 = time.time()
@@ -220,6 +225,12 @@ def keypoint_people(data_dir, log=print):
                 hand = Hand(side='right', image_landmarks=pts)
                 tally.add(person, lab, KEYPOINT_EXPECT.get(lab, 'nothing'),
                           _read(classify_pose(hand, None, model)))
+        elif person.startswith('photo:'):
+            for source, lab, xy in photo_hands:
+                if 'photo:' + source == person and lab in gd.PHOTO_LABELS:
+                    hand = Hand(side='right', image_landmarks=xy)
+                    photos.add(person, lab, PHOTO_EXPECT.get(lab, 'nothing'),
+                               _read(classify_pose(hand, None, model)))
         else:   # a Leap person seen as a camera would: judge it on its views
             idx = np.where(persons == person)[0][0::2]
             for i in idx:
@@ -233,6 +244,7 @@ def keypoint_people(data_dir, log=print):
         log('  keypoints: scored %s (%.0f s)' % (person, time.time() - t0))
     out = tally.summary()
     out['leap_people_seen_by_a_camera'] = views.summary()
+    out['photos_by_source'] = photos.summary()
     return out
 
 
@@ -278,6 +290,8 @@ def print_tables(results):
         print_people('Webcam keypoints, leave-one-person-out (8 people):', results['keypoints'])
         print_people('Leap people seen as a camera would (keypoint model):',
                      results['keypoints']['leap_people_seen_by_a_camera'])
+        print_people('Labelled photos, leave one photo source out (keypoint model):',
+                     results['keypoints']['photos_by_source'])
 
 
 def main(argv=None):

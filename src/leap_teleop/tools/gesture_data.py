@@ -25,6 +25,11 @@ SHARED_DATA = os.environ.get('LEAP_TELEOP_SHARED_DATA') or os.path.normpath(
 LEAP_PEOPLE = os.path.join(SHARED_DATA, 'leap_people')
 KEYPOINTS = os.path.join(SHARED_DATA, 'keypoints')
 STROKES = os.path.join(SHARED_DATA, 'strokes')
+HANDS = os.path.join(SHARED_DATA, 'hands')
+# The labelled photos (../hands: label__source__name): what each label is to the model.
+PHOTO_LABELS = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist', 'thumbs_up': 'thumb',
+                'thumbs_down': 'thumb', 'ok': 'pinch', 'pinch_o': 'pinch', 'pointing': 'none',
+                'neg_half_curl': 'none', 'neg_pinky': 'none'}
 
 # What each recorded pose label is to the recognizer. `thumb`: a fist with the thumb out
 # (its direction, up or down, is judged apart from the model); `none`: a pose that is none
@@ -140,3 +145,20 @@ def read_keypoints(path, label=None, person=None):
             labels.append(label if label is not None else lab)
             rows.append(xy)
     return persons, labels, np.array(rows).reshape(-1, 21, 2)
+
+
+def photo_hands(folder=None):
+    """[(source, label, (21, 2) pixel landmarks)] of the labelled photos' hands, from the
+    folder's hands.json (what MediaPipe found in each photo)."""
+    folder = folder or HANDS
+    with open(os.path.join(folder, 'hands.json'), encoding='utf-8') as f:
+        images = json.load(f)['images']
+    out = []
+    for name, entry in sorted(images.items()):
+        parts = name.split('__')
+        if len(parts) < 3:
+            continue
+        for h in entry['hands']:
+            xy = np.asarray(h['landmarks'], dtype=float)[:, :2] * (entry['width'], entry['height'])
+            out.append((parts[1], parts[0], xy))
+    return out

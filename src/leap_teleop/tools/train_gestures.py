@@ -64,7 +64,9 @@ DATA_TERMS = {
     'keypoints': ['hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
                   'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
                   '(their hand-gesture-recognition repositories): Apache-2.0',
-                  'GTI-UPM Leap captures seen as a camera would (see the Leap model)'],
+                  'GTI-UPM Leap captures seen as a camera would (see the Leap model)',
+                  'the labelled hand photos of ../shared/data/hands (each under its source '
+                  "repository's licence; see that README)"],
 }
 
 
@@ -226,6 +228,7 @@ VIEW_STRIDE = 2
 # the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
 TURN_RAD = 0.45
 RARE_KEYPOINT_COPIES = 4
+PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
 
 
 def camera_view(landmarks, yaw, pitch):
@@ -263,6 +266,18 @@ def strided(rows, stride=FIT_STRIDE):
     keypoint row and its mirror image), kept together."""
     rows = np.asarray(rows)
     return rows[(rows // 2) % stride == 0]
+
+
+def add_photos(ds, folder):
+    """The labelled photos' hands, one person per photo source (a few photos each, from
+    other people than the keypoint files): PHOTO_COPIES turned copies each."""
+    n = 0
+    for source, label, xy in gd.photo_hands(folder):
+        cls = gd.PHOTO_LABELS.get(label)
+        if cls is not None:
+            add_keypoint_row(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
+            n += 1
+    ds.sources.append('the labelled photos of ../hands (%d hands)' % n)
 
 
 def fit_rows(labels, persons, rows):
@@ -396,6 +411,8 @@ def build(family, data_dir, adds, log=print):
         gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
         if os.path.isfile(gti):
             add_leap_views(ds, gti)
+        if os.path.isfile(os.path.join(data_dir, 'hands', 'hands.json')):
+            add_photos(ds, os.path.join(data_dir, 'hands'))
         if os.path.isdir(folder):
             for name in sorted(os.listdir(folder)):
                 if name.endswith('.csv'):
@@ -447,7 +464,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
     if family == 'keypoints' and not adds:
         # the Leap people's camera views are judged in evaluate_people; the card holds the
         # webcam people
-        held = [p for p in held if not p.startswith('leap:')]
+        held = [p for p in held if not p.startswith(('leap:', 'photo:'))]
     if report and len(set(persons)) > 1:
         log('%s: leave-one-person-out over %d of %d people (%d rows)'
             % (family, len(held), len(set(persons)), len(y)))
