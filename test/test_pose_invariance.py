@@ -115,3 +115,19 @@ def test_the_shipped_models_are_arrays_with_a_card():
             assert z['w0'].dtype == np.float64 and 'card' in z.files
         assert m.card['family'] == family and m.card['people']
         assert {'fist', 'open', 'pinch', 'rock', 'thumb', 'none'} <= set(m.classes)
+
+
+def test_camera_thumb_guard_wants_the_thumb_up_in_the_picture():
+    from leap_teleop.gestures.features import rotate_keypoints
+    from leap_teleop.gestures.pose import camera_thumb_points
+    from leap_teleop.tools import gesture_data
+    thumbs = [xy for source, label, xy in gesture_data.photo_hands() if label == 'thumbs_up']
+    assert len(thumbs) == 4
+    for xy in thumbs:
+        centre = xy.mean(axis=0)
+        assert camera_thumb_points(xy) == 'up'
+        # the picture upside down: a thumbs-down; turned on its side: neither
+        upside_down = rotate_keypoints(xy - centre, math.pi) + centre
+        assert camera_thumb_points(upside_down) == 'down'
+        for turn in (math.radians(80), -math.radians(80)):
+            assert camera_thumb_points(rotate_keypoints(xy - centre, turn) + centre) is None

@@ -41,8 +41,13 @@ THUMB_UP_SCORE = 1.0        # thumb rise + thumb side up (Leap y of unit vectors
 THUMB_RISE_MIN = 0.3
 THUMB_SIDE_MIN = 0.15
 # Camera thumbs-up: the thumb tip above every other landmark by this share of the hand's
-# extent in the picture, and its last two bones pointing up.
+# extent in the picture, its last two bones pointing up, the last one within
+# CAMERA_THUMB_MAX_DEG of straight up (the labelled thumbs-up photos, turned up to 45 deg
+# either way: 52 deg at most; a fist's thumb laid over its fingers, turned 45 deg so that
+# its tip is highest: 73).
 CAMERA_THUMB_RISE = 0.05
+CAMERA_THUMB_MAX_DEG = 60.0
+_CAMERA_THUMB_COS = math.cos(math.radians(CAMERA_THUMB_MAX_DEG))
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 _isfinite = math.isfinite
 
@@ -79,6 +84,11 @@ def camera_thumb_points(xy):
     extent = float(np.ptp(p[:, 1])) or 1.0
     others = np.delete(p, (2, 3, 4), axis=0)[:, 1]
     tip_y, ip_y, mcp_y = p[4, 1], p[3, 1], p[2, 1]
+    dx, dy = p[4] - p[3]
+    n = math.hypot(dx, dy)
+    vertical = n > 0.0 and abs(dy) / n >= _CAMERA_THUMB_COS
+    if not vertical:
+        return None
     if others.min() - tip_y > CAMERA_THUMB_RISE * extent and tip_y < ip_y < mcp_y:
         return 'up'
     if tip_y - others.max() > CAMERA_THUMB_RISE * extent and tip_y > ip_y > mcp_y:
