@@ -67,3 +67,31 @@ def test_lopo_fits_are_deterministic():
     b = tg.models_without(x, y, persons, y, ['p2', 'p1'], log=lambda s: None)
     for p in ('p1', 'p2'):
         assert np.array_equal(a[p].w0, b[p].w0) and np.array_equal(a[p].b1, b[p].b1)
+
+
+def test_train_command_writes_a_model_and_its_card(tmp_path, capsys):
+    from leap_teleop.gestures import PoseClassifier
+    out = str(tmp_path / 'keypoints.npz')
+    assert tg.main(['--family', 'keypoints', '--out', out]) == 0
+    model = PoseClassifier.load(out, 'keypoints')
+    card = (tmp_path / 'keypoints.md').read_text()
+    assert model.card['leave_one_person_out']['open']['people'] == 8
+    assert 'Leave-one-person-out' in card and 'Apache-2.0' in card and '--family keypoints' in card
+    assert 'keypoints model, leave-one-person-out' in capsys.readouterr().out
+
+
+def test_evaluate_people_command_writes_its_figures(tmp_path, monkeypatch):
+    import json
+    # the keypoint half, two people held out (make eval holds out every one)
+    real = tg.models_without
+    monkeypatch.setattr(tg, 'models_without', lambda x, y, persons, labels, held, **kw: real(
+        x, y, persons, labels, ['kinivi', 'Harikumar4'], **kw))
+    seen = []
+    monkeypatch.setattr(ep.Tally, 'add', lambda self, person, *a, _add=ep.Tally.add: (
+        seen.append(person), _add(self, person, *a)))
+    out = tmp_path / 'people.json'
+    assert ep.main(['--family', 'keypoints', '--out', str(out)]) == 0
+    data = json.loads(out.read_text())['keypoints']
+    assert set(seen) == {'kinivi', 'Harikumar4'}
+    assert data['per_gesture']['pinch']['positives'] == 337          # kinivi's OK signs
+    assert data['per_gesture']['thumb_up']['positives'] == 212       # Harikumar4's thumbs-ups

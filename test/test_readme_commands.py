@@ -43,6 +43,22 @@ COVERED = {
     './env.sh python -m leap_teleop.tools.evaluate_photo_views':
         'test_photo_views.py::test_main_prints_and_writes_the_table',
     'make bench': 'test_bench_harness.py::test_each_run_writes_a_fresh_file',
+    './env.sh python -m leap_teleop.tools.classify_frames --keypoints '
+    '../shared/data/keypoints/Harikumar4.csv':
+        'test_classify_frames.py::test_keypoints_in_both_csv_forms_give_one_line_per_row',
+    'make train': 'test_people_eval.py::test_train_command_writes_a_model_and_its_card',
+    'python -m leap_teleop.tools.evaluate_people':
+        'test_people_eval.py::test_evaluate_people_command_writes_its_figures',
+    'roslaunch leap_teleop sender.launch source:=leap gesture_model:=$HOME/two.npz '
+    'gesture_bindings:=$HOME/mine.yaml': 'test_own_gestures.py::test_the_nodes_arm_on_a_bound_new_gesture',
+    'rosrun leap_teleop classify_frames take.json --model ~/two.npz':
+        'test_own_gestures.py::test_classify_frames_reports_the_new_gesture',
+    'rosrun leap_teleop record_gestures --source leap --label two --seconds 10':
+        'test_own_gestures.py::test_record_gestures_from_a_leap_recording',
+    'rosrun leap_teleop record_gestures --source webcam --label peace --seconds 10':
+        'test_own_gestures.py::test_camera_hands_become_community_normalised_keypoint_rows',
+    'rosrun leap_teleop train_gestures --add two.jsonl --label two --out ~/two.npz':
+        'test_own_gestures.py::test_default_retrain_includes_the_leave_one_person_out_report',
     'python -m leap_teleop.tools.classify_frames':
         'test_classify_frames.py::test_json_lines_on_stdin_stream_and_stateless',
     'python -m leap_teleop.tools.make_sessions': 'test_arm_closed_loop.py',

@@ -134,7 +134,7 @@ def leap_people(data_dir, log=print):
     tally = Tally()
     take_rows = []
     models = tg.models_without(x, y, persons, labels, set(persons), log=log)
-    for person in sorted(set(persons)):
+    for person in sorted(models):
         t0 = time.time()
         model = models[person]
         model.family = 'leap'
@@ -216,7 +216,7 @@ def keypoint_people(data_dir, log=print):
     photo_hands = gd.photo_hands(os.path.join(data_dir, 'hands')) \
         if os.path.isfile(os.path.join(data_dir, 'hands', 'hands.json')) else []
     models = tg.models_without(x, y, persons, labels, set(persons), log=log)
-    for person in sorted(set(persons)):
+    for person in sorted(models):
         t0 = time.time()
         model = models[person]
         model.family = 'keypoints'
