@@ -67,6 +67,8 @@ def test_lopo_fits_are_deterministic():
     b = tg.models_without(x, y, persons, y, ['p2', 'p1'], log=lambda s: None)
     for p in ('p1', 'p2'):
         assert np.array_equal(a[p].w0, b[p].w0) and np.array_equal(a[p].b1, b[p].b1)
+        # two classes: one logistic output, as a softmax of two
+        assert a[p].classes == ('a', 'b') and a[p].proba(x[:3]).shape == (3, 2)
 
 
 def test_train_command_writes_a_model_and_its_card(tmp_path, capsys):
@@ -75,7 +77,8 @@ def test_train_command_writes_a_model_and_its_card(tmp_path, capsys):
     assert tg.main(['--family', 'keypoints', '--out', out]) == 0
     model = PoseClassifier.load(out, 'keypoints')
     card = (tmp_path / 'keypoints.md').read_text()
-    assert model.card['leave_one_person_out']['open']['people'] == 8
+    # the 4 of the 8 keypoint people who recorded an open hand, each held out once
+    assert model.card['leave_one_person_out']['open']['people'] == 4
     assert 'Leave-one-person-out' in card and 'Apache-2.0' in card and '--family keypoints' in card
     assert 'keypoints model, leave-one-person-out' in capsys.readouterr().out
 

@@ -302,8 +302,12 @@ def fit(x, y, seed=SEED):
         warnings.simplefilter('ignore', ConvergenceWarning)
         m = MLPClassifier((HIDDEN_UNITS,), alpha=L2, max_iter=MAX_ITER,
                           random_state=seed).fit(z, y)
-    return PoseClassifier(m.classes_.tolist(), '', mean, scale, m.coefs_[0],
-                          m.intercepts_[0], m.coefs_[1], m.intercepts_[1])
+    w1, b1 = m.coefs_[1], m.intercepts_[1]
+    if len(m.classes_) == 2:    # one logistic output: the same as softmax over (0, z)
+        w1 = np.hstack((np.zeros_like(w1), w1))
+        b1 = np.concatenate(([0.0], b1))
+    return PoseClassifier(m.classes_.tolist(), '', mean, scale, m.coefs_[0], m.intercepts_[0],
+                          w1, b1)
 
 
 _FOLD_DATA = None
