@@ -43,15 +43,12 @@ def leap_features(hand, geometry=None):
     g = geometry if geometry is not None else hand_geometry(hand)
     if g is None or g.joints is None:
         return None
-    j = g.joints
-    basis = np.array(g.basis)                       # rows: thumbward, normal, direction
-    inv = 1.0 / g.palm_width
-    local = j @ basis.T * inv                       # (5, 4, 3) in the hand frame
+    local, bones = g.local, g.bones                 # hand frame, palm widths; unit bones
     reach = local[:, 1:] - local[:, :1]             # (5, 3, 3) from each knuckle
-    bones = _unit_rows(np.diff(local, axis=1))      # (5, 3, 3)
     tips = local[:, 3]
-    gaps = np.sqrt(((tips[_TIP_A] - tips[_TIP_B]) ** 2).sum(axis=1))
-    cos = (bones[:, 1:] * bones[:, :-1]).sum(axis=2)  # (5, 2)
+    d = tips[_TIP_A] - tips[_TIP_B]
+    gaps = np.sqrt(np.einsum('ij,ij->i', d, d))
+    cos = np.einsum('ijk,ijk->ij', bones[:, 1:], bones[:, :-1])  # (5, 2)
     out = np.concatenate((reach.ravel(), bones.ravel(), gaps, cos.ravel()))
     return out if np.isfinite(out).all() else None
 

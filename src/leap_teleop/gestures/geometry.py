@@ -37,6 +37,10 @@ class HandGeometry:
     palm_width: float             # mm, the unit of the rest
     joints: Optional[np.ndarray]  # (5, 4, 3) mcp, pip, dip, tip per finger, mm; None
                                   # when any joint is missing
+    local: Optional[np.ndarray]   # the joints in the hand frame, palm widths (origin: the
+                                  # tracker's), None without joints
+    bones: Optional[np.ndarray]   # (5, 3, 3) unit bone directions in the hand frame
+    bone_length: Optional[np.ndarray]   # (5, 3) palm widths
     tips_world: list              # 5 [x, y, z] fingertips, mm
     thumb_dir: Tuple[float, float, float]   # unit, Leap axes: the thumb's knuckle -> tip
     pinch_gap: float              # palm widths, thumb tip to index tip
@@ -89,10 +93,11 @@ def hand_geometry(hand):
         joints = None
         if all(f.mcp is not None and f.pip is not None and f.dip is not None for f in fingers):
             try:
-                j = np.array([(f.mcp, f.pip, f.dip, f.tip) for f in fingers], dtype=float)
+                j = np.concatenate([np.asarray(a, dtype=float).ravel() for f in fingers
+                                    for a in (f.mcp, f.pip, f.dip, f.tip)]).reshape(5, 4, 3)
             except (TypeError, ValueError):
                 j = None
-            if j is not None and j.shape == (5, 4, 3) and np.isfinite(j).all():
+            if j is not None and np.isfinite(j).all():
                 joints = j
         if joints is not None:
             tips = joints[:, 3]
@@ -133,8 +138,17 @@ def hand_geometry(hand):
         thumb_dir = _unit3(*fd) if fd is not None else None
     if thumb_dir is None:
         thumb_dir = (math.nan,) * 3
-    extended = _extended(joints, tip_list, palm, t, d, width, fingers)
+    local = bones = length = None
+    if joints is not None:
+        local = joints @ (np.array((t, n, d)).T / width)
+        bones = local[:, 1:] - local[:, :-1]
+        length = np.sqrt(np.einsum('ijk,ijk->ij', bones, bones))
+        bones /= np.maximum(length, 1e-9)[:, :, None]
+        extended = _extended_from_local(local, bones, length)
+    else:
+        extended = _extended(tip_list, palm, t, d, width, fingers)
     return HandGeometry(basis=(t, n, d), palm=palm, palm_width=width, joints=joints,
+                        local=local, bones=bones, bone_length=length,
                         tips_world=tip_list, thumb_dir=thumb_dir,
                         pinch_gap=math.dist(tip_list[0], tip_list[1]) / width,
                         extended=extended)
@@ -149,18 +163,18 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _extended(joints, tips, palm, t, d, width, fingers):
-    if joints is not None:
-        bones = np.diff(joints[1:], axis=1)                       # (4, 3, 3)
-        length = np.sqrt((bones * bones).sum(axis=2))             # (4, 3)
-        chord = joints[1:, 3] - joints[1:, 0]
-        chord = np.sqrt((chord * chord).sum(axis=1)) / np.maximum(length.sum(axis=1), 1e-9)
-        along = (bones[:, 2] @ np.array(d)) / np.maximum(length[:, 2], 1e-9)
-        straight = ((chord > EXTENDED_CHORD) & (along > _COS_FLEX)).tolist()
-        im = joints[1, 0].tolist()
-        out = _dot([a - b for a, b in zip(tips[0], im)], t) / width
-        return (out > THUMB_OUT,) + tuple(straight)
-    # tips only: the tracker's own flags where it gives them, else the tip ahead of the palm
+def _extended_from_local(local, bones, length):
+    """5 flags from the hand-frame joints (see EXTENDED_*)."""
+    chord = local[1:, 3] - local[1:, 0]
+    chord = np.sqrt(np.einsum('ij,ij->i', chord, chord)) / np.maximum(length[1:].sum(axis=1),
+                                                                      1e-9)
+    straight = ((chord > EXTENDED_CHORD) & (bones[1:, 2, 2] > _COS_FLEX)).tolist()
+    return (float(local[0, 3, 0] - local[1, 0, 0]) > THUMB_OUT,) + tuple(straight)
+
+
+def _extended(tips, palm, t, d, width, fingers):
+    """Without joints: the tracker's own flags where it gives them, else the tip ahead of
+    the palm."""
     out = _dot([a - b for a, b in zip(tips[0], palm)], t) / width - INDEX_KNUCKLE_THUMBWARD
     flags = [out > THUMB_OUT]
     for i in (1, 2, 3, 4):
