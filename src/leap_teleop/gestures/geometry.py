@@ -93,8 +93,8 @@ def hand_geometry(hand):
         joints = None
         if all(f.mcp is not None and f.pip is not None and f.dip is not None for f in fingers):
             try:
-                j = np.concatenate([np.asarray(a, dtype=float).ravel() for f in fingers
-                                    for a in (f.mcp, f.pip, f.dip, f.tip)]).reshape(5, 4, 3)
+                j = np.concatenate([a for f in fingers for a in (f.mcp, f.pip, f.dip, f.tip)]
+                                   ).astype(float, copy=False).reshape(5, 4, 3)
             except (TypeError, ValueError):
                 j = None
             if j is not None and np.isfinite(j).all():
