@@ -13,11 +13,12 @@ Guards that no model can lift:
   AND the thumb measured pointing up: the thumb (knuckle -> tip) rising by THUMB_RISE_MIN
   and the hand's thumb side turned up by THUMB_SIDE_MIN, together by THUMB_UP_SCORE, in
   Leap y of unit vectors. Real thumbs-up takes (two people): rise 0.34 and up, side 0.21
-  and up, together 1.19..1.67; the same fist with its thumb out forward, palm up or down:
-  95 % below 0.64 together; a thumb out sideways from a fist turned thumb side up (the
-  LeapJS paddle take): rise -0.01..0.40; thumbs-down: -1.36 and below together. A thumb
-  out sideways or down is never a thumbs-up; thumbs-down mirrors the rule. Camera hands: the thumb tip above every other landmark and pointing
-  up in the picture.
+  and up, together 1.19..1.67; the same fist with its thumb out ahead, palm up or down:
+  95 % below 0.64 together; thumbs-down: -1.36 and below together. A thumb leaning as far
+  as a real one (rise 0.3..0.4, the LeapJS paddle take's most leaning frames too) passes;
+  a thumb out sideways (palm up or down) or down never does; thumbs-down mirrors the
+  rule. Camera hands: the thumb tip above every other landmark, its last bone within
+  CAMERA_THUMB_MAX_DEG of up in the picture.
 - a class wins only at MIN_P or more; below, the frame shows no gesture.
 """
 import math
