@@ -1,7 +1,6 @@
 """The shipped pose model under changes that must not move its decision (size, side,
 orientation, tracker noise, a missing joint), and the thumbs-up guard beside it: a
 thumbs-down or a sideways thumb never arms an arm, a held thumbs-up does."""
-import dataclasses
 import math
 
 import numpy as np

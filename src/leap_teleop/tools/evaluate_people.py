@@ -27,7 +27,6 @@ are the labelled photos, one photo source held out at a time.
 import argparse
 import collections
 import json
-import math
 import os
 import sys
 import time
