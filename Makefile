@@ -10,24 +10,24 @@ setup:
 	@bash tools/setup.sh
 
 demo: setup
-	@$(ENV) python -m leap_teleop.tools.demo --gui $(GUI)
+	@$(ENV) python -m tools.demo --gui $(GUI)
 
 test: setup
 	@$(ENV) python -m pytest test/ $(PYTEST_ARGS)
 
 bench: setup
-	@$(ENV) python -m leap_teleop.bench
+	@$(ENV) python -m tools.bench
 
 eval: setup
-	@$(ENV) python -m leap_teleop.tools.evaluate
+	@$(ENV) python -m tools.evaluation.evaluate
 
-# Refit the shipped pose models (arrays + model cards in src/leap_teleop/gestures/models/)
+# Refit the shipped pose models (arrays + model cards in src/leap_teleop/hands/gestures/models/)
 # from ../shared/data, with their leave-one-person-out figures.
 train: setup
-	@$(ENV) python -m leap_teleop.tools.train_gestures
+	@$(ENV) python -m leap_teleop.hands.gestures.train
 
 soak: setup
-	@$(ENV) python -m leap_teleop.tools.soak
+	@$(ENV) python -m tools.soak
 
 clean:
 	rm -rf .ws build devel bench_results.json soak_results.json eval_results.json people_results.json demo_output

@@ -29,6 +29,8 @@ case "${ROS_HOSTNAME:-$ROS_IP}" in
     fi ;;
 esac
 export PYTHONDONTWRITEBYTECODE=1
+# the project tooling (tools/: evaluation, benchmarks, demo, soak) is not installed
+export PYTHONPATH="$_lt_root${PYTHONPATH:+:$PYTHONPATH}"
 set -- "${_lt_args[@]}"
 unset _lt_args
 if [ "${BASH_SOURCE[0]}" = "$0" ]; then

@@ -6,5 +6,5 @@ setup(**generate_distutils_setup(
     packages=find_packages('src'),
     package_dir={'': 'src'},
     # the shipped pose models: arrays and their cards
-    package_data={'leap_teleop.gestures': ['models/*.npz', 'models/*.md']},
+    package_data={'leap_teleop.hands.gestures': ['models/*.npz', 'models/*.md']},
 ))

@@ -17,7 +17,7 @@ from std_msgs.msg import Empty
 from std_srvs.srv import Empty as EmptySrv, Trigger
 
 import ardrone_driver_types as driver
-from leap_teleop.drone.interface import (DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER,
+from leap_teleop.ros.ardrone_interface import (DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER,
                                          SERVICE, SUBSCRIBER)
 
 NODE = '/uav/ardrone_sim'

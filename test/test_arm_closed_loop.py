@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import yaml
 
-from leap_teleop.teleop.arm import DISARMED, TRACKING, ArmTeleopParams
-from leap_teleop.teleop.closed_loop import run_session
+from leap_teleop.ur10.teleop import DISARMED, TRACKING, ArmTeleopParams
+from tools.closed_loop import run_session
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_path
 
@@ -51,7 +51,7 @@ def test_scripted_sessions_pick_and_place(session, cell_file, arms):
 
 
 def test_generated_sessions_are_up_to_date():
-    from leap_teleop.tools.make_sessions import main
+    from tools.make_sessions import main
     assert main(['--check']) == 0
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from leap_teleop.teleop.arm import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
+from leap_teleop.ur10.teleop import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
                                     ArmTeleopParams, HandInput)
 from leap_teleop.ur10 import kinematics as kin
 

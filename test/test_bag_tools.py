@@ -1,5 +1,5 @@
 """The README's bag tools as commands: `rosrun leap_teleop recording_to_bag` on a shared
-recording and `python -m leap_teleop.tools.to_bag --script` on a session write the
+recording and `python -m leap_teleop.ros.recording_to_bag --script` on a session write the
 sender's topics, one message per frame and side."""
 import os
 import subprocess
@@ -32,9 +32,9 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
     assert got['leapmotion/data_right'] == ('leap_teleop/leapcobotright', frames)
     assert got['leapmotion/hand_right'] == ('leap_teleop/Hand', frames)
     # The gesture events are the ones the sender's logic finds in the take, in order.
-    from leap_teleop import conversions
-    from leap_teleop.leap_interface import LeapInterface
-    from leap_teleop.sources import make_source
+    from leap_teleop.ros import conversions
+    from leap_teleop.hands.leap_interface import LeapInterface
+    from leap_teleop.hands.sources import make_source
     li, want = LeapInterface(sides=['right', 'left']), []
     li.add_hand_listener(lambda frame, state: want.extend(
         (m.side, m.gesture, m.active) for m in conversions.to_gesture_events(state)))
@@ -49,7 +49,7 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
 
 def test_to_bag_writes_a_scripted_session(tmp_path):
     out = str(tmp_path / 'dual.bag')
-    said = run([sys.executable, '-m', 'leap_teleop.tools.to_bag', '--script',
+    said = run([sys.executable, '-m', 'leap_teleop.ros.recording_to_bag', '--script',
                 'config/gestures/ur10_pick_place_dual.yaml', out])
     frames = int(said.split(':')[-1].split()[0])
     assert frames == 2424, said                     # 20.2 s at 120 Hz

@@ -7,11 +7,9 @@ import types
 import numpy as np
 import pytest
 
-from leap_teleop.bench import __main__ as bench_main
-from leap_teleop.bench.bench_arm import _p99_ms, median_ci
-from leap_teleop.bench.bench_sender import max_rate_no_drop, received_hz
-
-
+from tools.bench import __main__ as bench_main
+from tools.bench.bench_arm import _p99_ms, median_ci
+from tools.bench.bench_sender import max_rate_no_drop, received_hz
 def fake(run, doc='fake benchmark'):
     return types.SimpleNamespace(run=run, __doc__=doc)
 
@@ -46,8 +44,7 @@ def test_each_run_writes_a_fresh_file(tmp_path):
 
 @pytest.mark.parametrize('outcome', ['measured', 'raised'])
 def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
-    from leap_teleop.tools import soak
-
+    from tools import soak
     def run(minutes, rtf, rate_hz=None, log=print):
         if outcome == 'raised':
             raise SystemExit('[soak] the graph died: ur10_sim')

@@ -8,13 +8,11 @@ import sys
 import numpy as np
 import pytest
 
-from leap_teleop.sources.landmarks import (CameraModel, HandLandmarks, camera_to_leap,
+from leap_teleop.hands.sources.landmarks import (CameraModel, HandLandmarks, camera_to_leap,
                                            chirality, hand_from_landmarks, hand_side,
                                            join_touching_tips, person_side, project,
                                            reprojection_rms_px, solve_translation)
-from leap_teleop.tools.evaluate import HANDS_DATA
-
-
+from tools.evaluation.evaluate import HANDS_DATA
 @pytest.fixture(scope='module')
 def hands_json():
     path = os.path.join(HANDS_DATA, 'hands.json')
@@ -271,8 +269,8 @@ def test_camera_matrix_and_letterbox():
 
 def test_camera_modules_load_without_mediapipe_or_opencv():
     """Nodes that do not use the camera must not pay for MediaPipe or OpenCV at start-up."""
-    code = ('import sys; import leap_teleop.sources.camera, leap_teleop.sources.camera_params, '
-            'leap_teleop.camera_view, leap_teleop.nodes.sender; '
+    code = ('import sys; import leap_teleop.hands.sources.camera, leap_teleop.hands.sources.camera_params, '
+            'leap_teleop.hands.camera_view, leap_teleop.ros.nodes.sender; '
             'bad = [m for m in ("mediapipe", "cv2") if m in sys.modules]; '
             'sys.exit("imported: %s" % bad if bad else 0)')
     proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True)
@@ -281,7 +279,7 @@ def test_camera_modules_load_without_mediapipe_or_opencv():
 
 def test_missing_mediapipe_names_what_to_install(tmp_path):
     code = ('import sys; sys.modules["mediapipe"] = None\n'
-            'from leap_teleop.sources import make_source, SourceError\n'
+            'from leap_teleop.hands.sources import make_source, SourceError\n'
             'try:\n'
             '    make_source("video", path=%r)\n'
             'except SourceError as e:\n'

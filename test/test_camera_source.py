@@ -10,13 +10,13 @@ import sys
 import numpy as np
 import pytest
 
-from leap_teleop.camera_view import CameraView, draw, held_gestures, image_message
-from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.leap_interface import LeapInterface
-from leap_teleop.sources import make_source
-from leap_teleop.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
-from leap_teleop.tools.evaluate import HANDS_DATA
-
+from leap_teleop.hands.camera_view import CameraView, draw, held_gestures
+from leap_teleop.ros.conversions import image_message
+from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.sources import make_source
+from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
+from tools.evaluation.evaluate import HANDS_DATA
 HELD = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
 CLIP_FIST_THUMB = 'clip_fist_then_thumbs_up__mps__gr_test_video.mp4'
 CLIP_PALM = 'clip_palm_motion__mps__hl_test_video.mp4'
@@ -39,7 +39,7 @@ def detections(hands_json):
     """{photo: (width, height, [HandLandmarks])} from the pipeline, with hands.json's
     settings (still images, up to two hands, full model)."""
     import cv2
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     out = {}
     with HandDetector(max_hands=2, model='full', static=True) as detector:
         for name in hands_json['images']:
@@ -228,7 +228,7 @@ def test_clip_open_hand_rising():
 
 def test_classify_frames_reads_images_and_videos(tmp_path):
     env = dict(os.environ, PYTHONWARNINGS='ignore')
-    cmd = [sys.executable, '-m', 'leap_teleop.tools.classify_frames']
+    cmd = [sys.executable, '-m', 'leap_teleop.hands.classify_frames']
     out = subprocess.run(cmd + [data('fist__htj__22.jpg')], capture_output=True, text=True,
                          env=env, timeout=120)
     assert out.returncode == 0, out.stderr
@@ -279,8 +279,9 @@ def test_annotated_view(detections):
 def test_record_frames_and_bag_from_camera_footage(tmp_path):
     """record_frames and recording_to_bag take the video source like any other."""
     import rosbag
-    from leap_teleop.sources.recording import RecordingSource
-    from leap_teleop.tools import record_frames, to_bag
+    from leap_teleop.hands.sources.recording import RecordingSource
+    from leap_teleop.hands import record_frames
+    from leap_teleop.ros import recording_to_bag as to_bag
     out = tmp_path / 'thumbs.json.gz'
     assert record_frames.main([str(out), '--source', 'video', '--realtime', '0', '--video',
                                os.path.join(HANDS_DATA, 'thumbs_up__*')]) == 0
@@ -294,7 +295,7 @@ def test_record_frames_and_bag_from_camera_footage(tmp_path):
 
 
 def test_camera_sources_refuse_bad_input_with_the_fix(tmp_path):
-    from leap_teleop.sources import SourceError
+    from leap_teleop.hands.sources import SourceError
     with pytest.raises(SourceError, match='does not exist'):
         make_source('webcam', device='/dev/video_absent')
     with pytest.raises(SourceError, match='names no video file'):
@@ -328,7 +329,7 @@ def test_paired_trackers_find_both_hands_once_each():
     """Video mode, 'paired': the two-hand photo as a still stream: the first hand on the
     first frame, the second within detect_every frames, then both every frame, never the
     same hand twice (the second graph sees the first hand blanked out)."""
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
     with HandDetector(max_hands=2, strategy='paired', detect_every=4) as detector:
         counts, runs = [], []
@@ -361,7 +362,7 @@ def test_search_thread_finds_both_hands_from_a_following_frame():
     tracked from a following frame on: the second hand within detect_every frames of the
     first (paced at 20 frames/s, a search ends within a frame once its graph has loaded
     its models), then both every frame, never the same hand twice."""
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
     with HandDetector(max_hands=2, strategy='paired', detect_every=4,
                       search_thread=True) as detector:
@@ -399,7 +400,7 @@ def test_search_thread_runs_one_search_at_a_time():
     time: the hand stays with the graph that found it. Made likely here: the second
     graph's searches are slow and it may look on every frame."""
     import cv2
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = cv2.cvtColor(cv2.imread(data('fist__htj__22.jpg')), cv2.COLOR_BGR2RGB)
     with HandDetector(max_hands=2, strategy='paired', detect_every=1,
                       search_thread=True) as detector:
@@ -420,7 +421,7 @@ def search_threads():
 
 
 def test_close_waits_for_the_search_and_stops_its_thread():
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
     detector = HandDetector(max_hands=2, strategy='paired', search_thread=True)
     assert detector.detect(rgb) == []                  # a search is now under way
@@ -433,7 +434,7 @@ def test_tracking_does_not_wait_for_a_slow_search():
     """A search still running is left to run, the tracked hand is returned meanwhile;
     its hand is adopted once it has ended."""
     import time
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
     with HandDetector(max_hands=2, strategy='paired', detect_every=100,
                       search_thread=True) as detector:
@@ -448,7 +449,7 @@ def test_tracking_does_not_wait_for_a_slow_search():
 
 
 def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
-    from leap_teleop.sources.mediapipe_hands import HandDetector
+    from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
 
     class Failing:
@@ -463,7 +464,7 @@ def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
         detector.detect_every = 2
         detector._graphs[1].close()
         detector._graphs[1] = Failing()
-        with caplog.at_level('WARNING', logger='leap_teleop.sources.mediapipe_hands'):
+        with caplog.at_level('WARNING', logger='leap_teleop.hands.sources.mediapipe_hands'):
             counts = paced_counts(detector, rgb, 9)
     assert counts == [1] * 9, counts
     assert detector.search_failures >= 3, detector.search_failures
@@ -472,8 +473,8 @@ def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
 
 
 def test_a_frame_the_detector_fails_on_is_skipped_and_a_broken_detector_ends_the_source():
-    from leap_teleop.sources import SourceError
-    from leap_teleop.sources.camera import MAX_DETECTOR_FAILURES
+    from leap_teleop.hands.sources import SourceError
+    from leap_teleop.hands.sources.camera import MAX_DETECTOR_FAILURES
     source = make_source('video', path=data('fist__htj__22.jpg'))
     real = source.detector
 

@@ -24,7 +24,7 @@ import textwrap
 
 import pytest
 
-from leap_teleop.bench.harness import free_port
+from tools.bench.harness import free_port
 from test_launch_smoke import run_launches
 
 HERE = os.path.dirname(os.path.abspath(__file__))

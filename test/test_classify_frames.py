@@ -7,20 +7,18 @@ import sys
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from leap_teleop.frame import Frame
-from leap_teleop.hand_model import render_hand
-from leap_teleop.sources import leapjs
-from leap_teleop.tools.classify_frames import Classifier
-
-from leap_teleop.tools.evaluate import data_dir
-
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.classify_frames import Classifier
+from tools.evaluation.evaluate import data_dir
 DATA = data_dir()
 KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down',
         'events']
 
 
 def run_cli(args, stdin=None):
-    p = subprocess.run([sys.executable, '-m', 'leap_teleop.tools.classify_frames'] + args,
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames'] + args,
                        input=stdin, capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     return [json.loads(line) for line in p.stdout.splitlines()]
@@ -123,7 +121,7 @@ KEYPOINTS = os.path.join(os.path.dirname(DATA), 'keypoints')
 
 
 def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
-    from leap_teleop.tools import gesture_data
+    from leap_teleop.hands.gestures import datasets as gesture_data
     path = os.path.join(KEYPOINTS, 'Harikumar4.csv')
     if not os.path.isfile(path):
         pytest.fail('the shared keypoint files are not at %s' % KEYPOINTS)
@@ -143,7 +141,7 @@ def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
 
 
 def test_keypoints_mirror_image_reads_the_same(tmp_path):
-    from leap_teleop.tools import gesture_data
+    from leap_teleop.hands.gestures import datasets as gesture_data
     _, _, xy = gesture_data.read_keypoints(os.path.join(KEYPOINTS, 'Kazuhito00.csv'))
     rows = xy[::200]
     mirrored = rows.copy()
@@ -160,6 +158,6 @@ def test_keypoints_mirror_image_reads_the_same(tmp_path):
 def test_malformed_keypoint_file_is_one_clear_error(tmp_path):
     bad = tmp_path / 'bad.csv'
     bad.write_text('1,0.0,0.0,0.5\n')
-    p = subprocess.run([sys.executable, '-m', 'leap_teleop.tools.classify_frames', '--keypoints',
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', '--keypoints',
                         str(bad)], capture_output=True, text=True, timeout=60)
     assert p.returncode == 2 and 'row 1' in p.stderr and 'Traceback' not in p.stderr

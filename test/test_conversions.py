@@ -1,11 +1,11 @@
 """HandState -> leapcobot / Hand / GestureEvent messages."""
 import pytest
 
-from leap_teleop import conversions
-from leap_teleop.frame import Frame
-from leap_teleop.hand_model import render_hand
-from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.leap_interface import LeapInterface
+from leap_teleop.ros import conversions
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 
 

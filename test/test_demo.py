@@ -7,7 +7,7 @@ import sys
 def test_demo_succeeds_and_writes_its_outputs(tmp_path):
     out = tmp_path / 'demo_output'
     # Its own process: the demo's monitor is a rospy node.
-    proc = subprocess.run([sys.executable, '-m', 'leap_teleop.tools.demo', '--out', str(out)],
+    proc = subprocess.run([sys.executable, '-m', 'tools.demo', '--out', str(out)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=600)
     log = proc.stdout.decode(errors='replace')
     assert proc.returncode == 0, log[-4000:]

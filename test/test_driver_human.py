@@ -6,15 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop import conversions, skeleton
-from leap_teleop.frame import Finger, Frame
-from leap_teleop.gestures import GestureEvent
-from leap_teleop.hand_model import render_hand
-from leap_teleop.leap_interface import HandState, LeapInterface
-from leap_teleop.lowpass import LowPass
-from leap_teleop.visualization import driver_markers
+from leap_teleop.ros import conversions
 
-
+from leap_teleop.hands import skeleton
+from leap_teleop.hands.frame import Finger, Frame
+from leap_teleop.hands.gestures import GestureEvent
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.tracker import HandState
+from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.control.lowpass import LowPass
+from leap_teleop.ros.markers import driver_markers
 # --- skeleton ----------------------------------------------------------------------------
 def test_bones_run_knuckle_to_tip_and_the_metacarpal_has_no_length():
     hand = render_hand('right', 'open', [0.0, 200.0, 0.0])

@@ -19,11 +19,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from leap_teleop.bench import harness
-from leap_teleop.sources import leapjs
-from leap_teleop.sources.scripted import GestureScript
-from leap_teleop.tools.evaluate import HANDS_DATA
-
+from tools.bench import harness
+from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.sources.scripted import GestureScript
+from tools.evaluation.evaluate import HANDS_DATA
 HERE = os.path.dirname(os.path.abspath(__file__))
 PYTHON = sys.executable
 

@@ -4,10 +4,9 @@ import pytest
 from leap_teleop.drone import sim as ds
 from leap_teleop.drone.pilot import DronePilot, HandInput, PilotConfig
 from leap_teleop.drone.sim import ArDroneSim
-from leap_teleop.leap_interface import LeapInterface
-from leap_teleop.nodes.common import package_path
-from leap_teleop.sources.scripted import ScriptedSource
-
+from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.ros.node import package_path
+from leap_teleop.hands.sources.scripted import ScriptedSource
 SCRIPT = package_path('config', 'gestures', 'drone_flight.yaml')
 
 

@@ -2,9 +2,8 @@
 import os
 import re
 
-from leap_teleop.drone.interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
-from leap_teleop.nodes.ardrone_sim import PARAMS
-
+from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
+from leap_teleop.ros.nodes.ardrone_sim import PARAMS
 README = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'README.md')
 
 

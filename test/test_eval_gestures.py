@@ -4,9 +4,7 @@ import os
 
 import pytest
 
-from leap_teleop.tools import evaluate
-
-
+from tools.evaluation import evaluate
 @pytest.fixture(scope='module')
 def results(leapjs_data):
     return evaluate.evaluate(leapjs_data, verbose=False)
@@ -75,7 +73,7 @@ def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):
 
 
 def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
-    from leap_teleop.gestures import GestureEvent
+    from leap_teleop.hands.gestures import GestureEvent
     sdk = evaluate.SdkCircle('left', 1.0, 1.2, False)
     sdk.finger, sdk.places = 'thumb', [([20.0, 170.0, 25.0], 17.0)]
     rows = lambda e, t=1.1, side='left': [(0, side, type('S', (), {'events': [e]}), None, t)]  # noqa: E731
@@ -94,7 +92,7 @@ def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
 
 def test_main_writes_the_json(tmp_path, results, leapjs_data):
     import json
-    from leap_teleop.tools import evaluate_invariance
+    from tools.evaluation import invariance as evaluate_invariance
     out = tmp_path / 'eval_results.json'
     # one photo for the photo views (its full table is make eval's and test_photo_views')
     photos = tmp_path / 'hands'

@@ -5,9 +5,8 @@ import os
 
 import pytest
 
-from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.tools import evaluate_strokes as es
-
+from leap_teleop.hands.gestures import GestureRecognizer
+from tools.evaluation import strokes as es
 ZIG_ZAG_LIKE = ('zig-zag', 'check', 'caret', 'v')
 
 

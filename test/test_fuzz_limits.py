@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from leap_teleop import conversions
+from leap_teleop.ros import conversions
 from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
-from leap_teleop.frame import Finger, Hand
-from leap_teleop.leap_interface import HandTracker
-from leap_teleop.teleop.arm import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
+from leap_teleop.hands.frame import Finger, Hand
+from leap_teleop.hands.tracker import HandTracker
+from leap_teleop.ur10.teleop import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
                                     ArmTeleopParams, HandInput)
-from leap_teleop.teleop.input_check import InputStream
+from leap_teleop.control.input_check import InputStream
 from leap_teleop.ur10 import kinematics as kin
 
 HOME = kin.HOME_Q.copy()
@@ -183,7 +183,7 @@ def raw_hands(draw):
        st.sampled_from(['right', 'left']))
 def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
     # Frame times are >= 0: every source produces them so (a negative one cannot be stamped).
-    log = logging.getLogger('leap_teleop.leap_interface')
+    log = logging.getLogger('leap_teleop.hands.tracker')
     level = log.level
     log.setLevel(logging.ERROR)        # its rate-limited warnings restart with each tracker
     try:
@@ -391,8 +391,8 @@ def test_flight_animation_type_200_refused_and_duration_overflow_harmless():
 
 # -- no parameter disables a watchdog: any accepted value keeps it working ------------------
 from leap_teleop.drone.pilot import PILOT_PARAMS, PilotWorker  # noqa: E402
-from leap_teleop.service_call import ServiceCall  # noqa: E402
-from leap_teleop.teleop.arm import TELEOP_PARAMS  # noqa: E402
+from leap_teleop.ros.service_call import ServiceCall  # noqa: E402
+from leap_teleop.ur10.teleop import TELEOP_PARAMS  # noqa: E402
 
 
 def _accepted(p):
@@ -590,7 +590,7 @@ def test_found_live_queue_delivers_the_newest_frame_after_a_stall():
     # Before: a 256-frame queue handed a 2 s old hand to the robots after a stall.
     from types import SimpleNamespace
 
-    from leap_teleop.sources.live import PushQueue
+    from leap_teleop.hands.sources.live import PushQueue
     clock = FakeClock(100.0)
     pq = PushQueue(clock, maxsize=8, max_age=0.25)
     for i in range(10):                       # the device runs at 120 Hz, the consumer keeps up

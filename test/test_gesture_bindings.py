@@ -3,13 +3,13 @@ import os
 
 import pytest
 
-from leap_teleop.frame import Frame
-from leap_teleop.gestures import GestureEvent, GestureRecognizer, GestureState
-from leap_teleop.gestures.bindings import (BOUND_FLIP_RADIUS_M, DEFAULTS, GRIPPER_CLOSED,
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures import GestureEvent, GestureRecognizer, GestureState
+from leap_teleop.hands.gestures.bindings import (BOUND_FLIP_RADIUS_M, DEFAULTS, GRIPPER_CLOSED,
                                            BindingError, Bindings, load_bindings)
-from leap_teleop.hand_model import render_hand
-from leap_teleop.leap_interface import HandTracker, LeapInterface
-
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.tracker import HandTracker
+from leap_teleop.hands.leap_interface import LeapInterface
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_YAML = os.path.join(ROOT, 'config', 'gestures', 'bindings', 'default.yaml')
 

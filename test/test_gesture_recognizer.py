@@ -6,13 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from leap_teleop.frame import FINGER_NAMES, Finger, Hand
-from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.tools.original_rules import OriginalRules
-from leap_teleop.hand_model import POSES, render_hand
-from leap_teleop.leap_interface import HandTracker
-from leap_teleop.sources.scripted import GestureScript, ScriptedSource
-
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Hand
+from leap_teleop.hands.gestures import GestureRecognizer
+from tools.evaluation.original_rules import OriginalRules
+from leap_teleop.hands.hand_model import POSES, render_hand
+from leap_teleop.hands.tracker import HandTracker
+from leap_teleop.hands.sources.scripted import GestureScript, ScriptedSource
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open')
 EXPECTED = {'open': {'open'}, 'fist': {'fist'}, 'thumbs_up': {'thumb_up'}, 'rock': {'rock'},
             'pinch': {'pinch'}, 'point': set(), 'two': set(), 'gun': set()}
@@ -43,7 +42,7 @@ def test_pinch_value_round_trips_through_the_hand_model(value):
 
 
 def test_rotated_poses_still_recognized():
-    from leap_teleop.hand_model import rpy_to_basis
+    from leap_teleop.hands.hand_model import rpy_to_basis
     for rpy in [(0.3, 0.0, 0.0), (0.0, 0.4, 0.0), (0.0, 0.0, 0.5), (-0.4, 0.3, -0.3)]:
         n, d = rpy_to_basis(*rpy, 'right')
         for pose in ('fist', 'open', 'rock', 'pinch'):
@@ -66,7 +65,7 @@ def test_temporal_filter_needs_consistent_frames_and_emits_start_stop():
     events = [(e.gesture, e.active) for e in states[2].events]
     assert ('fist', False) in events and ('open', True) in events
     # the unfold once the open hand has held FOLD_CONFIRM_S
-    from leap_teleop.gestures.temporal import FOLD_CONFIRM_S
+    from leap_teleop.hands.gestures.temporal import FOLD_CONFIRM_S
     unfolds = [i for i, s in enumerate(states) if any(e.gesture == 'unfold' for e in s.events)]
     assert len(unfolds) == 1 and (unfolds[0] - 2) / 120.0 == pytest.approx(FOLD_CONFIRM_S, abs=0.01)
 
@@ -83,7 +82,7 @@ def test_fold_event_and_reset():
 
 
 def test_fold_and_unfold_need_the_first_shape_held():
-    from leap_teleop.gestures.temporal import FOLD_CONFIRM_S, FOLD_GAP_S
+    from leap_teleop.hands.gestures.temporal import FOLD_CONFIRM_S, FOLD_GAP_S
     opn = render_hand('right', 'open', (0, 200, 0))
     fist = render_hand('right', 'fist', (0, 200, 0))
     brief = int(FOLD_CONFIRM_S * 120 * 0.5)
@@ -181,7 +180,7 @@ def test_palm_circle_of_the_drone_flight_fires_once_it_is_drawn_with_its_radius(
 
 
 def test_fit_circle_recovers_a_noisy_tilted_arc():
-    from leap_teleop.gestures import fit_circle
+    from leap_teleop.hands.gestures import fit_circle
     rng = np.random.default_rng(1)
     normal = np.array([0.3, -0.5, 0.81])
     normal /= np.linalg.norm(normal)
@@ -215,7 +214,7 @@ def _fingertip_loop(plane, sense=1.0, radius=12.0, duration=0.3, rate=110.0, pos
 def _index_loop(plane, sense=1.0, radius=60.0, duration=1.0, rate=110.0):
     """Circle events of a pointing hand whose index tip alone goes round a loop (the palm
     still), fed to a CircleDetector as the recognizer feeds it."""
-    from leap_teleop.gestures import CircleDetector, hand_geometry
+    from leap_teleop.hands.gestures import CircleDetector, hand_geometry
     hand = render_hand('right', 'point', (0.0, 200.0, 0.0))
     g0 = hand_geometry(hand)
     det, events = CircleDetector(), []
@@ -342,7 +341,7 @@ def test_random_hands_never_raise_and_stay_in_range(hs, times):
 @given(st.lists(st.tuples(st.sampled_from(sorted(POSES)), st.floats(-0.6, 0.6),
                           st.floats(-0.6, 0.6), st.floats(0, 0.8)), min_size=1, max_size=20))
 def test_pose_sequences_keep_exclusive_gestures(seq):
-    from leap_teleop.hand_model import rpy_to_basis
+    from leap_teleop.hands.hand_model import rpy_to_basis
     rec = GestureRecognizer()
     for i, (pose, roll, pitch, value) in enumerate(seq):
         n, d = rpy_to_basis(roll, pitch, 0.0, 'right')

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
-from leap_teleop.teleop.arm import ArmTeleop, ArmTeleopParams, HandInput
-from leap_teleop.teleop.input_age import InputAgeWindow
+from leap_teleop.ur10.teleop import ArmTeleop, ArmTeleopParams, HandInput
+from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.ur10 import kinematics as kin
 
 

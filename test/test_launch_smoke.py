@@ -11,9 +11,8 @@ import time
 
 import pytest
 
-from leap_teleop.bench import harness
-from leap_teleop.tools.evaluate import data_dir
-
+from tools.bench import harness
+from tools.evaluation.evaluate import data_dir
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CHECK = os.path.join(HERE, 'launch_check.py')

@@ -15,7 +15,7 @@ import rosgraph
 PROGRAM = textwrap.dedent('''
     import os, signal, sys, threading, time
     import rospy
-    from leap_teleop.nodes.signals import install_shutdown_handlers
+    from leap_teleop.ros.signals import install_shutdown_handlers
     handlers = sys.argv[1]
     lock, ran_in = threading.Lock(), []
     def hook(*_reason):
@@ -108,13 +108,13 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
     from its main thread), each stopped mid-run: status 0 within 10 s, no traceback (rospy
     refuses publishes once it has closed the topics, before is_shutdown() turns true)."""
     import random
-    from leap_teleop.bench.harness import ros_master
+    from tools.bench.harness import ros_master
     rng = random.Random(7)
     with ros_master() as env:
         master = rosgraph.Master('/signals_test', master_uri=env['ROS_MASTER_URI'])
 
         # A subscriber makes closing the topic take a while (its connection ends).
-        echo = subprocess.Popen([sys.executable, '-m', 'leap_teleop.bench.echo'], env=env,
+        echo = subprocess.Popen([sys.executable, '-m', 'tools.bench.echo'], env=env,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
         def publishing(i):
@@ -122,7 +122,7 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
                        for t, nodes in master.getSystemState()[0])
         try:
             runs = interrupt_runs(env, lambda i: [sys.executable, '-m',
-                                                  'leap_teleop.bench.bare_publisher', '--rate',
+                                                  'tools.bench.bare_publisher', '--rate',
                                                   '1000', '--topic', 'bench/echo_in'],
                                   publishing, 8, rng)
         finally:

@@ -11,17 +11,20 @@ import numpy as np
 import pytest
 import yaml
 
-from leap_teleop import conversions
-from leap_teleop.frame import Frame
-from leap_teleop.gestures import GestureRecognizer
-from leap_teleop.gestures.bindings import Bindings
-from leap_teleop.gestures.classifier import PoseClassifier
-from leap_teleop.hand_model import render_hand
-from leap_teleop.leap_interface import LeapInterface
-from leap_teleop.sources import make_source
-from leap_teleop.sources.base import HandSource
-from leap_teleop.teleop.arm import ARMED, DISARMED, ArmTeleop, HandInput
-from leap_teleop.tools import classify_frames, gesture_data, record_gestures, train_gestures
+from leap_teleop.ros import conversions
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures.bindings import Bindings
+from leap_teleop.hands.gestures.classifier import PoseClassifier
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.sources import make_source
+from leap_teleop.hands.sources.base import HandSource
+from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmTeleop, HandInput
+from leap_teleop.hands import classify_frames
+from leap_teleop.hands.gestures import (datasets as gesture_data,
+    record as record_gestures,
+    train as train_gestures)
 from leap_teleop.ur10 import kinematics as kin
 
 RETRAIN_CPU_S = 60.0        # the issue's bound for retraining with a user's samples
@@ -160,7 +163,7 @@ def test_classify_frames_reports_the_new_gesture(trained, tmp_path, capsys):
 
 
 def leapjs_dict(i, pose):
-    from leap_teleop.sources import leapjs
+    from leap_teleop.hands.sources import leapjs
     return leapjs.frame_to_dict(Frame(i, 100.0 + i / 60.0,
                                       [render_hand('right', pose, (0, 200, 0))]))
 
@@ -300,7 +303,7 @@ def test_the_nodes_arm_on_a_bound_new_gesture(trained, tmp_path):
 def test_record_gestures_from_a_leap_recording(tmp_path, capsys):
     """A recording (here a shared LeapJS take of a hand making an L / gun) is a source
     too: one pose record per hand per frame, gzip by the name."""
-    from leap_teleop.tools.evaluate import data_dir
+    from tools.evaluation.evaluate import data_dir
     take = os.path.join(data_dir(), 'gun.json.lz')
     assert os.path.isfile(take), 'shared data missing: %s' % take
     out = tmp_path / 'gun.jsonl.gz'
@@ -319,7 +322,7 @@ def test_record_gestures_from_a_leap_recording(tmp_path, capsys):
 @pytest.mark.rostest
 def test_the_nodes_fly_a_drone_on_bound_gestures(trained, tmp_path):
     """The real graph: sender (the user's model; takeoff bound to the V sign, land to a
-    fist held) -> drone_subscriber (unchanged) -> simulated AR.Drone: it takes off,
+    fist held) -> drone_pilot (unchanged) -> simulated AR.Drone: it takes off,
     flies and lands again, while the hand is still there (a lost hand lands only after
     the check's time limit)."""
     from test_launch_smoke import run_launches

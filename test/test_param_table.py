@@ -1,15 +1,14 @@
 """README's parameter tables are what the declarations say."""
 import os
 
-from leap_teleop.tools import param_table
-
+from tools import param_table
 README = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'README.md')
 SCRIPTS = os.path.join(os.path.dirname(README), 'scripts')
 
 
 def test_readme_parameter_tables_match_the_declarations():
     assert param_table.readme_copy(README) == param_table.markdown(), (
-        'README.md is out of date: python -m leap_teleop.tools.param_table')
+        'README.md is out of date: python -m tools.param_table')
     assert param_table.main(['--check', README]) == 0
 
 

@@ -44,7 +44,7 @@ def test_allowed_text():
 # -- every node's table: declarations, bad values, bounds of the safety functions ----------
 from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
 
-from leap_teleop.tools.param_table import node_tables  # noqa: E402
+from tools.param_table import node_tables  # noqa: E402
 
 TABLES = {module: params for module, _, params in node_tables()}
 EVERY_PARAM = [(m, n) for m, params in sorted(TABLES.items()) for n in params]
@@ -146,7 +146,7 @@ def test_every_bad_value_of_every_parameter_is_refused():
 
 # -- the library configurations share the declarations ------------------------------------
 from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotConfig  # noqa: E402
-from leap_teleop.teleop.arm import TELEOP_PARAMS, ArmTeleop, ArmTeleopParams  # noqa: E402
+from leap_teleop.ur10.teleop import TELEOP_PARAMS, ArmTeleop, ArmTeleopParams  # noqa: E402
 
 
 def test_every_config_field_is_declared():

@@ -6,10 +6,9 @@ import os
 import numpy as np
 import pytest
 
-from leap_teleop.tools import evaluate_people as ep
-from leap_teleop.tools import gesture_data as gd
-from leap_teleop.tools import train_gestures as tg
-
+from tools.evaluation import people as ep
+from leap_teleop.hands.gestures import datasets as gd
+from leap_teleop.hands.gestures import train as tg
 HELD = ('user_03', 'guinevere_01')
 
 
@@ -72,7 +71,7 @@ def test_lopo_fits_are_deterministic():
 
 
 def test_train_command_writes_a_model_and_its_card(tmp_path, capsys):
-    from leap_teleop.gestures import PoseClassifier
+    from leap_teleop.hands.gestures import PoseClassifier
     out = str(tmp_path / 'keypoints.npz')
     assert tg.main(['--family', 'keypoints', '--out', out]) == 0
     model = PoseClassifier.load(out, 'keypoints')

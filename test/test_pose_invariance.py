@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop.gestures import GestureRecognizer, hand_geometry, load_model
-from leap_teleop.gestures.pose import classify_pose, thumb_points
-from leap_teleop.hand_model import render_hand
-from leap_teleop.teleop.arm import ARMED, DISARMED, ArmTeleop, HandInput
-from leap_teleop.tools import evaluate_invariance
+from leap_teleop.hands.gestures import GestureRecognizer, hand_geometry, load_model
+from leap_teleop.hands.gestures.pose import classify_pose, thumb_points
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmTeleop, HandInput
+from tools.evaluation import invariance as evaluate_invariance
 from leap_teleop.ur10 import kinematics as kin
 
 
@@ -86,7 +86,7 @@ def test_a_held_thumbs_up_arms_but_not_before_the_hold():
 
 
 def test_a_model_file_of_the_wrong_family_or_malformed_is_refused(tmp_path):
-    from leap_teleop.gestures import ModelError, PoseClassifier
+    from leap_teleop.hands.gestures import ModelError, PoseClassifier
     bad = tmp_path / 'bad.npz'
     bad.write_bytes(b'not a zip')
     with pytest.raises(ModelError, match='cannot read'):
@@ -107,7 +107,7 @@ def test_a_model_file_of_the_wrong_family_or_malformed_is_refused(tmp_path):
 
 
 def test_the_shipped_models_are_arrays_with_a_card():
-    from leap_teleop.gestures.classifier import DEFAULT_MODELS
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS
     for family in ('leap', 'keypoints'):
         m = load_model(None, family)
         with np.load(DEFAULT_MODELS[family], allow_pickle=False) as z:
@@ -117,9 +117,9 @@ def test_the_shipped_models_are_arrays_with_a_card():
 
 
 def test_camera_thumb_guard_wants_the_thumb_up_in_the_picture():
-    from leap_teleop.gestures.features import rotate_keypoints
-    from leap_teleop.gestures.pose import camera_thumb_points
-    from leap_teleop.tools import gesture_data
+    from leap_teleop.hands.gestures.features import rotate_keypoints
+    from leap_teleop.hands.gestures.pose import camera_thumb_points
+    from leap_teleop.hands.gestures import datasets as gesture_data
     thumbs = [xy for source, label, xy in gesture_data.photo_hands() if label == 'thumbs_up']
     assert len(thumbs) == 4
     for xy in thumbs:

@@ -18,7 +18,7 @@ COVERED = {
     './env.sh roslaunch leap_teleop ur10_dual.launch': SMOKE,
     './env.sh rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
     'rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
-    "./env.sh python -m leap_teleop.tools.classify_frames 'photos/*.jpg'":
+    "./env.sh python -m leap_teleop.hands.classify_frames 'photos/*.jpg'":
         'test_camera_source.py::test_classify_frames_reads_images_and_videos',
     './env.sh roslaunch leap_teleop ur10_dual.launch source:=video video:=clip.mp4 '
     'annotated_image_topic:=/camera/annotated': 'camera_video_ur10.test',
@@ -38,16 +38,16 @@ COVERED = {
     'source devel/setup.bash': WORKSPACE,
     'make demo': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     'make eval': 'test_eval_gestures.py::test_main_writes_the_json',
-    './env.sh python -m leap_teleop.tools.evaluate_strokes --loso':
+    './env.sh python -m tools.evaluation.strokes --loso':
         'test_eval_strokes.py::test_loso_command_meets_the_goals',
-    './env.sh python -m leap_teleop.tools.evaluate_photo_views':
+    './env.sh python -m tools.evaluation.photo_views':
         'test_photo_views.py::test_main_prints_and_writes_the_table',
     'make bench': 'test_bench_harness.py::test_each_run_writes_a_fresh_file',
-    './env.sh python -m leap_teleop.tools.classify_frames --keypoints '
+    './env.sh python -m leap_teleop.hands.classify_frames --keypoints '
     '../shared/data/keypoints/Harikumar4.csv':
         'test_classify_frames.py::test_keypoints_in_both_csv_forms_give_one_line_per_row',
     'make train': 'test_people_eval.py::test_train_command_writes_a_model_and_its_card',
-    'python -m leap_teleop.tools.evaluate_people':
+    'python -m tools.evaluation.people':
         'test_people_eval.py::test_evaluate_people_command_writes_its_figures',
     'roslaunch leap_teleop sender.launch source:=leap gesture_model:=$HOME/two.npz '
     'gesture_bindings:=$HOME/mine.yaml': 'test_own_gestures.py::test_the_nodes_arm_on_a_bound_new_gesture',
@@ -59,14 +59,14 @@ COVERED = {
         'test_own_gestures.py::test_camera_hands_become_community_normalised_keypoint_rows',
     'rosrun leap_teleop train_gestures --add two.jsonl --label two --out ~/two.npz':
         'test_own_gestures.py::test_default_retrain_includes_the_leave_one_person_out_report',
-    'python -m leap_teleop.tools.classify_frames':
+    'python -m leap_teleop.hands.classify_frames':
         'test_classify_frames.py::test_json_lines_on_stdin_stream_and_stateless',
-    'python -m leap_teleop.tools.make_sessions': 'test_arm_closed_loop.py',
+    'python -m tools.make_sessions': 'test_arm_closed_loop.py',
     # make demo runs rotated_task.run, which the module's main() calls.
-    'python -m leap_teleop.tools.rotated_task': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
-    'python -m leap_teleop.tools.param_table':
+    'python -m tools.rotated_task': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
+    'python -m tools.param_table':
         'test_param_table.py::test_readme_parameter_tables_match_the_declarations',
-    'python -m leap_teleop.tools.to_bag --script config/gestures/ur10_pick_place_dual.yaml '
+    'python -m leap_teleop.ros.recording_to_bag --script config/gestures/ur10_pick_place_dual.yaml '
     '/tmp/dual.bag': 'test_bag_tools.py::test_to_bag_writes_a_scripted_session',
     'rosrun leap_teleop recording_to_bag ../shared/data/leapjs/grab.json.lz /tmp/grab.bag':
         'test_bag_tools.py::test_recording_to_bag_writes_the_take',
@@ -98,7 +98,7 @@ BY_CI = {'make test', 'make setup',
 # Not run by any test, and why.
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
-    'python -m leap_teleop.bench --only arm_motion': 'a benchmark, part of make bench (the '
+    'python -m tools.bench --only arm_motion': 'a benchmark, part of make bench (the '
         'integrator runs it); test_bench_harness.py checks the bench runner itself',
     'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
     'make clean': 'deletes the build the other tests use',

@@ -9,10 +9,9 @@ import sys
 
 import pytest
 
-from leap_teleop.bench.harness import ros_master, start_node, stop_node
-from leap_teleop.nodes import drone_pilot, sender, ur10_arm
-from leap_teleop.nodes.reconfigure import bounds, config_type
-
+from tools.bench.harness import ros_master, start_node, stop_node
+from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
+from leap_teleop.ros.nodes.reconfigure import bounds, config_type
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
 NODES = [(ur10_arm, 'ur10_arm'), (drone_pilot, 'drone_pilot'), (sender, 'sender')]
@@ -53,7 +52,7 @@ def test_a_string_parameter_is_not_offered():
 
 
 def test_retune_reaches_the_arms_filters_and_servo():
-    from leap_teleop.teleop.arm import ArmTeleop
+    from leap_teleop.ur10.teleop import ArmTeleop
     teleop = ArmTeleop()
     ur10_arm.retune(teleop, {'filter_beta': 0.5, 'rotation_d_cutoff_hz': 2.0,
                              'max_joint_speed': 0.02, 'max_joint_accel': 0.3,
@@ -143,7 +142,7 @@ print(json.dumps(out))
 @pytest.mark.rostest
 def test_dynparam_retunes_the_pilot_and_cannot_disable_its_limits():
     with ros_master() as env:
-        node = start_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_subscriber.py')])
+        node = start_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_pilot.py')])
         try:
             out = run_client(env, PILOT_CLIENT)
         finally:
@@ -322,7 +321,7 @@ def test_dynparam_retunes_the_senders_recognizer_and_filter(tmp_path):
 
 def test_the_senders_recognizer_defaults_are_the_recognizers():
     import inspect
-    from leap_teleop.gestures import GestureRecognizer
+    from leap_teleop.hands.gestures import GestureRecognizer
     sig = inspect.signature(GestureRecognizer).parameters
     for name in ('on_frames', 'off_frames', 'min_confidence'):
         assert sender.PARAMS['recognizer_' + name].default == sig[name].default

@@ -8,8 +8,8 @@ import time
 
 import pytest
 
-from leap_teleop.bench import harness
-from leap_teleop.nodes.common import package_path
+from tools.bench import harness
+from leap_teleop.ros.node import package_path
 from test_rostests import check_every_test_passed
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -6,8 +6,8 @@ import os
 
 import pytest
 
-from leap_teleop.sources.scripted import ScriptedSource
-from leap_teleop.tools.to_bag import write_bag
+from leap_teleop.hands.sources.scripted import ScriptedSource
+from leap_teleop.ros.recording_to_bag import write_bag
 from test_launch_smoke import GESTURES, run_launches
 
 LAYOUTS = {

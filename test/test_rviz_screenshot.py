@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 import yaml
 
-from leap_teleop.bench.harness import free_port
-
+from tools.bench.harness import free_port
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, '..', 'rviz', 'ur10.rviz')
 SCREEN = (1280, 900)

@@ -4,10 +4,9 @@ import time
 import numpy as np
 import pytest
 
-from leap_teleop.frame import FINGER_NAMES
-from leap_teleop.sources import SourceError, make_source
-from leap_teleop.sources.scripted import GestureScript, ScriptedSource
-
+from leap_teleop.hands.frame import FINGER_NAMES
+from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.hands.sources.scripted import GestureScript, ScriptedSource
 SCRIPT = {
     'rate_hz': 100,
     'hands': {

@@ -43,13 +43,13 @@ BAD_PARAMS = [
     ('hand_markers.py', ['_max_rate:=fast'], "~max_rate = 'fast': not a number"),
     ('hand_markers.py', ['_hand_topics:=[]'], '~hand_topics = []: 0 items'),
     ('hand_markers.py', ['_scale:=0'], '~scale = 0: out of range'),
-    ('drone_subscriber.py', ['_mode:=loop'], "~mode = 'loop': not one of the choices"),
-    ('drone_subscriber.py', ['_flip_type:=42'], '~flip_type = 42: out of range'),
-    ('drone_subscriber.py', ['_hand_timeout:=.nan'], '~hand_timeout = nan: not finite'),
-    ('drone_subscriber.py', ['_hand_timeout:=nan'], "~hand_timeout = 'nan': not a number"),
-    ('drone_subscriber.py', ['_land_after:=.inf'], '~land_after = inf: not finite'),
-    ('drone_subscriber.py', ['_land_after:=1000000.0'], '~land_after = 1000000.0: out of range'),
-    ('drone_subscriber.py', ['_navdata_timeout:=0'], '~navdata_timeout = 0: out of range'),
+    ('drone_pilot.py', ['_mode:=loop'], "~mode = 'loop': not one of the choices"),
+    ('drone_pilot.py', ['_flip_type:=42'], '~flip_type = 42: out of range'),
+    ('drone_pilot.py', ['_hand_timeout:=.nan'], '~hand_timeout = nan: not finite'),
+    ('drone_pilot.py', ['_hand_timeout:=nan'], "~hand_timeout = 'nan': not a number"),
+    ('drone_pilot.py', ['_land_after:=.inf'], '~land_after = inf: not finite'),
+    ('drone_pilot.py', ['_land_after:=1000000.0'], '~land_after = 1000000.0: out of range'),
+    ('drone_pilot.py', ['_navdata_timeout:=0'], '~navdata_timeout = 0: out of range'),
     ('ur10_sim.py', ['_realtime_factor:=-1'], '~realtime_factor = -1: out of range'),
     ('ur10_sim.py', ['_snapshot_size:=[640]'], '~snapshot_size = [640]: 1 items'),
     ('ardrone_sim.py', ['_looprate:=0'], '~looprate = 0: out of range'),
@@ -59,7 +59,7 @@ BAD_PARAMS = [
 
 @pytest.fixture(scope='module')
 def master():
-    from leap_teleop.bench import harness
+    from tools.bench import harness
     with harness.ros_master() as env:
         yield env
 

@@ -11,13 +11,11 @@ import types
 import numpy as np
 import pytest
 
-from leap_teleop.frame import Frame
-from leap_teleop.hand_model import render_hand
-from leap_teleop.sources import SourceError, leapjs, make_source
-from leap_teleop.tools import record_frames
-
-from leap_teleop.tools.evaluate import data_dir
-
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.sources import SourceError, leapjs, make_source
+from leap_teleop.hands import record_frames
+from tools.evaluation.evaluate import data_dir
 DATA = data_dir()
 need_data = pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
 
@@ -332,7 +330,7 @@ def _take(source, n):
 
 def test_leap_v2_backend_with_a_fake_sdk(monkeypatch):
     monkeypatch.setitem(sys.modules, 'Leap', _fake_leap_v2())
-    from leap_teleop.leap_interface import LeapInterface
+    from leap_teleop.hands.leap_interface import LeapInterface
     src = make_source('leap', clock=lambda: 50.0)
     frames = _take(src, 10)
     assert len(frames) == 10
@@ -347,7 +345,7 @@ def test_leap_v2_backend_with_a_fake_sdk(monkeypatch):
 
 def test_leapc_backend_with_a_fake_sdk(monkeypatch):
     monkeypatch.setitem(sys.modules, 'leap', _fake_leapc())
-    from leap_teleop.gestures import GestureRecognizer
+    from leap_teleop.hands.gestures import GestureRecognizer
     frames = _take(make_source('leapc'), 8)
     assert len(frames) == 8 and frames[0].hands[0].side == 'right'
     rec = GestureRecognizer()

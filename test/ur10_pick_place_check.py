@@ -22,7 +22,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.pick_place import pick_place_plan
-from leap_teleop.ur10.ros_interface import (OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE,
+from leap_teleop.ros.conversions import (OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE,
                                             object_positions)
 
 POSITION_TOL = 0.01     # rad: a move is done when every joint is this close ...

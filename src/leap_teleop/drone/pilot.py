@@ -53,8 +53,7 @@ import time
 from dataclasses import dataclass, fields
 
 from leap_teleop.params import Param, check_params
-from leap_teleop.teleop.input_check import InputStream
-
+from leap_teleop.control.input_check import InputStream
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping

@@ -1,0 +1,92 @@
+"""The annotated camera view: what the camera source sees, with each hand's landmarks,
+its side, the gestures the recognizer holds for it and the processed frame rate drawn on
+the image (ros.conversions.image_message makes it a message).
+"""
+import time
+
+import numpy as np
+
+from leap_teleop.hands.sources.landmarks import person_side
+# MediaPipe's hand skeleton: landmark index pairs.
+HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
+                    (5, 9), (9, 10), (10, 11), (11, 12), (9, 13), (13, 14), (14, 15),
+                    (15, 16), (13, 17), (17, 18), (18, 19), (19, 20), (0, 17))
+# Held gestures shown, when the recognizer's state has them.
+GESTURES = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
+SIDE_COLOURS = {'right': (60, 180, 255), 'left': (255, 160, 60)}      # BGR
+FPS_SMOOTHING = 0.1
+
+
+def held_gestures(state):
+    """Names of the held gestures of a HandState (or GestureState) that are on."""
+    if state is None:
+        return []
+    return [g for g in GESTURES if getattr(state, g, False) is True]
+
+
+def draw(bgr, landmarks, mirrored, states=None, fps=None):
+    """A copy of bgr with every hand drawn. landmarks: HandLandmarks list as detected in
+    this image; states: {side: HandState} (gestures), optional; fps: shown top left."""
+    import cv2
+    out = bgr.copy()
+    h, w = out.shape[:2]
+    thick = max(1, round(min(w, h) / 240))
+    for lm in landmarks:
+        side = person_side(lm.label, mirrored)
+        colour = SIDE_COLOURS[side]
+        pts = np.round(lm.image[:, :2] * (w, h)).astype(int)
+        for a, b in HAND_CONNECTIONS:
+            cv2.line(out, tuple(pts[a]), tuple(pts[b]), colour, thick, cv2.LINE_AA)
+        for p in pts:
+            cv2.circle(out, tuple(p), thick + 2, (255, 255, 255), -1, cv2.LINE_AA)
+            cv2.circle(out, tuple(p), thick + 2, colour, 1, cv2.LINE_AA)
+        state = (states or {}).get(side)
+        gestures = held_gestures(state)
+        label = '%s %.2f%s' % (side, lm.score, (': ' + ' '.join(gestures)) if gestures else '')
+        pose = getattr(state, 'pose_class', '')
+        if pose:        # what the pose model sees this frame, held or not
+            label += ' [%s %.2f]' % (pose, getattr(state, 'pose_probability', 0.0))
+        x, y = int(pts[:, 0].min()), int(pts[:, 1].min()) - 8
+        _text(out, label, (max(2, x), max(16, y)), colour, thick)
+    if fps is not None:
+        _text(out, '%.1f fps' % fps, (6, 20), (255, 255, 255), thick)
+    return out
+
+
+def _text(img, text, org, colour, thick):
+    import cv2
+    scale = 0.5 * thick
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), thick + 2,
+                cv2.LINE_AA)
+    cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thick, cv2.LINE_AA)
+
+
+class CameraView:
+    """Joins a camera source's images with the recognizer's states: give on_image to the
+    source (source.on_image) and on_frame to LeapInterface.add_listener; publish(frame,
+    image) receives each annotated image. wanted() -> False skips the drawing (no one
+    is looking)."""
+
+    def __init__(self, mirrored, publish, wanted=lambda: True, clock=time.monotonic):
+        self.mirrored = mirrored
+        self.publish = publish
+        self.wanted = wanted
+        self.clock = clock
+        self.fps = None
+        self._last_t = None
+        self._pending = None
+
+    def on_image(self, frame, bgr, landmarks):
+        t = self.clock()
+        if self._last_t is not None and t > self._last_t:
+            rate = 1.0 / (t - self._last_t)
+            self.fps = rate if self.fps is None else (
+                (1 - FPS_SMOOTHING) * self.fps + FPS_SMOOTHING * rate)
+        self._last_t = t
+        self._pending = (frame.id, bgr, landmarks)
+
+    def on_frame(self, frame, states):
+        pending, self._pending = self._pending, None
+        if pending is None or pending[0] != frame.id or not self.wanted():
+            return
+        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps))

@@ -1,0 +1,241 @@
+"""Classify Leap frames offline: one JSON line of per-hand gestures per input frame.
+
+usage: python -m leap_teleop.hands.classify_frames [INPUT] [--stateless] [--out FILE]
+       python -m leap_teleop.hands.classify_frames --keypoints FILE.csv
+       rosrun leap_teleop classify_frames [INPUT] [--stateless] [--model MODEL]
+           [--keypoint-model MODEL]
+
+--keypoints FILE.csv reads webcam hand keypoints: the community's keypoint.csv (a class
+id then 42 numbers, x0 y0 .. x20 y20, no header; the id is ignored) or the shared
+files' form with a header (person,label,source_label,x0,...,y20). Each row is one hand
+judged on its own by the keypoint model (a left hand is a mirrored right one: no side):
+one line per row, {"id": ROW, "timestamp": null, "hands": [{"type": null, "fist": ...}]}.
+
+INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
+.mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
+images (.jpg, .jpeg, .png, ...: a file, a folder or a quoted glob; one line per image,
+each classified on its own as with --stateless). Hands come from the camera source's
+pipeline (MediaPipe Hands, then the landmark conversion) with its defaults: frames
+letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does not
+mirror.
+
+INPUT is a LeapJS Playback recording (.json, .json.gz, .json.lz; formatVersion 0.1, 1 or
+packed 2), or JSON Lines: one LeapJS frame dict per line (fields as in a recording:
+id, timestamp [us], hands[] with id, type, palmPosition, palmNormal, direction,
+grabStrength, pinchStrength, confidence; pointables[] with handId, type 0..4,
+tipPosition, dipPosition, pipPosition, mcpPosition, direction, extended). Without INPUT
+(or with "-") JSON Lines are read from stdin.
+
+Output, one line per input frame, in input order:
+
+    {"id": 139235, "timestamp": 12439621196,
+     "hands": [{"type": "right", "fist": false, "thumb_up": false, "pinch": true,
+                "pinch_value": 0.62, "rock": false, "open": false,
+                "thumb_down": false, "events": ["pinch", "circle_cw"]}]}
+
+- id, timestamp: copied from the frame (timestamp in the frame's microseconds; null
+  when absent).
+- hands: one entry per left / right hand in the frame, in frame order. fist, thumb_up,
+  pinch, rock, open, thumb_down: the recognizer's held gestures; pinch_value: pinch strength - 0.2
+  in 0..0.8 while pinching, else 0.
+- events: what started on this frame: a held gesture's name when it turns on
+  ("fist", "thumb_up", "pinch", "rock", "open", "thumb_down"), "unfold" (fist -> open), "fold"
+  (open -> fist), "circle_cw" / "circle_ccw" (palm or fingertip circle).
+- A line that is not a JSON object yields {"id": null, "timestamp": null, "hands": [],
+  "error": "..."}; a frame with missing fields is classified from what is there (a hand
+  without fingers shows every gesture false).
+
+--model MODEL (Leap frames) and --keypoint-model MODEL (camera hands, keypoint rows)
+classify with a user's model (train_gestures --out MODEL) instead of the shipped one;
+each class of it that is no built-in gesture is one more key of every hand, true while it
+is held.
+
+--stateless classifies every frame on its own (no temporal filter, no events): for
+snapshot data whose frames are unrelated. Otherwise frames are a stream: a gesture
+turns on after 3 consistent frames and off after 3, per hand side.
+"""
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from leap_teleop.hands.frame import Frame, Hand
+from leap_teleop.hands.gestures import GestureRecognizer, ModelError
+from leap_teleop.hands.sources import SourceError, leapjs
+from leap_teleop.hands.gestures import datasets as gesture_data
+HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
+
+
+class Classifier:
+    """Frames -> output dicts, keeping one recognizer per hand side. model /
+    keypoint_model: pose model paths (None: the shipped ones); their own classes show as
+    one more key each, true while held."""
+
+    def __init__(self, stateless=False, model=None, keypoint_model=None):
+        self.stateless = stateless
+        self.models = {'model': model, 'keypoint_model': keypoint_model}
+        self.user_gestures = self._recognizer(stateless).user_gestures
+        self.recognizers = {}
+
+    def _recognizer(self, stateless):
+        return GestureRecognizer(stateless=stateless, **self.models)
+
+    def classify(self, d):
+        """A LeapJS frame dict -> output dict."""
+        try:
+            frame = leapjs.frame_from_dict(d)
+        except leapjs.FrameError as e:
+            return {'id': None, 'timestamp': None, 'hands': [], 'error': str(e)}
+        ts = d.get('timestamp')
+        ts = ts if isinstance(ts, (int, float)) and not isinstance(ts, bool) and \
+            math.isfinite(ts) else None
+        fid = d.get('id')
+        fid = fid if isinstance(fid, (int, str)) and not isinstance(fid, bool) else None
+        return self.classify_frame(frame, fid, ts)
+
+    def classify_frame(self, frame, fid, ts):
+        """A Frame -> output dict (id and timestamp as given)."""
+        t = frame.timestamp if math.isfinite(frame.timestamp) else None
+        hands, seen = [], set()
+        for hand in frame.hands:
+            rec = self.recognizers.get(hand.side)
+            if rec is None:
+                rec = self.recognizers[hand.side] = self._recognizer(self.stateless)
+            if hand.side in seen:       # a second hand of one side: judge it on its own
+                rec = self._recognizer(True)
+            seen.add(hand.side)
+            state = rec.update(hand, t if t is not None else math.nan)
+            hands.append(hand_output(hand.side, state, self.user_gestures))
+        for side, rec in self.recognizers.items():
+            if side not in seen:
+                rec.reset()
+        return {'id': fid, 'timestamp': ts, 'hands': hands}
+
+
+def hand_output(side, state, user_gestures=()):
+    out = {'type': side, 'fist': bool(state.fist), 'thumb_up': bool(state.thumb_up),
+           'pinch': bool(state.pinch), 'pinch_value': round(float(state.pinch_value), 4),
+           'rock': bool(state.rock), 'open': bool(state.open),
+           'thumb_down': bool(state.thumb_down),
+           'events': [e.gesture for e in state.events if e.active]}
+    for name in user_gestures:
+        out[name] = name in state.user
+    return out
+
+
+def keypoint_lines(path, classifier):
+    """Output dicts of a keypoint CSV, one per row."""
+    _, _, xy = gesture_data.read_keypoints(path)
+    rec = classifier._recognizer(True)
+    for i, pts in enumerate(xy):
+        hand = Hand(side='right', image_landmarks=np.asarray(pts, dtype=float))
+        yield {'id': i, 'timestamp': None,
+               'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
+
+
+def iter_json_lines(stream):
+    for line in stream:
+        line = line.strip()
+        if not line:
+            continue
+        try:
+            yield leapjs.parse_json(line)
+        except ValueError as e:
+            yield e
+
+
+def looks_like_recording(path):
+    if path.endswith(('.lz', '.gz')):
+        return True
+    with open(path, 'rb') as f:
+        head = f.read(4096).lstrip()
+    # A recording is one JSON object with "frames"; JSON Lines start a frame per line.
+    return head.startswith(b'{') and b'"frames"' in head.split(b'\n', 1)[0][:4096] \
+        and b'"metadata"' in head
+
+
+def camera_input(path):
+    """'video' or 'stills' when `path` names camera footage (by extension), else None."""
+    from leap_teleop.hands.sources import capture
+    if path in (None, '-'):
+        return None
+    if capture.is_video_path(path):
+        return 'video'
+    if capture.resolve_stills(path) or capture.is_image_path(path):
+        return 'stills'
+    return None
+
+
+def camera_frames(path):
+    """Frames of the hands the camera pipeline finds in a video or images, stamped from
+    the footage's start (kept as Frames: their hands carry the image landmarks)."""
+    from leap_teleop.hands.sources import make_source
+    source = make_source('video', path=path, realtime=False, clock=lambda: 0.0)
+    return source.frames()
+
+
+def frames_of(path):
+    if camera_input(path):
+        return camera_frames(path)
+    if path in (None, '-'):
+        return iter_json_lines(sys.stdin)
+    if looks_like_recording(path):
+        _, dicts = leapjs.load(path)
+        return iter(dicts)
+    return iter_json_lines(open(path, encoding='utf-8', errors='replace'))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('input', nargs='?', default='-', help='recording or JSON Lines; - = stdin')
+    ap.add_argument('--stateless', action='store_true', help='no temporal filtering / events')
+    ap.add_argument('--out', default='-', help='output file; - = stdout')
+    ap.add_argument('--keypoints', default=None, metavar='FILE.csv',
+                    help='classify the rows of a webcam keypoint CSV instead of INPUT')
+    ap.add_argument('--model', default=None, help='Leap-family pose model (.npz, from '
+                                                  'train_gestures); default: the shipped one')
+    ap.add_argument('--keypoint-model', default=None,
+                    help='camera keypoint pose model (.npz); default: the shipped one')
+    if argv is None:   # drop ROS remappings that rosrun / roslaunch add
+        argv = [a for a in sys.argv[1:] if ':=' not in a]
+    args = ap.parse_args(argv)
+    try:
+        # Still images are unrelated pictures: each is judged on its own.
+        classifier = Classifier(args.stateless or (not args.keypoints and
+                                                   camera_input(args.input) == 'stills'),
+                                args.model, args.keypoint_model)
+        if args.keypoints:
+            frames = list(keypoint_lines(args.keypoints, classifier))
+        else:
+            frames = frames_of(args.input)
+    except (SourceError, OSError, ModelError, gesture_data.DataError) as e:
+        print('classify_frames: %s' % e, file=sys.stderr)
+        return 2
+    out = sys.stdout if args.out == '-' else open(args.out, 'w')
+    n = 0
+    try:
+        for d in frames:
+            if args.keypoints:
+                result = d
+            elif isinstance(d, Frame):
+                ts = round(d.timestamp * 1e6) if math.isfinite(d.timestamp) else None
+                result = classifier.classify_frame(d, d.id, ts)
+            elif isinstance(d, Exception) or not isinstance(d, dict):
+                why = 'not JSON: %s' % d if isinstance(d, Exception) else 'not a frame object'
+                result = {'id': None, 'timestamp': None, 'hands': [], 'error': why}
+            else:
+                result = classifier.classify(d)
+            out.write(json.dumps(result) + '\n')
+            n += 1
+    except BrokenPipeError:
+        return 0
+    finally:
+        if out is not sys.stdout:
+            out.close()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,112 @@
+"""Hand-invariant feature vectors for the learned pose models.
+
+One vector per hand, the same for small and large hands, for either side and for any
+orientation of the hand: joints are expressed in the hand's own frame (thumbward, palm
+normal, hand direction; see geometry) and in palm widths, bones as unit directions in that
+frame, plus fingertip gaps and the cosines between successive bones.
+
+- `leap_features(hand)`: each finger's joints from its own knuckle (trackers place the
+  knuckles by a fixed palm model of their own: the Leap SDK's sit at the same place in
+  every hand, so where they sit says nothing), from a tracker's 3-D joints (Leap SDKs, recordings, scripts, a camera's
+  lifted landmarks). None when the hand lacks the joints: such a hand shows no gesture.
+- `keypoint_features(xy)`: 21 2-D image landmarks (MediaPipe order), the only thing a
+  webcam's community keypoint files hold, in the picture's own orientation (the model
+  learns small turns from turned copies). Image y grows downward; a left hand is a
+  mirrored right one, so callers score both the landmarks and their mirror image.
+"""
+import math
+
+import numpy as np
+
+from leap_teleop.hands.gestures.geometry import hand_geometry
+LEAP_FEATURES = 5 * 3 * 3 + 5 * 3 * 3 + 7 + 10
+KEYPOINT_FEATURES = 21 * 2 + 20 * 2 + 7 + 15
+# fingertip pairs whose gaps are features: thumb to every other tip, neighbouring tips
+_TIP_PAIRS = ((0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4))
+_TIP_A = np.array([a for a, _ in _TIP_PAIRS])
+_TIP_B = np.array([b for _, b in _TIP_PAIRS])
+# MediaPipe landmark chains: wrist -> each finger's four joints
+_CHAINS = np.array([[0, 1, 2, 3, 4], [0, 5, 6, 7, 8], [0, 9, 10, 11, 12],
+                    [0, 13, 14, 15, 16], [0, 17, 18, 19, 20]])
+_MP_TIPS = np.array([4, 8, 12, 16, 20])
+_isfinite = math.isfinite
+
+
+def _unit_rows(v):
+    n = np.sqrt((v * v).sum(axis=-1, keepdims=True))
+    return v / np.maximum(n, 1e-9)
+
+
+def leap_features(hand, geometry=None):
+    """Feature vector (LEAP_FEATURES,) of a Hand with 3-D joints, or None."""
+    g = geometry if geometry is not None else hand_geometry(hand)
+    if g is None or g.joints is None:
+        return None
+    local, bones = g.local, g.bones                 # hand frame, palm widths; unit bones
+    reach = local[:, 1:] - local[:, :1]             # (5, 3, 3) from each knuckle
+    tips = local[:, 3]
+    d = tips[_TIP_A] - tips[_TIP_B]
+    gaps = np.sqrt(np.einsum('ij,ij->i', d, d))
+    cos = np.einsum('ijk,ijk->ij', bones[:, 1:], bones[:, :-1])  # (5, 2)
+    out = np.concatenate((reach.ravel(), bones.ravel(), gaps, cos.ravel()))
+    return out if np.isfinite(out).all() else None
+
+
+def normalize_keypoints(xy):
+    """The community's normalisation of 21 image landmarks: relative to the wrist,
+    divided by the largest absolute coordinate. (21, 2) array, or None when degenerate."""
+    p = np.asarray(xy, dtype=float).reshape(21, 2)
+    if not np.isfinite(p).all():
+        return None
+    p = p - p[0]
+    m = np.abs(p).max()
+    if not m > 0.0:
+        return None
+    return p / m
+
+
+def keypoint_features(xy):
+    """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale: normalised as
+    the community does, so the picture's up stays up: a thumbs-up and a thumbs-down differ
+    by it), or None. Not mirror-invariant by itself: see module doc."""
+    p = normalize_keypoints(xy)
+    if p is None:
+        return None
+    w = math.hypot(*(p[5] - p[17]))             # palm width, the unit of the gaps
+    if not w > 1e-6:
+        w = 1e-6
+    chain = p[_CHAINS]                               # (5, 5, 2)
+    bones = _unit_rows(np.diff(chain, axis=1))       # (5, 4, 2)
+    tips = p[_MP_TIPS]
+    gaps = np.sqrt(((tips[_TIP_A] - tips[_TIP_B]) ** 2).sum(axis=1)) / w
+    cos = (bones[:, 1:] * bones[:, :-1]).sum(axis=2)  # (5, 3)
+    out = np.concatenate((p.ravel(), bones.ravel(), np.minimum(gaps, 10.0), cos.ravel()))
+    return out if np.isfinite(out).all() else None
+
+
+def rotate_keypoints(xy, angle):
+    """The landmarks turned in the picture by `angle` (rad)."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.asarray(xy, dtype=float).reshape(21, 2) @ np.array([[c, -s], [s, c]]).T
+
+
+def mirror_keypoints(xy):
+    """The same landmarks as a mirror image (x negated)."""
+    p = np.array(xy, dtype=float).reshape(21, 2)
+    p[:, 0] = -p[:, 0]
+    return p
+
+
+# Where a Leap hand's wrist sits from its palm centre, hand frame, palm widths (median of
+# the Guinevere takes, which carry the wrist): the landmark a camera sees first.
+WRIST_FROM_PALM = (-0.17, -0.03, -1.15)
+
+
+def hand_landmarks(hand, geometry=None):
+    """(21, 3) MediaPipe-ordered landmarks of a Hand with 3-D joints, in its own frame
+    (thumbward, normal, direction) and palm widths, or None."""
+    g = geometry if geometry is not None else hand_geometry(hand)
+    if g is None or g.joints is None:
+        return None
+    local = (g.joints - np.array(g.palm)) @ np.array(g.basis).T / g.palm_width
+    return np.vstack((np.array(WRIST_FROM_PALM)[None], local.reshape(20, 3)))

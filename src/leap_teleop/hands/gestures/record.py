@@ -1,0 +1,197 @@
+"""Record samples of one gesture from any hand source, in the shared data's formats, for
+train_gestures --add FILE --label NAME.
+
+usage: rosrun leap_teleop record_gestures --source SOURCE --label NAME --seconds N
+           [--out FILE] [--person NAME] [--side right|left|any]
+           [--script YAML] [--recording PATH] [--video PATH] [--device N|/dev/videoN]
+           [--mirror] [--realtime 0|1]
+
+SOURCE: leap, leapc, scripted, recording (Leap-family hands: 3-D joints) or webcam,
+video (camera hands: image landmarks). Hold the gesture, moving and turning the hand a
+little, for N seconds (of the source's time: a scripted or recording source with
+--realtime 0 takes no longer than it needs).
+
+Leap-family hands are written as JSON Lines pose records, one per hand per frame:
+{"person", "label", "frame": the LeapJS frame dict with that hand} (FILE .jsonl, or
+.jsonl.gz for gzip; default NAME.jsonl). Camera hands are written as keypoint CSV with
+the shared header (person,label,source_label,x0,y0,...,x20,y20; default NAME.csv), the
+21 landmarks relative to the wrist and divided by the largest absolute coordinate, as
+the community's keypoint.csv. Frames without a (matching) hand are counted as missing.
+"""
+import argparse
+import csv
+import gzip
+import json
+import math
+import os
+import re
+import sys
+
+from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures.features import normalize_keypoints
+from leap_teleop.hands.sources import SOURCES, SourceError, leapjs
+from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
+from leap_teleop.hands.record_frames import build_source
+# Built-in gesture and event names that are no class of the pose models: a user class so
+# named would clash with them (fist, open, pinch, rock, thumb, none add samples to the
+# built-in classes and are allowed).
+CLASHING_LABELS = ('thumb_up', 'thumb_down', 'unfold', 'fold', 'circle', 'circle_cw',
+                   'circle_ccw', 'hand_lost', 'hand_found')
+KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
+    '%s%d' % (axis, i) for i in range(21) for axis in 'xy']
+
+
+class RecordError(ValueError):
+    """Arguments or a source that cannot record."""
+
+
+def check_label(label):
+    if not re.fullmatch(r'[A-Za-z0-9_]+', label or ''):
+        raise RecordError('--label %r: letters, digits and _ only' % label)
+    if label in CLASHING_LABELS:
+        raise RecordError('--label %s: the name of a built-in gesture or event; choose '
+                          'another (thumb, fist, open, pinch, rock or none add samples to '
+                          'the built-in classes)' % label)
+    return label
+
+
+def output_path(out, label, family):
+    """The file to write: `out` checked against the family, or NAME.jsonl / NAME.csv."""
+    if not out:
+        return label + ('.csv' if family == 'keypoints' else '.jsonl')
+    low = out.lower()
+    if family == 'keypoints' and not low.endswith('.csv'):
+        raise RecordError('--out %s: camera hands are written as keypoint CSV: name it '
+                          '.csv' % out)
+    if family == 'leap' and not low.endswith(('.jsonl', '.jsonl.gz')):
+        raise RecordError('--out %s: Leap hands are written as JSON Lines: name it .jsonl '
+                          'or .jsonl.gz' % out)
+    return out
+
+
+def keypoint_row(hand, person, label):
+    """The CSV row of a camera hand, or None when it has no usable image landmarks."""
+    xy = getattr(hand, 'image_landmarks', None)
+    p = normalize_keypoints(xy) if xy is not None else None
+    if p is None:
+        return None
+    return [person, label, label] + ['%.4f' % v for v in p.ravel()]
+
+
+def pose_record(frame, hand, person, label):
+    """The JSON Lines record of one hand of a frame."""
+    one = Frame(id=frame.id, timestamp=frame.timestamp, hands=[hand])
+    return {'person': person, 'label': label, 'frame': leapjs.frame_to_dict(one)}
+
+
+def collect(source, family, label, person, seconds, side='any'):
+    """(rows, frames seen, frames without a usable hand) of `seconds` of source time."""
+    rows, seen, missing = [], 0, 0
+    t0 = None
+    try:
+        for frame in source.frames():
+            t = frame.timestamp
+            if t0 is None and math.isfinite(t):
+                t0 = t
+            if t0 is not None and math.isfinite(t) and t - t0 >= seconds:
+                break
+            seen += 1
+            got = 0
+            for hand in frame.hands:
+                if side != 'any' and hand.side != side:
+                    continue
+                if family == 'keypoints':
+                    row = keypoint_row(hand, person, label)
+                else:
+                    row = pose_record(frame, hand, person, label)
+                if row is not None:
+                    rows.append(row)
+                    got += 1
+            missing += got == 0
+    except KeyboardInterrupt:
+        pass
+    finally:
+        source.stop()
+    return rows, seen, missing
+
+
+def write(path, family, rows):
+    """Write `rows` to `path` (whole, through a temporary file)."""
+    tmp = path + '.part'
+    if family == 'keypoints':
+        with open(tmp, 'w', newline='', encoding='utf-8') as f:
+            w = csv.writer(f)
+            w.writerow(KEYPOINT_HEADER)
+            w.writerows(rows)
+    else:
+        opener = gzip.open if path.lower().endswith('.gz') else open
+        with opener(tmp, 'wt', encoding='utf-8') as f:
+            for r in rows:
+                f.write(json.dumps(r, separators=(',', ':')) + '\n')
+    os.replace(tmp, path)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('--source', required=True, choices=sorted(SOURCES))
+    ap.add_argument('--label', required=True, help='the gesture\'s name (the class to train)')
+    ap.add_argument('--seconds', type=float, default=10.0,
+                    help='how long to record, in the source\'s time (default %(default)s)')
+    ap.add_argument('--out', default='', help='output file (default NAME.jsonl or NAME.csv)')
+    ap.add_argument('--person', default='user', help='who is recorded (default %(default)s)')
+    ap.add_argument('--side', default='any', choices=('any', 'right', 'left'),
+                    help='which hands to keep (default: every hand)')
+    ap.add_argument('--script', default='', help='gesture script for --source scripted')
+    ap.add_argument('--recording', default='', help='input file for --source recording')
+    ap.add_argument('--video', default='', help='--source video: a video, an image, a folder '
+                                                'or a glob of images')
+    ap.add_argument('--device', default='0', help='--source webcam: index or /dev/videoN')
+    ap.add_argument('--mirror', action='store_true',
+                    help='camera sources: flip the image (a selfie view)')
+    ap.add_argument('--realtime', type=int, default=1, choices=(0, 1),
+                    help='scripted / recording / video sources: 1 = at their timing, 0 = fast')
+    if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
+        argv = [a for a in sys.argv[1:] if ':=' not in a]
+    args = ap.parse_args(argv)
+    family = 'keypoints' if args.source in CAMERA_SOURCES else 'leap'
+    try:
+        check_label(args.label)
+        if not (math.isfinite(args.seconds) and 0.0 < args.seconds <= 3600.0):
+            raise RecordError('--seconds %g: more than 0, at most 3600' % args.seconds)
+        if not args.person.strip() or ',' in args.person or '\n' in args.person:
+            raise RecordError('--person %r: a name without commas' % args.person)
+        out = output_path(args.out, args.label, family)
+        folder = os.path.dirname(os.path.abspath(out))
+        if not os.path.isdir(folder):
+            raise RecordError('--out %s: no folder %s' % (out, folder))
+        source = build_source(args)
+    except (RecordError, SourceError) as e:
+        print('record_gestures: %s' % e, file=sys.stderr)
+        return 2
+    print('record_gestures: recording %r for %g s from the %s source; hold the gesture, '
+          'moving and turning the hand a little' % (args.label, args.seconds, args.source),
+          file=sys.stderr)
+    try:
+        rows, seen, missing = collect(source, family, args.label, args.person.strip(),
+                                      args.seconds, args.side)
+    except (OSError, SourceError) as e:
+        print('record_gestures: the %s source failed: %s' % (args.source, e), file=sys.stderr)
+        return 1
+    if not rows:
+        print('record_gestures: no hand in %d frames: nothing written%s' % (
+            seen, ' (a camera hand needs its image landmarks)' if family == 'keypoints' else ''),
+            file=sys.stderr)
+        return 1
+    try:
+        write(out, family, rows)
+    except OSError as e:
+        print('record_gestures: cannot write %s: %s' % (out, e), file=sys.stderr)
+        return 1
+    print('record_gestures: wrote %d %s of %r to %s (%d frames, hands missing in %d)'
+          % (len(rows), 'keypoint rows' if family == 'keypoints' else 'hand poses',
+             args.label, out, seen, missing))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,564 @@
+"""Fit the pose models on people, judge them on people they never saw, and ship them as
+arrays with a model card.
+
+usage: python -m leap_teleop.hands.gestures.train [--family leap|keypoints|all]
+           [--data DIR] [--add FILE --label NAME ...] [--out MODEL] [--no-report]
+       rosrun leap_teleop train_gestures --add FILE --label NAME --out MODEL
+
+Without --add it refits the shipped models (make train) from the shared, people-split
+data: Leap frames of 12 people (static poses) and 2 people (dynamic takes) for the Leap
+model, 8 people's webcam keypoints for the keypoint model. With --add FILE --label NAME
+(repeatable) the user's samples join as one more person each file, class NAME: FILE is
+record_gestures' output or a shared-format file (.jsonl[.gz] Leap poses, .csv keypoints)
+or a community keypoint.csv whose rows are all NAME; the family follows FILE.
+
+Fitting is deterministic (fixed seed, one thread). Before the final fit it runs
+leave-one-person-out (fit on all people but one, score that one, for each) and writes the
+figures, with the worst person, into the model's card.
+"""
+import argparse
+import collections
+import dataclasses
+import datetime
+import os
+import sys
+import time
+
+import numpy as np
+
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier
+from leap_teleop.hands.gestures.features import (hand_landmarks, keypoint_features, leap_features,
+                                 mirror_keypoints, rotate_keypoints)
+from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.gestures import datasets as gd
+SEED = 0
+HIDDEN_UNITS = 64
+L2 = 1e-3
+MAX_ITER = 80
+# Consecutive frames of one pose are nearly the same: fitting on every other one halves the
+# time and loses nothing measurable.
+FIT_STRIDE = 2
+JOINT_NOISE_MM = 3.0
+FOLD_WORKERS = 2        # leave-one-person-out folds fitted at once (this machine: 2 cores)
+MIN_SCALE = 0.05        # features are unit vectors, cosines and palm widths
+# Guinevere takes whose every frame shows one pose: the thumbs takes (a fist with the thumb
+# out, judged up or down apart from the model) and the open-hand moves.
+# Their thumbs are the only real thumbs-up / down there are (two people, four takes each
+# way, against thousands of frames of each static pose): each such frame counts
+# THUMB_TAKE_REPEAT times in the fit.
+THUMB_TAKE_REPEAT = 10
+TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'open',
+               'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
+
+
+# Where the fitted data comes from and under what terms (the data folders' READMEs).
+DATA_TERMS = {
+    'leap': ['GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
+             'de Madrid, Grupo de Tratamiento de Imagenes; Mantecon et al.), users 01-12, as '
+             'redistributed in sluyters/QuantumLeap: published by its authors for research, '
+             'no licence file',
+             'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
+             'research, no licence file',
+             'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0'],
+    'keypoints': ['hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
+                  'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
+                  '(their hand-gesture-recognition repositories): Apache-2.0',
+                  'GTI-UPM Leap captures seen as a camera would (see the Leap model)',
+                  'the labelled hand photos of ../shared/data/hands (each under its source '
+                  "repository's licence; see that README)"],
+}
+
+
+class Dataset:
+    """Feature rows with their class, person and source label; `augmented` marks the
+    noisy copies (fitted on, never scored)."""
+
+    def __init__(self, family, seed=SEED):
+        self.family = family
+        self.x, self.y, self.person, self.label, self.augmented = [], [], [], [], []
+        self.sources = []
+        self.rng = np.random.default_rng(seed)
+
+    def add(self, x, cls, person, label, augmented=False):
+        if x is not None:
+            self.x.append(x)
+            self.y.append(cls)
+            self.person.append(person)
+            self.label.append(label)
+            self.augmented.append(augmented)
+
+    def add_hand(self, hand, cls, person, label):
+        """A Leap-family hand, and a copy with JOINT_NOISE_MM of tracker noise on every
+        joint (a model fitted on one tracker's exact proportions reads a fist as
+        something else once its joints move by a millimetre)."""
+        x = leap_features(hand)
+        if x is None:
+            return
+        self.add(x, cls, person, label)
+        self.add(leap_features(noisy_hand(hand, JOINT_NOISE_MM, self.rng)), cls, person, label,
+                 augmented=True)
+
+    def arrays(self):
+        return (np.array(self.x), np.array(self.y), np.array(self.person),
+                np.array(self.label))
+
+    def clean(self):
+        return ~np.array(self.augmented, dtype=bool)
+
+
+def noisy_hand(hand, sigma, rng):
+    """A copy of a Hand with Gaussian noise (mm) on every joint."""
+    fingers = tuple(dataclasses.replace(
+        f, tip=f.tip + rng.normal(0.0, sigma, 3), mcp=f.mcp + rng.normal(0.0, sigma, 3),
+        pip=f.pip + rng.normal(0.0, sigma, 3), dip=f.dip + rng.normal(0.0, sigma, 3))
+        if f.mcp is not None and f.pip is not None and f.dip is not None else f
+        for f in hand.fingers)
+    return dataclasses.replace(hand, fingers=fingers)
+
+
+def add_leap_poses(ds, path, label_map=None, label=None, person=None):
+    """Rows of a Leap pose file; `label` overrides every row's (a user's file)."""
+    n = 0
+    for p, lab, frame in gd.read_pose_lines(path):
+        hand = gd.first_hand(frame)
+        cls = label if label is not None else (label_map or gd.LEAP_LABELS).get(lab)
+        if hand is None or cls is None:
+            continue
+        ds.add_hand(hand, cls, person or p, lab)
+        n += 1
+    ds.sources.append('%s (%d hands)' % (os.path.basename(path), n))
+
+
+def take_class(want, hand):
+    """The pose class of a labelled frame of the shared LeapJS takes, or None."""
+    from tools.evaluation.evaluate import UP
+    if want.get('fist') is True:
+        return 'fist'
+    if want.get('open') is True:
+        return 'open'
+    if want.get('pinch') is True:
+        return 'pinch'
+    if want.get('thumb_up') == UP:
+        return 'thumb'          # a thumb out of a fist, up or sideways: the guard decides
+    if all(v is False for v in want.values()) and len(want) == 4:
+        return 'none'           # the gun (thumb and index out)
+    return None
+
+
+def leapjs_take_hands(folder):
+    """(take, hand, pose class, labels) of every labelled hand of the shared LeapJS takes
+    (labels: tools/evaluate.LABELS)."""
+    from tools.evaluation import evaluate
+    for take, spans in sorted(evaluate.LABELS.items()):
+        path = evaluate.find_file(folder, take)
+        if path is None:
+            continue
+        dicts = evaluate._load(path)
+        for side, frames, want in spans:
+            for k in frames if frames is not evaluate.ALL else range(len(dicts)):
+                if k >= len(dicts) or dicts[k] is None:
+                    continue
+                try:
+                    frame = leapjs.frame_from_dict(dicts[k])
+                except leapjs.FrameError:
+                    continue
+                hand = frame.hand(side)
+                cls = take_class(want, hand) if hand is not None else None
+                if cls is not None:
+                    yield take, hand, cls, want
+
+
+def add_leapjs_takes(ds, folder):
+    """The labelled frames of the shared LeapJS takes (an older tracker's hand model:
+    fists curled at the middle joints, knuckles straight) as one more person."""
+    n = 0
+    for take, hand, cls, _ in leapjs_take_hands(folder):
+        ds.add_hand(hand, cls, 'leapjs_takes', take)
+        n += 1
+    ds.sources.append('the LeapJS takes of ../leapjs (%d labelled hands)' % n)
+
+
+def add_guinevere(ds, root):
+    n = 0
+    for person, gesture, path in gd.guinevere_takes(root):
+        cls = TAKE_LABELS.get(gesture)
+        if cls is None:
+            continue
+        for frame in gd.read_take(path):
+            hand = gd.first_hand(frame)
+            if hand is not None:
+                ds.add_hand(hand, cls, 'guinevere_' + person, gesture)
+                n += 1
+    ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
+
+
+def add_keypoint_row(ds, pts, cls, person, label, copies=1):
+    """A keypoint row and its mirror image (a left hand is a mirrored right one), the
+    first copy as recorded, further copies turned in the picture by up to TURN_RAD."""
+    for k in range(copies):
+        q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
+        ds.add(keypoint_features(q), cls, person, label, augmented=k > 0)
+        ds.add(keypoint_features(mirror_keypoints(q)), cls, person, label, augmented=k > 0)
+
+
+def add_keypoints(ds, path, label=None, person=None):
+    persons, labels, xy = gd.read_keypoints(path, label=label, person=person)
+    n = 0
+    for p, lab, pts in zip(persons, labels, xy):
+        cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
+        if cls is None:
+            continue
+        # the rarer gestures (few people recorded a thumb or an OK sign) count more
+        add_keypoint_row(ds, pts, cls, p, lab,
+                         RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
+        n += 1
+    ds.sources.append('%s (%d rows)' % (os.path.basename(path), n))
+
+
+# The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
+# 3-D landmarks turned palm to the camera, then about the fingers' axis by up to
+# VIEW_YAW_DEG (side views: a thumbs-up shows the side of the fist) and about the
+# thumbward axis by up to VIEW_PITCH_DEG, and flattened. They bring the poses the
+# keypoint files lack (horns, and OK signs and thumbs of more people).
+VIEW_YAW_DEG = 80.0
+VIEW_PITCH_DEG = 35.0
+VIEW_STRIDE = 2
+# Keypoint rows are also fitted turned in the picture by up to this (rad, ~26 deg), and
+# the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
+TURN_RAD = 0.45
+RARE_KEYPOINT_COPIES = 4
+PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
+
+
+def camera_view(landmarks, yaw, pitch):
+    """(21, 2) image positions (y down) of hand-frame landmarks seen palm-on after
+    turning them by yaw (about the hand direction) and pitch (about thumbward)."""
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]])
+    q = landmarks @ (rx @ rz).T
+    return np.stack((q[:, 0], -q[:, 2]), axis=1)
+
+
+def add_leap_views(ds, path, seed=SEED):
+    rng = np.random.default_rng(seed)
+    n = 0
+    for i, (p, lab, frame) in enumerate(gd.read_pose_lines(path)):
+        cls = gd.LEAP_LABELS.get(lab)
+        # their thumbs point ahead along the fingers, unlike a webcam's thumbs-up
+        if i % VIEW_STRIDE or cls is None or cls == 'thumb':
+            continue
+        hand = gd.first_hand(frame)
+        lm = hand_landmarks(hand) if hand is not None else None
+        if lm is None:
+            continue
+        yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
+        xy = rotate_keypoints(camera_view(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
+        ds.add(keypoint_features(xy), cls, 'leap:' + p, lab)
+        ds.add(keypoint_features(mirror_keypoints(xy)), cls, 'leap:' + p, lab)
+        n += 1
+    ds.sources.append('%s seen as a webcam would (%d views)' % (os.path.basename(path), n))
+
+
+def strided(rows, stride=FIT_STRIDE):
+    """Every stride-th pair of rows: rows come in pairs (a hand and its noisy copy, a
+    keypoint row and its mirror image), kept together."""
+    rows = np.asarray(rows)
+    return rows[(rows // 2) % stride == 0]
+
+
+def add_photos(ds, folder):
+    """The labelled photos' hands, one person per photo source (a few photos each, from
+    other people than the keypoint files): PHOTO_COPIES turned copies each."""
+    n = 0
+    for source, label, xy in gd.photo_hands(folder):
+        cls = gd.PHOTO_LABELS.get(label)
+        if cls is not None:
+            add_keypoint_row(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
+            n += 1
+    ds.sources.append('the labelled photos of ../hands (%d hands)' % n)
+
+
+def fit_rows(labels, persons, rows):
+    """`rows` (indices) with the thumbs takes' frames repeated (see THUMB_TAKE_REPEAT)."""
+    thumbs = rows[np.isin(labels[rows], ('thumbs_up', 'thumbs_down'))
+                  & np.char.startswith(persons[rows].astype(str), 'guinevere_')]
+    return np.concatenate([rows] + [thumbs] * (THUMB_TAKE_REPEAT - 1))
+
+
+def fit(x, y, seed=SEED):
+    """A PoseClassifier fitted on rows x with class names y."""
+    from sklearn.neural_network import MLPClassifier
+    from threadpoolctl import threadpool_limits
+    import warnings
+    from sklearn.exceptions import ConvergenceWarning
+    mean = x.mean(axis=0)
+    # a floor on the spread: a feature nearly constant in the data (a tracker's fixed
+    # proportions) must not turn a small difference elsewhere into a huge one
+    scale = np.maximum(x.std(axis=0), MIN_SCALE)
+    z = (x - mean) / scale
+    with threadpool_limits(1), warnings.catch_warnings():
+        warnings.simplefilter('ignore', ConvergenceWarning)
+        m = MLPClassifier((HIDDEN_UNITS,), alpha=L2, max_iter=MAX_ITER,
+                          random_state=seed).fit(z, y)
+    w1, b1 = m.coefs_[1], m.intercepts_[1]
+    if len(m.classes_) == 2:    # one logistic output: the same as softmax over (0, z)
+        w1 = np.hstack((np.zeros_like(w1), w1))
+        b1 = np.concatenate(([0.0], b1))
+    return PoseClassifier(m.classes_.tolist(), '', mean, scale, m.coefs_[0], m.intercepts_[0],
+                          w1, b1)
+
+
+_FOLD_DATA = None
+
+
+def _fit_without(person):
+    x, y, persons, labels, stride = _FOLD_DATA
+    rows = fit_rows(labels, persons, strided(np.where(persons != person)[0], stride))
+    return fit(x[rows], y[rows])
+
+
+def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print):
+    """{person: model fitted on everyone else} for each held-out person, two folds at a
+    time (one per core; each fit is seeded, so the result does not depend on the order)."""
+    global _FOLD_DATA
+    import multiprocessing
+    _FOLD_DATA = (x, y, persons, labels, stride)
+    held = sorted(held)
+    out = {}
+    try:
+        ctx = multiprocessing.get_context('fork')
+        with ctx.Pool(min(FOLD_WORKERS, len(held))) as pool:
+            for person, model in zip(held, pool.imap(_fit_without, held)):
+                out[person] = model
+                log('  fitted without %s' % person)
+    finally:
+        _FOLD_DATA = None
+    return out
+
+
+def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print, clean=None, held=None):
+    """Leave-one-person-out: per class recall and false-positive rate per held-out person,
+    their mean and worst, and the confusion of source labels into classes."""
+    classes = sorted(set(y))
+    per = {c: {} for c in classes}
+    confusion = collections.defaultdict(collections.Counter)
+    held = sorted(set(persons) if held is None else held)
+    models = models_without(x, y, persons, labels, held, stride, log)
+    for person in held:
+        test = persons == person
+        model = models[person]
+        if clean is not None:
+            test = test & clean
+        proba = model.proba(x[test])
+        if family == 'keypoints':   # rows come in (image, mirror) pairs: score their mean
+            proba = 0.5 * (proba[0::2] + proba[1::2])
+            yt, lt = y[test][0::2], labels[test][0::2]
+        else:
+            yt, lt = y[test], labels[test]
+        pred = np.array(model.classes)[proba.argmax(axis=1)]
+        for c in classes:
+            pos = yt == c
+            per[c][person] = {'n': int(pos.sum()),
+                              'recall': float((pred[pos] == c).mean()) if pos.any() else None,
+                              'fpr': float((pred[~pos] == c).mean()) if (~pos).any() else None}
+        for lab, p in zip(lt, pred):
+            confusion[str(lab)][str(p)] += 1
+        log('  held out %s: %s' % (person, ', '.join(
+            '%s %.2f' % (c, per[c][person]['recall']) for c in classes
+            if per[c][person].get('recall') is not None)))
+    summary = {}
+    for c in classes:
+        rec = {p: v['recall'] for p, v in per[c].items() if v['recall'] is not None}
+        fpr = {p: v['fpr'] for p, v in per[c].items() if v['fpr'] is not None}
+        worst = min(rec, key=rec.get) if rec else None
+        summary[c] = {'recall_mean': float(np.mean(list(rec.values()))) if rec else None,
+                      'recall_worst': rec[worst] if rec else None, 'worst_person': worst,
+                      'fpr_mean': float(np.mean(list(fpr.values()))) if fpr else None,
+                      'fpr_worst': max(fpr.values()) if fpr else None,
+                      'people': len(rec)}
+    return {'per_class': summary, 'per_person': per,
+            'confusion': {k: dict(v) for k, v in sorted(confusion.items())}}
+
+
+def print_lopo(title, report):
+    print(title)
+    print('  %-11s %-22s %-16s %s' % ('class', 'recall mean / worst', 'worst person', 'FPR mean / worst'))
+    for c, s in report['per_class'].items():
+        if s['fpr_mean'] is None:
+            continue
+        rec = ('%.3f / %.3f          %-16s' % (s['recall_mean'], s['recall_worst'], s['worst_person'])
+               if s['recall_mean'] is not None else '%-39s' % '- (no held-out person shows it)')
+        print('  %-11s %s %.4f / %.4f' % (c, rec, s['fpr_mean'], s['fpr_worst']))
+    print('  confusion (source label -> share read as each class):')
+    for lab, row in report['confusion'].items():
+        tot = sum(row.values())
+        print('    %-22s %s' % (lab, ', '.join('%s %.2f' % (k, v / tot) for k, v in
+                                                sorted(row.items(), key=lambda kv: -kv[1]))))
+
+
+def build(family, data_dir, adds, log=print):
+    """The Dataset of `family` from the shared data (when there) plus the user's files."""
+    ds = Dataset(family)
+    if family == 'leap':
+        gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
+        guin = os.path.join(data_dir, 'leap_people', 'guinevere')
+        if os.path.isfile(gti):
+            add_leap_poses(ds, gti)
+        if os.path.isdir(guin):
+            add_guinevere(ds, guin)
+        if os.path.isdir(os.path.join(data_dir, 'leapjs')):
+            add_leapjs_takes(ds, os.path.join(data_dir, 'leapjs'))
+    else:
+        folder = os.path.join(data_dir, 'keypoints')
+        gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
+        if os.path.isfile(gti):
+            add_leap_views(ds, gti)
+        if os.path.isfile(os.path.join(data_dir, 'hands', 'hands.json')):
+            add_photos(ds, os.path.join(data_dir, 'hands'))
+        if os.path.isdir(folder):
+            for name in sorted(os.listdir(folder)):
+                if name.endswith('.csv'):
+                    add_keypoints(ds, os.path.join(folder, name))
+    # A user's new gesture that the shared people also recorded (a V sign is their 'two'
+    # or 'peace', trained as none): their rows join the user's class instead of opposing it.
+    for _, label in adds:
+        for i, lab in enumerate(ds.label):
+            if lab == label:
+                ds.y[i] = label
+    for path, label in adds:
+        person = 'user:' + os.path.splitext(os.path.basename(path))[0]
+        if file_family(path) == 'keypoints':
+            add_keypoints(ds, path, label=label, person=person)
+        else:
+            add_leap_poses(ds, path, label=label, person=person)
+    return ds
+
+
+def file_family(path):
+    return 'keypoints' if path.lower().endswith('.csv') else 'leap'
+
+
+def train(family, data_dir, adds=(), report=True, log=print):
+    """(model, card) fitted on every person, the card holding the LOPO figures."""
+    t0 = time.time()
+    ds = build(family, data_dir, adds, log)
+    x, y, persons, labels = ds.arrays()
+    if len(set(y)) < 2:
+        raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '
+                         'data at %s?)' % (family, data_dir))
+    card = {'family': family, 'fitted_on': ds.sources, 'data_terms': DATA_TERMS[family], 'people': sorted(set(persons.tolist())),
+            'rows': int(len(y)), 'classes': sorted(set(y.tolist())),
+            'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
+                     'MLPClassifier, alpha %g, %d iterations, seed %d; fitted on every %s '
+                     'frame, %s)'
+                     % (HIDDEN_UNITS, L2, MAX_ITER, SEED, {1: '', 2: 'second'}.get(
+                         FIT_STRIDE, '%dth' % FIT_STRIDE),
+                        'each Leap hand also with %g mm of noise on every joint'
+                        % JOINT_NOISE_MM if family == 'leap' else
+                        'each row also as its mirror image'),
+            'command': 'python -m leap_teleop.hands.gestures.train --family %s%s' % (
+                family, ''.join(' --add %s --label %s' % (p, l) for p, l in adds)),
+            'date': datetime.date.today().isoformat()}
+    users = sorted(p for p in set(persons.tolist()) if p.startswith('user:'))
+    # a user's retrain holds out each of their own files (the shared people's figures
+    # are the shipped model's card); the shipped models hold out every person
+    held = users if adds else sorted(set(persons.tolist()))
+    if family == 'keypoints' and not adds:
+        # the Leap people's camera views are judged in evaluate_people; the card holds the
+        # webcam people
+        held = [p for p in held if not p.startswith(('leap:', 'photo:'))]
+    if report and len(set(persons)) > 1:
+        log('%s: leave-one-person-out over %d of %d people (%d rows)'
+            % (family, len(held), len(set(persons)), len(y)))
+        if adds and len(users) < 2:
+            log('  (one file of your own: held out, its gesture is unknown to the fit; '
+                'record a second session to judge it on data the fit never saw)')
+        card['leave_one_person_out'] = lopo(x, y, persons, labels, family, log=log,
+                                            clean=ds.clean(), held=held)['per_class']
+    mine = np.char.startswith(persons.astype(str), 'user:')
+    rows = np.union1d(strided(np.where(~mine)[0]), np.where(mine)[0])
+    rows = fit_rows(labels, persons, rows)
+    model = fit(x[rows], y[rows])
+    model.family = family
+    model.card = card
+    card['seconds'] = round(time.time() - t0, 1)
+    return model, card
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('--family', choices=('leap', 'keypoints', 'all'), default=None,
+                    help='which model (default: all, or the family of the --add files)')
+    ap.add_argument('--data', default=gd.SHARED_DATA,
+                    help='the shared data folder (default %(default)s)')
+    ap.add_argument('--add', action='append', default=[], metavar='FILE',
+                    help="a user's samples (repeatable, each followed by --label)")
+    ap.add_argument('--label', action='append', default=[], metavar='NAME',
+                    help='the class of the preceding --add file')
+    ap.add_argument('--out', default=None, help='model file (default: the shipped one)')
+    ap.add_argument('--no-report', action='store_true', help='skip leave-one-person-out')
+    if argv is None:
+        argv = [a for a in sys.argv[1:] if ':=' not in a]
+    args = ap.parse_args(argv)
+    if len(args.add) != len(args.label):
+        ap.error('every --add FILE needs its --label NAME')
+    for path in args.add:
+        if not os.path.isfile(path):
+            ap.error('--add %s: no such file' % path)
+    for label in args.label:
+        if not label.replace('_', '').isalnum():
+            ap.error('--label %r: letters, digits and _ only' % label)
+    adds = list(zip(args.add, args.label))
+    families = {file_family(p) for p in args.add}
+    if len(families) > 1:
+        ap.error('--add files of one family at a time (Leap .jsonl or keypoint .csv)')
+    family = args.family or (families.pop() if families else 'all')
+    todo = ('leap', 'keypoints') if family == 'all' else (family,)
+    if args.out and len(todo) > 1:
+        ap.error('--out names one model: give --family')
+    for fam in todo:
+        try:
+            model, card = train(fam, args.data, adds, report=not args.no_report)
+        except gd.DataError as e:
+            print('train_gestures: %s' % e, file=sys.stderr)
+            return 2
+        out = args.out or DEFAULT_MODELS[fam]
+        model.save(out)
+        write_card(out, card)
+        if 'leave_one_person_out' in card:
+            print_lopo('%s model, leave-one-person-out:' % fam,
+                       {'per_class': card['leave_one_person_out'], 'confusion': {}})
+        print('wrote %s (%d classes: %s) in %.0f s'
+              % (out, len(model.classes), ', '.join(model.classes), card['seconds']))
+    return 0
+
+
+def write_card(model_path, card):
+    """The model card beside the model, as Markdown."""
+    lines = ['# Pose model card: %s' % os.path.basename(model_path), '',
+             '- family: %s' % card['family'],
+             '- classes: %s' % ', '.join(card['classes']),
+             '- fitted on: %s' % '; '.join(card['fitted_on']),
+             '- data and terms: %s' % '; '.join(card.get('data_terms', [])),
+             '- people: %d (%s)' % (len(card['people']), ', '.join(card['people'])),
+             '- rows: %d' % card['rows'], '- model: %s' % card['model'],
+             '- made by: `%s` (%s, %s s)' % (card['command'], card['date'], card['seconds']), '']
+    lo = card.get('leave_one_person_out')
+    if lo:
+        lines += ['## Leave-one-person-out (fit on all people but one, score that one)', '',
+                  '| class | recall mean | recall worst (person) | FPR mean | FPR worst |',
+                  '|---|---|---|---|---|']
+        for c, s in lo.items():
+            if s['fpr_mean'] is None:
+                continue
+            rec = ('%.3f | %.3f (%s)' % (s['recall_mean'], s['recall_worst'], s['worst_person'])
+                   if s['recall_mean'] is not None else '- | - (no unseen person shows it)')
+            lines.append('| %s | %s | %.4f | %.4f |' % (c, rec, s['fpr_mean'], s['fpr_worst']))
+        lines.append('')
+    with open(os.path.splitext(model_path)[0] + '.md', 'w') as f:
+        f.write('\n'.join(lines))
+
+
+if __name__ == '__main__':
+    sys.exit(main())

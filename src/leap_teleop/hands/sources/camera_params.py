@@ -1,0 +1,71 @@
+"""The camera sources' node parameters (declared once, used by the sender) and their
+mapping onto make_source('webcam' | 'video', ...) keywords."""
+from leap_teleop.params import Param
+from leap_teleop.hands.sources.landmarks import (DEFAULT_CAMERA_POSITION_MM,
+    DEFAULT_HFOV_DEG,
+    DEFAULT_PALM_LENGTH_MM)
+CAMERA_SOURCES = ('webcam', 'video')
+
+CAMERA_PARAMS = {
+    'device': Param('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
+    'video': Param('', 'video source: a video file, an image, a folder or a glob of images'),
+    'width': Param(640, 'webcam: capture width asked of the device; video: frames are '
+                        'letterboxed to width x height (0 = as they come)',
+                   unit='px', ge=0, le=7680),
+    'height': Param(480, 'webcam: capture height; video: see ~width', unit='px', ge=0, le=4320),
+    'camera_fps': Param(30.0, 'webcam: frame rate asked of the device', unit='Hz', gt=0.0,
+                        le=240.0),
+    'mirror': Param(False, 'camera sources: flip images left-right before processing (a '
+                           'selfie view); hands keep the person\'s side and axes either way'),
+    'input_mirrored': Param(False, 'camera sources: the images already are mirror images (a '
+                                   'camera or driver that mirrors)'),
+    'hfov_deg': Param(DEFAULT_HFOV_DEG, 'camera sources: horizontal field of view, used when '
+                                        '~camera_info_topic is empty', unit='deg', ge=1.0,
+                      le=179.0),
+    'camera_info_topic': Param('', 'camera sources: sensor_msgs/CameraInfo topic with the '
+                                   'intrinsics (one message is read at start-up); empty = '
+                                   '~hfov_deg'),
+    'palm_length_mm': Param(DEFAULT_PALM_LENGTH_MM, 'camera sources: the user\'s palm length '
+                                                    '(wrist crease to middle-finger knuckle); '
+                                                    'depth scales with it',
+                            unit='mm', ge=50.0, le=150.0),
+    'camera_position_mm': Param(list(DEFAULT_CAMERA_POSITION_MM),
+                                'camera sources: the camera\'s position in the Leap frame (a '
+                                'hand 500 mm in front of the camera is at y 200, z 0 by '
+                                'default)', unit='mm', length=3, ge=-5000.0, le=5000.0),
+    'model': Param('full', 'camera sources: MediaPipe hand landmark model',
+                   choices=('full', 'lite')),
+    'max_hands': Param(2, 'camera sources: hands tracked at most', ge=1, le=2),
+    'detect_every': Param(8, 'camera sources: while fewer than ~max_hands are tracked, look '
+                             'for another hand every this many frames', ge=1, le=60),
+    'search_thread': Param(True, 'camera sources, live or paced: look for hands on a worker '
+                                 'thread (the other core) and publish each frame after '
+                                 'tracking only; off = in the frame\'s own processing, which '
+                                 'makes that frame late'),
+    'min_detection_confidence': Param(0.5, 'camera sources: MediaPipe palm detection '
+                                           'threshold', gt=0.0, lt=1.0),
+    'video_drop_late': Param(False, 'video source, paced: behave like a live camera (a frame '
+                                   'that arrives while the previous one is being processed '
+                                   'replaces it) instead of processing every frame'),
+    'annotated_image_topic': Param('', 'camera sources: publish the annotated camera view '
+                                       '(sensor_msgs/Image: landmarks, side, gestures, fps) '
+                                       'on this topic; empty = off'),
+}
+
+
+def camera_source_kwargs(name, p, clock, camera=None, on_image=None):
+    """make_source keywords for camera source `name` from checked params `p` (the
+    sender's: CAMERA_PARAMS plus realtime, loop, rate)."""
+    common = dict(hfov_deg=p['hfov_deg'], palm_length_mm=p['palm_length_mm'],
+                  camera_position_mm=p['camera_position_mm'], max_hands=p['max_hands'],
+                  model=p['model'], detect_every=p['detect_every'],
+                  search_thread=p['search_thread'],
+                  min_detection_confidence=p['min_detection_confidence'],
+                  mirror=p['mirror'], input_mirrored=p['input_mirrored'], camera=camera,
+                  clock=clock, on_image=on_image)
+    if name == 'webcam':
+        return dict(common, device=p['device'], width=p['width'], height=p['height'],
+                    fps=p['camera_fps'])
+    return dict(common, path=p['video'], realtime=p['realtime'], loop=p['loop'],
+                rate_hz=p['rate'], width=p['width'], height=p['height'],
+                drop_late=p['video_drop_late'])

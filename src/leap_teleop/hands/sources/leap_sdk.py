@@ -1,0 +1,87 @@
+"""The Leap Motion SDK v2 (`import Leap`: Leap.Controller, Leap.Listener.on_frame).
+
+The v2 Python binding ships with the (discontinued) Leap Motion SDK 2.3.1 for Python 2;
+for Python 3 it must be rebuilt from the SDK's LeapPython SWIG sources. The import is
+optional: without it, constructing the source raises SourceError saying what to install.
+"""
+import logging
+import time
+
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, Hand
+from leap_teleop.hands.sources.base import HandSource, SourceError
+from leap_teleop.hands.sources.live import PushQueue, attr, wait_loop, xyz
+log = logging.getLogger(__name__)
+INSTALL_HINT = ('the "leap" source needs the Leap Motion SDK v2 Python binding (import Leap): '
+                'install the Leap Motion SDK 2.3.1 and its service, put LeapPython and '
+                'Leap.py (rebuilt for Python 3) on PYTHONPATH; or use source:=leapc '
+                '(Ultraleap Gemini), recording or scripted')
+
+
+def _import():
+    try:
+        import Leap
+    except ImportError as e:
+        raise SourceError('%s (%s)' % (INSTALL_HINT, e))
+    return Leap
+
+
+def convert_hand(Leap, h):
+    side = 'right' if attr(h, 'is_right') else 'left'
+    fingers = [None] * 5
+    for f in attr(h, 'fingers') or ():
+        i = attr(f, 'type')
+        if not isinstance(i, int) or not 0 <= i < 5 or fingers[i] is not None:
+            continue
+        joints = {}
+        bone = getattr(f, 'bone', None)
+        if bone is not None:
+            try:
+                joints['mcp'] = xyz(bone(Leap.Bone.TYPE_PROXIMAL).prev_joint)
+                joints['pip'] = xyz(bone(Leap.Bone.TYPE_INTERMEDIATE).prev_joint)
+                joints['dip'] = xyz(bone(Leap.Bone.TYPE_DISTAL).prev_joint)
+            except Exception:       # a binding without bones: tip and direction only
+                joints = {}
+        fingers[i] = Finger(tip=xyz(attr(f, 'tip_position')), direction=xyz(attr(f, 'direction')),
+                            extended=bool(attr(f, 'is_extended')), **joints)
+    return Hand(side=side, palm_position=xyz(attr(h, 'palm_position')),
+                palm_velocity=xyz(attr(h, 'palm_velocity')),
+                palm_normal=xyz(attr(h, 'palm_normal')), direction=xyz(attr(h, 'direction')),
+                grab_strength=float(attr(h, 'grab_strength') or 0.0),
+                pinch_strength=float(attr(h, 'pinch_strength') or 0.0),
+                confidence=float(attr(h, 'confidence') or 0.0),
+                fingers=tuple(fingers) if all(f is not None for f in fingers) else (),
+                id=int(attr(h, 'id') or 0))
+
+
+class LeapSdkSource(HandSource):
+    """Frames from a Leap Motion controller through the v2 SDK."""
+
+    def __init__(self, clock=time.time, **_ignored):
+        self.Leap = _import()
+        self._clock = clock
+        self.rate_hz = None
+
+    def frames(self):
+        Leap = self.Leap
+        pq = PushQueue(self._clock)
+
+        class Listener(Leap.Listener):
+            def on_frame(listener, controller):
+                try:
+                    f = controller.frame()
+                    hands = [convert_hand(Leap, h) for h in attr(f, 'hands') or ()]
+                    pq.put(Frame(id=int(attr(f, 'id') or 0),
+                                 timestamp=pq.stamp(attr(f, 'timestamp')), hands=hands))
+                except Exception as e:   # never let a bad frame kill the SDK's thread
+                    log.warning('leap source: dropped a frame that failed to convert: %s', e)
+
+        listener = Listener()
+        controller = Leap.Controller()
+        controller.add_listener(listener)
+        try:
+            yield from wait_loop(self, pq)
+        finally:
+            controller.remove_listener(listener)
+
+
+__all__ = ['LeapSdkSource', 'FINGER_NAMES']

@@ -1,0 +1,88 @@
+"""Ultraleap Gemini through its LeapC Python bindings (`import leap`: leap.Connection,
+leap.Listener.on_tracking_event).
+
+The bindings are not on PyPI: build them from Ultraleap's leapc-python-bindings against
+an installed Gemini (5.x) service. The import is optional: without it, constructing the
+source raises SourceError saying what to install.
+"""
+import logging
+import time
+
+from leap_teleop.hands.frame import Finger, Frame, Hand
+from leap_teleop.hands.sources.base import HandSource, SourceError
+from leap_teleop.hands.sources.live import PushQueue, attr, wait_loop, xyz
+log = logging.getLogger(__name__)
+INSTALL_HINT = ('the "leapc" source needs Ultraleap\'s LeapC Python bindings (import leap): '
+                'install the Ultraleap Gemini hand-tracking service, then build and pip '
+                'install leapc-python-bindings (leapc-cffi and leap); or use source:=leap '
+                '(SDK v2), recording or scripted')
+
+
+def _import():
+    try:
+        import leap
+    except ImportError as e:
+        raise SourceError('%s (%s)' % (INSTALL_HINT, e))
+    return leap
+
+
+def _side(leap, hand_type):
+    left = getattr(getattr(leap, 'HandType', None), 'Left', None)
+    if left is not None and hand_type == left:
+        return 'left'
+    return 'left' if 'left' in str(hand_type).lower() else 'right'
+
+
+def convert_hand(leap, h):
+    palm = attr(h, 'palm')
+    fingers = []
+    for d in (attr(h, 'digits') or ())[:5]:
+        prox, inter, dist = attr(d, 'proximal'), attr(d, 'intermediate'), attr(d, 'distal')
+        tip = xyz(attr(dist, 'next_joint'))
+        dip = xyz(attr(dist, 'prev_joint'))
+        direction = tip - dip
+        n = float((direction @ direction) ** 0.5)
+        fingers.append(Finger(tip=tip, direction=direction / n if n > 0 else direction,
+                              extended=bool(attr(d, 'is_extended')),
+                              mcp=xyz(attr(prox, 'prev_joint')),
+                              pip=xyz(attr(inter, 'prev_joint')), dip=dip))
+    return Hand(side=_side(leap, attr(h, 'type')), palm_position=xyz(attr(palm, 'position')),
+                palm_velocity=xyz(attr(palm, 'velocity')), palm_normal=xyz(attr(palm, 'normal')),
+                direction=xyz(attr(palm, 'direction')),
+                grab_strength=float(attr(h, 'grab_strength') or 0.0),
+                pinch_strength=float(attr(h, 'pinch_strength') or 0.0),
+                confidence=float(attr(h, 'confidence') or 0.0),
+                fingers=tuple(fingers) if len(fingers) == 5 else (), id=int(attr(h, 'id') or 0))
+
+
+class LeapCSource(HandSource):
+    """Frames from an Ultraleap device through the Gemini service."""
+
+    def __init__(self, clock=time.time, **_ignored):
+        self.leap = _import()
+        self._clock = clock
+        self.rate_hz = None
+
+    def frames(self):
+        leap = self.leap
+        pq = PushQueue(self._clock)
+
+        class Listener(leap.Listener):
+            def on_tracking_event(listener, event):
+                try:
+                    hands = [convert_hand(leap, h) for h in attr(event, 'hands') or ()]
+                    pq.put(Frame(id=int(attr(event, 'tracking_frame_id') or 0),
+                                 timestamp=pq.stamp(attr(event, 'timestamp')), hands=hands))
+                except Exception as e:   # never let a bad frame kill the service thread
+                    log.warning('leapc source: dropped a frame that failed to convert: %s', e)
+
+        connection = leap.Connection()
+        connection.add_listener(Listener())
+        with connection.open():
+            mode = getattr(getattr(leap, 'TrackingMode', None), 'Desktop', None)
+            if mode is not None and hasattr(connection, 'set_tracking_mode'):
+                connection.set_tracking_mode(mode)
+            yield from wait_loop(self, pq)
+
+
+__all__ = ['LeapCSource']

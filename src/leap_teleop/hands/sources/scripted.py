@@ -1,0 +1,209 @@
+"""Scripted gestures: a YAML script of poses and palm waypoints rendered into frames.
+
+Script format (all keys but `hands` optional)::
+
+    rate_hz: 120            # frames per second
+    noise_mm: 0.0           # std. dev. of Gaussian palm noise
+    seed: 0                 # noise seed
+    hands:
+      right:                # a list of segments, played in order
+        - {pose: absent, duration: 0.5}
+        - {pose: thumbs_up, palm: [0, 200, 0], duration: 1.0}
+        - {pose: open, palm: [80, 220, -40], duration: 2.0}   # palm moves linearly
+        - {pose: pinch, value: 0.6, duration: 1.0}
+        - {pose: open, rpy: [0, 20, 0], duration: 1.0}       # roll, pitch, yaw in deg
+        - {pose: open, circle: {radius: 60, turns: 1, direction: cw}, duration: 1.5}
+      left: [...]
+
+A segment holds `pose` for `duration` seconds while the palm moves from where the
+previous segment ended to `palm` (mm, Leap axes) and the orientation to `rpy`; a hand
+that appears (first segment, or after `absent`) appears at its `palm` and `rpy`.
+`circle` moves the palm once round a horizontal circle of `radius` mm instead.
+A hand whose segments are over is absent. Poses: absent and hand_model.POSES.
+"""
+import math
+import time
+
+import numpy as np
+import yaml
+
+from leap_teleop.hands.frame import Frame, SIDES, vec3
+from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
+from leap_teleop.hands.sources.base import HandSource, SourceError
+DEFAULT_PALM = (0.0, 200.0, 0.0)
+_SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
+
+
+def _vector(value, what, n=3):
+    try:
+        arr = np.asarray(value, dtype=float).reshape(n)
+    except (TypeError, ValueError):
+        raise SourceError('%s must be a list of %d numbers, got %r' % (what, n, value))
+    if not np.all(np.isfinite(arr)):
+        raise SourceError('%s must be finite, got %r' % (what, value))
+    return arr
+
+
+class _Segment:
+    __slots__ = ('pose', 'duration', 'start', 'palm0', 'palm1', 'rpy0', 'rpy1',
+                 'value', 'circle', 'confidence')
+
+
+class GestureScript:
+    """A parsed, validated gesture script; hand_at(side, t) samples it."""
+
+    def __init__(self, data, name='<script>'):
+        if not isinstance(data, dict) or not isinstance(data.get('hands'), dict):
+            raise SourceError('%s: a gesture script is a mapping with a "hands" mapping '
+                              '(right: [...], left: [...])' % name)
+        self.name = name
+        self.rate_hz = float(data.get('rate_hz', 120.0))
+        self.noise_mm = float(data.get('noise_mm', 0.0))
+        self.seed = int(data.get('seed', 0))
+        if not (0 < self.rate_hz <= 10000):
+            raise SourceError('%s: rate_hz must be in (0, 10000], got %r' % (name, self.rate_hz))
+        if not (0 <= self.noise_mm < 1000):
+            raise SourceError('%s: noise_mm must be in [0, 1000), got %r' % (name, self.noise_mm))
+        self.segments = {}
+        for side, segs in data['hands'].items():
+            if side not in SIDES:
+                raise SourceError('%s: unknown hand %r; use right or left' % (name, side))
+            self.segments[side] = self._parse_segments(side, segs)
+        self.duration = max([s[-1].start + s[-1].duration for s in self.segments.values() if s]
+                            or [0.0])
+
+    def _parse_segments(self, side, segs):
+        where = '%s: hands.%s' % (self.name, side)
+        if not isinstance(segs, list):
+            raise SourceError('%s must be a list of segments' % where)
+        out, t = [], 0.0
+        palm, rpy = np.array(DEFAULT_PALM), np.zeros(3)
+        for i, raw in enumerate(segs):
+            here = '%s[%d]' % (where, i)
+            if not isinstance(raw, dict):
+                raise SourceError('%s must be a mapping, got %r' % (here, raw))
+            unknown = set(raw) - _SEGMENT_KEYS
+            if unknown:
+                raise SourceError('%s: unknown keys %s; known: %s'
+                                  % (here, sorted(unknown), sorted(_SEGMENT_KEYS)))
+            seg = _Segment()
+            seg.pose = raw.get('pose', 'open')
+            if seg.pose != 'absent' and seg.pose not in POSES:
+                raise SourceError('%s: unknown pose %r; known: absent, %s'
+                                  % (here, seg.pose, ', '.join(sorted(POSES))))
+            try:
+                seg.duration = float(raw.get('duration', 1.0))
+            except (TypeError, ValueError):
+                raise SourceError('%s: duration must be a number' % here)
+            if not (0 < seg.duration < 1e6):
+                raise SourceError('%s: duration must be > 0 s, got %r' % (here, raw.get('duration')))
+            seg.start = t
+            seg.palm1 = _vector(raw['palm'], here + '.palm') if 'palm' in raw else palm
+            seg.rpy1 = np.radians(_vector(raw['rpy'], here + '.rpy')) if 'rpy' in raw else rpy
+            # A hand that (re)appears does so at its waypoint; otherwise it moves there.
+            appears = not out or out[-1].pose == 'absent'
+            seg.palm0 = seg.palm1 if appears else palm
+            seg.rpy0 = seg.rpy1 if appears else rpy
+            seg.value = float(raw.get('value', 0.5))
+            if not (0.0 <= seg.value <= 0.8):
+                raise SourceError('%s: pinch value must be in [0, 0.8], got %r' % (here, seg.value))
+            seg.confidence = float(raw.get('confidence', 1.0))
+            seg.circle = None
+            if 'circle' in raw:
+                c = raw['circle']
+                if not isinstance(c, dict) or float(c.get('radius', 0)) <= 0:
+                    raise SourceError('%s.circle needs a positive radius (mm)' % here)
+                direction = c.get('direction', 'cw')
+                if direction not in ('cw', 'ccw'):
+                    raise SourceError('%s.circle.direction must be cw or ccw' % here)
+                seg.circle = (float(c['radius']), float(c.get('turns', 1.0)),
+                              1.0 if direction == 'cw' else -1.0)
+            out.append(seg)
+            t += seg.duration
+            palm, rpy = seg.palm1, seg.rpy1
+        return out
+
+    @classmethod
+    def load(cls, path):
+        try:
+            with open(path) as f:
+                data = yaml.safe_load(f)
+        except OSError as e:
+            raise SourceError('cannot read gesture script %s: %s' % (path, e.strerror))
+        except yaml.YAMLError as e:
+            raise SourceError('gesture script %s is not valid YAML: %s' % (path, e))
+        return cls(data, name=str(path))
+
+    def _palm(self, seg, u):
+        if seg.circle:
+            radius, turns, sign = seg.circle
+            a = 2 * math.pi * turns * u
+            # Seen from above (+y), cw: starts moving toward -z... away from the user.
+            offset = np.array([radius * (math.cos(a) - 1.0), 0.0, -sign * radius * math.sin(a)])
+            return seg.palm0 + offset
+        return seg.palm0 + (seg.palm1 - seg.palm0) * u
+
+    def hand_at(self, side, t):
+        """The Hand of `side` at script time t (s), or None when absent."""
+        for seg in self.segments.get(side, ()):
+            if seg.start <= t < seg.start + seg.duration:
+                if seg.pose == 'absent':
+                    return None
+                u = (t - seg.start) / seg.duration
+                palm = self._palm(seg, u)
+                dt = 1e-3
+                velocity = (self._palm(seg, min(u + dt / seg.duration, 1.0)) - palm) / dt
+                rpy = seg.rpy0 + (seg.rpy1 - seg.rpy0) * u
+                normal = direction = None
+                if np.any(rpy != 0.0) or seg.pose != 'thumbs_up':
+                    normal, direction = rpy_to_basis(rpy[0], rpy[1], rpy[2], side)
+                return render_hand(side, seg.pose, palm, normal, direction,
+                                   pinch_value=seg.value, velocity=velocity,
+                                   confidence=seg.confidence)
+        return None
+
+
+class ScriptedSource(HandSource):
+    """Renders a GestureScript at rate_hz, paced in real time unless realtime=False."""
+
+    def __init__(self, script, rate_hz=None, realtime=True, loop=False, noise_mm=None,
+                 seed=None, clock=time.time):
+        if not isinstance(script, GestureScript):
+            script = GestureScript.load(script)
+        self.script = script
+        self.rate_hz = float(rate_hz or script.rate_hz)
+        if not (0 < self.rate_hz <= 10000):
+            raise SourceError('rate_hz must be in (0, 10000], got %r' % rate_hz)
+        self.realtime = realtime
+        self.loop = loop
+        self.noise_mm = script.noise_mm if noise_mm is None else float(noise_mm)
+        self._rng = np.random.default_rng(script.seed if seed is None else seed)
+        self._clock = clock
+
+    def frames(self):
+        period = 1.0 / self.rate_hz
+        n_frames = max(1, int(round(self.script.duration * self.rate_hz)))
+        t0_wall, t0_mono = self._clock(), time.monotonic()
+        k = 0
+        while not self.stopped:
+            i = k % n_frames if self.loop else k
+            if i >= n_frames and not self.loop:
+                return
+            if self.realtime:
+                delay = t0_mono + k * period - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            script_t = i * period
+            hands = []
+            for side in SIDES:
+                hand = self.script.hand_at(side, script_t)
+                if hand is not None:
+                    if self.noise_mm > 0:
+                        hand.palm_position = hand.palm_position + self._rng.normal(
+                            0.0, self.noise_mm, 3)
+                    hands.append(hand)
+            # Live pacing stamps the moment the frame is complete, as a device would;
+            # fast-as-possible runs keep the ideal grid (their time is virtual).
+            stamp = self._clock() if self.realtime else t0_wall + k * period
+            yield Frame(id=k + 1, timestamp=stamp, hands=hands)
+            k += 1

@@ -1,0 +1,69 @@
+"""What every node shares: a parameter table that is both read and shown by --help."""
+import sys
+import textwrap
+
+import rospkg
+import rospy
+
+from leap_teleop.ros.signals import init_node
+from leap_teleop.params import Param, ParamError, check_params  # noqa: F401 (re-exported)
+
+
+def handle_help(node_name, description, params, argv=None):
+    """Print the node's private parameters and exit when --help / -h is given."""
+    argv = rospy.myargv(argv if argv is not None else sys.argv)
+    if '-h' not in argv and '--help' not in argv:
+        return
+    print('usage: rosrun leap_teleop %s [_param:=value ...] [topic:=remapped ...]\n' % node_name)
+    print(textwrap.fill(description, 88) + '\n')
+    print('private parameters (~name, default, allowed values):')
+    for name, p in params.items():
+        print('  ~%-22s %-28r %s\n  %-51s allowed: %s' % (name, p.default, p.doc, '', p.allowed()))
+    sys.exit(0)
+
+
+def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, TypeError),
+               hint=''):
+    """The start every node shares: --help, init_node, the ~params, then build(p). A bad
+    parameter (build raising one of `errors`) ends the node with one fatal log line (plus
+    `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
+    handle_help(script, doc, params, argv)
+    init_node(name)
+    try:
+        p = read_params(params)
+        return p, build(p)
+    except (ParamError,) + tuple(errors) as e:
+        rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
+        raise SystemExit(1)
+
+
+def read_params(params):
+    """A dict of every ~param, defaults from the table, each checked against its declaration
+    (ParamError names the first bad one)."""
+    return check_params(params, {name: rospy.get_param('~' + name, params[name].default)
+                                 for name in params})
+
+
+def package_path(*parts):
+    """A path inside this package (config files, scripts)."""
+    import os
+    return os.path.join(rospkg.RosPack().get_path('leap_teleop'), *parts)
+
+
+class RateLimitedLog:
+    """Warn at most once per period per key, with a count of what was suppressed."""
+
+    def __init__(self, period=2.0):
+        self.period = period
+        self._last = {}
+        self._suppressed = {}
+
+    def warn(self, key, fmt, *args):
+        now = rospy.get_time() if rospy.core.is_initialized() else 0.0
+        last = self._last.get(key)
+        if last is not None and 0.0 <= now - last < self.period:
+            self._suppressed[key] = self._suppressed.get(key, 0) + 1
+            return
+        n = self._suppressed.pop(key, 0)
+        self._last[key] = now
+        rospy.logwarn(fmt + (' (%d similar suppressed)' % n if n else ''), *args)

@@ -1,0 +1,55 @@
+"""hand_markers: the sender's rich Hand messages -> RViz markers.
+
+Subscribes leap_teleop/Hand on each of ~hand_topics (default leapmotion/hand_right and
+leapmotion/hand_left) and publishes visualization_msgs/MarkerArray on ~marker_topic:
+palm and fingertip spheres, palm -> tip lines, a palm-normal arrow and a label, coloured
+by the recognised state (grey open, red fist, green thumbs-up, blue pinch, yellow rock,
+purple thumbs-down),
+deleted when the hand leaves. The frame is the message's (leap_hands; the sender
+publishes the static TF world -> leap_hands).
+"""
+import rospy
+from visualization_msgs.msg import MarkerArray
+
+from leap_teleop.msg import Hand
+from leap_teleop.ros.node import Param, RateLimitedLog, start_node
+from leap_teleop.ros.markers import HandMarkerThrottle
+PARAMS = {
+    'hand_topics': Param(['leapmotion/hand_right', 'leapmotion/hand_left'],
+                         'leap_teleop/Hand topics to draw', min_length=1, empty_ok=False),
+    'marker_topic': Param('leapmotion/hand_markers', 'MarkerArray output topic',
+                          empty_ok=False),
+    'max_rate': Param(30.0, 'max marker updates per hand (state changes and deletes always '
+                            'go out); 0 = every message', unit='Hz', ge=0.0, le=1000.0),
+    'lifetime': Param(0.5, 'marker lifetime, so markers vanish when input stops; 0 = forever',
+                      unit='s', ge=0.0, le=3600.0),
+    'frame_id': Param('', 'frame for the markers; empty = the Hand message\'s frame'),
+    'scale': Param(1.0, 'size factor for spheres, lines and text', gt=0.0, le=100.0),
+}
+
+
+class HandMarkersNode:
+    def __init__(self, p):
+        self.throttle = HandMarkerThrottle(float(p['max_rate']), str(p['frame_id']),
+                                           float(p['lifetime']), float(p['scale']))
+        self.pub = rospy.Publisher(p['marker_topic'], MarkerArray, queue_size=10)
+        self.log = RateLimitedLog()
+        topics = p['hand_topics']
+        self.subs = [rospy.Subscriber(t, Hand, self.on_hand, queue_size=5) for t in topics]
+
+    def on_hand(self, msg):
+        try:
+            out = self.throttle.update(msg, rospy.get_time())
+        except ValueError as e:
+            self.log.warn('bad-hand', 'hand_markers: skipping a Hand message: %s', e)
+            return
+        if out is not None:
+            self.pub.publish(out)
+
+
+def main(argv=None):
+    p, node = start_node('hand_markers.py', 'hand_markers', __doc__, PARAMS, HandMarkersNode,
+                         argv)
+    rospy.loginfo('hand_markers: %s -> %s', ', '.join(s.resolved_name for s in node.subs),
+                  node.pub.resolved_name)
+    rospy.spin()

@@ -1,0 +1,250 @@
+"""ur10_arm: one hand drives one UR10 (the original's UR10_lm_arm).
+
+Subscribes the hand's leapcobot topic and joint_states; publishes
+arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory) and
+~status (ArmStatus) plus diagnostics. Callbacks only store input and wake the control
+loop, which runs at ~rate and right after each new hand message. Every key of
+config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, ...) is
+also a private parameter; the launch files load that file into the node's namespace.
+RECONFIGURABLE of them (gains, dead zone, filter constants, speed limits, the arming hold)
+can be changed while running with dynamic_reconfigure; the others are start-up only.
+"""
+import threading
+import time
+
+import diagnostic_updater
+import numpy as np
+import rospy
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Point
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from leap_teleop.ros import conversions
+from leap_teleop.msg import ArmStatus
+from leap_teleop.ros.node import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.signals import closed_at_shutdown
+from leap_teleop.ur10.teleop import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
+                                   HandInput)
+from leap_teleop.control.input_age import InputAgeWindow
+from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.kinematics import JOINT_NAMES
+from leap_teleop.ur10.model import GRIPPER_JOINT
+
+PARAMS = {
+    'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
+    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
+    # The loop is also the watchdog's clock: at least 10 Hz.
+    'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
+                  unit='Hz', ge=10.0, le=1000.0),
+    'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
+    'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
+                         ge=0.1, le=1000.0),
+    **TELEOP_PARAMS,          # config/ur10_teleop.yaml, loaded into the node's namespace
+}
+
+
+# Changeable while running (dynamic_reconfigure): gains, the dead zone, filter constants,
+# speed limits, the arming hold. Modes, geometry, watchdog times and topics stay start-up only.
+RECONFIGURABLE = ('scale', 'deadzone_mm', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
+                  'max_tool_tilt', 'max_tool_turn', 'filter_min_cutoff_hz', 'filter_beta',
+                  'filter_d_cutoff_hz', 'rotation_min_cutoff_hz', 'rotation_beta',
+                  'rotation_d_cutoff_hz', 'max_joint_speed', 'max_joint_accel', 'servo_gain',
+                  'gripper_binary_closed', 'arm_hold_s')
+
+
+def retune(teleop, changes):
+    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop: its params
+    (read where used) and the filters and servo it built from them at start-up."""
+    for name, value in changes.items():
+        setattr(teleop.p, name, value)
+    p = teleop.p
+    for filt, prefix in ((teleop._filter, 'filter_'), (teleop._rotation_filter, 'rotation_')):
+        filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
+        filt.beta = getattr(p, prefix + 'beta')
+        filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
+    teleop._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
+    teleop._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
+    teleop._servo.gain = float(p.servo_gain)
+
+
+def teleop_params(p):
+    """ArmTeleopParams from the node's checked ~params."""
+    return ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
+
+
+class ArmNode:
+    def __init__(self, p, params):
+        self.p = p
+        self.teleop = ArmTeleop(params)
+        self.lock = threading.Lock()
+        self.wake = threading.Event()
+        self.log = RateLimitedLog(2.0)
+        prefix = p['joint_prefix']
+        self.arm_joints = [prefix + n for n in JOINT_NAMES]
+        self.gripper_joint = prefix + GRIPPER_JOINT
+        self._joint_index = None
+        side = p['hand']
+        topic = p['hand_topic'] or 'leapmotion/data_%s' % side
+        self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
+        self.gripper_pub = rospy.Publisher('gripper/command', JointTrajectory, queue_size=10)
+        self.status_pub = rospy.Publisher('~status', ArmStatus, queue_size=10, latch=True)
+        self.hand_topic, self.hand_type = topic, conversions.LEAPCOBOT_TYPES[side]
+        self.joints_seen = threading.Event()
+        rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
+        self._last_status = None
+        self._last_status_pub = 0.0
+        self.input_age = InputAgeWindow()      # control loop thread only
+        self.diagnostics = diagnostic_updater.Updater()
+        self.diagnostics.setHardwareID('ur10_arm_%s' % side)
+        self.diagnostics.add('teleop', self.diagnose)
+        rospy.loginfo('ur10_arm: %s hand on %s drives %s (mode %s, orientation %s, gripper %s, '
+                      'max joint speed %.3g rad/s, acceleration %.3g rad/s^2)', side,
+                      rospy.resolve_name(topic), self.arm_pub.resolved_name, params.mode,
+                      params.orientation, params.gripper_mode, params.max_joint_speed,
+                      params.max_joint_accel)
+
+    # Callbacks: store and wake, nothing else.
+    def on_hand(self, msg):
+        hand = HandInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        with self.lock:
+            why = self.teleop.on_hand(hand, rospy.get_time())
+        if why:
+            self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)
+        self.wake.set()
+
+    def on_joints(self, msg):
+        if self._joint_index is None or len(msg.name) != self._joint_count:
+            index = []
+            for name in JOINT_NAMES:
+                match = [i for i, n in enumerate(msg.name) if n == name or n.endswith('_' + name)
+                         or n.endswith('/' + name)]
+                if not match:
+                    self.log.warn('joints', 'ur10_arm: joint_states lacks %s', name)
+                    return
+                index.append(match[0])
+            self._joint_index, self._joint_count = index, len(msg.name)
+        q = [msg.position[i] for i in self._joint_index]
+        with self.lock:
+            self.teleop.on_joints(q, rospy.get_time())
+        self.joints_seen.set()
+
+    def start_reconfigure(self):
+        """dynamic_reconfigure on ~: RECONFIGURABLE, applied under the control loop's lock."""
+        def apply(changes):
+            with self.lock:
+                retune(self.teleop, changes)
+        self.reconfigure = Reconfigure('ur10_arm', PARAMS, RECONFIGURABLE,
+                                       {k: getattr(self.teleop.p, k) for k in RECONFIGURABLE},
+                                       apply)
+
+    def wait_for_robot(self):
+        """Listen to the hand only once the robot reports its joints, so no gesture
+        (a thumbs-up) is spent while nothing could act on it; a sender started with
+        ~wait_for_subscribers then starts its session exactly when the arm is ready."""
+        last_log = time.monotonic()
+        while not self.joints_seen.wait(0.2):
+            if rospy.is_shutdown():
+                return False
+            if time.monotonic() - last_log >= 5.0:
+                last_log = time.monotonic()
+                rospy.loginfo('ur10_arm: waiting for %s', rospy.resolve_name('joint_states'))
+        rospy.Subscriber(self.hand_topic, self.hand_type, self.on_hand, queue_size=50,
+                         tcp_nodelay=True)
+        # Its own timer thread: the master lookup blocks, the control loop must not.
+        self._type_check = rospy.Timer(rospy.Duration(5.0), self.check_hand_type)
+        return True
+
+    def check_hand_type(self, _event=None):
+        """Say so when the hand topic carries another type (e.g. the other hand's
+        leapcobot, or leapros): rospy drops such a connection with no word to this node,
+        and the arm would wait for a thumbs-up that never arrives."""
+        topic, want = rospy.resolve_name(self.hand_topic), self.hand_type._type
+        try:
+            published = dict(rospy.get_published_topics())
+        except Exception as e:      # the master gone or busy: try again next period
+            self.log.warn('type_check', 'ur10_arm: cannot ask the master for %s: %s', topic, e)
+            return None
+        got = published.get(topic)
+        if got is not None and got != want:
+            self.log.warn('type_check', 'ur10_arm: %s carries %s, but this arm (hand %s) reads '
+                          '%s: no hand input arrives; publish the %s hand there or set '
+                          '~hand_topic / the launch file\'s topic', topic, got, self.p['hand'],
+                          want, self.p['hand'])
+        return got
+
+    def loop(self):
+        period = 1.0 / float(self.p['rate'])
+        while not rospy.is_shutdown():
+            self.wake.wait(period)
+            self.wake.clear()
+            now = rospy.get_time()
+            with self.lock:
+                cmd = self.teleop.step(now)
+                status = self.teleop.status
+                snapshot = (status.state, status.reason, status.origin_set)
+            if cmd.points:
+                # Stamp 0 (start on receipt): a command delayed in transport still starts
+                # from the controller's current state instead of partly in the past.
+                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points))
+            if cmd.gripper is not None:
+                self.gripper_pub.publish(self._trajectory([self.gripper_joint],
+                                                          [(0.1, [cmd.gripper], None)]))
+            if cmd.points or cmd.gripper is not None:
+                self.input_age.add(rospy.get_time(), cmd.input_stamp)
+            self._publish_status(snapshot, now)
+            self.diagnostics.update()
+
+    @staticmethod
+    def _trajectory(names, points, stamp=0.0):
+        """points [(time_from_start, positions, velocities|None)], starting at stamp
+        (the control period's time; 0 = on receipt, the ros_control convention)."""
+        msg = JointTrajectory()
+        msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
+        msg.joint_names = list(names)
+        msg.points = [JointTrajectoryPoint(
+            positions=[float(x) for x in q],
+            velocities=[] if v is None else [float(x) for x in v],
+            time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
+        return msg
+
+    def _publish_status(self, snapshot, now):
+        changed = snapshot != self._last_status
+        if changed:
+            state, reason, _ = snapshot
+            log = rospy.logwarn if state == HOLDING else rospy.loginfo
+            log('ur10_arm: %s (%s)', state, reason)
+        if not changed and now - self._last_status_pub < 1.0 / float(self.p['status_rate']):
+            return
+        self._last_status, self._last_status_pub = snapshot, now
+        s = self.teleop.status
+        msg = ArmStatus(state=s.state, reason=s.reason, origin_set=s.origin_set,
+                        rejected_inputs=s.rejected_inputs, ik_failures=s.ik_failures)
+        msg.header.stamp = rospy.Time.now()
+        if len(s.target) == 3:
+            msg.target = Point(*s.target)
+        if s.input_stamp > 0:
+            msg.input_stamp = rospy.Time.from_sec(s.input_stamp)
+        self.status_pub.publish(msg)
+
+    def diagnose(self, stat):
+        s = self.teleop.status
+        level = DiagnosticStatus.WARN if s.state == HOLDING else DiagnosticStatus.OK
+        stat.summary(level, '%s: %s' % (s.state, s.reason))
+        stat.add('origin set', s.origin_set)
+        stat.add('rejected inputs', s.rejected_inputs)
+        stat.add('IK failures', s.ik_failures)
+        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+            stat.add(key, value)
+        return stat
+
+
+def main(argv=None):
+    p, node = start_node('ur10_arm.py', 'ur10_arm', __doc__, PARAMS,
+                         lambda p: ArmNode(p, teleop_params(p)), argv,
+                         hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
+    node.start_reconfigure()
+    if node.wait_for_robot():
+        with closed_at_shutdown():
+            node.loop()

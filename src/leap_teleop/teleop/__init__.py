@@ -1,1 +1,0 @@
-"""Teleoperation logic that turns hand input into robot commands (no ROS here)."""

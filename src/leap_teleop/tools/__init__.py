@@ -1,1 +1,0 @@
-"""Command-line tools (python -m leap_teleop.tools.NAME)."""

@@ -1,0 +1,512 @@
+"""Hand -> UR10 teleoperation logic, one instance per arm, no ROS.
+
+Protocol (as the original UR10_lm_arm): thumbs-up arms, fist disarms and stops, rock
+stores the origin (palm reference + the TCP's current pose), pinch drives the gripper.
+Modes: imitation (TCP follows the palm's offset from the origin, scaled) and joystick
+(beyond a dead zone around the origin, the TCP moves at a speed proportional to the
+excess). Orientation modes: fixed (tool pointing down, turned by tool_yaw), yaw (the
+tool's yaw follows the hand's turn about the vertical), full (the tool turns as the palm
+does); the hand's rotation since the origin goes through the same axis map as positions,
+is scaled, and the tool's tilt from vertical and turn from the origin are clamped like the
+workspace. Unlike the original: the input is smoothed by One Euro filters (position and
+rotation vector) and validated (out-of-order and late messages are dropped and counted,
+see input_check), the target is clamped to a workspace box, motion is commanded by a
+joint servo with speed and acceleration limits whose trajectories keep the velocity
+continuous (servo.py), IK failures hold the arm instead of raising, stale input holds at
+once and resumes from the current pose when fresh input returns within disarm_after (the
+origin is re-anchored, so nothing jumps), while a longer silence, a lost hand or a fist
+disarms (watchdog), stale joint states or the clock jumping back (a simulator restart)
+disarm without commanding the old pose, and every state change says why.
+"""
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from leap_teleop.params import Param, check_params
+from leap_teleop.ur10 import orientation as ori
+from leap_teleop.control.input_check import InputStream
+from leap_teleop.control.one_euro import OneEuroFilter
+from leap_teleop.control.servo import JointServo
+from leap_teleop.ur10 import kinematics as kin
+
+DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
+MODES = ('imitation', 'joystick')
+GRIPPER_MODES = ('binary', 'proportional')
+ORIENTATION_MODES = ('fixed', 'yaw', 'full')
+# While tracking, an IK answer this far (rad, any joint) from the last goal is another
+# arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
+MAX_GOAL_JUMP = 1.0
+_TWO_PI = 2 * math.pi
+
+
+@dataclass
+class ArmTeleopParams:
+    mode: str = 'imitation'
+    # Leap axes (x right, y up, z toward the user) -> arm base axes, rows = base x, y, z.
+    axis_map: tuple = ((0.0, 0.0, -1.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    scale: float = 2.5                 # imitation: robot m per hand m
+    deadzone_mm: float = 30.0          # joystick: radius around the origin that moves nothing
+    joystick_gain: float = 2.0         # joystick: TCP m/s per m of palm excess
+    max_tcp_speed: float = 0.25        # joystick: m/s cap
+    workspace_min: tuple = (0.25, -0.9, 0.0)    # m, arm base frame
+    workspace_max: tuple = (1.15, 0.9, 0.9)
+    tool_yaw: float = 0.0              # rad, fixed tool orientation: pointing down, turned by this
+    orientation: str = 'fixed'         # fixed | yaw | full
+    orientation_scale: float = 1.0     # tool rad per hand rad
+    max_tool_tilt: float = 0.8         # rad, tool axis from straight down
+    max_tool_turn: float = 1.6         # rad, tool yaw from its yaw at the origin
+    wrist_lower: tuple = (-_TWO_PI, -_TWO_PI, -_TWO_PI)   # rad, wrist 1-3 ranges for IK
+    wrist_upper: tuple = (_TWO_PI, _TWO_PI, _TWO_PI)
+    filter_min_cutoff_hz: float = 0.2  # One Euro on the palm: cutoff at rest; <= 0 disables
+    filter_beta: float = 0.05          # Hz of cutoff per mm/s of palm speed
+    filter_d_cutoff_hz: float = 0.35   # cutoff of the palm speed estimate
+    rotation_min_cutoff_hz: float = 0.3    # One Euro on the hand's rotation vector
+    rotation_beta: float = 4.0         # Hz per rad/s
+    rotation_d_cutoff_hz: float = 1.0
+    max_joint_speed: float = 0.05      # rad/s, every joint
+    max_joint_accel: float = 0.5       # rad/s^2, every joint (<= the UR10's limit)
+    servo_gain: float = 10.0           # 1/s, joint error -> velocity correction
+    command_horizon: float = 0.032     # s, time of each trajectory's first point
+    min_duration: float = 0.05         # s, shortest trajectory sent
+    input_timeout: float = 0.2         # s without hand input -> hold (a stall)
+    disarm_after: float = 1.0          # s without hand input -> disarm (a loss)
+    gripper_mode: str = 'binary'
+    gripper_binary_closed: float = 0.43
+    max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
+    max_input_age: float = 0.25        # s a message may arrive later than the stream's
+                                       # best-case latency
+    joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
+    arm_hold_s: float = 0.3            # s a thumbs-up must be held before it arms
+
+    @classmethod
+    def from_dict(cls, values):
+        """Build from a dict (YAML / ROS params); unknown keys and bad values raise
+        ValueError naming them."""
+        known = {f.name for f in fields(cls)}
+        unknown = set(values) - known
+        if unknown:
+            raise ValueError('unknown arm teleop parameters: %s' % ', '.join(sorted(unknown)))
+        p = cls(**values)
+        p.validate()
+        return p
+
+    def validate(self):
+        """Check every field against TELEOP_PARAMS (ParamError, a ValueError, names the
+        first bad one), then what involves two fields."""
+        for name, value in check_params(TELEOP_PARAMS, vars(self)).items():
+            setattr(self, name, value)
+        lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
+        if np.any(lo >= hi):
+            raise ValueError('workspace_min must be below workspace_max on every axis')
+        if not np.linalg.matrix_rank(np.asarray(self.axis_map, float)) == 3:
+            raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
+        if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
+            raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
+        if self.disarm_after < self.input_timeout:
+            raise ValueError('disarm_after (%g s) must be at least input_timeout (%g s)'
+                             % (self.disarm_after, self.input_timeout))
+
+
+_P = ArmTeleopParams()
+# Every ArmTeleopParams field's declaration: ur10_arm's ~params (config/ur10_teleop.yaml)
+# and ArmTeleopParams.validate share it. Timeouts and speeds have upper bounds too.
+TELEOP_PARAMS = {
+    'mode': Param(_P.mode, 'imitation (TCP follows the palm) or joystick (speed beyond the '
+                           'dead zone)', choices=MODES),
+    'axis_map': Param([list(r) for r in _P.axis_map], 'Leap axes -> arm base axes, rows = '
+                      'base x, y, z', length=3,
+                      item=Param([0.0, 0.0, 0.0], '', length=3, ge=-1.0, le=1.0)),
+    'scale': Param(_P.scale, 'imitation: robot m per hand m', gt=0.0, le=10.0),
+    'deadzone_mm': Param(_P.deadzone_mm, 'joystick: radius around the origin that moves '
+                                         'nothing', unit='mm', gt=0.0, le=300.0),
+    'joystick_gain': Param(_P.joystick_gain, 'joystick: TCP m/s per m of palm beyond the '
+                                             'dead zone', unit='1/s', gt=0.0, le=20.0),
+    'max_tcp_speed': Param(_P.max_tcp_speed, 'joystick: TCP speed cap', unit='m/s',
+                           gt=0.0, le=1.0),
+    'workspace_min': Param(list(_P.workspace_min), 'TCP target box, low corner (base frame)',
+                           unit='m', length=3, ge=-3.0, le=3.0),
+    'workspace_max': Param(list(_P.workspace_max), 'TCP target box, high corner', unit='m',
+                           length=3, ge=-3.0, le=3.0),
+    'tool_yaw': Param(_P.tool_yaw, 'tool turned about z by this (pointing down)', unit='rad',
+                      ge=-2 * math.pi, le=2 * math.pi),
+    'orientation': Param(_P.orientation, 'fixed (tool down, turned by tool_yaw), yaw (tool '
+                                         'yaw follows the hand\'s turn) or full (the tool '
+                                         'turns as the palm)', choices=ORIENTATION_MODES),
+    'orientation_scale': Param(_P.orientation_scale, 'tool rotation per hand rotation',
+                               gt=0.0, le=5.0),
+    'max_tool_tilt': Param(_P.max_tool_tilt, 'tool axis at most this far from straight down',
+                           unit='rad', ge=0.0, le=math.pi / 2),
+    'max_tool_turn': Param(_P.max_tool_turn, 'tool yaw at most this far from its yaw at the '
+                                             'rock', unit='rad', ge=0.0, le=math.pi),
+    'wrist_lower': Param(list(_P.wrist_lower), 'wrist 1-3 lower limits the IK may use',
+                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
+    'wrist_upper': Param(list(_P.wrist_upper), 'wrist 1-3 upper limits the IK may use',
+                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
+    'filter_min_cutoff_hz': Param(_P.filter_min_cutoff_hz, 'One Euro on the palm: cutoff at '
+                                  'rest; 0 = off', unit='Hz', ge=0.0, le=100.0),
+    'filter_beta': Param(_P.filter_beta, 'One Euro on the palm: cutoff added per palm speed',
+                         unit='Hz/(mm/s)', ge=0.0, le=10.0),
+    'filter_d_cutoff_hz': Param(_P.filter_d_cutoff_hz, 'One Euro on the palm: cutoff of the '
+                                'speed estimate', unit='Hz', gt=0.0, le=100.0),
+    'rotation_min_cutoff_hz': Param(_P.rotation_min_cutoff_hz, 'One Euro on the hand\'s '
+                                    'rotation vector: cutoff at rest; 0 = off', unit='Hz',
+                                    ge=0.0, le=100.0),
+    'rotation_beta': Param(_P.rotation_beta, 'One Euro on the rotation: cutoff added per '
+                                             'turning speed', unit='Hz/(rad/s)', ge=0.0,
+                           le=1000.0),
+    'rotation_d_cutoff_hz': Param(_P.rotation_d_cutoff_hz, 'One Euro on the rotation: cutoff '
+                                  'of the speed estimate', unit='Hz', gt=0.0, le=100.0),
+    'max_joint_speed': Param(_P.max_joint_speed, 'every joint at most this fast',
+                             unit='rad/s', gt=0.0, le=float(min(kin.MAX_JOINT_SPEED))),
+    'max_joint_accel': Param(_P.max_joint_accel, 'every joint accelerates at most this much '
+                             '(the UR10 limit at most)', unit='rad/s^2', gt=0.0,
+                             le=float(min(kin.MAX_JOINT_ACCEL))),
+    'servo_gain': Param(_P.servo_gain, 'joint error -> velocity correction on top of the '
+                                       'goal\'s own velocity', unit='1/s', gt=0.0, le=100.0),
+    'command_horizon': Param(_P.command_horizon, 'time of each trajectory\'s first point '
+                             '(with its velocity; the second is rest)', unit='s',
+                             ge=0.004, le=0.5),
+    'min_duration': Param(_P.min_duration, 'shortest hold trajectory sent', unit='s',
+                          gt=0.0, le=5.0),
+    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold (watchdog); '
+                                             'fresh input resumes from the current pose',
+                           unit='s', gt=0.0, le=10.0),
+    'disarm_after': Param(_P.disarm_after, 'no hand input this long -> disarm (a new '
+                                           'thumbs-up needed); at least input_timeout',
+                          unit='s', gt=0.0, le=10.0),
+    'gripper_mode': Param(_P.gripper_mode, 'binary (closed while pinching) or proportional',
+                          choices=GRIPPER_MODES),
+    'gripper_binary_closed': Param(_P.gripper_binary_closed, 'binary: knuckle when closed',
+                                   unit='rad', ge=0.0, le=0.8),
+    'max_palm_mm': Param(_P.max_palm_mm, '|palm| beyond this is a tracking error, ignored',
+                         unit='mm', gt=0.0, le=2000.0),
+    'max_input_age': Param(_P.max_input_age, 'drop a message arriving this much later than '
+                                             'the stream\'s best latency', unit='s',
+                           gt=0.0, le=10.0),
+    'joint_timeout': Param(_P.joint_timeout, 'no joint states this long -> disarm (robot '
+                                             'gone)', unit='s', gt=0.0, le=10.0),
+    'arm_hold_s': Param(_P.arm_hold_s, 'a thumbs-up must be held this long before it arms',
+                        unit='s', ge=0.0, le=5.0),
+}
+
+
+@dataclass
+class HandInput:
+    """One hand message, side-free (see conversions.from_leapcobot)."""
+    present: bool
+    palm_mm: tuple = (0.0, 0.0, 0.0)
+    fist: bool = False
+    thumb_up: bool = False
+    pinch: bool = False
+    pinch_value: float = 0.0
+    rock: bool = False
+    stamp: float = 0.0
+    # Rotation since the origin (rad) about Leap z, y, x, as the sender measures it.
+    rotate: float = 0.0
+    turn: float = 0.0
+    swing: float = 0.0
+
+    @classmethod
+    def from_leapcobot_dict(cls, d):
+        return cls(present=bool(d['present']), palm_mm=tuple(d['palmpos']), fist=bool(d['fist']),
+                   thumb_up=bool(d['thumb_up']), pinch=bool(d['pinch']),
+                   pinch_value=float(d['pinch_value']),
+                   rock=bool(d['set_origin_frame_detected']), stamp=float(d['stamp']),
+                   rotate=float(d.get('rotate_value', 0.0)),
+                   turn=float(d.get('turn_value', 0.0)), swing=float(d.get('swing_value', 0.0)))
+
+
+@dataclass
+class ArmCommand:
+    """What to send this control period; None fields mean nothing to send."""
+    q: np.ndarray = None               # joint goal: the target pose's IK, or where a hold stops
+    points: list = None                # trajectory [(time_from_start s, q, qd)] from `stamp`
+    stamp: float = 0.0                 # time the trajectory starts (the control period's)
+    gripper: float = None              # knuckle 0 (open) .. 0.8 (closed)
+    input_stamp: float = 0.0           # capture stamp of the hand behind it (0: none, a
+                                       # watchdog hold)
+
+
+@dataclass
+class ArmStatus:
+    state: str = DISARMED
+    reason: str = 'waiting for thumbs-up'
+    origin_set: bool = False
+    target: tuple = ()                 # TCP target, base frame, m
+    target_rotation: tuple = ()        # tool orientation target (3x3 rows), base frame
+    rejected_inputs: int = 0           # non-finite / absurd / out-of-order / late messages
+    ik_failures: int = 0
+    input_stamp: float = 0.0           # capture stamp of the hand behind the latest command
+    counters: dict = field(default_factory=dict)
+
+
+class ArmTeleop:
+    def __init__(self, params=None):
+        self.p = params or ArmTeleopParams()
+        self.p.validate()
+        self._axes = np.asarray(self.p.axis_map, dtype=float)
+        self._axes_rotation = ori.axis_rotation(self._axes)
+        self._lo = np.asarray(self.p.workspace_min, dtype=float)
+        self._hi = np.asarray(self.p.workspace_max, dtype=float)
+        self._rotation = kin.tool_down(self.p.tool_yaw)
+        self._joint_lower = np.maximum(np.concatenate([kin.JOINT_LOWER[:3], self.p.wrist_lower]),
+                                       kin.JOINT_LOWER)
+        self._joint_upper = np.minimum(np.concatenate([kin.JOINT_UPPER[:3], self.p.wrist_upper]),
+                                       kin.JOINT_UPPER)
+        self._filter = OneEuroFilter(self.p.filter_min_cutoff_hz, self.p.filter_beta,
+                                     self.p.filter_d_cutoff_hz)
+        self._rotation_filter = OneEuroFilter(self.p.rotation_min_cutoff_hz,
+                                              self.p.rotation_beta, self.p.rotation_d_cutoff_hz)
+        speed = np.minimum(self.p.max_joint_speed, kin.MAX_JOINT_SPEED)
+        self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
+                                 self.p.command_horizon, self.p.servo_gain,
+                                 kin.JOINT_LOWER, kin.JOINT_UPPER)
+        self.status = ArmStatus()
+        self._hand = None
+        self._hand_rx = None
+        self._q = None
+        self._joints_rx = None
+        self._stream = InputStream(self.p.max_input_age, self.p.input_timeout)
+        self._palm_ref = None
+        self._tcp_ref = None
+        self._tool_ref = None          # tool rotation at the origin (base frame)
+        self._yaw_ref = 0.0
+        self._hand_rot_ref = None      # hand rotation vector at the origin (Leap axes)
+        self._target = None
+        self._goal = None              # (time, joint goal) of the last tracked target
+        self._last_step = None
+        self._gripper_sent = None
+        self._thumb_up_since = None       # capture time the current thumbs-up began
+        self._stalled = None              # holding for stale input: when input last came
+
+    # -- input (cheap; called from subscriber callbacks) ----------------------------
+    def on_hand(self, hand, now):
+        """Store one hand message. Returns None, or why it was rejected."""
+        palm = np.asarray(hand.palm_mm, dtype=float)
+        angles = (hand.rotate, hand.turn, hand.swing)
+        why = None
+        if hand.present and (not np.all(np.isfinite(palm))
+                             or np.any(np.abs(palm) > self.p.max_palm_mm)):
+            why = 'palm position %s is not a trackable hand' % (tuple(palm),)
+        elif not math.isfinite(hand.pinch_value):
+            why = 'pinch value %r is not finite' % hand.pinch_value
+        elif not all(math.isfinite(a) and abs(a) <= _TWO_PI for a in angles):
+            why = 'hand rotation %s is not an angle' % (angles,)
+        else:
+            why = self._stream.check(hand.stamp, now)
+        if why:
+            self.status.rejected_inputs += 1
+            return why
+        self._hand, self._hand_rx = hand, now
+        if not (hand.present and hand.thumb_up):
+            self._thumb_up_since = None
+        elif self._thumb_up_since is None:
+            self._thumb_up_since = hand.stamp
+        return None
+
+    def on_joints(self, q, now=None):
+        """Store the arm's joint positions; with `now`, their staleness is watched."""
+        q = np.asarray(q, dtype=float)
+        # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
+        if (q.shape == (6,) and np.all(np.isfinite(q)) and np.all(q >= kin.JOINT_LOWER - 0.01)
+                and np.all(q <= kin.JOINT_UPPER + 0.01)):
+            self._q = np.clip(q, kin.JOINT_LOWER, kin.JOINT_UPPER)
+            self._joints_rx = now
+            return True
+        return False
+
+    # -- control period ---------------------------------------------------------------
+    def _set(self, state, reason):
+        self.status.state, self.status.reason = state, reason
+
+    def _hold(self, now):
+        """Stop the commanded motion within the acceleration limits and hold there."""
+        self._target = None
+        self._goal = None
+        if self._q is None:
+            return ArmCommand()
+        # As fast as the robot may stop: a hold is not bound by the teleop's own pace.
+        points = self._servo.stop(now, self._q, self.p.min_duration, kin.MAX_JOINT_ACCEL)
+        return ArmCommand(q=points[-1][1].copy(), points=points, stamp=now)
+
+    def _lose_robot(self, reason):
+        """The robot's state is unknown (simulator or driver gone / restarted): forget it
+        and disarm without a hold, which would command the old pose to a new robot."""
+        self._q = self._joints_rx = self._hand = None
+        self._stalled = None
+        self._stream.reset()
+        self._servo.reset()
+        if self.status.state != DISARMED:
+            self._set(DISARMED, reason)
+            self.status.origin_set = False
+            self._palm_ref = self._tcp_ref = self._target = None
+        return ArmCommand()
+
+    def _disarm(self, reason, now):
+        # A stall has already sent its hold: the arm is stopping or at rest.
+        was_moving = self.status.state in (ARMED, TRACKING, HOLDING) and self._stalled is None
+        self._stalled = None
+        self._set(DISARMED, reason)
+        self.status.origin_set = False
+        self._palm_ref = self._tcp_ref = self._target = None
+        return self._hold(now) if was_moving else ArmCommand()
+
+    def step(self, now):
+        """One control period: the command to send (possibly empty)."""
+        cmd = self._step(now)
+        if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
+            self.status.input_stamp = cmd.input_stamp
+        return cmd
+
+    def _step(self, now):
+        jumped_back = self._last_step is not None and now < self._last_step - 1e-6
+        dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
+        self._last_step = now
+        if jumped_back:
+            return self._lose_robot('the clock jumped back (simulation restarted?)')
+        if self._joints_rx is not None and now - self._joints_rx > self.p.joint_timeout:
+            return self._lose_robot('no joint states for %.2f s' % self.p.joint_timeout)
+        if self._q is None:
+            self._set(DISARMED, 'waiting for joint states')
+            return ArmCommand()
+        hand = self._hand
+        if hand is None or now - self._hand_rx > self.p.input_timeout:
+            if self.status.state == DISARMED:
+                return ArmCommand()
+            if hand is None or now - self._hand_rx > self.p.disarm_after:
+                return self._disarm('no hand input for %.2f s (watchdog)'
+                                    % self.p.disarm_after, now)
+            if self._stalled is not None:     # the hold was sent: nothing moves meanwhile
+                return ArmCommand()
+            # A stall: stop at once, but stay armed for a while in case input resumes.
+            held = self._hold(now)
+            self._stalled = self._hand_rx
+            self._set(HOLDING, 'no hand input for %.2f s: holding, disarms after %.2f s '
+                      '(watchdog)' % (self.p.input_timeout, self.p.disarm_after))
+            return held
+        if not hand.present or hand.fist:
+            cmd = ArmCommand()
+            if self.status.state != DISARMED:
+                cmd = self._disarm('fist' if hand.present else 'hand left the sensor', now)
+            cmd.input_stamp = hand.stamp
+            return cmd
+        if self.status.state == DISARMED:
+            # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
+            # be held arm_hold_s by the hand's own capture times.
+            if hand.thumb_up and self._thumb_up_since is not None:
+                if hand.stamp - self._thumb_up_since >= self.p.arm_hold_s - 1e-9:
+                    self._set(ARMED, 'thumbs-up; show rock to set the origin')
+                else:
+                    self._set(DISARMED, 'hold the thumbs-up')
+            return ArmCommand()
+
+        palm = np.asarray(hand.palm_mm, dtype=float)
+        if self.p.orientation == 'fixed':
+            hand_rot = np.zeros(3)
+        elif self.p.orientation == 'yaw':     # the turn about the vertical alone
+            hand_rot = kin.rotation_vector(ori.hand_rotation(0.0, hand.turn, 0.0))
+        else:
+            hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
+        if self._stalled is not None:
+            back = 'hand input back after %.2f s' % (self._hand_rx - self._stalled)
+            self._stalled = None
+            if self._palm_ref is not None:
+                # Re-anchor: the hand where it is now maps to the pose the arm holds.
+                self._set_origin(palm, hand_rot, now)
+                self._set(TRACKING, back + ': origin re-anchored')
+            else:
+                self._set(ARMED, back + '; show rock to set the origin')
+        if hand.rock:
+            self._set_origin(palm, hand_rot, now)
+        cmd = ArmCommand(gripper=self._gripper_command(hand), input_stamp=hand.stamp)
+        if self._palm_ref is None:
+            return cmd
+        palm_f = self._filter.update(palm, now)
+        offset = palm_f - self._palm_ref
+        if self.p.mode == 'imitation':
+            target = self._tcp_ref + self._axes @ offset * 0.001 * self.p.scale
+        else:
+            target = self._joystick(offset, dt)
+        target = np.clip(target, self._lo, self._hi)
+        rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
+        self._target = target
+        self.status.target = tuple(target)
+        self.status.target_rotation = tuple(map(tuple, rotation))
+        seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
+        q = kin.ik_nearest(kin.pose(target, rotation), seed,
+                           lower=self._joint_lower, upper=self._joint_upper)
+        why = 'no IK solution within the joint limits for'
+        if (q is not None and self._goal is not None
+                and float(np.max(np.abs(q - self._goal[1]))) > MAX_GOAL_JUMP):
+            q, why = None, 'only another arm configuration reaches'
+        if q is None:
+            self.status.ik_failures += 1
+            if self.status.state != HOLDING:
+                self._set(HOLDING, '%s %s' % (why, np.round(target, 3).tolist()))
+                held = self._hold(now)
+                self._target = target
+                cmd.q, cmd.points, cmd.stamp = held.q, held.points, held.stamp
+            return cmd
+        if self.status.state == HOLDING:
+            self._set(TRACKING, 'target reachable again')
+        goal_velocity = None
+        if self._goal is not None and now > self._goal[0]:
+            goal_velocity = (q - self._goal[1]) / (now - self._goal[0])
+        self._goal = (now, q)
+        cmd.q = q
+        cmd.points = self._servo.track(now, self._q, q, goal_velocity)
+        cmd.stamp = now
+        return cmd
+
+    def _set_origin(self, palm, hand_rot, now):
+        self._palm_ref = palm.copy()
+        tool = kin.fk(self._servo.state_at(now, self._q)[0])
+        self._tcp_ref = tool[:3, 3].copy()
+        self._tool_ref = tool[:3, :3].copy()
+        self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
+        self._hand_rot_ref = hand_rot.copy()
+        self._target = self._tcp_ref.copy()
+        self._goal = None
+        self._filter.reset(palm, now)
+        self._rotation_filter.reset(hand_rot, now)
+        self.status.origin_set = True
+        self._set(TRACKING, 'origin set')
+
+    def _tool_rotation(self, hand_rot):
+        """Target tool rotation (base frame) for the filtered hand rotation vector."""
+        mode = self.p.orientation
+        if mode == 'fixed':
+            return self._rotation
+        # The hand's rotation since the origin, turned into the arm base's axes.
+        rel = kin.rotation_from_vector(hand_rot) @ kin.rotation_from_vector(self._hand_rot_ref).T
+        delta = kin.rotation_vector(ori.map_rotation(rel, self._axes_rotation))
+        delta = delta * self.p.orientation_scale
+        if mode == 'yaw':
+            turn = max(-self.p.max_tool_turn, min(self.p.max_tool_turn, float(delta[2])))
+            return kin.tool_down(self._yaw_ref + turn)
+        R = kin.rotation_from_vector(delta) @ self._tool_ref
+        return kin.limit_tool_rotation(R, self.p.max_tool_tilt, self._yaw_ref,
+                                       self.p.max_tool_turn)
+
+    def _joystick(self, offset_mm, dt):
+        n = float(np.linalg.norm(offset_mm))
+        base = self._target if self._target is not None else self._tcp_ref
+        if n <= self.p.deadzone_mm:
+            return base
+        excess = offset_mm * (1.0 - self.p.deadzone_mm / n)
+        v = self._axes @ excess * 0.001 * self.p.joystick_gain
+        speed = float(np.linalg.norm(v))
+        if speed > self.p.max_tcp_speed:
+            v *= self.p.max_tcp_speed / speed
+        return base + v * dt
+
+    def _gripper_command(self, hand):
+        if self.p.gripper_mode == 'binary':
+            want = self.p.gripper_binary_closed if hand.pinch else 0.0
+        else:
+            want = min(max(hand.pinch_value, 0.0), 0.8) if hand.pinch else 0.0
+        if self._gripper_sent is not None and abs(want - self._gripper_sent) < 0.01:
+            return None
+        self._gripper_sent = want
+        return want

@@ -1,0 +1,1 @@
+"""Recognition judged on people it never saw (`python -m tools.evaluation.evaluate`)."""

@@ -1,0 +1,514 @@
+"""Circles drawn in the air by real people: which strokes fire a circle (the drone's flip).
+
+usage: python -m tools.evaluation.strokes [--strokes DIR] [--leap-people DIR]
+           [--leapjs DIR] [--loso] [--json FILE]
+
+The strokes folder holds index-fingertip paths of 7 people drawing 26 symbols (one
+`circle`, loop-free strokes, strokes that hold loops, closed angular shapes). A person
+drawing moves the whole hand with the finger, so a real hand of another person (from
+leap_people/gti_dev.jsonl.gz) is translated so that its index tip follows each path,
+stamped with the path's times, and fed to a fresh GestureRecognizer (stream mode): once
+as a pointing hand (label `index`: the index tip draws) and once as an open hand (label
+`five`: the whole hand draws). Stroke person k (in name order) moves the hands of GTI
+person k + 1, so every person's strokes are drawn with a different real hand.
+
+Reported per symbol and per person, for each hand: circles recognized (a circle event
+while drawing the `circle`), loop-free strokes that fire one (the goal: none), closed
+angular shapes and looped strokes that fire one (reported). Beside them: circle events
+on the Guinevere dynamic takes (leap_people/guinevere) and on the shared LeapJS takes,
+none of which draws a circle.
+
+--loso: the circle rules refitted leave-one-person-out (CircleFit): for each person,
+the rules are chosen on the other six and scored on that person.
+"""
+import argparse
+import dataclasses
+import glob
+import gzip
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+from leap_teleop.hands.frame import Finger
+from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer
+from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
+from leap_teleop.hands.gestures.datasets import SHARED_DATA
+from leap_teleop.hands.sources import leapjs
+from tools.evaluation import evaluate
+STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
+LEAP_PEOPLE_DATA = os.environ.get('LEAP_PEOPLE_DATA') or os.path.join(SHARED_DATA, 'leap_people')
+
+CIRCLE = 'circle'
+LOOP_FREE = ('left-swipe', 'right-swipe', 'v', 'check', 'caret', 'zig-zag',
+             'square-braket-left', 'square-braket-right', 'curly-braket-left',
+             'curly-braket-right', 'arc3Dleft', 'arc3Dright')
+LOOPED = ('spiral', 'pigtail')          # hold loops: a circle event there is no error
+CLOSED = ('rectangle', 'triangle', 'star', 'x', 'delete', 'poly3Dxyz', 'poly3Dxzy',
+          'poly3Dyxz', 'poly3Dyzx', 'poly3Dzxy', 'poly3Dzyx')
+KINDS = (('circle', (CIRCLE,)), ('loop_free', LOOP_FREE), ('looped', LOOPED),
+         ('closed', CLOSED))
+# The hands moved along the strokes: GTI label, and which fingers the SDK flags extended
+# (thumb .. pinky; None: either) on the frame chosen.
+HANDS = {'pointing': ('index', (None, True, False, False, False)),
+         'open': ('five', (True, True, True, True, True))}
+
+
+class DataError(RuntimeError):
+    """Shared data missing or unreadable."""
+
+
+def _kind(symbol):
+    for kind, symbols in KINDS:
+        if symbol in symbols:
+            return kind
+    return None
+
+
+def load_strokes(folder=STROKES_DATA):
+    """{person: {symbol: (t (n,) s from the stroke's first sample, xyz (n, 3) mm)}}."""
+    if not os.path.isdir(folder):
+        raise DataError('no strokes folder at %s (set $STROKES_DATA)' % folder)
+    out = {}
+    for person in sorted(os.listdir(folder)):
+        files = sorted(glob.glob(os.path.join(folder, person, '*.csv')))
+        if not files:
+            continue
+        out[person] = {}
+        for path in files:
+            a = np.loadtxt(path, ndmin=2)
+            if a.shape[1] != 4 or len(a) < 2 or not np.isfinite(a).all():
+                raise DataError('%s: expected rows of 4 finite numbers (x y z ms)' % path)
+            out[person][os.path.basename(path)[:-4]] = ((a[:, 3] - a[0, 3]) * 1e-3, a[:, :3])
+    if not out:
+        raise DataError('no strokes under %s' % folder)
+    return out
+
+
+def _flags_match(d, want):
+    by_type = {p.get('type'): p.get('extended') for p in d.get('pointables') or []}
+    return all(w is None or by_type.get(i) is w for i, w in enumerate(want))
+
+
+def template_hands(folder=LEAP_PEOPLE_DATA):
+    """{'pointing': [Hand per GTI person], 'open': [...]}: per person (in name order) the
+    most confident frame of the label whose SDK flags match (first of equals)."""
+    path = os.path.join(folder, 'gti_dev.jsonl.gz')
+    if not os.path.exists(path):
+        raise DataError('no %s (set $LEAP_PEOPLE_DATA)' % path)
+    best = {}
+    labels = {label: kind for kind, (label, _) in HANDS.items()}
+    with gzip.open(path, 'rt') as f:
+        for line in f:
+            d = json.loads(line)
+            kind = labels.get(d.get('label'))
+            if kind is None or not _flags_match(d['frame'], HANDS[kind][1]):
+                continue
+            hands = d['frame'].get('hands') or []
+            conf = float(hands[0].get('confidence', 0.0)) if hands else 0.0
+            key = (kind, d['person'])
+            if key not in best or conf > best[key][0]:
+                best[key] = (conf, d['frame'])
+    out = {kind: [] for kind in HANDS}
+    for (kind, person) in sorted(best):
+        frame = leapjs.frame_from_dict(best[(kind, person)][1], timestamp=0.0)
+        out[kind].append(frame.hands[0])
+    if not all(out.values()):
+        raise DataError('%s holds no usable frame for %s'
+                        % (path, [k for k, v in out.items() if not v]))
+    return out
+
+
+def _shifted(v, d):
+    return None if v is None else v + d
+
+
+def hand_at(hand, tip):
+    """`hand` translated so that its index tip is at `tip` (mm)."""
+    d = np.asarray(tip, dtype=float) - hand.fingers[1].tip
+    fingers = tuple(Finger(f.tip + d, f.direction, f.extended, _shifted(f.mcp, d),
+                           _shifted(f.pip, d), _shifted(f.dip, d)) for f in hand.fingers)
+    return dataclasses.replace(hand, palm_position=hand.palm_position + d, fingers=fingers)
+
+
+def circle_events(events):
+    return [e for e in events if e.active and e.gesture.startswith('circle')]
+
+
+def draw(hand, t, xyz, recognizer=None):
+    """Circle events [(time s, GestureEvent)] of `hand` moved along the path."""
+    rec = recognizer or GestureRecognizer()
+    out = []
+    for k in range(len(t)):
+        state = rec.update(hand_at(hand, xyz[k]), t[k])
+        out += [(float(t[k]), e) for e in circle_events(state.events)]
+    return out
+
+
+def load_guinevere(folder=LEAP_PEOPLE_DATA):
+    """{'NN/name': [frame dicts]} of the Guinevere takes."""
+    paths = sorted(glob.glob(os.path.join(folder, 'guinevere', '*', '*.json.gz')))
+    if not paths:
+        raise DataError('no Guinevere takes under %s/guinevere' % folder)
+    out = {}
+    for path in paths:
+        with gzip.open(path, 'rt') as f:
+            data = json.load(f)
+        frames = data.get('data') if isinstance(data, dict) else None
+        if not isinstance(frames, list):
+            raise DataError('%s: expected {"frames": N, "data": [frames]}' % path)
+        out[os.path.relpath(path, os.path.join(folder, 'guinevere'))[:-len('.json.gz')]] = frames
+    return out
+
+
+def take_circles(dicts, make_recognizer=GestureRecognizer):
+    """Circle events [(time s, side, GestureEvent)] of a take's frame dicts, one
+    recognizer per hand side (as classify_frames)."""
+    recs, out = {}, []
+    for d in dicts:
+        try:
+            frame = leapjs.frame_from_dict(d)
+        except leapjs.FrameError:
+            continue
+        seen = set()
+        for hand in frame.hands:
+            if hand.side in seen:
+                continue
+            seen.add(hand.side)
+            rec = recs.get(hand.side)
+            if rec is None:
+                rec = recs[hand.side] = make_recognizer()
+            out += [(frame.timestamp, hand.side, e)
+                    for e in circle_events(rec.update(hand, frame.timestamp).events)]
+        for side, rec in recs.items():
+            if side not in seen:
+                rec.reset()
+    return out
+
+
+def leapjs_takes(folder=None):
+    folder = folder or evaluate.data_dir()
+    out = {}
+    for take in evaluate.EVERY_TAKE:
+        path = evaluate.find_file(folder, take)
+        if path is None:
+            raise DataError('LeapJS take %s not found in %s (set $LEAPJS_DATA)' % (take, folder))
+        out[take] = leapjs.load(path)[1]
+    return out
+
+
+# -- fitting the circle rules: the recognizer's calls to its CircleDetector, recorded once
+# and replayed through detectors with other rules (the poses do not depend on them).
+class _Recorder:
+    """Stands in for a recognizer's CircleDetector: keeps its calls, fires nothing."""
+
+    def __init__(self, calls):
+        self.calls = calls
+
+    def update(self, hand, timestamp, geometry, extended):
+        self.calls.append((hand, timestamp, geometry, tuple(extended)))
+
+    def reset(self):
+        self.calls.append(None)
+
+
+def _recording_recognizer(calls):
+    rec = GestureRecognizer()
+    rec.circles = _Recorder(calls)
+    return rec
+
+
+def replay(calls, rules):
+    """Circle events [(time s, GestureEvent)] of a CircleDetector with `rules` fed the
+    recorded calls (None: the hand left)."""
+    det = CircleDetector(rules)
+    out = []
+    for c in calls:
+        if c is None:
+            det.reset()
+            continue
+        e = det.update(*c)
+        if e is not None:
+            out.append((c[1], e))
+    return out
+
+
+def record_strokes(strokes, hands):
+    """{(hand kind, person, symbol): recorded calls} of every stroke drawn with each hand."""
+    out = {}
+    for kind in HANDS:
+        for k, person in enumerate(sorted(strokes)):
+            hand = hands[kind][k % len(hands[kind])]
+            for symbol, (t, xyz) in sorted(strokes[person].items()):
+                calls = []
+                draw(hand, t, xyz, _recording_recognizer(calls))
+                # the detector reads only the finger's direction off the Hand, which the
+                # translation keeps: one Hand for the stroke holds less memory
+                out[(kind, person, symbol)] = [c and (hand,) + c[1:] for c in calls]
+    return out
+
+
+def record_takes(takes):
+    """{take: [recorded calls per hand side]} of frame-dict takes."""
+    out = {}
+    for name, dicts in sorted(takes.items()):
+        per_side = {}
+
+        def make(per_side=per_side):
+            calls = []
+            per_side[len(per_side)] = calls
+            return _recording_recognizer(calls)
+        take_circles(dicts, make)
+        out[name] = list(per_side.values())
+    return out
+
+
+# The circle rules' search: each rule over its grid, one at a time (the others held),
+# two passes in FIT_ORDER from the rules before this refit (CircleRules()). A value
+# scores by the training people's circles recognized (both hands) minus twice their
+# loop-free strokes firing one; any circle event on a shared take rules it out; ties go
+# to fewer closed angular shapes firing; of what is still tied, the middle value (the
+# widest margin on both sides).
+GRID = {'tip_v_max': (1000.0, 1500.0, 2000.0, 3000.0, 4000.0),
+        'max_s': (1.6, 2.0, 2.5, 3.0),
+        'r_max': (100.0, 125.0, 150.0, 200.0, 250.0, 300.0),
+        'arc': tuple(math.pi * k for k in (1.5, 1.625, 1.75, 1.875)),
+        'min_roundness': (0.5, 0.6, 0.7, 0.8),
+        'min_across': (0.4, 0.5, 0.6, 0.7, 0.8, 0.9)}
+FIT_ORDER = ('tip_v_max', 'max_s', 'r_max', 'arc', 'min_roundness', 'min_across')
+FIT_PASSES = 2
+LOOP_FREE_WEIGHT = 2
+
+
+class CircleFit:
+    """Leave-one-person-out choice of CircleRules from recorded calls (record_strokes,
+    record_takes); each rules' outcome is computed once."""
+
+    def __init__(self, stroke_calls, take_calls):
+        self.stroke_calls = stroke_calls
+        self.take_calls = take_calls
+        self._cache = {}
+
+    def outcome(self, rules):
+        """({(hand kind, person, symbol): circle events}, circle events on the takes)."""
+        if rules not in self._cache:
+            strokes = {key: len(replay(calls, rules)) for key, calls in self.stroke_calls.items()}
+            takes = sum(len(replay(calls, rules)) for sides in self.take_calls.values()
+                        for calls in sides)
+            self._cache[rules] = strokes, takes
+        return self._cache[rules]
+
+    def score(self, rules, people):
+        strokes, takes = self.outcome(rules)
+        if takes:
+            return (-math.inf, -math.inf)
+        good = bad = closed = 0
+        for (_, person, symbol), n in strokes.items():
+            if person not in people or not n:
+                continue
+            kind = _kind(symbol)
+            good += kind == 'circle'
+            bad += kind == 'loop_free'
+            closed += kind == 'closed'
+        return (good - LOOP_FREE_WEIGHT * bad, -closed)
+
+    def fit(self, people, start=None):
+        rules = start or CircleRules()
+        people = set(people)
+        for _ in range(FIT_PASSES):
+            for name in FIT_ORDER:
+                values = GRID[name]
+                scores = [self.score(dataclasses.replace(rules, **{name: v}), people)
+                          for v in values]
+                best = [i for i, s in enumerate(scores) if s == max(scores)]
+                rules = dataclasses.replace(rules, **{name: values[best[(len(best) - 1) // 2]]})
+        return rules
+
+    def loso(self, people):
+        """{'folds': {person: {'rules', 'held_out'}}, 'pooled', 'worst_person', 'all'}."""
+        folds = {}
+        for person in people:
+            rules = self.fit([p for p in people if p != person])
+            folds[person] = {'rules': _rules_dict(rules),
+                             'held_out': self._counts(rules, [person])}
+        pooled = _sum_counts([f['held_out'] for f in folds.values()])
+        worst = min(people, key=lambda p: (_recall(folds[p]['held_out']),
+                                           -folds[p]['held_out']['loop_free_fired']))
+        return {'folds': folds, 'pooled': pooled, 'worst_person': worst,
+                'all_people_rules': _rules_dict(self.fit(people))}
+
+    def _counts(self, rules, people):
+        strokes, takes = self.outcome(rules)
+        out = _zero_counts()
+        for (hand, person, symbol), n in strokes.items():
+            if person in people:
+                _count(out, hand, _kind(symbol), n)
+        out['take_events'] = takes
+        return out
+
+
+def _rules_dict(rules):
+    d = dataclasses.asdict(rules)
+    d['arc_deg'] = round(math.degrees(d.pop('arc')), 1)
+    return d
+
+
+def _zero_counts():
+    return {'circles': 0, 'circles_recognized': 0, 'circles_fired_twice': 0,
+            'loop_free': 0, 'loop_free_fired': 0, 'closed': 0, 'closed_fired': 0,
+            'looped': 0, 'looped_fired': 0,
+            'per_hand': {h: {'circles': 0, 'circles_recognized': 0, 'loop_free': 0,
+                             'loop_free_fired': 0} for h in HANDS}}
+
+
+def _count(out, hand, kind, n):
+    if kind is None:
+        return
+    if kind == 'circle':
+        out['circles'] += 1
+        out['circles_recognized'] += n > 0
+        out['circles_fired_twice'] += n > 1
+        out['per_hand'][hand]['circles'] += 1
+        out['per_hand'][hand]['circles_recognized'] += n > 0
+    else:
+        out[kind] += 1
+        out[kind + '_fired'] += n > 0
+        if kind == 'loop_free':
+            out['per_hand'][hand]['loop_free'] += 1
+            out['per_hand'][hand]['loop_free_fired'] += n > 0
+
+
+def _sum_counts(counts):
+    out = _zero_counts()
+    for c in counts:
+        for k, v in c.items():
+            if k == 'per_hand':
+                for h, d in v.items():
+                    for kk, vv in d.items():
+                        out['per_hand'][h][kk] += vv
+            elif k != 'take_events':
+                out[k] += v
+    return out
+
+
+def _recall(c):
+    return c['circles_recognized'] / c['circles'] if c['circles'] else 1.0
+
+
+# -- the evaluation with the shipped rules ----------------------------------------------
+def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=None,
+        rules=None, loso=False):
+    """The figures as a JSON-able dict: per person and per symbol (each hand), circles
+    recognized, loop-free / closed / looped strokes firing one, circle events on the
+    Guinevere and LeapJS takes; with `loso`, the leave-one-person-out refit too. `rules`:
+    CircleRules for the detector (default: the shipped ones). DataError without data."""
+    strokes = load_strokes(strokes_dir)
+    hands = template_hands(leap_people_dir)
+    people = sorted(strokes)
+
+    def make():
+        rec = GestureRecognizer()
+        if rules is not None:
+            rec.circles = CircleDetector(rules)
+        return rec
+
+    per_person, per_symbol, fired = {}, {}, []
+    total = _zero_counts()
+    for kind in HANDS:
+        for k, person in enumerate(people):
+            hand = hands[kind][k % len(hands[kind])]
+            for symbol, (t, xyz) in sorted(strokes[person].items()):
+                events = draw(hand, t, xyz, make())
+                sym_kind = _kind(symbol)
+                for c in (per_person.setdefault(person, _zero_counts()),
+                          per_symbol.setdefault(symbol, _zero_counts()), total):
+                    _count(c, kind, sym_kind, len(events))
+                if events:
+                    fired.append({'hand': kind, 'person': person, 'symbol': symbol,
+                                  'kind': sym_kind, 'events': [
+                                      {'t': round(t_, 3), 'gesture': e.gesture,
+                                       'source': e.source, 'radius_mm': round(e.value * 1e3, 1)}
+                                      for t_, e in events]})
+    frames = {'guinevere/' + k: v for k, v in load_guinevere(leap_people_dir).items()}
+    frames.update(('leapjs/' + k, v) for k, v in leapjs_takes(leapjs_dir).items())
+    takes = {name: len(take_circles(dicts, make)) for name, dicts in sorted(frames.items())}
+    out = {'rules': _rules_dict(rules or DRAWN), 'people': people, 'total': total,
+           'per_person': per_person, 'per_symbol': per_symbol, 'fired': fired,
+           'worst_person': min(people, key=lambda p: (_recall(per_person[p]),
+                                                      -per_person[p]['loop_free_fired'])),
+           'take_events': {k: v for k, v in takes.items() if v},
+           'takes': {'guinevere': sum(k.startswith('guinevere/') for k in takes),
+                     'leapjs': sum(k.startswith('leapjs/') for k in takes)},
+           'takes_with_circles': sum(1 for v in takes.values() if v)}
+    if loso:
+        fit = CircleFit(record_strokes(strokes, hands), record_takes(frames))
+        out['loso'] = fit.loso(people)
+    return out
+
+
+def _rate(n, d):
+    return '%d/%d (%.1f %%)' % (n, d, 100.0 * n / d) if d else '-'
+
+
+def _line(name, c):
+    hands = ' '.join('%s %d/%d' % (h, v['circles_recognized'], v['circles'])
+                     for h, v in c['per_hand'].items())
+    return ('%-20s circles %s (%s; twice %d) | loop-free firing %s | closed %s | looped %s'
+            % (name, '%d/%d' % (c['circles_recognized'], c['circles']), hands,
+               c['circles_fired_twice'], _rate(c['loop_free_fired'], c['loop_free']),
+               _rate(c['closed_fired'], c['closed']), _rate(c['looped_fired'], c['looped'])))
+
+
+def print_table(results, out=None):
+    w = (out or sys.stdout).write
+    w('circle rules: %s\n' % ', '.join('%s %s' % kv for kv in results['rules'].items()))
+    w('strokes drawn with a pointing and an open hand (each person: one stroke a symbol)\n')
+    for person in results['people']:
+        w(_line(person, results['per_person'][person]) + '\n')
+    w(_line('all people', results['total']) + '\n')
+    w('worst person: %s\n' % results['worst_person'])
+    w('per symbol (strokes firing a circle / strokes, both hands):\n')
+    for symbol, c in sorted(results['per_symbol'].items()):
+        n = sum(c[k] for k in ('circles', 'loop_free', 'closed', 'looped'))
+        k = sum(c[k] for k in ('circles_recognized', 'loop_free_fired', 'closed_fired',
+                               'looped_fired'))
+        w('  %-20s %d/%d\n' % (symbol, k, n))
+    w('circle events on takes that draw none: %d of %d Guinevere and %d LeapJS takes %s\n'
+      % (results['takes_with_circles'], results['takes']['guinevere'],
+         results['takes']['leapjs'], results['take_events'] or ''))
+    lo = results.get('loso')
+    if lo:
+        w('leave-one-person-out (rules fitted on the other people, scored on this one):\n')
+        for person, f in lo['folds'].items():
+            w(_line(person, f['held_out']) + '\n')
+        w(_line('pooled', lo['pooled']) + '\n')
+        w('worst person: %s; rules fitted on all people: %s\n' % (
+            lo['worst_person'], ', '.join('%s %s' % kv for kv in lo['all_people_rules'].items())))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    ap.add_argument('--strokes', default=STROKES_DATA, help='strokes folder')
+    ap.add_argument('--leap-people', default=LEAP_PEOPLE_DATA,
+                    help='leap_people folder (gti_dev.jsonl.gz, guinevere/)')
+    ap.add_argument('--leapjs', default=None, help='LeapJS takes folder')
+    ap.add_argument('--loso', action='store_true',
+                    help='also refit the circle rules leave-one-person-out (~2 min)')
+    ap.add_argument('--json', help='write the results here as JSON')
+    args = ap.parse_args(argv)
+    try:
+        results = run(args.strokes, args.leap_people, args.leapjs, loso=args.loso)
+    except (DataError, leapjs.SourceError, OSError, ValueError) as e:
+        sys.stderr.write('evaluate_strokes: %s\n' % e)
+        return 2
+    print_table(results)
+    if args.json:
+        with open(args.json, 'w') as f:
+            json.dump(results, f, indent=1, sort_keys=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

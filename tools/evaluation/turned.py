@@ -1,0 +1,136 @@
+"""How reliable the gesture recognizer is while the hand is turned (the orientation
+modes ask the user to turn the hand while gesturing).
+
+Real data: every labelled frame of the LeapJS recordings (tools/evaluate.py's labels),
+binned by how far the palm is turned from flat and pointing away (the angle of the
+rotation hand_rotation() rebuilds from the frame's roll, yaw and pitch); per bin, the
+fraction of labelled gesture values the recognizer gets right. Synthetic: each pose of the
+scripted hand model at turns up to 70 deg, both hands; fraction of frames recognised.
+
+usage: python -m tools.evaluation.turned [--data DIR]
+"""
+import argparse
+import math
+import sys
+
+import numpy as np
+
+from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
+from leap_teleop.hands.tracker import hand_angles
+from leap_teleop.hands.sources import leapjs
+from leap_teleop.ur10.orientation import hand_rotation
+from tools.evaluation.evaluate import DEFAULT_DATA, GESTURES, LABELS, find_file
+from tools.evaluation.evaluate import expected as label_value
+from leap_teleop.ur10 import kinematics as kin
+
+BINS_DEG = (0, 20, 40, 60, 90, 180)
+
+
+def real(data_dir):
+    """{bin label: (right, total)} over every labelled gesture value."""
+    out = {}
+    for take, labels in LABELS.items():
+        path = find_file(data_dir, take)
+        if path is None:
+            raise FileNotFoundError('recording %s not found in %s' % (take, data_dir))
+        _, dicts = leapjs.load(path)
+        recognizers = {}
+        for k, d in enumerate(dicts):
+            if d is None:
+                continue
+            try:
+                frame = leapjs.frame_from_dict(d)
+            except leapjs.FrameError:
+                continue
+            seen = set()
+            for hand in frame.hands:
+                if hand.side in seen:
+                    continue
+                seen.add(hand.side)
+                state = recognizers.setdefault(hand.side, GestureRecognizer()).update(
+                    hand, frame.timestamp)
+                want = {}
+                for side, frames, expected in labels:
+                    if side == hand.side and k in frames:
+                        want.update(expected)
+                if not want:
+                    continue
+                turn = math.degrees(np.linalg.norm(kin.rotation_vector(hand_rotation(
+                    *hand_angles(hand.palm_normal, hand.direction)))))
+                b = next(i for i in range(len(BINS_DEG) - 1) if turn < BINS_DEG[i + 1])
+                key = '%d-%d deg' % (BINS_DEG[b], BINS_DEG[b + 1])
+                right, total = out.get(key, (0, 0))
+                for g, value in want.items():
+                    value = label_value(value, hand)    # a thumbs-up label: by thumb direction
+                    if g in GESTURES and value is not None:
+                        right += bool(getattr(state, g)) == value
+                        total += 1
+                out[key] = (right, total)
+            for side in list(recognizers):
+                if side not in seen:
+                    recognizers[side].reset()
+    return out
+
+
+def _turned_thumbs_up(rpy, side):
+    """Palm normal and direction of the hand model's thumbs-up turned by rpy (deg, as
+    rpy_to_basis turns the palm-down pose), or (None, None) when the turn leaves the
+    thumb more than 45 deg from up."""
+    n0, d0 = rpy_to_basis(0.0, 0.0, 0.0, side)
+    n1, d1 = rpy_to_basis(*np.radians(rpy), side)
+    r = np.column_stack([n1, d1, np.cross(n1, d1)]) @ np.column_stack([n0, d0, np.cross(n0, d0)]).T
+    up = render_hand(side, 'thumbs_up', (0.0, 0.0, 0.0))
+    normal, direction = r @ up.palm_normal, r @ up.direction
+    thumb = r @ (up.fingers[0].tip - up.fingers[0].pip)
+    if thumb[1] / np.linalg.norm(thumb) < math.cos(math.radians(45.0)):
+        return None, None
+    return normal, direction
+
+
+def synthetic(turns=((0, 0, 0), (0, 0, 40), (0, 0, -70), (30, 0, 0), (-30, 0, 0),
+                     (0, 25, 0), (0, -25, 0), (20, 20, 50)), frames=120):
+    """{pose: fraction of frames recognised as that pose} over turns and both hands."""
+    out = {}
+    for pose in ('open', 'pinch', 'fist', 'rock', 'thumb_up'):
+        hits = total = 0
+        for side in ('right', 'left'):
+            for rpy in turns:
+                rec = GestureRecognizer()
+                normal, direction = rpy_to_basis(*np.radians(rpy), side)
+                render_pose = 'thumbs_up' if pose == 'thumb_up' else pose
+                if pose == 'thumb_up':
+                    # the thumbs-up's own pose (thumb up) turned: a thumbs-up is a thumb
+                    # pointing up, so only turns that keep it within 45 deg of up count
+                    normal, direction = _turned_thumbs_up(rpy, side)
+                    if normal is None:
+                        continue
+                for k in range(frames):
+                    hand = render_hand(side, render_pose, (0.0, 250.0, 0.0), normal, direction,
+                                       pinch_value=0.6)
+                    state = rec.update(hand, k / 120.0)
+                    if k >= 30:
+                        hits += bool(getattr(state, pose))
+                        total += 1
+        out[pose] = hits / total
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('--data', default=DEFAULT_DATA)
+    args = ap.parse_args(argv)
+    print('real recordings, labelled gesture values right / total by palm turn:')
+    results = real(args.data)
+    for lo, hi in zip(BINS_DEG, BINS_DEG[1:]):
+        key = '%d-%d deg' % (lo, hi)
+        right, total = results.get(key, (0, 0))
+        print('  %-12s %6d / %-6d %.4f' % (key, right, total, right / total if total else 0))
+    print('synthetic hands turned up to 70 deg, both sides, fraction recognised:')
+    for pose, frac in synthetic().items():
+        print('  %-10s %.3f' % (pose, frac))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,452 @@
+"""Soak test (`make soak`): the full dual-arm + drone graph for 30 simulated minutes.
+
+usage: python -m tools.soak [--minutes 30] [--rtf 1.5] [--out soak_results.json]
+
+Runs on a private master with /use_sim_time: the dual UR10 simulator is the clock (at
+--rtf times real time), the drone simulator runs at the same factor (its own /clock is
+remapped away so there is one time base). Instead of the sender (whose scripted source
+paces itself on wall time) this process replays the gesture sessions paced by the sim
+clock, like `rosbag play` would: the dual pick and place (leapcobot, both hands) and the
+drone flight (Hand + GestureEvent, namespace drone/), pre-rendered through the sender's
+own code (LeapInterface + conversions), restamped with the sim time when sent, in a loop;
+each cycle resets the UR10 cell first.
+
+Input timeouts (arm input_timeout / disarm_after / max_input_age, pilot hand_timeout /
+disarm_after / max_input_age) are sim seconds; the soak scales them by --rtf so that they
+keep their real-time wall tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
+and hand -> cmd_vel latency per cycle (wall clock) and its drift (median of the last
+cycles minus the first), lost messages (hand topics: sent vs received; joint_states,
+arm commands, navdata: sequence gaps), inputs the nodes rejected, pick and place and
+flight successes. Writes soak_results.json afresh (soak.rss_growth_pct, goal <= 5;
+soak.dropped_msgs = messages lost in transport, goal 0; soak.rejected_inputs = inputs the
+nodes refused as late / out of order / invalid; and the rest), as `make bench` writes its
+file: this run's figures only, `_sources` and `_failed` (a soak that fails writes no figure).
+"""
+import argparse
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import traceback
+import time
+import xmlrpc.client
+
+import numpy as np
+
+ARMS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+# The graph's own nodes: one that is gone (refused a parameter, crashed) ends the soak
+# rather than leaving its figures out.
+NODES = ('/ur10_sim', '/ur10_1/ur10_arm', '/ur10_2/ur10_arm', '/drone/drone_pilot',
+         '/drone/ardrone_sim')
+LAUNCH = """<launch>
+  <param name="/use_sim_time" value="true"/>
+  <include file="$(find leap_teleop)/launch/ur10_dual_sim.launch">
+    <arg name="use_sim_time" value="true"/>
+    <arg name="realtime_factor" value="{rtf}"/>
+  </include>
+  <include file="$(find leap_teleop)/launch/ur10_arm.launch">
+    <arg name="arm" value="ur10_1"/> <arg name="hand" value="right"/>
+    <arg name="max_joint_speed" value="1.0"/>
+  </include>
+  <include file="$(find leap_teleop)/launch/ur10_arm.launch">
+    <arg name="arm" value="ur10_2"/> <arg name="hand" value="left"/>
+    <arg name="max_joint_speed" value="1.0"/>
+  </include>
+  <!-- Input timeouts are sim seconds: scaled by the speed-up they keep their wall-clock
+       tolerance (scheduling hiccups on a loaded machine are wall-clock). -->
+  <param name="ur10_1/ur10_arm/input_timeout" value="{input_timeout}"/>
+  <param name="ur10_1/ur10_arm/disarm_after" value="{disarm_after}"/>
+  <param name="ur10_1/ur10_arm/max_input_age" value="{max_age}"/>
+  <param name="ur10_2/ur10_arm/input_timeout" value="{input_timeout}"/>
+  <param name="ur10_2/ur10_arm/disarm_after" value="{disarm_after}"/>
+  <param name="ur10_2/ur10_arm/max_input_age" value="{max_age}"/>
+  <group ns="drone">
+    <rosparam command="load" file="$(find leap_teleop)/config/ardrone.yaml"/>
+    <param name="drone_pilot/hand_timeout" value="{hand_timeout}"/>
+    <param name="drone_pilot/disarm_after" value="{disarm_after}"/>
+    <param name="drone_pilot/max_input_age" value="{max_age}"/>
+    <node pkg="leap_teleop" type="drone_pilot.py" name="drone_pilot"/>
+    <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
+      <param name="realtime_factor" value="{rtf}"/>
+      <!-- The longest battery the node accepts: it never runs flat during a soak. -->
+      <param name="battery_flight_time" value="100000.0"/>
+      <remap from="/clock" to="/drone/sim_clock"/>
+    </node>
+  </group>
+</launch>
+"""
+
+
+def render(script, kinds, topics, rate_hz=None):
+    """[(t, topic, msg)] of one gesture session through the sender's code, t from 0."""
+    from leap_teleop.ros import conversions
+    from leap_teleop.hands.leap_interface import LeapInterface
+    from leap_teleop.hands.sources.scripted import ScriptedSource
+    out = []
+    interface = LeapInterface(sides=list(topics))
+    t0 = [None]
+
+    def on_hand(frame, state):
+        for kind, msg in conversions.hand_messages(state):
+            if kind in kinds:
+                out.append((frame.timestamp - t0[0], topics[state.side][kind], msg))
+    interface.add_hand_listener(on_hand)
+    for frame in ScriptedSource(script, rate_hz=rate_hz, realtime=False).frames():
+        if t0[0] is None:
+            t0[0] = frame.timestamp
+        interface.on_frame(frame)
+    return out
+
+
+class Monitor:
+    """Subscribes what the graph produces; counts, sequence gaps, latency samples."""
+
+    def __init__(self, hand_topics):
+        import rospy
+        from geometry_msgs.msg import Twist
+        from sensor_msgs.msg import JointState
+        from trajectory_msgs.msg import JointTrajectory
+
+        from leap_teleop.ros import conversions
+        from leap_teleop.msg import ArmStatus, Hand, Navdata
+        from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
+        self.lock = threading.Lock()
+        self.received, self.last_seq, self.gaps = {}, {}, {}
+        self.last_rx = {}
+        self.lat = {}                    # key -> [(cycle, seconds)]
+        self.cycle = 0
+        self.status = {}
+        self.cubes = {}
+        self.nav_states = []
+        big = dict(queue_size=2000, buff_size=2 ** 24, tcp_nodelay=True)
+        for side, topic in hand_topics['arms'].items():
+            rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self.on_input, topic, **big)
+        rospy.Subscriber(hand_topics['drone'], Hand, self.on_input, hand_topics['drone'], **big)
+        for arm, (side, _) in ARMS.items():
+            rospy.Subscriber('/%s/joint_states' % arm, JointState, self.on_seq,
+                             '/%s/joint_states' % arm, **big)
+            rospy.Subscriber('/%s/arm_controller/command' % arm, JointTrajectory, self.on_cmd,
+                             (arm, hand_topics['arms'][side]), **big)
+            rospy.Subscriber('/%s/ur10_arm/status' % arm, ArmStatus, self.on_status, arm,
+                             queue_size=10)
+        rospy.Subscriber('/drone/ardrone/navdata', Navdata, self.on_nav, **big)
+        rospy.Subscriber('/drone/cmd_vel', Twist, self.on_twist, hand_topics['drone'], **big)
+        rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self.on_objects, queue_size=2)
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.diag_rejected = {}
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
+
+    def on_diag(self, msg):
+        with self.lock:
+            for st in msg.status:
+                for kv in st.values:
+                    if kv.key == 'rejected inputs':
+                        self.diag_rejected[st.name] = int(kv.value)
+
+    def _seq(self, topic, msg):
+        seq = msg.header.seq
+        last = self.last_seq.get(topic)
+        if last is not None and seq > last + 1:
+            self.gaps[topic] = self.gaps.get(topic, 0) + seq - last - 1
+        self.last_seq[topic] = seq
+        self.received[topic] = self.received.get(topic, 0) + 1
+
+    def on_input(self, msg, topic):
+        with self.lock:
+            self.received[topic] = self.received.get(topic, 0) + 1
+            self.last_rx[topic] = time.monotonic()
+
+    def on_seq(self, msg, topic):
+        with self.lock:
+            self._seq(topic, msg)
+
+    def on_cmd(self, msg, args):
+        arm, hand_topic = args
+        now = time.monotonic()
+        with self.lock:
+            self._seq(arm + '/command', msg)
+            t_hand = self.last_rx.get(hand_topic)
+            if t_hand is not None and now - t_hand < 0.5:
+                self.lat.setdefault('arm', []).append((self.cycle, now - t_hand))
+
+    def on_twist(self, msg, hand_topic):
+        now = time.monotonic()
+        with self.lock:
+            t_hand = self.last_rx.get(hand_topic)
+            if t_hand is not None and now - t_hand < 0.5 and (msg.linear.x or msg.linear.y
+                                                              or msg.linear.z or msg.angular.z):
+                self.lat.setdefault('drone', []).append((self.cycle, now - t_hand))
+
+    def on_status(self, msg, arm):
+        with self.lock:
+            self.status[arm] = msg
+
+    def on_nav(self, msg):
+        with self.lock:
+            self._seq('/drone/ardrone/navdata', msg)
+            if not self.nav_states or self.nav_states[-1][1] != msg.state:
+                self.nav_states.append((self.cycle, msg.state))
+
+    def on_objects(self, msg):
+        from leap_teleop.ros.conversions import object_positions
+        with self.lock:
+            self.cubes = object_positions(msg)
+
+
+def node_pids(master_uri):
+    import rosgraph
+    master = rosgraph.Master('/soak', master_uri=master_uri)
+    pids = {}
+    for names in master.getSystemState():
+        for _, nodes in names:
+            for n in nodes:
+                if n in pids or n == '/soak':
+                    continue
+                try:
+                    pids[n] = xmlrpc.client.ServerProxy(master.lookupNode(n)).getPid('/soak')[2]
+                except Exception:       # noqa: BLE001 - a node going away mid-scan
+                    pass
+    return pids
+
+
+def rss_kb(pid):
+    try:
+        with open('/proc/%d/status' % pid) as f:
+            for line in f:
+                if line.startswith('VmRSS:'):
+                    return int(line.split()[1])
+    except OSError:
+        return None
+    return None
+
+
+def percentile(xs, q):
+    return float(np.percentile(xs, q)) if xs else float('nan')
+
+
+def run(minutes, rtf, rate_hz=None, log=print):
+    """Run the soak; returns (figures, {figure: what it was measured on})."""
+    from tools.bench.harness import ros_master
+    from leap_teleop.ros.node import package_path
+    with ros_master() as env:
+        os.environ.update({k: env[k] for k in ('ROS_MASTER_URI', 'ROS_IP', 'ROS_HOSTNAME')})
+        log_dir = tempfile.mkdtemp(prefix='soak_logs_')
+        env = dict(env, ROS_LOG_DIR=log_dir)
+        with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
+            f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
+                                  hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf))
+            launch_file = f.name
+        subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
+        graph = subprocess.Popen(['roslaunch', launch_file], env=env,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                 start_new_session=True)
+        try:
+            return _soak(env, minutes, rtf, rate_hz, log, package_path, graph)
+        finally:
+            try:
+                os.killpg(graph.pid, signal.SIGINT)
+                graph.wait(30)
+            except (OSError, subprocess.TimeoutExpired):
+                os.killpg(graph.pid, signal.SIGKILL)
+            os.unlink(launch_file)
+
+
+def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
+    import rospy
+    from leap_teleop.ros import conversions
+    from leap_teleop.msg import GestureEvent, Hand
+    from leap_teleop.ur10.config import load_config
+    from std_srvs.srv import Trigger
+
+    arm_topics = {side: {'leapcobot': '/leapmotion/data_%s' % side} for side in ('right', 'left')}
+    drone_topics = {'right': {'hand': '/drone/leapmotion/hand_right',
+                              'gesture': '/drone/leapmotion/gestures'}}
+    session = render(package_path('config', 'gestures', 'ur10_pick_place_dual.yaml'),
+                     ('leapcobot',), arm_topics, rate_hz)
+    session += render(package_path('config', 'gestures', 'drone_flight.yaml'),
+                      ('hand', 'gesture'), drone_topics, rate_hz)
+    session.sort(key=lambda x: x[0])
+    cycle_len = session[-1][0] + 4.0             # settle before the next reset
+    cycles = max(1, int(round(minutes * 60.0 / cycle_len)))
+    log('[soak] session %.1f s sim, %d messages; %d cycles = %.1f sim minutes at x%g'
+        % (cycle_len, len(session), cycles, cycles * cycle_len / 60.0, rtf))
+
+    rospy.init_node('soak', disable_signals=True)
+    types = {'/leapmotion/data_right': conversions.LEAPCOBOT_TYPES['right'],
+             '/leapmotion/data_left': conversions.LEAPCOBOT_TYPES['left'],
+             '/drone/leapmotion/hand_right': Hand, '/drone/leapmotion/gestures': GestureEvent}
+    pubs = {t: rospy.Publisher(t, ty, queue_size=2000, tcp_nodelay=True)
+            for t, ty in types.items()}
+    mon = Monitor({'arms': {s: arm_topics[s]['leapcobot'] for s in arm_topics},
+                   'drone': drone_topics['right']['hand']})
+    sent = {t: 0 for t in types}
+    reset = rospy.ServiceProxy('/ur10_sim/reset', Trigger)
+    reset.wait_for_service(120)
+    # Every subscriber of the player's topics connected (arm nodes, pilot, monitor).
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (
+            all(pubs[t].get_num_connections() >= 2 for t in types)):
+        time.sleep(0.2)
+    while time.monotonic() < deadline and rospy.get_time() == 0:
+        time.sleep(0.1)
+    cell = load_config('ur10_dual_cell.yaml')
+    master_uri = env['ROS_MASTER_URI']
+    rss, placed, flights = {}, [], 0
+    wall0, sim0 = time.monotonic(), rospy.get_time()
+    for cycle in range(cycles):
+        mon.cycle = cycle
+        reset()
+        t0 = rospy.get_time()
+        for t, topic, msg in session:
+            while True:
+                ahead = t0 + t - rospy.get_time()
+                if ahead <= 0:
+                    break
+                time.sleep(min(0.02, max(0.0005, 0.8 * ahead / rtf)))
+            msg.header.stamp = rospy.Time.now()
+            pubs[topic].publish(msg)
+            sent[topic] += 1
+        while rospy.get_time() < t0 + cycle_len:
+            time.sleep(0.01)
+        with mon.lock:
+            cubes = dict(mon.cubes)
+        ok = 0
+        for arm, (_, cube) in ARMS.items():
+            pos = cubes.get(cube)
+            tray = cell.arm(arm).tray
+            if pos is not None and np.linalg.norm(np.subtract(pos[:2], tray.xyz[:2])) < 0.03:
+                ok += 1
+        placed.append(ok)
+        with mon.lock:
+            flights = sum(1 for c, s in mon.nav_states if s == 6)
+        if cycle == 0 or cycle == cycles - 1 or cycle % 5 == 4:
+            pids = node_pids(master_uri)
+            gone = [n for n in NODES if n not in pids]
+            if gone:
+                raise SystemExit('[soak] nodes not running after cycle %d: %s'
+                                 % (cycle + 1, ', '.join(gone)))
+            sample = {n: rss_kb(p) for n, p in pids.items()}
+            for n, kb in sample.items():
+                if kb:
+                    rss.setdefault(n, []).append((cycle, kb))
+        wall, sim = time.monotonic() - wall0, rospy.get_time() - sim0
+        log('[soak] cycle %d/%d: %d/2 cubes placed, %d takeoffs so far; %.1f sim min in %.1f '
+            'wall min (x%.2f)' % (cycle + 1, cycles, ok, flights, sim / 60, wall / 60,
+                                   sim / wall))
+        if graph.poll() is not None:
+            raise SystemExit('[soak] the graph died: %s' % graph.stderr.read()[-2000:])
+    wall, sim = time.monotonic() - wall0, rospy.get_time() - sim0
+    time.sleep(2.0)
+
+    # -- figures ----------------------------------------------------------------------
+    with mon.lock:
+        received, gaps = dict(mon.received), dict(mon.gaps)
+        status = dict(mon.status)
+        lat = {k: list(v) for k, v in mon.lat.items()}
+    lost_inputs = {t: sent[t] - received.get(t, 0) for t in ('/leapmotion/data_right',
+                                                             '/leapmotion/data_left',
+                                                             '/drone/leapmotion/hand_right')}
+    rejected = {arm: int(s.rejected_inputs) for arm, s in status.items()}
+    with mon.lock:
+        rejected.update({n: v for n, v in mon.diag_rejected.items() if 'pilot' in n})
+    dropped = sum(lost_inputs.values()) + sum(gaps.values())
+    growth = {}
+    for n, samples in rss.items():
+        if len(samples) >= 2 and samples[0][1] > 0:
+            growth[n] = 100.0 * (samples[-1][1] - samples[0][1]) / samples[0][1]
+    k = max(1, min(5, cycles // 3))
+
+    def drift(key):
+        xs = lat.get(key, [])
+        first = [v for c, v in xs if c < k]
+        last = [v for c, v in xs if c >= cycles - k]
+        if not first or not last:
+            return float('nan'), float('nan'), float('nan')
+        return (1e3 * statistics.median(first), 1e3 * statistics.median(last),
+                1e3 * (statistics.median(last) - statistics.median(first)))
+    arm_first, arm_last, arm_drift = drift('arm')
+    dr_first, dr_last, dr_drift = drift('drone')
+    log('\n[soak] %.1f sim minutes in %.1f wall minutes: x%.2f' % (sim / 60, wall / 60,
+                                                                    sim / wall))
+    log('[soak] RSS growth per node (first cycle -> end):')
+    for n in sorted(growth):
+        log('  %-28s %7.0f kB -> %7.0f kB  %+6.2f %%' % (n, rss[n][0][1], rss[n][-1][1], growth[n]))
+    log('[soak] hand -> arm command latency p50: first %d cycles %.2f ms, last %d %.2f ms '
+        '(drift %+.2f ms); p99 overall %.2f ms' % (k, arm_first, k, arm_last, arm_drift,
+                                                   1e3 * percentile([v for _, v in lat.get('arm', [])], 99)))
+    log('[soak] hand -> cmd_vel latency p50: first %.2f ms, last %.2f ms (drift %+.2f ms)'
+        % (dr_first, dr_last, dr_drift))
+    log('[soak] lost inputs %s, sequence gaps %s, rejected by the nodes %s'
+        % (lost_inputs, gaps, rejected))
+    log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
+        % (sum(placed), 2 * cycles, flights, cycles))
+    figures = {
+        'soak.rss_growth_pct': max(growth.values()) if growth else float('nan'),
+        'soak.dropped_msgs': dropped,
+        'soak.rejected_inputs': sum(rejected.values()),
+        'soak.sim_minutes': sim / 60.0,
+        'soak.sim_wall_ratio': sim / wall,
+        'soak.arm_latency_p50_ms': arm_last,
+        'soak.arm_latency_drift_ms': arm_drift,
+        'soak.drone_latency_drift_ms': dr_drift,
+        'soak.pick_place_success_pct': 100.0 * sum(placed) / (2 * cycles),
+    }
+    run_of = '%d cycles, %.1f sim minutes at x%.2f' % (cycles, sim / 60.0, sim / wall)
+    nodes = ', '.join(sorted(growth)) or 'no node sampled twice'
+    sources = {
+        'soak.rss_growth_pct': 'VmRSS of each node after cycle 1 vs the end, the largest '
+                               'growth (%s)' % nodes,
+        'soak.dropped_msgs': 'hand messages sent minus received %s, plus sequence gaps %s'
+                             % (lost_inputs, gaps),
+        'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'
+                                % rejected,
+        'soak.sim_minutes': '/clock of the UR10 simulator',
+        'soak.sim_wall_ratio': '/clock over monotonic wall time',
+        'soak.arm_latency_p50_ms': 'hand stamp -> arm command, median of the last %d cycles '
+                                   '(%d samples in all)' % (k, len(lat.get('arm', []))),
+        'soak.arm_latency_drift_ms': 'arm latency median: last %d cycles minus first %d' % (k, k),
+        'soak.drone_latency_drift_ms': 'hand stamp -> cmd_vel median: last %d cycles minus '
+                                       'first %d (%d samples)' % (k, k, len(lat.get('drone', []))),
+        'soak.pick_place_success_pct': 'cubes in their trays after each cycle (%d/%d)'
+                                       % (sum(placed), 2 * cycles),
+    }
+    return figures, {key: '%s; %s' % (text, run_of) for key, text in sources.items()}
+
+
+def main(argv=None):
+    from tools.bench.results import finite_figures, utc_now, write_results
+    ap = argparse.ArgumentParser(prog='python -m tools.soak',
+                                 description=__doc__.split('\n\n')[0])
+    ap.add_argument('--minutes', type=float, default=30.0, help='simulated minutes')
+    ap.add_argument('--rtf', type=float, default=1.5, help='sim time / wall time target (1.5 keeps 2 cores below saturation)')
+    ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
+                    '(default the scripts\' 120)')
+    ap.add_argument('--out', default='soak_results.json')
+    args = ap.parse_args(argv)
+    run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
+                'rate_hz': args.rate}
+    figures, sources, failed = {}, {}, {}
+    try:
+        figures, sources = run(args.minutes, args.rtf, args.rate,
+                               log=lambda s: print(s, flush=True))
+    except (Exception, SystemExit) as e:     # noqa: BLE001 - recorded in _failed, exit 1
+        traceback.print_exc()
+        failed['soak'] = '%s: %s' % (type(e).__name__, e)
+    figures, not_measured = finite_figures(figures)
+    failed.update(not_measured)
+    sources = {key: sources[key] for key in figures}
+    # A fresh file per run: a failed soak leaves no earlier run's figures behind.
+    write_results(args.out, figures, sources, failed, run_info)
+    print('[soak] wrote %s (%d figures from this run)' % (args.out, len(figures)), flush=True)
+    if failed:
+        print('[soak] failed: %s' % '; '.join('%s (%s)' % kv for kv in sorted(failed.items())),
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
