@@ -1,4 +1,4 @@
-"""The README's bag tools as commands: `rosrun leap_teleop recording_to_bag` on a shared
+"""The bag tools docs/usage.md shows, as commands: `rosrun leap_teleop recording_to_bag` on a shared
 recording and `python -m leap_teleop.tools.to_bag --script` on a session write the
 sender's topics, one message per frame and side."""
 import os
