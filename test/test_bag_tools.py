@@ -1,5 +1,5 @@
-"""The bag tools docs/usage.md shows, as commands: `rosrun leap_teleop recording_to_bag` on a shared
-recording and `python -m leap_teleop.tools.to_bag --script` on a session write the
+"""The bag tools docs/usage.md shows, as commands: `rosrun leap_teleop recording_to_bag` on a
+shared recording and `python -m leap_teleop.tools.to_bag --script` on a session write the
 sender's topics, one message per frame and side."""
 import os
 import subprocess
