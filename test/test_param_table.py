@@ -38,8 +38,10 @@ def test_write_regenerates_a_stale_copy_and_keeps_the_rest(tmp_path):
     assert param_table.main(['--check', str(stale)]) == 0
 
 
-def test_write_refuses_a_file_without_the_markers(tmp_path):
+def test_write_and_check_refuse_a_file_without_the_markers(tmp_path, capsys):
     other = tmp_path / 'other.md'
     other.write_text('# no table here\n')
     assert param_table.main(['--write', str(other)]) == 1
     assert other.read_text() == '# no table here\n'
+    assert param_table.main(['--check', str(other)]) == 1
+    assert 'markers' in capsys.readouterr().err

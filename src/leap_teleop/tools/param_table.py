@@ -91,7 +91,12 @@ def main(argv=None):
     args = ap.parse_args(argv)
     table = markdown()
     if args.check:
-        if docs_copy(args.check) != table:
+        copy = docs_copy(args.check)
+        if copy is None:
+            print('%s: no %s ... %s markers holding the parameter table'
+                  % (args.check, BEGIN, END), file=sys.stderr)
+            return 1
+        if copy != table:
             print('%s: the parameter table differs from the declarations; regenerate it '
                   'with python -m leap_teleop.tools.param_table --write %s'
                   % (args.check, args.check), file=sys.stderr)
