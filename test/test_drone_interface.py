@@ -1,14 +1,21 @@
-"""The README's AR.Drone endpoint table is the node's (the rostest checks the node)."""
+"""The AR.Drone endpoint table in docs/robots.md is the node's (the rostest checks the node)."""
 import os
 import re
 
+<<<<<<< HEAD
 from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
 from leap_teleop.ros.nodes.ardrone_sim import PARAMS
 README = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'README.md')
+=======
+from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
+from leap_teleop.ros.nodes.ardrone_sim import PARAMS
+ROBOTS_DOC = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs',
+                          'robots.md')
+>>>>>>> docs
 
 
-def readme_endpoints():
-    with open(README) as f:
+def documented_endpoints():
+    with open(ROBOTS_DOC) as f:
         text = f.read()
     section = text.split('## The AR.Drone driver interface', 1)[1].split('\n## ', 1)[0]
     rows = []
@@ -20,10 +27,10 @@ def readme_endpoints():
     return rows
 
 
-def test_readme_table_lists_exactly_the_offered_endpoints():
+def test_docs_table_lists_exactly_the_offered_endpoints():
     expected = [(k, n, t) for k, n, t, _ in DRIVER_ENDPOINTS]
     expected += [(k + ' (opt-in)', n, t) for k, n, t, _ in OPTIONAL_ENDPOINTS]
-    assert readme_endpoints() == expected
+    assert documented_endpoints() == expected
     assert len(DRIVER_ENDPOINTS) == 23
 
 

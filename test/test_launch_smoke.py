@@ -1,8 +1,8 @@
-"""Every top-level launch file, started as the README shows (defaults, then each documented
-arg value), reaches its purpose within a time limit: the cube placed, the drone landed
-after its flight, the sender publishing. A private master per case; test/launch_check.py
-watches the graph. RViz itself (rviz:=true) only parses here: test_rviz_screenshot.py
-draws it under Xvfb."""
+"""Every top-level launch file, started as the README and docs/ pages show (defaults, then each
+documented arg value), reaches its purpose within a time limit: the cube placed, the drone
+landed after its flight, the sender publishing. A private master per case;
+test/launch_check.py watches the graph. RViz itself (rviz:=true) only parses here:
+test_rviz_screenshot.py draws it under Xvfb."""
 import os
 import signal
 import subprocess
@@ -85,7 +85,7 @@ def run_launches(tmp_path, launches, check_args, timeout, others=(), env=None,
     return out
 
 
-# (id, launches, checker args, time limit s): the README's commands and documented values.
+# (id, launches, checker args, time limit s): the documented commands and values (README, docs/).
 CASES = [
     ('ur10_single', [['ur10_single.launch']],
      ['--cube', 'ur10_1:cube_red'], 120),
@@ -171,7 +171,7 @@ def test_record_launch_records_a_running_sender(tmp_path):
 
 
 DOCUMENTED_VALUES = [
-    # (launch, args, nodes that must be in it): every arg value the README or the launch
+    # (launch, args, nodes that must be in it): every arg value README, docs/ or the launch
     # docs name, parsed by roslaunch itself.
     ('ur10_dual.launch', ['rviz:=true'], {'/rviz', '/hand_markers', '/leap_sender'}),
     ('ur10_single.launch', ['rviz:=true'], {'/rviz', '/hand_markers', '/leap_sender'}),

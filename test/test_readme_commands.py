@@ -1,17 +1,23 @@
-"""Every command the README shows is exercised by a test: the commands are read out of the
-README (code blocks and inline code) and each must be listed here with the test that runs
-it, and that test must exist. A command added to the README without a test fails this."""
+"""Every command the README and the docs/ pages show is exercised by a test: the commands
+are read out of README.md and docs/*.md (code blocks and inline code) and each must be listed
+here with the test that runs it, and that test must exist. A command added to a page without
+a test fails this. The README stays a front page: short, linking every docs page, and no
+link between the pages points at a file or heading that is not there."""
+import glob
 import os
 import re
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-README = os.path.join(HERE, '..', 'README.md')
+ROOT = os.path.dirname(HERE)
+README = os.path.join(ROOT, 'README.md')
+DOCS = os.path.join(ROOT, 'docs')
+README_MAX_LINES = 250
 PREFIX = re.compile(r'(?:\./env\.sh |sudo )?(?:roslaunch|rosrun|rostest|python3? -m|make|'
                     r'catkin_make|catkin|catkin_lint|git clone|pip install|apt-get|source)(?=\s|$)')
 
 SMOKE = 'test_launch_smoke.py::test_launch_reaches_its_purpose'
 WORKSPACE = 'test_catkin_workspace.py::test_builds_tests_installs_and_runs_in_a_users_workspace'
-# README command (after `cd ... &&`, without comments) -> test file::function that runs it.
+# Documented command (after `cd ... &&`, without comments) -> test file::function that runs it.
 COVERED = {
     './env.sh python -m pytest test/test_arm_teleop.py': 'test_arm_teleop.py',
     './env.sh roslaunch leap_teleop ardrone.launch': SMOKE,
@@ -64,8 +70,8 @@ COVERED = {
     'python -m tools.make_sessions': 'test_arm_closed_loop.py',
     # make demo runs rotated_task.run, which the module's main() calls.
     'python -m tools.rotated_task': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
-    'python -m tools.param_table':
-        'test_param_table.py::test_readme_parameter_tables_match_the_declarations',
+    'python -m tools.param_table --write docs/nodes.md':
+        'test_param_table.py::test_write_regenerates_a_stale_copy_and_keeps_the_rest',
     'python -m leap_teleop.ros.recording_to_bag --script config/gestures/ur10_pick_place_dual.yaml '
     '/tmp/dual.bag': 'test_bag_tools.py::test_to_bag_writes_a_scripted_session',
     'rosrun leap_teleop recording_to_bag ../shared/data/leapjs/grab.json.lz /tmp/grab.bag':
@@ -112,25 +118,35 @@ NOT_RUN = {
 }
 
 
-def readme_commands():
-    text = open(README).read()
+def pages():
+    """README.md and every docs/*.md page: {path: text}."""
+    paths = [README] + sorted(glob.glob(os.path.join(DOCS, '*.md')))
+    out = {}
+    for path in paths:
+        with open(path) as f:
+            out[path] = f.read()
+    return out
+
+
+def documented_commands():
     found = set()
-    for block in re.findall(r'```bash\n(.*?)```', text, re.S):
-        block = re.sub(r'\\\n\s*', '', block)          # continued lines
-        for line in block.splitlines():
-            line = line.split(' #')[0].strip()
-            line = re.sub(r'^cd [^&]+&& ', '', line)
-            if PREFIX.match(line):
-                found.add(line)
-    for inline in re.findall(r'`([^`\n]+)`', text):
-        if PREFIX.match(inline):
-            found.add(inline.strip())
+    for text in pages().values():
+        for block in re.findall(r'```bash\n(.*?)```', text, re.S):
+            block = re.sub(r'\\\n\s*', '', block)          # continued lines
+            for line in block.splitlines():
+                line = line.split(' #')[0].strip()
+                line = re.sub(r'^cd [^&]+&& ', '', line)
+                if PREFIX.match(line):
+                    found.add(line)
+        for inline in re.findall(r'`([^`\n]+)`', text):
+            if PREFIX.match(inline):
+                found.add(inline.strip())
     return found
 
 
-def test_every_readme_command_has_a_test():
-    missing = sorted(readme_commands() - set(COVERED) - BY_CI - set(NOT_RUN))
-    assert not missing, 'README commands without a test (add one, list it in COVERED):\n' + \
+def test_every_documented_command_has_a_test():
+    missing = sorted(documented_commands() - set(COVERED) - BY_CI - set(NOT_RUN))
+    assert not missing, 'documented commands without a test (add one, list it in COVERED):\n' + \
         '\n'.join(missing)
 
 
@@ -141,6 +157,37 @@ def test_the_listed_tests_exist():
         assert not func or re.search(r'def %s\(' % re.escape(func), text), (command, where)
 
 
-def test_the_lists_hold_only_readme_commands():
-    stale = (set(COVERED) | BY_CI | set(NOT_RUN)) - readme_commands()
+def test_the_lists_hold_only_documented_commands():
+    stale = (set(COVERED) | BY_CI | set(NOT_RUN)) - documented_commands()
     assert not stale, sorted(stale)
+
+
+def test_the_readme_is_a_front_page_linking_every_docs_page():
+    text = pages()[README]
+    assert len(text.splitlines()) <= README_MAX_LINES, len(text.splitlines())
+    linked = set(re.findall(r'\]\(docs/([^)#]+\.md)(?:#[^)]*)?\)', text))
+    docs = {os.path.basename(p) for p in glob.glob(os.path.join(DOCS, '*.md'))}
+    assert docs and not docs - linked, sorted(docs - linked)
+
+
+def anchor(heading):
+    """GitHub's anchor for a Markdown heading."""
+    return re.sub(r'[^\w\- ]', '', heading.strip().lower()).replace(' ', '-')
+
+
+def test_links_between_the_pages_reach_a_file_and_heading():
+    texts = pages()
+    for path, text in texts.items():
+        text = re.sub(r'```.*?```', '', text, flags=re.S)
+        for target in re.findall(r'\]\(([^)\s]+)\)', text):
+            if re.match(r'[a-z]+://', target):
+                continue
+            file_part, _, fragment = target.partition('#')
+            dest = os.path.normpath(os.path.join(os.path.dirname(path), file_part)) \
+                if file_part else path
+            assert os.path.exists(dest), (path, target)
+            if fragment:
+                with open(dest) as f:
+                    headings = re.findall(r'^#+ (.+)$', re.sub(r'```.*?```', '', f.read(),
+                                                                  flags=re.S), re.M)
+                assert fragment in {anchor(h) for h in headings}, (path, target)

@@ -1,5 +1,5 @@
 """Bags of the original systems replay into ur10_single.launch through replay.launch as the
-README shows, and the arm places its cube: the one-arm layout (leapcobotright on
+docs/usage.md shows, and the arm places its cube: the one-arm layout (leapcobotright on
 /leapmotion/data) as recorded, the two-arm layout (leapcobotright on /leapmotion/data_right,
 leapcobotleft on /leapmotion/data_left) through remap_from / remap_to."""
 import os

@@ -56,7 +56,7 @@ if [ ! -f .ws/loopback_bind.so ] || [ tools/loopback_bind.c -nt .ws/loopback_bin
     cc -shared -fPIC -O2 -Wall -o .ws/loopback_bind.so.tmp tools/loopback_bind.c -ldl \
       && mv .ws/loopback_bind.so.tmp .ws/loopback_bind.so
   else
-    say "WARNING: no C compiler: roscpp nodes will listen on all interfaces (see README)"
+    say "WARNING: no C compiler: roscpp nodes will listen on all interfaces (see docs/reliability.md, Network)"
   fi
 fi
 

@@ -4,7 +4,7 @@ One row per endpoint: (kind, name relative to the drone's namespace, the type th
 simulator uses, the driver's type). The two type columns differ only in the package
 name where the project carries its own MD5-identical copy of a driver type. The node
 (`nodes/ardrone_sim.py`) registers exactly these; a rostest compares them with the
-running node's and a unit test with the README's table.
+running node's and a unit test with the table in docs/robots.md.
 """
 
 PUBLISHER, SUBSCRIBER, SERVICE = 'publisher', 'subscriber', 'service'
