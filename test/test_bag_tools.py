@@ -1,10 +1,5 @@
-<<<<<<< HEAD
-"""The README's bag tools as commands: `rosrun leap_teleop recording_to_bag` on a shared
-recording and `python -m leap_teleop.ros.recording_to_bag --script` on a session write the
-=======
 """The bag tools docs/usage.md shows, as commands: `rosrun leap_teleop recording_to_bag` on a
 shared recording and `python -m leap_teleop.ros.recording_to_bag --script` on a session write the
->>>>>>> docs
 sender's topics, one message per frame and side."""
 import os
 import subprocess

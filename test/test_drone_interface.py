@@ -2,16 +2,10 @@
 import os
 import re
 
-<<<<<<< HEAD
-from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
-from leap_teleop.ros.nodes.ardrone_sim import PARAMS
-README = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'README.md')
-=======
 from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
 from leap_teleop.ros.nodes.ardrone_sim import PARAMS
 ROBOTS_DOC = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs',
                           'robots.md')
->>>>>>> docs
 
 
 def documented_endpoints():

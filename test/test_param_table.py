@@ -1,18 +1,7 @@
 """The parameter tables in docs/nodes.md are what the declarations say."""
 import os
 
-<<<<<<< HEAD
 from tools import param_table
-README = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'README.md')
-SCRIPTS = os.path.join(os.path.dirname(README), 'scripts')
-
-
-def test_readme_parameter_tables_match_the_declarations():
-    assert param_table.readme_copy(README) == param_table.markdown(), (
-        'README.md is out of date: python -m tools.param_table')
-    assert param_table.main(['--check', README]) == 0
-=======
-from leap_teleop.tools import param_table
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 NODES_DOC = os.path.join(ROOT, 'docs', 'nodes.md')
@@ -24,7 +13,6 @@ def test_docs_parameter_tables_match_the_declarations():
         'docs/nodes.md is out of date: python -m tools.param_table --write '
         'docs/nodes.md')
     assert param_table.main(['--check', NODES_DOC]) == 0
->>>>>>> docs
 
 
 def test_every_table_names_an_installed_script_and_every_parameter():
