@@ -1,10 +1,10 @@
-# make demo | make test | make bench | make eval | make train | make setup | make clean
+# make demo | make test | make check | make lint | make bench | make eval | make train | make setup | make clean
 SHELL := /bin/bash
 ENV := ./env.sh
 PYTEST_ARGS ?=
 GUI ?= 0
 
-.PHONY: setup demo test bench eval train soak clean
+.PHONY: setup demo test check lint bench eval train soak clean
 
 setup:
 	@bash tools/setup.sh
@@ -12,8 +12,17 @@ setup:
 demo: setup
 	@$(ENV) python -m tools.demo --gui $(GUI)
 
+# Everything: the linter, then every test (unit, integration, rostests, the workspace).
 test: setup
+	@$(ENV) ruff check src tools test scripts
 	@$(ENV) python -m pytest test/ $(PYTEST_ARGS)
+
+# The unit tests that need no ROS master and no simulator: seconds, while you work.
+check: setup
+	@$(ENV) python -m pytest test/ -m 'not integration' -q $(PYTEST_ARGS)
+
+lint: setup
+	@$(ENV) ruff check src tools test scripts
 
 bench: setup
 	@$(ENV) python -m tools.bench

@@ -14,11 +14,12 @@ from geometry_msgs.msg import Vector3Stamped
 from sensor_msgs.msg import CameraInfo, Image
 from sensor_msgs.srv import SetCameraInfo
 from std_msgs.msg import Empty
-from std_srvs.srv import Empty as EmptySrv, Trigger
+from std_srvs.srv import Empty as EmptySrv
+from std_srvs.srv import Trigger
+
+from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER, SERVICE
 
 import ardrone_driver_types as driver
-from leap_teleop.ros.ardrone_interface import (DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER,
-                                         SERVICE, SUBSCRIBER)
 
 NODE = '/uav/ardrone_sim'
 Navdata = driver.message('Navdata')

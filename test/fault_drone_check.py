@@ -22,8 +22,9 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
-from fault_common import node_pid, wait_for
 from leap_teleop.msg import GestureEvent, Hand, Navdata
+
+from fault_common import node_pid, wait_for
 
 ZERO = (0.0,) * 6
 

@@ -17,8 +17,9 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import JointState
 
-from fault_common import Watch, wait_for
 from leap_teleop.msg import GestureEvent, Hand, Navdata, leapcobotright
+
+from fault_common import Watch, wait_for
 
 ARM = 'ur10_1'
 NEUTRAL = dict(palm=(0.0, 250.0, 0.0))

@@ -22,9 +22,10 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
-from fault_common import Watch, alive, kill, node_pid, wait_for
 from leap_teleop.msg import Hand, leapcobotright
 from leap_teleop.ur10 import kinematics as kin
+
+from fault_common import Watch, alive, kill, node_pid, wait_for
 
 ARM = 'ur10_1'
 

@@ -11,11 +11,12 @@ import unittest
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
+from fault_hand_burst_check import Hands
 from sensor_msgs.msg import JointState
 
-from fault_common import Watch, wait_for
-from fault_hand_burst_check import Hands
 from leap_teleop.msg import GestureEvent, Navdata
+
+from fault_common import Watch, wait_for
 
 ARM = 'ur10_1'
 P50, P99, SAMPLES = ('input age p50 (ms, last 10 s)', 'input age p99 (ms, last 10 s)',

@@ -19,14 +19,15 @@ import time
 
 import numpy as np
 import rosgraph
-import rospy
 import roslib.message
+import rospy
 from rosgraph_msgs.msg import Log
 from std_msgs.msg import Empty
 
 from leap_teleop.msg import ArmStatus, Navdata
-from leap_teleop.ur10.config import load_config
 from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+from leap_teleop.ur10.config import load_config
+
 LANDED, HOVERING, TAKING_OFF = 2, 4, 6
 
 

@@ -7,8 +7,10 @@ import rospy
 import rostest
 import tf2_ros
 
-from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 from leap_teleop.hands.sources.scripted import GestureScript
+from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
+
+
 class SenderFollowsScript(unittest.TestCase):
     def test_messages_follow_the_script(self):
         script = GestureScript.load(rospy.get_param('~script'))

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import yaml
 
-from leap_teleop.ur10.teleop import DISARMED, TRACKING, ArmTeleopParams
-from tools.closed_loop import run_session
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_path
+from leap_teleop.ur10.teleop import DISARMED, TRACKING, ArmTeleopParams
+from tools.closed_loop import run_session
 
 
 def sim_params(**overrides):

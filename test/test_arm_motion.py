@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from leap_teleop.control.one_euro import OneEuroFilter, smoothing_factor
-from leap_teleop.ur10.orientation import hand_rotation
 from leap_teleop.control.servo import JointServo
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.orientation import hand_rotation
 from leap_teleop.ur10.trajectory import TrajectoryFollower, _hermite, _hermite_peak
 
 

@@ -3,11 +3,11 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from leap_teleop.ur10.teleop import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
-                                    ArmTeleopParams, HandInput)
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
 HOME = kin.HOME_Q.copy()
 PALM = (0.0, 200.0, 0.0)
@@ -26,7 +26,7 @@ class Clock:
 def hand(**kw):
     kw.setdefault('present', True)
     kw.setdefault('palm_mm', PALM)
-    return HandInput(**kw)
+    return ArmInput(**kw)
 
 
 def drive(teleop, clock, h, periods=1, q=None):
@@ -377,7 +377,7 @@ def test_fuzzed_input_never_leaves_the_limits(palm, pinch_value, flags, mode):
     t, c = armed_with_origin(mode=mode)
     present, fist, thumb, pinch, rock = flags
     now = c.tick()
-    t.on_hand(HandInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb, pinch=pinch,
+    t.on_hand(ArmInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb, pinch=pinch,
                         pinch_value=pinch_value, rock=rock, stamp=now), now)
     cmd = t.step(now)
     if cmd.q is not None:

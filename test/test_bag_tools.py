@@ -32,9 +32,9 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
     assert got['leapmotion/data_right'] == ('leap_teleop/leapcobotright', frames)
     assert got['leapmotion/hand_right'] == ('leap_teleop/Hand', frames)
     # The gesture events are the ones the sender's logic finds in the take, in order.
-    from leap_teleop.ros import conversions
     from leap_teleop.hands.leap_interface import LeapInterface
     from leap_teleop.hands.sources import make_source
+    from leap_teleop.ros import conversions
     li, want = LeapInterface(sides=['right', 'left']), []
     li.add_hand_listener(lambda frame, state: want.extend(
         (m.side, m.gesture, m.active) for m in conversions.to_gesture_events(state)))

@@ -10,6 +10,8 @@ import pytest
 from tools.bench import __main__ as bench_main
 from tools.bench.bench_arm import _p99_ms, median_ci
 from tools.bench.bench_sender import max_rate_no_drop, received_hz
+
+
 def fake(run, doc='fake benchmark'):
     return types.SimpleNamespace(run=run, __doc__=doc)
 

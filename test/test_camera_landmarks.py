@@ -8,11 +8,22 @@ import sys
 import numpy as np
 import pytest
 
-from leap_teleop.hands.sources.landmarks import (CameraModel, HandLandmarks, camera_to_leap,
-                                           chirality, hand_from_landmarks, hand_side,
-                                           join_touching_tips, person_side, project,
-                                           reprojection_rms_px, solve_translation)
+from leap_teleop.hands.sources.landmarks import (
+    CameraModel,
+    HandLandmarks,
+    camera_to_leap,
+    chirality,
+    hand_from_landmarks,
+    hand_side,
+    join_touching_tips,
+    person_side,
+    project,
+    reprojection_rms_px,
+    solve_translation,
+)
 from tools.evaluation.evaluate import HANDS_DATA
+
+
 @pytest.fixture(scope='module')
 def hands_json():
     path = os.path.join(HANDS_DATA, 'hands.json')

@@ -11,12 +11,13 @@ import numpy as np
 import pytest
 
 from leap_teleop.hands.camera_view import CameraView, draw, held_gestures
-from leap_teleop.ros.conversions import image_message
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
+from leap_teleop.ros.conversions import image_message
 from tools.evaluation.evaluate import HANDS_DATA
+
 HELD = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
 CLIP_FIST_THUMB = 'clip_fist_then_thumbs_up__mps__gr_test_video.mp4'
 CLIP_PALM = 'clip_palm_motion__mps__hl_test_video.mp4'
@@ -39,6 +40,7 @@ def detections(hands_json):
     """{photo: (width, height, [HandLandmarks])} from the pipeline, with hands.json's
     settings (still images, up to two hands, full model)."""
     import cv2
+
     from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     out = {}
     with HandDetector(max_hands=2, model='full', static=True) as detector:
@@ -279,8 +281,9 @@ def test_annotated_view(detections):
 def test_record_frames_and_bag_from_camera_footage(tmp_path):
     """record_frames and recording_to_bag take the video source like any other."""
     import rosbag
-    from leap_teleop.hands.sources.recording import RecordingSource
+
     from leap_teleop.hands import record_frames
+    from leap_teleop.hands.sources.recording import RecordingSource
     from leap_teleop.ros import recording_to_bag as to_bag
     out = tmp_path / 'thumbs.json.gz'
     assert record_frames.main([str(out), '--source', 'video', '--realtime', '0', '--video',
@@ -400,6 +403,7 @@ def test_search_thread_runs_one_search_at_a_time():
     time: the hand stays with the graph that found it. Made likely here: the second
     graph's searches are slow and it may look on every frame."""
     import cv2
+
     from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = cv2.cvtColor(cv2.imread(data('fist__htj__22.jpg')), cv2.COLOR_BGR2RGB)
     with HandDetector(max_hands=2, strategy='paired', detect_every=1,
@@ -434,6 +438,7 @@ def test_tracking_does_not_wait_for_a_slow_search():
     """A search still running is left to run, the tracked hand is returned meanwhile;
     its hand is adopted once it has ended."""
     import time
+
     from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
     with HandDetector(max_hands=2, strategy='paired', detect_every=100,

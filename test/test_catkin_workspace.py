@@ -23,9 +23,9 @@ import sys
 import textwrap
 
 import pytest
+from test_launch_smoke import run_launches
 
 from tools.bench.harness import free_port
-from test_launch_smoke import run_launches
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -106,7 +106,8 @@ def clean_env(tmp_path):
     """Only Debian's ROS and the python environment with the package's dependencies (the
     venv's bin first on PATH, as a user's python with them installed): no sourced
     workspace."""
-    return {'PATH': '%s:/usr/local/bin:/usr/bin:/bin' % os.path.dirname(PYTHON), 'HOME': os.environ.get('HOME', '/root'),
+    return {'PATH': '%s:/usr/local/bin:/usr/bin:/bin' % os.path.dirname(PYTHON),
+            'HOME': os.environ.get('HOME', '/root'),
             'LANG': 'C.UTF-8', 'ROS_HOME': str(tmp_path / 'ros_home'),
             'ROS_LOG_DIR': str(tmp_path / 'ros_log'), 'ROS_HOSTNAME': '127.0.0.1',
             'ROS_IP': '127.0.0.1', 'LEAPJS_DATA': os.environ.get('LEAPJS_DATA', ''),
@@ -134,6 +135,7 @@ def gesture_bag(path):
     """A short bag of right-hand leapcobot frames, as record.launch writes."""
     import rosbag
     import rospy
+
     from leap_teleop.msg import leapcobotright
     with rosbag.Bag(str(path), 'w') as bag:
         for i in range(60):

@@ -6,6 +6,7 @@ from PIL import Image
 
 from leap_teleop.msg import Hand
 from tools import demo_pictures as dp
+
 # A short flight: landed, takeoff, hover, flip, landing (times in s).
 STATES = [(0.0, 2), (0.5, 6), (1.5, 4), (2.0, 9), (2.5, 3), (3.0, 8), (3.8, 2)]
 GESTURES = [(0.45, 'unfold'), (1.95, 'circle_cw'), (2.95, 'fold')]

@@ -6,16 +6,17 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop.ros import conversions
-
+from leap_teleop.control.lowpass import LowPass
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import Finger, Frame
-from leap_teleop.hands.gestures import GestureEvent
+from leap_teleop.hands.gestures import HandEvent
 from leap_teleop.hands.hand_model import render_hand
-from leap_teleop.hands.tracker import HandState
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.control.lowpass import LowPass
+from leap_teleop.hands.tracker import HandState
+from leap_teleop.ros import conversions
 from leap_teleop.ros.markers import driver_markers
+
+
 # --- skeleton ----------------------------------------------------------------------------
 def test_bones_run_knuckle_to_tip_and_the_metacarpal_has_no_length():
     hand = render_hand('right', 'open', [0.0, 200.0, 0.0])
@@ -161,7 +162,7 @@ def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture()
     builder = conversions.DriverHumanBuilder()
     hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)
     frame = Frame(id=1, timestamp=1.0, hands=[hand])
-    events = tuple(GestureEvent(g) for g in ('circle_cw', 'fold', 'hand_found', 'circle_ccw'))
+    events = tuple(HandEvent(g) for g in ('circle_cw', 'fold', 'hand_found', 'circle_ccw'))
     state = HandState('right', present=True, timestamp=1.0, frame_id=1,
                       palm_position=(0.0, 200.0, 0.0), palm_normal=(0.0, -1.0, 0.0),
                       direction=(0.0, 0.0, -1.0), events=events)

@@ -19,10 +19,11 @@ import textwrap
 import numpy as np
 import pytest
 
-from tools.bench import harness
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.sources.scripted import GestureScript
+from tools.bench import harness
 from tools.evaluation.evaluate import HANDS_DATA
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PYTHON = sys.executable
 
@@ -248,7 +249,7 @@ def sdk_angles(normal, direction):
 
 
 def check_hand(test_hand, src, tol_m=1e-6, tol_unit=1e-6):
-    """A received driver Hand against a frame.Hand of the source (mm)."""
+    """A received driver Hand against a hands.frame.TrackedHand of the source (mm)."""
     assert test_hand['present']
     assert test_hand['id'] == src.id
     np.testing.assert_allclose(test_hand['palm'], np.asarray(src.palm_position) / 1000.0,

@@ -2,11 +2,12 @@
 import pytest
 
 from leap_teleop.drone import sim as ds
-from leap_teleop.drone.pilot import DronePilot, HandInput, PilotConfig
+from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
 from leap_teleop.drone.sim import ArDroneSim
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.ros.node import package_path
 from leap_teleop.hands.sources.scripted import ScriptedSource
+from leap_teleop.ros.node import package_path
+
 SCRIPT = package_path('config', 'gestures', 'drone_flight.yaml')
 
 
@@ -24,7 +25,7 @@ def fly_script(path, mode='tilt'):
         nav = drone.navdata()
         pilot.on_navdata(nav['state'], nav['altd'], t)
         st = li.on_frame(frame)['right']
-        pilot.on_hand(HandInput(st.present, tuple(v * 1e-3 for v in st.palm_position),
+        pilot.on_hand(PilotInput(st.present, tuple(v * 1e-3 for v in st.palm_position),
                                 st.palm_normal, st.direction), t)
         for e in st.events:
             events.append(e.gesture)

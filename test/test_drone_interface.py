@@ -4,6 +4,7 @@ import re
 
 from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS
 from leap_teleop.ros.nodes.ardrone_sim import PARAMS
+
 ROBOTS_DOC = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs',
                           'robots.md')
 

@@ -1,18 +1,16 @@
 """DronePilot logic: paper mode = Algorithm 1, tilt mapping, gestures, watchdog, queue."""
 import math
-import os
 
 import numpy as np
 import pytest
 
-from leap_teleop.drone.pilot import (Command, CommandQueue, DronePilot, HandInput,
-                                     PilotConfig, leap_angles, shaped)
+from leap_teleop.drone.pilot import Command, CommandQueue, DronePilot, PilotConfig, PilotInput, leap_angles, shaped
 
 FLAT = dict(normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0))
 
 
 def hand(palm, normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0), present=True):
-    return HandInput(present, tuple(palm), tuple(normal), tuple(direction))
+    return PilotInput(present, tuple(palm), tuple(normal), tuple(direction))
 
 
 _MONO = [1000.0]
@@ -232,7 +230,7 @@ def test_reference_recaptured_when_the_hand_comes_back():
 
 # -- a stall holds (hovers), a loss disengages ------------------------------------------
 def stamped(palm, t, present=True):
-    return HandInput(present, tuple(palm), FLAT['normal'], FLAT['direction'], stamp=t)
+    return PilotInput(present, tuple(palm), FLAT['normal'], FLAT['direction'], stamp=t)
 
 
 def silence(pilot, t0, t1, dt=0.02):
@@ -312,7 +310,7 @@ def test_paper_mode_loss_longer_than_disarm_after_needs_the_capture_pose_again()
     pilot = DronePilot(PilotConfig(mode='paper', navdata_timeout=10.0, disarm_after=1.0))
     pilot.on_navdata(3, 1000, 0.0)
     tilted = dict(normal=(0.6, -0.8, 0.0), direction=(0.0, 0.6, -0.8))
-    pilot.on_hand(HandInput(True, (0.0, 0.2, 0.0), **tilted), 0.0)     # captures
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), **tilted), 0.0)     # captures
     assert pilot.paper_ref is not None and twists(drain(pilot))
     silence(pilot, 0.0, 0.5)
     pilot.on_hand(hand((0.0, 0.2, -0.1)), 0.5)                         # short: steers on
@@ -367,9 +365,9 @@ def test_absurd_palm_positions_are_rejected_not_flown(mode):
     # Found by fuzzing: a finite but absurd palm (1.8e305 m) made paper mode's twist infinite.
     pilot = DronePilot(PilotConfig(mode=mode))
     pilot.on_navdata(4, 1000, 0.0)
-    pilot.on_hand(HandInput(False), 0.0)
-    pilot.on_hand(HandInput(True, palm=(1.797693134862316e+305, 0.0, 0.0)), 0.01)
-    pilot.on_hand(HandInput(True, palm=(0.0, 0.2, 0.0), normal=(0.0, -30.0, 0.0)), 0.02)
+    pilot.on_hand(PilotInput(False), 0.0)
+    pilot.on_hand(PilotInput(True, palm=(1.797693134862316e+305, 0.0, 0.0)), 0.01)
+    pilot.on_hand(PilotInput(True, palm=(0.0, 0.2, 0.0), normal=(0.0, -30.0, 0.0)), 0.02)
     assert pilot.rejected_inputs == 2
     while True:
         cmd, _ = pilot.pop(1e9)

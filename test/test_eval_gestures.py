@@ -5,6 +5,8 @@ import os
 import pytest
 
 from tools.evaluation import evaluate
+
+
 @pytest.fixture(scope='module')
 def results(leapjs_data):
     return evaluate.evaluate(leapjs_data, verbose=False)
@@ -73,25 +75,26 @@ def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):
 
 
 def test_a_circle_event_agrees_only_with_the_sdk_circle_it_is():
-    from leap_teleop.hands.gestures import GestureEvent
+    from leap_teleop.hands.gestures import HandEvent
     sdk = evaluate.SdkCircle('left', 1.0, 1.2, False)
     sdk.finger, sdk.places = 'thumb', [([20.0, 170.0, 25.0], 17.0)]
     rows = lambda e, t=1.1, side='left': [(0, side, type('S', (), {'events': [e]}), None, t)]  # noqa: E731
-    here = GestureEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))
+    here = HandEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))
     assert evaluate.circle_agreement(rows(here), {1: sdk}) == (1, 1, 1, 1)
-    for other in (GestureEvent('circle_ccw', True, 0.017, 'pinky', (22.0, 166.0, 27.0)),   # finger
-                  GestureEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 215.0, 27.0)),   # place
-                  GestureEvent('circle_cw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))):   # sense
+    for other in (HandEvent('circle_ccw', True, 0.017, 'pinky', (22.0, 166.0, 27.0)),   # finger
+                  HandEvent('circle_ccw', True, 0.017, 'thumb', (22.0, 215.0, 27.0)),   # place
+                  HandEvent('circle_cw', True, 0.017, 'thumb', (22.0, 166.0, 27.0))):   # sense
         assert evaluate.circle_agreement(rows(other), {1: sdk}) == (0, 1, 0, 1)
     assert evaluate.circle_agreement(rows(here, t=1.5), {1: sdk}) == (0, 1, 0, 1)        # time
     assert evaluate.circle_agreement(rows(here, side='right'), {1: sdk}) == (0, 1, 0, 1)
     # a palm circle carries every fingertip round its own centre: placed by hand and time
-    palm = GestureEvent('circle_ccw', True, 0.05, 'palm', (0.0, 200.0, 0.0))
+    palm = HandEvent('circle_ccw', True, 0.05, 'palm', (0.0, 200.0, 0.0))
     assert evaluate.circle_agreement(rows(palm), {1: sdk}) == (1, 1, 1, 1)
 
 
 def test_main_writes_the_json(tmp_path, results, leapjs_data):
     import json
+
     from tools.evaluation import invariance as evaluate_invariance
     out = tmp_path / 'eval_results.json'
     # one photo for the photo views (its full table is make eval's and test_photo_views')

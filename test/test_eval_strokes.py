@@ -7,6 +7,7 @@ import pytest
 
 from leap_teleop.hands.gestures import GestureRecognizer
 from tools.evaluation import strokes as es
+
 ZIG_ZAG_LIKE = ('zig-zag', 'check', 'caret', 'v')
 
 

@@ -13,16 +13,17 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from leap_teleop.ros import conversions
-from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
-from leap_teleop.hands.frame import Finger, Hand
-from leap_teleop.hands.tracker import HandTracker
-from leap_teleop.ur10.teleop import (ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop,
-                                    ArmTeleopParams, HandInput)
 from leap_teleop.control.input_check import InputStream
+from leap_teleop.drone.pilot import DronePilot, PilotConfig
+from leap_teleop.drone.pilot import PilotInput as PilotHand
+from leap_teleop.hands.frame import Finger, TrackedHand
+from leap_teleop.hands.tracker import HandTracker
+from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop, ArmTeleopParams, PilotInput
 
 HOME = kin.HOME_Q.copy()
 wild = st.one_of(st.floats(-600, 600), st.floats(allow_nan=True, allow_infinity=True),
@@ -72,7 +73,7 @@ def test_stream_restarts_after_silence_or_a_clock_jump():
 def hand(**kw):
     kw.setdefault('present', True)
     kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
-    return HandInput(**kw)
+    return PilotInput(**kw)
 
 
 class Arm:
@@ -172,7 +173,7 @@ def raw_hands(draw):
                            extended=[None, True, False][int(rng.integers(0, 3))],
                            mcp=value(2), pip=None, dip=value(3) if mask & 1 else None)
                     for _ in range(n))
-    return Hand(side='right', palm_position=value(4), palm_velocity=value(5),
+    return TrackedHand(side='right', palm_position=value(4), palm_velocity=value(5),
                 palm_normal=value(6), direction=value(7),
                 grab_strength=value(8, ()) / 600 + 0.5, pinch_strength=value(9, ()) / 600 + 0.5,
                 confidence=float(rng.uniform(-0.5, 1.5)), fingers=fingers)
@@ -241,7 +242,7 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
     for ev in seq:
         if ev[0] == 'hand':
             _, palm, pinch_value, (present, fist, thumb, pinch, rock), age, angles = ev
-            t.on_hand(HandInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
+            t.on_hand(PilotInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
                                 pinch=pinch, pinch_value=pinch_value, rock=rock,
                                 stamp=now + age, rotate=angles[0], turn=angles[1],
                                 swing=angles[2]), now)

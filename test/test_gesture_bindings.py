@@ -4,12 +4,19 @@ import os
 import pytest
 
 from leap_teleop.hands.frame import Frame
-from leap_teleop.hands.gestures import GestureEvent, GestureRecognizer, GestureState
-from leap_teleop.hands.gestures.bindings import (BOUND_FLIP_RADIUS_M, DEFAULTS, GRIPPER_CLOSED,
-                                           BindingError, Bindings, load_bindings)
+from leap_teleop.hands.gestures import GestureRecognizer, GestureState, HandEvent
+from leap_teleop.hands.gestures.bindings import (
+    BOUND_FLIP_RADIUS_M,
+    DEFAULTS,
+    GRIPPER_CLOSED,
+    BindingError,
+    Bindings,
+    load_bindings,
+)
 from leap_teleop.hands.hand_model import render_hand
-from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.tracker import HandTracker
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_YAML = os.path.join(ROOT, 'config', 'gestures', 'bindings', 'default.yaml')
 
@@ -88,10 +95,10 @@ def test_flags_follow_the_bound_gestures():
 def test_events_become_the_bound_drone_actions():
     actions = Bindings({'drone': {'takeoff': 'two', 'land': 'unfold', 'flip': ['circle', 'gun'],
                                   'hover': 'open'}}).applier(('two', 'gun'))
-    circle = GestureEvent('circle_ccw', True, 0.07, 'index', (1.0, 2.0, 3.0))
-    out = actions.events([GestureEvent('hand_found'), GestureEvent('two'), GestureEvent('fold'),
-                          GestureEvent('unfold'), circle, GestureEvent('gun'),
-                          GestureEvent('open'), GestureEvent('two', False)])
+    circle = HandEvent('circle_ccw', True, 0.07, 'index', (1.0, 2.0, 3.0))
+    out = actions.events([HandEvent('hand_found'), HandEvent('two'), HandEvent('fold'),
+                          HandEvent('unfold'), circle, HandEvent('gun'),
+                          HandEvent('open'), HandEvent('two', False)])
     assert [(e.gesture, e.active) for e in out] == [
         ('hand_found', True), ('two', True), ('unfold', True),     # takeoff on two's start
         # the raw fold is bound to nothing now: not sent; unfold is the landing
@@ -100,7 +107,7 @@ def test_events_become_the_bound_drone_actions():
     assert out[4].value == 0.07 and out[4].source == 'index' and out[4].center == (1.0, 2.0, 3.0)
     assert out[6].value == BOUND_FLIP_RADIUS_M
     default = Bindings().applier()
-    events = [GestureEvent('unfold'), GestureEvent('circle_cw', True, 0.05)]
+    events = [HandEvent('unfold'), HandEvent('circle_cw', True, 0.05)]
     assert default.events(events) is events                      # the defaults change nothing
 
 

@@ -4,14 +4,16 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Hand
+from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer
-from tools.evaluation.original_rules import OriginalRules
 from leap_teleop.hands.hand_model import POSES, render_hand
-from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.hands.sources.scripted import GestureScript, ScriptedSource
+from leap_teleop.hands.tracker import HandTracker
+from tools.evaluation.original_rules import OriginalRules
+
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open')
 EXPECTED = {'open': {'open'}, 'fist': {'fist'}, 'thumbs_up': {'thumb_up'}, 'rock': {'rock'},
             'pinch': {'pinch'}, 'point': set(), 'two': set(), 'gun': set()}
@@ -307,7 +309,7 @@ def fingers(draw):
 @st.composite
 def hands(draw):
     n = draw(st.sampled_from([0, 5, 5, 3]))
-    return Hand(side=draw(st.sampled_from(['right', 'left'])), palm_position=draw(vec),
+    return TrackedHand(side=draw(st.sampled_from(['right', 'left'])), palm_position=draw(vec),
                 palm_velocity=draw(vec), palm_normal=draw(vec), direction=draw(vec),
                 grab_strength=draw(floats), pinch_strength=draw(floats), confidence=draw(floats),
                 fingers=tuple(draw(fingers()) for _ in range(n)))

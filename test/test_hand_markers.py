@@ -5,12 +5,12 @@ import pytest
 import rospy
 from visualization_msgs.msg import Marker
 
-from leap_teleop.ros import conversions, markers as viz
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.msg import Hand
+from leap_teleop.ros import conversions
+from leap_teleop.ros import markers as viz
 
 PALM_MM = (20.0, 200.0, -10.0)
 
@@ -207,6 +207,7 @@ def test_node_publishes_markers_and_deletes_on_a_private_master():
     import os
     import subprocess
     import sys
+
     from tools.bench.harness import ros_master, start_node, stop_node
     here = os.path.dirname(os.path.abspath(__file__))
     script = os.path.join(here, '..', 'scripts', 'hand_markers.py')

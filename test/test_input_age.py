@@ -4,10 +4,11 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop.drone.pilot import DronePilot, HandInput as PilotHand, PilotConfig
-from leap_teleop.ur10.teleop import ArmTeleop, ArmTeleopParams, HandInput
 from leap_teleop.control.input_age import InputAgeWindow
+from leap_teleop.drone.pilot import ArmInput as PilotHand
+from leap_teleop.drone.pilot import DronePilot, PilotConfig
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
 
 
 def test_window_percentiles_over_the_last_seconds_only():
@@ -40,7 +41,7 @@ def test_window_ignores_unstamped_input_and_forgets_a_clock_jump_back():
 def hand(stamp, **kw):
     kw.setdefault('present', True)
     kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
-    return HandInput(stamp=stamp, **kw)
+    return ArmInput(stamp=stamp, **kw)
 
 
 def test_arm_commands_and_status_carry_the_capture_stamp_of_their_hand():

@@ -13,6 +13,7 @@ import pytest
 
 from tools.bench import harness
 from tools.evaluation.evaluate import data_dir
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CHECK = os.path.join(HERE, 'launch_check.py')

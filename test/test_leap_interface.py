@@ -7,11 +7,13 @@ import numpy as np
 import pytest
 
 from leap_teleop.hands.frame import Frame
-from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.tracker import DEAD_BANDS, dead_band, hand_angles
+from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.base import HandSource
+from leap_teleop.hands.tracker import DEAD_BANDS, dead_band, hand_angles
+
+
 def per_frame():
     """Single-frame checks: no temporal filtering."""
     return GestureRecognizer(stateless=True)

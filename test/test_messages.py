@@ -1,6 +1,15 @@
 """The wire formats: the original messages and ardrone_autonomy's keep their MD5 sums."""
-from leap_teleop.msg import (GestureEvent, Hand, Navdata, leapcobotleft, leapcobotright, leapros,
-                             navdata_altitude, vector21, vector31)
+from leap_teleop.msg import (
+    GestureEvent,
+    Hand,
+    Navdata,
+    leapcobotleft,
+    leapcobotright,
+    leapros,
+    navdata_altitude,
+    vector21,
+    vector31,
+)
 from leap_teleop.srv import CamSelect, FlightAnim, LedAnim, RecordEnable
 
 
@@ -15,6 +24,7 @@ def test_original_and_driver_md5_sums():
 def test_leapros_md5_computed_by_genmsg_from_the_msg_file():
     # Not only the generated class: the .msg file itself hashes to the classic sum.
     import os
+
     import genmsg.gentools
     import genmsg.msg_loader
     here = os.path.dirname(os.path.abspath(__file__))
@@ -68,6 +78,7 @@ def test_the_drivers_human_types_and_old_leap_md5_sums():
 def test_driver_types_md5_computed_by_genmsg_from_the_msg_files():
     # The .msg files themselves hash to the sums, not only the generated classes.
     import os
+
     import genmsg.gentools
     import genmsg.msg_loader
     here = os.path.dirname(os.path.abspath(__file__))

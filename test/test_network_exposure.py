@@ -14,6 +14,7 @@ import time
 import pytest
 
 from tools.bench.harness import free_port
+
 # env.sh and tools/setup.sh of a checkout set up by make setup: not part of a package
 # built in a user's workspace (catkin_make run_tests leaves these out).
 pytestmark = pytest.mark.checkout

@@ -108,6 +108,7 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
     from its main thread), each stopped mid-run: status 0 within 10 s, no traceback (rospy
     refuses publishes once it has closed the topics, before is_shutdown() turns true)."""
     import random
+
     from tools.bench.harness import ros_master
     rng = random.Random(7)
     with ros_master() as env:

@@ -11,21 +11,21 @@ import numpy as np
 import pytest
 import yaml
 
-from leap_teleop.ros import conversions
+from leap_teleop.hands import classify_frames
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures import datasets as gesture_data
+from leap_teleop.hands.gestures import record as record_gestures
+from leap_teleop.hands.gestures import train as train_gestures
 from leap_teleop.hands.gestures.bindings import Bindings
 from leap_teleop.hands.gestures.classifier import PoseClassifier
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.base import HandSource
-from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmTeleop, HandInput
-from leap_teleop.hands import classify_frames
-from leap_teleop.hands.gestures import (datasets as gesture_data,
-    record as record_gestures,
-    train as train_gestures)
+from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
 
 RETRAIN_CPU_S = 60.0        # the issue's bound for retraining with a user's samples
 
@@ -97,14 +97,14 @@ def session(path, rate=60):
 
 def drive_arm(li, frames):
     """The sender's side (LeapInterface -> leapcobot message) into the arm's logic (message
-    -> HandInput -> ArmTeleop), as the nodes do; the arm's state after each frame."""
+    -> ArmInput -> ArmTeleop), as the nodes do; the arm's state after each frame."""
     arm = ArmTeleop()
     arm.on_joints(kin.HOME_Q.copy(), frames[0].timestamp)
     out = []
     for frame in frames:
         state = li.on_frame(frame)['right']
         msg = conversions.to_leapcobot(state)
-        hand = HandInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        hand = ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
         arm.on_hand(hand, frame.timestamp)
         arm.on_joints(arm._q, frame.timestamp)
         arm.step(frame.timestamp)

@@ -42,7 +42,8 @@ def test_allowed_text():
 
 
 # -- every node's table: declarations, bad values, bounds of the safety functions ----------
-from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 
 from tools.param_table import node_tables  # noqa: E402
 
@@ -187,6 +188,7 @@ def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():
 def test_cell_config_scalars_are_checked(key, value):
     # A physics rate of 0 divided by zero when the cell started; NaN corrupted the physics.
     import yaml
+
     from leap_teleop.ur10.config import config_path, load_config, parse_config
     with open(config_path('ur10_cell.yaml')) as f:
         data = yaml.safe_load(f)

@@ -6,9 +6,10 @@ import os
 import numpy as np
 import pytest
 
-from tools.evaluation import people as ep
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
+from tools.evaluation import people as ep
+
 HELD = ('user_03', 'guinevere_01')
 
 

@@ -6,6 +6,8 @@ import os
 
 from tools.evaluation import photo_views as views
 from tools.evaluation.evaluate import HANDS_DATA
+
+
 def test_mirrored_and_turned_photos_keep_their_gesture():
     assert os.path.isdir(HANDS_DATA), 'shared hand photos absent: %s' % HANDS_DATA
     names = views.photo_names(HANDS_DATA)

@@ -9,9 +9,9 @@ import pytest
 from leap_teleop.hands.gestures import GestureRecognizer, hand_geometry, load_model
 from leap_teleop.hands.gestures.pose import classify_pose, thumb_points
 from leap_teleop.hands.hand_model import render_hand
-from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmTeleop, HandInput
-from tools.evaluation import invariance as evaluate_invariance
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
+from tools.evaluation import invariance as evaluate_invariance
 
 
 @pytest.fixture(scope='module')
@@ -60,7 +60,7 @@ def _arm_with(hands, dt=1 / 60.0):
         t = i * dt
         st = rec.update(hand, t)
         states.append(st)
-        arm.on_hand(HandInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+        arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
                               thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
         arm.step(100.0 + t)
     return arm.status.state, states
@@ -117,9 +117,9 @@ def test_the_shipped_models_are_arrays_with_a_card():
 
 
 def test_camera_thumb_guard_wants_the_thumb_up_in_the_picture():
+    from leap_teleop.hands.gestures import datasets as gesture_data
     from leap_teleop.hands.gestures.features import rotate_keypoints
     from leap_teleop.hands.gestures.pose import camera_thumb_points
-    from leap_teleop.hands.gestures import datasets as gesture_data
     thumbs = [xy for source, label, xy in gesture_data.photo_hands() if label == 'thumbs_up']
     assert len(thumbs) == 4
     for xy in thumbs:

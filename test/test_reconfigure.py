@@ -9,9 +9,10 @@ import sys
 
 import pytest
 
-from tools.bench.harness import ros_master, start_node, stop_node
 from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
 from leap_teleop.ros.nodes.reconfigure import bounds, config_type
+from tools.bench.harness import ros_master, start_node, stop_node
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
 NODES = [(ur10_arm, 'ur10_arm'), (drone_pilot, 'drone_pilot'), (sender, 'sender')]
@@ -321,6 +322,7 @@ def test_dynparam_retunes_the_senders_recognizer_and_filter(tmp_path):
 
 def test_the_senders_recognizer_defaults_are_the_recognizers():
     import inspect
+
     from leap_teleop.hands.gestures import GestureRecognizer
     sig = inspect.signature(GestureRecognizer).parameters
     for name in ('on_frames', 'off_frames', 'min_confidence'):

@@ -7,10 +7,10 @@ import sys
 import time
 
 import pytest
-
-from tools.bench import harness
-from leap_teleop.ros.node import package_path
 from test_rostests import check_every_test_passed
+
+from leap_teleop.ros.node import package_path
+from tools.bench import harness
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

@@ -5,10 +5,10 @@ leapcobotleft on /leapmotion/data_left) through remap_from / remap_to."""
 import os
 
 import pytest
+from test_launch_smoke import GESTURES, run_launches
 
 from leap_teleop.hands.sources.scripted import ScriptedSource
 from leap_teleop.ros.recording_to_bag import write_bag
-from test_launch_smoke import GESTURES, run_launches
 
 LAYOUTS = {
     'one_arm': ({'right': '/leapmotion/data'}, ['topics:=/leapmotion/data']),

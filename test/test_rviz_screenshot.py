@@ -20,6 +20,7 @@ import pytest
 import yaml
 
 from tools.bench.harness import free_port
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, '..', 'rviz', 'ur10.rviz')
 SCREEN = (1280, 900)
@@ -110,7 +111,7 @@ def _stop(proc, sig=signal.SIGINT, wait=15):
 def test_rviz_draws_the_ur10(tmp_path):
     _need('rviz', 'rviz')
     _need('Xvfb', 'xvfb')
-    from PIL import features          # Pillow is pinned in tools/requirements.txt
+    from PIL import features  # Pillow is pinned in tools/requirements.txt
     assert features.check('xcb'), 'Pillow was built without XCB: no X screenshots'
 
     with open(CONFIG) as f:

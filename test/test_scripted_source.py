@@ -7,6 +7,7 @@ import pytest
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.sources import SourceError, make_source
 from leap_teleop.hands.sources.scripted import GestureScript, ScriptedSource
+
 SCRIPT = {
     'rate_hz': 100,
     'hands': {

@@ -1,6 +1,5 @@
 """Recording source, LeapJS reader / writer, recorder, and the Leap / LeapC backends
 with fake SDK modules."""
-import gzip
 import json
 import os
 import sys
@@ -11,11 +10,12 @@ import types
 import numpy as np
 import pytest
 
+from leap_teleop.hands import record_frames
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.sources import SourceError, leapjs, make_source
-from leap_teleop.hands import record_frames
 from tools.evaluation.evaluate import data_dir
+
 DATA = data_dir()
 need_data = pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
 

@@ -7,12 +7,18 @@ import pytest
 import rospy
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from leap_teleop.ros.conversions import (
+    ARM_JOINTS,
+    GRIPPER_JOINTS,
+    CommandError,
+    joint_state_msg,
+    object_poses_msg,
+    object_positions,
+    trajectory_points,
+)
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import UR10Cell
 from leap_teleop.ur10.pick_place import pick_place_plan, play_together, run_plan
-from leap_teleop.ros.conversions import (ARM_JOINTS, CommandError, GRIPPER_JOINTS,
-                                            joint_state_msg, object_poses_msg,
-                                            object_positions, trajectory_points)
 from leap_teleop.ur10.trajectory import TrajectoryError
 
 ARM = 'ur10_1'

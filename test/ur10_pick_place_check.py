@@ -19,11 +19,10 @@ import tf2_ros
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.pick_place import pick_place_plan
-from leap_teleop.ros.conversions import (OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE,
-                                            object_positions)
 
 POSITION_TOL = 0.01     # rad: a move is done when every joint is this close ...
 SPEED_TOL = 0.02        # ... and this slow (rad/s)

@@ -26,13 +26,15 @@ import rostest
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from leap_teleop.ros import conversions
-from leap_teleop.msg import ArmStatus
 from leap_teleop.hands.sources.scripted import ScriptedSource
+from leap_teleop.msg import ArmStatus
+from leap_teleop.ros import conversions
+from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 from leap_teleop.ros.recording_to_bag import write_bag
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
-from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+
+
 def square_error(quaternion):
     """Angle (rad, 0..pi/4) of a cube lying on a face from square to the world axes."""
     x, y, z, w = quaternion

@@ -11,6 +11,8 @@ import sys
 from leap_teleop.hands.camera_view import CameraView
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, make_source
+
+
 def snapshot(path, frame_number=1, mirror=False, width=640, height=480):
     """The annotated BGR image of frame `frame_number` (1-based) of `path` as the sender
     shows it (letterboxed to width x height; the frame rate is the processing rate), or

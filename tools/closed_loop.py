@@ -7,13 +7,13 @@ import numpy as np
 
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
-from leap_teleop.ur10.teleop import ArmTeleop, ArmTeleopParams, HandInput, TRACKING
 from leap_teleop.ur10.cell import UR10Cell
+from leap_teleop.ur10.teleop import TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
 
 def hand_input(state):
     """The leapcobot view of a HandState, as the arm node receives it."""
-    return HandInput(present=state.present, palm_mm=state.palm_position, fist=state.fist,
+    return ArmInput(present=state.present, palm_mm=state.palm_position, fist=state.fist,
                      thumb_up=state.thumb_up, pinch=state.pinch, pinch_value=state.pinch_value,
                      rock=state.rock, stamp=state.timestamp, rotate=state.rotate,
                      turn=state.turn, swing=state.swing)

@@ -17,9 +17,10 @@ import time
 
 import numpy as np
 
-from tools.bench.harness import free_port
-from leap_teleop.ros.node import package_path
 from leap_teleop.hands.sources.scripted import GestureScript
+from leap_teleop.ros.node import package_path
+from tools.bench.harness import free_port
+
 UR10_SCRIPT = 'ur10_pick_place_dual.yaml'
 DRONE_SCRIPT = 'drone_flight.yaml'
 # arm -> (hand, cube it picks)
@@ -47,8 +48,9 @@ class Monitor:
         deadline = time.monotonic() + 60
         while not rosgraph.is_master_online() and time.monotonic() < deadline:
             time.sleep(0.2)
-        from leap_teleop.msg import ArmStatus, Navdata
         from nav_msgs.msg import Odometry
+
+        from leap_teleop.msg import ArmStatus, Navdata
         self.rospy = rospy
         rospy.init_node('demo_monitor', disable_signals=True)
         self.tasks = tasks
@@ -70,8 +72,9 @@ class Monitor:
                              lambda m: self.first_frame.setdefault('drone', time.monotonic()),
                              queue_size=1)
         if 'drone' in tasks:
-            from leap_teleop.msg import GestureEvent
             from sensor_msgs.msg import Image
+
+            from leap_teleop.msg import GestureEvent
             rospy.Subscriber('/drone/ardrone/navdata', Navdata, self._on_nav, queue_size=50)
             rospy.Subscriber('/drone/ardrone/odometry', Odometry, self._on_odom, queue_size=50)
             rospy.Subscriber('/drone/leapmotion/gestures', GestureEvent, self._on_drone_gesture,
@@ -86,7 +89,7 @@ class Monitor:
             rospy.Subscriber('/leapmotion/gestures', GestureEvent, self._on_arm_gesture,
                              queue_size=50)
         if 'ur10' in tasks:
-            from leap_teleop.ros.conversions import OBJECT_POSES_TYPE, OBJECT_POSES_TOPIC
+            from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
             rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._on_objects,
                              queue_size=5)
             for arm in UR10_TASKS:

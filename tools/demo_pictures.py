@@ -83,9 +83,10 @@ def _sample(track, t):
 
 def chase_gif(track, states, gestures, path, camera_frames=(), size=(480, 360)):
     """Render the chase-view GIF of the recorded flight; returns the number of frames."""
+    import pybullet as pb
+
     from leap_teleop.drone.cameras import chase_view
     from leap_teleop.drone.sim import ArDroneSim
-    import pybullet as pb
     drone = ArDroneSim()          # its client holds the drone body, and the scene:
     drone.show_scene()
     frames, durations = [], []

@@ -14,17 +14,16 @@ sender's dead band on the turn).
 usage: python -m tools.make_sessions [--check]
 """
 import argparse
+import math
 import os
 import sys
-
-import math
 
 import numpy as np
 import yaml
 
 from leap_teleop.hands.tracker import DEAD_BANDS
-from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.config import config_dir, load_config
 
 APPROACH_M = 0.15          # above the cube / drop point before descending

@@ -13,9 +13,9 @@ import numpy as np
 import yaml
 
 from leap_teleop.ros.node import package_path
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ArmTeleopParams
 from tools.closed_loop import run_session
-from leap_teleop.ur10 import kinematics as kin
 
 SCRIPT = 'ur10_pick_place_rotated.yaml'
 CELL = 'ur10_dual_rotated_cell.yaml'

@@ -30,8 +30,8 @@ import subprocess
 import sys
 import tempfile
 import threading
-import traceback
 import time
+import traceback
 import xmlrpc.client
 
 import numpy as np
@@ -82,9 +82,9 @@ LAUNCH = """<launch>
 
 def render(script, kinds, topics, rate_hz=None):
     """[(t, topic, msg)] of one gesture session through the sender's code, t from 0."""
-    from leap_teleop.ros import conversions
     from leap_teleop.hands.leap_interface import LeapInterface
     from leap_teleop.hands.sources.scripted import ScriptedSource
+    from leap_teleop.ros import conversions
     out = []
     interface = LeapInterface(sides=list(topics))
     t0 = [None]
@@ -110,8 +110,8 @@ class Monitor:
         from sensor_msgs.msg import JointState
         from trajectory_msgs.msg import JointTrajectory
 
-        from leap_teleop.ros import conversions
         from leap_teleop.msg import ArmStatus, Hand, Navdata
+        from leap_teleop.ros import conversions
         from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
         self.lock = threading.Lock()
         self.received, self.last_seq, self.gaps = {}, {}, {}
@@ -229,8 +229,8 @@ def percentile(xs, q):
 
 def run(minutes, rtf, rate_hz=None, log=print):
     """Run the soak; returns (figures, {figure: what it was measured on})."""
-    from tools.bench.harness import ros_master
     from leap_teleop.ros.node import package_path
+    from tools.bench.harness import ros_master
     with ros_master() as env:
         os.environ.update({k: env[k] for k in ('ROS_MASTER_URI', 'ROS_IP', 'ROS_HOSTNAME')})
         log_dir = tempfile.mkdtemp(prefix='soak_logs_')
@@ -256,10 +256,11 @@ def run(minutes, rtf, rate_hz=None, log=print):
 
 def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     import rospy
-    from leap_teleop.ros import conversions
-    from leap_teleop.msg import GestureEvent, Hand
-    from leap_teleop.ur10.config import load_config
     from std_srvs.srv import Trigger
+
+    from leap_teleop.msg import GestureEvent, Hand
+    from leap_teleop.ros import conversions
+    from leap_teleop.ur10.config import load_config
 
     arm_topics = {side: {'leapcobot': '/leapmotion/data_%s' % side} for side in ('right', 'left')}
     drone_topics = {'right': {'hand': '/drone/leapmotion/hand_right',
@@ -421,7 +422,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog='python -m tools.soak',
                                  description=__doc__.split('\n\n')[0])
     ap.add_argument('--minutes', type=float, default=30.0, help='simulated minutes')
-    ap.add_argument('--rtf', type=float, default=1.5, help='sim time / wall time target (1.5 keeps 2 cores below saturation)')
+    ap.add_argument('--rtf', type=float, default=1.5,
+                    help='sim time / wall time target (1.5 keeps 2 cores below saturation)')
     ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
                     '(default the scripts\' 120)')
     ap.add_argument('--out', default='soak_results.json')

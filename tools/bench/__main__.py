@@ -14,6 +14,8 @@ import traceback
 
 import tools.bench as bench_pkg
 from tools.bench.results import utc_now, write_results
+
+
 def discover():
     return sorted(m.name for m in pkgutil.iter_modules(bench_pkg.__path__)
                   if m.name.startswith('bench_'))

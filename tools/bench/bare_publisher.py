@@ -10,6 +10,8 @@ import rospy
 
 from leap_teleop.msg import leapcobotright
 from leap_teleop.ros.signals import closed_at_shutdown, init_node
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('--rate', type=float, required=True)

@@ -9,8 +9,10 @@ import tempfile
 
 import numpy as np
 
-from tools.bench import harness
 from leap_teleop.ros.node import package_path
+from tools.bench import harness
+
+
 def _round_trips(env, rounds, count):
     with tempfile.NamedTemporaryFile(suffix='.json', delete=False) as f:
         out = f.name

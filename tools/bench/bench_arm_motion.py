@@ -29,13 +29,13 @@ import math
 import numpy as np
 
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.ros.node import package_path
 from leap_teleop.hands.sources.scripted import ScriptedSource
-from leap_teleop.ur10 import orientation as ori
-from leap_teleop.ur10.teleop import ArmTeleop, ArmTeleopParams, HandInput, TRACKING
-from tools.closed_loop import hand_input
+from leap_teleop.ros.node import package_path
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.cell import UR10Cell
+from leap_teleop.ur10.teleop import TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
+from tools.closed_loop import hand_input
 
 ARM = 'ur10_1'
 FRAME_HZ = 120.0
@@ -100,9 +100,9 @@ class Loop:
 def _arm(loop, palm=(60.0, 300.0, 0.0)):
     # Arming needs the thumbs-up held arm_hold_s (by capture time).
     for _ in range(int(math.ceil((loop.teleop.p.arm_hold_s + 0.1) * FRAME_HZ))):
-        loop.period(HandInput(present=True, palm_mm=palm, thumb_up=True))
+        loop.period(ArmInput(present=True, palm_mm=palm, thumb_up=True))
     for _ in range(30):
-        loop.period(HandInput(present=True, palm_mm=palm, rock=True))
+        loop.period(ArmInput(present=True, palm_mm=palm, rock=True))
     assert loop.teleop.status.state == TRACKING
 
 
@@ -161,11 +161,11 @@ def jitter(results, sigma, key):
         _arm(loop, palm)
         held = palm + np.array([30.0, -20.0, -30.0])     # move, then hold still there
         for _ in range(int(1.0 * FRAME_HZ)):
-            loop.period(HandInput(present=True, palm_mm=tuple(held)))
+            loop.period(ArmInput(present=True, palm_mm=tuple(held)))
         tcp = []
         for k in range(int(5.0 * FRAME_HZ)):
             noisy = held + rng.normal(0.0, sigma, 3)
-            loop.period(HandInput(present=True, palm_mm=tuple(noisy)))
+            loop.period(ArmInput(present=True, palm_mm=tuple(noisy)))
             if k >= 2 * FRAME_HZ:
                 tcp.append(loop.tcp()[:3, 3])
         tcp = np.asarray(tcp)
@@ -191,7 +191,7 @@ def orientation(results):
                                      0.45 * math.sin(2 * math.pi * 0.15 * t + 1.0),
                                      0.30 * math.sin(2 * math.pi * 0.25 * t + 2.0)])
             noisy = clean + np.radians(0.3) * rng.normal(size=3)
-            loop.period(HandInput(present=True, palm_mm=palm, rotate=noisy[0], turn=noisy[1],
+            loop.period(ArmInput(present=True, palm_mm=palm, rotate=noisy[0], turn=noisy[1],
                                   swing=noisy[2]))
             want = tel._tool_rotation(kin.rotation_vector(ori.hand_rotation(*clean)))
             if t > 1.0:
@@ -212,7 +212,7 @@ def onset(results, n=100):
         _arm(loop, tuple(palm))
         for i in range(n):
             for _ in range(int(0.6 * FRAME_HZ)):          # at rest
-                loop.period(HandInput(present=True, palm_mm=tuple(palm)))
+                loop.period(ArmInput(present=True, palm_mm=tuple(palm)))
             q0 = loop.cell.joint_state(ARM)[0]
             # The step happens at a random instant inside the next frame period: the frame
             # carrying it is captured at the end of that period.
@@ -225,7 +225,7 @@ def onset(results, n=100):
                 if not moved and np.max(np.abs(loop.cell.joint_state(ARM)[0] - q0)) > 1e-4:
                     moved.append(t)
             for _ in range(int(0.2 * FRAME_HZ)):
-                loop.period(HandInput(present=True, palm_mm=tuple(palm)), record)
+                loop.period(ArmInput(present=True, palm_mm=tuple(palm)), record)
                 if moved:
                     break
             if moved:

@@ -23,9 +23,8 @@ import tempfile
 import threading
 import time
 
-import numpy as np
-
 from tools.bench import harness
+
 LATENCY_SECONDS = 10.0
 CAMERA_WALL_S = 10.0       # wall time of the camera run (flights repeated), for the rates
 HAND_RATE = 120.0
@@ -37,6 +36,7 @@ def sim_rtf(rates=None, min_wall_s=0.0, paced=False):
     `paced`: the flight runs in real time as in the node (sleeping between chunks).
     Returns (rtf, {camera: frames per wall second})."""
     import threading
+
     from leap_teleop.drone.cameras import CameraLoop
     from leap_teleop.drone.sim import ArDroneSim
     drone = ArDroneSim()
@@ -98,6 +98,7 @@ def latency_client(out, seconds):
     import rospy
     from geometry_msgs.msg import Twist
     from std_msgs.msg import Header
+
     from leap_teleop.msg import GestureEvent, Hand
 
     rospy.init_node('bench_drone_client', disable_signals=True)

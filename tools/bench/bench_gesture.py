@@ -15,12 +15,14 @@ import glob
 import os
 import time
 
-PASSES = 5
-_clock = time.process_time
-
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation.evaluate import data_dir
+
+PASSES = 5
+_clock = time.process_time
+
+
 def _files(pattern):
     files = sorted(glob.glob(os.path.join(data_dir(), pattern)))
     if not files:

@@ -11,8 +11,9 @@ import time
 
 import numpy as np
 
-from tools.bench import harness
 from leap_teleop.ros.node import package_path
+from tools.bench import harness
+
 RATES_HZ = (120, 200, 295, 400)
 WINDOW_S = 5.0
 ROUNDS = 5

@@ -4,6 +4,8 @@ import rospy
 
 from leap_teleop.msg import leapcobotright
 from leap_teleop.ros.signals import init_node
+
+
 def main():
     init_node('bench_echo')
     pub = rospy.Publisher('bench/echo', leapcobotright, queue_size=10, tcp_nodelay=True)

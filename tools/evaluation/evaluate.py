@@ -73,9 +73,10 @@ import os
 import sys
 
 from leap_teleop.hands.gestures import FINGER_NAMES, GestureRecognizer
-from tools.evaluation.original_rules import OriginalRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA
 from leap_teleop.hands.sources import leapjs
+from tools.evaluation.original_rules import OriginalRules
+
 DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.join(SHARED_DATA, 'leapjs')
 # Real hand photos and clips for the camera sources ($HANDS_DATA overrides).
 HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(os.path.dirname(DEFAULT_DATA), 'hands')

@@ -19,6 +19,7 @@ import numpy as np
 from leap_teleop.hands.gestures import hand_geometry, load_model
 from leap_teleop.hands.gestures.pose import classify_pose
 from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
+
 CHANGES = ('size', 'side', 'orientation', 'noise_1mm', 'noise_3mm', 'noise_5mm')
 PALM = (20.0, 200.0, -10.0)
 

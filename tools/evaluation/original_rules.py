@@ -4,6 +4,8 @@ says extended; pinch strength > 0.2 a pinch; the flags' thumb + index + pinky a 
 every flag extended with grab < 0.5 an open hand."""
 from leap_teleop.hands.gestures import PINCH_THRESHOLD, GestureState
 from leap_teleop.hands.gestures.geometry import num
+
+
 def _flags(hand):
     return tuple(bool(f.extended) for f in hand.fingers) if len(hand.fingers) == 5 else (False,) * 5
 

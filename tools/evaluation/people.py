@@ -18,11 +18,12 @@ heavy -> rock; up, down (a fist with the thumb out, pointing forward) and two, t
 four, index, L, hang, C -> nothing. Dynamic takes: thumbs_up -> thumb_up, thumbs_down ->
 thumb_down, open_hand_* -> open, other takes' frames are unlabelled (they only count for
 false thumbs-ups and false events). The shared LeapJS takes (one more person, an older
-tracker): their labelled frames (tools/evaluate.LABELS; a thumb out of a fist is a
-thumbs-up where the SDK's thumb points up, nothing where it points sideways). Webcam keypoints: open, fist, thumb_up, thumb_down,
-ok -> pinch; pointing, peace, other -> nothing; the Leap people seen as a camera would
-(train_gestures.camera_view) score horns (heavy -> rock) and are reported apart, and so
-are the labelled photos, one photo source held out at a time.
+tracker): their labelled frames (tools.evaluation.evaluate.LABELS; a thumb out of a fist
+is a thumbs-up where the SDK's thumb points up, nothing where it points sideways). Webcam
+keypoints: open, fist, thumb_up, thumb_down, ok -> pinch; pointing, peace, other ->
+nothing; the Leap people seen as a camera would (hands.gestures.train.camera_view) score
+horns (heavy -> rock) and are reported apart, and so are the labelled photos, one photo
+source held out at a time.
 """
 import argparse
 import collections
@@ -33,12 +34,13 @@ import time
 
 import numpy as np
 
-from leap_teleop.hands.frame import Hand
+from leap_teleop.hands.frame import TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.gestures.geometry import hand_geometry
-from leap_teleop.hands.gestures.pose import HELD, classify_pose
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
+from leap_teleop.hands.gestures.geometry import hand_geometry
+from leap_teleop.hands.gestures.pose import HELD, classify_pose
+
 ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
 LEAP_EXPECT = {'fist_moved': 'fist', 'five': 'open', 'palm': 'open', 'palm_m': 'open',
                'palm_u': 'open', 'ok': 'pinch', 'heavy': 'rock', 'thumbs_up': 'thumb_up',
@@ -220,13 +222,13 @@ def keypoint_people(data_dir, log=print):
         model.family = 'keypoints'
         if person in real:
             for lab, pts in real[person]:
-                hand = Hand(side='right', image_landmarks=pts)
+                hand = TrackedHand(side='right', image_landmarks=pts)
                 tally.add(person, lab, KEYPOINT_EXPECT.get(lab, 'nothing'),
                           _read(classify_pose(hand, None, model)))
         elif person.startswith('photo:'):
             for source, lab, xy in photo_hands:
                 if 'photo:' + source == person and lab in gd.PHOTO_LABELS:
-                    hand = Hand(side='right', image_landmarks=xy)
+                    hand = TrackedHand(side='right', image_landmarks=xy)
                     photos.add(person, lab, PHOTO_EXPECT.get(lab, 'nothing'),
                                _read(classify_pose(hand, None, model)))
         else:   # a Leap person seen as a camera would: judge it on its views

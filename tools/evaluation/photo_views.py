@@ -29,9 +29,10 @@ import sys
 
 import numpy as np
 
-from tools.evaluation import evaluate
 from leap_teleop.hands.classify_frames import HELD, Classifier
 from leap_teleop.hands.frame import Frame
+from tools.evaluation import evaluate
+
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
 EXPECTED = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist',
             'thumbs_up': 'thumb_up', 'thumbs_down': 'thumb_down', 'ok': 'pinch',

@@ -38,6 +38,7 @@ from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation import evaluate
+
 STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
 LEAP_PEOPLE_DATA = os.environ.get('LEAP_PEOPLE_DATA') or os.path.join(SHARED_DATA, 'leap_people')
 
@@ -138,7 +139,7 @@ def circle_events(events):
 
 
 def draw(hand, t, xyz, recognizer=None):
-    """Circle events [(time s, GestureEvent)] of `hand` moved along the path."""
+    """Circle events [(time s, HandEvent)] of `hand` moved along the path."""
     rec = recognizer or GestureRecognizer()
     out = []
     for k in range(len(t)):
@@ -164,7 +165,7 @@ def load_guinevere(folder=LEAP_PEOPLE_DATA):
 
 
 def take_circles(dicts, make_recognizer=GestureRecognizer):
-    """Circle events [(time s, side, GestureEvent)] of a take's frame dicts, one
+    """Circle events [(time s, side, HandEvent)] of a take's frame dicts, one
     recognizer per hand side (as classify_frames)."""
     recs, out = {}, []
     for d in dicts:
@@ -221,7 +222,7 @@ def _recording_recognizer(calls):
 
 
 def replay(calls, rules):
-    """Circle events [(time s, GestureEvent)] of a CircleDetector with `rules` fed the
+    """Circle events [(time s, HandEvent)] of a CircleDetector with `rules` fed the
     recorded calls (None: the hand left)."""
     det = CircleDetector(rules)
     out = []

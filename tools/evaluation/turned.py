@@ -17,12 +17,12 @@ import numpy as np
 
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
-from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.tracker import hand_angles
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.orientation import hand_rotation
 from tools.evaluation.evaluate import DEFAULT_DATA, GESTURES, LABELS, find_file
 from tools.evaluation.evaluate import expected as label_value
-from leap_teleop.ur10 import kinematics as kin
 
 BINS_DEG = (0, 20, 40, 60, 90, 180)
 

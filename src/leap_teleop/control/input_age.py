@@ -46,7 +46,9 @@ class InputAgeWindow:
     def diagnostic_values(self, now):
         """[(key, text)] for a DiagnosticStatus: the window's p50 / p99 in ms."""
         p50, p99, n = self.summary(now)
-        fmt = (lambda s: 'n/a' if s is None else '%.1f' % (1000.0 * s))
+
+        def fmt(s):
+            return 'n/a' if s is None else '%.1f' % (1000.0 * s)
         return [('input age p50 (ms, last %g s)' % self.window_s, fmt(p50)),
                 ('input age p99 (ms, last %g s)' % self.window_s, fmt(p99)),
                 ('input age samples', str(n)),

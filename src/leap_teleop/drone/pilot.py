@@ -32,8 +32,8 @@ Modes:
 Safety added in both modes: hand twists are only sent while fresh navdata (no older
 than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
 says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
-the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present false, a hand_lost event, or no Hand
-message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; back within
+the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present
+false, a hand_lost event, or no Hand message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; back within
 ``disarm_after`` -> steering resumes from where the hand is (tilt: the reference is
 re-captured, so nothing jumps), without a new unfold; lost for ``disarm_after`` ->
 steering is off until a new unfold (tilt) or capture pose (paper); lost for
@@ -52,8 +52,9 @@ import threading
 import time
 from dataclasses import dataclass, fields
 
-from leap_teleop.params import Param, check_params
 from leap_teleop.control.input_check import InputStream
+from leap_teleop.params import Param, check_params
+
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
@@ -154,7 +155,7 @@ PILOT_PARAMS = {
 
 
 @dataclass
-class HandInput:
+class PilotInput:
     """What the pilot reads from a leap_teleop/Hand message (metres, Leap axes)."""
     present: bool
     palm: tuple = (0.0, 0.0, 0.0)

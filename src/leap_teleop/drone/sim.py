@@ -35,7 +35,7 @@ vx/vy/vz body-frame mm/s, altd mm, ax/ay/az specific force in g (az = +1 at rest
 import collections
 import logging
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 
 import pybullet as pb
 

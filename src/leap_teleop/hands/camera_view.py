@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from leap_teleop.hands.sources.landmarks import person_side
+
 # MediaPipe's hand skeleton: landmark index pairs.
 HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
                     (5, 9), (9, 10), (10, 11), (11, 12), (9, 13), (13, 14), (14, 15),

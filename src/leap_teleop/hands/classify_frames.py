@@ -61,10 +61,11 @@ import sys
 
 import numpy as np
 
-from leap_teleop.hands.frame import Frame, Hand
+from leap_teleop.hands.frame import Frame, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer, ModelError
-from leap_teleop.hands.sources import SourceError, leapjs
 from leap_teleop.hands.gestures import datasets as gesture_data
+from leap_teleop.hands.sources import SourceError, leapjs
+
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
 
@@ -130,7 +131,7 @@ def keypoint_lines(path, classifier):
     _, _, xy = gesture_data.read_keypoints(path)
     rec = classifier._recognizer(True)
     for i, pts in enumerate(xy):
-        hand = Hand(side='right', image_landmarks=np.asarray(pts, dtype=float))
+        hand = TrackedHand(side='right', image_landmarks=np.asarray(pts, dtype=float))
         yield {'id': i, 'timestamp': None,
                'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
 

@@ -31,7 +31,7 @@ class Finger:
 
 
 @dataclass
-class Hand:
+class TrackedHand:
     side: str                                               # 'right' | 'left'
     palm_position: np.ndarray = field(default_factory=vec3)  # mm
     palm_velocity: np.ndarray = field(default_factory=vec3)  # mm/s
@@ -57,7 +57,7 @@ class Frame:
     (wall time for live and scripted sources, recorded time for recordings)."""
     id: int
     timestamp: float
-    hands: List[Hand] = field(default_factory=list)
+    hands: List[TrackedHand] = field(default_factory=list)
     gestures: List[dict] = field(default_factory=list)      # SDK gesture events, if any
 
     def hand(self, side):

@@ -1,11 +1,12 @@
-"""A kinematic hand that renders named poses into Leap-like Hand objects.
+"""A kinematic hand that renders named poses into Leap-like TrackedHand objects.
 
 Used by the scripted source (and by tests) so synthetic hands carry the same
 geometry a real Leap frame does: fingertips, joints, directions, SDK-style flags.
 """
 import numpy as np
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Hand, vec3
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand, vec3
+
 # pose -> (extended fingers, grab strength, pinch strength): the SDK-style flags.
 POSES = {
     'open':      ({'thumb', 'index', 'middle', 'ring', 'pinky'}, 0.0, 0.0),
@@ -104,7 +105,7 @@ def rpy_to_basis(roll, pitch, yaw, side):
 
 def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
                 velocity=None, confidence=1.0, hand_id=None):
-    """A Hand of `side` in `pose` with the palm at `palm` (mm).
+    """A TrackedHand of `side` in `pose` with the palm at `palm` (mm).
 
     pinch_value follows the leapcobot meaning (pinch strength - 0.2, 0..0.8).
     """
@@ -142,7 +143,7 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
     out = tuple(Finger(tip=w[3], direction=u, extended=name in extended, mcp=w[0], pip=w[1],
                        dip=w[2])
                 for name, w, u in zip(FINGER_NAMES, world, tip_dirs))
-    return Hand(side=side, palm_position=palm, palm_velocity=vec3(velocity),
+    return TrackedHand(side=side, palm_position=palm, palm_velocity=vec3(velocity),
                 palm_normal=n, direction=d, grab_strength=float(grab),
                 pinch_strength=float(pinch), confidence=float(confidence),
                 fingers=out, id=hand_id if hand_id is not None else (1 if side == 'right' else 2))

@@ -14,8 +14,9 @@ import argparse
 import sys
 import time
 
-from leap_teleop.hands.sources import SourceError, make_source
-from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.sources import SourceError, leapjs, make_source
+
+
 def build_source(args):
     if args.source == 'scripted':
         if not args.script:

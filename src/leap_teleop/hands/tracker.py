@@ -8,8 +8,9 @@ from typing import Tuple
 
 import numpy as np
 
-from leap_teleop.hands.gestures import GestureEvent, GestureRecognizer
+from leap_teleop.hands.gestures import GestureRecognizer, HandEvent
 from leap_teleop.hands.gestures.bindings import Bindings
+
 log = logging.getLogger(__name__)
 
 # Rotation since the origin: (dead band low, high) in rad, per DESIGN.md section 3.
@@ -70,7 +71,7 @@ class HandState:
     rotate: float = 0.0
     turn: float = 0.0
     swing: float = 0.0
-    events: Tuple[GestureEvent, ...] = ()
+    events: Tuple[HandEvent, ...] = ()
 
 
 def _finite_tuple(v, limit=None):
@@ -116,7 +117,7 @@ class HandTracker:
         was_present = self.state.present
         self.recognizer.reset()
         self._origin_angles = None
-        events = (GestureEvent('hand_lost'),) if was_present else ()
+        events = (HandEvent('hand_lost'),) if was_present else ()
         self.state = HandState(self.side, timestamp=timestamp, frame_id=frame_id, events=events)
         return self.state
 
@@ -139,7 +140,7 @@ class HandTracker:
         arm, origin, stop, gripper, gripper_value = self.actions.flags(g)
         events = list(self.actions.events(g.events))
         if not was_present:
-            events.insert(0, GestureEvent('hand_found'))
+            events.insert(0, HandEvent('hand_found'))
 
         angles = hand_angles(normal, direction)
         if origin:

@@ -22,8 +22,19 @@ from sensor_msgs.msg import Image, JointState
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.tracker import hand_angles
-from leap_teleop.msg import (DriverBone, DriverFinger, DriverGesture, DriverHuman, GestureEvent,
-                             Hand, ObjectPoses, leap, leapcobotleft, leapcobotright, leapros)
+from leap_teleop.msg import (
+    DriverBone,
+    DriverFinger,
+    DriverGesture,
+    DriverHuman,
+    GestureEvent,
+    Hand,
+    ObjectPoses,
+    leap,
+    leapcobotleft,
+    leapcobotright,
+    leapros,
+)
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
@@ -92,7 +103,7 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     """The classic leap_motion/leapros message for one side, in that driver's units: Leap
     axes, millimetres, ypr in degrees as (yaw, pitch, roll), yaw and pitch of the hand's
     direction, roll of its palm normal. Finger tips come from the state; bone bases
-    (proximal = knuckle, intermediate, distal) from `hand` (the frame's frame.Hand) where
+    (proximal = knuckle, intermediate, distal) from `hand` (a hands.frame.TrackedHand) where
     its source tracks joints; a metacarpal base and anything untracked stays 0. A frame
     without the hand gives a message with only the header set."""
     msg = _header(leapros(), state, frame_id)

@@ -5,8 +5,8 @@ import textwrap
 import rospkg
 import rospy
 
-from leap_teleop.ros.signals import init_node
 from leap_teleop.params import Param, ParamError, check_params  # noqa: F401 (re-exported)
+from leap_teleop.ros.signals import init_node
 
 
 def handle_help(node_name, description, params, argv=None):

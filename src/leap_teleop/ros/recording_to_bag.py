@@ -17,10 +17,12 @@ import time
 import rosbag
 import rospy
 
-from leap_teleop.ros import conversions
 from leap_teleop.hands.frame import SIDES
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.ros import conversions
+
+
 def write_bag(source, out_path, sides=SIDES, topics=None, kinds=('leapcobot', 'hand', 'gesture'),
               start=None, compression='bz2'):
     """Run `source` through the sender logic into `out_path`; returns the frame count.

@@ -23,12 +23,12 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from leap_teleop.params import Param, check_params
-from leap_teleop.ur10 import orientation as ori
 from leap_teleop.control.input_check import InputStream
 from leap_teleop.control.one_euro import OneEuroFilter
 from leap_teleop.control.servo import JointServo
+from leap_teleop.params import Param, check_params
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10 import orientation as ori
 
 DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
 MODES = ('imitation', 'joystick')
@@ -192,7 +192,7 @@ TELEOP_PARAMS = {
 
 
 @dataclass
-class HandInput:
+class ArmInput:
     """One hand message, side-free (see conversions.from_leapcobot)."""
     present: bool
     palm_mm: tuple = (0.0, 0.0, 0.0)
@@ -229,7 +229,7 @@ class ArmCommand:
 
 
 @dataclass
-class ArmStatus:
+class ArmTeleopStatus:
     state: str = DISARMED
     reason: str = 'waiting for thumbs-up'
     origin_set: bool = False
@@ -262,7 +262,7 @@ class ArmTeleop:
         self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
                                  self.p.command_horizon, self.p.servo_gain,
                                  kin.JOINT_LOWER, kin.JOINT_UPPER)
-        self.status = ArmStatus()
+        self.status = ArmTeleopStatus()
         self._hand = None
         self._hand_rx = None
         self._q = None

@@ -11,8 +11,9 @@ from leap_teleop.hands.gestures.classifier import ModelError, PoseClassifier, lo
 from leap_teleop.hands.gestures.geometry import HandGeometry, hand_geometry
 from leap_teleop.hands.gestures.pose import PINCH_THRESHOLD, classify_pose, geometric_pinch_strength
 from leap_teleop.hands.gestures.recognizer import GestureRecognizer
-from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureEvent, GestureState
-__all__ = ['FINGER_NAMES', 'HELD_GESTURES', 'CircleDetector', 'GestureEvent',
+from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureState, HandEvent
+
+__all__ = ['FINGER_NAMES', 'HELD_GESTURES', 'CircleDetector', 'HandEvent',
            'GestureRecognizer', 'GestureState', 'HandGeometry', 'ModelError', 'PINCH_THRESHOLD',
            'PoseClassifier', 'classify_pose', 'fit_circle', 'geometric_pinch_strength',
            'hand_geometry', 'load_model']

@@ -30,7 +30,8 @@ circle events go out only as the actions they are bound to.
 """
 import yaml
 
-from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureEvent
+from leap_teleop.hands.gestures.temporal import HELD_GESTURES, HandEvent
+
 ARM_ACTIONS = ('arm', 'origin', 'stop', 'gripper')
 DRONE_ACTIONS = ('takeoff', 'land', 'flip', 'hover')
 SECTIONS = {'arm': ARM_ACTIONS, 'drone': DRONE_ACTIONS}
@@ -198,14 +199,14 @@ def _action_event(action, event):
     """The event the pilot acts on for `action`, from `event` (a raw pilot event) or from
     a held gesture's start (None)."""
     if action == 'takeoff':
-        return GestureEvent('unfold')
+        return HandEvent('unfold')
     if action == 'land':
-        return GestureEvent('fold')
+        return HandEvent('fold')
     if action == 'hover':
-        return GestureEvent('hand_lost')
+        return HandEvent('hand_lost')
     if event is not None and event.gesture.startswith('circle_'):
-        return GestureEvent(event.gesture, True, event.value, event.source, event.center)
-    return GestureEvent('circle_cw', True, BOUND_FLIP_RADIUS_M)
+        return HandEvent(event.gesture, True, event.value, event.source, event.center)
+    return HandEvent('circle_cw', True, BOUND_FLIP_RADIUS_M)
 
 
 def load_bindings(path=None):

@@ -8,8 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leap_teleop.hands.gestures.temporal import GestureEvent
 from leap_teleop.hands.gestures.geometry import f3 as _f3
+from leap_teleop.hands.gestures.temporal import HandEvent
+
 _isfinite = math.isfinite
 
 # Each track (the smoothed palm, the index tip) keeps its recent path, resampled at a
@@ -393,7 +394,7 @@ class CircleDetector:
         return along > 0, hit[1], 'index', hit[2]
 
     def update(self, hand, timestamp, geometry, extended):
-        """GestureEvent or None, from the hand's HandGeometry (palm and tips) and the
+        """HandEvent or None, from the hand's HandGeometry (palm and tips) and the
         pose rules' extended verdict per finger."""
         # The palm always (a whole hand going round; a pointing hand's palm follows its
         # finger, and keeps its circle when the pose reads a frame or two as not
@@ -415,5 +416,5 @@ class CircleDetector:
             return None
         self._last_event = timestamp
         cw, radius, source, centre = found
-        return GestureEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3, source,
+        return HandEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3, source,
                             tuple(float(c) for c in centre))

@@ -18,6 +18,7 @@ import os
 import numpy as np
 
 from leap_teleop.hands.sources import leapjs
+
 SHARED_DATA = os.environ.get('LEAP_TELEOP_SHARED_DATA') or os.path.normpath(
     os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..', '..',
                  'shared', 'data'))

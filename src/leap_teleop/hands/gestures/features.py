@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from leap_teleop.hands.gestures.geometry import hand_geometry
+
 LEAP_FEATURES = 5 * 3 * 3 + 5 * 3 * 3 + 7 + 10
 KEYPOINT_FEATURES = 21 * 2 + 20 * 2 + 7 + 15
 # fingertip pairs whose gaps are features: thumb to every other tip, neighbouring tips

@@ -27,6 +27,7 @@ import numpy as np
 
 from leap_teleop.hands.gestures.features import keypoint_features, leap_features, mirror_keypoints
 from leap_teleop.hands.gestures.geometry import num
+
 PINCH_THRESHOLD = 0.2   # original: pinch when strength > 0.2; pinch_value = strength - 0.2
 # Geometric pinch strength from the thumb-index tip gap (palm widths): 1 at 0.35, 0 at 1.1.
 PINCH_GAP_OPEN = 1.1

@@ -17,6 +17,7 @@ from leap_teleop.hands.gestures.classifier import load_model
 from leap_teleop.hands.gestures.geometry import hand_geometry, num
 from leap_teleop.hands.gestures.pose import classify_pose
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureState, HeldFilter
+
 MIN_CONFIDENCE = 0.1               # below: the frame does not count (SDK fists go to ~0.15)
 # Minimum time a gesture must be seen before it turns on (besides on_frames).
 ON_TIME_S = {}

@@ -29,9 +29,10 @@ import sys
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.features import normalize_keypoints
+from leap_teleop.hands.record_frames import build_source
 from leap_teleop.hands.sources import SOURCES, SourceError, leapjs
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
-from leap_teleop.hands.record_frames import build_source
+
 # Built-in gesture and event names that are no class of the pose models: a user class so
 # named would clash with them (fist, open, pinch, rock, thumb, none add samples to the
 # built-in classes and are allowed).

@@ -21,7 +21,7 @@ FOLD_CONFIRM_S = 0.15
 
 
 @dataclass
-class GestureEvent:
+class HandEvent:
     gesture: str
     active: bool = True
     value: float = 0.0
@@ -40,7 +40,7 @@ class GestureState:
     rock: bool = False
     open: bool = False
     finger_extended: Tuple[bool, ...] = (False,) * 5
-    events: List[GestureEvent] = field(default_factory=list)
+    events: List[HandEvent] = field(default_factory=list)
     thumb_down: bool = False           # its own gesture: bound to nothing, never a thumbs-up
     label: str = ''                    # the pose model's winning class this frame
     probability: float = 0.0           # ... and its probability
@@ -108,10 +108,10 @@ class HeldFilter:
         for name in HELD_GESTURES:
             now = getattr(state, name)
             if now != getattr(prev, name):
-                events.append(GestureEvent(name, now,
+                events.append(HandEvent(name, now,
                                            state.pinch_value if name == 'pinch' else 0.0))
         for name in set(state.user) ^ set(prev.user):
-            events.append(GestureEvent(name, name in state.user))
+            events.append(HandEvent(name, name in state.user))
         shape = 'fist' if state.fist else 'open' if state.open else None
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
@@ -123,6 +123,6 @@ class HeldFilter:
             start, end = self._last_span
             if self._last_shape not in (None, shape) and end - start >= FOLD_HOLD_S - 1e-9 \
                     and self._shape_since - end <= FOLD_GAP_S:
-                events.append(GestureEvent('unfold' if shape == 'open' else 'fold'))
+                events.append(HandEvent('unfold' if shape == 'open' else 'fold'))
             self._last_shape = None
         return events

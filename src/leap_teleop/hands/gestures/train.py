@@ -26,11 +26,17 @@ import time
 
 import numpy as np
 
-from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier
-from leap_teleop.hands.gestures.features import (hand_landmarks, keypoint_features, leap_features,
-                                 mirror_keypoints, rotate_keypoints)
-from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.gestures import datasets as gd
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier
+from leap_teleop.hands.gestures.features import (
+    hand_landmarks,
+    keypoint_features,
+    leap_features,
+    mirror_keypoints,
+    rotate_keypoints,
+)
+from leap_teleop.hands.sources import leapjs
+
 SEED = 0
 HIDDEN_UNITS = 64
 L2 = 1e-3
@@ -288,10 +294,11 @@ def fit_rows(labels, persons, rows):
 
 def fit(x, y, seed=SEED):
     """A PoseClassifier fitted on rows x with class names y."""
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
     from sklearn.neural_network import MLPClassifier
     from threadpoolctl import threadpool_limits
-    import warnings
-    from sklearn.exceptions import ConvergenceWarning
     mean = x.mean(axis=0)
     # a floor on the spread: a feature nearly constant in the data (a tracker's fixed
     # proportions) must not turn a small difference elsewhere into a huge one
@@ -447,7 +454,8 @@ def train(family, data_dir, adds=(), report=True, log=print):
     if len(set(y)) < 2:
         raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '
                          'data at %s?)' % (family, data_dir))
-    card = {'family': family, 'fitted_on': ds.sources, 'data_terms': DATA_TERMS[family], 'people': sorted(set(persons.tolist())),
+    card = {'family': family, 'fitted_on': ds.sources, 'data_terms': DATA_TERMS[family],
+            'people': sorted(set(persons.tolist())),
             'rows': int(len(y)), 'classes': sorted(set(y.tolist())),
             'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
                      'MLPClassifier, alpha %g, %d iterations, seed %d; fitted on every %s '
@@ -458,7 +466,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
                         % JOINT_NOISE_MM if family == 'leap' else
                         'each row also as its mirror image'),
             'command': 'python -m leap_teleop.hands.gestures.train --family %s%s' % (
-                family, ''.join(' --add %s --label %s' % (p, l) for p, l in adds)),
+                family, ''.join(' --add %s --label %s' % (path, label) for path, label in adds)),
             'date': datetime.date.today().isoformat()}
     users = sorted(p for p in set(persons.tolist()) if p.startswith('user:'))
     # a user's retrain holds out each of their own files (the shared people's figures

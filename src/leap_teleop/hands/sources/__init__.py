@@ -2,6 +2,7 @@
 import importlib
 
 from leap_teleop.hands.sources.base import HandSource, SourceError
+
 # name -> (module, class); modules load lazily so optional SDKs stay optional.
 SOURCES = {
     'scripted': ('leap_teleop.hands.sources.scripted', 'ScriptedSource'),

@@ -16,9 +16,15 @@ import numpy as np
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.sources import capture
 from leap_teleop.hands.sources.base import HandSource, SourceError
-from leap_teleop.hands.sources.landmarks import (DEFAULT_CAMERA_POSITION_MM, DEFAULT_HFOV_DEG, DEFAULT_PALM_LENGTH_MM,
-                        CameraModel, hand_from_landmarks)
+from leap_teleop.hands.sources.landmarks import (
+    DEFAULT_CAMERA_POSITION_MM,
+    DEFAULT_HFOV_DEG,
+    DEFAULT_PALM_LENGTH_MM,
+    CameraModel,
+    hand_from_landmarks,
+)
 from leap_teleop.hands.sources.mediapipe_hands import HandDetector
+
 log = logging.getLogger(__name__)
 VELOCITY_SMOOTHING = 0.5            # weight of the newest finite difference
 # A frame the detector fails on is skipped (no hands: downstream holds, as for a lost

@@ -1,9 +1,8 @@
 """The camera sources' node parameters (declared once, used by the sender) and their
 mapping onto make_source('webcam' | 'video', ...) keywords."""
+from leap_teleop.hands.sources.landmarks import DEFAULT_CAMERA_POSITION_MM, DEFAULT_HFOV_DEG, DEFAULT_PALM_LENGTH_MM
 from leap_teleop.params import Param
-from leap_teleop.hands.sources.landmarks import (DEFAULT_CAMERA_POSITION_MM,
-    DEFAULT_HFOV_DEG,
-    DEFAULT_PALM_LENGTH_MM)
+
 CAMERA_SOURCES = ('webcam', 'video')
 
 CAMERA_PARAMS = {

@@ -17,6 +17,7 @@ from typing import Optional
 import numpy as np
 
 from leap_teleop.hands.sources.base import SourceError
+
 log = logging.getLogger(__name__)
 IMAGE_EXTENSIONS = ('.jpg', '.jpeg', '.png', '.bmp', '.webp', '.tif', '.tiff')
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv', '.webm', '.m4v', '.mpg', '.mpeg', '.ogv')

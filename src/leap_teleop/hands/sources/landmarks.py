@@ -1,4 +1,4 @@
-"""Camera hand landmarks (MediaPipe's 21 per hand) -> the project's Hand, in Leap axes.
+"""Camera hand landmarks (MediaPipe's 21 per hand) -> the project's TrackedHand, in Leap axes.
 
 Pure numpy: no MediaPipe, no ROS. Input per hand: the image landmarks (normalized x, y in
 [0, 1] of the image width / height, z relative depth), the metric world landmarks
@@ -38,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from leap_teleop.hands.frame import Finger, Hand
+from leap_teleop.hands.frame import Finger, TrackedHand
+
 N_LANDMARKS = 21
 WRIST = 0
 # MediaPipe landmark indices per finger, in FINGER_NAMES order: the Leap's mcp, pip, dip,
@@ -283,7 +284,7 @@ def palm_centre(joints):
 def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_LENGTH_MM,
                         camera_position_mm=DEFAULT_CAMERA_POSITION_MM, hand_id=0,
                         velocity=None):
-    """A Hand (mm, Leap axes) from HandLandmarks seen by `camera`; None when unusable."""
+    """A TrackedHand (mm, Leap axes) from HandLandmarks seen by `camera`; None when unusable."""
     world = np.asarray(lm.world, dtype=float)
     image = np.asarray(lm.image, dtype=float)
     if world.shape != (N_LANDMARKS, 3) or image.shape != (N_LANDMARKS, 3) \
@@ -326,7 +327,7 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
     gap = min(np.linalg.norm(joints[4] - joints[j]) for j in (8, 12, 16, 20)) / palm_length_mm
     g0, g1 = PINCH_GAP_FRACTION
     pinch = float(min(max((g1 - gap) / (g1 - g0), 0.0), 1.0))
-    return Hand(side=side, palm_position=palm_centre(joints),
+    return TrackedHand(side=side, palm_position=palm_centre(joints),
                 palm_velocity=np.zeros(3) if velocity is None else np.asarray(velocity, float),
                 palm_normal=normal, direction=direction, grab_strength=grab,
                 pinch_strength=pinch, confidence=float(min(max(lm.score, 0.0), 1.0)),

@@ -7,9 +7,10 @@ optional: without it, constructing the source raises SourceError saying what to 
 import logging
 import time
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, Hand
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
 from leap_teleop.hands.sources.base import HandSource, SourceError
 from leap_teleop.hands.sources.live import PushQueue, attr, wait_loop, xyz
+
 log = logging.getLogger(__name__)
 INSTALL_HINT = ('the "leap" source needs the Leap Motion SDK v2 Python binding (import Leap): '
                 'install the Leap Motion SDK 2.3.1 and its service, put LeapPython and '
@@ -43,7 +44,7 @@ def convert_hand(Leap, h):
                 joints = {}
         fingers[i] = Finger(tip=xyz(attr(f, 'tip_position')), direction=xyz(attr(f, 'direction')),
                             extended=bool(attr(f, 'is_extended')), **joints)
-    return Hand(side=side, palm_position=xyz(attr(h, 'palm_position')),
+    return TrackedHand(side=side, palm_position=xyz(attr(h, 'palm_position')),
                 palm_velocity=xyz(attr(h, 'palm_velocity')),
                 palm_normal=xyz(attr(h, 'palm_normal')), direction=xyz(attr(h, 'direction')),
                 grab_strength=float(attr(h, 'grab_strength') or 0.0),

@@ -8,9 +8,10 @@ source raises SourceError saying what to install.
 import logging
 import time
 
-from leap_teleop.hands.frame import Finger, Frame, Hand
+from leap_teleop.hands.frame import Finger, Frame, TrackedHand
 from leap_teleop.hands.sources.base import HandSource, SourceError
 from leap_teleop.hands.sources.live import PushQueue, attr, wait_loop, xyz
+
 log = logging.getLogger(__name__)
 INSTALL_HINT = ('the "leapc" source needs Ultraleap\'s LeapC Python bindings (import leap): '
                 'install the Ultraleap Gemini hand-tracking service, then build and pip '
@@ -46,7 +47,7 @@ def convert_hand(leap, h):
                               extended=bool(attr(d, 'is_extended')),
                               mcp=xyz(attr(prox, 'prev_joint')),
                               pip=xyz(attr(inter, 'prev_joint')), dip=dip))
-    return Hand(side=_side(leap, attr(h, 'type')), palm_position=xyz(attr(palm, 'position')),
+    return TrackedHand(side=_side(leap, attr(h, 'type')), palm_position=xyz(attr(palm, 'position')),
                 palm_velocity=xyz(attr(palm, 'velocity')), palm_normal=xyz(attr(palm, 'normal')),
                 direction=xyz(attr(palm, 'direction')),
                 grab_strength=float(attr(h, 'grab_strength') or 0.0),

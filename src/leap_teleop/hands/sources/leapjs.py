@@ -26,8 +26,10 @@ try:                       # faster still for whole recordings (load_frames); op
 except ImportError:        # pragma: no cover
     _simdjson = None
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, Hand
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
 from leap_teleop.hands.sources.base import SourceError
+
+
 class FrameError(ValueError):
     """One frame dict cannot be turned into a Frame (the rest of the file may be fine)."""
 
@@ -352,7 +354,7 @@ def _hand_from_dict(h, side, pointables):
         if t.__class__ is int and 0 <= t < 5 and by_type[t] is None:
             by_type[t] = p
     # Fast path: every vector present and well-formed -> one numpy call for the hand,
-    # whose rows become the Hand's and Fingers' vectors (views).
+    # whose rows become the TrackedHand's and Fingers' vectors (views).
     have = []
     try:
         rows = [h['palmPosition'], h['palmVelocity'], h['palmNormal'], h['direction']]
@@ -392,7 +394,7 @@ def _hand_from_dict(h, side, pointables):
             fl = [f if f is not None else Finger(tip=missing, direction=missing) for f in fl]
         fingers = tuple(fl)
     hid = h.get('id', 0)
-    return Hand(side, v[0], v[1], v[2], v[3], _num(h.get('grabStrength'), math.nan),
+    return TrackedHand(side, v[0], v[1], v[2], v[3], _num(h.get('grabStrength'), math.nan),
                 _num(h.get('pinchStrength'), math.nan), _num(h.get('confidence'), 1.0),
                 fingers, hid if hid.__class__ is int else 0)
 

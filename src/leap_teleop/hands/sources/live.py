@@ -1,7 +1,7 @@
 """What the device-driven sources share: frames pushed from the SDK's thread into a
 short queue that keeps the newest, stamped on the caller's clock, pulled by frames()."""
-import logging
 import collections
+import logging
 import math
 import threading
 import time

@@ -10,8 +10,9 @@ import math
 import time
 
 from leap_teleop.hands.frame import Frame
-from leap_teleop.hands.sources.base import HandSource, SourceError
 from leap_teleop.hands.sources import leapjs
+from leap_teleop.hands.sources.base import HandSource, SourceError
+
 log = logging.getLogger(__name__)
 
 

@@ -27,9 +27,10 @@ import time
 import numpy as np
 import yaml
 
-from leap_teleop.hands.frame import Frame, SIDES, vec3
+from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
 from leap_teleop.hands.sources.base import HandSource, SourceError
+
 DEFAULT_PALM = (0.0, 200.0, 0.0)
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
 

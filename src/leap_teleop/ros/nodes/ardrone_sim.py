@@ -31,18 +31,28 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu
 from sensor_msgs.srv import SetCameraInfo, SetCameraInfoResponse
 from std_msgs.msg import Empty
-from std_srvs.srv import Empty as EmptySrv, EmptyResponse, Trigger, TriggerResponse
+from std_srvs.srv import Empty as EmptySrv
+from std_srvs.srv import EmptyResponse, Trigger, TriggerResponse
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone import cameras
-from leap_teleop.ros.ardrone_interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_TAG
-from leap_teleop.drone.sim import ArDroneSim, DroneParams, STATE_NAMES
+from leap_teleop.drone.sim import STATE_NAMES, ArDroneSim, DroneParams
 from leap_teleop.msg import Navdata, navdata_altitude
+from leap_teleop.ros.ardrone_interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_TAG
+from leap_teleop.ros.markers import PathTrail, drone_markers
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.srv import (CamSelect, CamSelectResponse, FlightAnim, FlightAnimResponse,
-                             LedAnim, LedAnimResponse, RecordEnable, RecordEnableResponse)
-from leap_teleop.ros.markers import PathTrail, drone_markers
+from leap_teleop.srv import (
+    CamSelect,
+    CamSelectResponse,
+    FlightAnim,
+    FlightAnimResponse,
+    LedAnim,
+    LedAnimResponse,
+    RecordEnable,
+    RecordEnableResponse,
+)
+
 _D = DroneParams()
 # Default camera rates: what 2 shared cores render (in the camera process) while the
 # flight keeps real time; measured by bench_drone's sim.drone_rtf_cameras.

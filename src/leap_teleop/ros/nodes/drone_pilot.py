@@ -23,15 +23,15 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
-from leap_teleop.drone.pilot import (PILOT_PARAMS, DronePilot, HandInput, PilotConfig,
-                                     PilotWorker)
+from leap_teleop.control.input_age import InputAgeWindow
+from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotConfig, PilotInput, PilotWorker
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
 from leap_teleop.ros.nodes.reconfigure import Reconfigure
-from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ros.service_call import ServiceCall
+from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.srv import FlightAnim
-from leap_teleop.control.input_age import InputAgeWindow
+
 PARAMS = {
     'side': Param('right', 'hand to follow', choices=('right', 'left')),
     'hand_topic': Param('', 'Hand topic (default leapmotion/hand_<side>)'),
@@ -84,7 +84,7 @@ class DronePilotNode:
                           msg.side, self.hand_topic, self.side)
             return
         p, n, d = msg.palm_position, msg.palm_normal, msg.direction
-        self.pilot.on_hand(HandInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z),
+        self.pilot.on_hand(PilotInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z),
                                      (d.x, d.y, d.z), msg.header.stamp.to_sec()),
                            rospy.get_time())
 

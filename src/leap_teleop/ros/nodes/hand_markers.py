@@ -12,8 +12,9 @@ import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.msg import Hand
-from leap_teleop.ros.node import Param, RateLimitedLog, start_node
 from leap_teleop.ros.markers import HandMarkerThrottle
+from leap_teleop.ros.node import Param, RateLimitedLog, start_node
+
 PARAMS = {
     'hand_topics': Param(['leapmotion/hand_right', 'leapmotion/hand_left'],
                          'leap_teleop/Hand topics to draw', min_length=1, empty_ok=False),

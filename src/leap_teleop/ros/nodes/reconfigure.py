@@ -12,8 +12,8 @@ from types import SimpleNamespace
 import rospy
 from dynamic_reconfigure.server import Server
 
-from leap_teleop.ros.node import RateLimitedLog
 from leap_teleop.params import ParamError
+from leap_teleop.ros.node import RateLimitedLog
 
 _TYPES = {'bool': ('bool', 'bool'), 'int': ('int', 'int'), 'float': ('double', 'double')}
 _INT32 = (-2 ** 31, 2 ** 31 - 1)

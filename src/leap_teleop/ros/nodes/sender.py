@@ -12,21 +12,20 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 from visualization_msgs.msg import MarkerArray
 
-from leap_teleop.ros import conversions
+from leap_teleop.control.lowpass import DEFAULT_CUTOFF, LowPass
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.gestures.recognizer import MIN_CONFIDENCE
-from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.control.lowpass import DEFAULT_CUTOFF, LowPass
+from leap_teleop.hands.sources import SOURCES, SourceError, make_source
+from leap_teleop.hands.sources.camera_params import CAMERA_PARAMS, CAMERA_SOURCES, camera_source_kwargs
+from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.msg import DriverHuman, GestureEvent, Hand, leap, leapros
+from leap_teleop.ros import conversions
+from leap_teleop.ros.markers import driver_markers
 from leap_teleop.ros.node import Param, RateLimitedLog, package_path, start_node
 from leap_teleop.ros.nodes.reconfigure import Reconfigure
-from leap_teleop.hands.sources import SOURCES, SourceError, make_source
-from leap_teleop.hands.sources.camera_params import (CAMERA_PARAMS,
-    CAMERA_SOURCES,
-    camera_source_kwargs)
-from leap_teleop.ros.markers import driver_markers
+
 PARAMS = {
     'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
     'script': Param('', 'gesture script YAML for the scripted source '
@@ -121,6 +120,7 @@ def camera_model(p, timeout=10.0):
     if not p['camera_info_topic']:
         return None
     from sensor_msgs.msg import CameraInfo
+
     from leap_teleop.hands.sources.landmarks import CameraModel
     try:
         info = rospy.wait_for_message(p['camera_info_topic'], CameraInfo, timeout)
@@ -315,6 +315,7 @@ def camera_view(p):
     if p['source'] not in CAMERA_SOURCES or not p['annotated_image_topic']:
         return None
     from sensor_msgs.msg import Image
+
     from leap_teleop.hands.camera_view import CameraView
 
     pub = rospy.Publisher(p['annotated_image_topic'], Image, queue_size=2)

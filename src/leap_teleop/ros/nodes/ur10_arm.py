@@ -20,17 +20,16 @@ from geometry_msgs.msg import Point
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from leap_teleop.ros import conversions
+from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
+from leap_teleop.ros import conversions
 from leap_teleop.ros.node import Param, RateLimitedLog, package_path, start_node
 from leap_teleop.ros.nodes.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.ur10.teleop import (HOLDING, TELEOP_PARAMS, ArmTeleop, ArmTeleopParams,
-                                   HandInput)
-from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
+from leap_teleop.ur10.teleop import HOLDING, TELEOP_PARAMS, ArmInput, ArmTeleop, ArmTeleopParams
 
 PARAMS = {
     'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
@@ -107,7 +106,7 @@ class ArmNode:
 
     # Callbacks: store and wake, nothing else.
     def on_hand(self, msg):
-        hand = HandInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        hand = ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
         with self.lock:
             why = self.teleop.on_hand(hand, rospy.get_time())
         if why:

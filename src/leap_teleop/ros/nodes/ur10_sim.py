@@ -25,13 +25,18 @@ from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
+from leap_teleop.ros.conversions import (
+    ARM_JOINTS,
+    GRIPPER_JOINTS,
+    CommandError,
+    joint_state_msg,
+    object_poses_msg,
+    trajectory_points,
+)
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ur10.model import build_urdf
 from leap_teleop.ur10.snapshot import SnapshotRenderer
-from leap_teleop.ros.conversions import (ARM_JOINTS, GRIPPER_JOINTS, CommandError,
-                                            joint_state_msg, object_poses_msg,
-                                            trajectory_points)
 from leap_teleop.ur10.trajectory import TrajectoryError
 
 PARAMS = {
@@ -59,7 +64,7 @@ KINDS = {'arm': ('arm_controller/command', ARM_JOINTS),
 
 class UR10SimNode:
     def __init__(self, p):
-        from leap_teleop.ur10.cell import UR10Cell     # pybullet: after --help / --urdf
+        from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
         self.p = p
         self.cell = UR10Cell(p['config'], gui=bool(p['gui']))
         self.lock = threading.Lock()               # guards self.cell (physics)
@@ -196,6 +201,7 @@ class UR10SimNode:
 def print_urdf(argv):
     """--urdf ARM [--config FILE]: the arm's description on stdout (for <param command=>)."""
     import argparse
+
     from leap_teleop.ur10.config import load_config
     ap = argparse.ArgumentParser(prog='ur10_sim.py --urdf')
     ap.add_argument('--urdf', required=True, metavar='ARM')
