@@ -2,23 +2,10 @@
 pick-and-place sessions put each arm's cube in its tray (no ROS; simulated time)."""
 import numpy as np
 import pytest
-import yaml
 
-from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import config_path
-from leap_teleop.ur10.teleop import DISARMED, TRACKING, ArmTeleopParams
-from tools.closed_loop import run_session
-
-
-def sim_params(**overrides):
-    with open(config_path('ur10_teleop.yaml')) as f:
-        values = yaml.safe_load(f)
-    # As the simulation launch files: faster joints, the UR10's acceleration limit.
-    values.update(max_joint_speed=1.0, max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
-    values.update(overrides)
-    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
-        values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
-    return ArmTeleopParams.from_dict(values)
+from leap_teleop.ur10.teleop import DISARMED, TRACKING
+from tools.closed_loop import run_session, sim_params
 
 
 def tray_error(cell, cube, arm):

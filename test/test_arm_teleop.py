@@ -124,7 +124,7 @@ def test_target_is_clamped_to_the_workspace_box():
 
 
 def test_joystick_dead_zone_moves_nothing_and_excess_moves_at_capped_speed():
-    t, c = armed_with_origin(mode='joystick', deadzone_mm=30.0, max_tcp_speed=0.1)
+    t, c = armed_with_origin(mode='joystick', dead_zone=0.03, max_tcp_speed=0.1)
     for _ in range(50):
         drive(t, c, hand(palm_mm=(20.0, 210.0, 0.0)))      # 22 mm from the origin
     np.testing.assert_allclose(t.status.target, kin.fk(HOME)[:3, 3], atol=1e-12)

@@ -25,7 +25,7 @@ import textwrap
 import pytest
 from test_launch_smoke import run_launches
 
-from tools.bench.harness import free_port
+from tools.bench.ros_processes import free_port
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)

@@ -21,7 +21,7 @@ import pytest
 
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.sources.scripted import GestureScript
-from tools.bench import harness
+from tools.bench import ros_processes
 from tools.evaluation.evaluate import HANDS_DATA
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -197,7 +197,7 @@ def run_stand_in(driver_ws, tmp_path, launch_args, max_time=90.0, echo=()):
     setup, clean = driver_ws
     records = tmp_path / 'received.jsonl'
     echoes = []
-    with harness.ros_master() as env:
+    with ros_processes.ros_master() as env:
         for topic in echo:
             echoes.append(subprocess.Popen(
                 ['rostopic', 'echo', '-p', topic], env=env, stderr=subprocess.DEVNULL,

@@ -591,7 +591,7 @@ def test_found_live_queue_delivers_the_newest_frame_after_a_stall():
     # Before: a 256-frame queue handed a 2 s old hand to the robots after a stall.
     from types import SimpleNamespace
 
-    from leap_teleop.hands.sources.live import PushQueue
+    from leap_teleop.hands.sources.device_queue import PushQueue
     clock = FakeClock(100.0)
     pq = PushQueue(clock, maxsize=8, max_age=0.25)
     for i in range(10):                       # the device runs at 120 Hz, the consumer keeps up

@@ -208,16 +208,16 @@ def test_node_publishes_markers_and_deletes_on_a_private_master():
     import subprocess
     import sys
 
-    from tools.bench.harness import ros_master, start_node, stop_node
+    from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
     here = os.path.dirname(os.path.abspath(__file__))
     script = os.path.join(here, '..', 'scripts', 'hand_markers.py')
     with ros_master() as env:
-        node = start_node(env, [sys.executable, script, '_max_rate:=0'])
+        node = spawn_node(env, [sys.executable, script, '_max_rate:=0'])
         try:
             out = subprocess.run([sys.executable, '-c', NODE_CLIENT, here], env=env,
                                  capture_output=True, text=True, timeout=60)
         finally:
-            stop_node(node)
+            stop_spawned(node)
             err = node.stderr.read().decode(errors='replace')
     assert out.returncode == 0, out.stderr
     arrays = json.loads(out.stdout.strip().splitlines()[-1])

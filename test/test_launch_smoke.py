@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from tools.bench import harness
+from tools.bench import ros_processes
 from tools.evaluation.evaluate import data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -42,7 +42,7 @@ def run_launches(tmp_path, launches, check_args, timeout, others=(), env=None,
     also assert that each launch, stopped with SIGINT as Ctrl-C does, ends with status 0
     within 30 s and no node died or needed more than SIGINT."""
     procs, logs, stops = [], [], []
-    with harness.ros_master(env) as env:
+    with ros_processes.ros_master(env) as env:
         env = dict(env, ROS_LOG_DIR=str(tmp_path / 'log'), PWD=str(tmp_path))
         try:
             checker = subprocess.Popen([sys.executable, CHECK, '--timeout', str(timeout)]

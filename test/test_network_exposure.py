@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from tools.bench.harness import free_port
+from tools.bench.ros_processes import free_port
 
 # env.sh and tools/setup.sh of a checkout set up by make setup: not part of a package
 # built in a user's workspace (catkin_make run_tests leaves these out).

@@ -109,7 +109,7 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
     refuses publishes once it has closed the topics, before is_shutdown() turns true)."""
     import random
 
-    from tools.bench.harness import ros_master
+    from tools.bench.ros_processes import ros_master
     rng = random.Random(7)
     with ros_master() as env:
         master = rosgraph.Master('/signals_test', master_uri=env['ROS_MASTER_URI'])

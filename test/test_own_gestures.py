@@ -22,7 +22,7 @@ from leap_teleop.hands.gestures.classifier import PoseClassifier
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
-from leap_teleop.hands.sources.base import HandSource
+from leap_teleop.hands.sources.source import HandSource
 from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop

@@ -176,7 +176,7 @@ def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():
                 PilotConfig().update({key: value})
             with pytest.raises(ValueError):
                 DronePilot(PilotConfig(**{key: value}))
-    for key in ('input_timeout', 'joint_timeout', 'max_input_age', 'deadzone_mm'):
+    for key in ('input_timeout', 'joint_timeout', 'max_input_age', 'dead_zone'):
         for value in (math.nan, math.inf, 0.0, -5.0):
             with pytest.raises(ValueError):
                 ArmTeleop(ArmTeleopParams(**{key: value}))

@@ -48,7 +48,7 @@ COVERED = {
         'test_eval_strokes.py::test_loso_command_meets_the_goals',
     './env.sh python -m tools.evaluation.photo_views':
         'test_photo_views.py::test_main_prints_and_writes_the_table',
-    'make bench': 'test_bench_harness.py::test_each_run_writes_a_fresh_file',
+    'make bench': 'test_bench_ros_processes.py::test_each_run_writes_a_fresh_file',
     './env.sh python -m leap_teleop.hands.classify_frames --keypoints '
     '../shared/data/keypoints/Harikumar4.csv':
         'test_classify_frames.py::test_keypoints_in_both_csv_forms_give_one_line_per_row',
@@ -105,7 +105,7 @@ BY_CI = {'make test', 'make setup',
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
     'python -m tools.bench --only arm_motion': 'a benchmark, part of make bench (the '
-        'integrator runs it); test_bench_harness.py checks the bench runner itself',
+        'integrator runs it); test_bench_ros_processes.py checks the bench runner itself',
     'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
     'make clean': 'deletes the build the other tests use',
     'rosrun leap_teleop record_frames my_take.json.gz --source leap': 'needs a Leap device; '

@@ -11,7 +11,7 @@ import pytest
 
 from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
 from leap_teleop.ros.nodes.reconfigure import bounds, config_type
-from tools.bench.harness import ros_master, start_node, stop_node
+from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
@@ -143,11 +143,11 @@ print(json.dumps(out))
 @pytest.mark.rostest
 def test_dynparam_retunes_the_pilot_and_cannot_disable_its_limits():
     with ros_master() as env:
-        node = start_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_pilot.py')])
+        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_pilot.py')])
         try:
             out = run_client(env, PILOT_CLIENT)
         finally:
-            stop_node(node)
+            stop_spawned(node)
             err = node.stderr.read().decode(errors='replace')
     assert out['default'] and all(y == pytest.approx(-0.2) for y in out['default']), out
     assert out['wide_dead_zone'] and all(y == 0.0 for y in out['wide_dead_zone']), out
@@ -225,11 +225,11 @@ print(json.dumps(out))
 @pytest.mark.rostest
 def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
     with ros_master() as env:
-        node = start_node(env, [sys.executable, os.path.join(SCRIPTS, 'ur10_arm.py')])
+        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'ur10_arm.py')])
         try:
             out = run_client(env, ARM_CLIENT)
         finally:
-            stop_node(node)
+            stop_spawned(node)
             err = node.stderr.read().decode(errors='replace')
     assert out['long_hold'] == 'disarmed' and out['short_hold'] == 'armed', out
     assert out['tracking'] == 'tracking', out
@@ -298,14 +298,14 @@ def test_dynparam_retunes_the_senders_recognizer_and_filter(tmp_path):
     script = tmp_path / 'open_fist.yaml'
     script.write_text(SENDER_SCRIPT)
     with ros_master() as env:
-        node = start_node(env, [sys.executable, os.path.join(SCRIPTS, 'sender.py'),
+        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'sender.py'),
                                 '_script:=%s' % script, '_loop:=true', '_sides:=[right]',
                                 '_human_topic:=leap_motion/leap_device',
                                 '_filtered_human_topic:=leap_motion/filtered_values'])
         try:
             out = run_client(env, SENDER_CLIENT)
         finally:
-            stop_node(node)
+            stop_spawned(node)
             err = node.stderr.read().decode(errors='replace')
     assert out['default'][0] >= 2, out                    # a fist per second
     assert out['slow_recognizer'][0] == 0, out            # 60-frame fists never start

@@ -10,7 +10,7 @@ import pytest
 from test_rostests import check_every_test_passed
 
 from leap_teleop.ros.node import package_path
-from tools.bench import harness
+from tools.bench import ros_processes
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -18,7 +18,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 def record_session(tmp_path, script, topics, sides):
     """Run the real sender on `script` and record `topics` with record.launch."""
     bag = str(tmp_path / ('%s.bag' % os.path.basename(script).split('.')[0]))
-    with harness.ros_master() as env:
+    with ros_processes.ros_master() as env:
         recorder = subprocess.Popen(
             ['roslaunch', 'leap_teleop', 'record.launch', 'output:=' + bag,
              'topics:=' + ' '.join(topics)],

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tools.bench.harness import free_port
+from tools.bench.ros_processes import free_port
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, '..', 'rviz', 'ur10.rviz')

@@ -37,7 +37,7 @@ BAD_PARAMS = [
     ('ur10_arm.py', ['_hand:=middle'], "~hand = 'middle': not one of the choices"),
     ('ur10_arm.py', ['_rate:=0'], '~rate = 0: out of range; allowed: a finite number >= 10'),
     ('ur10_arm.py', ['_status_rate:=0'], '~status_rate = 0: out of range'),
-    ('ur10_arm.py', ['_deadzone_mm:=-5'], '~deadzone_mm = -5: out of range'),
+    ('ur10_arm.py', ['_dead_zone:=-5'], '~dead_zone = -5: out of range'),
     ('ur10_arm.py', ['_input_timeout:=.nan'], '~input_timeout = nan: not finite'),
     ('ur10_arm.py', ['_workspace_min:=[0, 0]'], '~workspace_min = [0, 0]: 2 items'),
     ('hand_markers.py', ['_max_rate:=fast'], "~max_rate = 'fast': not a number"),
@@ -59,8 +59,8 @@ BAD_PARAMS = [
 
 @pytest.fixture(scope='module')
 def master():
-    from tools.bench import harness
-    with harness.ros_master() as env:
+    from tools.bench import ros_processes
+    with ros_processes.ros_master() as env:
         yield env
 
 

@@ -4,11 +4,26 @@ demo's pictures."""
 from dataclasses import dataclass, field
 
 import numpy as np
+import yaml
 
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import UR10Cell
+from leap_teleop.ur10.config import config_path
 from leap_teleop.ur10.teleop import TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
+
+
+def sim_params(**overrides):
+    """The arm's parameters from config/ur10_teleop.yaml as the simulation launch files set
+    them (faster joints, the UR10's acceleration limit), with `overrides`."""
+    with open(config_path('ur10_teleop.yaml')) as f:
+        values = yaml.safe_load(f)
+    values.update(max_joint_speed=1.0, max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
+    values.update(overrides)
+    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
+        values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
+    return ArmTeleopParams.from_dict(values)
 
 
 def hand_input(state):

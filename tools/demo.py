@@ -17,9 +17,10 @@ import time
 
 import numpy as np
 
+from leap_teleop.drone.sim import STATE_NAMES
 from leap_teleop.hands.sources.scripted import GestureScript
 from leap_teleop.ros.node import package_path
-from tools.bench.harness import free_port
+from tools.bench.ros_processes import free_port
 
 UR10_SCRIPT = 'ur10_pick_place_dual.yaml'
 DRONE_SCRIPT = 'drone_flight.yaml'
@@ -31,15 +32,13 @@ SNAPSHOT_PERIOD_S = 1.0
 SETTLE_S = 3.0
 MAX_WAIT_S = 240.0          # give up on sessions that never start
 PLACEMENT_TOLERANCE_M = 0.03
-STATE_NAMES = {0: 'unknown', 1: 'init', 2: 'landed', 3: 'flying', 4: 'hovering', 5: 'test',
-               6: 'taking off', 7: 'goto fix point', 8: 'landing', 9: 'looping'}
 
 
 def say(msg):
     print('[demo] %s' % msg, flush=True)
 
 
-class Monitor:
+class DemoMonitor:
     """A rospy node in this process watching the demo graph."""
 
     def __init__(self, tasks):
@@ -257,7 +256,7 @@ def main(argv=None):
 
 
 def run_demo(tasks, out, durations):
-    mon = Monitor(tasks)
+    mon = DemoMonitor(tasks)
     services = {}
     if 'ur10' in tasks:
         services['ur10'] = '/ur10_sim/snapshot'

@@ -13,8 +13,8 @@ import math
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-STATE_NAMES = {0: 'emergency', 1: 'init', 2: 'landed', 3: 'flying', 4: 'hovering', 5: 'test',
-               6: 'taking off', 7: 'goto fix point', 8: 'landing', 9: 'flip'}
+from leap_teleop.drone.sim import STATE_NAMES
+
 # What the pilot does on each gesture (the drone's gestures in the README).
 GESTURE_ACTIONS = {'unfold': 'takeoff', 'fold': 'land', 'circle_cw': 'flip',
                    'circle_ccw': 'flip'}

@@ -10,12 +10,9 @@ import math
 import sys
 
 import numpy as np
-import yaml
 
 from leap_teleop.ros.node import package_path
-from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.teleop import ArmTeleopParams
-from tools.closed_loop import run_session
+from tools.closed_loop import run_session, sim_params
 
 SCRIPT = 'ur10_pick_place_rotated.yaml'
 CELL = 'ur10_dual_rotated_cell.yaml'
@@ -24,15 +21,6 @@ TASKS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
 # down around it (the square cube beside it for comparison).
 GRASP_VIEW = {'eye': [1.2, -0.6, 1.1], 'target': [0.68, -0.92, 0.82], 'fov': 38}
 
-
-def sim_params(orientation='yaw'):
-    with open(package_path('config', 'ur10_teleop.yaml')) as f:
-        values = yaml.safe_load(f)
-    values.update(orientation=orientation, max_joint_speed=1.0,
-                  max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
-    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
-        values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
-    return ArmTeleopParams.from_dict(values)
 
 
 def run(png=None, orientation='yaw'):
@@ -48,7 +36,7 @@ def run(png=None, orientation='yaw'):
 
     cell, runs = run_session(package_path('config', 'gestures', SCRIPT), CELL,
                              {arm: side for arm, (side, _) in TASKS.items()},
-                             sim_params(orientation), on_period=on_period)
+                             sim_params(orientation=orientation), on_period=on_period)
     try:
         out = {}
         for arm, (_, cube) in TASKS.items():

@@ -101,7 +101,7 @@ def render(script, kinds, topics, rate_hz=None):
     return out
 
 
-class Monitor:
+class SoakMonitor:
     """Subscribes what the graph produces; counts, sequence gaps, latency samples."""
 
     def __init__(self, hand_topics):
@@ -230,7 +230,7 @@ def percentile(xs, q):
 def run(minutes, rtf, rate_hz=None, log=print):
     """Run the soak; returns (figures, {figure: what it was measured on})."""
     from leap_teleop.ros.node import package_path
-    from tools.bench.harness import ros_master
+    from tools.bench.ros_processes import ros_master
     with ros_master() as env:
         os.environ.update({k: env[k] for k in ('ROS_MASTER_URI', 'ROS_IP', 'ROS_HOSTNAME')})
         log_dir = tempfile.mkdtemp(prefix='soak_logs_')
@@ -281,7 +281,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
              '/drone/leapmotion/hand_right': Hand, '/drone/leapmotion/gestures': GestureEvent}
     pubs = {t: rospy.Publisher(t, ty, queue_size=2000, tcp_nodelay=True)
             for t, ty in types.items()}
-    mon = Monitor({'arms': {s: arm_topics[s]['leapcobot'] for s in arm_topics},
+    mon = SoakMonitor({'arms': {s: arm_topics[s]['leapcobot'] for s in arm_topics},
                    'drone': drone_topics['right']['hand']})
     sent = {t: 0 for t in types}
     reset = rospy.ServiceProxy('/ur10_sim/reset', Trigger)

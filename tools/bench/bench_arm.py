@@ -10,7 +10,7 @@ import tempfile
 import numpy as np
 
 from leap_teleop.ros.node import package_path
-from tools.bench import harness
+from tools.bench import ros_processes
 
 
 def _round_trips(env, rounds, count):
@@ -57,20 +57,20 @@ def _latency(rounds=ROUNDS, count=150):
     the median of the per-round p99 differences (load that comes and goes weighs on both
     halves of a round alike), with their spread across rounds and a bootstrap 95 %
     confidence interval of that median (what the goal is judged by)."""
-    with harness.ros_master() as env:
-        arm = harness.start_node(env, [
+    with ros_processes.ros_master() as env:
+        arm = ros_processes.spawn_node(env, [
             sys.executable, package_path('scripts', 'ur10_arm.py'), '__name:=ur10_arm',
             '__ns:=ur10_1', '_hand:=right', '_hand_topic:=/leapmotion/data_right',
             '_filter_min_cutoff_hz:=0.0', '_max_joint_speed:=1.0', '_input_timeout:=1.0',
             # The servo's command changes every period while it moves: with the periodic
             # loop at its slowest (10 Hz), a command answers a hand message, not the timer.
             '_rate:=10.0', '_joint_prefix:=ur10_1_'])
-        echo = harness.start_node(env, [sys.executable, '-m', 'tools.bench.echo'])
+        echo = ros_processes.spawn_node(env, [sys.executable, '-m', 'tools.bench.echo'])
         try:
             data = _round_trips(env, rounds, count)
         finally:
-            harness.stop_node(echo)
-            harness.stop_node(arm)
+            ros_processes.stop_spawned(echo)
+            ros_processes.stop_spawned(arm)
     arm_rounds, bare_rounds = data['rounds']['arm'], data['rounds']['bare']
     lost = data['lost']
     # Per round: a round's lost replies are not known per round, so rounds use what came

@@ -34,22 +34,12 @@ from leap_teleop.ros.node import package_path
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.cell import UR10Cell
-from leap_teleop.ur10.teleop import TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
-from tools.closed_loop import hand_input
+from leap_teleop.ur10.teleop import TRACKING, ArmInput, ArmTeleop
+from tools.closed_loop import hand_input, sim_params
 
 ARM = 'ur10_1'
 FRAME_HZ = 120.0
 
-
-def sim_params(**overrides):
-    import yaml
-    with open(package_path('config', 'ur10_teleop.yaml')) as f:
-        values = yaml.safe_load(f)
-    values.update(max_joint_speed=1.0, max_joint_accel=float(kin.MAX_JOINT_ACCEL[0]))
-    values.update(overrides)
-    for key in ('axis_map', 'workspace_min', 'workspace_max', 'wrist_lower', 'wrist_upper'):
-        values[key] = tuple(tuple(v) if isinstance(v, list) else v for v in values[key])
-    return ArmTeleopParams.from_dict(values)
 
 
 class Loop:

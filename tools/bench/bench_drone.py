@@ -23,7 +23,7 @@ import tempfile
 import threading
 import time
 
-from tools.bench import harness
+from tools.bench import ros_processes
 
 LATENCY_SECONDS = 10.0
 CAMERA_WALL_S = 10.0       # wall time of the camera run (flights repeated), for the rates
@@ -168,8 +168,8 @@ def latency_client(out, seconds):
 
 
 def pilot_latency():
-    with harness.ros_master() as env:
-        pilot = harness.start_node(env, [sys.executable, '-c',
+    with ros_processes.ros_master() as env:
+        pilot = ros_processes.spawn_node(env, [sys.executable, '-c',
                                          'from leap_teleop.ros.nodes.drone_pilot import main; main()'])
         with tempfile.NamedTemporaryFile(suffix='.json', delete=False) as f:
             out = f.name
@@ -179,12 +179,12 @@ def pilot_latency():
             with open(out) as f:
                 data = json.load(f)
         finally:
-            harness.stop_node(pilot)
+            ros_processes.stop_spawned(pilot)
             os.unlink(out)
     lat = data['latency_s']
     if len(lat) < 0.5 * data['sent']:
         raise RuntimeError('pilot answered only %d of %d hand messages' % (len(lat), data['sent']))
-    p50, p99 = harness.percentiles_ms(lat)
+    p50, p99 = ros_processes.percentiles_ms(lat)
     return p50, p99, len(lat) / float(data['sent'])
 
 

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from leap_teleop.ros.node import package_path
-from tools.bench import harness
+from tools.bench import ros_processes
 
 RATES_HZ = (120, 200, 295, 400)
 WINDOW_S = 5.0
@@ -53,14 +53,14 @@ def run():
     results = {}
     sources = {}
     trials = {}
-    with harness.ros_master() as env:
+    with ros_processes.ros_master() as env:
         for rate in RATES_HZ:
-            node = harness.start_node(env, _sender_cmd(rate))
+            node = ros_processes.spawn_node(env, _sender_cmd(rate))
             try:
-                trials[rate] = harness.probe(env, 'leapmotion/hand_right', 'leap_teleop/Hand',
+                trials[rate] = ros_processes.probe(env, 'leapmotion/hand_right', 'leap_teleop/Hand',
                                              WINDOW_S)
             finally:
-                harness.stop_node(node)
+                ros_processes.stop_spawned(node)
             print('  sender at %d Hz: received %.1f Hz (%d frames), dropped %s'
                   % (rate, received_hz(trials[rate]), len(trials[rate]['frame_id']),
                      _dropped(trials[rate]['frame_id'])))
@@ -77,30 +77,30 @@ def run():
         rate = 295
         sender_lat, bare_lat, cpu, frames = [], [], 0.0, 0
         for _ in range(ROUNDS):
-            node = harness.start_node(env, _sender_cmd(rate))
+            node = ros_processes.spawn_node(env, _sender_cmd(rate))
             try:
                 time.sleep(2.0)
-                cobot = harness.probe(env, 'leapmotion/data_right',
+                cobot = ros_processes.probe(env, 'leapmotion/data_right',
                                       'leap_teleop/leapcobotright', WINDOW_S, cpu_pid=node.pid)
                 cpu += cobot['cpu_s']
                 frames += len(cobot['receipt'])     # one leapcobotright per frame
             finally:
-                harness.stop_node(node)
+                ros_processes.stop_spawned(node)
             sender_lat.extend(np.subtract(cobot['receipt'], cobot['stamp']))
-            bare = harness.start_node(env, [sys.executable, '-m',
+            bare = ros_processes.spawn_node(env, [sys.executable, '-m',
                                             'tools.bench.bare_publisher', '--rate',
                                             str(rate)])
             try:
-                base = harness.probe(env, 'leapmotion/data_right',
+                base = ros_processes.probe(env, 'leapmotion/data_right',
                                      'leap_teleop/leapcobotright', WINDOW_S)
             finally:
-                harness.stop_node(bare)
+                ros_processes.stop_spawned(bare)
             bare_lat.extend(np.subtract(base['receipt'], base['stamp']))
         results['sender.cpu_us_per_frame'] = cpu / frames * 1e6
         results['sender.latency_p50_ms'], results['sender.latency_p99_ms'] = \
-            harness.percentiles_ms(sender_lat)
+            ros_processes.percentiles_ms(sender_lat)
         results['bare_rospy.latency_p50_ms'], results['bare_rospy.latency_p99_ms'] = \
-            harness.percentiles_ms(bare_lat)
+            ros_processes.percentiles_ms(bare_lat)
     results['sender.latency_p99_ratio'] = (results['sender.latency_p99_ms']
                                            / results['bare_rospy.latency_p99_ms'])
     pooled = ('%d alternating rounds at %d Hz, %.0f s windows: %d sender and %d bare '

@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from leap_teleop.ros.node import package_path
-from tools.bench import harness
+from tools.bench import ros_processes
 from tools.evaluation.evaluate import HANDS_DATA
 
 CLIPS = ('clip_fist_then_thumbs_up__mps__gr_test_video.mp4',
@@ -81,35 +81,35 @@ def run():
     latencies = {v: [] for v in variants}
     p99s = {v: [] for v in variants}
     received = 0
-    with harness.ros_master() as env:
+    with ros_processes.ros_master() as env:
         for _ in range(ROUNDS):
             for variant, search_thread in variants.items():
                 lats = []
                 for name in CLIPS:
-                    node = harness.start_node(env, _sender_cmd(_clip(name), search_thread))
+                    node = ros_processes.spawn_node(env, _sender_cmd(_clip(name), search_thread))
                     try:
-                        cobot = harness.probe(env, 'leapmotion/data_right',
+                        cobot = ros_processes.probe(env, 'leapmotion/data_right',
                                               'leap_teleop/leapcobotright', WINDOW_S,
                                               warmup=2.0)
                     finally:
-                        harness.stop_node(node)
+                        ros_processes.stop_spawned(node)
                     lat = np.subtract(cobot['receipt'], cobot['stamp'])
                     print('  sender (search %s) on %s at %d Hz: %d messages (%.1f/s), latency '
                           'p50 %.1f ms, p99 %.1f ms'
                           % (variant, name, PACE_HZ, len(lat), len(lat) / WINDOW_S,
-                             *harness.percentiles_ms(lat)))
+                             *ros_processes.percentiles_ms(lat)))
                     lats.extend(lat)
                     if search_thread:
                         received += len(lat)
                 latencies[variant].extend(lats)
-                p99s[variant].append(harness.percentiles_ms(lats)[1])
+                p99s[variant].append(ros_processes.percentiles_ms(lats)[1])
     for variant in variants:
         print('  search %s: p99 per round %s ms' % (
             variant, ', '.join('%.1f' % v for v in p99s[variant])))
     results['webcam.processed_fraction'] = received / (PACE_HZ * WINDOW_S * len(CLIPS) * ROUNDS)
     results['webcam.latency_p50_ms'], results['webcam.latency_p99_ms'] = \
-        harness.percentiles_ms(latencies['thread'])
+        ros_processes.percentiles_ms(latencies['thread'])
     results['webcam.latency_p50_ms_search_inline'], \
         results['webcam.latency_p99_ms_search_inline'] = \
-        harness.percentiles_ms(latencies['inline'])
+        ros_processes.percentiles_ms(latencies['inline'])
     return results

@@ -35,7 +35,7 @@ import numpy as np
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer
 from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
-from leap_teleop.hands.gestures.datasets import SHARED_DATA
+from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation import evaluate
 
@@ -55,10 +55,6 @@ KINDS = (('circle', (CIRCLE,)), ('loop_free', LOOP_FREE), ('looped', LOOPED),
 # (thumb .. pinky; None: either) on the frame chosen.
 HANDS = {'pointing': ('index', (None, True, False, False, False)),
          'open': ('five', (True, True, True, True, True))}
-
-
-class DataError(RuntimeError):
-    """Shared data missing or unreadable."""
 
 
 def _kind(symbol):

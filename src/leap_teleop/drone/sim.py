@@ -40,6 +40,7 @@ from dataclasses import dataclass, fields
 import pybullet as pb
 
 from leap_teleop.drone import scene
+from leap_teleop.vectors import wrap_angle
 
 log = logging.getLogger(__name__)
 
@@ -117,10 +118,6 @@ def _finite(x):
     except (TypeError, ValueError):
         return None
     return x if math.isfinite(x) else None
-
-
-def _wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _rpy_matrix(roll, pitch, yaw):
@@ -468,11 +465,11 @@ class ArDroneSim:
     def _attitude(self, roll_d, pitch_d, yaw_rate_d):
         """Body torque tracking roll/pitch set points and a yaw rate (integrated yaw)."""
         J = self.p.inertia
-        self._yaw_d = _wrap(self._yaw_d + yaw_rate_d * self.dt)
+        self._yaw_d = wrap_angle(self._yaw_d + yaw_rate_d * self.dt)
         # Keep the integrated yaw near the real one so a saturated turn cannot wind up.
-        err = _wrap(self._yaw_d - self.yaw)
+        err = wrap_angle(self._yaw_d - self.yaw)
         if abs(err) > 0.5:
-            self._yaw_d = _wrap(self.yaw + math.copysign(0.5, err))
+            self._yaw_d = wrap_angle(self.yaw + math.copysign(0.5, err))
         e = _attitude_error(_rpy_matrix(roll_d, pitch_d, self._yaw_d), self.R)
         w = self.omega
         kr, kw = 625.0, 45.0

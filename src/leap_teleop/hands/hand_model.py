@@ -6,6 +6,7 @@ geometry a real Leap frame does: fingertips, joints, directions, SDK-style flags
 import numpy as np
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand, vec3
+from leap_teleop.vectors import unit
 
 # pose -> (extended fingers, grab strength, pinch strength): the SDK-style flags.
 POSES = {
@@ -87,11 +88,6 @@ _PINCH_MEET = np.array([24.5, 44.1, 16.6])
 PINCH_GAP_MM = 12.0
 
 
-def _unit(v):
-    n = np.linalg.norm(v)
-    return v / n if n > 0 else v
-
-
 def rpy_to_basis(roll, pitch, yaw, side):
     """Palm normal and hand direction after rotating the palm-down pose by Leap-SDK
     style roll (about -z), pitch (about x), yaw (about y), radians."""
@@ -116,9 +112,9 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
         normal, direction = PALM_DOWN
         if pose == 'thumbs_up':
             normal = _THUMBS_UP_NORMAL[side]
-    n = _unit(vec3(normal))
-    d = _unit(vec3(direction))
-    d = _unit(d - n * np.dot(d, n))
+    n = unit(vec3(normal), fallback=vec3(normal))
+    d = unit(vec3(direction), fallback=vec3(direction))
+    d = unit(d - n * np.dot(d, n), fallback=d - n * np.dot(d, n))
     thumbward = np.cross(d, n) if side == 'right' else -np.cross(d, n)
     basis = np.stack([thumbward, n, d], axis=1)       # columns: hand frame axes in Leap axes
     palm = vec3(palm)

@@ -10,6 +10,7 @@ import numpy as np
 
 from leap_teleop.hands.gestures import GestureRecognizer, HandEvent
 from leap_teleop.hands.gestures.bindings import Bindings
+from leap_teleop.vectors import wrap_angle
 
 log = logging.getLogger(__name__)
 
@@ -25,10 +26,6 @@ def dead_band(angle, low, high):
     if angle < low:
         return angle - low
     return 0.0
-
-
-def _wrap(a):
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 def hand_angles(normal, direction):
@@ -151,7 +148,7 @@ class HandTracker:
         rotation = {'rotate': 0.0, 'turn': 0.0, 'swing': 0.0}
         if self._origin_angles is not None:
             for key, now, ref in zip(('rotate', 'turn', 'swing'), angles, self._origin_angles):
-                angle = _wrap(now - ref)
+                angle = wrap_angle(now - ref)
                 rotation[key] = (angle if self.dead_bands is None
                                  else dead_band(angle, *self.dead_bands[key]))
         tips = tuple((_finite_tuple(f.tip) or (0.0, 0.0, 0.0)) for f in hand.fingers[:5])

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from leap_teleop.vectors import wrap_angle
+
 D1, A2, A3, D4, D5, D6 = 0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922
 ALPHA = (math.pi / 2, 0.0, 0.0, math.pi / 2, -math.pi / 2, 0.0)
 _DH_A = (0.0, A2, A3, 0.0, 0.0, 0.0)
@@ -162,10 +164,6 @@ _LOWER_LIST = JOINT_LOWER.tolist()
 _UPPER_LIST = JOINT_UPPER.tolist()
 
 
-def _wrap(a):
-    return (a + math.pi) % (2 * math.pi) - math.pi
-
-
 def ik(T, tcp=True, q6_free=0.0, eps=1e-9):
     """Every joint solution (list of 6-arrays in (-pi, pi]) that puts the TCP (or tool0)
     at pose T (4x4, base_link). Empty list when unreachable; never raises.
@@ -238,7 +236,7 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
                 s3 = math.sin(q3)
                 q2 = math.atan2(uy, ux) - math.atan2(A3 * s3, A2 + A3 * c3)
                 q4 = q234 - q2 - q3
-                sols.append((_wrap(q1), _wrap(q2), _wrap(q3), _wrap(q4), _wrap(q5), _wrap(q6)))
+                sols.append(tuple(wrap_angle(q) for q in (q1, q2, q3, q4, q5, q6)))
     return sols
 
 

@@ -46,7 +46,7 @@ class ArmTeleopParams:
     # Leap axes (x right, y up, z toward the user) -> arm base axes, rows = base x, y, z.
     axis_map: tuple = ((0.0, 0.0, -1.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
     scale: float = 2.5                 # imitation: robot m per hand m
-    deadzone_mm: float = 30.0          # joystick: radius around the origin that moves nothing
+    dead_zone: float = 0.03            # m, joystick: radius around the origin that moves nothing
     joystick_gain: float = 2.0         # joystick: TCP m/s per m of palm excess
     max_tcp_speed: float = 0.25        # joystick: m/s cap
     workspace_min: tuple = (0.25, -0.9, 0.0)    # m, arm base frame
@@ -118,8 +118,8 @@ TELEOP_PARAMS = {
                       'base x, y, z', length=3,
                       item=Param([0.0, 0.0, 0.0], '', length=3, ge=-1.0, le=1.0)),
     'scale': Param(_P.scale, 'imitation: robot m per hand m', gt=0.0, le=10.0),
-    'deadzone_mm': Param(_P.deadzone_mm, 'joystick: radius around the origin that moves '
-                                         'nothing', unit='mm', gt=0.0, le=300.0),
+    'dead_zone': Param(_P.dead_zone, 'joystick: radius around the origin that moves '
+                                     'nothing', unit='m', gt=0.0, le=0.3),
     'joystick_gain': Param(_P.joystick_gain, 'joystick: TCP m/s per m of palm beyond the '
                                              'dead zone', unit='1/s', gt=0.0, le=20.0),
     'max_tcp_speed': Param(_P.max_tcp_speed, 'joystick: TCP speed cap', unit='m/s',
@@ -492,9 +492,10 @@ class ArmTeleop:
     def _joystick(self, offset_mm, dt):
         n = float(np.linalg.norm(offset_mm))
         base = self._target if self._target is not None else self._tcp_ref
-        if n <= self.p.deadzone_mm:
+        dead_zone_mm = 1000.0 * self.p.dead_zone
+        if n <= dead_zone_mm:
             return base
-        excess = offset_mm * (1.0 - self.p.deadzone_mm / n)
+        excess = offset_mm * (1.0 - dead_zone_mm / n)
         v = self._axes @ excess * 0.001 * self.p.joystick_gain
         speed = float(np.linalg.norm(v))
         if speed > self.p.max_tcp_speed:

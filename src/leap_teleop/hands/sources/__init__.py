@@ -1,7 +1,7 @@
 """Hand sources by name: make_source('scripted', script=...)."""
 import importlib
 
-from leap_teleop.hands.sources.base import HandSource, SourceError
+from leap_teleop.hands.sources.source import HandSource, SourceError
 
 # name -> (module, class); modules load lazily so optional SDKs stay optional.
 SOURCES = {

@@ -15,7 +15,6 @@ import numpy as np
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.sources import capture
-from leap_teleop.hands.sources.base import HandSource, SourceError
 from leap_teleop.hands.sources.landmarks import (
     DEFAULT_CAMERA_POSITION_MM,
     DEFAULT_HFOV_DEG,
@@ -24,6 +23,7 @@ from leap_teleop.hands.sources.landmarks import (
     hand_from_landmarks,
 )
 from leap_teleop.hands.sources.mediapipe_hands import HandDetector
+from leap_teleop.hands.sources.source import HandSource, SourceError
 
 log = logging.getLogger(__name__)
 VELOCITY_SMOOTHING = 0.5            # weight of the newest finite difference

@@ -16,7 +16,7 @@ from typing import Optional
 
 import numpy as np
 
-from leap_teleop.hands.sources.base import SourceError
+from leap_teleop.hands.sources.source import SourceError
 
 log = logging.getLogger(__name__)
 IMAGE_EXTENSIONS = ('.jpg', '.jpeg', '.png', '.bmp', '.webp', '.tif', '.tiff')

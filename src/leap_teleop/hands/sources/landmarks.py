@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from leap_teleop.hands.frame import Finger, TrackedHand
+from leap_teleop.vectors import unit
 
 N_LANDMARKS = 21
 WRIST = 0
@@ -163,7 +164,7 @@ def chirality(world):
     left hand's (fingers bend toward the palm)."""
     w = np.asarray(world, dtype=float)
     palm = np.linalg.norm(w[MIDDLE_MCP] - w[WRIST])
-    normal = _unit(np.cross(w[5] - w[17], w[MIDDLE_MCP] - w[WRIST]))
+    normal = unit(np.cross(w[5] - w[17], w[MIDDLE_MCP] - w[WRIST]))
     tips, knuckles = w[[8, 12, 16, 20]], w[list(KNUCKLES)]
     return float(np.mean((tips - knuckles) @ normal)) / palm if palm > 0 else 0.0
 
@@ -217,13 +218,8 @@ def project(points_mm, camera):
                      camera.fy * p[:, 1] / p[:, 2] + camera.cy), axis=1)
 
 
-def _unit(v):
-    n = np.linalg.norm(v)
-    return v / n if n > 1e-9 else np.full(3, np.nan)
-
-
 def _angle_deg(u, v):
-    c = float(np.dot(_unit(u), _unit(v)))
+    c = float(np.dot(unit(u), unit(v)))
     return math.degrees(math.acos(min(1.0, max(-1.0, c)))) if math.isfinite(c) else math.nan
 
 
@@ -268,11 +264,11 @@ def hand_basis(joints, side):
     frame: direction wrist -> middle knuckle, normal out of the palm (orthogonalised)."""
     wrist = joints[WRIST]
     across = joints[5] - joints[17]              # index knuckle <- pinky knuckle
-    direction = _unit(joints[MIDDLE_MCP] - wrist)
+    direction = unit(joints[MIDDLE_MCP] - wrist)
     # Right hand: thumb side x fingers points out of the palm; a left hand's mirror image.
     normal = np.cross(across, direction) if side == 'right' else np.cross(direction, across)
-    normal = _unit(normal)
-    direction = _unit(direction - normal * np.dot(direction, normal))
+    normal = unit(normal)
+    direction = unit(direction - normal * np.dot(direction, normal))
     return normal, direction
 
 
@@ -319,7 +315,7 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
             extended = (_angle_deg(direction, tip - mcp) < EXTENDED_MAX_DEG
                         and bend < EXTENDED_MAX_BEND_DEG)
             flex.append(_angle_deg(direction, tip - dip))
-        fdir = _unit(tip - pip)
+        fdir = unit(tip - pip)
         fingers.append(Finger(tip=tip, direction=fdir, extended=bool(extended),
                               mcp=mcp, pip=pip, dip=dip))
     lo, hi = GRAB_FLEX_DEG

@@ -9,8 +9,8 @@ import logging
 import time
 
 from leap_teleop.hands.frame import Finger, Frame, TrackedHand
-from leap_teleop.hands.sources.base import HandSource, SourceError
-from leap_teleop.hands.sources.live import PushQueue, attr, wait_loop, xyz
+from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
+from leap_teleop.hands.sources.source import HandSource, SourceError
 
 log = logging.getLogger(__name__)
 INSTALL_HINT = ('the "leapc" source needs Ultraleap\'s LeapC Python bindings (import leap): '

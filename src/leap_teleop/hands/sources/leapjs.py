@@ -27,7 +27,7 @@ except ImportError:        # pragma: no cover
     _simdjson = None
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
-from leap_teleop.hands.sources.base import SourceError
+from leap_teleop.hands.sources.source import SourceError
 
 
 class FrameError(ValueError):

@@ -40,8 +40,8 @@ import logging
 
 import numpy as np
 
-from leap_teleop.hands.sources.base import SourceError
 from leap_teleop.hands.sources.landmarks import HandLandmarks
+from leap_teleop.hands.sources.source import SourceError
 
 INSTALL_HINT = ('the camera sources need MediaPipe 0.10.21 and OpenCV: run tools/setup.sh, or '
                 '`pip install --no-deps -r tools/requirements-camera.txt` in the venv')

@@ -11,7 +11,7 @@ import time
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.sources import leapjs
-from leap_teleop.hands.sources.base import HandSource, SourceError
+from leap_teleop.hands.sources.source import HandSource, SourceError
 
 log = logging.getLogger(__name__)
 

@@ -29,7 +29,7 @@ import yaml
 
 from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
-from leap_teleop.hands.sources.base import HandSource, SourceError
+from leap_teleop.hands.sources.source import HandSource, SourceError
 
 DEFAULT_PALM = (0.0, 200.0, 0.0)
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}

@@ -46,7 +46,7 @@ PARAMS = {
 
 # Changeable while running (dynamic_reconfigure): gains, the dead zone, filter constants,
 # speed limits, the arming hold. Modes, geometry, watchdog times and topics stay start-up only.
-RECONFIGURABLE = ('scale', 'deadzone_mm', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
+RECONFIGURABLE = ('scale', 'dead_zone', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
                   'max_tool_tilt', 'max_tool_turn', 'filter_min_cutoff_hz', 'filter_beta',
                   'filter_d_cutoff_hz', 'rotation_min_cutoff_hz', 'rotation_beta',
                   'rotation_d_cutoff_hz', 'max_joint_speed', 'max_joint_accel', 'servo_gain',

@@ -48,12 +48,12 @@ def _wait_for_master(env, timeout=15.0):
     raise RuntimeError('rosmaster did not come up')
 
 
-def start_node(env, args):
-    """Start `args` (a command list) as a ROS process; stop it with stop_node()."""
+def spawn_node(env, args):
+    """Start `args` (a command list) as a ROS process; stop it with stop_spawned()."""
     return subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 
 
-def stop_node(proc, timeout=10.0):
+def stop_spawned(proc, timeout=10.0):
     if proc.poll() is None:
         proc.send_signal(2)
         try:
