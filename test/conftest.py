@@ -16,7 +16,7 @@ def leapjs_data():
     """The shared LeapJS recordings ($LEAPJS_DATA, else ../shared/data/leapjs next to the
     repository). A test that needs them fails without them: CI always has them, and a
     skip would let a run without the data pass."""
-    from tools.evaluation.evaluate import data_dir
+    from leap_teleop.hands.gestures.datasets import data_dir
     path = data_dir()
     if not os.path.isdir(path):
         pytest.fail('the shared LeapJS recordings are not at %s: set $LEAPJS_DATA' % path)

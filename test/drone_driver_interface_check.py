@@ -32,7 +32,7 @@ def wait(topic, kind, timeout=30.0):
     return rospy.wait_for_message(topic, kind, timeout)
 
 
-class DriverInterface(unittest.TestCase):
+class DriverInterfaceCheck(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         # The driver-typed client's first step: wait for the flat-trim service.
@@ -161,4 +161,4 @@ class DriverInterface(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('driver_client')
-    rostest.rosrun('leap_teleop', 'drone_driver_interface_check', DriverInterface, sys.argv)
+    rostest.rosrun('leap_teleop', 'drone_driver_interface_check', DriverInterfaceCheck, sys.argv)

@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 
+from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from leap_teleop.hands.sources.landmarks import (
     CameraModel,
     HandLandmarks,
@@ -21,7 +22,6 @@ from leap_teleop.hands.sources.landmarks import (
     reprojection_rms_px,
     solve_translation,
 )
-from tools.evaluation.evaluate import HANDS_DATA
 
 
 @pytest.fixture(scope='module')

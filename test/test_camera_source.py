@@ -12,11 +12,11 @@ import pytest
 
 from leap_teleop.hands.camera_view import CameraView, draw, held_gestures
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
 from leap_teleop.ros.conversions import image_message
-from tools.evaluation.evaluate import HANDS_DATA
 
 HELD = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
 CLIP_FIST_THUMB = 'clip_fist_then_thumbs_up__mps__gr_test_video.mp4'
@@ -457,7 +457,7 @@ def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
     from leap_teleop.hands.sources.mediapipe_hands import HandDetector
     rgb = two_hand_photo()
 
-    class Failing:
+    class FailingSearchGraph:
         def process(self, image):
             raise RuntimeError('search graph failed')
 
@@ -468,7 +468,7 @@ def test_a_failing_search_is_logged_and_counted_and_tracking_goes_on(caplog):
         until_tracking(detector, rgb, 1)
         detector.detect_every = 2
         detector._graphs[1].close()
-        detector._graphs[1] = Failing()
+        detector._graphs[1] = FailingSearchGraph()
         with caplog.at_level('WARNING', logger='leap_teleop.hands.sources.mediapipe_hands'):
             counts = paced_counts(detector, rgb, 9)
     assert counts == [1] * 9, counts
@@ -483,13 +483,13 @@ def test_a_frame_the_detector_fails_on_is_skipped_and_a_broken_detector_ends_the
     source = make_source('video', path=data('fist__htj__22.jpg'))
     real = source.detector
 
-    class Failing:
+    class FailingDetector:
         def detect(self, rgb):
             raise RuntimeError('graph failed')
 
         def close(self):
             real.close()
-    source.detector = Failing()
+    source.detector = FailingDetector()
     bgr = np.zeros((48, 64, 3), np.uint8)
     frame, landmarks, _ = source.process(bgr, 1.0, 1)
     assert frame.hands == [] and landmarks == []

@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 
 from leap_teleop.hands.classify_frames import Classifier
 from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.sources import leapjs
-from tools.evaluation.evaluate import data_dir
 
 DATA = data_dir()
 KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down',

@@ -19,10 +19,10 @@ import textwrap
 import numpy as np
 import pytest
 
+from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.sources.scripted import GestureScript
 from tools.bench import ros_processes
-from tools.evaluation.evaluate import HANDS_DATA
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PYTHON = sys.executable

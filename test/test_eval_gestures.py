@@ -4,6 +4,7 @@ import os
 
 import pytest
 
+from leap_teleop.hands.gestures import datasets
 from tools.evaluation import evaluate
 
 
@@ -47,7 +48,7 @@ def test_no_circle_event_on_any_shared_take(results):
     # mm). A circle is a pointing index or the whole hand going round, so none fires.
     every, two = results['circle_all_takes'], results['circle_events']
     per_take = every['per_take']
-    assert sorted(per_take) == sorted(evaluate.EVERY_TAKE)
+    assert sorted(per_take) == sorted(datasets.EVERY_TAKE)
     assert {t: v['agreeing_events'] for t, v in per_take.items() if v['agreeing_events']} == {}
     assert every['events'] == 0 and two['events'] == 0, (every, two)
 
@@ -67,9 +68,9 @@ def test_sdk_circles_counted_as_the_recordings_show(results):
 
 
 def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):
-    rows, sdk = evaluate.run_take(evaluate.find_file(leapjs_data, 'flapping'))
+    rows, sdk = evaluate.run_take(datasets.find_take(leapjs_data, 'flapping'))
     assert len(sdk) == 8 and sum(c.in_recording for c in sdk.values()) == 4
-    rows, sdk = evaluate.run_take(evaluate.find_file(leapjs_data, 'Waiting-110fps'))
+    rows, sdk = evaluate.run_take(datasets.find_take(leapjs_data, 'Waiting-110fps'))
     assert len(sdk) == 2 and sum(c.in_recording for c in sdk.values()) == 1
     assert all(c.clockwise is not None for c in sdk.values())
 
@@ -100,7 +101,7 @@ def test_main_writes_the_json(tmp_path, results, leapjs_data):
     # one photo for the photo views (its full table is make eval's and test_photo_views')
     photos = tmp_path / 'hands'
     photos.mkdir()
-    os.symlink(os.path.join(evaluate.HANDS_DATA, 'open_palm__gestia__palm_open.jpg'),
+    os.symlink(os.path.join(datasets.HANDS_DATA, 'open_palm__gestia__palm_open.jpg'),
                str(photos / 'open_palm__gestia__palm_open.jpg'))
     assert evaluate.main(['--data', leapjs_data, '--out', str(out), '--no-people',
                           '--hands-data', str(photos)]) == 0
@@ -117,9 +118,9 @@ def test_main_writes_the_json(tmp_path, results, leapjs_data):
 
 
 def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):
-    rows, _ = evaluate.run_take(evaluate.find_file(leapjs_data, 'test-paddle-rightwards'))
-    labels = evaluate.LABELS['test-paddle-rightwards'][:3]
-    verdicts = [evaluate.expected(e['thumb_up'], r.hand) for r in rows for _, fr, e in labels
+    rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, 'test-paddle-rightwards'))
+    labels = datasets.LEAPJS_LABELS['test-paddle-rightwards'][:3]
+    verdicts = [datasets.expected(e['thumb_up'], r.hand) for r in rows for _, fr, e in labels
                 if r[0] in fr]
     # thumb up (within 45 deg of vertical) and leaning further (unlabelled: real people's
     # thumbs-ups lean as far) both occur on this take
@@ -132,7 +133,7 @@ def test_no_hand_sized_circle_on_takes_without_circles(leapjs_data):
     # (their fingertip loops are 4-20 mm: reported, see circle_all_takes)
     for take in ('finger-tap-54fps', 'wave', 'grab', 'gun', 'three-claps', 'HandSplay-110fps',
                  'brian', 'confidence2'):
-        rows, _ = evaluate.run_take(evaluate.find_file(leapjs_data, take))
+        rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, take))
         events = [e for r in rows for e in r[2].events if e.gesture.startswith('circle')]
         assert not [e for e in events if e.source == 'palm' or e.value >= 0.025], take
 
@@ -140,6 +141,6 @@ def test_no_hand_sized_circle_on_takes_without_circles(leapjs_data):
 def test_no_take_shows_rock_or_a_thumbs_down(leapjs_data):
     # No one makes horns or a thumbs-down in the shared takes; Waiting's finger taps (the
     # SDK's flags read them as rock) bend the fingers at the knuckle only.
-    for take in evaluate.EVERY_TAKE:
-        rows, _ = evaluate.run_take(evaluate.find_file(leapjs_data, take))
+    for take in datasets.EVERY_TAKE:
+        rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, take))
         assert not any(r[2].rock or r[2].thumb_down for r in rows), take

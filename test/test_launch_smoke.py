@@ -11,8 +11,8 @@ import time
 
 import pytest
 
+from leap_teleop.hands.gestures.datasets import data_dir
 from tools.bench import ros_processes
-from tools.evaluation.evaluate import data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)

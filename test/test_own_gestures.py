@@ -303,7 +303,7 @@ def test_the_nodes_arm_on_a_bound_new_gesture(trained, tmp_path):
 def test_record_gestures_from_a_leap_recording(tmp_path, capsys):
     """A recording (here a shared LeapJS take of a hand making an L / gun) is a source
     too: one pose record per hand per frame, gzip by the name."""
-    from tools.evaluation.evaluate import data_dir
+    from leap_teleop.hands.gestures.datasets import data_dir
     take = os.path.join(data_dir(), 'gun.json.lz')
     assert os.path.isfile(take), 'shared data missing: %s' % take
     out = tmp_path / 'gun.jsonl.gz'

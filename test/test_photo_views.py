@@ -4,8 +4,8 @@ image path must keep their gesture in >= 90 % of cases and never read as a thumb
 unless they show one (the full set of views is `make eval`'s photo table)."""
 import os
 
+from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from tools.evaluation import photo_views as views
-from tools.evaluation.evaluate import HANDS_DATA
 
 
 def test_mirrored_and_turned_photos_keep_their_gesture():

@@ -7,7 +7,7 @@ from xml.etree import ElementTree
 
 import pytest
 
-from tools.evaluation.evaluate import HANDS_DATA, data_dir
+from leap_teleop.hands.gestures.datasets import HANDS_DATA, data_dir
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))

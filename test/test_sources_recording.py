@@ -12,9 +12,9 @@ import pytest
 
 from leap_teleop.hands import record_frames
 from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.sources import SourceError, leapjs, make_source
-from tools.evaluation.evaluate import data_dir
 
 DATA = data_dir()
 need_data = pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings

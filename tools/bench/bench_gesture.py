@@ -16,8 +16,8 @@ import os
 import time
 
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.sources import leapjs
-from tools.evaluation.evaluate import data_dir
 
 PASSES = 5
 _clock = time.process_time

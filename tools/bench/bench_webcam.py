@@ -20,9 +20,9 @@ import time
 
 import numpy as np
 
+from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from leap_teleop.ros.node import package_path
 from tools.bench import ros_processes
-from tools.evaluation.evaluate import HANDS_DATA
 
 CLIPS = ('clip_fist_then_thumbs_up__mps__gr_test_video.mp4',
          'clip_palm_motion__mps__hl_test_video.mp4')

@@ -9,33 +9,8 @@ result. The shared LeapJS takes below are a secondary check against the original
 system's rules: the pose model is fitted on their labelled frames too (one more person),
 so their figures are no result on their own.
 
-Nobody labelled the recordings frame by frame, so the labels below are frame ranges read
-once off each take (its title / description and its raw data: the SDK's grab and pinch
-strength, fingertip positions), fixed here, and never moved to suit a recognizer. Frames
-in transitions (a hand closing or opening) are left unlabelled: what they "are" is a
-matter of opinion. Per take:
+The labelled frames of the takes are datasets.LEAPJS_LABELS (see there).
 
-- grab (right hand, open <-> fist cycles): fist where the SDK grab strength sits on its
-  plateau (>= 0.6, all fingers folded: frames 52-118, 246-334); open where grab is 0 and
-  the fingers are straight (0-22, 160-206, 350-373). Also negatives: no pinch and no
-  thumb-up in any of those frames (a fist is not a pinch).
-- pinch (right, pinch ramp with grab 0): pinch on the plateau where the SDK's pinch
-  strength is >= 0.9 (frames 128-234); not a pinch where it is 0 (0-60, 266-306). In this
-  take nothing but the pinch moves, so the SDK strength is a fair witness here.
-- gun (right, thumb + index extended): every frame is not fist, not pinch, not thumb-up,
-  not open.
-- HandSplay-110fps (right, open hand spread / closed flat): every frame open; not fist,
-  not pinch, not thumb-up.
-- three-claps (both hands, open hands clapping): every frame open; not fist, not pinch,
-  not thumb-up.
-- test-paddle-rightwards (right): thumb out of a closed fist (grab >= 0.9 with the thumb
-  tip clear of the fist: frames 28-74, 148-186, 290-318) -> not fist; thumb_up where the
-  SDK's own thumb direction points up (within 45 deg of +y), unlabelled where it leans
-  further (THUMB_UP_BY_DIRECTION: the thumb side of these hands stays turned up, and real
-  people's thumbs-ups lean as far: a Guinevere take's thumb 75..80 deg off vertical by the
-  SDK's direction, so "sideways" here is no longer a label that can be defended); a fist
-  with the thumb tucked (262-282) -> fist, not thumb-up; open hand (84-100, 200-236,
-  344-366) -> open.
 - Waiting-110fps and flapping: the SDK's own circle gestures, counted beside the circle
   events (see circle_agreement; reported, not a target: nobody draws a circle in these
   takes, the SDK's circles are loops of flapping thumbs and pinkies): 10 SDK circles, each reported by the SDK once its
@@ -68,90 +43,29 @@ precision and recall over the labelled frames, n = labelled frames.
 """
 import argparse
 import json
-import math
 import os
 import sys
 
 from leap_teleop.hands.gestures import FINGER_NAMES, GestureRecognizer
-from leap_teleop.hands.gestures.datasets import SHARED_DATA
+from leap_teleop.hands.gestures.datasets import (
+    DEFAULT_LEAPJS_DATA,
+    EVERY_TAKE,
+    HANDS_DATA,
+    LEAPJS_LABELS,
+    data_dir,
+    expected,
+    find_take,
+    take_frames,
+)
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation.original_rules import OriginalRules
 
-DEFAULT_DATA = os.environ.get('LEAPJS_DATA') or os.path.join(SHARED_DATA, 'leapjs')
-# Real hand photos and clips for the camera sources ($HANDS_DATA overrides).
-HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(os.path.dirname(DEFAULT_DATA), 'hands')
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 
 
-def data_dir():
-    """The folder of the shared LeapJS recordings: $LEAPJS_DATA when set, else the
-    repository's sibling shared/data/leapjs."""
-    return os.environ.get('LEAPJS_DATA') or DEFAULT_DATA
-
-
-ALL = range(0, 10 ** 6)
-
-
-def _r(a, b):
-    return range(a, b + 1)
-
-
-# A thumb-out-of-a-fist frame is a thumbs-up when the SDK's thumb direction is within 45
-# deg of +y; beyond, unlabelled (see the paddle take above).
-UP = 'up'
-THUMB_UP_BY_DIRECTION = math.cos(math.radians(45.0))
-
-
-def expected(want, hand):
-    """The label's bool for this hand, or None (unlabelled)."""
-    if want != UP:
-        return want
-    try:
-        y = float(hand.fingers[0].direction[1])
-    except (TypeError, ValueError, IndexError, AttributeError):
-        return None
-    return True if y >= THUMB_UP_BY_DIRECTION else None
-
-
-# take -> list of (side, frame range, {gesture: expected bool or UP})
-LABELS = {
-    'grab': [
-        ('right', _r(52, 118), {'fist': True, 'open': False, 'pinch': False, 'thumb_up': False}),
-        ('right', _r(246, 334), {'fist': True, 'open': False, 'pinch': False, 'thumb_up': False}),
-        ('right', _r(0, 22), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
-        ('right', _r(160, 206), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
-        ('right', _r(350, 373), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
-    ],
-    'pinch': [
-        ('right', _r(128, 234), {'pinch': True, 'fist': False, 'thumb_up': False}),
-        ('right', _r(0, 60), {'pinch': False, 'fist': False, 'thumb_up': False}),
-        ('right', _r(266, 306), {'pinch': False, 'fist': False, 'thumb_up': False}),
-    ],
-    'gun': [('right', ALL, {'fist': False, 'pinch': False, 'thumb_up': False, 'open': False})],
-    'HandSplay-110fps': [
-        ('right', ALL, {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False})],
-    'three-claps': [
-        (side, ALL, {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False})
-        for side in ('right', 'left')],
-    'test-paddle-rightwards': [
-        ('right', _r(28, 74), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
-        ('right', _r(148, 186), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
-        ('right', _r(290, 318), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
-        ('right', _r(262, 282), {'fist': True, 'thumb_up': False, 'open': False}),
-        ('right', _r(84, 100), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
-        ('right', _r(200, 236), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
-        ('right', _r(344, 366), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
-    ],
-}
 # Takes whose frames must show neither pinch nor fist (the issue's hard requirement).
 NO_PINCH_NO_FIST = ('gun', 'HandSplay-110fps', 'three-claps')
 CIRCLE_TAKES = ('Waiting-110fps', 'flapping')
-# Every shared take. The SDK reported circles on six of them; the same circle matching run
-# over all of them shows what a user sees on hands that are not asked to circle (clapping,
-# grabbing, splaying): no circle event is the target.
-EVERY_TAKE = ('grab', 'pinch', 'gun', 'wave', 'three-claps', 'confidence2',
-              'test-paddle-rightwards', 'Waiting-110fps', 'HandSplay-110fps', 'brian',
-              'flapping', 'rollAndPitchCropped', 'finger-tap-54fps')
 # An event matches an SDK circle of the same hand and the same sense when it falls within
 # the SDK circle's span (start .. stop event) widened by this much on each side: the SDK
 # reports the start at 270 deg, the recognizer fires at 300 deg, inside the span; the
@@ -164,36 +78,16 @@ CIRCLE_PLACE_MM = 10.0
 CIRCLE_MIN_LEAD_S = 0.25
 
 
-def find_file(data_dir, take):
-    for name in (take + '.json.gz', 'decoded/%s.json.gz' % take, take + '.json.lz',
-                 take + '.json'):
-        path = os.path.join(data_dir, name)
-        if os.path.exists(path):
-            return path
-    return None
-
-
-_LOADED = {}
-
-
 class Row(tuple):
     """(frame index, side, recognizer state, original state, timestamp); .hand: the Hand
     judged (the labels' thumb direction reads it)."""
     hand = None
 
 
-def _load(path):
-    """The take's frame dicts, read once per process (the leave-one-take-out refits run
-    each take many times)."""
-    if path not in _LOADED:
-        _LOADED[path] = leapjs.load(path)[1]
-    return _LOADED[path]
-
-
 def run_take(path):
     """Per frame: a Row (index, side, recognizer state, original state, timestamp; .hand)
     for every hand, plus the SDK circle gestures: {id: SdkCircle}."""
-    dicts = _load(path)
+    dicts = take_frames(path)
     recognizers = {}
     original = OriginalRules()
     rows = []
@@ -304,7 +198,7 @@ def score_take(take, rows):
     with a pinch or fist on a NO_PINCH_NO_FIST take}} over the take's labelled frames."""
     counts = {who: {g: [0, 0, 0, 0] for g in GESTURES} for who in ('recognizer', 'original')}
     forbidden = {'recognizer': 0, 'original': 0}
-    labels = LABELS.get(take, ())
+    labels = LEAPJS_LABELS.get(take, ())
     for row in rows:
         k, side, rec, orig, _ = row
         hand = row.hand
@@ -331,7 +225,7 @@ def score_take(take, rows):
     return counts
 
 
-def evaluate(data_dir=DEFAULT_DATA, verbose=True):
+def evaluate(data_dir=DEFAULT_LEAPJS_DATA, verbose=True):
     counts = {who: {g: [0, 0, 0, 0] for g in GESTURES} for who in ('recognizer', 'original')}
     forbidden = {'recognizer': 0, 'original': 0}
     missing = []
@@ -339,12 +233,12 @@ def evaluate(data_dir=DEFAULT_DATA, verbose=True):
 
     def take_run(take):
         if take not in runs:
-            path = find_file(data_dir, take)
+            path = find_take(data_dir, take)
             runs[take] = None if path is None else run_take(path)
             if path is None:
                 missing.append(take)
         return runs[take]
-    for take in LABELS:
+    for take in LEAPJS_LABELS:
         run = take_run(take)
         if run is None:
             continue

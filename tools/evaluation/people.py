@@ -18,7 +18,7 @@ heavy -> rock; up, down (a fist with the thumb out, pointing forward) and two, t
 four, index, L, hang, C -> nothing. Dynamic takes: thumbs_up -> thumb_up, thumbs_down ->
 thumb_down, open_hand_* -> open, other takes' frames are unlabelled (they only count for
 false thumbs-ups and false events). The shared LeapJS takes (one more person, an older
-tracker): their labelled frames (tools.evaluation.evaluate.LABELS; a thumb out of a fist
+tracker): their labelled frames (hands.gestures.datasets.LEAPJS_LABELS; a thumb out of a fist
 is a thumbs-up where the SDK's thumb points up, nothing where it points sideways). Webcam
 keypoints: open, fist, thumb_up, thumb_down, ok -> pinch; pointing, peace, other ->
 nothing; the Leap people seen as a camera would (hands.gestures.train.camera_view) score
@@ -159,7 +159,7 @@ def leap_people(data_dir, log=print):
                                   'thumb_down_held': armed['thumb_down'],
                                   'events': dict(events)})
         elif person == 'leapjs_takes':
-            from tools.evaluation.evaluate import UP, expected
+            from leap_teleop.hands.gestures.datasets import UP, expected
             folder = os.path.join(data_dir, 'leapjs')
             for take, hand, cls, want in tg.leapjs_take_hands(folder):
                 if cls == 'thumb':

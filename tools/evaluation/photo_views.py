@@ -31,7 +31,7 @@ import numpy as np
 
 from leap_teleop.hands.classify_frames import HELD, Classifier
 from leap_teleop.hands.frame import Frame
-from tools.evaluation import evaluate
+from leap_teleop.hands.gestures import datasets
 
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
 EXPECTED = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist',
@@ -192,7 +192,7 @@ class PhotoPipeline:
         self.source.detector.close()
 
 
-def run(data_dir=evaluate.HANDS_DATA, names=None, make_views=views, log=None):
+def run(data_dir=datasets.HANDS_DATA, names=None, make_views=views, log=None):
     """Per label: cases, right, fraction, false thumbs-up, no hand found, failures
     [(photo, view, 'label as given' | 'label swapped', gestures read)]. make_views(cv2,
     bgr, label, hand box) -> [(view name, BGR image)]: views (default) or lean_views."""
@@ -258,7 +258,7 @@ def print_table(res, failures=True):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--data', default=evaluate.HANDS_DATA,
+    ap.add_argument('--data', default=datasets.HANDS_DATA,
                     help='folder of the labelled hand photos (default %(default)s)')
     ap.add_argument('--out', default='', help='also write the figures as JSON here')
     ap.add_argument('--photos', default='',

@@ -33,11 +33,10 @@ import sys
 import numpy as np
 
 from leap_teleop.hands.frame import Finger
-from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer
+from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datasets
 from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
-from tools.evaluation import evaluate
 
 STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
 LEAP_PEOPLE_DATA = os.environ.get('LEAP_PEOPLE_DATA') or os.path.join(SHARED_DATA, 'leap_people')
@@ -186,10 +185,10 @@ def take_circles(dicts, make_recognizer=GestureRecognizer):
 
 
 def leapjs_takes(folder=None):
-    folder = folder or evaluate.data_dir()
+    folder = folder or datasets.data_dir()
     out = {}
-    for take in evaluate.EVERY_TAKE:
-        path = evaluate.find_file(folder, take)
+    for take in datasets.EVERY_TAKE:
+        path = datasets.find_take(folder, take)
         if path is None:
             raise DataError('LeapJS take %s not found in %s (set $LEAPJS_DATA)' % (take, folder))
         out[take] = leapjs.load(path)[1]

@@ -16,13 +16,14 @@ import sys
 import numpy as np
 
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures.datasets import DEFAULT_LEAPJS_DATA, LEAPJS_LABELS, find_take
+from leap_teleop.hands.gestures.datasets import expected as label_value
 from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.orientation import hand_rotation
-from tools.evaluation.evaluate import DEFAULT_DATA, GESTURES, LABELS, find_file
-from tools.evaluation.evaluate import expected as label_value
+from tools.evaluation.evaluate import GESTURES
 
 BINS_DEG = (0, 20, 40, 60, 90, 180)
 
@@ -30,8 +31,8 @@ BINS_DEG = (0, 20, 40, 60, 90, 180)
 def real(data_dir):
     """{bin label: (right, total)} over every labelled gesture value."""
     out = {}
-    for take, labels in LABELS.items():
-        path = find_file(data_dir, take)
+    for take, labels in LEAPJS_LABELS.items():
+        path = find_take(data_dir, take)
         if path is None:
             raise FileNotFoundError('recording %s not found in %s' % (take, data_dir))
         _, dicts = leapjs.load(path)
@@ -118,7 +119,7 @@ def synthetic(turns=((0, 0, 0), (0, 0, 40), (0, 0, -70), (30, 0, 0), (-30, 0, 0)
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--data', default=DEFAULT_DATA)
+    ap.add_argument('--data', default=DEFAULT_LEAPJS_DATA)
     args = ap.parse_args(argv)
     print('real recordings, labelled gesture values right / total by palm turn:')
     results = real(args.data)

@@ -26,7 +26,6 @@ import numpy as np
 import pybullet as pb
 
 from leap_teleop.drone import scene
-from leap_teleop.drone.sim import body_visual
 
 
 @dataclass(frozen=True)
@@ -134,7 +133,7 @@ class SceneRenderer:
         if self._drone_arm != arm:
             if self._drone is not None:
                 pb.removeBody(self._drone, physicsClientId=c)
-            self._drone = pb.createMultiBody(0, -1, body_visual(c, arm), HIDDEN,
+            self._drone = pb.createMultiBody(0, -1, scene.body_visual(c, arm), HIDDEN,
                                              physicsClientId=c)
             self._drone_arm = arm
         pb.resetBasePositionAndOrientation(self._drone, pos, quat, physicsClientId=c)

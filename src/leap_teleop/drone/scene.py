@@ -7,6 +7,7 @@ cameras and the pictures show motion against fixed references. Grid lines every 
 landing pad with an arrow pointing +x at the start.
 """
 import atexit
+import math
 import os
 import tempfile
 
@@ -124,3 +125,17 @@ def build(client):
     for x, y, half, rgba in CRATES:
         visual(pb.GEOM_BOX, (x, y, half[2]), halfExtents=half, rgbaColor=rgba)
     return ids
+
+
+def body_visual(client, arm):
+    """The drone's look in `client`: body, four rotor discs at `arm` m from the centre and a
+    red nose marker, as one visual shape array (also drawn by the snapshot renderer)."""
+    a = arm / math.sqrt(2.0)
+    return pb.createVisualShapeArray(
+        shapeTypes=[pb.GEOM_BOX] + [pb.GEOM_CYLINDER] * 4 + [pb.GEOM_BOX],
+        halfExtents=[(0.09, 0.04, 0.03)] + [(0, 0, 0)] * 4 + [(0.03, 0.02, 0.02)],
+        radii=[0] + [0.1] * 4 + [0], lengths=[0] + [0.01] * 4 + [0],
+        rgbaColors=[(0.15, 0.15, 0.15, 1)] + [(0.9, 0.9, 0.9, 0.8)] * 4 + [(0.9, 0.1, 0.1, 1)],
+        visualFramePositions=[(0, 0, 0), (a, a, 0.02), (a, -a, 0.02), (-a, -a, 0.02),
+                              (-a, a, 0.02), (0.12, 0, 0.02)],
+        physicsClientId=client)

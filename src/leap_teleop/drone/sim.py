@@ -137,20 +137,6 @@ def _attitude_error(rd, r):
     return (0.5 * (m(2, 1) - m(1, 2)), 0.5 * (m(0, 2) - m(2, 0)), 0.5 * (m(1, 0) - m(0, 1)))
 
 
-def body_visual(client, arm):
-    """The drone's look in `client`: body, four rotor discs at `arm` m from the centre and a
-    red nose marker, as one visual shape array (also drawn by the snapshot renderer)."""
-    a = arm / math.sqrt(2.0)
-    return pb.createVisualShapeArray(
-        shapeTypes=[pb.GEOM_BOX] + [pb.GEOM_CYLINDER] * 4 + [pb.GEOM_BOX],
-        halfExtents=[(0.09, 0.04, 0.03)] + [(0, 0, 0)] * 4 + [(0.03, 0.02, 0.02)],
-        radii=[0] + [0.1] * 4 + [0], lengths=[0] + [0.01] * 4 + [0],
-        rgbaColors=[(0.15, 0.15, 0.15, 1)] + [(0.9, 0.9, 0.9, 0.8)] * 4 + [(0.9, 0.1, 0.1, 1)],
-        visualFramePositions=[(0, 0, 0), (a, a, 0.02), (a, -a, 0.02), (-a, -a, 0.02),
-                              (-a, a, 0.02), (0.12, 0, 0.02)],
-        physicsClientId=client)
-
-
 class ArDroneSim:
     """One simulated AR.Drone 2.0. Drive it with the command methods and step()/advance().
 
@@ -188,7 +174,7 @@ class ArDroneSim:
         c, p = self.client, self.p
         col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=p.hull, physicsClientId=c)
         hz = p.hull[2]
-        vis = body_visual(c, p.arm)
+        vis = scene.body_visual(c, p.arm)
         self.body = pb.createMultiBody(p.mass, col, vis, (start_xyz[0], start_xyz[1], hz),
                                        physicsClientId=c)
         pb.changeDynamics(self.body, -1, localInertiaDiagonal=p.inertia, linearDamping=0.0,

@@ -13,6 +13,7 @@ import csv
 import gzip
 import io
 import json
+import math
 import os
 
 import numpy as np
@@ -23,6 +24,10 @@ SHARED_DATA = os.environ.get('LEAP_TELEOP_SHARED_DATA') or os.path.normpath(
     os.path.join(os.path.dirname(os.path.realpath(__file__)), '..', '..', '..', '..', '..',
                  'shared', 'data'))
 LEAP_PEOPLE = os.path.join(SHARED_DATA, 'leap_people')
+# The shared LeapJS recordings ($LEAPJS_DATA overrides) and the hand photos and clips
+# ($HANDS_DATA overrides).
+DEFAULT_LEAPJS_DATA = os.environ.get('LEAPJS_DATA') or os.path.join(SHARED_DATA, 'leapjs')
+HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(SHARED_DATA, 'hands')
 KEYPOINTS = os.path.join(SHARED_DATA, 'keypoints')
 STROKES = os.path.join(SHARED_DATA, 'strokes')
 HANDS = os.path.join(SHARED_DATA, 'hands')
@@ -162,3 +167,123 @@ def photo_hands(folder=None):
             xy = np.asarray(h['landmarks'], dtype=float)[:, :2] * (entry['width'], entry['height'])
             out.append((parts[1], parts[0], xy))
     return out
+
+
+# -- the shared LeapJS takes' labelled frames -----------------------------------------
+# Nobody labelled the recordings frame by frame, so the labels below are frame ranges read
+# once off each take (its title / description and its raw data: the SDK's grab and pinch
+# strength, fingertip positions), fixed here, and never moved to suit a recognizer. Frames
+# in transitions (a hand closing or opening) are left unlabelled: what they "are" is a
+# matter of opinion. Per take:
+#
+# - grab (right hand, open <-> fist cycles): fist where the SDK grab strength sits on its
+#   plateau (>= 0.6, all fingers folded: frames 52-118, 246-334); open where grab is 0 and
+#   the fingers are straight (0-22, 160-206, 350-373). Also negatives: no pinch and no
+#   thumb-up in any of those frames (a fist is not a pinch).
+# - pinch (right, pinch ramp with grab 0): pinch on the plateau where the SDK's pinch
+#   strength is >= 0.9 (frames 128-234); not a pinch where it is 0 (0-60, 266-306). In this
+#   take nothing but the pinch moves, so the SDK strength is a fair witness here.
+# - gun (right, thumb + index extended): every frame is not fist, not pinch, not thumb-up,
+#   not open.
+# - HandSplay-110fps (right, open hand spread / closed flat): every frame open; not fist,
+#   not pinch, not thumb-up.
+# - three-claps (both hands, open hands clapping): every frame open; not fist, not pinch,
+#   not thumb-up.
+# - test-paddle-rightwards (right): thumb out of a closed fist (grab >= 0.9 with the thumb
+#   tip clear of the fist: frames 28-74, 148-186, 290-318) -> not fist; thumb_up where the
+#   SDK's own thumb direction points up (within 45 deg of +y), unlabelled where it leans
+#   further (THUMB_UP_BY_DIRECTION: the thumb side of these hands stays turned up, and real
+#   people's thumbs-ups lean as far: a Guinevere take's thumb 75..80 deg off vertical by the
+#   SDK's direction, so "sideways" here is no longer a label that can be defended); a fist
+#   with the thumb tucked (262-282) -> fist, not thumb-up; open hand (84-100, 200-236,
+#   344-366) -> open.
+
+ALL = range(0, 10 ** 6)
+
+
+def _r(a, b):
+    return range(a, b + 1)
+
+
+# A thumb-out-of-a-fist frame is a thumbs-up when the SDK's thumb direction is within 45
+# deg of +y; beyond, unlabelled (see the paddle take above).
+UP = 'up'
+THUMB_UP_BY_DIRECTION = math.cos(math.radians(45.0))
+
+
+def expected(want, hand):
+    """The label's bool for this hand, or None (unlabelled)."""
+    if want != UP:
+        return want
+    try:
+        y = float(hand.fingers[0].direction[1])
+    except (TypeError, ValueError, IndexError, AttributeError):
+        return None
+    return True if y >= THUMB_UP_BY_DIRECTION else None
+
+
+# take -> list of (side, frame range, {gesture: expected bool or UP})
+LEAPJS_LABELS = {
+    'grab': [
+        ('right', _r(52, 118), {'fist': True, 'open': False, 'pinch': False, 'thumb_up': False}),
+        ('right', _r(246, 334), {'fist': True, 'open': False, 'pinch': False, 'thumb_up': False}),
+        ('right', _r(0, 22), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
+        ('right', _r(160, 206), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
+        ('right', _r(350, 373), {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False}),
+    ],
+    'pinch': [
+        ('right', _r(128, 234), {'pinch': True, 'fist': False, 'thumb_up': False}),
+        ('right', _r(0, 60), {'pinch': False, 'fist': False, 'thumb_up': False}),
+        ('right', _r(266, 306), {'pinch': False, 'fist': False, 'thumb_up': False}),
+    ],
+    'gun': [('right', ALL, {'fist': False, 'pinch': False, 'thumb_up': False, 'open': False})],
+    'HandSplay-110fps': [
+        ('right', ALL, {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False})],
+    'three-claps': [
+        (side, ALL, {'open': True, 'fist': False, 'pinch': False, 'thumb_up': False})
+        for side in ('right', 'left')],
+    'test-paddle-rightwards': [
+        ('right', _r(28, 74), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(148, 186), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(290, 318), {'thumb_up': UP, 'fist': False, 'open': False, 'pinch': False}),
+        ('right', _r(262, 282), {'fist': True, 'thumb_up': False, 'open': False}),
+        ('right', _r(84, 100), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
+        ('right', _r(200, 236), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
+        ('right', _r(344, 366), {'open': True, 'fist': False, 'thumb_up': False, 'pinch': False}),
+    ],
+}
+
+
+def find_take(data_dir, take):
+    """The file of a shared LeapJS take (any of its encodings), or None."""
+    for name in (take + '.json.gz', 'decoded/%s.json.gz' % take, take + '.json.lz',
+                 take + '.json'):
+        path = os.path.join(data_dir, name)
+        if os.path.exists(path):
+            return path
+    return None
+
+
+_TAKES = {}
+
+
+def take_frames(path):
+    """The take's frame dicts, read once per process (training and evaluation read each
+    take many times)."""
+    if path not in _TAKES:
+        _TAKES[path] = leapjs.load(path)[1]
+    return _TAKES[path]
+
+
+def data_dir():
+    """The folder of the shared LeapJS recordings: $LEAPJS_DATA when set (read now), else
+    the repository's sibling shared/data/leapjs."""
+    return os.environ.get('LEAPJS_DATA') or DEFAULT_LEAPJS_DATA
+
+
+# Every shared take. The SDK reported circles on six of them; the same circle matching run
+# over all of them shows what a user sees on hands that are not asked to circle (clapping,
+# grabbing, splaying): no circle event is the target.
+EVERY_TAKE = ('grab', 'pinch', 'gun', 'wave', 'three-claps', 'confidence2',
+              'test-paddle-rightwards', 'Waiting-110fps', 'HandSplay-110fps', 'brian',
+              'flapping', 'rollAndPitchCropped', 'finger-tap-54fps')

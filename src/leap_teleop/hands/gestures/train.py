@@ -137,14 +137,13 @@ def add_leap_poses(ds, path, label_map=None, label=None, person=None):
 
 def take_class(want, hand):
     """The pose class of a labelled frame of the shared LeapJS takes, or None."""
-    from tools.evaluation.evaluate import UP
     if want.get('fist') is True:
         return 'fist'
     if want.get('open') is True:
         return 'open'
     if want.get('pinch') is True:
         return 'pinch'
-    if want.get('thumb_up') == UP:
+    if want.get('thumb_up') == gd.UP:
         return 'thumb'          # a thumb out of a fist, up or sideways: the guard decides
     if all(v is False for v in want.values()) and len(want) == 4:
         return 'none'           # the gun (thumb and index out)
@@ -153,15 +152,14 @@ def take_class(want, hand):
 
 def leapjs_take_hands(folder):
     """(take, hand, pose class, labels) of every labelled hand of the shared LeapJS takes
-    (labels: tools/evaluate.LABELS)."""
-    from tools.evaluation import evaluate
-    for take, spans in sorted(evaluate.LABELS.items()):
-        path = evaluate.find_file(folder, take)
+    (labels: datasets.LEAPJS_LABELS)."""
+    for take, spans in sorted(gd.LEAPJS_LABELS.items()):
+        path = gd.find_take(folder, take)
         if path is None:
             continue
-        dicts = evaluate._load(path)
+        dicts = gd.take_frames(path)
         for side, frames, want in spans:
-            for k in frames if frames is not evaluate.ALL else range(len(dicts)):
+            for k in frames if frames is not gd.ALL else range(len(dicts)):
                 if k >= len(dicts) or dicts[k] is None:
                     continue
                 try:

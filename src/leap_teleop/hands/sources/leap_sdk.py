@@ -66,7 +66,7 @@ class LeapSdkSource(HandSource):
         Leap = self.Leap
         pq = PushQueue(self._clock)
 
-        class Listener(Leap.Listener):
+        class SdkFrameListener(Leap.Listener):
             def on_frame(listener, controller):
                 try:
                     f = controller.frame()
@@ -76,7 +76,7 @@ class LeapSdkSource(HandSource):
                 except Exception as e:   # never let a bad frame kill the SDK's thread
                     log.warning('leap source: dropped a frame that failed to convert: %s', e)
 
-        listener = Listener()
+        listener = SdkFrameListener()
         controller = Leap.Controller()
         controller.add_listener(listener)
         try:

@@ -68,7 +68,7 @@ class LeapCSource(HandSource):
         leap = self.leap
         pq = PushQueue(self._clock)
 
-        class Listener(leap.Listener):
+        class LeapCFrameListener(leap.Listener):
             def on_tracking_event(listener, event):
                 try:
                     hands = [convert_hand(leap, h) for h in attr(event, 'hands') or ()]
@@ -78,7 +78,7 @@ class LeapCSource(HandSource):
                     log.warning('leapc source: dropped a frame that failed to convert: %s', e)
 
         connection = leap.Connection()
-        connection.add_listener(Listener())
+        connection.add_listener(LeapCFrameListener())
         with connection.open():
             mode = getattr(getattr(leap, 'TrackingMode', None), 'Desktop', None)
             if mode is not None and hasattr(connection, 'set_tracking_mode'):
