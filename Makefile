@@ -17,9 +17,10 @@ test: setup
 	@$(ENV) ruff check src tools test scripts
 	@$(ENV) python -m pytest test/ $(PYTEST_ARGS)
 
-# The unit tests that need no ROS master and no simulator: seconds, while you work.
+# The unit tests that need no ROS master, no simulator and no model fitting: for while you work.
 check: setup
-	@$(ENV) python -m pytest test/ -m 'not integration' -q $(PYTEST_ARGS)
+	@$(ENV) ruff check src tools test scripts
+	@$(ENV) python -m pytest test/ -m 'not integration and not slow' -q $(PYTEST_ARGS)
 
 lint: setup
 	@$(ENV) ruff check src tools test scripts

@@ -7,6 +7,9 @@ from leap_teleop.ur10.config import config_path
 from leap_teleop.ur10.teleop import DISARMED, TRACKING
 from tools.closed_loop import run_session, sim_params
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 def tray_error(cell, cube, arm):
     tray = cell.config.arm(arm).tray.xyz

@@ -113,6 +113,7 @@ def test_servo_stops_by_itself_when_commands_stop():
     np.testing.assert_allclose(follower.q, q2)      # (from rest: stretched in time)
 
 
+@pytest.mark.slow
 def test_cubic_peak_speed_in_closed_form_matches_dense_sampling():
     rng = np.random.default_rng(2)
     s = np.linspace(0.0, 1.0, 2001)

@@ -373,6 +373,7 @@ finite = st.one_of(st.floats(-1e12, 1e12), st.floats(allow_nan=True, allow_infin
 @given(palm=st.tuples(finite, finite, finite), pinch_value=finite,
        flags=st.tuples(st.booleans(), st.booleans(), st.booleans(), st.booleans(), st.booleans()),
        mode=st.sampled_from(['imitation', 'joystick']))
+@pytest.mark.slow
 def test_fuzzed_input_never_leaves_the_limits(palm, pinch_value, flags, mode):
     t, c = armed_with_origin(mode=mode)
     present, fist, thumb, pinch, rock = flags

@@ -5,7 +5,11 @@ import os
 import subprocess
 import sys
 
+import pytest
 import rosbag
+
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

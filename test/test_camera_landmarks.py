@@ -23,6 +23,9 @@ from leap_teleop.hands.sources.landmarks import (
     solve_translation,
 )
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 @pytest.fixture(scope='module')
 def hands_json():

@@ -18,6 +18,9 @@ from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
 from leap_teleop.ros.conversions import image_message
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HELD = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
 CLIP_FIST_THUMB = 'clip_fist_then_thumbs_up__mps__gr_test_video.mp4'
 CLIP_PALM = 'clip_palm_motion__mps__hl_test_video.mp4'

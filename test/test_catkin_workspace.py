@@ -27,6 +27,9 @@ from test_launch_smoke import run_launches
 
 from tools.bench.ros_processes import free_port
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 PYTHON = sys.executable

@@ -14,6 +14,9 @@ from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.sources import leapjs
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 DATA = data_dir()
 KEYS = ['type', 'fist', 'thumb_up', 'pinch', 'pinch_value', 'rock', 'open', 'thumb_down',
         'events']

@@ -3,6 +3,11 @@ import json
 import subprocess
 import sys
 
+import pytest
+
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 def test_demo_succeeds_and_writes_its_outputs(tmp_path):
     out = tmp_path / 'demo_output'

@@ -24,6 +24,9 @@ from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.sources.scripted import GestureScript
 from tools.bench import ros_processes
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PYTHON = sys.executable
 

@@ -8,6 +8,9 @@ from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
 from leap_teleop.ros.node import package_path
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 SCRIPT = package_path('config', 'gestures', 'drone_flight.yaml')
 
 

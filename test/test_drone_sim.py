@@ -6,6 +6,9 @@ import pytest
 from leap_teleop.drone import sim as ds
 from leap_teleop.drone.sim import ArDroneSim
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 @pytest.fixture
 def warnings():

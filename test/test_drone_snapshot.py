@@ -10,6 +10,9 @@ from leap_teleop.drone import scene
 from leap_teleop.drone.cameras import ChaseSnapshots, chase_view
 from leap_teleop.drone.sim import ArDroneSim
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 @pytest.fixture
 def flying():

@@ -8,6 +8,9 @@ import pytest
 from leap_teleop.hands.gestures import GestureRecognizer
 from tools.evaluation import strokes as es
 
+# fits models or fuzzes for minutes: not in make check
+pytestmark = pytest.mark.slow
+
 ZIG_ZAG_LIKE = ('zig-zag', 'check', 'caret', 'v')
 
 

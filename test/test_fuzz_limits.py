@@ -17,13 +17,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from leap_teleop.control.input_check import InputStream
-from leap_teleop.drone.pilot import DronePilot, PilotConfig
-from leap_teleop.drone.pilot import PilotInput as PilotHand
+from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
 from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop, ArmTeleopParams, PilotInput
+from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
 HOME = kin.HOME_Q.copy()
 wild = st.one_of(st.floats(-600, 600), st.floats(allow_nan=True, allow_infinity=True),
@@ -73,7 +72,7 @@ def test_stream_restarts_after_silence_or_a_clock_jump():
 def hand(**kw):
     kw.setdefault('present', True)
     kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
-    return PilotInput(**kw)
+    return ArmInput(**kw)
 
 
 class Arm:
@@ -242,7 +241,7 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
     for ev in seq:
         if ev[0] == 'hand':
             _, palm, pinch_value, (present, fist, thumb, pinch, rock), age, angles = ev
-            t.on_hand(PilotInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
+            t.on_hand(ArmInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
                                 pinch=pinch, pinch_value=pinch_value, rock=rock,
                                 stamp=now + age, rotate=angles[0], turn=angles[1],
                                 swing=angles[2]), now)
@@ -294,7 +293,7 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
     for ev in seq:
         if ev[0] == 'hand':
             _, present, palm, normal, direction, age = ev
-            pilot.on_hand(PilotHand(present, palm, normal, direction, now + age), now)
+            pilot.on_hand(PilotInput(present, palm, normal, direction, now + age), now)
         elif ev[0] == 'gesture':
             pilot.on_gesture(ev[1], True, now, ev[2])
         elif ev[0] == 'nav':              # also altitudes no Navdata (int32) carries
@@ -324,8 +323,8 @@ def _engaged_pilot(t0):
     pilot = DronePilot(PilotConfig())
     pilot.on_navdata(4, 1000, t0)
     pilot.on_gesture('unfold', True, t0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=t0), t0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t0 + 0.01), t0 + 0.01)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=t0), t0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.2), stamp=t0 + 0.01), t0 + 0.01)
     return pilot
 
 
@@ -335,8 +334,8 @@ def test_pilot_hovers_then_lands_on_a_stream_of_bad_hands():
     out = []
     while t < 4.0:          # NaN palms (and late ones) keep coming: they must not feed the watchdog
         t += 0.01
-        pilot.on_hand(PilotHand(True, (math.nan, 0.2, 0.0), stamp=t), t)
-        pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t - 1.0), t)
+        pilot.on_hand(PilotInput(True, (math.nan, 0.2, 0.0), stamp=t), t)
+        pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.2), stamp=t - 1.0), t)
         pilot.on_navdata(4, 1000, t)
         pilot.watchdog(t)
         while True:
@@ -395,6 +394,9 @@ from leap_teleop.drone.pilot import PILOT_PARAMS, PilotWorker  # noqa: E402
 from leap_teleop.ros.service_call import ServiceCall  # noqa: E402
 from leap_teleop.ur10.teleop import TELEOP_PARAMS  # noqa: E402
 
+# fits models or fuzzes for minutes: not in make check
+pytestmark = pytest.mark.slow
+
 
 def _accepted(p):
     lo = p.gt if p.gt is not None else p.ge
@@ -408,7 +410,7 @@ def _pilot_run(pilot, t0, until, dt=0.01, hand=False, navdata=True):
     while t < until:
         t += dt
         if hand:
-            pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.2), stamp=t), t)
+            pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.2), stamp=t), t)
         if navdata:
             pilot.on_navdata(4, 1000, t)
         pilot.watchdog(t)
@@ -432,7 +434,7 @@ def test_fuzz_any_accepted_pilot_timeouts_still_hover_then_land(hand_timeout, la
     pilot = DronePilot(cfg)
     pilot.on_navdata(4, 1000, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
     _pilot_run(pilot, 0.0, 0.05, hand=True)
     limit = (hand_timeout if lose == 'hand' else navdata_timeout) + land_after + 0.05
     out = _pilot_run(pilot, 0.05, 0.05 + limit, dt=0.02, hand=lose == 'navdata',
@@ -469,7 +471,7 @@ def test_found_no_navdata_no_takeoff_and_no_twist_beyond_hover():
     # Before: with no navdata at all an unfold took off and hand twists were sent.
     warnings = []
     pilot = DronePilot(PilotConfig(), warn=lambda key, text: warnings.append(text))
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
     out = _pilot_run(pilot, 0.0, 2.0, hand=True, navdata=False)
     assert not any(c.kind == 'takeoff' for _, c in out)
@@ -486,7 +488,7 @@ def test_found_navdata_stopping_mid_flight_hovers_then_lands():
     pilot = DronePilot(PilotConfig(navdata_timeout=0.5, land_after=3.0))
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
     out = _pilot_run(pilot, 0.0, 1.0, hand=True)
     assert any(c.kind == 'twist' and c.twist[0] > 0.5 for _, c in out)    # flying forward
     out = _pilot_run(pilot, 1.0, 5.0, hand=True, navdata=False)          # navdata stops
@@ -526,7 +528,7 @@ def test_found_hung_flip_call_never_blocks_the_watchdog():
     w, sent, warnings = _worker(pilot, lambda *anim: release.wait(30.0), clock)
     pilot.on_navdata(4, 1500, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
     pilot.on_gesture('circle_cw', True, 0.0, 0.035)
     try:
         while clock.t < 4.0:                   # the hand went silent right after the circle

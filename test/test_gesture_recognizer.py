@@ -324,6 +324,7 @@ def check_state(s):
         assert math.isfinite(e.value)
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(hands(), min_size=1, max_size=12), st.lists(floats, min_size=12, max_size=12))
 def test_random_hands_never_raise_and_stay_in_range(hs, times):

@@ -12,6 +12,9 @@ from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.ros import conversions
 from leap_teleop.ros import markers as viz
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 PALM_MM = (20.0, 200.0, -10.0)
 
 

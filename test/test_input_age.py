@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.control.input_age import InputAgeWindow
-from leap_teleop.drone.pilot import ArmInput as PilotHand
-from leap_teleop.drone.pilot import DronePilot, PilotConfig
+from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
 
@@ -70,12 +69,12 @@ def test_arm_commands_and_status_carry_the_capture_stamp_of_their_hand():
 def test_pilot_twists_and_gesture_commands_carry_the_capture_stamp():
     pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
     pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, 0.0), stamp=0.05), 0.06)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.05), 0.06)
     pilot.on_gesture('unfold', True, 0.07, stamp=0.055)
     cmd = pilot.queue.popleft()
     assert cmd.kind == 'takeoff' and cmd.input_stamp == 0.055
     pilot.on_navdata(3, 1000, 0.1)
-    pilot.on_hand(PilotHand(True, (0.0, 0.2, -0.1), stamp=0.11), 0.12)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.1), stamp=0.11), 0.12)
     cmd = pilot.queue.popleft()
     assert cmd.kind == 'twist' and cmd.twist[0] > 0 and cmd.input_stamp == 0.11
     pilot.watchdog(0.5)                                   # the watchdog's hover: no input

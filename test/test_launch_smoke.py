@@ -14,6 +14,9 @@ import pytest
 from leap_teleop.hands.gestures.datasets import data_dir
 from tools.bench import ros_processes
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 CHECK = os.path.join(HERE, 'launch_check.py')

@@ -2,6 +2,7 @@
 one name per class. Static (ast), so it needs nothing built or running."""
 import ast
 import os
+import re
 
 import pytest
 
@@ -156,3 +157,18 @@ def test_scripts_are_few_line_wrappers(script):
     code = [line for line in text.splitlines() if line.strip() and not line.startswith('#')]
     assert len(code) <= 8, (script, code)
     assert 'main' in text
+
+
+def test_every_module_the_architecture_page_names_exists():
+    text = open(os.path.join(ROOT, 'docs', 'architecture.md')).read()
+    named = set(re.findall(r'(?<![\w.])((?:hands|control|ur10|drone|ros)(?:\.\w+)+|params|vectors)'
+                           r'(?![\w(])', text))
+    named |= set(re.findall(r'(?<![\w.])(tools(?:\.\w+)+)', text))
+    assert len(named) > 20
+    missing = []
+    for name in sorted(named):
+        name = name.rstrip('.*').rstrip('.')
+        full = name if name.startswith('tools') else 'leap_teleop.' + name
+        if full not in MODULES:
+            missing.append(name)
+    assert not missing, missing

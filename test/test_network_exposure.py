@@ -17,7 +17,7 @@ from tools.bench.ros_processes import free_port
 
 # env.sh and tools/setup.sh of a checkout set up by make setup: not part of a package
 # built in a user's workspace (catkin_make run_tests leaves these out).
-pytestmark = pytest.mark.checkout
+pytestmark = [pytest.mark.checkout, pytest.mark.integration]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAUNCHES = [('demo.launch', ['ur10:=true', 'drone:=true'])]

@@ -10,6 +10,9 @@ import time
 import pytest
 import rosgraph
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 # A shutdown hook stands in for rospy's cleanup: it needs a lock that the main thread
 # holds at the moment the signal arrives, and the main thread then waits for shutdown.
 PROGRAM = textwrap.dedent('''

@@ -27,6 +27,9 @@ from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 RETRAIN_CPU_S = 60.0        # the bound for retraining with a user's samples
 
 

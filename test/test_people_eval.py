@@ -10,6 +10,9 @@ from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
 from tools.evaluation import people as ep
 
+# fits models or fuzzes for minutes: not in make check
+pytestmark = pytest.mark.slow
+
 HELD = ('user_03', 'guinevere_01')
 
 

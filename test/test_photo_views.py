@@ -4,8 +4,13 @@ image path must keep their gesture in >= 90 % of cases and never read as a thumb
 unless they show one (the full set of views is `make eval`'s photo table)."""
 import os
 
+import pytest
+
 from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from tools.evaluation import photo_views as views
+
+# fits models or fuzzes for minutes: not in make check
+pytestmark = pytest.mark.slow
 
 
 def test_mirrored_and_turned_photos_keep_their_gesture():

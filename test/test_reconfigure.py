@@ -13,6 +13,9 @@ from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
 from leap_teleop.ros.nodes.reconfigure import bounds, config_type
 from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
 NODES = [(ur10_arm, 'ur10_arm'), (drone_pilot, 'drone_pilot'), (sender, 'sender')]

@@ -12,6 +12,9 @@ from test_rostests import check_every_test_passed
 from leap_teleop.ros.node import package_path
 from tools.bench import ros_processes
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 

@@ -10,6 +10,9 @@ from test_launch_smoke import GESTURES, run_launches
 from leap_teleop.hands.sources.scripted import ScriptedSource
 from leap_teleop.ros.recording_to_bag import write_bag
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 LAYOUTS = {
     'one_arm': ({'right': '/leapmotion/data'}, ['topics:=/leapmotion/data']),
     'two_arm': ({'right': '/leapmotion/data_right', 'left': '/leapmotion/data_left'},

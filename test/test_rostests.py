@@ -9,6 +9,9 @@ import pytest
 
 from leap_teleop.hands.gestures.datasets import HANDS_DATA, data_dir
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
 TIMEOUT_S = 300

@@ -21,6 +21,9 @@ import yaml
 
 from tools.bench.ros_processes import free_port
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONFIG = os.path.join(HERE, '..', 'rviz', 'ur10.rviz')
 SCREEN = (1280, 900)

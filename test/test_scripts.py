@@ -6,6 +6,9 @@ import subprocess
 
 import pytest
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 @pytest.fixture(autouse=True)
 def rosrun_installed():

@@ -3,9 +3,13 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
 from leap_teleop.ur10.cell import UR10Cell
 from leap_teleop.ur10.snapshot import SnapshotRenderer
+
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
 
 
 def test_found_snapshot_renders_outside_the_physics_thread(tmp_path):

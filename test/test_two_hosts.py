@@ -23,7 +23,7 @@ import pytest
 
 # env.sh and tools/setup.sh of a checkout set up by make setup: not part of a package
 # built in a user's workspace (catkin_make run_tests leaves these out).
-pytestmark = pytest.mark.checkout
+pytestmark = [pytest.mark.checkout, pytest.mark.integration]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 GROUND, ROBOT = '10.231.0.1', '10.231.0.2'

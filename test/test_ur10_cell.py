@@ -21,6 +21,9 @@ from leap_teleop.ur10.cell import UR10Cell
 from leap_teleop.ur10.pick_place import pick_place_plan, play_together, run_plan
 from leap_teleop.ur10.trajectory import TrajectoryError
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 ARM = 'ur10_1'
 
 

@@ -9,6 +9,9 @@ import pytest
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.model import urdf_file
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 RNG_SEED = 4
 
 
