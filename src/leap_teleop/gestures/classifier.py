@@ -52,9 +52,10 @@ class PoseClassifier:
 
     def proba(self, x):
         """Probabilities (n_classes,) for one feature vector, or (n, n_classes) for rows."""
-        h = np.asarray(x, dtype=float) @ self._w0
+        # ndarray.dot, not @: the same product at half the call overhead for one vector
+        h = np.asarray(x, dtype=float).dot(self._w0)
         h += self._b0
-        s = np.maximum(h, 0.0) @ self.w1
+        s = np.maximum(h, 0.0).dot(self.w1)
         s += self.b1
         if s.ndim == 1:
             # one vector: the softmax of a handful of classes in plain floats costs a

@@ -45,10 +45,10 @@ def leap_features(hand, geometry=None):
     if g is None or g.joints is None:
         return None
     bones = g.bones.reshape(15, 3)                  # unit bones, hand frame
-    cos = (bones @ bones.T).take(_BONE_COS)         # (5, 2) flattened
+    cos = bones.dot(bones.T).take(_BONE_COS)        # (5, 2) flattened
     out = np.concatenate((g.reach.ravel(), g.bones.ravel(), g.tip_gaps, cos))
     # a finite sum of squares: all finite (else the exact test: it may have overflowed)
-    return out if _isfinite(out @ out) or np.isfinite(out).all() else None
+    return out if _isfinite(out.dot(out)) or np.isfinite(out).all() else None
 
 
 def normalize_keypoints(xy):

@@ -119,7 +119,10 @@ def hand_geometry(hand):
         if palm is None or n is None or d is None:
             return None
         joints = None
-        parts = [a for f in fingers for a in (f.mcp, f.pip, f.dip, f.tip)]
+        f0, f1, f2, f3, f4 = fingers
+        parts = [f0.mcp, f0.pip, f0.dip, f0.tip, f1.mcp, f1.pip, f1.dip, f1.tip,
+                 f2.mcp, f2.pip, f2.dip, f2.tip, f3.mcp, f3.pip, f3.dip, f3.tip,
+                 f4.mcp, f4.pip, f4.dip, f4.tip]
         try:
             if set(map(_dtype, parts)) == _F64_ONLY:
                 # contiguous float64 (what the sources make): their bytes joined cost a
@@ -134,7 +137,7 @@ def hand_geometry(hand):
                 j = None                            # a joint missing or malformed
         # a finite sum of squares: every joint is finite (else the exact test: the sum
         # may have overflowed)
-        if j is not None and j.shape == (60,) and (_isfinite(j @ j) or np.isfinite(j).all()):
+        if j is not None and j.shape == (60,) and (_isfinite(j.dot(j)) or np.isfinite(j).all()):
             joints = j.reshape(20, 3)
         if joints is not None:
             jl = j.tolist()                         # joint i at jl[3 * i:3 * i + 3]
@@ -175,11 +178,12 @@ def hand_geometry(hand):
         thumb_dir = (math.nan,) * 3
     local = bones = length = reach = gaps = None
     if joints is not None:
-        local = joints @ np.array(((t[0] / width, n[0] / width, d[0] / width),
-                                   (t[1] / width, n[1] / width, d[1] / width),
-                                   (t[2] / width, n[2] / width, d[2] / width)))
-        diffs = _DIFFS @ local                      # rows: see _difference_rows
-        norms = np.sqrt((diffs * diffs) @ _ONES_COLUMN)      # (38, 1)
+        # ndarray.dot, not @: the same product at half the call overhead on arrays this small
+        local = joints.dot(np.array(((t[0] / width, n[0] / width, d[0] / width),
+                                     (t[1] / width, n[1] / width, d[1] / width),
+                                     (t[2] / width, n[2] / width, d[2] / width))))
+        diffs = _DIFFS.dot(local)                   # rows: see _difference_rows
+        norms = np.sqrt((diffs * diffs).dot(_ONES_COLUMN))  # (38, 1)
         unit = diffs / np.maximum(norms, 1e-9)
         reach = diffs[:15].reshape(5, 3, 3)
         bones = unit[15:30].reshape(5, 3, 3)
