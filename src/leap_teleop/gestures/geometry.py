@@ -50,6 +50,7 @@ def _difference_rows():
 
 _DIFFS = _difference_rows()
 _ONES_COLUMN = np.ones((3, 1))
+_NORM_FLOOR = np.full((38, 1), 1e-9)   # an array: numpy converts a Python float per call
 _F64_ONLY = {np.dtype(float)}
 _dtype = operator.attrgetter('dtype')
 _isfinite = math.isfinite
@@ -179,12 +180,12 @@ def hand_geometry(hand):
     local = bones = length = reach = gaps = None
     if joints is not None:
         # ndarray.dot, not @: the same product at half the call overhead on arrays this small
-        local = joints.dot(np.array(((t[0] / width, n[0] / width, d[0] / width),
-                                     (t[1] / width, n[1] / width, d[1] / width),
-                                     (t[2] / width, n[2] / width, d[2] / width))))
+        local = joints.dot(np.array((t[0] / width, n[0] / width, d[0] / width,
+                                     t[1] / width, n[1] / width, d[1] / width,
+                                     t[2] / width, n[2] / width, d[2] / width)).reshape(3, 3))
         diffs = _DIFFS.dot(local)                   # rows: see _difference_rows
         norms = np.sqrt((diffs * diffs).dot(_ONES_COLUMN))  # (38, 1)
-        unit = diffs / np.maximum(norms, 1e-9)
+        unit = diffs / np.maximum(norms, _NORM_FLOOR)
         reach = diffs[:15].reshape(5, 3, 3)
         bones = unit[15:30].reshape(5, 3, 3)
         length = norms[15:30].reshape(5, 3)
