@@ -140,7 +140,9 @@ def _with_joints(hand, convert):
     lambda j: np.asarray(j, dtype=np.float32).astype(float),        # float64 (the fast path)
     lambda j: np.asarray(j, dtype=np.float32),                      # another dtype
     lambda j: np.repeat(np.asarray(j, dtype=float), 2)[::2],        # not contiguous
-], ids=['lists', 'float64', 'float32', 'strided'])
+    lambda j: np.asarray(j, dtype=float).reshape(1, 3),             # rows
+    lambda j: np.asarray(j, dtype=np.float32).reshape(1, 3),
+], ids=['lists', 'float64', 'float32', 'strided', 'rows', 'float32 rows'])
 def test_joints_of_any_array_kind_give_the_same_features(real_hands, convert):
     for hand in real_hands[::25]:
         # joints rounded to float32 first, so that every kind holds the same numbers

@@ -133,7 +133,7 @@ def hand_geometry(hand):
                 raise TypeError
         except (TypeError, AttributeError):
             try:
-                j = np.concatenate(parts).astype(float, copy=False)
+                j = np.concatenate(parts).astype(float, copy=False).reshape(-1)
             except (TypeError, ValueError):
                 j = None                            # a joint missing or malformed
         # a finite sum of squares: every joint is finite (else the exact test: the sum
