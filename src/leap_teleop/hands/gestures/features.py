@@ -18,14 +18,15 @@ import math
 
 import numpy as np
 
-from leap_teleop.hands.gestures.geometry import hand_geometry
+from leap_teleop.hands.gestures.geometry import TIP_PAIRS, hand_geometry
 
 LEAP_FEATURES = 5 * 3 * 3 + 5 * 3 * 3 + 7 + 10
 KEYPOINT_FEATURES = 21 * 2 + 20 * 2 + 7 + 15
-# fingertip pairs whose gaps are features: thumb to every other tip, neighbouring tips
-_TIP_PAIRS = ((0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4))
-_TIP_A = np.array([a for a, _ in _TIP_PAIRS])
-_TIP_B = np.array([b for _, b in _TIP_PAIRS])
+_TIP_A = np.array([a for a, _ in TIP_PAIRS])
+_TIP_B = np.array([b for _, b in TIP_PAIRS])
+# where each finger's two successive-bone cosines sit in the (15, 15) Gram matrix of its
+# bones, flattened
+_BONE_COS = np.array([15 * i + i + 1 for f in range(5) for i in (3 * f, 3 * f + 1)])
 # MediaPipe landmark chains: wrist -> each finger's four joints
 _CHAINS = np.array([[0, 1, 2, 3, 4], [0, 5, 6, 7, 8], [0, 9, 10, 11, 12],
                     [0, 13, 14, 15, 16], [0, 17, 18, 19, 20]])
@@ -43,14 +44,11 @@ def leap_features(hand, geometry=None):
     g = geometry if geometry is not None else hand_geometry(hand)
     if g is None or g.joints is None:
         return None
-    local, bones = g.local, g.bones                 # hand frame, palm widths; unit bones
-    reach = local[:, 1:] - local[:, :1]             # (5, 3, 3) from each knuckle
-    tips = local[:, 3]
-    d = tips[_TIP_A] - tips[_TIP_B]
-    gaps = np.sqrt(np.einsum('ij,ij->i', d, d))
-    cos = np.einsum('ijk,ijk->ij', bones[:, 1:], bones[:, :-1])  # (5, 2)
-    out = np.concatenate((reach.ravel(), bones.ravel(), gaps, cos.ravel()))
-    return out if np.isfinite(out).all() else None
+    bones = g.bones.reshape(15, 3)                  # unit bones, hand frame
+    cos = bones.dot(bones.T).take(_BONE_COS)        # (5, 2) flattened
+    out = np.concatenate((g.reach.ravel(), g.bones.ravel(), g.tip_gaps, cos))
+    # a finite sum of squares: all finite (else the exact test: it may have overflowed)
+    return out if _isfinite(out.dot(out)) or np.isfinite(out).all() else None
 
 
 def normalize_keypoints(xy):

@@ -7,6 +7,7 @@ right one). Lengths are in palm widths: the distance between the index and pinky
 knuckles, or a nominal adult value when the frame has no knuckles.
 """
 import math
+import operator
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
@@ -27,6 +28,31 @@ EXTENDED_CHORD = 0.85
 EXTENDED_MAX_FLEX_DEG = 85.0
 THUMB_OUT = 0.35
 _COS_FLEX = math.cos(math.radians(EXTENDED_MAX_FLEX_DEG))
+# fingertip pairs whose gaps the features use: thumb to every other tip, neighbouring tips
+TIP_PAIRS = ((0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4))
+
+
+def _difference_rows():
+    """(38, 20): times the (20, 3) joints (finger by finger: mcp, pip, dip, tip), each
+    finger's pip, dip and tip from its knuckle (rows 0..14), its three bones (15..29),
+    the TIP_PAIRS gaps (30..36) and the thumb tip from the index knuckle (37): one matrix
+    product instead of a dozen small ones."""
+    rows = np.zeros((38, 20))
+    for f in range(5):
+        for k in range(3):
+            rows[3 * f + k, 4 * f + k + 1], rows[3 * f + k, 4 * f] = 1.0, -1.0
+            rows[15 + 3 * f + k, 4 * f + k + 1], rows[15 + 3 * f + k, 4 * f + k] = 1.0, -1.0
+    for i, (a, b) in enumerate(TIP_PAIRS):
+        rows[30 + i, 4 * a + 3], rows[30 + i, 4 * b + 3] = 1.0, -1.0
+    rows[37, 3], rows[37, 4] = 1.0, -1.0
+    return rows
+
+
+_DIFFS = _difference_rows()
+_ONES_COLUMN = np.ones((3, 1))
+_NORM_FLOOR = np.full((38, 1), 1e-9)   # an array: numpy converts a Python float per call
+_F64_ONLY = {np.dtype(float)}
+_dtype = operator.attrgetter('dtype')
 _isfinite = math.isfinite
 
 
@@ -41,6 +67,9 @@ class HandGeometry:
                                   # tracker's), None without joints
     bones: Optional[np.ndarray]   # (5, 3, 3) unit bone directions in the hand frame
     bone_length: Optional[np.ndarray]   # (5, 3) palm widths
+    reach: Optional[np.ndarray]   # (5, 3, 3) pip, dip, tip from the finger's knuckle, hand
+                                  # frame, palm widths
+    tip_gaps: Optional[np.ndarray]   # (7,) palm widths between the TIP_PAIRS fingertips
     tips_world: list              # 5 [x, y, z] fingertips, mm
     thumb_dir: Tuple[float, float, float]   # unit, Leap axes: the thumb's knuckle -> tip
     pinch_gap: float              # palm widths, thumb tip to index tip
@@ -91,21 +120,33 @@ def hand_geometry(hand):
         if palm is None or n is None or d is None:
             return None
         joints = None
-        if all(f.mcp is not None and f.pip is not None and f.dip is not None for f in fingers):
+        f0, f1, f2, f3, f4 = fingers
+        parts = [f0.mcp, f0.pip, f0.dip, f0.tip, f1.mcp, f1.pip, f1.dip, f1.tip,
+                 f2.mcp, f2.pip, f2.dip, f2.tip, f3.mcp, f3.pip, f3.dip, f3.tip,
+                 f4.mcp, f4.pip, f4.dip, f4.tip]
+        try:
+            if set(map(_dtype, parts)) == _F64_ONLY:
+                # contiguous float64 (what the sources make): their bytes joined cost a
+                # third of np.concatenate (a non-contiguous one raises TypeError)
+                j = np.frombuffer(bytearray().join(parts))
+            else:
+                raise TypeError
+        except (TypeError, AttributeError):
             try:
-                j = np.concatenate([a for f in fingers for a in (f.mcp, f.pip, f.dip, f.tip)]
-                                   ).astype(float, copy=False).reshape(5, 4, 3)
+                j = np.concatenate(parts).astype(float, copy=False).reshape(-1)
             except (TypeError, ValueError):
-                j = None
-            if j is not None and np.isfinite(j).all():
-                joints = j
+                j = None                            # a joint missing or malformed
+        # a finite sum of squares: every joint is finite (else the exact test: the sum
+        # may have overflowed)
+        if j is not None and j.shape == (60,) and (_isfinite(j.dot(j)) or np.isfinite(j).all()):
+            joints = j.reshape(20, 3)
         if joints is not None:
-            tips = joints[:, 3]
+            jl = j.tolist()                         # joint i at jl[3 * i:3 * i + 3]
+            tip_list = [jl[9:12], jl[21:24], jl[33:36], jl[45:48], jl[57:60]]
         else:
-            tips = [_vec(f.tip) for f in fingers]
-            if any(x is None for x in tips):
+            tip_list = [_vec(f.tip) for f in fingers]
+            if any(x is None for x in tip_list):
                 return None
-            tips = np.array(tips)
     except (TypeError, ValueError, AttributeError, IndexError):
         return None
     # the hand frame in plain floats: numpy's cross and norm cost more than they save here
@@ -125,31 +166,38 @@ def hand_geometry(hand):
     t = (sgn * (dy * nz - dz * ny), sgn * (dz * nx - dx * nz), sgn * (dx * ny - dy * nx))
     n, d = (nx, ny, nz), (dx, dy, dz)
     width = NOMINAL_PALM_WIDTH_MM
-    tip_list = tips.tolist()
     thumb_dir = None
     if joints is not None:
-        im, pm = joints[1, 0].tolist(), joints[4, 0].tolist()
-        w = math.dist(im, pm)
+        w = math.dist(jl[12:15], jl[48:51])         # index and pinky knuckles
         if PALM_WIDTH_RANGE_MM[0] <= w <= PALM_WIDTH_RANGE_MM[1]:
             width = w
-        thumb_dir = _unit3(*(a - b for a, b in zip(tip_list[0], joints[0, 1].tolist())))
+        thumb_dir = _unit3(jl[9] - jl[3], jl[10] - jl[4], jl[11] - jl[5])   # pip -> tip
     if thumb_dir is None:
         fd = _vec(fingers[0].direction)
         thumb_dir = _unit3(*fd) if fd is not None else None
     if thumb_dir is None:
         thumb_dir = (math.nan,) * 3
-    local = bones = length = None
+    local = bones = length = reach = gaps = None
     if joints is not None:
-        local = joints @ (np.array((t, n, d)).T / width)
-        bones = local[:, 1:] - local[:, :-1]
-        length = np.sqrt(np.einsum('ijk,ijk->ij', bones, bones))
-        bones /= np.maximum(length, 1e-9)[:, :, None]
-        extended = _extended_from_local(local, bones, length)
+        # ndarray.dot, not @: the same product at half the call overhead on arrays this small
+        local = joints.dot(np.array((t[0] / width, n[0] / width, d[0] / width,
+                                     t[1] / width, n[1] / width, d[1] / width,
+                                     t[2] / width, n[2] / width, d[2] / width)).reshape(3, 3))
+        diffs = _DIFFS.dot(local)                   # rows: see _difference_rows
+        norms = np.sqrt((diffs * diffs).dot(_ONES_COLUMN))  # (38, 1)
+        unit = diffs / np.maximum(norms, _NORM_FLOOR)
+        reach = diffs[:15].reshape(5, 3, 3)
+        bones = unit[15:30].reshape(5, 3, 3)
+        length = norms[15:30].reshape(5, 3)
+        gaps = norms[30:37, 0]
+        extended = _extended_from_local(diffs, unit, norms)
+        local = local.reshape(5, 4, 3)
+        joints = joints.reshape(5, 4, 3)
     else:
         extended = _extended(tip_list, palm, t, d, width, fingers)
     return HandGeometry(basis=(t, n, d), palm=palm, palm_width=width, joints=joints,
-                        local=local, bones=bones, bone_length=length,
-                        tips_world=tip_list, thumb_dir=thumb_dir,
+                        local=local, bones=bones, bone_length=length, reach=reach,
+                        tip_gaps=gaps, tips_world=tip_list, thumb_dir=thumb_dir,
                         pinch_gap=math.dist(tip_list[0], tip_list[1]) / width,
                         extended=extended)
 
@@ -163,13 +211,17 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _extended_from_local(local, bones, length):
-    """5 flags from the hand-frame joints (see EXTENDED_*)."""
-    chord = local[1:, 3] - local[1:, 0]
-    chord = np.sqrt(np.einsum('ij,ij->i', chord, chord)) / np.maximum(length[1:].sum(axis=1),
-                                                                      1e-9)
-    straight = ((chord > EXTENDED_CHORD) & (bones[1:, 2, 2] > _COS_FLEX)).tolist()
-    return (float(local[0, 3, 0] - local[1, 0, 0]) > THUMB_OUT,) + tuple(straight)
+def _extended_from_local(diffs, unit, norms):
+    """5 flags from the _DIFFS rows in the hand frame, as they are, as unit vectors and
+    their norms (see EXTENDED_*)."""
+    nl = norms[:, 0].tolist()
+    flex = unit[17:30:3, 2].tolist()                # each finger's last bone, along z
+    flags = [float(diffs[37, 0]) > THUMB_OUT]       # thumb tip thumbward of index knuckle
+    for f in (1, 2, 3, 4):
+        b = 15 + 3 * f
+        chord = nl[3 * f + 2] / max(nl[b] + nl[b + 1] + nl[b + 2], 1e-9)
+        flags.append(chord > EXTENDED_CHORD and flex[f] > _COS_FLEX)
+    return tuple(flags)
 
 
 def _extended(tips, palm, t, d, width, fingers):

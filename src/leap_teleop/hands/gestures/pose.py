@@ -50,6 +50,7 @@ CAMERA_THUMB_RISE = 0.05
 CAMERA_THUMB_MAX_DEG = 60.0
 _CAMERA_THUMB_COS = math.cos(math.radians(CAMERA_THUMB_MAX_DEG))
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
+_EXTRA = {}                 # a model's classes -> its user classes (a key each in the decisions)
 _isfinite = math.isfinite
 
 
@@ -119,7 +120,7 @@ def classify_pose(hand, g, model):
     'extended' (5 bools), 'label' (the winning class or '') and 'probability'; user
     classes appear under their own names. `g` (the HandGeometry) may be None for a hand
     known only by its image landmarks."""
-    out = {name: False for name in HELD}
+    out = dict.fromkeys(HELD, False)
     out['extended'] = g.extended if g is not None else (False,) * 5
     out['pinch_value'] = 0.0
     out['label'], out['probability'] = '', 0.0
@@ -127,9 +128,12 @@ def classify_pose(hand, g, model):
     if scored is None:
         return out
     classes, p = scored
-    for c in classes:
-        if c not in out and c not in ('none', 'thumb'):
-            out[c] = False
+    extra = _EXTRA.get(classes)
+    if extra is None:
+        extra = _EXTRA[classes] = tuple(c for c in classes if c not in out
+                                        and c not in ('none', 'thumb'))
+    for c in extra:
+        out[c] = False
     i = int(p.argmax())
     best, prob = classes[i], float(p[i])
     out['label'], out['probability'] = best, prob

@@ -86,7 +86,8 @@ class GestureRecognizer:
                              min(max(float(pinch_value), 0.0), 0.8) if pinch else 0.0,
                              'rock' in active, 'open' in active, extended, [],
                              'thumb_down' in active, label, probability,
-                             tuple(sorted(n for n in active if n in self.user_gestures)))
+                             tuple(sorted(n for n in active if n in self.user_gestures))
+                             if self.user_gestures else ())
         if not stateless:
             state.events = filt.events(state, prev, timestamp)
             if self.circles is not None and usable and g is not None:
