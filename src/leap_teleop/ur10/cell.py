@@ -32,6 +32,12 @@ SOLVER_ITERATIONS = 100
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
+# The per-step motor call's constant arguments, as lists (PyBullet reads them fastest).
+_ARM_FORCES = ARM_FORCE.tolist()
+_ARM_KP = [ARM_POSITION_GAIN] * 6
+_ARM_KD = [1.0] * 6
+_GRIPPER_FORCES = [GRIPPER_FORCE, GRIPPER_FORCE, 1.0]     # fingers, knuckle
+_GRIPPER_KP = [0.2] * 3
 
 
 class _Arm:
@@ -49,6 +55,7 @@ class _Arm:
         self.arm_joints = [joints[n] for n in kin.JOINT_NAMES]
         self.knuckle = joints[GRIPPER_JOINT]
         self.fingers = [joints['left_finger_joint'], joints['right_finger_joint']]
+        self.gripper_joints = self.fingers + [self.knuckle]
         self.finger_links = [links['left_finger_link'], links['right_finger_link']]
         self.tcp_link = links['tcp_link']
         self.arm_follower = TrajectoryFollower(cfg.home, kin.MAX_JOINT_SPEED,
@@ -82,11 +89,24 @@ class UR10Cell:
             body = p.loadURDF(urdf_file(a.prefix, a.base_xyz, a.base_rpy), useFixedBase=True,
                               flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
             self.arms[a.name] = arm = _Arm(a, body, c)
+            self._cap_arm_speed(arm)
             for j in arm.fingers + [arm.knuckle]:
                 p.changeDynamics(body, j, jointLowerLimit=0.0,
                                  jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
                                  physicsClientId=c)
         self.reset()
+
+    def _cap_arm_speed(self, arm):
+        """Cap each arm motor at the joint's speed limit. PyBullet keeps a motor's
+        maxVelocity until it is set again and only the one-joint call sets it, so it is set
+        here once (holding home, as step() does after a reset) and the per-step array call
+        leaves it in place."""
+        for j, q, fj, vmax in zip(arm.arm_joints, arm.cfg.home, _ARM_FORCES,
+                                  kin.MAX_JOINT_SPEED):
+            p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=float(q),
+                                    targetVelocity=0.0, force=fj,
+                                    positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
+                                    maxVelocity=float(vmax), physicsClientId=self.client)
 
     # ---- scene -------------------------------------------------------------------------
     def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
@@ -158,31 +178,29 @@ class UR10Cell:
 
     # ---- simulation --------------------------------------------------------------------
     def step(self, n=1):
-        c = self.client
+        c, dt = self.client, self.dt
         for _ in range(n):
-            t = self.time + self.dt
+            t = self.time + dt
             for arm in self.arms.values():
                 # PyBullet's motor sets the step's velocity to targetVelocity +
                 # positionGain * (targetPosition - q) / dt. The feed-forward is the desired
                 # motion over this step and the correction acts on the error now, so a joint
                 # on its trajectory lands on the next desired position and its acceleration
                 # is the trajectory's (a target for the end of the step with the velocity
-                # there counts that step twice: ~30 % acceleration overshoot).
+                # there counts that step twice: ~30 % acceleration overshoot). One call for
+                # the six joints; their speed caps were set once (_cap_arm_speed).
                 q_now = arm.arm_follower.sample(self.time)[0].copy()
                 q_next, _ = arm.arm_follower.sample(t)
-                v_step = (q_next - q_now) / self.dt
-                for j, qj, vj, fj, vmax in zip(arm.arm_joints, q_now, v_step, ARM_FORCE,
-                                               kin.MAX_JOINT_SPEED):
-                    p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=qj,
-                                            targetVelocity=vj, force=fj,
-                                            positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
-                                            maxVelocity=vmax, physicsClientId=c)
-                g, _ = arm.gripper_follower.sample(t)
-                f = float(g[0]) * FINGER_TRAVEL / GRIPPER_CLOSED
-                p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],
-                                            p.POSITION_CONTROL, targetPositions=[f, f, float(g[0])],
-                                            forces=[GRIPPER_FORCE, GRIPPER_FORCE, 1.0],
-                                            positionGains=[0.2, 0.2, 0.2], physicsClientId=c)
+                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
+                                            targetPositions=q_now.tolist(),
+                                            targetVelocities=((q_next - q_now) / dt).tolist(),
+                                            forces=_ARM_FORCES, positionGains=_ARM_KP,
+                                            velocityGains=_ARM_KD, physicsClientId=c)
+                g = float(arm.gripper_follower.sample(t)[0][0])
+                f = g * FINGER_TRAVEL / GRIPPER_CLOSED
+                p.setJointMotorControlArray(arm.body, arm.gripper_joints, p.POSITION_CONTROL,
+                                            targetPositions=[f, f, g], forces=_GRIPPER_FORCES,
+                                            positionGains=_GRIPPER_KP, physicsClientId=c)
             p.stepSimulation(physicsClientId=c)
             self.time = t
             self.steps += 1
@@ -194,26 +212,29 @@ class UR10Cell:
         """Step for the given simulated time."""
         self.step(max(1, int(round(seconds / self.dt))))
 
-    def _touching(self, arm, link, axis):
-        """Cubes the finger link presses with its pad: contact normals along the closing
-        axis (fingertips resting on a cube's top do not count)."""
+    def _touching(self, contacts, axis):
+        """Cubes a finger link presses with its pad (of its contacts with cubes): contact
+        normals along the closing axis (fingertips resting on a cube's top do not count)."""
         out = []
-        for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link, physicsClientId=self.client):
-            name = self._cube_by_body.get(cp[2])
-            if (name is not None and name not in out
-                    and abs(float(np.dot(cp[7], axis))) > PAD_NORMAL_MIN_COS):
+        for cp in contacts:
+            name = self._cube_by_body[cp[2]]
+            if name not in out and abs(float(np.dot(cp[7], axis))) > PAD_NORMAL_MIN_COS:
                 out.append(name)
         return out
 
     def _update_grasp(self, arm):
         c = self.client
-        orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
-                             physicsClientId=c)[5]
-        axis = np.array(p.getMatrixFromQuaternion(orn))[[0, 3, 6]]   # TCP x: closing axis
-        left, right = (self._touching(arm, link, axis) for link in arm.finger_links)
+        contacts = [[cp for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link,
+                                                     physicsClientId=c)
+                     if cp[2] in self._cube_by_body] for link in arm.finger_links]
+        axis = None
+        if contacts[0] or contacts[1]:      # the TCP's pose only matters for a cube contact
+            orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
+                                 physicsClientId=c)[5]
+            axis = np.array(p.getMatrixFromQuaternion(orn))[[0, 3, 6]]   # TCP x: closing axis
+        left, right = (self._touching(cps, axis) for cps in contacts)
         arm.touching = (left, right)
         g_des = float(arm.gripper_follower.q[0])
-        g_now = self._knuckle(arm)[0]
         if arm.grasp is not None:
             cid, cube, g_grasp = arm.grasp
             opening = g_des < g_grasp - 0.02
@@ -225,8 +246,11 @@ class UR10Cell:
                 arm.lost_checks = 0
             return
         both = [n for n in left if n in right]
+        if not both:
+            return
         # Only a closing gripper squeezing the cube grasps it.
-        if both and g_des > g_now + 0.01 or (both and g_des >= GRIPPER_CLOSED - 1e-6):
+        g_now = self._knuckle(arm)[0]
+        if g_des > g_now + 0.01 or g_des >= GRIPPER_CLOSED - 1e-6:
             cube = both[0]
             body = self.cubes[cube]
             ls = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
