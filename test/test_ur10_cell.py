@@ -3,6 +3,7 @@ that do not interfere, reset, snapshots; and the ROS conversions' validation."""
 import math
 
 import numpy as np
+import pybullet as p
 import pytest
 import rospy
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -70,6 +71,33 @@ def test_joints_follow_the_trajectory_with_its_acceleration(cell):
     assert worst_err < 1e-4, worst_err
     # one full period of the motion: back at the start, at rest
     assert np.max(np.abs(cell.joint_state(ARM)[0] - q_start)) < 1e-3
+
+
+def test_free_motion_sits_on_the_closed_form_trajectory(cell):
+    """A cubic from rest to rest within the speed and acceleration limits: after every
+    physics step the joints are where q0 + d (3 s^2 - 2 s^3) puts them and move at its mean
+    velocity over that step (the motor's feed-forward), to the solver's precision. The
+    solver's default residual (1e-7) misses both bounds (3.5e-6 rad, 7e-6 rad/s)."""
+    cell.run(0.5)
+    q0 = cell.desired_state(ARM)[0]
+    d = np.array([0.3, -0.2, 0.25, -0.3, 0.2, 0.4])
+    T = 1.5                          # peaks 0.4 rad/s and 1.07 rad/s^2
+    t0 = cell.time
+    cell.command_arm(ARM, [(T, q0 + d, np.zeros(6))])
+
+    def expected(t):
+        s = min(max((t - t0) / T, 0.0), 1.0)
+        return q0 + d * (3 * s * s - 2 * s ** 3)
+
+    worst_q, worst_qd = 0.0, 0.0
+    for _ in range(int(round((T + 0.5) / cell.dt))):
+        cell.step()
+        q, qd = cell.joint_state(ARM)[:2]
+        worst_q = max(worst_q, float(np.max(np.abs(q - expected(cell.time)))))
+        step_velocity = (expected(cell.time) - expected(cell.time - cell.dt)) / cell.dt
+        worst_qd = max(worst_qd, float(np.max(np.abs(qd - step_velocity))))
+    assert worst_q < 1e-7, worst_q
+    assert worst_qd < 1e-6, worst_qd
 
 
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
