@@ -100,6 +100,26 @@ def test_free_motion_sits_on_the_closed_form_trajectory(cell):
     assert worst_qd < 1e-6, worst_qd
 
 
+def test_cubes_at_rest_sleep_and_wake_when_touched(cell):
+    """A cube still for 2 s sleeps (the physics skips it: its velocity is exactly zero); the
+    arm's touch wakes it, so a cube that slept is grasped and placed as before, and the
+    others stay where they lay; a reset wakes them to settle again."""
+    cell.run(2.5)
+    velocity = {n: p.getBaseVelocity(b, physicsClientId=cell.client)
+                for n, b in cell.cubes.items()}
+    assert all(np.all(np.asarray(v) == 0.0) for v in velocity.values()), velocity
+    run_plan(cell, ARM, pick_place_plan(cell.config, ARM, 'cube_green'))
+    assert cell.in_tray('cube_green', ARM) and cell.grasped(ARM) is None
+    for c in cell.config.cubes:
+        if c.name != 'cube_green':
+            assert np.linalg.norm(cell.object_poses()[c.name][0] - c.xyz) < 2e-3, c.name
+    cell.reset()
+    cell.step(2)
+    moving = [n for n, b in cell.cubes.items()
+              if np.any(np.asarray(p.getBaseVelocity(b, physicsClientId=cell.client)[0]) != 0.0)]
+    assert sorted(moving) == sorted(cell.cubes)
+
+
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
     q0 = cell.joint_state(ARM)[0]
     target = q0 + np.array([1.2, -0.4, 0.6, 0.8, -0.9, 1.5])

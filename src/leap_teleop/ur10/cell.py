@@ -29,6 +29,9 @@ ARM_POSITION_GAIN = 0.5        # share of the joint's position error removed per
 # velocities ~5e-4 rad/s off their motor targets: 2 % spurious acceleration.
 SOLVER_RESIDUAL = 1e-14
 SOLVER_ITERATIONS = 100
+# A cube moving slower than this ((m/s)^2 + (rad/s)^2, ~1 mm/s) for 2 s sleeps until
+# something touches it: the physics then skips the cubes at rest (~6e-13 when settled).
+CUBE_SLEEP_THRESHOLD = 1e-6
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -145,6 +148,8 @@ class UR10Cell:
         self.cubes = {}
         for cube in cfg.cubes:
             body = self._box([half] * 3, cube.xyz, list(cube.rgba), mass=cfg.cube_mass, friction=1.0)
+            p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_ENABLE_SLEEPING,
+                             sleepThreshold=CUBE_SLEEP_THRESHOLD, physicsClientId=c)
             self.cubes[cube.name] = body
         self._cube_by_body = {b: n for n, b in self.cubes.items()}
 
@@ -352,6 +357,9 @@ class UR10Cell:
             p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, cube.quaternion,
                                               physicsClientId=c)
             p.resetBaseVelocity(self.cubes[cube.name], [0, 0, 0], [0, 0, 0], physicsClientId=c)
+            # A sleeping cube moved back stays asleep: wake it to settle as a new one does.
+            p.changeDynamics(self.cubes[cube.name], -1,
+                             activationState=p.ACTIVATION_STATE_WAKE_UP, physicsClientId=c)
 
     def pose_state(self):
         """What a picture needs, copied: every body's base pose and joint positions."""
