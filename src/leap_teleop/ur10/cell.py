@@ -69,6 +69,10 @@ class _Arm:
         self.grasp = None              # (constraint id, cube name, knuckle at grasp)
         self.lost_checks = 0
         self.touching = ([], [])       # cube names touched by left, right finger
+        # step()'s last arm sample (time, the follower's segment list then, q) and gripper
+        # target sent: each is reused while it is still what step() would compute.
+        self.sampled = (None, None, None)
+        self.gripper_sent = None
 
 
 class UR10Cell:
@@ -196,18 +200,27 @@ class UR10Cell:
                 # is the trajectory's (a target for the end of the step with the velocity
                 # there counts that step twice: ~30 % acceleration overshoot). One call for
                 # the six joints; their speed caps were set once (_cap_arm_speed).
-                q_now = arm.arm_follower.sample(self.time)[0].copy()
-                q_next, _ = arm.arm_follower.sample(t)
+                follower = arm.arm_follower
+                last_t, last_segments, last_q = arm.sampled
+                if last_t == self.time and last_segments is follower.segments:
+                    q_now = last_q        # the trajectory is the one sampled a step ago
+                else:
+                    q_now = follower.sample(self.time)[0].copy()
+                q_next = follower.sample(t)[0].copy()
+                arm.sampled = (t, follower.segments, q_next)
                 p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
                                             targetPositions=q_now.tolist(),
                                             targetVelocities=((q_next - q_now) / dt).tolist(),
                                             forces=_ARM_FORCES, positionGains=_ARM_KP,
                                             velocityGains=_ARM_KD, physicsClientId=c)
                 g = float(arm.gripper_follower.sample(t)[0][0])
-                f = g * FINGER_TRAVEL / GRIPPER_CLOSED
-                p.setJointMotorControlArray(arm.body, arm.gripper_joints, p.POSITION_CONTROL,
-                                            targetPositions=[f, f, g], forces=_GRIPPER_FORCES,
-                                            positionGains=_GRIPPER_KP, physicsClientId=c)
+                if g != arm.gripper_sent:     # PyBullet's motors keep their targets
+                    f = g * FINGER_TRAVEL / GRIPPER_CLOSED
+                    p.setJointMotorControlArray(arm.body, arm.gripper_joints,
+                                                p.POSITION_CONTROL, targetPositions=[f, f, g],
+                                                forces=_GRIPPER_FORCES, positionGains=_GRIPPER_KP,
+                                                physicsClientId=c)
+                    arm.gripper_sent = g
             p.stepSimulation(physicsClientId=c)
             self.time = t
             self.steps += 1
@@ -354,6 +367,8 @@ class UR10Cell:
                 p.resetJointState(arm.body, j, 0.0, 0.0, physicsClientId=c)
             arm.arm_follower.hold(arm.cfg.home)
             arm.gripper_follower.hold([0.0])
+            arm.sampled = (None, None, None)
+            arm.gripper_sent = None
             arm.touching = ([], [])
         for cube in self.config.cubes:
             p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, cube.quaternion,
