@@ -3,6 +3,7 @@ that do not interfere, reset, snapshots; and the ROS conversions' validation."""
 import math
 
 import numpy as np
+import pybullet as p
 import pytest
 import rospy
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -79,6 +80,53 @@ def test_joints_follow_the_trajectory_with_its_acceleration(cell):
     assert worst_err < 1e-4, worst_err
     # one full period of the motion: back at the start, at rest
     assert np.max(np.abs(cell.joint_state(ARM)[0] - q_start)) < 1e-3
+
+
+def test_free_motion_sits_on_the_closed_form_trajectory(cell):
+    """A cubic from rest to rest within the speed and acceleration limits: after every
+    physics step the joints are where q0 + d (3 s^2 - 2 s^3) puts them and move at its mean
+    velocity over that step (the motor's feed-forward), to the solver's precision. The
+    solver's default residual (1e-7) misses both bounds (3.5e-6 rad, 7e-6 rad/s)."""
+    cell.run(0.5)
+    q0 = cell.desired_state(ARM)[0]
+    d = np.array([0.3, -0.2, 0.25, -0.3, 0.2, 0.4])
+    T = 1.5                          # peaks 0.4 rad/s and 1.07 rad/s^2
+    t0 = cell.time
+    cell.command_arm(ARM, [(T, q0 + d, np.zeros(6))])
+
+    def expected(t):
+        s = min(max((t - t0) / T, 0.0), 1.0)
+        return q0 + d * (3 * s * s - 2 * s ** 3)
+
+    worst_q, worst_qd = 0.0, 0.0
+    for _ in range(int(round((T + 0.5) / cell.dt))):
+        cell.step()
+        q, qd = cell.joint_state(ARM)[:2]
+        worst_q = max(worst_q, float(np.max(np.abs(q - expected(cell.time)))))
+        step_velocity = (expected(cell.time) - expected(cell.time - cell.dt)) / cell.dt
+        worst_qd = max(worst_qd, float(np.max(np.abs(qd - step_velocity))))
+    assert worst_q < 1e-7, worst_q
+    assert worst_qd < 1e-6, worst_qd
+
+
+def test_cubes_at_rest_sleep_and_wake_when_touched(cell):
+    """A cube still for 2 s sleeps (the physics skips it: its velocity is exactly zero); the
+    arm's touch wakes it, so a cube that slept is grasped and placed as before, and the
+    others stay where they lay; a reset wakes them to settle again."""
+    cell.run(2.5)
+    velocity = {n: p.getBaseVelocity(b, physicsClientId=cell.client)
+                for n, b in cell.cubes.items()}
+    assert all(np.all(np.asarray(v) == 0.0) for v in velocity.values()), velocity
+    run_plan(cell, ARM, pick_place_plan(cell.config, ARM, 'cube_green'))
+    assert cell.in_tray('cube_green', ARM) and cell.grasped(ARM) is None
+    for c in cell.config.cubes:
+        if c.name != 'cube_green':
+            assert np.linalg.norm(cell.object_poses()[c.name][0] - c.xyz) < 2e-3, c.name
+    cell.reset()
+    cell.step(2)
+    moving = [n for n, b in cell.cubes.items()
+              if np.any(np.asarray(p.getBaseVelocity(b, physicsClientId=cell.client)[0]) != 0.0)]
+    assert sorted(moving) == sorted(cell.cubes)
 
 
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):

@@ -25,13 +25,24 @@ GRIPPER_MAX_SPEED = 1.6        # knuckle rad/s: about 0.5 s from open to closed 
 GRIPPER_FORCE = 60.0           # N per finger
 ARM_FORCE = np.array([330.0, 330.0, 150.0, 54.0, 54.0, 54.0])   # URDF efforts
 ARM_POSITION_GAIN = 0.5        # share of the joint's position error removed per physics step
-# The constraint solver's defaults (residual 1e-7, 50 iterations) stop early, leaving joint
-# velocities ~5e-4 rad/s off their motor targets: 2 % spurious acceleration.
+# The constraint solver's default residual (1e-7) stops early, leaving joint velocities
+# ~5e-4 rad/s off their motor targets: 2 % spurious acceleration. At 1e-14 a free arm
+# converges in at most ~40 iterations; an arm squeezing a cube never does (its contacts and
+# the grasp constraint hold the cube twice), so the cap only bounds what those steps cost.
 SOLVER_RESIDUAL = 1e-14
-SOLVER_ITERATIONS = 100
+SOLVER_ITERATIONS = 40
+# A cube moving slower than this ((m/s)^2 + (rad/s)^2, ~1 mm/s) for 2 s sleeps until
+# something touches it: the physics then skips the cubes at rest (~6e-13 when settled).
+CUBE_SLEEP_THRESHOLD = 1e-6
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
+# The per-step motor call's constant arguments, as lists (PyBullet reads them fastest).
+_ARM_FORCES = ARM_FORCE.tolist()
+_ARM_KP = [ARM_POSITION_GAIN] * 6
+_ARM_KD = [1.0] * 6
+_GRIPPER_FORCES = [GRIPPER_FORCE, GRIPPER_FORCE, 1.0]     # fingers, knuckle
+_GRIPPER_KP = [0.2] * 3
 
 
 class _Arm:
@@ -49,6 +60,7 @@ class _Arm:
         self.arm_joints = [joints[n] for n in kin.JOINT_NAMES]
         self.knuckle = joints[GRIPPER_JOINT]
         self.fingers = [joints['left_finger_joint'], joints['right_finger_joint']]
+        self.gripper_joints = self.fingers + [self.knuckle]
         self.finger_links = [links['left_finger_link'], links['right_finger_link']]
         self.tcp_link = links['tcp_link']
         self.arm_follower = TrajectoryFollower(cfg.home, kin.MAX_JOINT_SPEED,
@@ -57,6 +69,10 @@ class _Arm:
         self.grasp = None              # (constraint id, cube name, knuckle at grasp)
         self.lost_checks = 0
         self.touching = ([], [])       # cube names touched by left, right finger
+        # step()'s last arm sample (time, the follower's segment list then, q) and gripper
+        # target sent: each is reused while it is still what step() would compute.
+        self.sampled = (None, None, None)
+        self.gripper_sent = None
 
 
 class UR10Cell:
@@ -82,11 +98,24 @@ class UR10Cell:
             body = p.loadURDF(urdf_file(a.prefix, a.base_xyz, a.base_rpy), useFixedBase=True,
                               flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
             self.arms[a.name] = arm = _Arm(a, body, c)
+            self._cap_arm_speed(arm)
             for j in arm.fingers + [arm.knuckle]:
                 p.changeDynamics(body, j, jointLowerLimit=0.0,
                                  jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
                                  physicsClientId=c)
         self.reset()
+
+    def _cap_arm_speed(self, arm):
+        """Cap each arm motor at the joint's speed limit. PyBullet keeps a motor's
+        maxVelocity until it is set again and only the one-joint call sets it, so it is set
+        here once (holding home, as step() does after a reset) and the per-step array call
+        leaves it in place."""
+        for j, q, fj, vmax in zip(arm.arm_joints, arm.cfg.home, _ARM_FORCES,
+                                  kin.MAX_JOINT_SPEED):
+            p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=float(q),
+                                    targetVelocity=0.0, force=fj,
+                                    positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
+                                    maxVelocity=float(vmax), physicsClientId=self.client)
 
     # ---- scene -------------------------------------------------------------------------
     def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
@@ -125,6 +154,8 @@ class UR10Cell:
         self.cubes = {}
         for cube in cfg.cubes:
             body = self._box([half] * 3, cube.xyz, list(cube.rgba), mass=cfg.cube_mass, friction=1.0)
+            p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_ENABLE_SLEEPING,
+                             sleepThreshold=CUBE_SLEEP_THRESHOLD, physicsClientId=c)
             self.cubes[cube.name] = body
         self._cube_by_body = {b: n for n, b in self.cubes.items()}
 
@@ -158,31 +189,38 @@ class UR10Cell:
 
     # ---- simulation --------------------------------------------------------------------
     def step(self, n=1):
-        c = self.client
+        c, dt = self.client, self.dt
         for _ in range(n):
-            t = self.time + self.dt
+            t = self.time + dt
             for arm in self.arms.values():
                 # PyBullet's motor sets the step's velocity to targetVelocity +
                 # positionGain * (targetPosition - q) / dt. The feed-forward is the desired
                 # motion over this step and the correction acts on the error now, so a joint
                 # on its trajectory lands on the next desired position and its acceleration
                 # is the trajectory's (a target for the end of the step with the velocity
-                # there counts that step twice: ~30 % acceleration overshoot).
-                q_now = arm.arm_follower.sample(self.time)[0].copy()
-                q_next, _ = arm.arm_follower.sample(t)
-                v_step = (q_next - q_now) / self.dt
-                for j, qj, vj, fj, vmax in zip(arm.arm_joints, q_now, v_step, ARM_FORCE,
-                                               kin.MAX_JOINT_SPEED):
-                    p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=qj,
-                                            targetVelocity=vj, force=fj,
-                                            positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
-                                            maxVelocity=vmax, physicsClientId=c)
-                g, _ = arm.gripper_follower.sample(t)
-                f = float(g[0]) * FINGER_TRAVEL / GRIPPER_CLOSED
-                p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],
-                                            p.POSITION_CONTROL, targetPositions=[f, f, float(g[0])],
-                                            forces=[GRIPPER_FORCE, GRIPPER_FORCE, 1.0],
-                                            positionGains=[0.2, 0.2, 0.2], physicsClientId=c)
+                # there counts that step twice: ~30 % acceleration overshoot). One call for
+                # the six joints; their speed caps were set once (_cap_arm_speed).
+                follower = arm.arm_follower
+                last_t, last_segments, last_q = arm.sampled
+                if last_t == self.time and last_segments is follower.segments:
+                    q_now = last_q        # the trajectory is the one sampled a step ago
+                else:
+                    q_now = follower.sample(self.time)[0].copy()
+                q_next = follower.sample(t)[0].copy()
+                arm.sampled = (t, follower.segments, q_next)
+                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
+                                            targetPositions=q_now.tolist(),
+                                            targetVelocities=((q_next - q_now) / dt).tolist(),
+                                            forces=_ARM_FORCES, positionGains=_ARM_KP,
+                                            velocityGains=_ARM_KD, physicsClientId=c)
+                g = float(arm.gripper_follower.sample(t)[0][0])
+                if g != arm.gripper_sent:     # PyBullet's motors keep their targets
+                    f = g * FINGER_TRAVEL / GRIPPER_CLOSED
+                    p.setJointMotorControlArray(arm.body, arm.gripper_joints,
+                                                p.POSITION_CONTROL, targetPositions=[f, f, g],
+                                                forces=_GRIPPER_FORCES, positionGains=_GRIPPER_KP,
+                                                physicsClientId=c)
+                    arm.gripper_sent = g
             p.stepSimulation(physicsClientId=c)
             self.time = t
             self.steps += 1
@@ -194,26 +232,29 @@ class UR10Cell:
         """Step for the given simulated time."""
         self.step(max(1, int(round(seconds / self.dt))))
 
-    def _touching(self, arm, link, axis):
-        """Cubes the finger link presses with its pad: contact normals along the closing
-        axis (fingertips resting on a cube's top do not count)."""
+    def _touching(self, contacts, axis):
+        """Cubes a finger link presses with its pad (of its contacts with cubes): contact
+        normals along the closing axis (fingertips resting on a cube's top do not count)."""
         out = []
-        for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link, physicsClientId=self.client):
-            name = self._cube_by_body.get(cp[2])
-            if (name is not None and name not in out
-                    and abs(float(np.dot(cp[7], axis))) > PAD_NORMAL_MIN_COS):
+        for cp in contacts:
+            name = self._cube_by_body[cp[2]]
+            if name not in out and abs(float(np.dot(cp[7], axis))) > PAD_NORMAL_MIN_COS:
                 out.append(name)
         return out
 
     def _update_grasp(self, arm):
         c = self.client
-        orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
-                             physicsClientId=c)[5]
-        axis = np.array(p.getMatrixFromQuaternion(orn))[[0, 3, 6]]   # TCP x: closing axis
-        left, right = (self._touching(arm, link, axis) for link in arm.finger_links)
+        contacts = [[cp for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link,
+                                                     physicsClientId=c)
+                     if cp[2] in self._cube_by_body] for link in arm.finger_links]
+        axis = None
+        if contacts[0] or contacts[1]:      # the TCP's pose only matters for a cube contact
+            orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
+                                 physicsClientId=c)[5]
+            axis = np.array(p.getMatrixFromQuaternion(orn))[[0, 3, 6]]   # TCP x: closing axis
+        left, right = (self._touching(cps, axis) for cps in contacts)
         arm.touching = (left, right)
         g_des = float(arm.gripper_follower.q[0])
-        g_now = self._knuckle(arm)[0]
         if arm.grasp is not None:
             cid, cube, g_grasp = arm.grasp
             opening = g_des < g_grasp - 0.02
@@ -225,8 +266,11 @@ class UR10Cell:
                 arm.lost_checks = 0
             return
         both = [n for n in left if n in right]
+        if not both:
+            return
         # Only a closing gripper squeezing the cube grasps it.
-        if both and g_des > g_now + 0.01 or (both and g_des >= GRIPPER_CLOSED - 1e-6):
+        g_now = self._knuckle(arm)[0]
+        if g_des > g_now + 0.01 or g_des >= GRIPPER_CLOSED - 1e-6:
             cube = both[0]
             body = self.cubes[cube]
             ls = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
@@ -323,11 +367,16 @@ class UR10Cell:
                 p.resetJointState(arm.body, j, 0.0, 0.0, physicsClientId=c)
             arm.arm_follower.hold(arm.cfg.home)
             arm.gripper_follower.hold([0.0])
+            arm.sampled = (None, None, None)
+            arm.gripper_sent = None
             arm.touching = ([], [])
         for cube in self.config.cubes:
             p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, cube.quaternion,
                                               physicsClientId=c)
             p.resetBaseVelocity(self.cubes[cube.name], [0, 0, 0], [0, 0, 0], physicsClientId=c)
+            # A sleeping cube moved back stays asleep: wake it to settle as a new one does.
+            p.changeDynamics(self.cubes[cube.name], -1,
+                             activationState=p.ACTIVATION_STATE_WAKE_UP, physicsClientId=c)
 
     def pose_state(self):
         """What a picture needs, copied: every body's base pose and joint positions."""
