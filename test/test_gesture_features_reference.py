@@ -9,13 +9,13 @@ import os
 import numpy as np
 import pytest
 
-from leap_teleop.frame import Finger, Hand
-from leap_teleop.gestures import geometry
-from leap_teleop.gestures.classifier import DEFAULT_MODELS, load_model
-from leap_teleop.gestures.features import leap_features
-from leap_teleop.gestures.geometry import hand_geometry
-from leap_teleop.sources import leapjs
-from leap_teleop.tools import gesture_data as gd
+from leap_teleop.hands.frame import Finger, TrackedHand
+from leap_teleop.hands.gestures import datasets as gd
+from leap_teleop.hands.gestures import geometry
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, load_model
+from leap_teleop.hands.gestures.features import leap_features
+from leap_teleop.hands.gestures.geometry import hand_geometry
+from leap_teleop.hands.sources import leapjs
 
 RTOL = 1e-9
 ATOL = 1e-12        # palm widths and cosines: far below anything a pose could show
@@ -131,7 +131,7 @@ def _with_joints(hand, convert):
     fingers = tuple(Finger(convert(f.tip), f.direction,
                            f.extended, *(convert(j) for j in (f.mcp, f.pip, f.dip)))
                     for f in hand.fingers)
-    return Hand(hand.side, hand.palm_position, hand.palm_velocity, hand.palm_normal,
+    return TrackedHand(hand.side, hand.palm_position, hand.palm_velocity, hand.palm_normal,
                 hand.direction, fingers=fingers)
 
 
@@ -159,7 +159,7 @@ def test_a_joint_that_is_missing_or_not_finite_leaves_no_joints(real_hands):
         fingers = list(hand.fingers)
         fingers[2] = Finger(fingers[2].tip, fingers[2].direction, True, fingers[2].mcp, bad,
                             fingers[2].dip)
-        broken = Hand(hand.side, hand.palm_position, hand.palm_velocity, hand.palm_normal,
+        broken = TrackedHand(hand.side, hand.palm_position, hand.palm_velocity, hand.palm_normal,
                       hand.direction, fingers=tuple(fingers))
         g = hand_geometry(broken)
         assert g is not None and g.joints is None and g.local is None, bad
@@ -174,7 +174,7 @@ def test_huge_but_finite_joints_are_still_joints():
                            np.array([x, 0.0, 0.0]), np.array([x, 0.0, -side / 3]),
                            np.array([x, 0.0, -side / 2]))
                     for x in np.linspace(-side / 4, side / 4, 5))
-    hand = Hand('right', fingers=fingers)
+    hand = TrackedHand('right', fingers=fingers)
     with np.errstate(over='ignore'):
         g = hand_geometry(hand)
     assert g is not None and g.joints is not None
