@@ -28,6 +28,7 @@ LIMITS = {
                              gt=0),
     'state_timeout_s': limit('the thumbs-up arms, the rock starts tracking within this', 's',
                              gt=0),
+    'pilot_timeout_s': limit('the engaged pilot sends twists within this', 's', gt=0),
     'min_rejected_arm': limit('of the 200 backlog messages the arm node refuses at least',
                               kind='int', ge=0, le=200),
     'min_rejected_pilot': limit('of the 200 backlog messages the pilot refuses at least',
@@ -80,7 +81,8 @@ class FaultHandBurst(unittest.TestCase):
             ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
             ev.header.stamp = rospy.Time.now()
             gesture_pub.publish(ev)
-            self.assertTrue(wait_for(lambda: twists, 3.0), 'the pilot sends nothing')
+            self.assertTrue(wait_for(lambda: twists, lim.pilot_timeout_s),
+                            'the pilot sends nothing')
             time.sleep(1.2)                         # diagnostics (1 Hz) before the stall
             arm_rej0, pilot_rej0 = rejected.get(ARM) or 0, rejected.get('pilot') or 0
 

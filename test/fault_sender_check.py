@@ -33,6 +33,9 @@ LIMITS = {
     'zero_twist_within_s': limit('the drone gets a zero twist within this', 's', gt=0),
     'land_early_s': limit('landing no earlier than land_after - this', 's', ge=0),
     'land_late_s': limit('... and no later than land_after + this', 's', ge=0),
+    'landed_timeout_s': limit('landed within this once landing began', 's', gt=0),
+    'command_timeout_s': limit('the first command after the new origin within this', 's',
+                               gt=0),
     'respawn_timeout_s': limit('the sender respawned, armed, tracking, taken off within this',
                                's', gt=0),
     'max_jump_rad': limit('commands from the kill to the new origin: at most this far from '
@@ -100,7 +103,8 @@ class FaultSender(unittest.TestCase):
         # from the kill's disarm and the landing on, not from when this check sees the new
         # pid: under load that can come after the new thumbs-up (only the new sender can
         # have sent anything since the kill).
-        self.assertTrue(wait_for(lambda: w.drone_state() == LANDED, 10.0), 'not landed')
+        self.assertTrue(wait_for(lambda: w.drone_state() == LANDED, lim.landed_timeout_s),
+                        'not landed')
         t_landed = w.first_nav((LANDED,), t_kill)
         self.assertTrue(wait_for(lambda: node_pid('/leap_sender', timeout=20.0) != pid, 15.0))
         new_pid = node_pid('/leap_sender')
@@ -115,7 +119,8 @@ class FaultSender(unittest.TestCase):
         self.assertEqual(set(states), {'disarmed'})
         # No jump toward the old target: from the kill until the new origin the arm gets at
         # most holds of where it is, and its first command after the new origin starts there.
-        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds), 3.0))
+        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds),
+                                 lim.command_timeout_s))
         first_after = next(t for t, _ in list(w.arm_cmds) if t > t_origin)
         worst = 0.0
         for t, q in [(t, q) for t, q in list(w.arm_cmds) if t_hold - 0.05 < t <= first_after]:
