@@ -158,15 +158,15 @@ class FaultRobot(unittest.TestCase):
         with w.lock:
             before = w.status[-1][1].rejected_inputs
         pose = dict(palm=(150.0, 320.0, -80.0))
-        late = 5
-        for k in range(late):
+        n_late = 5
+        for k in range(n_late):
             hand.pub.publish(hand.message(stamp_offset=-1.0, **pose))       # held up 1 s
             time.sleep(0.02)
         # Out of order: older than a live message sent before it (a fixed offset from now
         # is not, when the live stream has been starved for longer than the offset).
         hand.older_than_live(0.05, **pose)
         hand.pub.publish(hand.message(**dict(palm=(float('nan'), 0.0, 0.0))))
-        bad = late + 2                    # + the out-of-order one and the NaN palm
+        bad = n_late + 2                   # + the out-of-order one and the NaN palm
         self.assertTrue(wait_for(lambda: w.status[-1][1].rejected_inputs >= before + bad,
                                  lim.rejected_timeout_s),
                         'rejected_inputs %d -> %d' % (before, w.status[-1][1].rejected_inputs))
@@ -181,12 +181,12 @@ class FaultRobot(unittest.TestCase):
         for k in range(20):
             pub.publish(pilot_hand(rospy.get_time()))
             time.sleep(0.01)
-        late = 3
-        for k in range(late):
+        n_late = 3
+        for k in range(n_late):
             pub.publish(pilot_hand(rospy.get_time() - 1.0))
             time.sleep(0.01)
         pub.publish(pilot_hand(rospy.get_time(), side=Hand.SIDE_LEFT))
-        self.assertTrue(wait_for(lambda: diag.get('drone_pilot') == late + 1,
+        self.assertTrue(wait_for(lambda: diag.get('drone_pilot') == n_late + 1,
                                  lim.diagnostics_timeout_s), diag.values)
         self.assertTrue(alive(node_pid('/drone_pilot')))
 
