@@ -8,33 +8,41 @@ import unittest
 import rospy
 import rostest
 
-from leap_teleop.msg import GestureEvent, Navdata
+from leap_teleop.msg import GestureEvent
 
-LANDED, FLYING, HOVERING, TAKING_OFF = 2, 3, 4, 6
+from check_helpers import NavdataStates, limit, navdata_code, navdata_codes, read_limits, state_limit, states_limit
+
+LIMITS = {
+    'timeout_s': limit('wait this long for the drone to be airborne', 's', gt=0),
+    'start_state': state_limit('the first navdata state'),
+    'takeoff_state': state_limit('a state that shows the takeoff'),
+    'airborne_states': states_limit('the last state must be one of these'),
+    'gesture': limit('the event that takes off, seen on leapmotion/gestures', kind='str'),
+}
 
 
 class CameraFliesDrone(unittest.TestCase):
     def test_unfold_from_video_takes_off(self):
+        lim = read_limits(LIMITS)
+        start, taking_off = navdata_code(lim.start_state), navdata_code(lim.takeoff_state)
+        airborne = navdata_codes(lim.airborne_states)
         video = rospy.get_param('~video')
         self.assertTrue(os.path.exists(video), 'clip %s absent' % video)
-        states, gestures = [], []
-
-        def on_nav(msg):
-            if not states or states[-1] != msg.state:
-                states.append(msg.state)
-
-        rospy.Subscriber('ardrone/navdata', Navdata, on_nav, queue_size=100)
+        nav, gestures = NavdataStates(), []
         rospy.Subscriber('leapmotion/gestures', GestureEvent,
                          lambda m: gestures.append(m.gesture), queue_size=1000)
-        deadline = rospy.get_time() + 60.0
+        deadline = rospy.get_time() + lim.timeout_s
         while rospy.get_time() < deadline and not rospy.is_shutdown():
-            if TAKING_OFF in states and states[-1] in (FLYING, HOVERING):
+            states = nav.get()
+            if taking_off in states and states[-1] in airborne:
                 break
             rospy.sleep(0.1)
-        self.assertTrue(states and states[0] == LANDED, 'not landed at start: %s' % states)
-        self.assertIn(TAKING_OFF, states, 'no takeoff; gestures seen: %s' % sorted(set(gestures)))
-        self.assertIn(states[-1], (FLYING, HOVERING), 'not airborne: %s' % states)
-        self.assertIn('unfold', gestures)
+        states = nav.get()
+        self.assertTrue(states and states[0] == start, 'not %s at start: %s'
+                        % (lim.start_state, states))
+        self.assertIn(taking_off, states, 'no takeoff; gestures seen: %s' % sorted(set(gestures)))
+        self.assertIn(states[-1], airborne, 'not airborne: %s' % states)
+        self.assertIn(lim.gesture, gestures)
 
 
 if __name__ == '__main__':

@@ -16,9 +16,22 @@ from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ArmStatus, leapcobotright
 
+from check_helpers import limit, read_limits
+
+LIMITS = {
+    'timeout_s': limit('wait this long for the clip to end', 's', gt=0),
+    'ended_after_s': limit('the clip has ended once no hand message came for this long', 's',
+                           gt=0),
+    'min_hand_frames': limit('more right-hand messages than this', kind='int', ge=0),
+    'image_size': limit('the annotated view\'s width, height', 'px', kind='list', item='int',
+                        length=2),
+    'image_encoding': limit('the annotated view\'s encoding', kind='str'),
+}
+
 
 class CameraDrivesUr10(unittest.TestCase):
     def test_thumbs_up_from_video_arms_the_arm(self):
+        lim = read_limits(LIMITS)
         video = rospy.get_param('~video')
         self.assertTrue(os.path.exists(video), 'clip %s absent' % video)
         lock = threading.Lock()
@@ -38,12 +51,12 @@ class CameraDrivesUr10(unittest.TestCase):
         rospy.Subscriber('/camera/annotated', Image, images.append, queue_size=5)
         rospy.Subscriber('/leapmotion/data_right', leapcobotright,
                          lambda m: hands.append((rospy.get_time(), m)), queue_size=1000)
-        deadline = rospy.get_time() + 90.0
+        deadline = rospy.get_time() + lim.timeout_s
         # The clip lasts 7.8 s (longer under load): done once its messages have stopped
         # for a while, so the watchdog has had its say.
         while rospy.get_time() < deadline and not rospy.is_shutdown():
             with lock:
-                ended = hands and rospy.get_time() - hands[-1][0] > 2.0
+                ended = hands and rospy.get_time() - hands[-1][0] > lim.ended_after_s
             if ended:
                 break
             rospy.sleep(0.2)
@@ -57,11 +70,11 @@ class CameraDrivesUr10(unittest.TestCase):
         # Armed, the arm drives the gripper (sent once: open, no pinch in the clip).
         self.assertTrue(any(armed[0] <= t for t in grips), 'no gripper command once armed')
         present = [m for _, m in hands if m.is_right_hand]
-        self.assertGreater(len(present), 150)           # 172 frames show the hand
+        self.assertGreater(len(present), lim.min_hand_frames)
         self.assertTrue(any(m.right_hand_thumb_up for m in present))
         self.assertTrue(images, 'no annotated camera view')
         self.assertEqual((images[0].width, images[0].height, images[0].encoding),
-                         (640, 480, 'bgr8'))
+                         (*lim.image_size, lim.image_encoding))
 
 
 if __name__ == '__main__':

@@ -20,24 +20,46 @@ from std_srvs.srv import Trigger
 from leap_teleop.ros.ardrone_interface import DRIVER_ENDPOINTS, OPTIONAL_ENDPOINTS, PUBLISHER, SERVICE
 
 import ardrone_driver_types as driver
+from check_helpers import limit, read_limits
 
 NODE = '/uav/ardrone_sim'
 Navdata = driver.message('Navdata')
 NavdataAltitude = driver.message('navdata_altitude', ('vector31', 'vector21'))
 FlightAnim, CamSelect = driver.service('FlightAnim'), driver.service('CamSelect')
 LedAnim, RecordEnable = driver.service('LedAnim'), driver.service('RecordEnable')
-
-
-def wait(topic, kind, timeout=30.0):
-    return rospy.wait_for_message(topic, kind, timeout)
+LIMITS = {
+    'startup_timeout_s': limit('wait this long for the simulator\'s services and images',
+                               's', gt=0),
+    'message_timeout_s': limit('wait this long for any one message', 's', gt=0),
+    'endpoints_offered': limit('endpoints the running node offers', kind='int', ge=0),
+    'driver_endpoints': limit('endpoints of the driver\'s default table', kind='int', ge=0),
+    'front_size': limit('front camera width, height', 'px', kind='list', item='int', length=2),
+    'bottom_size': limit('bottom camera width, height', 'px', kind='list', item='int',
+                         length=2),
+    'front_focal_px': limit('front camera focal length (K[0]) ...', 'px', gt=0),
+    'focal_tolerance_px': limit('... give or take this much', 'px', gt=0),
+    'switch_timeout_s': limit('the active camera (and a new calibration) shows within this',
+                              's', gt=0),
+    'landed_max_altitude_mm': limit('landed: navdata_altitude altitude_raw below this', 'mm'),
+    'takeoff_timeout_s': limit('hovering within this after the takeoff', 's', gt=0),
+    'hover_altitude_mm': limit('hovering: altitude_raw this ...', 'mm', gt=0),
+    'altitude_tolerance_mm': limit('... give or take this much', 'mm', gt=0),
+    'min_navdata_gaps': limit('more navdata arrivals than this around a snapshot ...',
+                              kind='int', ge=0),
+    'max_navdata_gap_s': limit('... none further apart than this', 's', gt=0),
+}
 
 
 class DriverInterfaceCheck(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
+        cls.lim = read_limits(LIMITS)
         # The driver-typed client's first step: wait for the flat-trim service.
-        rospy.wait_for_service('ardrone/flattrim', 60.0)
-        wait('ardrone/front/image_raw', Image, 60.0)
+        rospy.wait_for_service('ardrone/flattrim', cls.lim.startup_timeout_s)
+        rospy.wait_for_message('ardrone/front/image_raw', Image, cls.lim.startup_timeout_s)
+
+    def wait(self, topic, kind):
+        return rospy.wait_for_message(topic, kind, self.lim.message_timeout_s)
 
     def test_1_endpoint_table_matches_the_running_node(self):
         master = rosgraph.Master(rospy.get_name())
@@ -56,43 +78,45 @@ class DriverInterfaceCheck(unittest.TestCase):
                 self.assertIn(NODE, table.get(full, []), '%s %s' % (kind, full))
                 self.assertEqual(types[full], msg_type, full)
             offered += 1
-        self.assertEqual(offered, 24)      # 23 default-on + navdata_altitude, enabled here
-        self.assertEqual(len(DRIVER_ENDPOINTS), 23)
+        self.assertEqual(offered, self.lim.endpoints_offered)
+        self.assertEqual(len(DRIVER_ENDPOINTS), self.lim.driver_endpoints)
 
     def test_2_cameras_and_the_active_channel(self):
-        front = wait('ardrone/front/image_raw', Image)
-        self.assertEqual((front.width, front.height, front.encoding), (640, 360, 'rgb8'))
+        (fw, fh), (bw, bh) = self.lim.front_size, self.lim.bottom_size
+        front = self.wait('ardrone/front/image_raw', Image)
+        self.assertEqual((front.width, front.height, front.encoding), (fw, fh, 'rgb8'))
         self.assertEqual(front.header.frame_id, 'uav/ardrone_base_frontcam')
-        self.assertEqual(len(front.data), 640 * 360 * 3)
-        bottom = wait('ardrone/bottom/image_raw', Image)
-        self.assertEqual((bottom.width, bottom.height), (320, 240))
-        info = wait('ardrone/front/camera_info', CameraInfo)
-        self.assertEqual((info.width, info.height), (640, 360))
-        self.assertAlmostEqual(info.K[0], 354.5, delta=1.0)    # 92 deg diagonal FOV
-        self.assertEqual(wait('ardrone/bottom/camera_info', CameraInfo).width, 320)
-        self.assertEqual(wait('ardrone/image_raw', Image).width, 640)    # front at start
-        self.assertEqual(wait('ardrone/camera_info', CameraInfo).width, 640)
+        self.assertEqual(len(front.data), fw * fh * 3)
+        bottom = self.wait('ardrone/bottom/image_raw', Image)
+        self.assertEqual((bottom.width, bottom.height), (bw, bh))
+        info = self.wait('ardrone/front/camera_info', CameraInfo)
+        self.assertEqual((info.width, info.height), (fw, fh))
+        self.assertAlmostEqual(info.K[0], self.lim.front_focal_px,
+                               delta=self.lim.focal_tolerance_px)
+        self.assertEqual(self.wait('ardrone/bottom/camera_info', CameraInfo).width, bw)
+        self.assertEqual(self.wait('ardrone/image_raw', Image).width, fw)    # front at start
+        self.assertEqual(self.wait('ardrone/camera_info', CameraInfo).width, fw)
         rospy.ServiceProxy('ardrone/togglecam', EmptySrv)()
-        self.assertTrue(self._active_becomes(320))
+        self.assertTrue(self._active_becomes(bw))
         self.assertTrue(rospy.ServiceProxy('ardrone/setcamchannel', CamSelect)(channel=0).result)
-        self.assertTrue(self._active_becomes(640))
+        self.assertTrue(self._active_becomes(fw))
 
-    def _active_becomes(self, width, timeout=10.0):
-        deadline = rospy.get_time() + timeout
+    def _active_becomes(self, width):
+        deadline = rospy.get_time() + self.lim.switch_timeout_s
         while rospy.get_time() < deadline:
-            if wait('ardrone/image_raw', Image).width == width:
+            if self.wait('ardrone/image_raw', Image).width == width:
                 return True
         return False
 
     def test_3_set_camera_info(self):
         setter = rospy.ServiceProxy('ardrone/bottom/set_camera_info', SetCameraInfo)
-        info = wait('ardrone/bottom/camera_info', CameraInfo)
+        info = self.wait('ardrone/bottom/camera_info', CameraInfo)
         info.K = list(info.K)
         info.K[0] = info.K[4] = 300.0
         self.assertTrue(setter(camera_info=info).success)
-        deadline = rospy.get_time() + 10.0
+        deadline = rospy.get_time() + self.lim.switch_timeout_s
         while rospy.get_time() < deadline:
-            if wait('ardrone/bottom/camera_info', CameraInfo).K[0] == 300.0:
+            if self.wait('ardrone/bottom/camera_info', CameraInfo).K[0] == 300.0:
                 break
         else:
             self.fail('the new calibration was not published')
@@ -104,14 +128,14 @@ class DriverInterfaceCheck(unittest.TestCase):
             self.assertIn('got 640x240', res.status_message)
 
     def test_4_navdata_mag_altitude_leds_record_flat_trim_flight(self):
-        nav = wait('ardrone/navdata', Navdata)
+        nav = self.wait('ardrone/navdata', Navdata)
         self.assertEqual(nav.state, 2)
-        mag = wait('ardrone/mag', Vector3Stamped)
+        mag = self.wait('ardrone/mag', Vector3Stamped)
         self.assertEqual(mag.header.frame_id, 'uav/ardrone_base_link')
         self.assertLess(mag.vector.z, 0)
-        alt = wait('ardrone/navdata_altitude', NavdataAltitude)
+        alt = self.wait('ardrone/navdata_altitude', NavdataAltitude)
         self.assertEqual((alt.tag, alt.size), (10, 56))
-        self.assertLess(alt.altitude_raw, 20)
+        self.assertLess(alt.altitude_raw, self.lim.landed_max_altitude_mm)
         self.assertTrue(rospy.ServiceProxy('ardrone/setledanimation', LedAnim)(
             type=3, freq=2.0, duration=2).result)
         self.assertTrue(rospy.ServiceProxy('ardrone/setrecord', RecordEnable)(enable=True).result)
@@ -120,17 +144,18 @@ class DriverInterfaceCheck(unittest.TestCase):
         anim = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
         self.assertTrue(anim(type=19, duration=0).result)
         rospy.sleep(0.5)
-        self.assertEqual(wait('ardrone/navdata', Navdata).state, 2)
+        self.assertEqual(self.wait('ardrone/navdata', Navdata).state, 2)
         takeoff = rospy.Publisher('ardrone/takeoff', Empty, queue_size=1, latch=True)
         takeoff.publish(Empty())
-        deadline = rospy.get_time() + 20.0
-        while rospy.get_time() < deadline and wait('ardrone/navdata', Navdata).state != 4:
+        deadline = rospy.get_time() + self.lim.takeoff_timeout_s
+        while rospy.get_time() < deadline and self.wait('ardrone/navdata', Navdata).state != 4:
             pass
-        self.assertEqual(wait('ardrone/navdata', Navdata).state, 4)
-        alt = wait('ardrone/navdata_altitude', NavdataAltitude)
-        self.assertAlmostEqual(alt.altitude_raw, 1000, delta=150)
+        self.assertEqual(self.wait('ardrone/navdata', Navdata).state, 4)
+        alt = self.wait('ardrone/navdata_altitude', NavdataAltitude)
+        self.assertAlmostEqual(alt.altitude_raw, self.lim.hover_altitude_mm,
+                               delta=self.lim.altitude_tolerance_mm)
         rospy.ServiceProxy('ardrone/flattrim', EmptySrv)()     # aloft: answered, ignored
-        self.assertIn(wait('ardrone/navdata', Navdata).state, (3, 4))
+        self.assertIn(self.wait('ardrone/navdata', Navdata).state, (3, 4))
 
     def test_5_snapshot_keeps_navdata_flowing(self):
         # The simulator's own ardrone/snapshot: the picture is drawn outside the physics
@@ -139,7 +164,7 @@ class DriverInterfaceCheck(unittest.TestCase):
         sub = rospy.Subscriber('ardrone/navdata', Navdata,
                                lambda _: arrivals.append(time.monotonic()))
         try:
-            wait('ardrone/navdata', Navdata)
+            self.wait('ardrone/navdata', Navdata)
             snapshot = rospy.ServiceProxy('ardrone/snapshot', Trigger)
             for _ in range(2):        # the first one also starts the renderer process
                 t0 = time.monotonic()
@@ -154,7 +179,8 @@ class DriverInterfaceCheck(unittest.TestCase):
                 gaps = [b - a for a, b in zip(during, during[1:])]
                 rospy.loginfo('snapshot in %.2f s, longest navdata gap %.3f s', t1 - t0,
                               max(gaps, default=float('nan')))
-                self.assertTrue(len(gaps) > 5 and max(gaps) < 0.5, (t1 - t0, gaps))
+                self.assertTrue(len(gaps) > self.lim.min_navdata_gaps
+                                and max(gaps) < self.lim.max_navdata_gap_s, (t1 - t0, gaps))
         finally:
             sub.unregister()
 

@@ -8,11 +8,30 @@ import rospy
 import rostest
 from geometry_msgs.msg import Twist
 
+from leap_teleop.drone.sim import FLYING, HOVERING, LANDED, LANDING
 from leap_teleop.msg import GestureEvent, Hand, Navdata
+
+from check_helpers import limit, pilot_hand, read_limits, wait_for
+
+LIMITS = {
+    'ready_timeout_s': limit('wait this long for the drone landed and the pilot listening',
+                             's', gt=0),
+    'takeoff_timeout_s': limit('the unfold takes off within this', 's', gt=0),
+    'forward_timeout_s': limit('the forward hand gives a forward twist within this', 's', gt=0),
+    'zero_twist_within_s': limit('a silent hand: zero twist within this', 's', gt=0),
+    'zero_twist_absent_within_s': limit('a hand reported absent: zero twist within this', 's',
+                                        gt=0),
+    'hover_within_s': limit('hovering within this once the twist is zero', 's', gt=0),
+    'no_landing_for_s': limit('no landing for this long after hovering', 's', gt=0),
+    'landing_within_s': limit('... then landing within this much more', 's', gt=0),
+    'landed_within_s': limit('landed within this once landing', 's', gt=0),
+    'absent_landing_within_s': limit('a hand reported absent: landing within this', 's', gt=0),
+}
 
 
 class DroneWatchdog(unittest.TestCase):
     def setUp(self):
+        self.lim = read_limits(LIMITS)
         self.state = None
         self.twists = []          # (wall time, Twist)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_nav, queue_size=10)
@@ -25,56 +44,56 @@ class DroneWatchdog(unittest.TestCase):
         self.state = msg.state
 
     def hand(self, z=0.0, present=True):
-        h = Hand()
-        h.header.stamp = rospy.Time.now()
-        h.side, h.present = Hand.SIDE_RIGHT, present
-        if present:
-            h.palm_position.y, h.palm_position.z = 0.2, z
-            h.palm_normal.y, h.direction.z = -1.0, -1.0
-        self.hand_pub.publish(h)
+        self.hand_pub.publish(pilot_hand(rospy.get_time(), (0.0, 0.2, z), present=present))
 
     def wait_for(self, cond, timeout, hand_z=None):
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline and not rospy.is_shutdown():
-            if cond():
-                return True
-            if hand_z is not None:
-                self.hand(hand_z)
-            time.sleep(0.01)
-        return cond()
+        """wait_for, sending the hand at hand_z meanwhile (unless None)."""
+        if hand_z is None:
+            return wait_for(cond, timeout, step=0.01)
+
+        def sending():
+            self.hand(hand_z)
+            return cond()
+        return cond() or wait_for(sending, timeout, step=0.01)
 
     def fly_forward(self):
         """Engage with an unfold, take off, then hold the hand 100 mm forward."""
-        self.assertTrue(self.wait_for(lambda: self.state == 2
+        lim = self.lim
+        self.assertTrue(self.wait_for(lambda: self.state == LANDED
                                       and self.hand_pub.get_num_connections() > 0
-                                      and self.gesture_pub.get_num_connections() > 0, 20.0))
+                                      and self.gesture_pub.get_num_connections() > 0,
+                                      lim.ready_timeout_s))
         self.hand(0.0)
         time.sleep(0.1)
         ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
         ev.header.stamp = rospy.Time.now()
         self.gesture_pub.publish(ev)
-        self.assertTrue(self.wait_for(lambda: self.state in (3, 4), 10.0, hand_z=0.0),
+        self.assertTrue(self.wait_for(lambda: self.state in (FLYING, HOVERING),
+                                      lim.takeoff_timeout_s, hand_z=0.0),
                         'no takeoff (state %s)' % self.state)
         self.assertTrue(self.wait_for(lambda: self.twists and self.twists[-1][1].linear.x > 0.5,
-                                      3.0, hand_z=-0.1), 'no forward command')
+                                      lim.forward_timeout_s, hand_z=-0.1), 'no forward command')
 
     def test_silent_hand_hovers_then_lands(self):
+        lim = self.lim
         self.fly_forward()
         self.hand(-0.1)
         last = time.monotonic()              # the hand goes silent from here
         self.assertTrue(self.wait_for(lambda: self.twists[-1][1].linear.x == 0.0, 1.0))
         zero_at = next(t for t, m in self.twists if t > last and m.linear.x == 0.0)
         rospy.loginfo('zero twist %.3f s after the last hand message', zero_at - last)
-        self.assertLess(zero_at - last, 0.25)    # 0.2 s spec + slack for a loaded machine
+        self.assertLess(zero_at - last, lim.zero_twist_within_s)
         z = self.twists[-1][1]
         self.assertEqual((z.linear.x, z.linear.y, z.linear.z, z.angular.x, z.angular.y,
                           z.angular.z), (0.0,) * 6)          # exact zero: auto-hover
-        self.assertTrue(self.wait_for(lambda: self.state == 4, 2.0))
-        self.assertFalse(self.wait_for(lambda: self.state in (8, 2), 2.3))   # not before 3 s
-        self.assertTrue(self.wait_for(lambda: self.state in (8, 2), 2.0), 'no landing')
+        self.assertTrue(self.wait_for(lambda: self.state == HOVERING, lim.hover_within_s))
+        self.assertFalse(self.wait_for(lambda: self.state in (LANDING, LANDED),
+                                       lim.no_landing_for_s))
+        self.assertTrue(self.wait_for(lambda: self.state in (LANDING, LANDED),
+                                      lim.landing_within_s), 'no landing')
         land_at = time.monotonic()
         rospy.loginfo('landing started %.2f s after the hand went silent', land_at - last)
-        self.assertTrue(self.wait_for(lambda: self.state == 2, 5.0))
+        self.assertTrue(self.wait_for(lambda: self.state == LANDED, lim.landed_within_s))
 
         # Again, with the hand reported absent (present = false) instead of silence.
         self.twists.clear()
@@ -83,8 +102,9 @@ class DroneWatchdog(unittest.TestCase):
         gone = time.monotonic()
         self.assertTrue(self.wait_for(lambda: self.twists[-1][1].linear.x == 0.0, 1.0))
         zero_at = next(t for t, m in self.twists if t > gone and m.linear.x == 0.0)
-        self.assertLess(zero_at - gone, 0.2)
-        self.assertTrue(self.wait_for(lambda: self.state in (8, 2), 5.0), 'no landing')
+        self.assertLess(zero_at - gone, lim.zero_twist_absent_within_s)
+        self.assertTrue(self.wait_for(lambda: self.state in (LANDING, LANDED),
+                                      lim.absent_landing_within_s), 'no landing')
 
 
 if __name__ == '__main__':

@@ -13,67 +13,40 @@ import unittest
 
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import JointState
 
-from leap_teleop.msg import GestureEvent, Hand, Navdata, leapcobotright
+from leap_teleop.msg import GestureEvent, Navdata
 
-from fault_common import Watch, wait_for
+from check_helpers import RejectedInputs, RightHands, Watch, limit, read_limits, wait_for
 
 ARM = 'ur10_1'
 NEUTRAL = dict(palm=(0.0, 250.0, 0.0))
 FAR = dict(palm=(0.0, 400.0, -150.0))
-
-
-class Hands:
-    """Right hand on the arm's leapcobot topic and the pilot's Hand topic, one pose."""
-
-    def __init__(self):
-        self.arm_pub = rospy.Publisher('/leapmotion/data_right', leapcobotright, queue_size=500)
-        self.hand_pub = rospy.Publisher('/leapmotion/hand_right', Hand, queue_size=500)
-
-    def publish(self, stamp, palm, thumb_up=False, rock=False):
-        m = leapcobotright()
-        m.header.stamp = rospy.Time.from_sec(stamp)
-        m.is_right_hand = True
-        m.right_hand_palmpos.x, m.right_hand_palmpos.y, m.right_hand_palmpos.z = palm
-        m.right_hand_thumb_up = thumb_up
-        m.right_hand_set_origin_frame_detected = rock
-        h = Hand()
-        h.header.stamp = m.header.stamp
-        h.side, h.present = Hand.SIDE_RIGHT, True
-        h.palm_position.x, h.palm_position.y, h.palm_position.z = (v / 1000.0 for v in palm)
-        h.palm_normal.y, h.direction.z = -1.0, -1.0
-        self.arm_pub.publish(m)
-        self.hand_pub.publish(h)
-
-
-class Rejected:
-    def __init__(self):
-        self.values = {}
-        rospy.Subscriber('/diagnostics', DiagnosticArray, self.cb, queue_size=20)
-
-    def cb(self, msg):
-        for st in msg.status:
-            for kv in st.values:
-                if kv.key == 'rejected inputs':
-                    self.values[st.name] = int(kv.value)
-
-    def get(self, part):
-        return next((v for k, v in self.values.items() if part in k), None)
+LIMITS = {
+    'ready_timeout_s': limit('wait this long for the arm node and the pilot to listen', 's',
+                             gt=0),
+    'state_timeout_s': limit('the thumbs-up arms, the rock starts tracking within this', 's',
+                             gt=0),
+    'pilot_timeout_s': limit('the engaged pilot sends twists within this', 's', gt=0),
+    'min_rejected_arm': limit('of the 200 backlog messages the arm node refuses at least',
+                              kind='int', ge=0, le=200),
+    'min_rejected_pilot': limit('of the 200 backlog messages the pilot refuses at least',
+                                kind='int', ge=0, le=200),
+}
 
 
 class FaultHandBurst(unittest.TestCase):
     def test_stall_then_backlog_burst(self):
+        lim = read_limits(LIMITS)
         w = Watch(arm=ARM)
-        rejected = Rejected()
+        rejected = RejectedInputs()
         twists = []
         rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m)),
                          queue_size=500)
         nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
         gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
-        hands = Hands()
+        hands = RightHands()
         pose = {'now': dict(NEUTRAL)}
         stop = threading.Event()
 
@@ -92,20 +65,24 @@ class FaultHandBurst(unittest.TestCase):
         rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
         self.assertTrue(wait_for(lambda: hands.arm_pub.get_num_connections() > 0
                                  and hands.hand_pub.get_num_connections() > 0
-                                 and gesture_pub.get_num_connections() > 0, 30.0))
+                                 and gesture_pub.get_num_connections() > 0,
+                                 lim.ready_timeout_s))
         threading.Thread(target=stream, daemon=True).start()
         try:
             # Arm tracking, pilot engaged.
             t0 = time.monotonic()
             pose['now'] = dict(NEUTRAL, thumb_up=True)
-            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None, 5.0))
+            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None,
+                                     lim.state_timeout_s))
             pose['now'] = dict(NEUTRAL, rock=True)
-            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None, 5.0))
+            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None,
+                                     lim.state_timeout_s))
             pose['now'] = dict(NEUTRAL)
             ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
             ev.header.stamp = rospy.Time.now()
             gesture_pub.publish(ev)
-            self.assertTrue(wait_for(lambda: twists, 3.0), 'the pilot sends nothing')
+            self.assertTrue(wait_for(lambda: twists, lim.pilot_timeout_s),
+                            'the pilot sends nothing')
             time.sleep(1.2)                         # diagnostics (1 Hz) before the stall
             arm_rej0, pilot_rej0 = rejected.get(ARM) or 0, rejected.get('pilot') or 0
 
@@ -140,8 +117,8 @@ class FaultHandBurst(unittest.TestCase):
             arm_rej, pilot_rej = rejected.get(ARM) - arm_rej0, rejected.get('pilot') - pilot_rej0
             rospy.loginfo('FAULT hand burst: arm refused %d, pilot refused %d of 200',
                           arm_rej, pilot_rej)
-            self.assertGreaterEqual(arm_rej, 150)
-            self.assertGreaterEqual(pilot_rej, 150)
+            self.assertGreaterEqual(arm_rej, lim.min_rejected_arm)
+            self.assertGreaterEqual(pilot_rej, lim.min_rejected_pilot)
         finally:
             stop.set()
 

@@ -19,15 +19,32 @@ import numpy as np
 import psutil
 import rospy
 import rostest
-from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
 from leap_teleop.msg import Hand, leapcobotright
 from leap_teleop.ur10 import kinematics as kin
 
-from fault_common import Watch, alive, kill, node_pid, wait_for
+from check_helpers import RejectedInputs, Watch, alive, kill, limit, node_pid, pilot_hand, read_limits, wait_for
 
 ARM = 'ur10_1'
+LIMITS = {
+    'state_timeout_s': limit('the thumbs-up arms, the rock starts tracking within this', 's',
+                             gt=0),
+    'moving_speed': limit('the arm moves: a joint faster than this', 'rad/s', gt=0),
+    'move_timeout_s': limit('... within this of the long move', 's', gt=0),
+    'disarm_timeout_s': limit('the simulator killed: disarmed within this', 's', gt=0),
+    'respawn_timeout_s': limit('roslaunch respawns the simulator within this', 's', gt=0),
+    'max_cpu': limit('the arm node\'s CPU share while the simulator is gone below this',
+                     'cores', gt=0),
+    'still_speed': limit('after the respawn, no joint faster than this', 'rad/s', gt=0),
+    'home_tolerance_rad': limit('the respawned arm is at home within this', 'rad', gt=0),
+    'command_timeout_s': limit('re-armed, the first command comes within this', 's', gt=0),
+    'max_jump_rad': limit('... at most this far from the new pose', 'rad', gt=0),
+    'rejected_timeout_s': limit('bad messages are counted in ArmStatus within this', 's',
+                                gt=0),
+    'diagnostics_timeout_s': limit('... and on /diagnostics within this', 's', gt=0),
+    'connect_timeout_s': limit('the pilot subscribes to the hand within this', 's', gt=0),
+}
 
 
 class HandStream(threading.Thread):
@@ -73,34 +90,22 @@ class HandStream(threading.Thread):
             self.pub.publish(m)
 
 
-class Diagnostics:
-    def __init__(self):
-        self.values = {}
-        rospy.Subscriber('/diagnostics', DiagnosticArray, self.cb, queue_size=20)
-
-    def cb(self, msg):
-        for st in msg.status:
-            for kv in st.values:
-                if kv.key == 'rejected inputs':
-                    self.values[st.name] = int(kv.value)
-
-    def get(self, part):
-        return next((v for k, v in self.values.items() if part in k), None)
-
-
 class FaultRobot(unittest.TestCase):
     def arm_and_track(self, hand, w, palm0, after):
         hand.set(palm=palm0, thumb_up=True)
-        self.assertTrue(wait_for(lambda: w.first_status('armed', after)[0] is not None, 5.0),
+        self.assertTrue(wait_for(lambda: w.first_status('armed', after)[0] is not None,
+                                 self.lim.state_timeout_s),
                         [s.state + ': ' + s.reason for _, s in w.status[-5:]])
         hand.set(palm=palm0, rock=True)
-        self.assertTrue(wait_for(lambda: w.first_status('tracking', after)[0] is not None, 5.0))
+        self.assertTrue(wait_for(lambda: w.first_status('tracking', after)[0] is not None,
+                                 self.lim.state_timeout_s))
         time.sleep(0.2)
         return w.first_status('tracking', after)[0]
 
     def test_sim_restart_then_bad_streams(self):
+        self.lim = lim = read_limits(LIMITS)
         w = Watch(arm=ARM)
-        diag = Diagnostics()
+        diag = RejectedInputs()
         hand = HandStream()
         rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
         hand.start()
@@ -109,16 +114,19 @@ class FaultRobot(unittest.TestCase):
         self.arm_and_track(hand, w, (0.0, 250.0, 0.0), t0)
         hand.set(palm=(150.0, 300.0, -80.0))          # a long move
         self.assertTrue(wait_for(lambda: (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
-                                          or 0) > 0.08, 5.0), 'the arm never moved')
+                                          or 0) > lim.moving_speed, lim.move_timeout_s),
+                        'the arm never moved')
         t_kill = kill(sim_pid)
-        self.assertTrue(wait_for(lambda: w.first_status('disarmed', t_kill)[0] is not None, 3.0),
+        self.assertTrue(wait_for(lambda: w.first_status('disarmed', t_kill)[0] is not None,
+                                 lim.disarm_timeout_s),
                         [s.state + ': ' + s.reason for _, s in w.status[-5:]])
         t_dis, st = w.first_status('disarmed', t_kill)
         rospy.loginfo('FAULT sim kill: arm disarmed %.3f s after (%s)', t_dis - t_kill, st.reason)
         self.assertIn('joint states', st.reason)
         # While the robot is gone: alive, not spinning, not commanding.
         c0, m0 = sum(psutil.Process(arm_pid).cpu_times()[:2]), time.monotonic()
-        self.assertTrue(wait_for(lambda: node_pid('/ur10_sim') != sim_pid, 30.0),
+        self.assertTrue(wait_for(lambda: node_pid('/ur10_sim') != sim_pid,
+                                 lim.respawn_timeout_s),
                         'the simulator was not respawned')
         t_back = time.monotonic()
         cpu = (sum(psutil.Process(arm_pid).cpu_times()[:2]) - c0) / (t_back - m0)
@@ -126,60 +134,60 @@ class FaultRobot(unittest.TestCase):
                       'was gone %.1f %%', t_back - t_kill, 100 * cpu)
         self.assertTrue(alive(arm_pid))
         self.assertEqual(node_pid('/%s/ur10_arm' % ARM), arm_pid, 'the arm node restarted')
-        self.assertLess(cpu, 0.3, 'arm node busy while the robot is gone')
-        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=30)
+        self.assertLess(cpu, lim.max_cpu, 'arm node busy while the robot is gone')
+        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=lim.respawn_timeout_s)
         t_js = time.monotonic()
         time.sleep(1.0)              # the hand still says "far away": nothing may move
         late = [t for t, _ in w.arm_cmds if t > t_dis + 0.05]
         self.assertEqual(late, [], 'commands while disarmed after the restart')
-        self.assertLess(w.arm_speed(t_js, time.monotonic()), 0.01)
+        self.assertLess(w.arm_speed(t_js, time.monotonic()), lim.still_speed)
         q_home = w.q_at(time.monotonic())
-        np.testing.assert_allclose(q_home, kin.HOME_Q, atol=0.05)
+        np.testing.assert_allclose(q_home, kin.HOME_Q, atol=lim.home_tolerance_rad)
         # Re-arm: the new origin is the new pose; the first command starts there.
         t_origin = self.arm_and_track(hand, w, (150.0, 300.0, -80.0), t_js)
         hand.set(palm=(150.0, 320.0, -80.0))
-        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds), 3.0))
+        self.assertTrue(wait_for(lambda: any(t > t_origin for t, _ in w.arm_cmds),
+                                 lim.command_timeout_s))
         t_cmd, q_cmd = next((t, q) for t, q in list(w.arm_cmds) if t > t_origin)
         jump = float(np.max(np.abs(q_cmd - w.q_at(t_cmd))))
         rospy.loginfo('FAULT sim restart: first command after re-arming %.4f rad from the '
                       'new pose', jump)
-        self.assertLess(jump, 0.05)
+        self.assertLess(jump, lim.max_jump_rad)
 
         # -- bad streams into the arm node ------------------------------------------------
         with w.lock:
             before = w.status[-1][1].rejected_inputs
         pose = dict(palm=(150.0, 320.0, -80.0))
-        for k in range(5):
+        n_late = 5
+        for k in range(n_late):
             hand.pub.publish(hand.message(stamp_offset=-1.0, **pose))       # held up 1 s
             time.sleep(0.02)
         # Out of order: older than a live message sent before it (a fixed offset from now
         # is not, when the live stream has been starved for longer than the offset).
         hand.older_than_live(0.05, **pose)
         hand.pub.publish(hand.message(**dict(palm=(float('nan'), 0.0, 0.0))))
-        self.assertTrue(wait_for(lambda: w.status[-1][1].rejected_inputs >= before + 7, 3.0),
+        bad = n_late + 2                   # + the out-of-order one and the NaN palm
+        self.assertTrue(wait_for(lambda: w.status[-1][1].rejected_inputs >= before + bad,
+                                 lim.rejected_timeout_s),
                         'rejected_inputs %d -> %d' % (before, w.status[-1][1].rejected_inputs))
-        self.assertEqual(w.status[-1][1].rejected_inputs, before + 7)
-        self.assertTrue(wait_for(lambda: (diag.get('ur10_arm') or 0) >= before + 7, 5.0),
-                        diag.values)
+        self.assertEqual(w.status[-1][1].rejected_inputs, before + bad)
+        self.assertTrue(wait_for(lambda: (diag.get('ur10_arm') or 0) >= before + bad,
+                                 lim.diagnostics_timeout_s), diag.values)
         self.assertEqual(w.status[-1][1].state, 'tracking')   # the live stream goes on
 
         # -- bad streams into the drone pilot ----------------------------------------------
         pub = rospy.Publisher('/leapmotion/hand_right', Hand, queue_size=50)
-        self.assertTrue(wait_for(lambda: pub.get_num_connections() > 0, 10.0))
-
-        def hand_msg(offset=0.0, side=Hand.SIDE_RIGHT):
-            h = Hand(side=side, present=True)
-            h.header.stamp = rospy.Time.from_sec(rospy.get_time() + offset)
-            h.palm_position.y, h.palm_normal.y, h.direction.z = 0.2, -1.0, -1.0
-            return h
+        self.assertTrue(wait_for(lambda: pub.get_num_connections() > 0, lim.connect_timeout_s))
         for k in range(20):
-            pub.publish(hand_msg())
+            pub.publish(pilot_hand(rospy.get_time()))
             time.sleep(0.01)
-        for offset in (-1.0, -1.0, -1.0):
-            pub.publish(hand_msg(offset))
+        n_late = 3
+        for k in range(n_late):
+            pub.publish(pilot_hand(rospy.get_time() - 1.0))
             time.sleep(0.01)
-        pub.publish(hand_msg(side=Hand.SIDE_LEFT))
-        self.assertTrue(wait_for(lambda: diag.get('drone_pilot') == 4, 5.0), diag.values)
+        pub.publish(pilot_hand(rospy.get_time(), side=Hand.SIDE_LEFT))
+        self.assertTrue(wait_for(lambda: diag.get('drone_pilot') == n_late + 1,
+                                 lim.diagnostics_timeout_s), diag.values)
         self.assertTrue(alive(node_pid('/drone_pilot')))
 
 

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""rostest node (fault_sender_stall.test): SIGSTOP the sender for 0.5 s while ur10_1
-moves (a stall shorter than disarm_after), then SIGCONT. The arm holds within 0.3 s,
+"""rostest node (fault_sender_stall.test): SIGSTOP the sender for stall_s while ur10_1
+moves (a stall shorter than disarm_after), then SIGCONT. The arm holds at once,
 commands nothing while the input is stale, resumes tracking when the input returns
 without a new thumbs-up (never disarmed), its first command after that starts at the pose
-it is at (no jump), and it moves on with the session."""
+it is at (no jump), and it moves on with the session. The limits: ~limits in
+fault_sender_stall.test."""
 import os
 import signal
 import sys
@@ -14,33 +15,46 @@ import numpy as np
 import rospy
 import rostest
 
-from fault_common import Watch, node_pid, wait_for
+from check_helpers import Watch, limit, node_pid, read_limits, wait_for
 
 ARM = 'ur10_1'
-STALL_S = 0.5
+LIMITS = {
+    'stall_s': limit('the sender is stopped this long (less than disarm_after - 0.2 s)', 's',
+                     gt=0),
+    'moving_timeout_s': limit('wait this long for the arm moving', 's', gt=0),
+    'moving_speed': limit('the arm moves: a joint faster than this', 'rad/s', gt=0),
+    'resume_timeout_s': limit('tracking again within this of the stop', 's', gt=0),
+    'hold_within_s': limit('the arm holds within this of the stop', 's', gt=0),
+    'max_jump_rad': limit('the first commands after the resume: at most this far from the '
+                          'arm\'s pose', 'rad', gt=0),
+    'moving_again_speed': limit('the session goes on: a joint faster than this ...', 'rad/s',
+                                gt=0),
+    'moving_again_timeout_s': limit('... within this of the resume', 's', gt=0),
+}
 
 
 class FaultSenderStall(unittest.TestCase):
     def test_short_sender_stall_holds_then_resumes(self):
+        lim = read_limits(LIMITS)
         w = Watch(arm=ARM)
         disarm_after = rospy.get_param('/%s/ur10_arm/disarm_after' % ARM)
-        self.assertLess(STALL_S + 0.2, disarm_after)
+        self.assertLess(lim.stall_s + 0.2, disarm_after)
         pid = node_pid('/leap_sender')
         self.assertTrue(wait_for(lambda: (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
-                                          or 0) > 0.08, 45.0),
+                                          or 0) > lim.moving_speed, lim.moving_timeout_s),
                         'the arm never moved: %s' % [(s.state, s.reason)
                                                      for _, s in w.status[-3:]])
         t_stop_stamp = rospy.get_time()
         os.kill(pid, signal.SIGSTOP)
         t_stop = time.monotonic()
         try:
-            time.sleep(STALL_S)
+            time.sleep(lim.stall_s)
         finally:
             os.kill(pid, signal.SIGCONT)
         t_cont = time.monotonic()
         rospy.loginfo('sender stopped for %.2f s', t_cont - t_stop)
         self.assertTrue(wait_for(lambda: w.first_status('tracking', t_stop, 'input back')[0]
-                                 is not None, 5.0),
+                                 is not None, lim.resume_timeout_s),
                         'no resume: %s' % [(s.state, s.reason) for _, s in w.status[-5:]])
         t_resume, st_resume = w.first_status('tracking', t_stop, 'input back')
         t_hold, st_hold = w.first_status('holding', t_stop, 'no hand input')
@@ -48,7 +62,7 @@ class FaultSenderStall(unittest.TestCase):
         held_in = st_hold.header.stamp.to_sec() - t_stop_stamp
         rospy.loginfo('FAULT sender stall: held %.3f s after the stop; %s', held_in,
                       st_resume.reason)
-        self.assertLess(held_in, 0.3)
+        self.assertLess(held_in, lim.hold_within_s)
         self.assertLess(t_hold, t_resume)
         time.sleep(2.0)
         states = [s.state for t, s in list(w.status) if t >= t_stop]
@@ -64,10 +78,11 @@ class FaultSenderStall(unittest.TestCase):
         worst = max(float(np.max(np.abs(q - w.q_at(t)))) for t, q in after)
         rospy.loginfo('FAULT sender stall: first commands after the resume at most %.4f rad '
                       'from the arm\'s pose', worst)
-        self.assertLess(worst, 0.05, 'a command %.3f rad away from the arm\'s pose' % worst)
+        self.assertLess(worst, lim.max_jump_rad, 'a command %.3f rad away from the arm\'s pose' % worst)
         # ... and the session goes on: the arm moves again.
-        self.assertTrue(wait_for(lambda: (w.arm_speed(t_resume, time.monotonic()) or 0) > 0.05,
-                                 5.0), 'the arm did not move after the resume')
+        self.assertTrue(wait_for(lambda: (w.arm_speed(t_resume, time.monotonic()) or 0)
+                                 > lim.moving_again_speed, lim.moving_again_timeout_s),
+                        'the arm did not move after the resume')
 
 
 if __name__ == '__main__':

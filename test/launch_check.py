@@ -31,7 +31,9 @@ from leap_teleop.ur10.config import load_config
 LANDED, HOVERING, TAKING_OFF = 2, 4, 6
 
 
-class Watch:
+class LaunchProgress:
+    """What the running launch has done so far, against the purposes asked for."""
+
     def __init__(self, args):
         self.args = args
         self.lock = threading.Lock()
@@ -163,7 +165,7 @@ def main():
     args = ap.parse_args(rospy.myargv()[1:])
     args.navdata = args.navdata or ['ardrone/navdata']
     rospy.init_node('launch_check', anonymous=True, disable_signals=True)
-    watch = Watch(args)
+    watch = LaunchProgress(args)
     t0 = time.monotonic()
     while time.monotonic() - t0 < args.timeout:
         if watch.done():

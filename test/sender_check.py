@@ -10,9 +10,21 @@ import tf2_ros
 from leap_teleop.hands.sources.scripted import GestureScript
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 
+from check_helpers import limit, read_limits
+
+LIMITS = {
+    'duration_s': limit('listen this long', 's', gt=0),
+    'min_messages': limit('more messages than this on each topic', kind='int', ge=0),
+    'palm_tolerance_mm': limit('palm positions follow the script this closely', 'mm', gt=0),
+    'min_absent': limit('more messages without the hand than this', kind='int', ge=0),
+    'tf_places': limit('the leap frame sits where the launch file puts it, to these decimal '
+                       'places', kind='int', ge=0),
+}
+
 
 class SenderFollowsScript(unittest.TestCase):
     def test_messages_follow_the_script(self):
+        lim = read_limits(LIMITS)
         script = GestureScript.load(rospy.get_param('~script'))
         hands, cobots_right, cobots_left = [], [], []
         rospy.Subscriber('leapmotion/hand_right', Hand, hands.append, queue_size=2000)
@@ -20,15 +32,15 @@ class SenderFollowsScript(unittest.TestCase):
                          queue_size=2000)
         rospy.Subscriber('leapmotion/data_left', leapcobotleft, cobots_left.append,
                          queue_size=2000)
-        deadline = rospy.Time.now() + rospy.Duration(rospy.get_param('~duration', 6.0))
+        deadline = rospy.Time.now() + rospy.Duration(lim.duration_s)
         while rospy.Time.now() < deadline and not rospy.is_shutdown():
             rospy.sleep(0.1)
         # The script has a right hand and no left one; both sides are published each frame.
-        self.assertGreater(len(hands), 300)
-        self.assertGreater(len(cobots_right), 300)
-        self.assertGreater(len(cobots_left), 300)
+        self.assertGreater(len(hands), lim.min_messages)
+        self.assertGreater(len(cobots_right), lim.min_messages)
+        self.assertGreater(len(cobots_left), lim.min_messages)
 
-        # Palm positions follow the script within 1 mm; presence matches.
+        # Palm positions follow the script; presence matches.
         n_frames = int(round(script.duration * script.rate_hz))   # the sender loops
         for msg in hands:
             t = ((msg.leap_frame_id - 1) % n_frames) / script.rate_hz
@@ -38,7 +50,7 @@ class SenderFollowsScript(unittest.TestCase):
                 got = [msg.palm_position.x * 1000, msg.palm_position.y * 1000,
                        msg.palm_position.z * 1000]
                 for g, e in zip(got, expected.palm_position):
-                    self.assertAlmostEqual(g, e, delta=1.0)
+                    self.assertAlmostEqual(g, e, delta=lim.palm_tolerance_mm)
 
         # Stamps strictly increase on every topic.
         for msgs in (hands, cobots_right, cobots_left):
@@ -49,7 +61,7 @@ class SenderFollowsScript(unittest.TestCase):
         self.assertTrue(any(m.right_hand_fist for m in cobots_right))
         self.assertTrue(any(m.right_hand_origin_frame for m in cobots_right))
         absent = [m for m in cobots_right if not m.is_right_hand]
-        self.assertGreater(len(absent), 50)
+        self.assertGreater(len(absent), lim.min_absent)
         for m in absent:
             self.assertFalse(m.right_hand_fist or m.right_hand_thumb_up or m.right_hand_pinch
                              or m.right_hand_origin_frame
@@ -58,12 +70,13 @@ class SenderFollowsScript(unittest.TestCase):
         self.assertFalse(any(m.is_left_hand for m in cobots_left))
 
     def test_leap_frame_sits_where_the_launch_file_puts_it(self):
+        places = read_limits(LIMITS).tf_places
         buffer = tf2_ros.Buffer()
         listener = tf2_ros.TransformListener(buffer)  # noqa: F841 (fills the buffer)
         t = buffer.lookup_transform('world', 'leap_hands', rospy.Time(0), rospy.Duration(10.0))
         p = t.transform.translation
         for got, want in zip((p.x, p.y, p.z), rospy.get_param('~leap_xyz')):
-            self.assertAlmostEqual(got, want, places=6)
+            self.assertAlmostEqual(got, want, places=places)
         # Leap axes in world: x (user's right) -> -y, y (up) -> z, z (toward the user) -> -x
         q = t.transform.rotation
         x, y, z, w = q.x, q.y, q.z, q.w
@@ -72,7 +85,7 @@ class SenderFollowsScript(unittest.TestCase):
                    (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)))
         for got, want in zip(columns, ((0, -1, 0), (0, 0, 1), (-1, 0, 0))):
             for g, e in zip(got, want):
-                self.assertAlmostEqual(g, e, places=6)
+                self.assertAlmostEqual(g, e, places=places)
 
 
 if __name__ == '__main__':

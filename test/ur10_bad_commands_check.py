@@ -20,7 +20,19 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 
+from check_helpers import limit, read_limits
+
 ARM = 'ur10_1'
+LIMITS = {
+    'ready_timeout_s': limit('wait this long for joint states and a first warning', 's', gt=0),
+    'warning_timeout_s': limit('each bad command\'s warning comes within this', 's', gt=0),
+    'rate_limit_wait_s': limit('wait this long after a warning (the sim warns at most every '
+                               '2 s)', 's', gt=0),
+    'hold_tolerance': limit('a rejected command moves no joint (rad) or the gripper more than '
+                            'this', gt=0),
+    'reach_tolerance_rad': limit('the valid command is reached this closely ...', 'rad', gt=0),
+    'reach_timeout_s': limit('... within this', 's', gt=0),
+}
 PREFIX = ARM + '_'
 NAMES = [PREFIX + n for n in JOINT_NAMES]
 
@@ -36,6 +48,7 @@ def traj(names, points):
 
 class BadCommands(unittest.TestCase):
     def setUp(self):
+        self.lim = read_limits(LIMITS)
         self.lock = threading.Lock()
         self.q = None
         self.g = None
@@ -45,19 +58,19 @@ class BadCommands(unittest.TestCase):
         self.arm_pub = rospy.Publisher(ARM + '/arm_controller/command', JointTrajectory,
                                        queue_size=5)
         self.grip_pub = rospy.Publisher(ARM + '/gripper/command', JointTrajectory, queue_size=5)
-        deadline = rospy.get_time() + 30.0
+        deadline = rospy.get_time() + self.lim.ready_timeout_s
         while rospy.get_time() < deadline and not (
                 self.q is not None and self.arm_pub.get_num_connections()
                 and self.grip_pub.get_num_connections()):
             rospy.sleep(0.05)
         self.assertIsNotNone(self.q, 'no joint_states')
         # Until the log subscription is up, warnings are lost: warm up with a bad command.
-        deadline = rospy.get_time() + 30.0
+        deadline = rospy.get_time() + self.lim.ready_timeout_s
         while rospy.get_time() < deadline and not self.warnings:
             self.arm_pub.publish(traj(['warm_up'], [(1.0, [0.0], [])]))
             rospy.sleep(0.5)
         self.assertTrue(self.warnings, 'no warnings from ur10_sim on /rosout')
-        rospy.sleep(2.2)        # past the warning rate limit
+        rospy.sleep(self.lim.rate_limit_wait_s)
 
     def on_joints(self, msg):
         with self.lock:
@@ -82,20 +95,22 @@ class BadCommands(unittest.TestCase):
         def warned():
             with self.lock:
                 return any('rejected' in w and reason in w for w in self.warnings[n:])
-        deadline = rospy.get_time() + 30.0
+        deadline = rospy.get_time() + self.lim.warning_timeout_s
         while not warned() and rospy.get_time() < deadline and not rospy.is_shutdown():
             rospy.sleep(0.05)
         # Past the warning rate limit counted from the warning, not from the publish (on a
         # loaded machine the command can reach the simulator late, and simulated time runs
         # 8x), and time to move if it would.
-        rospy.sleep(2.2)
+        rospy.sleep(self.lim.rate_limit_wait_s)
         q1, g1 = self.joints()
         with self.lock:
             new = self.warnings[n:]
         self.assertTrue(any('rejected' in w and reason in w for w in new),
                         'no warning with %r after the command; got %s' % (reason, new))
-        self.assertLess(np.max(np.abs(q1 - q0)), 1e-3, 'arm moved on a rejected command')
-        self.assertLess(abs(g1 - g0), 1e-3, 'gripper moved on a rejected command')
+        self.assertLess(np.max(np.abs(q1 - q0)), self.lim.hold_tolerance,
+                        'arm moved on a rejected command')
+        self.assertLess(abs(g1 - g0), self.lim.hold_tolerance,
+                        'gripper moved on a rejected command')
 
     def test_bad_commands_rejected_arm_holds(self):
         home, _ = self.joints()
@@ -128,10 +143,11 @@ class BadCommands(unittest.TestCase):
         # ... and a bad command in the middle of it does not stop or divert it.
         rospy.sleep(0.3)
         arm.publish(traj(NAMES, [(1.0, [math.nan] * 6, [])]))
-        deadline = rospy.get_time() + 5.0
-        while rospy.get_time() < deadline and np.max(np.abs(self.joints()[0] - target)) > 5e-3:
+        tol = self.lim.reach_tolerance_rad
+        deadline = rospy.get_time() + self.lim.reach_timeout_s
+        while rospy.get_time() < deadline and np.max(np.abs(self.joints()[0] - target)) > tol:
             rospy.sleep(0.05)
-        self.assertLess(np.max(np.abs(self.joints()[0] - target)), 5e-3)
+        self.assertLess(np.max(np.abs(self.joints()[0] - target)), tol)
 
 
 if __name__ == '__main__':

@@ -24,8 +24,22 @@ from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.pick_place import pick_place_plan
 
-POSITION_TOL = 0.01     # rad: a move is done when every joint is this close ...
-SPEED_TOL = 0.02        # ... and this slow (rad/s)
+from check_helpers import limit, read_limits
+
+LIMITS = {
+    'ready_timeout_s': limit('wait this long for joint states, subscribers and cube poses', 's',
+                             gt=0),
+    'step_timeout_s': limit('each move is done within this', 's', gt=0),
+    'position_tolerance_rad': limit('a move is done when every joint is this close ...',
+                                    'rad', gt=0),
+    'speed_tolerance': limit('... and this slow', 'rad/s', gt=0),
+    'tf_tolerance_m': limit('TF and the kinematics agree on the TCP this closely', 'm', gt=0),
+    'cube_height_tolerance_m': limit('the placed cube rests on the tray floor this closely',
+                                     'm', gt=0),
+    'max_speed_ratio': limit('no joint faster than this share of its speed limit', gt=0),
+    'max_other_cube_move_m': limit('a cube no arm was tasked with moves less than this', 'm',
+                                   gt=0),
+}
 
 
 class ArmDriver:
@@ -73,14 +87,14 @@ class ArmDriver:
                                            time_from_start=rospy.Duration.from_sec(duration))]
         pub.publish(msg)
 
-    def move(self, q, timeout):
+    def move(self, q, timeout, position_tol, speed_tol):
         # Duration 0: the sim stretches it to the joint speed limits.
         self.send(self.arm_pub, kin.JOINT_NAMES, q, 0.0)
         deadline = rospy.get_time() + timeout
         while not rospy.is_shutdown() and rospy.get_time() < deadline:
             rospy.sleep(0.02)
             qm, qdm, _ = self.state()
-            if np.max(np.abs(qm - q)) < POSITION_TOL and np.max(np.abs(qdm)) < SPEED_TOL:
+            if np.max(np.abs(qm - q)) < position_tol and np.max(np.abs(qdm)) < speed_tol:
                 return True
         return False
 
@@ -91,9 +105,9 @@ class ArmDriver:
 
 class PickPlace(unittest.TestCase):
     def test_pick_place_through_topics(self):
-        cfg = load_config(rospy.get_param('~config', 'ur10_cell.yaml'))
-        tasks = dict(t.split(':') for t in rospy.get_param('~tasks', 'ur10_1:cube_red').split())
-        step_timeout = rospy.get_param('~step_timeout', 15.0)
+        lim = read_limits(LIMITS)
+        cfg = load_config(rospy.get_param('~config'))
+        tasks = dict(t.split(':') for t in rospy.get_param('~tasks').split())
         poses, held = {}, {}
         lock = threading.Lock()
 
@@ -107,8 +121,9 @@ class PickPlace(unittest.TestCase):
         rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, on_objects, queue_size=20)
         drivers = {arm: ArmDriver(cfg, arm) for arm in tasks}
         for arm, d in drivers.items():
-            self.assertTrue(d.wait_ready(30.0), '%s: no joint_states / command subscribers' % arm)
-        deadline = rospy.get_time() + 30.0
+            self.assertTrue(d.wait_ready(lim.ready_timeout_s),
+                            '%s: no joint_states / command subscribers' % arm)
+        deadline = rospy.get_time() + lim.ready_timeout_s
         while not rospy.is_shutdown() and rospy.get_time() < deadline and len(poses) < len(cfg.cubes):
             rospy.sleep(0.05)
         with lock:
@@ -123,7 +138,7 @@ class PickPlace(unittest.TestCase):
                                            rospy.Time(0), rospy.Duration(10.0)).transform
             fk = cfg.arm(arm).to_world(kin.fk(d.state()[0]))[:3, 3]
             tf_xyz = np.array([t.translation.x, t.translation.y, t.translation.z])
-            self.assertLess(np.linalg.norm(tf_xyz - fk), 1e-3, '%s TF %s vs FK %s'
+            self.assertLess(np.linalg.norm(tf_xyz - fk), lim.tf_tolerance_m, '%s TF %s vs FK %s'
                             % (arm, tf_xyz, fk))
 
         failures = []
@@ -132,7 +147,8 @@ class PickPlace(unittest.TestCase):
             d = drivers[arm]
             for step in pick_place_plan(cfg, arm, cube, q_start=d.state()[0]):
                 if step.what == 'arm':
-                    if not d.move(step.target, step_timeout):
+                    if not d.move(step.target, lim.step_timeout_s, lim.position_tolerance_rad,
+                                  lim.speed_tolerance):
                         failures.append('%s: %s not reached (q %s)' % (arm, step.label,
                                                                         d.state()[0]))
                         return
@@ -156,14 +172,16 @@ class PickPlace(unittest.TestCase):
             self.assertIn(arm, held.get(cube, set()), '%s was never reported grasped' % cube)
             self.assertLess(abs(x - tray.xyz[0]), tray.inner[0] / 2, (cube, end[cube]))
             self.assertLess(abs(y - tray.xyz[1]), tray.inner[1] / 2, (cube, end[cube]))
-            self.assertAlmostEqual(z, tray.floor_z + cfg.cube_size / 2, delta=0.01)
-            self.assertLessEqual(drivers[arm].max_speed_ratio, 1.05, arm)
+            self.assertAlmostEqual(z, tray.floor_z + cfg.cube_size / 2,
+                                   delta=lim.cube_height_tolerance_m)
+            self.assertLessEqual(drivers[arm].max_speed_ratio, lim.max_speed_ratio, arm)
         for name in start:
             others = set(held.get(name, set())) - {a for a, c in tasks.items() if c == name}
             self.assertEqual(others, set(), '%s held by an arm that was not tasked' % name)
             if name not in tasks.values():
                 moved = np.linalg.norm(np.subtract(end[name], start[name]))
-                self.assertLess(moved, 0.005, '%s moved by %.3f m' % (name, moved))
+                self.assertLess(moved, lim.max_other_cube_move_m,
+                                '%s moved by %.3f m' % (name, moved))
 
 
 if __name__ == '__main__':

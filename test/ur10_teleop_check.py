@@ -3,12 +3,14 @@
 real sender logic (or takes a recorded ~bag), replays it with `rosbag play` into the
 running nodes, and checks what the simulated arms did. ~scenario picks the check:
 
-  pick_place  every arm's cube ends within 3 cm of its tray's centre (and, with
-              ~max_cube_yaw_deg, that close to square)
-  watchdog    the input is cut mid-motion: held (joint velocities ~0) within 0.3 s,
+  pick_place  every arm's cube ends near its tray's centre (and, with max_cube_yaw_deg,
+              that close to square)
+  watchdog    the input is cut mid-motion: held (joint velocities ~0) at once,
               disarmed after disarm_after
   fist        a fist mid-motion stops the arm; a later pinch without re-arming moves nothing
   joystick    a hand inside the dead zone moves nothing; beyond it the arm moves
+
+The limits of each scenario (SCENARIO_LIMITS) come from the .test file's ~limits.
 """
 import math
 import os
@@ -34,6 +36,8 @@ from leap_teleop.ros.recording_to_bag import write_bag
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 
+from check_helpers import limit, read_limits
+
 
 def square_error(quaternion):
     """Angle (rad, 0..pi/4) of a cube lying on a face from square to the world axes."""
@@ -47,8 +51,42 @@ def square_error(quaternion):
     return abs((yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4)
 
 
-STILL = 0.02          # rad/s: "~0" joint speed
 ARM_JOINTS = kin.JOINT_NAMES
+READY = {'ready_timeout_s': limit('wait this long for joint states and the arm nodes', 's',
+                                  gt=0)}
+STILL = {'still_speed': limit('"still": no joint faster than this', 'rad/s', gt=0)}
+SCENARIO_LIMITS = {
+    'pick_place': dict(
+        READY,
+        settle_s=limit('after the playback, let the cubes settle this long', 's', ge=0),
+        tray_tolerance_m=limit('each cube ends this close to its tray\'s centre (xy)', 'm',
+                               gt=0),
+        max_cube_yaw_deg=limit('... and this close to square (0: not checked)', 'deg', ge=0)),
+    'watchdog': dict(
+        READY, **STILL,
+        moving_speed=limit('the arm moves: a joint faster than this ...', 'rad/s', gt=0),
+        move_timeout_s=limit('... within this', 's', gt=0),
+        hold_within_s=limit('the input cut: held (status stamp) and still within this', 's',
+                            gt=0),
+        disarm_early_s=limit('disarmed no earlier than disarm_after - this', 's', ge=0),
+        disarm_late_s=limit('... and no later than disarm_after + this', 's', ge=0)),
+    'fist': dict(
+        READY, **STILL,
+        settle_s=limit('after the playback, wait this long', 's', ge=0),
+        moving_speed=limit('moving when the fist came: a joint faster than this', 'rad/s',
+                           gt=0),
+        still_within_s=limit('still from this long after the fist', 's', gt=0)),
+    'joystick': dict(
+        READY,
+        settle_s=limit('after the playback, wait this long', 's', ge=0),
+        origin_settle_s=limit('the dead-zone stretch starts this long after the origin', 's',
+                              ge=0),
+        dead_zone_end_s=limit('... and ends this long after the first hand message (the '
+                              'script)', 's', gt=0),
+        max_drift_m=limit('the TCP moves less than this inside the dead zone', 'm', gt=0),
+        min_forward_m=limit('beyond it, the TCP ends further forward (x) than this', 'm',
+                            gt=0)),
+}
 
 
 class Recorder:
@@ -120,14 +158,17 @@ class Recorder:
 class Ur10Teleop(unittest.TestCase):
     def setUp(self):
         self.scenario = rospy.get_param('~scenario')
+        self.assertIn(self.scenario, SCENARIO_LIMITS, '~scenario')
+        self.lim = read_limits(SCENARIO_LIMITS[self.scenario])
         self.script = rospy.get_param('~script')
         self.arms = rospy.get_param('~arms')                 # {arm: [hand, cube]}
         self.hand_topics = rospy.get_param('~hand_topics')   # {hand: topic}
-        self.cell = load_config(rospy.get_param('~cell', 'ur10_dual_cell.yaml'))
+        self.cell = load_config(rospy.get_param('~cell'))
         self.rec = Recorder(list(self.arms), self.hand_topics)
         for arm in self.arms:
-            rospy.wait_for_message('/%s/joint_states' % arm, JointState, timeout=60)
-        self.wait_for_arm_nodes(60.0)
+            rospy.wait_for_message('/%s/joint_states' % arm, JointState,
+                                   timeout=self.lim.ready_timeout_s)
+        self.wait_for_arm_nodes(self.lim.ready_timeout_s)
         given_bag = rospy.get_param('~bag', '')        # a recorded session, else the script's
         if given_bag:
             self.bag, self.own_bag = given_bag, False
@@ -180,34 +221,36 @@ class Ur10Teleop(unittest.TestCase):
         worst = max(float(np.max(np.abs(qd))) for _, _, qd in samples)
         timeline = ['%+.2f s: %.3f' % (t - t0, float(np.max(np.abs(qd))))
                     for t, _, qd in self.rec.joints_between(arm, t0 - 0.5, t1)[::6]]
-        self.assertLess(worst, STILL, '%s: %s, max joint speed %.4f rad/s; speeds from %.2f s '
+        self.assertLess(worst, self.lim.still_speed, '%s: %s, max joint speed %.4f rad/s; speeds from %.2f s '
                         'before: %s' % (arm, what, worst, 0.5, ', '.join(timeline)))
 
     def test_scenario(self):
         getattr(self, 'check_' + self.scenario)()
 
     def check_pick_place(self):
-        self.wait_playback(settle=3.0)
+        lim = self.lim
+        self.wait_playback(settle=lim.settle_s)
         for arm, (_, cube) in self.arms.items():
             pos = self.rec.cubes.get(cube)
             self.assertIsNotNone(pos, 'no pose for %s' % cube)
             tray = self.cell.arm(arm).tray
             err = float(np.linalg.norm(np.asarray(pos[:2]) - np.asarray(tray.xyz[:2])))
             rospy.loginfo('%s placed %s %.3f m from the tray centre', arm, cube, err)
-            self.assertLess(err, 0.03, '%s: %s at %s' % (arm, cube, pos))
+            self.assertLess(err, lim.tray_tolerance_m, '%s: %s at %s' % (arm, cube, pos))
             self.assertLess(pos[2], tray.floor_z + self.cell.cube_size, 'not resting in the tray')
-            max_yaw = rospy.get_param('~max_cube_yaw_deg', 0.0)
+            max_yaw = lim.max_cube_yaw_deg
             if max_yaw > 0:       # placed square: faces along the tray's walls
                 yaw = math.degrees(square_error(self.rec.cube_quaternions[cube]))
                 rospy.loginfo('%s: %s %.1f deg from square', arm, cube, yaw)
                 self.assertLess(yaw, max_yaw, '%s lands %.1f deg from square' % (cube, yaw))
 
     def check_watchdog(self):
+        lim = self.lim
         arm = next(iter(self.arms))
-        deadline = rospy.get_time() + 30
+        deadline = rospy.get_time() + lim.move_timeout_s
         while rospy.get_time() < deadline:
             recent = self.rec.joints_between(arm, rospy.get_time() - 0.1, rospy.get_time())
-            if recent and max(float(np.max(np.abs(qd))) for _, _, qd in recent) > 0.08:
+            if recent and max(float(np.max(np.abs(qd))) for _, _, qd in recent) > lim.moving_speed:
                 break
             rospy.sleep(0.02)
         else:
@@ -216,7 +259,7 @@ class Ur10Teleop(unittest.TestCase):
         t_stop = rospy.get_time()
         disarm_after = rospy.get_param('/%s/ur10_arm/disarm_after' % arm)
         rospy.sleep(disarm_after + 0.8)
-        self.assert_still(arm, t_stop + 0.3, t_stop + disarm_after + 0.8,
+        self.assert_still(arm, t_stop + lim.hold_within_s, t_stop + disarm_after + 0.8,
                           'after the input stopped')
         # A stall holds at once; the loss disarms after disarm_after. Timed by the arm
         # node's status stamps, not by this node's receipt: how late a loaded machine
@@ -229,20 +272,21 @@ class Ur10Teleop(unittest.TestCase):
                       '(disarm_after %.2f s; received %.3f s)', t_hold - t_stop,
                       t_disarm - t_stop, disarm_after,
                       self.rec.status_time(arm, 'disarmed', 'watchdog') - t_stop)
-        self.assertLess(t_hold - t_stop, 0.3)
-        self.assertGreater(t_disarm - t_stop, disarm_after - 0.1)
-        self.assertLess(t_disarm - t_stop, disarm_after + 0.3)
+        self.assertLess(t_hold - t_stop, lim.hold_within_s)
+        self.assertGreater(t_disarm - t_stop, disarm_after - lim.disarm_early_s)
+        self.assertLess(t_disarm - t_stop, disarm_after + lim.disarm_late_s)
 
     def check_fist(self):
+        lim = self.lim
         arm = next(iter(self.arms))
-        self.wait_playback(settle=1.0)
+        self.wait_playback(settle=lim.settle_s)
         t_fist = self.rec.status_time(arm, 'disarmed', 'fist')
         self.assertIsNotNone(t_fist, self.rec.status[arm])
         moving = self.rec.joints_between(arm, t_fist - 0.5, t_fist)
-        self.assertGreater(max(float(np.max(np.abs(qd))) for _, _, qd in moving), 0.05,
-                           'the arm was not moving when the fist came')
+        self.assertGreater(max(float(np.max(np.abs(qd))) for _, _, qd in moving),
+                           lim.moving_speed, 'the arm was not moving when the fist came')
         end = rospy.get_time()
-        self.assert_still(arm, t_fist + 0.3, end, 'after the fist')
+        self.assert_still(arm, t_fist + lim.still_within_s, end, 'after the fist')
         late_grip = [t for t, _ in self.rec.gripper_cmds[arm] if t > t_fist]
         self.assertEqual(late_grip, [], 'the gripper was commanded after the fist')
         holds = [q for t, q in self.rec.arm_cmds[arm] if t > t_fist + 0.05]
@@ -250,19 +294,21 @@ class Ur10Teleop(unittest.TestCase):
         self.assertNotIn('armed', [s for t, s, _ in self.rec.status[arm] if t > t_fist])
 
     def check_joystick(self):
+        lim = self.lim
         arm = next(iter(self.arms))
-        self.wait_playback(settle=0.5)
+        self.wait_playback(settle=lim.settle_s)
         t0 = self.rec.first_hand
         t_origin = self.rec.status_time(arm, 'tracking', 'origin')
         self.assertIsNotNone(t_origin, self.rec.status[arm])
-        # Script: origin by 2.3 s, dead-zone wandering until 5.3 s, then 120 mm forward.
-        inside = self.rec.joints_between(arm, t_origin + 0.3, t0 + 5.2)
+        inside = self.rec.joints_between(arm, t_origin + lim.origin_settle_s,
+                                         t0 + lim.dead_zone_end_s)
         tcp = np.array([kin.fk(q)[:3, 3] for _, q, _ in inside])
         drift = float(np.max(np.linalg.norm(tcp - tcp[0], axis=1)))
-        self.assertLess(drift, 0.002, 'TCP moved %.4f m inside the dead zone' % drift)
+        self.assertLess(drift, lim.max_drift_m, 'TCP moved %.4f m inside the dead zone' % drift)
         final = self.rec.joints_between(arm, rospy.get_time() - 0.2, rospy.get_time())[-1][1]
         moved = kin.fk(final)[:3, 3] - tcp[0]
-        self.assertGreater(moved[0], 0.1, 'beyond the dead zone the TCP should move forward')
+        self.assertGreater(moved[0], lim.min_forward_m,
+                           'beyond the dead zone the TCP should move forward')
 
 
 if __name__ == '__main__':
