@@ -6,7 +6,7 @@ import pytest
 from leap_teleop.sim_runtime import Every, RealtimePacer, SendGate, pace_factor, snapshot_path
 
 
-class FakeClock:
+class ManualClock:
     def __init__(self):
         self.now, self.sleeps = 100.0, []
 
@@ -26,7 +26,7 @@ def test_as_fast_as_possible_needs_sim_time():
 
 
 def test_pacer_sleeps_until_the_wall_clock_catches_up_with_sim_time():
-    clock = FakeClock()
+    clock = ManualClock()
     pacer = RealtimePacer(2.0, sim_time=10.0, clock=clock, sleep=clock.sleep)
     assert pacer.wait(11.0) == pytest.approx(0.5)      # 1 s of sim at x2 = 0.5 s wall
     assert clock.sleeps == [pytest.approx(0.5)]
@@ -36,7 +36,7 @@ def test_pacer_sleeps_until_the_wall_clock_catches_up_with_sim_time():
 
 
 def test_pacer_behind_restarts_instead_of_sprinting():
-    clock = FakeClock()
+    clock = ManualClock()
     pacer = RealtimePacer(1.0, sim_time=0.0, clock=clock, sleep=clock.sleep)
     clock.now += 0.3                                    # a little late: no sleep, no restart
     assert pacer.wait(0.1) == pytest.approx(-0.2) and pacer.t0_sim == 0.0
@@ -48,7 +48,7 @@ def test_pacer_behind_restarts_instead_of_sprinting():
 
 
 def test_pacer_at_factor_zero_only_yields():
-    clock = FakeClock()
+    clock = ManualClock()
     pacer = RealtimePacer(0.0, sim_time=0.0, clock=clock, sleep=clock.sleep)
     assert pacer.wait(1000.0) == 0.0 and clock.sleeps == [0]
 

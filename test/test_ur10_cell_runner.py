@@ -12,7 +12,7 @@ from leap_teleop.ur10.model import build_urdf
 ARM = 'ur10_1'
 
 
-class Clock:
+class RosTimeStub:
     """The ROS clock command stamps are read against."""
     now = 1000.0
 
@@ -27,7 +27,7 @@ def rejected():
 
 def make(rejected, use_sim_time=True, **values):
     p = check_params(RUNNER_PARAMS, dict({'realtime_factor': 0.0}, **values))
-    return CellRunner(p, use_sim_time, Clock(), lambda *why: rejected.append(why))
+    return CellRunner(p, use_sim_time, RosTimeStub(), lambda *why: rejected.append(why))
 
 
 @pytest.fixture

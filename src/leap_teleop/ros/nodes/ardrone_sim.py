@@ -30,6 +30,7 @@ from std_srvs.srv import Empty as EmptySrv
 from std_srvs.srv import EmptyResponse, Trigger, TriggerResponse
 from visualization_msgs.msg import MarkerArray
 
+from leap_teleop import srv
 from leap_teleop.drone.cameras import CAMERAS
 from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner, calibration_error, static_frames
 from leap_teleop.msg import Navdata, navdata_altitude
@@ -37,16 +38,6 @@ from leap_teleop.ros.conversions import DroneMessages, camera_info_msg, rgb_imag
 from leap_teleop.ros.markers import PathTrail, drone_markers
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.srv import (
-    CamSelect,
-    CamSelectResponse,
-    FlightAnim,
-    FlightAnimResponse,
-    LedAnim,
-    LedAnimResponse,
-    RecordEnable,
-    RecordEnableResponse,
-)
 
 PARAMS = RUNNER_PARAMS      # declared beside the simulation; --help and docs/nodes.md read it
 # The drone state, published each ~looprate tick in this order (DroneMessages' names).
@@ -55,21 +46,21 @@ STATE_TOPICS = (('navdata', Navdata), ('mag', Vector3Stamped), ('navdata_altitud
 # Service: (type, answer, DroneSimRunner's command, the request's fields it takes). Like the
 # driver, every answer is true: the simulated firmware logs why it ignored a command.
 SERVICES = {
-    'setflightanimation': (FlightAnim, FlightAnimResponse(result=True), 'flight_animation',
+    'setflightanimation': (srv.FlightAnim, srv.FlightAnimResponse(result=True), 'flight_animation',
                            ('type', 'duration')),
     'flattrim': (EmptySrv, EmptyResponse(), 'flat_trim', ()),
     'togglecam': (EmptySrv, EmptyResponse(), 'toggle_camera', ()),
-    'setcamchannel': (CamSelect, CamSelectResponse(result=True), 'set_camera_channel',
+    'setcamchannel': (srv.CamSelect, srv.CamSelectResponse(result=True), 'set_camera_channel',
                       ('channel',)),
-    'setledanimation': (LedAnim, LedAnimResponse(result=True), 'set_led_animation',
+    'setledanimation': (srv.LedAnim, srv.LedAnimResponse(result=True), 'set_led_animation',
                         ('type', 'freq', 'duration')),
-    'setrecord': (RecordEnable, RecordEnableResponse(result=True), 'set_record', ('enable',)),
+    'setrecord': (srv.RecordEnable, srv.RecordEnableResponse(result=True), 'set_record', ('enable',)),
 }
 
 
 class ArDroneSimNode:
     def __init__(self, p):
-        self.p, self.log = p, RateLimitedLog()
+        self.log = RateLimitedLog()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.runner = DroneSimRunner(p, self.use_sim_time, warn=lambda key, text:
                                      rospy.logwarn('ardrone_sim: %s', text))
@@ -145,12 +136,15 @@ class ArDroneSimNode:
         self.tf.sendTransform(m.transform)
         if reading.new_state:
             rospy.loginfo('ardrone_sim: state %d (%s)', reading.nav['state'], reading.new_state)
-        if self.runner.path_gate.period is not None:
-            self.trail.add(stamp, (reading.pos[0], reading.pos[1], reading.altitude),
-                           reading.quat)
-            if self.trail.changed and self.runner.path_gate.open(stamp.to_sec()):
+        self.publish_path(stamp, (reading.pos[0], reading.pos[1], reading.altitude), reading.quat)
+
+    def publish_path(self, stamp, xyz, quat):
+        gate = self.runner.path_gate
+        if gate.period is not None:
+            self.trail.add(stamp, xyz, quat)
+            if self.trail.changed and gate.open(stamp.to_sec()):
                 self.path_pub.publish(self.trail.to_msg(self.frames.odom, stamp))
-                self.runner.path_gate.sent(stamp.to_sec())
+                gate.sent(stamp.to_sec())
 
     def publish_image(self, name, rgb, stamp, active):
         msg, info = rgb_image_msg(rgb, stamp, self.frames.cameras[name]), self.info[name]
