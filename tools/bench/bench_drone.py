@@ -194,7 +194,7 @@ def subprocess_run(args, env):
 
 
 def camera_rates():
-    from leap_teleop.ros.nodes.ardrone_sim import BOTTOM_RATE, FRONT_RATE
+    from leap_teleop.drone.sim_runner import BOTTOM_RATE, FRONT_RATE
     return {'front': FRONT_RATE, 'bottom': BOTTOM_RATE}
 
 

@@ -11,13 +11,17 @@ Commands: trajectory_msgs/JointTrajectory as ros_control's JointTrajectoryContro
 them. Joint names may carry the arm's prefix ("ur10_1_shoulder_pan_joint") or not, in any
 order, but every joint of the controller exactly once. Anything malformed raises
 CommandError with a reason the node logs; the arm then keeps its current trajectory.
+
+AR.Drone: the driver's navdata, imu, mag, odometry, TF and camera messages that ardrone_sim
+publishes (DroneMessages, camera_info_msg, rgb_image_msg).
 """
 import math
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import Point, Pose, Vector3
-from sensor_msgs.msg import Image, JointState
+from geometry_msgs.msg import Point, Pose, TransformStamped, Vector3, Vector3Stamped
+from nav_msgs.msg import Odometry
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
@@ -29,12 +33,15 @@ from leap_teleop.msg import (
     DriverHuman,
     GestureEvent,
     Hand,
+    Navdata,
     ObjectPoses,
     leap,
     leapcobotleft,
     leapcobotright,
     leapros,
+    navdata_altitude,
 )
+from leap_teleop.ros.ardrone_interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_TAG
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
@@ -503,6 +510,93 @@ def trajectory_points(msg, expected, prefix):
             continue
         points.append((t, pos, vel))
     return points, msg.header.stamp.to_sec()
+
+
+# -- AR.Drone: the driver's messages from a DroneReading ---------------------------------
+
+G_NAVDATA = 9.8                 # m/s^2 per g of navdata's ax / ay / az on ardrone/imu
+
+
+class DroneMessages:
+    """What ardrone_sim publishes each tick, from one drone.sim_runner.DroneReading:
+    navdata (with the sensors), mag, imu, odometry, the TF odom -> body and the
+    navdata_altitude option (built only when asked for)."""
+
+    def __init__(self, reading, stamp, base_frame, odom_frame, with_altitude=False):
+        r, nav = reading, reading.nav
+        self.navdata = Navdata()
+        self.navdata.header.stamp, self.navdata.header.frame_id = stamp, base_frame
+        for key, value in nav.items():
+            setattr(self.navdata, key, value)
+        self.mag = Vector3Stamped(header=self.navdata.header,
+                                  vector=Vector3(nav['magX'], nav['magY'], nav['magZ']))
+        self.imu = Imu()
+        self.imu.header.stamp, self.imu.header.frame_id = stamp, base_frame
+        o = self.imu.orientation
+        o.x, o.y, o.z, o.w = r.quat
+        self.imu.angular_velocity = Vector3(*r.omega)
+        self.imu.linear_acceleration = Vector3(nav['ax'] * G_NAVDATA, nav['ay'] * G_NAVDATA,
+                                               nav['az'] * G_NAVDATA)
+        self.odometry = Odometry()
+        self.odometry.header.stamp, self.odometry.header.frame_id = stamp, odom_frame
+        self.odometry.child_frame_id = base_frame
+        pp = self.odometry.pose.pose
+        pp.position = Point(r.pos[0], r.pos[1], r.altitude)
+        pp.orientation = o
+        self.odometry.twist.twist.linear = Vector3(nav['vx'] / 1000, nav['vy'] / 1000,
+                                                   nav['vz'] / 1000)
+        self.odometry.twist.twist.angular = Vector3(*r.omega)
+        self.transform = transform_msg(odom_frame, base_frame,
+                                       (r.pos[0], r.pos[1], r.altitude), r.quat, stamp)
+        self.navdata_altitude = (navdata_altitude_msg(self.navdata.header, nav, r.altitude)
+                                 if with_altitude else None)
+
+
+def navdata_altitude_msg(header, nav, altitude):
+    """The driver's altitude option: vision / raw / reference altitude (mm) are the sim's
+    true one, the observer's state its altitude (m) and climb rate (m/s)."""
+    out = navdata_altitude()
+    out.header = header
+    out.drone_time = nav['tm'] / 1e6
+    out.tag, out.size = NAVDATA_ALTITUDE_TAG, NAVDATA_ALTITUDE_SIZE
+    out.altitude_vision = out.altitude_raw = out.altitude_ref = nav['altd']
+    out.altitude_vz = nav['vz']
+    out.obs_accZ = nav['az'] * 9.81
+    out.obs_alt = max(altitude, 0.0)
+    out.obs_x.x, out.obs_x.y = max(altitude, 0.0), nav['vz'] / 1000.0
+    out.est_vb.x = nav['vz'] / 1000.0
+    return out
+
+
+def transform_msg(parent, child, xyz, quat_xyzw, stamp):
+    t = TransformStamped()
+    t.header.stamp, t.header.frame_id, t.child_frame_id = stamp, parent, child
+    t.transform.translation = Vector3(*xyz)
+    r = t.transform.rotation
+    r.x, r.y, r.z, r.w = quat_xyzw
+    return t
+
+
+def camera_info_msg(spec, frame_id):
+    """The ideal (undistorted) calibration of a drone.cameras.CameraSpec."""
+    info = CameraInfo()
+    info.header.frame_id = frame_id
+    info.width, info.height = spec.width, spec.height
+    info.distortion_model = 'plumb_bob'
+    info.D = [0.0] * 5
+    info.K, info.P = spec.intrinsics()
+    info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    return info
+
+
+def rgb_image_msg(rgb, stamp, frame_id):
+    """sensor_msgs/Image (rgb8) of a (H, W, 3) uint8 picture; stamp a rospy.Time."""
+    msg = Image()
+    msg.header.stamp, msg.header.frame_id = stamp, frame_id
+    msg.height, msg.width = rgb.shape[:2]
+    msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
+    msg.data = rgb.tobytes()
+    return msg
 
 
 # -- camera view -----------------------------------------------------------------------

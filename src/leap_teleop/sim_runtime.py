@@ -1,0 +1,77 @@
+"""How both simulator nodes run their physics loop, without ROS: pacing to the wall clock,
+sim-time schedules for what they publish, and where their snapshots go."""
+import os
+import time
+
+
+def pace_factor(factor, use_sim_time):
+    """(the real-time factor to run at, a warning or None): 0 (as fast as possible) only
+    makes sense with /use_sim_time; without it the sim runs in real time instead."""
+    if factor <= 0 and not use_sim_time:
+        return 1.0, ('realtime_factor %g without /use_sim_time: running in real time instead'
+                     % factor)
+    return float(factor), None
+
+
+class RealtimePacer:
+    """Holds a simulation at `factor` x wall time: `wait(sim_time)` after each step sleeps
+    until the wall clock has caught up. More than `max_lag` s behind (a loaded machine), it
+    starts counting afresh instead of sprinting to catch up. factor 0 = as fast as possible
+    (it only yields, so callbacks get in)."""
+
+    def __init__(self, factor, sim_time, max_lag=0.5, clock=time.monotonic, sleep=time.sleep):
+        self.factor, self.max_lag = float(factor), max_lag
+        self.clock, self.sleep = clock, sleep
+        self.restart(sim_time)
+
+    def restart(self, sim_time):
+        self.t0_wall, self.t0_sim = self.clock(), sim_time
+
+    def wait(self, sim_time):
+        """Sleep until `sim_time` is due; returns how long that was (< 0: behind)."""
+        if self.factor <= 0:
+            self.sleep(0)
+            return 0.0
+        delay = self.t0_wall + (sim_time - self.t0_sim) / self.factor - self.clock()
+        if delay > 0:
+            self.sleep(delay)
+        elif delay < -self.max_lag:
+            self.restart(sim_time)
+        return delay
+
+
+class Every:
+    """Due at `start`, then once per `period` of sim time. A step more than a period late is
+    one tick, not a burst of catch-up ones: the schedule starts again from its time."""
+
+    def __init__(self, period, start):
+        self.period, self.next = float(period), start
+
+    def due(self, t):
+        if t < self.next - 1e-9:
+            return False
+        self.next = max(self.next + self.period, t)
+        return True
+
+
+class SendGate:
+    """At most once per `period` since the last send (`sent(now)`); a clock that went back
+    (a reset, a bag played again) opens it at once. period None = always closed."""
+
+    def __init__(self, period):
+        self.period, self.last = period, None
+
+    def open(self, now):
+        return self.period is not None and (
+            self.last is None or now < self.last or now - self.last >= self.period)
+
+    def sent(self, now):
+        self.last = now
+
+
+def snapshot_path(folder, name, sim_time):
+    """Where a snapshot taken at `sim_time` goes: `folder`, else ROS_HOME, else /tmp
+    (created when missing), as NAME_<sim time>.png."""
+    folder = folder or os.environ.get('ROS_HOME') or '/tmp'
+    os.makedirs(folder, exist_ok=True)
+    return os.path.join(folder, '%s_%08.3f.png' % (name, sim_time))

@@ -1,0 +1,155 @@
+"""The UR10 work cell as the ur10_sim node runs it, without ROS: its ~parameters, the queue
+of validated commands the physics loop applies, the lock around the physics, what is due
+each step (joint states, object poses, /clock, in sim time), pacing to the wall clock,
+snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
+import argparse
+import collections
+import threading
+from dataclasses import dataclass
+
+from leap_teleop.params import Param
+from leap_teleop.sim_runtime import Every, RealtimePacer, pace_factor, snapshot_path
+from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.kinematics import JOINT_NAMES
+from leap_teleop.ur10.model import GRIPPER_JOINT, build_urdf
+from leap_teleop.ur10.snapshot import SnapshotRenderer
+from leap_teleop.ur10.trajectory import TrajectoryError
+
+RUNNER_PARAMS = {
+    'config': Param('ur10_cell.yaml', 'cell YAML: a path or a file name in config/',
+                    empty_ok=False),
+    'gui': Param(False, 'open the PyBullet GUI window (needs a display)'),
+    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
+                                  '(only with /use_sim_time)', ge=0.0, le=100.0),
+    # joint_states feed the arm nodes' joint watchdog: at least 10 Hz.
+    'joint_state_rate': Param(125.0, 'joint_states rate per arm (UR CB3 controller)',
+                              unit='Hz', ge=10.0, le=1000.0),
+    'object_pose_rate': Param(30.0, '~object_poses rate', unit='Hz', gt=0.0, le=1000.0),
+    'clock_rate': Param(240.0, '/clock rate with /use_sim_time (at most the physics rate)',
+                        unit='Hz', ge=10.0, le=10000.0),
+    'snapshot_dir': Param('', 'where ~snapshot writes PNGs (default ROS_HOME or /tmp)'),
+    'snapshot_size': Param([640, 480], 'snapshot width, height', unit='px', length=2,
+                           ge=16, le=4096),
+}
+
+MAX_PENDING = 100               # commands queued for the physics loop (bounded)
+SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
+# Command kind: (topic in the arm's namespace, the joints a command names).
+KINDS = {'arm': ('arm_controller/command', tuple(JOINT_NAMES)),
+         'gripper': ('gripper/command', (GRIPPER_JOINT,))}
+
+
+def arm_urdf(arm):
+    """The URDF of one ArmConfig (its joints prefixed, its base where the cell puts it)."""
+    return build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
+
+
+def urdf_from_args(argv):
+    """--urdf ARM [--config FILE]: ARM's description (for <param command=>)."""
+    ap = argparse.ArgumentParser(prog='ur10_sim.py --urdf')
+    ap.add_argument('--urdf', required=True, metavar='ARM')
+    ap.add_argument('--config', default=RUNNER_PARAMS['config'].default)
+    args, _ = ap.parse_known_args(argv)
+    return arm_urdf(load_config(args.config).arm(args.urdf))
+
+
+@dataclass
+class CellTick:
+    """What one physics step has to publish (None / False: not due this step)."""
+    time: float
+    joint_states: dict = None       # {arm: (q, qd, gripper, gripper velocity)}
+    object_poses: tuple = None      # (UR10Cell.object_poses(), {cube: arm holding it})
+    clock: bool = False
+
+
+class CellRunner:
+    """UR10Cell behind one lock. Callbacks `queue` commands (bounded: when the loop stalls,
+    the oldest are dropped); each `step` applies them, steps the physics and says what is
+    due. `reject(arm, kind, why)` hears of a command the cell refused; `ros_time()` is the
+    clock command stamps are in."""
+
+    def __init__(self, p, use_sim_time, ros_time, reject):
+        from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
+        self.p, self.ros_time, self.reject = p, ros_time, reject
+        self.cell = UR10Cell(p['config'], gui=bool(p['gui']))
+        self.lock = threading.Lock()               # guards self.cell (physics)
+        self.render_lock = threading.Lock()        # one snapshot at a time
+        self.renderer = SnapshotRenderer(self.cell.config)
+        self.pending = collections.deque()         # validated commands for the loop
+        self.dropped_commands = 0
+        self.use_sim_time = use_sim_time
+        self.factor, self.pace_warning = pace_factor(float(p['realtime_factor']),
+                                                     use_sim_time)
+        t = self.cell.time
+        self.joint_states_due = Every(1.0 / float(p['joint_state_rate']), t)
+        self.object_poses_due = Every(1.0 / float(p['object_pose_rate']), t)
+        self.clock_due = Every(1.0 / float(p['clock_rate']), t)
+
+    def queue(self, arm, kind, points, stamp):
+        """Queue a validated command (stamp: ROS time s, 0 = start now); True when an older
+        one had to be dropped for it (the loop is behind)."""
+        dropped = len(self.pending) >= MAX_PENDING
+        if dropped:                                # the loop stalled: newer commands win
+            self.pending.popleft()
+            self.dropped_commands += 1
+        self.pending.append((arm, kind, points, stamp))
+        return dropped
+
+    def _apply_pending(self):
+        """Hand queued commands to the cell (lock held)."""
+        cell = self.cell
+        while self.pending:
+            arm, kind, points, stamp = self.pending.popleft()
+            # A stamped start in ROS time -> cell time; 0 = now.
+            start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
+            command = cell.command_arm if kind == 'arm' else cell.command_gripper
+            try:
+                command(arm, points, start)
+            except TrajectoryError as e:
+                self.reject(arm, kind, e)
+
+    def step(self):
+        """Apply the queued commands, step the physics once; a CellTick of what is due."""
+        cell = self.cell
+        with self.lock:
+            self._apply_pending()
+            cell.step()
+            tick = CellTick(cell.time)
+            if self.joint_states_due.due(tick.time):
+                tick.joint_states = {a: cell.joint_state(a) for a in cell.arm_names}
+            if self.object_poses_due.due(tick.time):
+                tick.object_poses = (cell.object_poses(),
+                                     {c: a for a in cell.arm_names
+                                      for c in [cell.grasped(a)] if c is not None})
+        tick.clock = self.use_sim_time and self.clock_due.due(tick.time)
+        return tick
+
+    def run(self, publish, stopped):
+        """step() then publish(tick) until stopped(); paced to ~realtime_factor."""
+        pacer = RealtimePacer(self.factor, self.cell.time)
+        while not stopped():
+            tick = self.step()
+            publish(tick)
+            pacer.wait(tick.time)
+
+    def reset(self):
+        with self.lock:
+            self.pending.clear()
+            self.cell.reset()
+
+    def snapshot(self):
+        """The path of a PNG of the cell now. Only the poses are copied under the physics
+        lock; a renderer process draws them, so a slow render never delays joint_states.
+        OSError, ValueError, TypeError, RuntimeError or TimeoutError when it cannot be."""
+        w, h = self.p['snapshot_size']
+        with self.lock:
+            t, state = self.cell.time, self.cell.pose_state()
+        path = snapshot_path(self.p['snapshot_dir'], 'ur10_sim', t)
+        with self.render_lock:
+            self.renderer.render(state, path, w, h, SNAPSHOT_TIMEOUT)
+        return path
+
+    def close(self):
+        with self.lock:
+            self.cell.close()
+        self.renderer.close()

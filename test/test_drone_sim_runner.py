@@ -1,0 +1,125 @@
+"""DroneSimRunner and its helpers: what the ardrone_sim node runs, without a master."""
+import numpy as np
+import pybullet as pb
+import pytest
+
+from leap_teleop.drone import cameras
+from leap_teleop.drone.sim import HOVERING, TAKING_OFF
+from leap_teleop.drone.sim_runner import (
+    RUNNER_PARAMS,
+    DroneFrames,
+    DroneSimRunner,
+    calibration_error,
+    sensor_readings,
+    static_frames,
+)
+from leap_teleop.params import check_params
+
+
+def params(**values):
+    return check_params(RUNNER_PARAMS, values)
+
+
+@pytest.fixture
+def runner():
+    r = DroneSimRunner(params(tf_prefix='/uav/'), use_sim_time=True)
+    yield r
+    r.close()
+
+
+def test_frames_carry_the_tf_prefix_as_the_driver_does():
+    f = DroneFrames('/drone1/', 'ardrone_base_link', 'odom')
+    assert (f.base, f.odom) == ('drone1/ardrone_base_link', 'drone1/odom')
+    assert f.cameras == {'front': 'drone1/ardrone_base_frontcam',
+                         'bottom': 'drone1/ardrone_base_bottomcam'}
+    plain = DroneFrames('', 'base', 'odom')
+    assert (plain.base, plain.odom, plain.cameras['front']) == ('base', 'odom',
+                                                                'ardrone_base_frontcam')
+
+
+def test_optical_frames_look_where_the_cameras_render():
+    """z along the view, y down in the image: the renderer's forward and up vectors."""
+    frames = DroneFrames('', 'base', 'odom')
+    out = static_frames(frames)
+    assert [(parent, child) for parent, child, _, _ in out] == [
+        ('base', 'ardrone_base_frontcam'), ('base', 'ardrone_base_bottomcam')]
+    for (_, _, xyz, quat), spec in zip(out, (cameras.FRONT, cameras.BOTTOM)):
+        R = np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        np.testing.assert_allclose(R[:, 2], spec.forward, atol=1e-12)
+        np.testing.assert_allclose(-R[:, 1], spec.up, atol=1e-12)
+        assert xyz == tuple(spec.mount)
+
+
+def test_world_frame_adds_a_fixed_odom_origin():
+    frames = DroneFrames('d2', 'base', 'odom')
+    world = static_frames(frames, 'world', [1, 2.5, 0])[0]
+    assert world == ('world', 'd2/odom', (1.0, 2.5, 0.0), (0.0, 0.0, 0.0, 1.0))
+    assert len(static_frames(frames, '', [1, 2.5, 0])) == 2
+
+
+def test_sensor_readings_turn_with_the_heading_and_fall_with_altitude():
+    north = sensor_readings({'rotZ': 0.0}, 0.0)
+    assert (north['magX'], north['magY'], north['magZ']) == (200, 0, -400)
+    east = sensor_readings({'rotZ': 90.0}, 10.0)
+    assert (east['magX'], east['magY']) == (0, -200)
+    assert north['pressure'] - east['pressure'] == 120 and north['temp'] == 25
+
+
+def test_calibration_must_have_the_cameras_size():
+    assert calibration_error('front', 640, 360) == ''
+    assert calibration_error('bottom', 640, 360) == 'bottom camera is 320x240, got 640x360'
+
+
+def test_readings_say_each_state_change_once(runner):
+    first = runner.read()
+    assert first.new_state == 'landed' and runner.read().new_state == ''
+    assert {'magX', 'pressure', 'temp', 'altd', 'state'} <= set(first.nav)
+    assert runner.frames.base == 'uav/ardrone_base_link'
+    runner.call(runner.sim.takeoff)
+    runner.sim.step()
+    reading = runner.read()
+    assert reading.nav['state'] == TAKING_OFF and reading.new_state == 'taking off'
+
+
+def test_driver_commands_answer_with_what_to_log(runner):
+    assert runner.toggle_camera() == 'video channel 1' and runner.sim.camera_channel == 1
+    assert runner.set_camera_channel(2) == 'video channel 0'
+    assert runner.set_led_animation(3, 2.0, 4) == 'LED animation BLINK_ORANGE at 2.0 Hz for 4 s'
+    assert runner.set_led_animation(99, 2.0, 4) == ''          # refused: the sim warns
+    assert runner.flat_trim() == 'flat trim done'
+    assert runner.set_record(True) == 'video recording on' and runner.sim.recording
+    assert runner.flight_animation(16, 0) == ''
+
+
+def test_run_steps_a_looprate_tick_per_publish_until_stopped():
+    r = DroneSimRunner(params(realtime_factor=0.0, looprate=50.0), use_sim_time=True)
+    try:
+        assert r.steps == 4 and r.pace_warning is None         # 200 Hz physics / 50 Hz
+        r.call(r.sim.takeoff)
+        times = []
+        r.run(lambda: times.append(r.read().time), lambda: len(times) >= 250)
+        assert times[0] == pytest.approx(0.02) and times[-1] == pytest.approx(5.0)
+        assert r.read().nav['state'] == HOVERING
+    finally:
+        r.close()
+
+
+def test_as_fast_as_possible_without_sim_time_runs_in_real_time():
+    r = DroneSimRunner(params(realtime_factor=0.0), use_sim_time=False)
+    try:
+        assert r.factor == 1.0 and 'without /use_sim_time' in r.pace_warning
+    finally:
+        r.close()
+
+
+def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
+    r = DroneSimRunner(params(snapshot_dir=str(tmp_path / 'shots'), snapshot_size=[64, 48]),
+                       use_sim_time=True)
+    try:
+        r.sim.advance(0.5)
+        path = r.snapshot()
+        assert path == str(tmp_path / 'shots' / 'ardrone_0000.500.png')
+        with open(path, 'rb') as f:
+            assert f.read(8) == b'\x89PNG\r\n\x1a\n'
+    finally:
+        r.close()

@@ -1,0 +1,83 @@
+"""The simulators' loop helpers: pacing to the wall clock, sim-time schedules, snapshot paths."""
+import os
+
+import pytest
+
+from leap_teleop.sim_runtime import Every, RealtimePacer, SendGate, pace_factor, snapshot_path
+
+
+class ManualClock:
+    def __init__(self):
+        self.now, self.sleeps = 100.0, []
+
+    def __call__(self):
+        return self.now
+
+    def sleep(self, s):
+        self.sleeps.append(s)
+        self.now += s
+
+
+def test_as_fast_as_possible_needs_sim_time():
+    assert pace_factor(0.0, use_sim_time=True) == (0.0, None)
+    factor, warning = pace_factor(0.0, use_sim_time=False)
+    assert factor == 1.0 and 'without /use_sim_time' in warning
+    assert pace_factor(2.5, use_sim_time=False) == (2.5, None)
+
+
+def test_pacer_sleeps_until_the_wall_clock_catches_up_with_sim_time():
+    clock = ManualClock()
+    pacer = RealtimePacer(2.0, sim_time=10.0, clock=clock, sleep=clock.sleep)
+    assert pacer.wait(11.0) == pytest.approx(0.5)      # 1 s of sim at x2 = 0.5 s wall
+    assert clock.sleeps == [pytest.approx(0.5)]
+    clock.now += 0.2                                    # the steps took 0.2 s of wall
+    assert pacer.wait(11.6) == pytest.approx(0.1)       # due 0.8 s after the start
+    assert clock.now == pytest.approx(100.8)
+
+
+def test_pacer_behind_restarts_instead_of_sprinting():
+    clock = ManualClock()
+    pacer = RealtimePacer(1.0, sim_time=0.0, clock=clock, sleep=clock.sleep)
+    clock.now += 0.3                                    # a little late: no sleep, no restart
+    assert pacer.wait(0.1) == pytest.approx(-0.2) and pacer.t0_sim == 0.0
+    clock.now += 2.0                                    # far behind (loaded machine)
+    assert pacer.wait(0.2) < -0.5
+    assert pacer.t0_sim == 0.2 and pacer.t0_wall == clock.now
+    assert pacer.wait(0.3) == pytest.approx(0.1)        # paced from the restart
+    assert clock.sleeps == [pytest.approx(0.1)]
+
+
+def test_pacer_at_factor_zero_only_yields():
+    clock = ManualClock()
+    pacer = RealtimePacer(0.0, sim_time=0.0, clock=clock, sleep=clock.sleep)
+    assert pacer.wait(1000.0) == 0.0 and clock.sleeps == [0]
+
+
+def test_every_ticks_once_per_period_without_bursts():
+    every = Every(0.1, start=0.0)
+    ticks = [t / 100 for t in range(0, 101) if every.due(t / 100)]
+    assert len(ticks) == 11 and ticks[:3] == [0.0, 0.1, 0.2]
+    late = Every(0.1, start=0.0)
+    assert late.due(0.0) and late.due(0.55)             # a late step: one tick, not five,
+    assert late.due(0.56)                               # and the schedule restarts from it
+    assert not late.due(0.6) and late.due(0.66)
+
+
+def test_send_gate_waits_a_period_and_opens_when_time_goes_back():
+    gate = SendGate(0.2)
+    assert gate.open(5.0)
+    gate.sent(5.0)
+    assert not gate.open(5.1) and gate.open(5.2)
+    assert gate.open(1.0)                               # the clock went back (a reset)
+    assert not SendGate(None).open(5.0)
+
+
+def test_snapshot_path_prefers_the_folder_then_ros_home(tmp_path, monkeypatch):
+    folder = tmp_path / 'new' / 'pictures'
+    path = snapshot_path(str(folder), 'ardrone', 12.3456)
+    assert path == str(folder / 'ardrone_0012.346.png') and folder.is_dir()
+    monkeypatch.setenv('ROS_HOME', str(tmp_path / 'ros_home'))
+    assert snapshot_path('', 'ur10_sim', 1.0) == os.path.join(str(tmp_path), 'ros_home',
+                                                              'ur10_sim_0001.000.png')
+    monkeypatch.delenv('ROS_HOME')
+    assert os.path.dirname(snapshot_path('', 'x', 0.0)) == '/tmp'

@@ -1,0 +1,119 @@
+"""CellRunner and --urdf: what the ur10_sim node runs, without a master."""
+import numpy as np
+import pytest
+
+from leap_teleop.params import check_params
+from leap_teleop.ur10 import cell_runner
+from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, urdf_from_args
+from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
+from leap_teleop.ur10.model import build_urdf
+
+ARM = 'ur10_1'
+
+
+class RosTimeStub:
+    """The ROS clock command stamps are read against."""
+    now = 1000.0
+
+    def __call__(self):
+        return self.now
+
+
+@pytest.fixture
+def rejected():
+    return []
+
+
+def make(rejected, use_sim_time=True, **values):
+    p = check_params(RUNNER_PARAMS, dict({'realtime_factor': 0.0}, **values))
+    return CellRunner(p, use_sim_time, RosTimeStub(), lambda *why: rejected.append(why))
+
+
+@pytest.fixture
+def runner(rejected):
+    r = make(rejected)
+    yield r
+    r.close()
+
+
+def test_command_kinds_name_the_controllers_joints():
+    assert KINDS['arm'] == ('arm_controller/command', tuple(JOINT_NAMES))
+    assert KINDS['gripper'] == ('gripper/command', ('finger_joint',))
+
+
+def test_queued_commands_apply_at_the_next_step_stamped_in_ros_time(runner):
+    q = np.array(HOME_Q) + [0.2, 0, 0, 0, 0, 0]
+    assert not runner.queue(ARM, 'arm', [(0.5, q, None)], 0.0)
+    assert not runner.queue(ARM, 'gripper', [(0.2, [0.4], None)], 0.0)
+    runner.step()
+    assert not runner.pending
+    runner.cell.run(1.5)
+    q_now, _, knuckle, _ = runner.cell.joint_state(ARM)
+    assert q_now[0] == pytest.approx(q[0], abs=1e-3) and knuckle == pytest.approx(0.4, abs=0.02)
+    # A start stamped 2 s ahead of the ROS clock starts 2 s ahead in cell time.
+    back = np.array(HOME_Q)
+    runner.queue(ARM, 'arm', [(0.5, back, None)], runner.ros_time.now + 2.0)
+    runner.step()
+    runner.cell.run(1.5)
+    assert runner.cell.joint_state(ARM)[0][0] == pytest.approx(q[0], abs=1e-3)   # not yet
+    runner.cell.run(1.5)
+    assert runner.cell.joint_state(ARM)[0][0] == pytest.approx(back[0], abs=1e-3)
+
+
+def test_a_refused_command_is_reported_and_the_arm_keeps_its_trajectory(runner, rejected):
+    runner.queue(ARM, 'arm', [], 0.0)                  # no points: the follower refuses it
+    runner.step()
+    assert len(rejected) == 1 and rejected[0][:2] == (ARM, 'arm')
+    assert 'empty trajectory' in str(rejected[0][2])
+
+
+def test_a_stalled_loop_drops_the_oldest_commands(runner, monkeypatch):
+    monkeypatch.setattr(cell_runner, 'MAX_PENDING', 3)
+    drops = [runner.queue(ARM, 'gripper', [(0.1 * (i + 1), [0.1], None)], 0.0) for i in range(5)]
+    assert drops == [False, False, False, True, True] and runner.dropped_commands == 2
+    assert [p[2][0][0] for p in runner.pending] == pytest.approx([0.3, 0.4, 0.5])
+    runner.reset()
+    assert not runner.pending
+
+
+def test_ticks_carry_what_is_due_at_its_rate(rejected):
+    r = make(rejected, joint_state_rate=120.0, object_pose_rate=30.0, clock_rate=60.0)
+    try:
+        ticks = [r.step() for _ in range(240)]             # 1 s at 240 Hz
+    finally:
+        r.close()
+    steps = {what: [round(t.time * 240) for t in ticks if getattr(t, what)]
+             for what in ('joint_states', 'object_poses', 'clock')}
+    # Due at the first step, then once per period (the schedules count from t = 0).
+    assert steps['joint_states'][:4] == [1, 2, 4, 6] and len(steps['joint_states']) == 121
+    assert steps['object_poses'][:3] == [1, 8, 16] and len(steps['object_poses']) == 31
+    assert steps['clock'][:3] == [1, 4, 8] and len(steps['clock']) == 61
+    assert set(ticks[0].joint_states) == {ARM}
+    poses, grasped = ticks[0].object_poses
+    assert set(poses) == {'cube_red', 'cube_green', 'cube_blue'} and grasped == {}
+    assert ticks[-1].time == pytest.approx(1.0)
+
+
+def test_no_clock_without_sim_time(rejected):
+    r = make(rejected, use_sim_time=False, realtime_factor=1.0)
+    try:
+        assert not any(r.step().clock for _ in range(10))
+        assert r.factor == 1.0 and r.pace_warning is None
+    finally:
+        r.close()
+
+
+def test_run_publishes_every_step_until_stopped(runner):
+    ticks = []
+    runner.run(ticks.append, lambda: len(ticks) >= 48)
+    assert len(ticks) == 48 and ticks[-1].time == pytest.approx(0.2)
+
+
+def test_urdf_from_args_is_the_arms_description():
+    arm = load_config('ur10_dual_cell').arm('ur10_2')
+    text = urdf_from_args(['--urdf', 'ur10_2', '--config', 'ur10_dual_cell'])
+    assert text == build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
+    assert 'ur10_2_shoulder_pan_joint' in text
+    with pytest.raises(KeyError):
+        urdf_from_args(['--urdf', 'no_such_arm'])
