@@ -15,6 +15,9 @@ from leap_teleop.drone.sim_runner import (
 )
 from leap_teleop.params import check_params
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 
 def params(**values):
     return check_params(RUNNER_PARAMS, values)

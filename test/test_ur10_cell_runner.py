@@ -9,6 +9,9 @@ from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
 from leap_teleop.ur10.model import build_urdf
 
+# needs a ROS master, a simulator, a subprocess or a build: not in make check
+pytestmark = pytest.mark.integration
+
 ARM = 'ur10_1'
 
 
