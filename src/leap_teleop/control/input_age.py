@@ -53,3 +53,40 @@ class InputAgeWindow:
                 ('input age p99 (ms, last %g s)' % self.window_s, fmt(p99)),
                 ('input age samples', str(n)),
                 ('input stamp of the last command', '%.6f' % self.last_stamp)]
+
+
+def age_row(name, values):
+    """(name, p50 ms, p99 ms, samples) from one diagnostic status's (key, value) pairs as
+    diagnostic_values writes them; None when the status carries no input age."""
+    got = {}
+    for key, value in values:
+        for field in ('p50', 'p99'):
+            if key.startswith('input age %s' % field):
+                got[field] = _ms(value)
+        if key == 'input age samples':
+            try:
+                got['n'] = int(value)
+            except (TypeError, ValueError):
+                got['n'] = 0
+    if not got:
+        return None
+    return name, got.get('p50'), got.get('p99'), got.get('n', 0)
+
+
+def _ms(text):
+    try:
+        x = float(text)
+    except (TypeError, ValueError):
+        return None            # 'n/a': no sample in the window
+    return x if math.isfinite(x) else None
+
+
+def age_table(rows):
+    """The rows as a fixed-width text table, sorted by name."""
+    def cell(x):
+        return '%8.1f' % x if x is not None else '     n/a'
+    lines = ['%-44s %8s %8s %8s' % ('capture -> command (input age)', 'p50 ms', 'p99 ms',
+                                    'samples')]
+    for name, p50, p99, n in sorted(rows):
+        lines.append('%-44s %s %s %8d' % (name[:44], cell(p50), cell(p99), n))
+    return '\n'.join(lines)
