@@ -13,7 +13,6 @@ import threading
 import time
 
 import diagnostic_updater
-import numpy as np
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point
@@ -23,49 +22,22 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
 from leap_teleop.ros import conversions
-from leap_teleop.ros.node import Param, RateLimitedLog, package_path, start_node
+from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
 from leap_teleop.ros.nodes.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
-from leap_teleop.ur10.teleop import HOLDING, TELEOP_PARAMS, ArmInput, ArmTeleop, ArmTeleopParams
+from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop
+from leap_teleop.ur10.teleop_params import ARM_NODE_PARAMS, ARM_RECONFIGURABLE, TELEOP_PARAMS, ArmTeleopParams
 
-PARAMS = {
-    'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
-    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
-    # The loop is also the watchdog's clock: at least 10 Hz.
-    'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
-                  unit='Hz', ge=10.0, le=1000.0),
-    'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
-    'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
-                         ge=0.1, le=1000.0),
-    **TELEOP_PARAMS,          # config/ur10_teleop.yaml, loaded into the node's namespace
-}
-
-
-# Changeable while running (dynamic_reconfigure): gains, the dead zone, filter constants,
-# speed limits, the arming hold. Modes, geometry, watchdog times and topics stay start-up only.
-RECONFIGURABLE = ('scale', 'dead_zone', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
-                  'max_tool_tilt', 'max_tool_turn', 'filter_min_cutoff_hz', 'filter_beta',
-                  'filter_d_cutoff_hz', 'rotation_min_cutoff_hz', 'rotation_beta',
-                  'rotation_d_cutoff_hz', 'max_joint_speed', 'max_joint_accel', 'servo_gain',
-                  'gripper_binary_closed', 'arm_hold_s')
+# The declarations live beside the teleop they configure; re-exported for --help and the docs.
+PARAMS = ARM_NODE_PARAMS
+RECONFIGURABLE = ARM_RECONFIGURABLE
 
 
 def retune(teleop, changes):
-    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop: its params
-    (read where used) and the filters and servo it built from them at start-up."""
-    for name, value in changes.items():
-        setattr(teleop.p, name, value)
-    p = teleop.p
-    for filt, prefix in ((teleop._filter, 'filter_'), (teleop._rotation_filter, 'rotation_')):
-        filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
-        filt.beta = getattr(p, prefix + 'beta')
-        filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
-    teleop._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
-    teleop._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
-    teleop._servo.gain = float(p.servo_gain)
+    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop."""
+    teleop.retune(changes)
 
 
 def teleop_params(p):
@@ -133,7 +105,7 @@ class ArmNode:
         """dynamic_reconfigure on ~: RECONFIGURABLE, applied under the control loop's lock."""
         def apply(changes):
             with self.lock:
-                retune(self.teleop, changes)
+                self.teleop.retune(changes)
         self.reconfigure = Reconfigure('ur10_arm', PARAMS, RECONFIGURABLE,
                                        {k: getattr(self.teleop.p, k) for k in RECONFIGURABLE},
                                        apply)
@@ -228,13 +200,9 @@ class ArmNode:
         self.status_pub.publish(msg)
 
     def diagnose(self, stat):
-        s = self.teleop.status
-        level = DiagnosticStatus.WARN if s.state == HOLDING else DiagnosticStatus.OK
-        stat.summary(level, '%s: %s' % (s.state, s.reason))
-        stat.add('origin set', s.origin_set)
-        stat.add('rejected inputs', s.rejected_inputs)
-        stat.add('IK failures', s.ik_failures)
-        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+        warn, summary, values = self.teleop.diagnostics()
+        stat.summary(DiagnosticStatus.WARN if warn else DiagnosticStatus.OK, summary)
+        for key, value in values + self.input_age.diagnostic_values(rospy.get_time()):
             stat.add(key, value)
         return stat
 
