@@ -18,11 +18,13 @@ import numpy as np
 import rospy
 from geometry_msgs.msg import Point, Pose, Vector3
 from sensor_msgs.msg import Image, JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.msg import (
+    ArmStatus,
     DriverBone,
     DriverFinger,
     DriverGesture,
@@ -503,6 +505,32 @@ def trajectory_points(msg, expected, prefix):
             continue
         points.append((t, pos, vel))
     return points, msg.header.stamp.to_sec()
+
+
+def joint_trajectory(names, points, stamp=0.0):
+    """A JointTrajectory for joints `names` from points [(time_from_start s, positions,
+    velocities or None)], starting at `stamp` (s; 0 = on receipt, the ros_control
+    convention)."""
+    msg = JointTrajectory()
+    msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
+    msg.joint_names = list(names)
+    msg.points = [JointTrajectoryPoint(
+        positions=[float(x) for x in q],
+        velocities=[] if v is None else [float(x) for x in v],
+        time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
+    return msg
+
+
+def arm_status_message(status):
+    """An ArmStatus from the arm teleop's ArmTeleopStatus, stamped now."""
+    msg = ArmStatus(state=status.state, reason=status.reason, origin_set=status.origin_set,
+                    rejected_inputs=status.rejected_inputs, ik_failures=status.ik_failures)
+    msg.header.stamp = rospy.Time.now()
+    if len(status.target) == 3:
+        msg.target = Point(*status.target)
+    if status.input_stamp > 0:
+        msg.input_stamp = rospy.Time.from_sec(status.input_stamp)
+    return msg
 
 
 # -- camera view -----------------------------------------------------------------------

@@ -15,9 +15,8 @@ import time
 import diagnostic_updater
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import Point
 from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
@@ -25,6 +24,7 @@ from leap_teleop.ros import conversions
 from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
 from leap_teleop.ros.nodes.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
+from leap_teleop.ur10.joint_states import JointStateIndex
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop
@@ -55,7 +55,7 @@ class ArmNode:
         prefix = p['joint_prefix']
         self.arm_joints = [prefix + n for n in JOINT_NAMES]
         self.gripper_joint = prefix + GRIPPER_JOINT
-        self._joint_index = None
+        self.joint_index = JointStateIndex()
         side = p['hand']
         topic = p['hand_topic'] or 'leapmotion/data_%s' % side
         self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
@@ -86,17 +86,11 @@ class ArmNode:
         self.wake.set()
 
     def on_joints(self, msg):
-        if self._joint_index is None or len(msg.name) != self._joint_count:
-            index = []
-            for name in JOINT_NAMES:
-                match = [i for i, n in enumerate(msg.name) if n == name or n.endswith('_' + name)
-                         or n.endswith('/' + name)]
-                if not match:
-                    self.log.warn('joints', 'ur10_arm: joint_states lacks %s', name)
-                    return
-                index.append(match[0])
-            self._joint_index, self._joint_count = index, len(msg.name)
-        q = [msg.position[i] for i in self._joint_index]
+        try:
+            q = self.joint_index.positions(msg.name, msg.position)
+        except KeyError as e:
+            self.log.warn('joints', 'ur10_arm: joint_states lacks %s', e.args[0])
+            return
         with self.lock:
             self.teleop.on_joints(q, rospy.get_time())
         self.joints_seen.set()
@@ -158,27 +152,14 @@ class ArmNode:
             if cmd.points:
                 # Stamp 0 (start on receipt): a command delayed in transport still starts
                 # from the controller's current state instead of partly in the past.
-                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points))
+                self.arm_pub.publish(conversions.joint_trajectory(self.arm_joints, cmd.points))
             if cmd.gripper is not None:
-                self.gripper_pub.publish(self._trajectory([self.gripper_joint],
-                                                          [(0.1, [cmd.gripper], None)]))
+                self.gripper_pub.publish(conversions.joint_trajectory(
+                    [self.gripper_joint], [(0.1, [cmd.gripper], None)]))
             if cmd.points or cmd.gripper is not None:
                 self.input_age.add(rospy.get_time(), cmd.input_stamp)
             self._publish_status(snapshot, now)
             self.diagnostics.update()
-
-    @staticmethod
-    def _trajectory(names, points, stamp=0.0):
-        """points [(time_from_start, positions, velocities|None)], starting at stamp
-        (the control period's time; 0 = on receipt, the ros_control convention)."""
-        msg = JointTrajectory()
-        msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
-        msg.joint_names = list(names)
-        msg.points = [JointTrajectoryPoint(
-            positions=[float(x) for x in q],
-            velocities=[] if v is None else [float(x) for x in v],
-            time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
-        return msg
 
     def _publish_status(self, snapshot, now):
         changed = snapshot != self._last_status
@@ -189,15 +170,7 @@ class ArmNode:
         if not changed and now - self._last_status_pub < 1.0 / float(self.p['status_rate']):
             return
         self._last_status, self._last_status_pub = snapshot, now
-        s = self.teleop.status
-        msg = ArmStatus(state=s.state, reason=s.reason, origin_set=s.origin_set,
-                        rejected_inputs=s.rejected_inputs, ik_failures=s.ik_failures)
-        msg.header.stamp = rospy.Time.now()
-        if len(s.target) == 3:
-            msg.target = Point(*s.target)
-        if s.input_stamp > 0:
-            msg.input_stamp = rospy.Time.from_sec(s.input_stamp)
-        self.status_pub.publish(msg)
+        self.status_pub.publish(conversions.arm_status_message(self.teleop.status))
 
     def diagnose(self, stat):
         warn, summary, values = self.teleop.diagnostics()
