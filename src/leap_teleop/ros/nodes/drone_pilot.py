@@ -28,7 +28,7 @@ from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput, PilotWo
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_RECONFIGURABLE
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.ros.node import RateLimitedLog, start_node
-from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.service_call import ServiceCall
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.srv import FlightAnim

@@ -28,7 +28,7 @@ from leap_teleop.ros.camera_topics import camera_model, camera_view
 from leap_teleop.ros.driver_topics import DriverInterface
 from leap_teleop.ros.graph import wait_for_subscribers
 from leap_teleop.ros.node import package_path, start_node
-from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.reconfigure import Reconfigure
 
 # The declarations live beside the hand source and recognizer; re-exported for --help and
 # the docs.

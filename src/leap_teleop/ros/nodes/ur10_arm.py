@@ -22,7 +22,7 @@ from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
 from leap_teleop.ros import conversions
 from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
-from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ur10.joint_states import JointStateIndex
 from leap_teleop.ur10.kinematics import JOINT_NAMES
