@@ -23,7 +23,7 @@ from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.ros import conversions
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmTeleop, ArmTeleopParams, PilotInput
+from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
 HOME = kin.HOME_Q.copy()
 wild = st.one_of(st.floats(-600, 600), st.floats(allow_nan=True, allow_infinity=True),
@@ -73,7 +73,7 @@ def test_stream_restarts_after_silence_or_a_clock_jump():
 def hand(**kw):
     kw.setdefault('present', True)
     kw.setdefault('palm_mm', (0.0, 200.0, 0.0))
-    return PilotInput(**kw)
+    return ArmInput(**kw)
 
 
 class Arm:
@@ -242,10 +242,10 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
     for ev in seq:
         if ev[0] == 'hand':
             _, palm, pinch_value, (present, fist, thumb, pinch, rock), age, angles = ev
-            t.on_hand(PilotInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
-                                pinch=pinch, pinch_value=pinch_value, rock=rock,
-                                stamp=now + age, rotate=angles[0], turn=angles[1],
-                                swing=angles[2]), now)
+            t.on_hand(ArmInput(present=present, palm_mm=palm, fist=fist, thumb_up=thumb,
+                              pinch=pinch, pinch_value=pinch_value, rock=rock,
+                              stamp=now + age, rotate=angles[0], turn=angles[1],
+                              swing=angles[2]), now)
         elif ev[0] == 'joints':
             t.on_joints(ev[1], now)
         else:

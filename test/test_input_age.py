@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from leap_teleop.control.input_age import InputAgeWindow
-from leap_teleop.drone.pilot import ArmInput as PilotHand
 from leap_teleop.drone.pilot import DronePilot, PilotConfig
+from leap_teleop.drone.pilot import PilotInput as PilotHand
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
 
