@@ -458,3 +458,12 @@ def test_non_angle_rotation_is_rejected():
     now = c.tick()
     assert 'is not an angle' in t.on_hand(hand(turn=float('nan'), stamp=now), now)
     assert t.status.rejected_inputs == 1
+
+
+def test_the_diagnostics_report_warns_while_holding():
+    teleop = ArmTeleop()
+    warn, summary, values = teleop.diagnostics()
+    assert not warn and summary == 'disarmed: waiting for thumbs-up'
+    assert dict(values) == {'origin set': False, 'rejected inputs': 0, 'IK failures': 0}
+    teleop.status.state, teleop.status.reason = HOLDING, 'input stalled'
+    assert teleop.diagnostics()[:2] == (True, 'holding: input stalled')

@@ -392,3 +392,32 @@ def test_fingertip_sized_circles_never_flip_a_flying_drone():
         return kinds(drain(pilot)).count('flip')
     assert flips(PilotConfig()) == 3
     assert flips(PilotConfig(flip_min_radius=0.0)) == len(circles)     # what the gate stops
+
+
+def test_the_diagnostics_report_says_what_the_worker_and_pilot_see():
+    from leap_teleop.drone.pilot import PilotWorker
+    from leap_teleop.ros.service_call import ServiceCall
+    now = [0.0]
+    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15))
+    worker = PilotWorker(pilot, lambda cmd: None, ServiceCall(lambda *a: True, 0.5, 'flip'),
+                         lambda: now[0], mono=lambda: 1e6 + now[0])
+    level, summary, values = worker.diagnostics(0.0)
+    assert (level, summary) == ('ok', 'hand not seen yet, drone state None')
+    assert dict(values)['navdata'] == 'fresh' and dict(values)['flip calls ok'] == 0
+    pilot.on_navdata(3, 1000, 0.2)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.2)
+    assert worker.diagnostics(0.2)[:2] == ('ok', 'hand tracked, drone state 3')
+    pilot.on_hand(hand((0.0, 0.2, 0.0), present=False), 0.3)
+    now[0] = 0.3
+    worker.step()
+    assert worker.diagnostics(0.3)[:2] == ('warn', 'hand lost, drone state 3')
+    now[0] = 1.0
+    worker.step()                                 # navdata 0.8 s old: stale
+    level, summary, values = worker.diagnostics(1.2)
+    assert level == 'warn' and summary.startswith('no navdata for 1.0 s (hand lost')
+    assert dict(values)['navdata'] == 'stale'
+    pilot.watchdog = lambda t: 1 / 0              # a fault in the worker's step
+    worker.step()
+    level, summary, values = worker.diagnostics(1.0)
+    assert level == 'error' and summary.startswith('worker fault: ZeroDivisionError')
+    assert dict(values)['worker faults'] == 1

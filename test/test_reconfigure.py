@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
-from leap_teleop.ros.nodes.reconfigure import bounds, config_type
+from leap_teleop.ros.reconfigure import bounds, config_type
 from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check

@@ -4,6 +4,9 @@ A `Param` knows its default, doc, unit and what values are allowed; `check_param
 raw values (from the parameter server) into checked ones or raises `ParamError` with one line
 naming the parameter, the value and the allowed range. Pure Python: testable without a master.
 """
+import copy
+import dataclasses
+import functools
 import math
 import numbers
 
@@ -131,6 +134,28 @@ def check_params(table, raw):
     """{name: checked value} for every parameter of `table`, values from `raw` (a dict of the
     values found; missing ones take the default). Raises ParamError for the first bad one."""
     return {name: p.check(name, raw.get(name, p.default)) for name, p in table.items()}
+
+
+_FIELD_TYPES = {'bool': bool, 'int': int, 'float': float, 'str': str, 'list': list}
+
+
+def declared_fields(table):
+    """Class decorator: make the class a dataclass whose fields are `table`'s parameters, in
+    its order, with its defaults (a list default is copied for each instance), so a
+    configuration class never restates what the `Param` table declares."""
+    def make(cls):
+        annotations = {}
+        for name, p in table.items():
+            annotations[name] = _FIELD_TYPES[p.kind]
+            if p.kind == 'list':
+                default = dataclasses.field(
+                    default_factory=functools.partial(copy.deepcopy, p.default))
+            else:
+                default = p.default
+            setattr(cls, name, default)
+        cls.__annotations__ = annotations
+        return dataclasses.dataclass(cls)
+    return make
 
 
 def _kind_of(value):

@@ -50,10 +50,10 @@ import math
 import numbers
 import threading
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from leap_teleop.control.input_check import InputStream
-from leap_teleop.params import Param, check_params
+from leap_teleop.drone.pilot_params import PILOT_PARAMS, PilotConfig  # noqa: F401 (re-exported)
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
@@ -61,97 +61,6 @@ AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
 ZERO_TWIST = (0.0,) * 6
 HOVER_REPEAT = 1.0                   # s between hover commands while navdata is stale
-
-
-@dataclass
-class PilotConfig:
-    mode: str = 'tilt'                  # tilt | paper
-    rate: float = 200.0                 # Hz, maximum twist publishing rate
-    queue_size: int = 10
-    flip_type: int = 19                 # FLIP_RIGHT
-    flip_duration: int = 0              # ms, 0 = the firmware's default
-    flip_min_altitude: float = 0.6      # m, no flip below this
-    flip_min_radius: float = 0.025      # m, no flip on a smaller circle
-    hand_timeout: float = 0.15          # s without a Hand message = hand lost
-    land_after: float = 3.0             # s of lost hand (or navdata) before landing
-    disarm_after: float = 1.0           # s of lost hand before steering needs a new unfold
-    navdata_timeout: float = 0.5        # s without navdata = drone state unknown
-    dead_zone: float = 0.03             # m, palm offset ignored around the reference
-    full_scale: float = 0.10            # m beyond the dead zone for a full command
-    z_dead_zone: float = 0.03           # m, vertical
-    z_full_scale: float = 0.10          # m, vertical
-    yaw_dead_zone: float = 15.0         # deg
-    yaw_full_scale: float = 45.0        # deg
-    max_cmd: float = 1.0                # cap on every tilt-mode component
-    paper_angle: float = 25.0           # deg, Algorithm 1's capture threshold
-    paper_scale: float = 3000.0         # mm per unit command, Algorithm 1
-    max_input_age: float = 0.25         # s a Hand may arrive later than the stream's best
-                                        # latency
-
-    def update(self, values):
-        """Set the known keys from `values`, then check every field against PILOT_PARAMS
-        (ParamError, a ValueError, names the first bad one)."""
-        known = {f.name for f in fields(self)}
-        for key, value in values.items():
-            if key in known:
-                setattr(self, key, value)
-        return self.validate()
-
-    def validate(self):
-        for name, value in check_params(PILOT_PARAMS, vars(self)).items():
-            setattr(self, name, value)
-        return self
-
-
-_C = PilotConfig()
-# Every PilotConfig field's declaration: the node's ~params and PilotConfig.update share it.
-# Watchdog times have upper bounds too: a huge timeout is a disabled watchdog.
-PILOT_PARAMS = {
-    'mode': Param(_C.mode, 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
-                           '(Algorithm 1 exactly)', choices=('tilt', 'paper')),
-    'rate': Param(_C.rate, 'max twist publishing rate (queue drain rate)', unit='Hz',
-                  ge=1.0, le=1000.0),
-    'queue_size': Param(_C.queue_size, 'command FIFO bound (oldest twist dropped when full)',
-                        ge=1, le=1000),
-    'flip_type': Param(_C.flip_type, 'flight animation for a circle gesture (19 = flip '
-                                     'right)', ge=0, le=19),
-    'flip_duration': Param(_C.flip_duration, 'its duration (0 = default)', unit='ms',
-                           ge=0, le=10000),
-    'flip_min_altitude': Param(_C.flip_min_altitude, 'no flip below this altitude', unit='m',
-                               ge=0.3, le=10.0),
-    'flip_min_radius': Param(_C.flip_min_radius, 'no flip on a smaller circle (fingertip '
-                                                 'loops are 4-20 mm)', unit='m',
-                             ge=0.0, le=0.5),
-    'hand_timeout': Param(_C.hand_timeout, 'no Hand message this long = hand lost (hover)',
-                          unit='s', gt=0.0, le=10.0),
-    'land_after': Param(_C.land_after, 'lost hand or navdata this long -> land', unit='s',
-                        gt=0.0, le=120.0),
-    'disarm_after': Param(_C.disarm_after, 'lost hand this long -> steering off until a new '
-                                           'unfold; back sooner, it steers on from where it '
-                                           'is', unit='s', gt=0.0, le=120.0),
-    'navdata_timeout': Param(_C.navdata_timeout, 'no navdata this long = drone state '
-                                                 'unknown: no takeoff, hover, then land',
-                             unit='s', gt=0.0, le=10.0),
-    'dead_zone': Param(_C.dead_zone, 'tilt: horizontal palm dead zone', unit='m',
-                       ge=0.0, le=0.5),
-    'full_scale': Param(_C.full_scale, 'tilt: offset beyond the dead zone for full tilt',
-                        unit='m', gt=0.0, le=1.0),
-    'z_dead_zone': Param(_C.z_dead_zone, 'tilt: vertical dead zone', unit='m', ge=0.0, le=0.5),
-    'z_full_scale': Param(_C.z_full_scale, 'tilt: offset beyond it for full climb rate',
-                          unit='m', gt=0.0, le=1.0),
-    'yaw_dead_zone': Param(_C.yaw_dead_zone, 'tilt: hand yaw dead zone', unit='deg',
-                           ge=0.0, lt=180.0),
-    'yaw_full_scale': Param(_C.yaw_full_scale, 'tilt: yaw beyond it for full yaw rate',
-                            unit='deg', gt=0.0, le=180.0),
-    'max_cmd': Param(_C.max_cmd, 'tilt: cap on every cmd_vel component', gt=0.0, le=1.0),
-    'paper_angle': Param(_C.paper_angle, 'paper: pitch and roll above this capture the '
-                                         'reference', unit='deg', ge=0.0, lt=90.0),
-    'paper_scale': Param(_C.paper_scale, 'paper: palm mm per unit command', unit='mm',
-                         ge=100.0, le=100000.0),
-    'max_input_age': Param(_C.max_input_age, 'drop a Hand arriving this much later than the '
-                                             'stream\'s best latency', unit='s',
-                           gt=0.0, le=10.0),
-}
 
 
 @dataclass
@@ -544,6 +453,29 @@ class PilotWorker:
         except Exception as e:          # the worker must outlive any fault
             self._fault(now, e)
             return 0.02
+
+    def diagnostics(self, now):
+        """(level 'ok' | 'warn' | 'error', summary, [(key, value)]) of the pilot and this
+        worker, for a diagnostics report."""
+        pl = self.pilot
+        lost = pl.lost_since is not None
+        stale = pl.navdata_lost_since is not None
+        summary = 'hand %s, drone state %s' % ('lost' if lost else 'tracked'
+                                               if pl.hand_present else 'not seen yet',
+                                               pl.drone_state)
+        if self.fault_since is not None:
+            level, summary = 'error', 'worker fault: %s (hovering)' % self.last_error
+        elif stale:
+            level = 'warn' if pl.drone_state != LANDED else 'ok'
+            summary = ('no navdata for %.1f s (%s): hovering, no takeoff'
+                       % (now - (pl.last_navdata_time or pl.navdata_lost_since), summary))
+        else:
+            level = 'warn' if lost and pl.drone_state in AIRBORNE_STATES else 'ok'
+        values = [('navdata', 'stale' if stale else 'fresh'), ('worker faults', self.errors)]
+        values += [('flip calls %s' % outcome, n) for outcome, n in self.flip_call.counts.items()]
+        values += [('rejected inputs', pl.rejected_inputs),
+                   ('twists superseded or dropped', pl.queue.dropped)]
+        return level, summary, values
 
     def _poll_flip(self):
         outcome = self.flip_call.poll()

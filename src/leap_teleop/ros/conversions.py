@@ -22,11 +22,13 @@ import rospy
 from geometry_msgs.msg import Point, Pose, TransformStamped, Vector3, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.msg import (
+    ArmStatus,
     DriverBone,
     DriverFinger,
     DriverGesture,
@@ -596,6 +598,30 @@ def rgb_image_msg(rgb, stamp, frame_id):
     msg.height, msg.width = rgb.shape[:2]
     msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
     msg.data = rgb.tobytes()
+
+def joint_trajectory(names, points, stamp=0.0):
+    """A JointTrajectory for joints `names` from points [(time_from_start s, positions,
+    velocities or None)], starting at `stamp` (s; 0 = on receipt, the ros_control
+    convention)."""
+    msg = JointTrajectory()
+    msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
+    msg.joint_names = list(names)
+    msg.points = [JointTrajectoryPoint(
+        positions=[float(x) for x in q],
+        velocities=[] if v is None else [float(x) for x in v],
+        time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
+    return msg
+
+
+def arm_status_message(status):
+    """An ArmStatus from the arm teleop's ArmTeleopStatus, stamped now."""
+    msg = ArmStatus(state=status.state, reason=status.reason, origin_set=status.origin_set,
+                    rejected_inputs=status.rejected_inputs, ik_failures=status.ik_failures)
+    msg.header.stamp = rospy.Time.now()
+    if len(status.target) == 3:
+        msg.target = Point(*status.target)
+    if status.input_stamp > 0:
+        msg.input_stamp = rospy.Time.from_sec(status.input_stamp)
     return msg
 
 

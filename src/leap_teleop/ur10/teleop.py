@@ -19,176 +19,22 @@ disarms (watchdog), stale joint states or the clock jumping back (a simulator re
 disarm without commanding the old pose, and every state change says why.
 """
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from leap_teleop.control.input_check import InputStream
 from leap_teleop.control.one_euro import OneEuroFilter
 from leap_teleop.control.servo import JointServo
-from leap_teleop.params import Param, check_params
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
+from leap_teleop.ur10.teleop_params import TELEOP_PARAMS, ArmTeleopParams  # noqa: F401 (re-exported)
 
 DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
-MODES = ('imitation', 'joystick')
-GRIPPER_MODES = ('binary', 'proportional')
-ORIENTATION_MODES = ('fixed', 'yaw', 'full')
 # While tracking, an IK answer this far (rad, any joint) from the last goal is another
 # arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
 MAX_GOAL_JUMP = 1.0
 _TWO_PI = 2 * math.pi
-
-
-@dataclass
-class ArmTeleopParams:
-    mode: str = 'imitation'
-    # Leap axes (x right, y up, z toward the user) -> arm base axes, rows = base x, y, z.
-    axis_map: tuple = ((0.0, 0.0, -1.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
-    scale: float = 2.5                 # imitation: robot m per hand m
-    dead_zone: float = 0.03            # m, joystick: radius around the origin that moves nothing
-    joystick_gain: float = 2.0         # joystick: TCP m/s per m of palm excess
-    max_tcp_speed: float = 0.25        # joystick: m/s cap
-    workspace_min: tuple = (0.25, -0.9, 0.0)    # m, arm base frame
-    workspace_max: tuple = (1.15, 0.9, 0.9)
-    tool_yaw: float = 0.0              # rad, fixed tool orientation: pointing down, turned by this
-    orientation: str = 'fixed'         # fixed | yaw | full
-    orientation_scale: float = 1.0     # tool rad per hand rad
-    max_tool_tilt: float = 0.8         # rad, tool axis from straight down
-    max_tool_turn: float = 1.6         # rad, tool yaw from its yaw at the origin
-    wrist_lower: tuple = (-_TWO_PI, -_TWO_PI, -_TWO_PI)   # rad, wrist 1-3 ranges for IK
-    wrist_upper: tuple = (_TWO_PI, _TWO_PI, _TWO_PI)
-    filter_min_cutoff_hz: float = 0.2  # One Euro on the palm: cutoff at rest; <= 0 disables
-    filter_beta: float = 0.05          # Hz of cutoff per mm/s of palm speed
-    filter_d_cutoff_hz: float = 0.35   # cutoff of the palm speed estimate
-    rotation_min_cutoff_hz: float = 0.3    # One Euro on the hand's rotation vector
-    rotation_beta: float = 4.0         # Hz per rad/s
-    rotation_d_cutoff_hz: float = 1.0
-    max_joint_speed: float = 0.05      # rad/s, every joint
-    max_joint_accel: float = 0.5       # rad/s^2, every joint (<= the UR10's limit)
-    servo_gain: float = 10.0           # 1/s, joint error -> velocity correction
-    command_horizon: float = 0.032     # s, time of each trajectory's first point
-    min_duration: float = 0.05         # s, shortest trajectory sent
-    input_timeout: float = 0.2         # s without hand input -> hold (a stall)
-    disarm_after: float = 1.0          # s without hand input -> disarm (a loss)
-    gripper_mode: str = 'binary'
-    gripper_binary_closed: float = 0.43
-    max_palm_mm: float = 1000.0        # |palm| beyond this is a tracking error, ignored
-    max_input_age: float = 0.25        # s a message may arrive later than the stream's
-                                       # best-case latency
-    joint_timeout: float = 0.5         # s without joint states -> disarm (robot gone)
-    arm_hold_s: float = 0.3            # s a thumbs-up must be held before it arms
-
-    @classmethod
-    def from_dict(cls, values):
-        """Build from a dict (YAML / ROS params); unknown keys and bad values raise
-        ValueError naming them."""
-        known = {f.name for f in fields(cls)}
-        unknown = set(values) - known
-        if unknown:
-            raise ValueError('unknown arm teleop parameters: %s' % ', '.join(sorted(unknown)))
-        p = cls(**values)
-        p.validate()
-        return p
-
-    def validate(self):
-        """Check every field against TELEOP_PARAMS (ParamError, a ValueError, names the
-        first bad one), then what involves two fields."""
-        for name, value in check_params(TELEOP_PARAMS, vars(self)).items():
-            setattr(self, name, value)
-        lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
-        if np.any(lo >= hi):
-            raise ValueError('workspace_min must be below workspace_max on every axis')
-        if not np.linalg.matrix_rank(np.asarray(self.axis_map, float)) == 3:
-            raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
-        if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
-            raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
-        if self.disarm_after < self.input_timeout:
-            raise ValueError('disarm_after (%g s) must be at least input_timeout (%g s)'
-                             % (self.disarm_after, self.input_timeout))
-
-
-_P = ArmTeleopParams()
-# Every ArmTeleopParams field's declaration: ur10_arm's ~params (config/ur10_teleop.yaml)
-# and ArmTeleopParams.validate share it. Timeouts and speeds have upper bounds too.
-TELEOP_PARAMS = {
-    'mode': Param(_P.mode, 'imitation (TCP follows the palm) or joystick (speed beyond the '
-                           'dead zone)', choices=MODES),
-    'axis_map': Param([list(r) for r in _P.axis_map], 'Leap axes -> arm base axes, rows = '
-                      'base x, y, z', length=3,
-                      item=Param([0.0, 0.0, 0.0], '', length=3, ge=-1.0, le=1.0)),
-    'scale': Param(_P.scale, 'imitation: robot m per hand m', gt=0.0, le=10.0),
-    'dead_zone': Param(_P.dead_zone, 'joystick: radius around the origin that moves '
-                                     'nothing', unit='m', gt=0.0, le=0.3),
-    'joystick_gain': Param(_P.joystick_gain, 'joystick: TCP m/s per m of palm beyond the '
-                                             'dead zone', unit='1/s', gt=0.0, le=20.0),
-    'max_tcp_speed': Param(_P.max_tcp_speed, 'joystick: TCP speed cap', unit='m/s',
-                           gt=0.0, le=1.0),
-    'workspace_min': Param(list(_P.workspace_min), 'TCP target box, low corner (base frame)',
-                           unit='m', length=3, ge=-3.0, le=3.0),
-    'workspace_max': Param(list(_P.workspace_max), 'TCP target box, high corner', unit='m',
-                           length=3, ge=-3.0, le=3.0),
-    'tool_yaw': Param(_P.tool_yaw, 'tool turned about z by this (pointing down)', unit='rad',
-                      ge=-2 * math.pi, le=2 * math.pi),
-    'orientation': Param(_P.orientation, 'fixed (tool down, turned by tool_yaw), yaw (tool '
-                                         'yaw follows the hand\'s turn) or full (the tool '
-                                         'turns as the palm)', choices=ORIENTATION_MODES),
-    'orientation_scale': Param(_P.orientation_scale, 'tool rotation per hand rotation',
-                               gt=0.0, le=5.0),
-    'max_tool_tilt': Param(_P.max_tool_tilt, 'tool axis at most this far from straight down',
-                           unit='rad', ge=0.0, le=math.pi / 2),
-    'max_tool_turn': Param(_P.max_tool_turn, 'tool yaw at most this far from its yaw at the '
-                                             'rock', unit='rad', ge=0.0, le=math.pi),
-    'wrist_lower': Param(list(_P.wrist_lower), 'wrist 1-3 lower limits the IK may use',
-                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
-    'wrist_upper': Param(list(_P.wrist_upper), 'wrist 1-3 upper limits the IK may use',
-                         unit='rad', length=3, ge=-2 * math.pi - 1e-3, le=2 * math.pi + 1e-3),
-    'filter_min_cutoff_hz': Param(_P.filter_min_cutoff_hz, 'One Euro on the palm: cutoff at '
-                                  'rest; 0 = off', unit='Hz', ge=0.0, le=100.0),
-    'filter_beta': Param(_P.filter_beta, 'One Euro on the palm: cutoff added per palm speed',
-                         unit='Hz/(mm/s)', ge=0.0, le=10.0),
-    'filter_d_cutoff_hz': Param(_P.filter_d_cutoff_hz, 'One Euro on the palm: cutoff of the '
-                                'speed estimate', unit='Hz', gt=0.0, le=100.0),
-    'rotation_min_cutoff_hz': Param(_P.rotation_min_cutoff_hz, 'One Euro on the hand\'s '
-                                    'rotation vector: cutoff at rest; 0 = off', unit='Hz',
-                                    ge=0.0, le=100.0),
-    'rotation_beta': Param(_P.rotation_beta, 'One Euro on the rotation: cutoff added per '
-                                             'turning speed', unit='Hz/(rad/s)', ge=0.0,
-                           le=1000.0),
-    'rotation_d_cutoff_hz': Param(_P.rotation_d_cutoff_hz, 'One Euro on the rotation: cutoff '
-                                  'of the speed estimate', unit='Hz', gt=0.0, le=100.0),
-    'max_joint_speed': Param(_P.max_joint_speed, 'every joint at most this fast',
-                             unit='rad/s', gt=0.0, le=float(min(kin.MAX_JOINT_SPEED))),
-    'max_joint_accel': Param(_P.max_joint_accel, 'every joint accelerates at most this much '
-                             '(the UR10 limit at most)', unit='rad/s^2', gt=0.0,
-                             le=float(min(kin.MAX_JOINT_ACCEL))),
-    'servo_gain': Param(_P.servo_gain, 'joint error -> velocity correction on top of the '
-                                       'goal\'s own velocity', unit='1/s', gt=0.0, le=100.0),
-    'command_horizon': Param(_P.command_horizon, 'time of each trajectory\'s first point '
-                             '(with its velocity; the second is rest)', unit='s',
-                             ge=0.004, le=0.5),
-    'min_duration': Param(_P.min_duration, 'shortest hold trajectory sent', unit='s',
-                          gt=0.0, le=5.0),
-    'input_timeout': Param(_P.input_timeout, 'no hand input this long -> hold (watchdog); '
-                                             'fresh input resumes from the current pose',
-                           unit='s', gt=0.0, le=10.0),
-    'disarm_after': Param(_P.disarm_after, 'no hand input this long -> disarm (a new '
-                                           'thumbs-up needed); at least input_timeout',
-                          unit='s', gt=0.0, le=10.0),
-    'gripper_mode': Param(_P.gripper_mode, 'binary (closed while pinching) or proportional',
-                          choices=GRIPPER_MODES),
-    'gripper_binary_closed': Param(_P.gripper_binary_closed, 'binary: knuckle when closed',
-                                   unit='rad', ge=0.0, le=0.8),
-    'max_palm_mm': Param(_P.max_palm_mm, '|palm| beyond this is a tracking error, ignored',
-                         unit='mm', gt=0.0, le=2000.0),
-    'max_input_age': Param(_P.max_input_age, 'drop a message arriving this much later than '
-                                             'the stream\'s best latency', unit='s',
-                           gt=0.0, le=10.0),
-    'joint_timeout': Param(_P.joint_timeout, 'no joint states this long -> disarm (robot '
-                                             'gone)', unit='s', gt=0.0, le=10.0),
-    'arm_hold_s': Param(_P.arm_hold_s, 'a thumbs-up must be held this long before it arms',
-                        unit='s', ge=0.0, le=5.0),
-}
 
 
 @dataclass
@@ -279,6 +125,28 @@ class ArmTeleop:
         self._gripper_sent = None
         self._thumb_up_since = None       # capture time the current thumbs-up began
         self._stalled = None              # holding for stale input: when input last came
+
+    def retune(self, changes):
+        """Apply checked changes ({name: value}, the node's reconfigurable ones) while
+        running: the params (read where used) and the filters and servo built from them."""
+        for name, value in changes.items():
+            setattr(self.p, name, value)
+        p = self.p
+        for filt, prefix in ((self._filter, 'filter_'), (self._rotation_filter, 'rotation_')):
+            filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
+            filt.beta = getattr(p, prefix + 'beta')
+            filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
+        self._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
+        self._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
+        self._servo.gain = float(p.servo_gain)
+
+    def diagnostics(self):
+        """(warn, summary, [(key, value)]) of the status, for a diagnostics report:
+        warn while holding."""
+        s = self.status
+        return (s.state == HOLDING, '%s: %s' % (s.state, s.reason),
+                [('origin set', s.origin_set), ('rejected inputs', s.rejected_inputs),
+                 ('IK failures', s.ik_failures)])
 
     # -- input (cheap; called from subscriber callbacks) ----------------------------
     def on_hand(self, hand, now):

@@ -24,27 +24,21 @@ from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
 from leap_teleop.control.input_age import InputAgeWindow
-from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotConfig, PilotInput, PilotWorker
+from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput, PilotWorker
+from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_RECONFIGURABLE
 from leap_teleop.msg import GestureEvent, Hand, Navdata
-from leap_teleop.ros.node import Param, RateLimitedLog, start_node
-from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.node import RateLimitedLog, start_node
+from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.service_call import ServiceCall
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.srv import FlightAnim
 
-PARAMS = {
-    'side': Param('right', 'hand to follow', choices=('right', 'left')),
-    'hand_topic': Param('', 'Hand topic (default leapmotion/hand_<side>)'),
-    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False),
-    'service_timeout': Param(0.5, 'a flight animation call (its own thread) is abandoned '
-                                  'after this long', unit='s', gt=0.0, le=10.0),
-    **PILOT_PARAMS,
-}
+# The declarations live beside the pilot they configure; re-exported for --help and the docs.
+PARAMS = PILOT_NODE_PARAMS
+RECONFIGURABLE = PILOT_RECONFIGURABLE
 SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
-# Changeable while running (dynamic_reconfigure); the pilot reads each where it uses it.
-RECONFIGURABLE = ('dead_zone', 'full_scale', 'z_dead_zone', 'z_full_scale', 'yaw_dead_zone',
-                  'yaw_full_scale', 'max_cmd', 'paper_angle', 'paper_scale',
-                  'flip_min_altitude', 'flip_min_radius')
+LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN,
+          'error': DiagnosticStatus.ERROR}
 
 
 class DronePilotNode:
@@ -127,30 +121,10 @@ class DronePilotNode:
         return self.flip_srv(anim_type, duration).result
 
     def diagnose(self, stat):
-        pl, w = self.pilot, self.worker
-        lost = pl.lost_since is not None
-        stale = pl.navdata_lost_since is not None
-        summary = 'hand %s, drone state %s' % ('lost' if lost else 'tracked'
-                                               if pl.hand_present else 'not seen yet',
-                                               pl.drone_state)
-        if w.fault_since is not None:
-            stat.summary(DiagnosticStatus.ERROR, 'worker fault: %s (hovering)' % w.last_error)
-        elif stale:
-            stat.summary(DiagnosticStatus.WARN if pl.drone_state != 2 else DiagnosticStatus.OK,
-                         'no navdata for %.1f s (%s): hovering, no takeoff'
-                         % (rospy.get_time() - (pl.last_navdata_time or pl.navdata_lost_since),
-                            summary))
-        else:
-            stat.summary(DiagnosticStatus.WARN if lost and pl.drone_state in (3, 4, 6, 7, 9)
-                         else DiagnosticStatus.OK, summary)
-        stat.add('navdata', 'stale' if stale else 'fresh')
-        stat.add('worker faults', w.errors)
-        for outcome, n in self.flip_call.counts.items():
-            stat.add('flip calls %s' % outcome, n)
-        stat.add('rejected inputs', pl.rejected_inputs)
-        stat.add('twists superseded or dropped', pl.queue.dropped)
-        stat.add('twists published', self.published)
-        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+        level, summary, values = self.worker.diagnostics(rospy.get_time())
+        stat.summary(LEVELS[level], summary)
+        values += [('twists published', self.published)]
+        for key, value in values + self.input_age.diagnostic_values(rospy.get_time()):
             stat.add(key, value)
         return stat
 

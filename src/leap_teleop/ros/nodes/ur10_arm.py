@@ -13,59 +13,31 @@ import threading
 import time
 
 import diagnostic_updater
-import numpy as np
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import Point
 from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
 from leap_teleop.ros import conversions
-from leap_teleop.ros.node import Param, RateLimitedLog, package_path, start_node
-from leap_teleop.ros.nodes.reconfigure import Reconfigure
+from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
+from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10.joint_states import JointStateIndex
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
-from leap_teleop.ur10.teleop import HOLDING, TELEOP_PARAMS, ArmInput, ArmTeleop, ArmTeleopParams
+from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop
+from leap_teleop.ur10.teleop_params import ARM_NODE_PARAMS, ARM_RECONFIGURABLE, TELEOP_PARAMS, ArmTeleopParams
 
-PARAMS = {
-    'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
-    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
-    # The loop is also the watchdog's clock: at least 10 Hz.
-    'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
-                  unit='Hz', ge=10.0, le=1000.0),
-    'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
-    'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
-                         ge=0.1, le=1000.0),
-    **TELEOP_PARAMS,          # config/ur10_teleop.yaml, loaded into the node's namespace
-}
-
-
-# Changeable while running (dynamic_reconfigure): gains, the dead zone, filter constants,
-# speed limits, the arming hold. Modes, geometry, watchdog times and topics stay start-up only.
-RECONFIGURABLE = ('scale', 'dead_zone', 'joystick_gain', 'max_tcp_speed', 'orientation_scale',
-                  'max_tool_tilt', 'max_tool_turn', 'filter_min_cutoff_hz', 'filter_beta',
-                  'filter_d_cutoff_hz', 'rotation_min_cutoff_hz', 'rotation_beta',
-                  'rotation_d_cutoff_hz', 'max_joint_speed', 'max_joint_accel', 'servo_gain',
-                  'gripper_binary_closed', 'arm_hold_s')
+# The declarations live beside the teleop they configure; re-exported for --help and the docs.
+PARAMS = ARM_NODE_PARAMS
+RECONFIGURABLE = ARM_RECONFIGURABLE
 
 
 def retune(teleop, changes):
-    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop: its params
-    (read where used) and the filters and servo it built from them at start-up."""
-    for name, value in changes.items():
-        setattr(teleop.p, name, value)
-    p = teleop.p
-    for filt, prefix in ((teleop._filter, 'filter_'), (teleop._rotation_filter, 'rotation_')):
-        filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
-        filt.beta = getattr(p, prefix + 'beta')
-        filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
-    teleop._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
-    teleop._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
-    teleop._servo.gain = float(p.servo_gain)
+    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop."""
+    teleop.retune(changes)
 
 
 def teleop_params(p):
@@ -83,7 +55,7 @@ class ArmNode:
         prefix = p['joint_prefix']
         self.arm_joints = [prefix + n for n in JOINT_NAMES]
         self.gripper_joint = prefix + GRIPPER_JOINT
-        self._joint_index = None
+        self.joint_index = JointStateIndex()
         side = p['hand']
         topic = p['hand_topic'] or 'leapmotion/data_%s' % side
         self.arm_pub = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
@@ -114,17 +86,11 @@ class ArmNode:
         self.wake.set()
 
     def on_joints(self, msg):
-        if self._joint_index is None or len(msg.name) != self._joint_count:
-            index = []
-            for name in JOINT_NAMES:
-                match = [i for i, n in enumerate(msg.name) if n == name or n.endswith('_' + name)
-                         or n.endswith('/' + name)]
-                if not match:
-                    self.log.warn('joints', 'ur10_arm: joint_states lacks %s', name)
-                    return
-                index.append(match[0])
-            self._joint_index, self._joint_count = index, len(msg.name)
-        q = [msg.position[i] for i in self._joint_index]
+        try:
+            q = self.joint_index.positions(msg.name, msg.position)
+        except KeyError as e:
+            self.log.warn('joints', 'ur10_arm: joint_states lacks %s', e.args[0])
+            return
         with self.lock:
             self.teleop.on_joints(q, rospy.get_time())
         self.joints_seen.set()
@@ -133,7 +99,7 @@ class ArmNode:
         """dynamic_reconfigure on ~: RECONFIGURABLE, applied under the control loop's lock."""
         def apply(changes):
             with self.lock:
-                retune(self.teleop, changes)
+                self.teleop.retune(changes)
         self.reconfigure = Reconfigure('ur10_arm', PARAMS, RECONFIGURABLE,
                                        {k: getattr(self.teleop.p, k) for k in RECONFIGURABLE},
                                        apply)
@@ -186,27 +152,14 @@ class ArmNode:
             if cmd.points:
                 # Stamp 0 (start on receipt): a command delayed in transport still starts
                 # from the controller's current state instead of partly in the past.
-                self.arm_pub.publish(self._trajectory(self.arm_joints, cmd.points))
+                self.arm_pub.publish(conversions.joint_trajectory(self.arm_joints, cmd.points))
             if cmd.gripper is not None:
-                self.gripper_pub.publish(self._trajectory([self.gripper_joint],
-                                                          [(0.1, [cmd.gripper], None)]))
+                self.gripper_pub.publish(conversions.joint_trajectory(
+                    [self.gripper_joint], [(0.1, [cmd.gripper], None)]))
             if cmd.points or cmd.gripper is not None:
                 self.input_age.add(rospy.get_time(), cmd.input_stamp)
             self._publish_status(snapshot, now)
             self.diagnostics.update()
-
-    @staticmethod
-    def _trajectory(names, points, stamp=0.0):
-        """points [(time_from_start, positions, velocities|None)], starting at stamp
-        (the control period's time; 0 = on receipt, the ros_control convention)."""
-        msg = JointTrajectory()
-        msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
-        msg.joint_names = list(names)
-        msg.points = [JointTrajectoryPoint(
-            positions=[float(x) for x in q],
-            velocities=[] if v is None else [float(x) for x in v],
-            time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
-        return msg
 
     def _publish_status(self, snapshot, now):
         changed = snapshot != self._last_status
@@ -217,24 +170,12 @@ class ArmNode:
         if not changed and now - self._last_status_pub < 1.0 / float(self.p['status_rate']):
             return
         self._last_status, self._last_status_pub = snapshot, now
-        s = self.teleop.status
-        msg = ArmStatus(state=s.state, reason=s.reason, origin_set=s.origin_set,
-                        rejected_inputs=s.rejected_inputs, ik_failures=s.ik_failures)
-        msg.header.stamp = rospy.Time.now()
-        if len(s.target) == 3:
-            msg.target = Point(*s.target)
-        if s.input_stamp > 0:
-            msg.input_stamp = rospy.Time.from_sec(s.input_stamp)
-        self.status_pub.publish(msg)
+        self.status_pub.publish(conversions.arm_status_message(self.teleop.status))
 
     def diagnose(self, stat):
-        s = self.teleop.status
-        level = DiagnosticStatus.WARN if s.state == HOLDING else DiagnosticStatus.OK
-        stat.summary(level, '%s: %s' % (s.state, s.reason))
-        stat.add('origin set', s.origin_set)
-        stat.add('rejected inputs', s.rejected_inputs)
-        stat.add('IK failures', s.ik_failures)
-        for key, value in self.input_age.diagnostic_values(rospy.get_time()):
+        warn, summary, values = self.teleop.diagnostics()
+        stat.summary(DiagnosticStatus.WARN if warn else DiagnosticStatus.OK, summary)
+        for key, value in values + self.input_age.diagnostic_values(rospy.get_time()):
             stat.add(key, value)
         return stat
 

@@ -1,0 +1,82 @@
+"""The gesture pilot's parameters, declared once: the `Param` tables are the single source of
+PilotConfig (its fields and defaults are generated from PILOT_PARAMS), of drone_pilot's
+~params and --help, of its dynamic_reconfigure server and of the docs' parameter table.
+The drone_pilot block of config/ardrone.yaml sets the same names (a test keeps it inside
+these declarations).
+"""
+from leap_teleop.params import Param, check_params, declared_fields
+
+# Every PilotConfig field. Watchdog times have upper bounds too: a huge timeout is a
+# disabled watchdog.
+PILOT_PARAMS = {
+    'mode': Param('tilt', 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
+                          '(Algorithm 1 exactly)', choices=('tilt', 'paper')),
+    'rate': Param(200.0, 'max twist publishing rate (queue drain rate)', unit='Hz',
+                  ge=1.0, le=1000.0),
+    'queue_size': Param(10, 'command FIFO bound (oldest twist dropped when full)',
+                        ge=1, le=1000),
+    'flip_type': Param(19, 'flight animation for a circle gesture (19 = flip right)',
+                       ge=0, le=19),
+    'flip_duration': Param(0, 'its duration (0 = default)', unit='ms', ge=0, le=10000),
+    'flip_min_altitude': Param(0.6, 'no flip below this altitude', unit='m', ge=0.3, le=10.0),
+    'flip_min_radius': Param(0.025, 'no flip on a smaller circle (fingertip loops are 4-20 '
+                                    'mm)', unit='m', ge=0.0, le=0.5),
+    'hand_timeout': Param(0.15, 'no Hand message this long = hand lost (hover)', unit='s',
+                          gt=0.0, le=10.0),
+    'land_after': Param(3.0, 'lost hand or navdata this long -> land', unit='s',
+                        gt=0.0, le=120.0),
+    'disarm_after': Param(1.0, 'lost hand this long -> steering off until a new unfold; back '
+                               'sooner, it steers on from where it is', unit='s',
+                          gt=0.0, le=120.0),
+    'navdata_timeout': Param(0.5, 'no navdata this long = drone state unknown: no takeoff, '
+                                  'hover, then land', unit='s', gt=0.0, le=10.0),
+    'dead_zone': Param(0.03, 'tilt: horizontal palm dead zone', unit='m', ge=0.0, le=0.5),
+    'full_scale': Param(0.10, 'tilt: offset beyond the dead zone for full tilt', unit='m',
+                        gt=0.0, le=1.0),
+    'z_dead_zone': Param(0.03, 'tilt: vertical dead zone', unit='m', ge=0.0, le=0.5),
+    'z_full_scale': Param(0.10, 'tilt: offset beyond it for full climb rate', unit='m',
+                          gt=0.0, le=1.0),
+    'yaw_dead_zone': Param(15.0, 'tilt: hand yaw dead zone', unit='deg', ge=0.0, lt=180.0),
+    'yaw_full_scale': Param(45.0, 'tilt: yaw beyond it for full yaw rate', unit='deg',
+                            gt=0.0, le=180.0),
+    'max_cmd': Param(1.0, 'tilt: cap on every cmd_vel component', gt=0.0, le=1.0),
+    'paper_angle': Param(25.0, 'paper: pitch and roll above this capture the reference',
+                         unit='deg', ge=0.0, lt=90.0),
+    'paper_scale': Param(3000.0, 'paper: palm mm per unit command', unit='mm',
+                         ge=100.0, le=100000.0),
+    'max_input_age': Param(0.25, 'drop a Hand arriving this much later than the stream\'s '
+                                 'best latency', unit='s', gt=0.0, le=10.0),
+}
+
+# drone_pilot's own ~params (its wiring), then every pilot one.
+PILOT_NODE_PARAMS = {
+    'side': Param('right', 'hand to follow', choices=('right', 'left')),
+    'hand_topic': Param('', 'Hand topic (default leapmotion/hand_<side>)'),
+    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False),
+    'service_timeout': Param(0.5, 'a flight animation call (its own thread) is abandoned '
+                                  'after this long', unit='s', gt=0.0, le=10.0),
+    **PILOT_PARAMS,
+}
+
+# Changeable while running (dynamic_reconfigure); the pilot reads each where it uses it.
+PILOT_RECONFIGURABLE = ('dead_zone', 'full_scale', 'z_dead_zone', 'z_full_scale',
+                        'yaw_dead_zone', 'yaw_full_scale', 'max_cmd', 'paper_angle',
+                        'paper_scale', 'flip_min_altitude', 'flip_min_radius')
+
+
+@declared_fields(PILOT_PARAMS)
+class PilotConfig:
+    """The pilot's configuration: one field per PILOT_PARAMS entry, its default."""
+
+    def update(self, values):
+        """Set the known keys from `values`, then check every field against PILOT_PARAMS
+        (ParamError, a ValueError, names the first bad one)."""
+        for key, value in values.items():
+            if key in PILOT_PARAMS:
+                setattr(self, key, value)
+        return self.validate()
+
+    def validate(self):
+        for name, value in check_params(PILOT_PARAMS, vars(self)).items():
+            setattr(self, name, value)
+        return self

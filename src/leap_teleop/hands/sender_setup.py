@@ -1,0 +1,77 @@
+"""What the sender's checked ~params build, without ROS: the hand source, the gesture
+recognizers and their live retuning, and the original sender's publishing period."""
+from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs
+
+
+def check_leapros(p):
+    """ValueError when leapros / leap would carry a hand the sender does not publish."""
+    if (p['leapros_topic'] or p['leap_topic']) and p['leapros_side'] not in p['sides']:
+        raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
+
+
+def build_source(p, clock, default_script, camera_model=lambda: None, on_image=None):
+    """The hand source ~source names, configured from `p`; SourceError when a parameter it
+    needs is missing. `clock` stamps frames; `camera_model()` (called only for a camera
+    source) gives its CameraModel or None; `on_image` sees each camera image."""
+    name = p['source']
+    if name in CAMERA_SOURCES:
+        if name == 'video' and not p['video']:
+            raise SourceError('~source video needs ~video:=PATH (a video, an image, a folder '
+                              'or a glob of images)')
+        return make_source(name, **camera_source_kwargs(name, p, clock, camera_model(),
+                                                        on_image))
+    if name == 'scripted':
+        return make_source('scripted', script=p['script'] or default_script,
+                           rate_hz=p['rate'] or None, loop=p['loop'], realtime=p['realtime'],
+                           clock=clock)
+    if name == 'recording':
+        if not p['recording']:
+            raise SourceError('~source recording needs ~recording:=PATH to a LeapJS file')
+        return make_source('recording', path=p['recording'], loop=p['loop'],
+                           realtime=p['realtime'], clock=clock)
+    return make_source(name)
+
+
+def recognizer_factory(p):
+    """A GestureRecognizer per hand with the ~gesture_model / ~keypoint_model (each model
+    is loaded once; a bad one raises ModelError, a ValueError)."""
+    def make():
+        return GestureRecognizer(model=p['gesture_model'] or None,
+                                 keypoint_model=p['keypoint_model'] or None,
+                                 on_frames=p['recognizer_on_frames'],
+                                 off_frames=p['recognizer_off_frames'],
+                                 min_confidence=p['recognizer_min_confidence'])
+    return make
+
+
+def retune_recognizers(recognizers, changes):
+    """Apply checked changes of the recognizer_* parameters to running recognizers (the
+    source thread reads each per frame)."""
+    for recognizer in recognizers:
+        if 'recognizer_on_frames' in changes:
+            recognizer.filter.on_frames = changes['recognizer_on_frames']
+        if 'recognizer_off_frames' in changes:
+            recognizer.filter.off_frames = changes['recognizer_off_frames']
+        if 'recognizer_min_confidence' in changes:
+            recognizer.min_confidence = changes['recognizer_min_confidence']
+
+
+class PeriodThrottle:
+    """The original sender's ~freq: at most one frame per `period` (s, by frame timestamp)
+    for each key; a period of 0 lets every frame through."""
+
+    def __init__(self, period):
+        self.period = float(period)
+        self._last = {}
+
+    def due(self, key, timestamp):
+        """True when a frame of `key` stamped `timestamp` goes out (and counts as sent)."""
+        if self.period <= 0:
+            return True
+        last = self._last.get(key)
+        if last is not None and timestamp - last < self.period:
+            return False
+        self._last[key] = timestamp
+        return True

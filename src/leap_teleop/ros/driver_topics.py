@@ -1,0 +1,57 @@
+"""The leap_motion driver's topics, published by the sender on request: DriverHuman raw and
+low-pass filtered, and its visualizer's RViz markers."""
+import rospy
+from visualization_msgs.msg import MarkerArray
+
+from leap_teleop.control.lowpass import LowPass
+from leap_teleop.hands.sender_setup import PeriodThrottle
+from leap_teleop.msg import DriverHuman
+from leap_teleop.ros import conversions
+from leap_teleop.ros.markers import driver_markers
+from leap_teleop.ros.node import RateLimitedLog
+
+
+class DriverInterface:
+    """The leap_motion driver's topics: DriverHuman raw and filtered, and its visualizer's
+    markers. Each is built only while it has subscribers; the filter forgets its history
+    while nobody reads the filtered Human (it restarts from the next frame)."""
+
+    def __init__(self, p, queue_size):
+        self.builder = conversions.DriverHumanBuilder(p['frame_id'])
+        self.lowpass = LowPass(p['filter_cutoff'])
+        self.throttle = PeriodThrottle(p['freq'])
+        self.pubs = {}
+        for kind, topic, msg_type in (('raw', p['human_topic'], DriverHuman),
+                                      ('filtered', p['filtered_human_topic'], DriverHuman),
+                                      ('markers', p['driver_marker_topic'], MarkerArray)):
+            if topic:
+                self.pubs[kind] = rospy.Publisher(topic, msg_type, queue_size=queue_size)
+        self.log = RateLimitedLog()
+
+    def _wanted(self, kind):
+        pub = self.pubs.get(kind)
+        return pub is not None and pub.get_num_connections() > 0
+
+    def on_frame(self, frame, states):
+        if not self.throttle.due('frame', frame.timestamp):
+            return
+        markers = self._wanted('markers')
+        filtered = self._wanted('filtered') or (markers and 'filtered' in self.pubs)
+        raw = self._wanted('raw') or (markers and not filtered)
+        if not (raw or filtered):
+            self.lowpass.reset()
+            return
+        if not filtered:
+            self.lowpass.reset()
+        human, smooth = self.builder.build(frame, states, raw=raw,
+                                           lowpass=self.lowpass if filtered else None)
+        if human is not None and 'raw' in self.pubs:
+            self.pubs['raw'].publish(human)
+        if smooth is not None and 'filtered' in self.pubs:
+            self.pubs['filtered'].publish(smooth)
+        if markers:
+            try:
+                self.pubs['markers'].publish(driver_markers(smooth or human))
+            except ValueError as e:
+                self.log.warn('markers', 'sender: no driver markers for frame %d: %s',
+                              frame.id, e)

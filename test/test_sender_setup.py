@@ -1,0 +1,81 @@
+"""What the sender's ~params build, without a ROS master: the hand source, the recognizers
+and their retuning, the ~freq throttle; and the arm's joint_states lookup."""
+import os
+
+import pytest
+
+from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
+from leap_teleop.hands.sender_setup import (
+    PeriodThrottle,
+    build_source,
+    check_leapros,
+    recognizer_factory,
+    retune_recognizers,
+)
+from leap_teleop.hands.sources import SourceError
+from leap_teleop.params import check_params
+from leap_teleop.ur10.joint_states import JointStateIndex
+from leap_teleop.ur10.kinematics import JOINT_NAMES
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+WAVE = os.path.join(ROOT, 'config', 'gestures', 'wave_hello.yaml')
+
+
+def params(**values):
+    return check_params(SENDER_PARAMS, values)
+
+
+def test_the_scripted_source_defaults_to_the_given_script_and_runs_on_the_clock():
+    source = build_source(params(realtime=False), lambda: 0.0, WAVE)
+    assert type(source).__name__ == 'ScriptedSource'
+    other = build_source(params(script=os.path.join(ROOT, 'test', 'data', 'sender_script.yaml'),
+                                realtime=False), lambda: 0.0, '/no/such/default.yaml')
+    assert type(other).__name__ == 'ScriptedSource'
+
+
+@pytest.mark.parametrize('values, says', [({'source': 'recording'}, 'needs ~recording'),
+                                          ({'source': 'video'}, 'needs ~video')])
+def test_a_source_missing_its_file_says_which_parameter(values, says):
+    asked = []
+    with pytest.raises(SourceError) as e:
+        build_source(params(**values), lambda: 0.0, WAVE, camera_model=lambda: asked.append(1))
+    assert says in str(e.value) and not asked     # no CameraInfo wait for a bad parameter
+
+
+def test_leapros_must_carry_a_published_side():
+    check_leapros(params(leapros_topic='leapmotion/data', sides=['right']))
+    with pytest.raises(ValueError, match='leapros_side'):
+        check_leapros(params(leap_topic='leapmotion/raw', sides=['left']))
+
+
+def test_recognizers_are_built_and_retuned_from_the_params():
+    make = recognizer_factory(params(recognizer_on_frames=5, recognizer_min_confidence=0.2))
+    a, b = make(), make()
+    assert a is not b and a.filter.on_frames == 5 and a.min_confidence == 0.2
+    retune_recognizers([a, b], {'recognizer_off_frames': 7, 'recognizer_min_confidence': 0.6,
+                                'filter_cutoff': 3.0})
+    assert all(r.filter.off_frames == 7 and r.min_confidence == 0.6 for r in (a, b))
+    assert a.filter.on_frames == 5
+    assert set(SENDER_RECONFIGURABLE) == {'recognizer_on_frames', 'recognizer_off_frames',
+                                          'recognizer_min_confidence', 'filter_cutoff'}
+
+
+def test_the_period_throttle_lets_one_frame_per_period_and_key():
+    t = PeriodThrottle(0.1)
+    got = [(key, ts) for ts in (0.0, 0.05, 0.1, 0.12, 0.25) for key in ('right', 'left')
+           if t.due(key, ts)]
+    assert got == [('right', 0.0), ('left', 0.0), ('right', 0.1), ('left', 0.1),
+                   ('right', 0.25), ('left', 0.25)]
+    every = PeriodThrottle(0.0)
+    assert all(every.due('right', 0.0) for _ in range(3))
+
+
+def test_joint_states_are_found_by_name_prefix_and_order():
+    index = JointStateIndex()
+    names = ['ur10_1_gripper_joint'] + ['ur10_1_' + n for n in reversed(JOINT_NAMES)]
+    positions = [9.0] + [float(i) for i in range(6)]
+    assert index.positions(names, positions) == [5.0, 4.0, 3.0, 2.0, 1.0, 0.0]
+    assert index.positions(['arm/' + n for n in JOINT_NAMES], list(range(6))) == list(range(6))
+    with pytest.raises(KeyError) as e:
+        index.positions(JOINT_NAMES[:5], list(range(5)))
+    assert e.value.args[0] == JOINT_NAMES[5]
