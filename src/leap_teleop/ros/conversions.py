@@ -598,6 +598,10 @@ def rgb_image_msg(rgb, stamp, frame_id):
     msg.height, msg.width = rgb.shape[:2]
     msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
     msg.data = rgb.tobytes()
+    return msg
+
+
+# -- UR10 arm: trajectory commands and status -------------------------------------------
 
 def joint_trajectory(names, points, stamp=0.0):
     """A JointTrajectory for joints `names` from points [(time_from_start s, positions,
