@@ -28,7 +28,7 @@ def params(**values):
 def test_the_scripted_source_defaults_to_the_given_script_and_runs_on_the_clock():
     source = build_source(params(realtime=False), lambda: 0.0, WAVE)
     assert type(source).__name__ == 'ScriptedSource'
-    other = build_source(params(script=os.path.join(ROOT, 'test', 'data', 'sender_script.yaml'),
+    other = build_source(params(script=os.path.join(ROOT, 'config', 'gestures', 'sender_script.yaml'),
                                 realtime=False), lambda: 0.0, '/no/such/default.yaml')
     assert type(other).__name__ == 'ScriptedSource'
 
