@@ -12,7 +12,7 @@ import yaml
 from check_helpers import LimitsError, check_limits, limit, state_limit
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')))
+TESTS = sorted(glob.glob(os.path.join(HERE, '*.test')) + glob.glob(os.path.join(HERE, 'replay', '*.test')))
 
 
 def checker_nodes():
