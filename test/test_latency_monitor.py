@@ -43,3 +43,10 @@ def test_the_command_prints_the_pilots_row_from_a_running_node():
             stop_spawned(pilot)
     assert p.returncode == 0, p.stderr[-2000:]
     assert 'capture -> command' in p.stdout and 'drone_pilot' in p.stdout, p.stdout
+
+
+def test_main_takes_its_arguments_without_the_program_name():
+    from leap_teleop.ros.latency_monitor import main
+    with pytest.raises(SystemExit) as e:
+        main(['--no-such-option'])       # refused by the parser, before any ROS call
+    assert e.value.code == 2

@@ -58,8 +58,8 @@ def test_a_string_parameter_is_not_offered():
 def test_retune_reaches_the_arms_filters_and_servo():
     from leap_teleop.ur10.teleop import ArmTeleop
     teleop = ArmTeleop()
-    ur10_arm.retune(teleop, {'filter_beta': 0.5, 'rotation_d_cutoff_hz': 2.0,
-                             'max_joint_speed': 0.02, 'max_joint_accel': 0.3,
+    teleop.retune({'filter_beta': 0.5, 'rotation_d_cutoff_hz': 2.0,
+                    'max_joint_speed': 0.02, 'max_joint_accel': 0.3,
                              'servo_gain': 5.0, 'scale': 1.5})
     assert teleop.p.scale == 1.5 and teleop._filter.beta == 0.5
     assert teleop._rotation_filter.d_cutoff_hz == 2.0

@@ -4,7 +4,7 @@ invariance stress and on the labelled photos.
 usage: python -m tools.evaluation.evaluate [--data DIR] [--out eval_results.json]
            [--no-people] [--no-photos]
 
-The leave-one-person-out figures (tools/evaluate_people) come first: they are the
+The leave-one-person-out figures (tools/evaluation/people.py) come first: they are the
 result. The shared LeapJS takes below are a secondary check against the original
 system's rules: the pose model is fitted on their labelled frames too (one more person),
 so their figures are no result on their own.

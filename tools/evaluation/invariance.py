@@ -8,7 +8,7 @@ the mirrored right one), orientation (roll, pitch, yaw within +-40 deg), tracker
 on every joint (1, 3, 5 mm), and a missing joint (the model then judges nothing: no
 gesture rather than a wrong one). Reported: the share of draws whose winning class
 equals the unchanged hand's, per pose and per change. Real people are judged in
-evaluate_people; this only checks that nothing but the pose moves the decision.
+tools.evaluation.people; this only checks that nothing but the pose moves the decision.
 """
 import argparse
 import dataclasses

@@ -4,7 +4,7 @@ usage: python -m tools.evaluation.people [--data DIR] [--family leap|keypoints|a
            [--out FILE]
 
 For every person of the shared, people-split data: fit the pose model on all the others
-(tools/train_gestures, same settings as the shipped model), then run that person's hands
+(hands/gestures/train.py, same settings as the shipped model), then run that person's hands
 through the recognizer's per-frame decisions (model + guards) and, for the dynamic takes,
 through the whole stream recognizer (temporal filter, events). Reported per gesture:
 recall and false-positive rate (mean over people and the worst person), a confusion

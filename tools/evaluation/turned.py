@@ -1,7 +1,7 @@
 """How reliable the gesture recognizer is while the hand is turned (the orientation
 modes ask the user to turn the hand while gesturing).
 
-Real data: every labelled frame of the LeapJS recordings (tools/evaluate.py's labels),
+Real data: every labelled frame of the LeapJS recordings (hands.gestures.datasets.LEAPJS_LABELS),
 binned by how far the palm is turned from flat and pointing away (the angle of the
 rotation hand_rotation() rebuilds from the frame's roll, yaw and pitch); per bin, the
 fraction of labelled gesture values the recognizer gets right. Synthetic: each pose of the

@@ -2,7 +2,7 @@
 p99 over its window) read from /diagnostics, as the arm nodes and pilots report it.
 
 usage: rosrun leap_teleop latency_monitor [--once] [--timeout S]
-  --once      print one table as soon as every reporting node was heard, then exit
+  --once      print one table (1.5 s after the first report), then exit
   --timeout   give up (exit 1) when no node reports an input age within S seconds
 """
 import argparse
@@ -36,16 +36,16 @@ def main(argv=None):
     ap.add_argument('--once', action='store_true', help='print one table, then exit')
     ap.add_argument('--timeout', type=float, default=30.0,
                     help='seconds to wait for a first report (default 30)')
-    args = ap.parse_args(rospy.myargv(sys.argv if argv is None else argv)[1:])
+    args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
     rospy.init_node('latency_monitor', anonymous=True, disable_signals=True)
     monitor = LatencyMonitor()
     rospy.Subscriber('/diagnostics', DiagnosticArray, monitor.on_diagnostics, queue_size=20)
-    if not monitor.heard.wait(args.timeout):
-        print('latency_monitor: no node reported an input age on /diagnostics in %g s'
-              % args.timeout, file=sys.stderr)
-        return 1
-    rospy.sleep(1.5)         # the updaters publish about once a second: hear them all
     try:
+        if not monitor.heard.wait(args.timeout):
+            print('latency_monitor: no node reported an input age on /diagnostics in %g s'
+                  % args.timeout, file=sys.stderr)
+            return 1
+        rospy.sleep(1.5)     # the updaters publish about once a second: hear them all
         while not rospy.is_shutdown():
             print(monitor.table(), flush=True)
             if args.once:

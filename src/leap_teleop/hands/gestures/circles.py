@@ -28,7 +28,7 @@ _isfinite = math.isfinite
 
 @dataclass(frozen=True)
 class CircleRules:
-    """The few numbers fitted on people's drawn circles (tools/evaluate_strokes.py);
+    """The few numbers fitted on people's drawn circles (tools/evaluation/strokes.py);
     the defaults are the rules before that fit (its starting point), DRAWN the fit."""
     r_max: float = 300.0         # mm, largest circle radius (both tracks)
     max_s: float = 1.6           # s, the longest stretch of path looked at for a circle
@@ -41,7 +41,7 @@ class CircleRules:
     min_across: float = 0.7
 
 
-# Fitted (evaluate_strokes.CircleFit, `python -m tools.evaluation.strokes
+# Fitted (tools.evaluation.strokes.CircleFit, `python -m tools.evaluation.strokes
 # --loso` prints them) on the 7 development people's strokes (GestureMidAir: circles
 # 120-260 mm across, one loop in 1.7-2.5 s), drawn by translated real pointing and open
 # hands (GTI-UPM), with no circle event allowed on the Guinevere and LeapJS takes; each

@@ -1,5 +1,5 @@
 """A learned pose classifier stored as plain arrays: standardise, one hidden ReLU layer,
-softmax. Fitted by tools/train_gestures (scikit-learn, training only); evaluated here with
+softmax. Fitted by hands/gestures/train.py (scikit-learn, training only); evaluated here with
 numpy alone.
 
 The model file is a .npz of arrays (loaded with allow_pickle=False): `classes` (names),

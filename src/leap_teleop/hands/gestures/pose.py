@@ -1,7 +1,7 @@
 """One frame's pose: the learned model's class with its probability, and the explicit
 guards that stand beside it.
 
-The model (classifier.PoseClassifier, fitted on real people by tools/train_gestures)
+The model (classifier.PoseClassifier, fitted on real people by hands/gestures/train.py)
 says which pose the hand shows: fist, open, pinch (an OK sign), rock (horns), a fist with
 the thumb out, or none of them (two, three, four, L, hang loose, C, pointing, peace...),
 plus any class a user trained. A Leap-family hand is judged from its 3-D joints, a

@@ -471,7 +471,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
     # are the shipped model's card); the shipped models hold out every person
     held = users if adds else sorted(set(persons.tolist()))
     if family == 'keypoints' and not adds:
-        # the Leap people's camera views are judged in evaluate_people; the card holds the
+        # the Leap people's camera views are judged in tools.evaluation.people; the card holds the
         # webcam people
         held = [p for p in held if not p.startswith(('leap:', 'photo:'))]
     if report and len(set(persons)) > 1:

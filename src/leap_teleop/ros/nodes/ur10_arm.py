@@ -35,11 +35,6 @@ PARAMS = ARM_NODE_PARAMS
 RECONFIGURABLE = ARM_RECONFIGURABLE
 
 
-def retune(teleop, changes):
-    """Apply checked changes of RECONFIGURABLE parameters to a running ArmTeleop."""
-    teleop.retune(changes)
-
-
 def teleop_params(p):
     """ArmTeleopParams from the node's checked ~params."""
     return ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
