@@ -46,7 +46,7 @@ import json
 import os
 import sys
 
-from leap_teleop.hands.gestures import FINGER_NAMES, GestureRecognizer
+from leap_teleop.hands.gestures import FINGER_NAMES
 from leap_teleop.hands.gestures.datasets import (
     DEFAULT_LEAPJS_DATA,
     EVERY_TAKE,
@@ -57,8 +57,8 @@ from leap_teleop.hands.gestures.datasets import (
     find_take,
     take_frames,
 )
-from leap_teleop.hands.sources import leapjs
 from tools.evaluation.original_rules import OriginalRules
+from tools.evaluation.take_stream import recognize_take
 
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 
@@ -88,33 +88,18 @@ def run_take(path):
     """Per frame: a Row (index, side, recognizer state, original state, timestamp; .hand)
     for every hand, plus the SDK circle gestures: {id: SdkCircle}."""
     dicts = take_frames(path)
-    recognizers = {}
     original = OriginalRules()
     rows = []
     sdk_circles = {}
     first_seen = {}                  # side -> timestamp of its first frame
-    for k, d in enumerate(dicts):
-        if d is None:
-            continue
-        try:
-            frame = leapjs.frame_from_dict(d)
-        except leapjs.FrameError:
-            continue
-        seen = set()
+    for k, frame, judged in recognize_take(dicts):
+        d = dicts[k]
         sides_by_id = {h.id: h.side for h in frame.hands}
-        for hand in frame.hands:
-            if hand.side in seen:
-                continue
-            seen.add(hand.side)
+        for hand, state in judged:
             first_seen.setdefault(hand.side, frame.timestamp)
-            rec = recognizers.setdefault(hand.side, GestureRecognizer())
-            state = rec.update(hand, frame.timestamp)
             row = Row((k, hand.side, state, original.classify(hand), frame.timestamp))
             row.hand = hand
             rows.append(row)
-        for side, rec in recognizers.items():
-            if side not in seen:
-                rec.reset()
         pointables = {p.get('id'): p for p in d.get('pointables') or [] if isinstance(p, dict)}
         for g in frame.gestures:
             if g.get('type') != 'circle':

@@ -37,6 +37,7 @@ from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datase
 from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
+from tools.evaluation.take_stream import recognize_take
 
 STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
 LEAP_PEOPLE_DATA = os.environ.get('LEAP_PEOPLE_DATA') or os.path.join(SHARED_DATA, 'leap_people')
@@ -162,26 +163,9 @@ def load_guinevere(folder=LEAP_PEOPLE_DATA):
 def take_circles(dicts, make_recognizer=GestureRecognizer):
     """Circle events [(time s, side, HandEvent)] of a take's frame dicts, one
     recognizer per hand side (as classify_frames)."""
-    recs, out = {}, []
-    for d in dicts:
-        try:
-            frame = leapjs.frame_from_dict(d)
-        except leapjs.FrameError:
-            continue
-        seen = set()
-        for hand in frame.hands:
-            if hand.side in seen:
-                continue
-            seen.add(hand.side)
-            rec = recs.get(hand.side)
-            if rec is None:
-                rec = recs[hand.side] = make_recognizer()
-            out += [(frame.timestamp, hand.side, e)
-                    for e in circle_events(rec.update(hand, frame.timestamp).events)]
-        for side, rec in recs.items():
-            if side not in seen:
-                rec.reset()
-    return out
+    return [(frame.timestamp, hand.side, e)
+            for _, frame, judged in recognize_take(dicts, make_recognizer)
+            for hand, state in judged for e in circle_events(state.events)]
 
 
 def leapjs_takes(folder=None):

@@ -24,6 +24,7 @@ from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.orientation import hand_rotation
 from tools.evaluation.evaluate import GESTURES
+from tools.evaluation.take_stream import recognize_take
 
 BINS_DEG = (0, 20, 40, 60, 90, 180)
 
@@ -36,21 +37,8 @@ def real(data_dir):
         if path is None:
             raise FileNotFoundError('recording %s not found in %s' % (take, data_dir))
         _, dicts = leapjs.load(path)
-        recognizers = {}
-        for k, d in enumerate(dicts):
-            if d is None:
-                continue
-            try:
-                frame = leapjs.frame_from_dict(d)
-            except leapjs.FrameError:
-                continue
-            seen = set()
-            for hand in frame.hands:
-                if hand.side in seen:
-                    continue
-                seen.add(hand.side)
-                state = recognizers.setdefault(hand.side, GestureRecognizer()).update(
-                    hand, frame.timestamp)
+        for k, _, judged in recognize_take(dicts):
+            for hand, state in judged:
                 want = {}
                 for side, frames, expected in labels:
                     if side == hand.side and k in frames:
@@ -68,9 +56,6 @@ def real(data_dir):
                         right += bool(getattr(state, g)) == value
                         total += 1
                 out[key] = (right, total)
-            for side in list(recognizers):
-                if side not in seen:
-                    recognizers[side].reset()
     return out
 
 
