@@ -14,26 +14,7 @@ import argparse
 import sys
 import time
 
-from leap_teleop.hands.sources import SourceError, leapjs, make_source
-
-
-def build_source(args):
-    if args.source == 'scripted':
-        if not args.script:
-            raise SourceError('--source scripted needs --script YAML')
-        return make_source('scripted', script=args.script, realtime=args.realtime)
-    if args.source == 'recording':
-        if not args.recording:
-            raise SourceError('--source recording needs --recording PATH')
-        return make_source('recording', path=args.recording, realtime=args.realtime)
-    if args.source == 'video':
-        if not args.video:
-            raise SourceError('--source video needs --video PATH (a video, an image, a folder '
-                              'or a glob of images)')
-        return make_source('video', path=args.video, realtime=args.realtime, mirror=args.mirror)
-    if args.source == 'webcam':
-        return make_source('webcam', device=args.device, mirror=args.mirror)
-    return make_source(args.source)
+from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
 
 
 def record(source, out, duration=None, max_frames=None, metadata=None):
@@ -63,25 +44,15 @@ def record(source, out, duration=None, max_frames=None, metadata=None):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('out', help='output file: .json, .json.gz or .json.lz')
-    ap.add_argument('--source', default='leap',
-                    choices=['leap', 'leapc', 'scripted', 'recording', 'webcam', 'video'])
-    ap.add_argument('--script', default='', help='gesture script for --source scripted')
-    ap.add_argument('--recording', default='', help='input file for --source recording')
-    ap.add_argument('--video', default='', help='--source video: a video, an image, a folder or '
-                                                'a glob of images')
-    ap.add_argument('--device', default='0', help='--source webcam: index or /dev/videoN')
-    ap.add_argument('--mirror', action='store_true',
-                    help='camera sources: flip the image (a selfie view)')
+    add_source_arguments(ap, default='leap')
     ap.add_argument('--duration', type=float, default=0.0, help='seconds to record; 0 = no limit')
     ap.add_argument('--frames', type=int, default=0, help='frames to record; 0 = no limit')
-    ap.add_argument('--realtime', type=int, default=1,
-                    help='scripted / recording / video sources: 1 = at their timing, 0 = fast')
     ap.add_argument('--title', default='', help='metadata title')
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
     try:
-        source = build_source(args)
+        source = source_from_args(args)
     except SourceError as e:
         print('record_frames: %s' % e, file=sys.stderr)
         return 2

@@ -29,8 +29,7 @@ import sys
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.features import normalize_keypoints
-from leap_teleop.hands.record_frames import build_source
-from leap_teleop.hands.sources import SOURCES, SourceError, leapjs
+from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
 
 # Built-in gesture and event names that are no class of the pose models: a user class so
@@ -134,7 +133,7 @@ def write(path, family, rows):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--source', required=True, choices=sorted(SOURCES))
+    add_source_arguments(ap)
     ap.add_argument('--label', required=True, help='the gesture\'s name (the class to train)')
     ap.add_argument('--seconds', type=float, default=10.0,
                     help='how long to record, in the source\'s time (default %(default)s)')
@@ -142,15 +141,6 @@ def main(argv=None):
     ap.add_argument('--person', default='user', help='who is recorded (default %(default)s)')
     ap.add_argument('--side', default='any', choices=('any', 'right', 'left'),
                     help='which hands to keep (default: every hand)')
-    ap.add_argument('--script', default='', help='gesture script for --source scripted')
-    ap.add_argument('--recording', default='', help='input file for --source recording')
-    ap.add_argument('--video', default='', help='--source video: a video, an image, a folder '
-                                                'or a glob of images')
-    ap.add_argument('--device', default='0', help='--source webcam: index or /dev/videoN')
-    ap.add_argument('--mirror', action='store_true',
-                    help='camera sources: flip the image (a selfie view)')
-    ap.add_argument('--realtime', type=int, default=1, choices=(0, 1),
-                    help='scripted / recording / video sources: 1 = at their timing, 0 = fast')
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
@@ -165,7 +155,7 @@ def main(argv=None):
         folder = os.path.dirname(os.path.abspath(out))
         if not os.path.isdir(folder):
             raise RecordError('--out %s: no folder %s' % (out, folder))
-        source = build_source(args)
+        source = source_from_args(args)
     except (RecordError, SourceError) as e:
         print('record_gestures: %s' % e, file=sys.stderr)
         return 2

@@ -1,4 +1,5 @@
-"""Hand sources by name: make_source('scripted', script=...)."""
+"""Hand sources by name: make_source('scripted', script=...), or from a command line's
+options (add_source_arguments, source_from_args)."""
 import importlib
 
 from leap_teleop.hands.sources.source import HandSource, SourceError
@@ -27,4 +28,43 @@ def make_source(name, **kwargs):
     return getattr(module, class_name)(**kwargs)
 
 
-__all__ = ['HandSource', 'SourceError', 'SOURCES', 'make_source']
+def add_source_arguments(parser, default=None):
+    """The command-line options that choose and configure a hand source (read by
+    source_from_args); --source is required unless given a default."""
+    parser.add_argument('--source', choices=sorted(SOURCES), default=default,
+                        required=default is None)
+    parser.add_argument('--script', default='', help='gesture script for --source scripted')
+    parser.add_argument('--recording', default='', help='input file for --source recording')
+    parser.add_argument('--video', default='', help='--source video: a video, an image, a '
+                                                    'folder or a glob of images')
+    parser.add_argument('--device', default='0', help='--source webcam: index or /dev/videoN')
+    parser.add_argument('--mirror', action='store_true',
+                        help='camera sources: flip the image (a selfie view)')
+    parser.add_argument('--realtime', type=int, default=1, choices=(0, 1),
+                        help='scripted / recording / video sources: 1 = at their timing, '
+                             '0 = fast')
+
+
+def source_from_args(args):
+    """The source that add_source_arguments' options describe; SourceError naming the
+    missing option otherwise."""
+    if args.source == 'scripted':
+        if not args.script:
+            raise SourceError('--source scripted needs --script YAML')
+        return make_source('scripted', script=args.script, realtime=args.realtime)
+    if args.source == 'recording':
+        if not args.recording:
+            raise SourceError('--source recording needs --recording PATH')
+        return make_source('recording', path=args.recording, realtime=args.realtime)
+    if args.source == 'video':
+        if not args.video:
+            raise SourceError('--source video needs --video PATH (a video, an image, a folder '
+                              'or a glob of images)')
+        return make_source('video', path=args.video, realtime=args.realtime, mirror=args.mirror)
+    if args.source == 'webcam':
+        return make_source('webcam', device=args.device, mirror=args.mirror)
+    return make_source(args.source)
+
+
+__all__ = ['HandSource', 'SourceError', 'SOURCES', 'add_source_arguments', 'make_source',
+           'source_from_args']
