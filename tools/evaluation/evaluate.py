@@ -42,7 +42,6 @@ latency counts against it); OriginalRules is applied to the same frames. Per ges
 precision and recall over the labelled frames, n = labelled frames.
 """
 import argparse
-import json
 import os
 import sys
 
@@ -58,6 +57,7 @@ from leap_teleop.hands.gestures.datasets import (
     take_frames,
 )
 from tools.evaluation.original_rules import OriginalRules
+from tools.evaluation.results_file import write_results
 from tools.evaluation.take_stream import recognize_take
 
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
@@ -331,9 +331,7 @@ def main(argv=None):
             return 2
         results['photo_views'] = evaluate_photo_views.run(args.hands_data)
         evaluate_photo_views.print_table(results['photo_views'])
-    with open(args.out, 'w') as f:
-        json.dump(results, f, indent=1, sort_keys=True, default=float)
-    print('wrote %s' % args.out)
+    write_results(args.out, results)
     return 0
 
 

@@ -27,7 +27,6 @@ source held out at a time.
 """
 import argparse
 import collections
-import json
 import os
 import sys
 import time
@@ -40,6 +39,7 @@ from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
 from leap_teleop.hands.gestures.pose import HELD, classify_pose
+from tools.evaluation.results_file import write_results
 
 ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
 LEAP_EXPECT = {'fist_moved': 'fist', 'five': 'open', 'palm': 'open', 'palm_m': 'open',
@@ -307,9 +307,7 @@ def main(argv=None):
     fams = ('leap', 'keypoints') if args.family == 'all' else (args.family,)
     results = run(args.data, fams)
     print_tables(results)
-    with open(args.out, 'w') as f:
-        json.dump(results, f, indent=1, sort_keys=True, default=float)
-    print('wrote %s' % args.out)
+    write_results(args.out, results)
     return 0
 
 

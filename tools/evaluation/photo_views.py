@@ -22,7 +22,6 @@ hand reading thumbs-up on a photo that is not one. Views are fixed (the noise ha
 seed): the figures are deterministic on one machine.
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -32,6 +31,7 @@ import numpy as np
 from leap_teleop.hands.classify_frames import HELD, Classifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import datasets
+from tools.evaluation.results_file import write_results
 
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
 EXPECTED = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist',
@@ -271,8 +271,7 @@ def main(argv=None):
     res = run(args.data, names)
     print_table(res)
     if args.out:
-        with open(args.out, 'w') as f:
-            json.dump(res, f, indent=1, sort_keys=True)
+        write_results(args.out, res, announce=False)
     return 0
 
 

@@ -37,6 +37,7 @@ from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datase
 from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
+from tools.evaluation.results_file import write_results
 from tools.evaluation.take_stream import recognize_take
 
 STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
@@ -485,8 +486,7 @@ def main(argv=None):
         return 2
     print_table(results)
     if args.json:
-        with open(args.json, 'w') as f:
-            json.dump(results, f, indent=1, sort_keys=True)
+        write_results(args.json, results, announce=False)
     return 0
 
 
