@@ -255,11 +255,23 @@ def pilot_hand(stamp, palm=(0.0, 0.2, 0.0), side=Hand.SIDE_RIGHT, present=True):
 
 
 class RightHands:
-    """The right hand on the arm's leapcobot topic and the pilot's Hand topic, one pose."""
+    """The right hand on the arm's leapcobot topic and the pilot's Hand topic, one pose;
+    the pilot's gesture events."""
 
     def __init__(self):
         self.arm_pub = rospy.Publisher('/leapmotion/data_right', leapcobotright, queue_size=500)
         self.hand_pub = rospy.Publisher('/leapmotion/hand_right', Hand, queue_size=500)
+        self.gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
+
+    def listened(self):
+        """The arm node and the pilot subscribe to the hands and the pilot to the gestures."""
+        return (self.arm_pub.get_num_connections() > 0 and self.hand_pub.get_num_connections() > 0
+                and self.gesture_pub.get_num_connections() > 0)
+
+    def unfold(self):
+        ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
+        ev.header.stamp = rospy.Time.now()
+        self.gesture_pub.publish(ev)
 
     def publish(self, stamp, palm, thumb_up=False, rock=False):
         """palm in mm."""
@@ -271,3 +283,30 @@ class RightHands:
         m.right_hand_set_origin_frame_detected = rock
         self.arm_pub.publish(m)
         self.hand_pub.publish(pilot_hand(stamp, tuple(v / 1000.0 for v in palm)))
+
+
+def hover_navdata(stop):
+    """Until `stop` is set, a thread publishes the navdata of a drone hovering at 1 m, 50 Hz
+    (the pilot flies only with navdata)."""
+    pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
+
+    def loop():
+        while not stop.is_set() and not rospy.is_shutdown():
+            pub.publish(Navdata(state=4, altd=1000))
+            time.sleep(0.02)
+    threading.Thread(target=loop, daemon=True).start()
+
+
+def arm_track_and_unfold(watch, hands, pose, neutral, timeout):
+    """Through pose['now'] (the hand the caller's stream sends): a thumbs-up arms the arm and
+    a rock starts it tracking, each within `timeout` (AssertionError otherwise); then the
+    neutral hand and an unfold engage the pilot. Returns the (monotonic) time it began."""
+    t0 = time.monotonic()
+    for gesture, state in (('thumb_up', 'armed'), ('rock', 'tracking')):
+        pose['now'] = dict(neutral, **{gesture: True})
+        if not wait_for(lambda state=state: watch.first_status(state, t0)[0] is not None,
+                        timeout):
+            raise AssertionError('not %s within %.1f s of the %s' % (state, timeout, gesture))
+    pose['now'] = dict(neutral)
+    hands.unfold()
+    return t0

@@ -16,9 +16,16 @@ import rostest
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import JointState
 
-from leap_teleop.msg import GestureEvent, Navdata
-
-from check_helpers import RejectedInputs, RightHands, Watch, limit, read_limits, wait_for
+from check_helpers import (
+    RejectedInputs,
+    RightHands,
+    Watch,
+    arm_track_and_unfold,
+    hover_navdata,
+    limit,
+    read_limits,
+    wait_for,
+)
 
 ARM = 'ur10_1'
 NEUTRAL = dict(palm=(0.0, 250.0, 0.0))
@@ -44,16 +51,9 @@ class FaultHandBurst(unittest.TestCase):
         twists = []
         rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m)),
                          queue_size=500)
-        nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
-        gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
         hands = RightHands()
         pose = {'now': dict(NEUTRAL)}
         stop = threading.Event()
-
-        def navdata():            # a drone hovering at 1 m, 50 Hz
-            while not stop.is_set() and not rospy.is_shutdown():
-                nav_pub.publish(Navdata(state=4, altd=1000))
-                time.sleep(0.02)
 
         def stream():             # the live hand, 100 Hz, unless stalled (pose None)
             while not stop.is_set() and not rospy.is_shutdown():
@@ -61,26 +61,13 @@ class FaultHandBurst(unittest.TestCase):
                 if p is not None:
                     hands.publish(rospy.get_time(), **p)
                 time.sleep(0.01)
-        threading.Thread(target=navdata, daemon=True).start()
+        hover_navdata(stop)
         rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
-        self.assertTrue(wait_for(lambda: hands.arm_pub.get_num_connections() > 0
-                                 and hands.hand_pub.get_num_connections() > 0
-                                 and gesture_pub.get_num_connections() > 0,
-                                 lim.ready_timeout_s))
+        self.assertTrue(wait_for(hands.listened, lim.ready_timeout_s))
         threading.Thread(target=stream, daemon=True).start()
         try:
             # Arm tracking, pilot engaged.
-            t0 = time.monotonic()
-            pose['now'] = dict(NEUTRAL, thumb_up=True)
-            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None,
-                                     lim.state_timeout_s))
-            pose['now'] = dict(NEUTRAL, rock=True)
-            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None,
-                                     lim.state_timeout_s))
-            pose['now'] = dict(NEUTRAL)
-            ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
-            ev.header.stamp = rospy.Time.now()
-            gesture_pub.publish(ev)
+            arm_track_and_unfold(w, hands, pose, NEUTRAL, lim.state_timeout_s)
             self.assertTrue(wait_for(lambda: twists, lim.pilot_timeout_s),
                             'the pilot sends nothing')
             time.sleep(1.2)                         # diagnostics (1 Hz) before the stall

@@ -13,11 +13,10 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
-from leap_teleop.msg import GestureEvent, Navdata
-
-from check_helpers import RightHands, Watch, limit, read_limits, wait_for
+from check_helpers import RightHands, Watch, arm_track_and_unfold, hover_navdata, limit, read_limits, wait_for
 
 ARM = 'ur10_1'
+NEUTRAL = dict(palm=(0.0, 250.0, 0.0))
 P50, P99, SAMPLES = ('input age p50 (ms, last 10 s)', 'input age p99 (ms, last 10 s)',
                      'input age samples')
 LIMITS = {
@@ -43,17 +42,10 @@ class InputAge(unittest.TestCase):
             for st in msg.status:
                 diag[st.name] = {kv.key: kv.value for kv in st.values}
         rospy.Subscriber('/diagnostics', DiagnosticArray, on_diag, queue_size=20)
-        nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
-        gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
         hands = RightHands()
-        pose = {'now': dict(palm=(0.0, 250.0, 0.0))}
+        pose = {'now': dict(NEUTRAL)}
         sent = []
         stop = threading.Event()
-
-        def navdata():
-            while not stop.is_set() and not rospy.is_shutdown():
-                nav_pub.publish(Navdata(state=4, altd=1000))
-                time.sleep(0.02)
 
         def stream():
             k = 0
@@ -65,25 +57,12 @@ class InputAge(unittest.TestCase):
                 sent.append(rospy.Time.from_sec(stamp))
                 k += 1
                 time.sleep(0.01)
-        threading.Thread(target=navdata, daemon=True).start()
+        hover_navdata(stop)
         rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
-        self.assertTrue(wait_for(lambda: hands.arm_pub.get_num_connections() > 0
-                                 and hands.hand_pub.get_num_connections() > 0
-                                 and gesture_pub.get_num_connections() > 0,
-                                 lim.ready_timeout_s))
+        self.assertTrue(wait_for(hands.listened, lim.ready_timeout_s))
         threading.Thread(target=stream, daemon=True).start()
         try:
-            t0 = time.monotonic()
-            pose['now'] = dict(palm=(0.0, 250.0, 0.0), thumb_up=True)
-            self.assertTrue(wait_for(lambda: w.first_status('armed', t0)[0] is not None,
-                                     lim.state_timeout_s))
-            pose['now'] = dict(palm=(0.0, 250.0, 0.0), rock=True)
-            self.assertTrue(wait_for(lambda: w.first_status('tracking', t0)[0] is not None,
-                                     lim.state_timeout_s))
-            pose['now'] = dict(palm=(0.0, 250.0, 0.0))
-            ev = GestureEvent(side=GestureEvent.SIDE_RIGHT, gesture='unfold', active=True)
-            ev.header.stamp = rospy.Time.now()
-            gesture_pub.publish(ev)
+            t0 = arm_track_and_unfold(w, hands, pose, NEUTRAL, lim.state_timeout_s)
 
             def ready():
                 arm = next((v for k, v in diag.items() if ARM in k), {})
