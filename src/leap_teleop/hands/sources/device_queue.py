@@ -8,6 +8,8 @@ import time
 
 import numpy as np
 
+from leap_teleop.hands.frame import Frame
+
 log = logging.getLogger(__name__)
 
 
@@ -74,6 +76,16 @@ class PushQueue:
                 self._count_drop(1)
             self.frames.append(frame)
             self._cond.notify()
+
+    def put_converted(self, source_name, convert):
+        """From the SDK's thread: put the Frame of convert() -> (frame id, device timestamp
+        us, hands), stamped on the caller's clock. A frame that fails to convert is dropped
+        with a warning: an exception must never kill the SDK's thread."""
+        try:
+            frame_id, device_us, hands = convert()
+            self.put(Frame(id=int(frame_id or 0), timestamp=self.stamp(device_us), hands=hands))
+        except Exception as e:
+            log.warning('%s source: dropped a frame that failed to convert: %s', source_name, e)
 
     def get(self, timeout=0.1):
         """The oldest frame not older than max_age, or None after `timeout` s."""

@@ -4,14 +4,12 @@ The v2 Python binding ships with the (discontinued) Leap Motion SDK 2.3.1 for Py
 for Python 3 it must be rebuilt from the SDK's LeapPython SWIG sources. The import is
 optional: without it, constructing the source raises SourceError saying what to install.
 """
-import logging
 import time
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
-log = logging.getLogger(__name__)
 INSTALL_HINT = ('the "leap" source needs the Leap Motion SDK v2 Python binding (import Leap): '
                 'install the Leap Motion SDK 2.3.1 and its service, put LeapPython and '
                 'Leap.py (rebuilt for Python 3) on PYTHONPATH; or use source:=leapc '
@@ -68,13 +66,11 @@ class LeapSdkSource(HandSource):
 
         class SdkFrameListener(Leap.Listener):
             def on_frame(listener, controller):
-                try:
+                def convert():
                     f = controller.frame()
-                    hands = [convert_hand(Leap, h) for h in attr(f, 'hands') or ()]
-                    pq.put(Frame(id=int(attr(f, 'id') or 0),
-                                 timestamp=pq.stamp(attr(f, 'timestamp')), hands=hands))
-                except Exception as e:   # never let a bad frame kill the SDK's thread
-                    log.warning('leap source: dropped a frame that failed to convert: %s', e)
+                    return (attr(f, 'id'), attr(f, 'timestamp'),
+                            [convert_hand(Leap, h) for h in attr(f, 'hands') or ()])
+                pq.put_converted('leap', convert)
 
         listener = SdkFrameListener()
         controller = Leap.Controller()

@@ -5,14 +5,12 @@ The bindings are not on PyPI: build them from Ultraleap's leapc-python-bindings 
 an installed Gemini (5.x) service. The import is optional: without it, constructing the
 source raises SourceError saying what to install.
 """
-import logging
 import time
 
-from leap_teleop.hands.frame import Finger, Frame, TrackedHand
+from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
-log = logging.getLogger(__name__)
 INSTALL_HINT = ('the "leapc" source needs Ultraleap\'s LeapC Python bindings (import leap): '
                 'install the Ultraleap Gemini hand-tracking service, then build and pip '
                 'install leapc-python-bindings (leapc-cffi and leap); or use source:=leap '
@@ -70,12 +68,9 @@ class LeapCSource(HandSource):
 
         class LeapCFrameListener(leap.Listener):
             def on_tracking_event(listener, event):
-                try:
-                    hands = [convert_hand(leap, h) for h in attr(event, 'hands') or ()]
-                    pq.put(Frame(id=int(attr(event, 'tracking_frame_id') or 0),
-                                 timestamp=pq.stamp(attr(event, 'timestamp')), hands=hands))
-                except Exception as e:   # never let a bad frame kill the service thread
-                    log.warning('leapc source: dropped a frame that failed to convert: %s', e)
+                pq.put_converted('leapc', lambda: (
+                    attr(event, 'tracking_frame_id'), attr(event, 'timestamp'),
+                    [convert_hand(leap, h) for h in attr(event, 'hands') or ()]))
 
         connection = leap.Connection()
         connection.add_listener(LeapCFrameListener())
