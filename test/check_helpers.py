@@ -297,6 +297,17 @@ def hover_navdata(stop):
     threading.Thread(target=loop, daemon=True).start()
 
 
+def start_streaming(arm, hands, stream, stop, timeout):
+    """Before a check drives both robots: hovering navdata until `stop` is set, the arm's
+    joint states, the arm node and the pilot listening within `timeout` (AssertionError
+    otherwise); then the caller's `stream` of hands runs on a thread."""
+    hover_navdata(stop)
+    rospy.wait_for_message('/%s/joint_states' % arm, JointState, timeout=60)
+    if not wait_for(hands.listened, timeout):
+        raise AssertionError('the arm node and the pilot did not listen within %.1f s' % timeout)
+    threading.Thread(target=stream, daemon=True).start()
+
+
 def arm_track_and_unfold(watch, hands, pose, neutral, timeout):
     """Through pose['now'] (the hand the caller's stream sends): a thumbs-up arms the arm and
     a rock starts it tracking, each within `timeout` (AssertionError otherwise); then the

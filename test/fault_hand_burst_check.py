@@ -14,16 +14,15 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Twist
-from sensor_msgs.msg import JointState
 
 from check_helpers import (
     RejectedInputs,
     RightHands,
     Watch,
     arm_track_and_unfold,
-    hover_navdata,
     limit,
     read_limits,
+    start_streaming,
     wait_for,
 )
 
@@ -61,10 +60,7 @@ class FaultHandBurst(unittest.TestCase):
                 if p is not None:
                     hands.publish(rospy.get_time(), **p)
                 time.sleep(0.01)
-        hover_navdata(stop)
-        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
-        self.assertTrue(wait_for(hands.listened, lim.ready_timeout_s))
-        threading.Thread(target=stream, daemon=True).start()
+        start_streaming(ARM, hands, stream, stop, lim.ready_timeout_s)
         try:
             # Arm tracking, pilot engaged.
             arm_track_and_unfold(w, hands, pose, NEUTRAL, lim.state_timeout_s)

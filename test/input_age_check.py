@@ -11,9 +11,8 @@ import unittest
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
-from sensor_msgs.msg import JointState
 
-from check_helpers import RightHands, Watch, arm_track_and_unfold, hover_navdata, limit, read_limits, wait_for
+from check_helpers import RightHands, Watch, arm_track_and_unfold, limit, read_limits, start_streaming, wait_for
 
 ARM = 'ur10_1'
 NEUTRAL = dict(palm=(0.0, 250.0, 0.0))
@@ -57,10 +56,7 @@ class InputAge(unittest.TestCase):
                 sent.append(rospy.Time.from_sec(stamp))
                 k += 1
                 time.sleep(0.01)
-        hover_navdata(stop)
-        rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
-        self.assertTrue(wait_for(hands.listened, lim.ready_timeout_s))
-        threading.Thread(target=stream, daemon=True).start()
+        start_streaming(ARM, hands, stream, stop, lim.ready_timeout_s)
         try:
             t0 = arm_track_and_unfold(w, hands, pose, NEUTRAL, lim.state_timeout_s)
 
