@@ -74,6 +74,19 @@ def run_client(env, code, timeout=180):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def run_node_and_client(script, args, client):
+    """scripts/`script` with `args` on a private master and the client code beside it:
+    (what the client printed, as JSON; the node's stderr)."""
+    with ros_master() as env:
+        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, script)] + args)
+        try:
+            out = run_client(env, client)
+        finally:
+            stop_spawned(node)
+            err = node.stderr.read().decode(errors='replace')
+    return out, err
+
+
 CLIENT_HEAD = r'''
 import json, subprocess, threading, time
 import rospy
@@ -82,6 +95,9 @@ def dynparam(*args):
     out = subprocess.run(['rosrun', 'dynamic_reconfigure', 'dynparam'] + [str(a) for a in args],
                          capture_output=True, text=True, timeout=60)
     return out.stdout + out.stderr
+
+def set_each(node, name, values):
+    return [dynparam('set', node, name, v) for v in values]
 
 def get(node):
     import yaml
@@ -128,15 +144,14 @@ state['palm'] = (0.05, 0.2, 0.0)           # 50 mm right of the reference
 out['default'] = window()
 out['set'] = dynparam('set', '/drone_pilot', 'dead_zone', 0.06)
 out['wide_dead_zone'] = window()
-out['bad'] = [dynparam('set', '/drone_pilot', 'dead_zone', v) for v in ('nan', 0.9, -1)]
+out['bad'] = set_each('/drone_pilot', 'dead_zone', ('nan', 0.9, -1))
 out['after_bad_dead_zone'] = window()
 out['dead_zone'] = get('/drone_pilot')['dead_zone']
 state['palm'] = (0.3, 0.2, 0.0)            # far: the command cap decides
 out['full'] = window()
 dynparam('set', '/drone_pilot', 'max_cmd', 0.1)
 out['capped'] = window()
-for v in ('nan', 5, 0, -0.5):
-    dynparam('set', '/drone_pilot', 'max_cmd', v)
+set_each('/drone_pilot', 'max_cmd', ('nan', 5, 0, -0.5))
 out['after_bad_cap'] = window()
 out['max_cmd'] = get('/drone_pilot')['max_cmd']
 print(json.dumps(out))
@@ -145,13 +160,7 @@ print(json.dumps(out))
 
 @pytest.mark.rostest
 def test_dynparam_retunes_the_pilot_and_cannot_disable_its_limits():
-    with ros_master() as env:
-        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_pilot.py')])
-        try:
-            out = run_client(env, PILOT_CLIENT)
-        finally:
-            stop_spawned(node)
-            err = node.stderr.read().decode(errors='replace')
+    out, err = run_node_and_client('drone_pilot.py', [], PILOT_CLIENT)
     assert out['default'] and all(y == pytest.approx(-0.2) for y in out['default']), out
     assert out['wide_dead_zone'] and all(y == 0.0 for y in out['wide_dead_zone']), out
     assert out['after_bad_dead_zone'] and all(y == 0.0 for y in out['after_bad_dead_zone'])
@@ -217,8 +226,7 @@ hand['rock'] = False
 out['speed_default'] = top_speed()
 dynparam('set', '/ur10_arm', 'max_joint_speed', 0.02)
 out['speed_slow'] = top_speed()
-for v in ('nan', 10, 0, -1):
-    dynparam('set', '/ur10_arm', 'max_joint_speed', v)
+set_each('/ur10_arm', 'max_joint_speed', ('nan', 10, 0, -1))
 out['speed_after_bad'] = top_speed()
 out['max_joint_speed'] = get('/ur10_arm')['max_joint_speed']
 print(json.dumps(out))
@@ -227,13 +235,7 @@ print(json.dumps(out))
 
 @pytest.mark.rostest
 def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
-    with ros_master() as env:
-        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'ur10_arm.py')])
-        try:
-            out = run_client(env, ARM_CLIENT)
-        finally:
-            stop_spawned(node)
-            err = node.stderr.read().decode(errors='replace')
+    out, err = run_node_and_client('ur10_arm.py', [], ARM_CLIENT)
     assert out['long_hold'] == 'disarmed' and out['short_hold'] == 'armed', out
     assert out['tracking'] == 'tracking', out
     assert out['speed_default'] == pytest.approx(0.05, abs=1e-6), out
@@ -279,8 +281,7 @@ def window(secs=2.5):
 out = {'default': window()}
 dynparam('set', '/leap_sender', 'recognizer_on_frames', 100)   # fists last 60 frames
 out['slow_recognizer'] = window()
-for v in (0, 1000, -3):
-    dynparam('set', '/leap_sender', 'recognizer_on_frames', v)
+set_each('/leap_sender', 'recognizer_on_frames', (0, 1000, -3))
 out['after_bad_frames'] = window()
 out['on_frames'] = get('/leap_sender')['recognizer_on_frames']
 dynparam('set', '/leap_sender', 'recognizer_on_frames', 3)
@@ -288,8 +289,7 @@ dynparam('set', '/leap_sender', 'filter_cutoff', 1.0)
 out['light_filter'] = window()
 dynparam('set', '/leap_sender', 'filter_cutoff', 40.0)
 out['heavy_filter'] = window()
-for v in ('nan', 0, -1, 5000):
-    dynparam('set', '/leap_sender', 'filter_cutoff', v)
+set_each('/leap_sender', 'filter_cutoff', ('nan', 0, -1, 5000))
 out['after_bad_cutoff'] = window()
 out['cutoff'] = get('/leap_sender')['filter_cutoff']
 print(json.dumps(out))
@@ -300,16 +300,10 @@ print(json.dumps(out))
 def test_dynparam_retunes_the_senders_recognizer_and_filter(tmp_path):
     script = tmp_path / 'open_fist.yaml'
     script.write_text(SENDER_SCRIPT)
-    with ros_master() as env:
-        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'sender.py'),
-                                '_script:=%s' % script, '_loop:=true', '_sides:=[right]',
-                                '_human_topic:=leap_motion/leap_device',
-                                '_filtered_human_topic:=leap_motion/filtered_values'])
-        try:
-            out = run_client(env, SENDER_CLIENT)
-        finally:
-            stop_spawned(node)
-            err = node.stderr.read().decode(errors='replace')
+    out, err = run_node_and_client('sender.py', [
+        '_script:=%s' % script, '_loop:=true', '_sides:=[right]',
+        '_human_topic:=leap_motion/leap_device',
+        '_filtered_human_topic:=leap_motion/filtered_values'], SENDER_CLIENT)
     assert out['default'][0] >= 2, out                    # a fist per second
     assert out['slow_recognizer'][0] == 0, out            # 60-frame fists never start
     assert out['after_bad_frames'][0] == 0, out

@@ -9,6 +9,7 @@ cover a robot-sized area near the view's centre and include the UR10's blue join
 while the reference view has none of those. rviz, Xvfb and Pillow with XCB come with
 make setup: without them the test fails (a skip would let a broken setup pass).
 """
+import contextlib
 import os
 import shutil
 import signal
@@ -111,22 +112,24 @@ def _stop(proc, sig=signal.SIGINT, wait=15):
         proc.wait(5)
 
 
-def test_rviz_draws_the_ur10(tmp_path):
-    _need('rviz', 'rviz')
-    _need('Xvfb', 'xvfb')
-    from PIL import features  # Pillow is pinned in tools/requirements.txt
-    assert features.check('xcb'), 'Pillow was built without XCB: no X screenshots'
-
-    with open(CONFIG) as f:
-        ref_cfg = yaml.safe_load(f)
-    robots = [d for d in ref_cfg['Visualization Manager']['Displays']
-              if d['Class'] == 'rviz/RobotModel']
-    assert robots, 'rviz/ur10.rviz has no RobotModel display'
-    for d in robots:
+def _reference_config(config, display_class, path):
+    """`config` with every display of `display_class` disabled, written to `path`; returns
+    those displays."""
+    with open(config) as f:
+        cfg = yaml.safe_load(f)
+    displays = [d for d in cfg['Visualization Manager']['Displays']
+                if d['Class'] == display_class]
+    for d in displays:
         d['Enabled'] = False
-    ref_path = tmp_path / 'no_robot.rviz'
-    ref_path.write_text(yaml.safe_dump(ref_cfg))
+    path.write_text(yaml.safe_dump(cfg))
+    return displays
 
+
+@contextlib.contextmanager
+def _launch_beside_reference(tmp_path, launch_args, ref_config):
+    """`roslaunch leap_teleop LAUNCH_ARGS` (its RViz on one Xvfb screen) and an RViz with
+    `ref_config` on another, on a private master; yields grab() -> (the launched RViz's
+    screen, the reference's), which fails once either has ended. Everything stops after."""
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
                ROS_LOG_DIR=str(tmp_path / 'log'), ROS_HOME=str(tmp_path),
@@ -139,18 +142,38 @@ def test_rviz_draws_the_ur10(tmp_path):
         xb, display_b = _start_xvfb()
         procs.append(xb)
         log = open(tmp_path / 'roslaunch.log', 'wb')
-        launch = subprocess.Popen(['roslaunch', '-p', str(port), 'leap_teleop',
-                                   'ur10_sim.launch', 'rviz:=true'],
+        launch = subprocess.Popen(['roslaunch', '-p', str(port), 'leap_teleop'] + launch_args,
                                   env=dict(env, DISPLAY=display_a), stdout=log,
                                   stderr=subprocess.STDOUT, start_new_session=True)
-        ref = subprocess.Popen(['rviz', '-d', str(ref_path)], env=dict(env, DISPLAY=display_b),
+        ref = subprocess.Popen(['rviz', '-d', str(ref_config)], env=dict(env, DISPLAY=display_b),
                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+        def grab():
+            assert launch.poll() is None, 'roslaunch ended: see %s' % (tmp_path / 'roslaunch.log')
+            assert ref.poll() is None, 'reference rviz ended'
+            return _grab(display_a), _grab(display_b)
+        yield grab
+    finally:
+        _stop(ref, signal.SIGTERM)
+        _stop(launch)
+        for p in procs:
+            _stop(p, signal.SIGTERM, 5)
+
+
+def test_rviz_draws_the_ur10(tmp_path):
+    _need('rviz', 'rviz')
+    _need('Xvfb', 'xvfb')
+    from PIL import features  # Pillow is pinned in tools/requirements.txt
+    assert features.check('xcb'), 'Pillow was built without XCB: no X screenshots'
+
+    ref_path = tmp_path / 'no_robot.rviz'
+    assert _reference_config(CONFIG, 'rviz/RobotModel', ref_path), \
+        'rviz/ur10.rviz has no RobotModel display'
+    with _launch_beside_reference(tmp_path, ['ur10_sim.launch', 'rviz:=true'], ref_path) as grab:
         start, m = time.monotonic(), None
         while time.monotonic() - start < DEADLINE_S:
             time.sleep(2.0)
-            assert launch.poll() is None, 'roslaunch ended: see %s' % (tmp_path / 'roslaunch.log')
-            assert ref.poll() is None, 'reference rviz ended'
-            robot_img, ref_img = _grab(display_a), _grab(display_b)
+            robot_img, ref_img = grab()
             m = measure(robot_img, ref_img)
             if robot_drawn(m):
                 break
@@ -164,11 +187,6 @@ def test_rviz_draws_the_ur10(tmp_path):
         # compared with itself shows nothing drawn.
         assert not robot_drawn(measure(ref_img, ref_img))
         assert m['ref_blue'] < MIN_BLUE_PIXELS / 3, m
-    finally:
-        _stop(ref, signal.SIGTERM)
-        _stop(launch)
-        for p in procs:
-            _stop(p, signal.SIGTERM, 5)
 
 
 DRIVER_CONFIG = os.path.join(HERE, '..', 'rviz', 'leap_motion.rviz')
@@ -186,39 +204,15 @@ def test_rviz_draws_the_leap_motion_driver_markers(tmp_path):
     show in the shipped config, against the same config with the MarkerArray off."""
     _need('rviz', 'rviz')
     _need('Xvfb', 'xvfb')
-    with open(DRIVER_CONFIG) as f:
-        ref_cfg = yaml.safe_load(f)
-    arrays = [d for d in ref_cfg['Visualization Manager']['Displays']
-              if d['Class'] == 'rviz/MarkerArray']
-    assert [d['Marker Topic'] for d in arrays] == ['/leap_motion/visualization_marker_array']
-    for d in arrays:
-        d['Enabled'] = False
     ref_path = tmp_path / 'no_markers.rviz'
-    ref_path.write_text(yaml.safe_dump(ref_cfg))
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port,
-               ROS_LOG_DIR=str(tmp_path / 'log'), ROS_HOME=str(tmp_path),
-               LIBGL_ALWAYS_SOFTWARE='1', XDG_RUNTIME_DIR=str(tmp_path))
-    procs = []
-    launch = ref = None
-    try:
-        xa, display_a = _start_xvfb()
-        procs.append(xa)
-        xb, display_b = _start_xvfb()
-        procs.append(xb)
-        log = open(tmp_path / 'roslaunch.log', 'wb')
-        launch = subprocess.Popen(['roslaunch', '-p', str(port), 'leap_teleop',
-                                   'leap_motion.launch', 'rviz:=true', 'loop:=true'],
-                                  env=dict(env, DISPLAY=display_a), stdout=log,
-                                  stderr=subprocess.STDOUT, start_new_session=True)
-        ref = subprocess.Popen(['rviz', '-d', str(ref_path)], env=dict(env, DISPLAY=display_b),
-                               stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    arrays = _reference_config(DRIVER_CONFIG, 'rviz/MarkerArray', ref_path)
+    assert [d['Marker Topic'] for d in arrays] == ['/leap_motion/visualization_marker_array']
+    with _launch_beside_reference(tmp_path, ['leap_motion.launch', 'rviz:=true', 'loop:=true'],
+                                  ref_path) as grab:
         start, best = time.monotonic(), None
         while time.monotonic() - start < DEADLINE_S:
             time.sleep(2.0)
-            assert launch.poll() is None, 'roslaunch ended: see %s' % (tmp_path / 'roslaunch.log')
-            assert ref.poll() is None, 'reference rviz ended'
-            hand_img, ref_img = _grab(display_a), _grab(display_b)
+            hand_img, ref_img = grab()
             box = _view_box(ref_img)
             if box is None or _view_box(hand_img) is None:
                 continue
@@ -238,8 +232,3 @@ def test_rviz_draws_the_leap_motion_driver_markers(tmp_path):
         assert best['pixels'] >= MIN_HAND_PIXELS and best['red'] >= MIN_RED_PIXELS, (
             'hand not drawn: %r (screenshots in %s)' % (best, tmp_path))
         assert best['ref_red'] < best['red'] / 3, best      # the red is the hand's joints
-    finally:
-        _stop(ref, signal.SIGTERM)
-        _stop(launch)
-        for p in procs:
-            _stop(p, signal.SIGTERM, 5)
