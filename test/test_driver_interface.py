@@ -225,13 +225,7 @@ def run_stand_in(driver_ws, tmp_path, launch_args, max_time=90.0, echo=()):
             for proc in echoes:
                 proc.send_signal(signal.SIGINT)
                 proc.wait(10)
-            if launch.poll() is None:
-                os.killpg(launch.pid, signal.SIGINT)
-                try:
-                    launch.wait(30)
-                except subprocess.TimeoutExpired:
-                    os.killpg(launch.pid, signal.SIGKILL)
-                    launch.wait()
+            ros_processes.interrupt_group(launch, 30)
     tail = (tmp_path / 'roslaunch.log').read_text(errors='replace')[-3000:]
     assert consumer.returncode == 0, '%s\n%s' % (out, tail)
     assert records.exists(), tail

@@ -4,7 +4,6 @@ landed after its flight, the sender publishing. A private master per case;
 test/launch_check.py watches the graph. RViz itself (rviz:=true) only parses here:
 test_rviz_screenshot.py draws it under Xvfb."""
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -66,14 +65,8 @@ def run_launches(tmp_path, launches, check_args, timeout, others=(), env=None,
         finally:
             for proc in reversed(procs):
                 running = proc.poll() is None
-                if running:
-                    os.killpg(proc.pid, signal.SIGINT)
-                    try:
-                        proc.wait(30)
-                    except subprocess.TimeoutExpired:
-                        os.killpg(proc.pid, signal.SIGKILL)
-                        proc.wait()
-                        running = None
+                if running and not ros_processes.interrupt_group(proc, 30):
+                    running = None
                 stops.append((proc.args, running, proc.returncode))
     tails = '\n'.join('--- %s\n%s' % (log, log.read_text(errors='replace')[-3000:]) for log in logs)
     assert checker.returncode == 0, '%s\n%s' % (out, tails)

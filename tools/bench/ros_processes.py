@@ -3,6 +3,7 @@ subprocesses, a measuring probe in its own process, and percentile figures."""
 import contextlib
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -61,6 +62,22 @@ def stop_spawned(proc, timeout=10.0):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+
+
+def interrupt_group(proc, timeout=30.0):
+    """Stop a process started with start_new_session=True as Ctrl-C does: SIGINT to its
+    process group, SIGKILL to the group if it outlives `timeout`. False when it had to be
+    killed; True when it ended on SIGINT or had ended before."""
+    if proc.poll() is not None:
+        return True
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(timeout)
+        return True
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        return False
 
 
 def probe(env, topic, msg_type, duration, warmup=1.0, cpu_pid=0):
