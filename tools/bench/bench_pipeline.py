@@ -139,10 +139,12 @@ def measure(rounds=ROUNDS, duration=DURATION_S, sources=SOURCES):
                     data = measure_round(env, source, duration)
                     ages, transit = round_ages(data)
                     p50, p99, n = summary_ms(ages) if ages else (np.nan, np.nan, 0)
+                    # The sender's share: its Hand message received by the driver.
+                    t50, t99 = ros_processes.percentiles_ms(transit)
                     print('  %s: %d commands on new input in %.0f s (%d rocks sent), capture -> '
-                          'command p50 %.1f ms, p99 %.1f ms; capture -> Hand received p50 %.1f ms'
-                          % (source, n, duration, data['rocks'], p50, p99,
-                             1000 * float(np.median(transit))), flush=True)
+                          'command p50 %.1f ms, p99 %.1f ms; capture -> Hand received p50 '
+                          '%.1f ms, p99 %.1f ms' % (source, n, duration, data['rocks'], p50, p99,
+                                                    t50, t99), flush=True)
                     a, t, r = got[source]
                     got[source] = (a + ages, t + transit, r + data['rocks'])
         finally:
