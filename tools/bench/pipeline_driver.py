@@ -31,6 +31,7 @@ class DriverRecord:
     """What the callbacks saw (they run on rospy's threads)."""
 
     def __init__(self):
+        self.since = time.time()   # the latched status of an earlier round is older
         self.lock = threading.Lock()
         self.status = []           # (status stamp, input_stamp, state)
         self.hands = []            # (stamp, receipt, present)
@@ -40,6 +41,8 @@ class DriverRecord:
 
     def on_status(self, msg):
         row = (msg.header.stamp.to_sec(), msg.input_stamp.to_sec(), msg.state)
+        if row[0] < self.since:
+            return
         with self.lock:
             self.status.append(row)
             self.state = msg.state
@@ -138,6 +141,8 @@ def main():
             rocks += 1
             last_rock = time.monotonic()
         time.sleep(0.005)
+    if window is None:
+        raise SystemExit('pipeline driver: shut down before the arm tracked')
     with rec.lock:
         status = [r for r in rec.status if window[0] <= r[0] <= window[1]]
         hands = list(rec.hands)
