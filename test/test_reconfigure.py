@@ -228,7 +228,9 @@ print(json.dumps(out))
 @pytest.mark.rostest
 def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
     with ros_master() as env:
-        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'ur10_arm.py')])
+        # ~deadzone_mm: the arm's old name of ~dead_zone, left in a user's YAML.
+        node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'ur10_arm.py'),
+                                '_deadzone_mm:=20.0'])
         try:
             out = run_client(env, ARM_CLIENT)
         finally:
@@ -242,6 +244,8 @@ def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
     assert out['max_joint_speed'] == 0.02
     assert 'refused ~max_joint_speed = nan' in err and 'refused ~max_joint_speed = 10' in err, \
         err[-3000:]
+    assert err.count('~deadzone_mm is not a parameter of ur10_arm (did you mean ~dead_zone?); '
+                     'ignored') == 1, err[-3000:]
 
 
 SENDER_SCRIPT = """\
