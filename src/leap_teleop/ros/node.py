@@ -5,7 +5,12 @@ import textwrap
 import rospkg
 import rospy
 
-from leap_teleop.params import Param, ParamError, check_params, unknown_param_warnings  # noqa: F401 (re-exported)
+from leap_teleop.params import (  # noqa: F401 (Param, ParamError re-exported)
+    Param,
+    ParamError,
+    check_params,
+    unknown_param_warnings,
+)
 from leap_teleop.ros.signals import init_node
 
 # Private parameters a library the nodes use reads itself (diagnostic_updater's period).

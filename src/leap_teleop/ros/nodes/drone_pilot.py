@@ -49,7 +49,8 @@ class DronePilotNode:
                                                self.commands.input_age)
         self.worker = PilotWorker(self.pilot, self.commands.send,
                                   ServiceCall(self.commands.flip, p['service_timeout'], 'flip'),
-                                  rospy.get_time, warn=self.warn, info=lambda text: rospy.loginfo('pilot: %s', text),
+                                  rospy.get_time, warn=self.warn,
+                                  info=lambda text: rospy.loginfo('pilot: %s', text),
                                   extra=self.diagnostics.update)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)

@@ -47,12 +47,14 @@ class ArmNode:
                                        lambda text: rospy.logwarn('ur10_arm: %s', text))
         self.diagnostics = diagnostics_updater('ur10_arm_%s' % p['hand'], 'teleop',
                                                self.runner.teleop.diagnostics, self.topics.input_age)
-        rospy.loginfo('ur10_arm: %s hand on %s drives %s (%s)', p['hand'], rospy.resolve_name(self.hand_topic),
-                      self.topics.arm.resolved_name, params.summary())
+        rospy.loginfo('ur10_arm: %s hand on %s drives %s (%s)', p['hand'],
+                      rospy.resolve_name(self.hand_topic), self.topics.arm.resolved_name,
+                      params.summary())
 
     # Callbacks: store and wake, nothing else.
     def on_hand(self, msg):
-        why = self.runner.on_hand(ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg)), rospy.get_time())
+        hand = ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        why = self.runner.on_hand(hand, rospy.get_time())
         if why:
             self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)
 
