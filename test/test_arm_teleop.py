@@ -462,8 +462,8 @@ def test_non_angle_rotation_is_rejected():
 
 def test_the_diagnostics_report_warns_while_holding():
     teleop = ArmTeleop()
-    warn, summary, values = teleop.diagnostics()
-    assert not warn and summary == 'disarmed: waiting for thumbs-up'
+    level, summary, values = teleop.diagnostics()
+    assert level == 'ok' and summary == 'disarmed: waiting for thumbs-up'
     assert dict(values) == {'origin set': False, 'rejected inputs': 0, 'IK failures': 0}
     teleop.status.state, teleop.status.reason = HOLDING, 'input stalled'
-    assert teleop.diagnostics()[:2] == (True, 'holding: input stalled')
+    assert teleop.diagnostics()[:2] == ('warn', 'holding: input stalled')

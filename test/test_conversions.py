@@ -106,3 +106,16 @@ def test_leapros_of_an_absent_hand_is_all_zero_but_the_header():
     msg = conversions.to_leapros(states()['right'])
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
     assert (msg.palmpos.x, msg.ypr.y, msg.thumb_tip.z, msg.direction.z) == (0, 0, 0, 0)
+
+
+def test_a_hand_message_becomes_the_pilots_input_and_a_twist_its_cmd_vel():
+    import rospy
+    msg = Hand(present=True)
+    msg.header.stamp = rospy.Time(12, 500000000)
+    msg.palm_position.x, msg.palm_position.y, msg.palm_position.z = 0.01, 0.2, -0.03
+    msg.palm_normal.y, msg.direction.z = -1.0, -1.0
+    got = conversions.pilot_input(msg)
+    assert got.present and got.palm == (0.01, 0.2, -0.03) and got.stamp == 12.5
+    assert got.normal == (0.0, -1.0, 0.0) and got.direction == (0.0, 0.0, -1.0)
+    t = conversions.twist_msg((0.1, 0.2, 0.3, 0.0, 0.0, -0.5))
+    assert (t.linear.x, t.linear.y, t.linear.z, t.angular.z) == (0.1, 0.2, 0.3, -0.5)

@@ -421,3 +421,24 @@ def test_the_diagnostics_report_says_what_the_worker_and_pilot_see():
     level, summary, values = worker.diagnostics(1.0)
     assert level == 'error' and summary.startswith('worker fault: ZeroDivisionError')
     assert dict(values)['worker faults'] == 1
+
+
+def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
+    import time
+
+    from leap_teleop.drone.pilot import PilotWorker
+    from leap_teleop.ros.service_call import ServiceCall
+    pilot = airborne(PilotConfig(rate=20.0))
+    sent = []
+
+    def send(cmd):
+        sent.append((time.monotonic(), cmd.kind))
+        if len(sent) == 2:                          # the next hand, right after a twist
+            pilot.on_hand(hand((0.0, 0.2, 0.1)), 0.03)
+
+    worker = PilotWorker(pilot, send, ServiceCall(lambda *a: True, 0.5, 'flip'), lambda: 0.05)
+    pilot.on_hand(hand((0.0, 0.2, -0.1)), 0.02)
+    start = time.monotonic()
+    worker.run(lambda: len(sent) >= 3 or time.monotonic() - start > 2.0)
+    assert [k for _, k in sent] == ['takeoff', 'twist', 'twist'], sent
+    assert sent[2][0] - sent[1][0] >= 1 / 20.0 - 0.005        # the second twist waited its slot

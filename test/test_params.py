@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from leap_teleop.params import Param, ParamError, check_params
+from leap_teleop.params import Param, ParamError, check_params, unknown_param_warnings
 
 TABLE = {
     'rate': Param(125.0, 'loop rate', unit='Hz', gt=0.0),
@@ -32,6 +32,19 @@ def test_bad_values_are_refused_with_one_line_naming_the_parameter(name, value):
         check_params(TABLE, {name: value})
     msg = str(e.value)
     assert '\n' not in msg and msg.startswith('~%s = ' % name) and 'allowed: ' in msg
+
+
+def test_an_unknown_parameter_is_named_with_the_closest_declared_ones():
+    declared = ['dead_zone', 'scale', 'rate', 'hand_topic']
+    assert unknown_param_warnings('ur10_arm', declared, ['deadzone_mm', 'scale', 'rate']) == [
+        '~deadzone_mm is not a parameter of ur10_arm (did you mean ~dead_zone?); ignored']
+    # Nothing close: no guess; several close: all of them, best first; sorted by name.
+    assert unknown_param_warnings('pilot', ['dead_zone', 'z_dead_zone', 'max_cmd'],
+                                  ['zzz', 'deadzone']) == [
+        '~deadzone is not a parameter of pilot (did you mean ~dead_zone or ~z_dead_zone?); '
+        'ignored',
+        '~zzz is not a parameter of pilot; ignored']
+    assert unknown_param_warnings('x', declared, declared) == []
 
 
 def test_allowed_text():

@@ -235,7 +235,8 @@ print(json.dumps(out))
 
 @pytest.mark.rostest
 def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
-    out, err = run_node_and_client('ur10_arm.py', [], ARM_CLIENT)
+    # ~deadzone_mm: the arm's old name of ~dead_zone, left in a user's YAML.
+    out, err = run_node_and_client('ur10_arm.py', ['_deadzone_mm:=20.0'], ARM_CLIENT)
     assert out['long_hold'] == 'disarmed' and out['short_hold'] == 'armed', out
     assert out['tracking'] == 'tracking', out
     assert out['speed_default'] == pytest.approx(0.05, abs=1e-6), out
@@ -244,6 +245,8 @@ def test_dynparam_retunes_the_arm_and_cannot_disable_its_speed_limit():
     assert out['max_joint_speed'] == 0.02
     assert 'refused ~max_joint_speed = nan' in err and 'refused ~max_joint_speed = 10' in err, \
         err[-3000:]
+    assert err.count('~deadzone_mm is not a parameter of ur10_arm (did you mean ~dead_zone?); '
+                     'ignored') == 1, err[-3000:]
 
 
 SENDER_SCRIPT = """\

@@ -11,6 +11,7 @@ from leap_teleop.hands.sender_setup import (
     check_leapros,
     recognizer_factory,
     retune_recognizers,
+    retune_sender,
 )
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.params import check_params
@@ -58,6 +59,16 @@ def test_recognizers_are_built_and_retuned_from_the_params():
     assert a.filter.on_frames == 5
     assert set(SENDER_RECONFIGURABLE) == {'recognizer_on_frames', 'recognizer_off_frames',
                                           'recognizer_min_confidence', 'filter_cutoff'}
+
+
+def test_the_senders_retune_reaches_the_recognizers_and_the_driver_filter():
+    from leap_teleop.control.lowpass import LowPass
+    make = recognizer_factory(params())
+    recognizers, lowpass = [make(), make()], LowPass(4.0)
+    retune_sender(recognizers, lowpass, {'recognizer_on_frames': 9})
+    assert all(r.filter.on_frames == 9 for r in recognizers) and lowpass.cutoff == 4.0
+    retune_sender(recognizers, lowpass, {'filter_cutoff': 1.5})
+    assert lowpass.cutoff == 1.5
 
 
 def test_the_period_throttle_lets_one_frame_per_period_and_key():

@@ -6,6 +6,7 @@ naming the parameter, the value and the allowed range. Pure Python: testable wit
 """
 import copy
 import dataclasses
+import difflib
 import functools
 import math
 import numbers
@@ -134,6 +135,21 @@ def check_params(table, raw):
     """{name: checked value} for every parameter of `table`, values from `raw` (a dict of the
     values found; missing ones take the default). Raises ParamError for the first bad one."""
     return {name: p.check(name, raw.get(name, p.default)) for name, p in table.items()}
+
+
+def unknown_param_warnings(node, declared, found):
+    """One warning per name in `found` (the private parameters set for `node`) that is not in
+    `declared`, naming the declared ones closest to it: a misspelt or renamed parameter is
+    otherwise silently ignored."""
+    out = []
+    for name in sorted(set(found) - set(declared)):
+        close = ['~' + c for c in difflib.get_close_matches(name, sorted(declared), n=3)]
+        hint = ''
+        if close:
+            hint = ' (did you mean %s?)' % (close[0] if len(close) == 1 else
+                                            '%s or %s' % (', '.join(close[:-1]), close[-1]))
+        out.append('~%s is not a parameter of %s%s; ignored' % (name, node, hint))
+    return out
 
 
 _FIELD_TYPES = {'bool': bool, 'int': int, 'float': float, 'str': str, 'list': list}

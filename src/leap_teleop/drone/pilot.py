@@ -454,6 +454,16 @@ class PilotWorker:
             self._fault(now, e)
             return 0.02
 
+    def run(self, stopped):
+        """Step until stopped(): between steps, a twist waiting for its slot sleeps out
+        the pacing; otherwise the wait ends early when a command is queued."""
+        while not stopped():
+            wait = self.step()
+            if wait and len(self.pilot.queue):
+                time.sleep(wait)
+            elif wait:
+                self.pilot.queue.wait(wait)
+
     def diagnostics(self, now):
         """(level 'ok' | 'warn' | 'error', summary, [(key, value)]) of the pilot and this
         worker, for a diagnostics report."""

@@ -58,6 +58,14 @@ def retune_recognizers(recognizers, changes):
             recognizer.min_confidence = changes['recognizer_min_confidence']
 
 
+def retune_sender(recognizers, lowpass, changes):
+    """Apply checked changes of the sender's reconfigurable parameters: the recognizer_*
+    ones to the running recognizers, filter_cutoff to the driver topics' LowPass."""
+    retune_recognizers(recognizers, changes)
+    if 'filter_cutoff' in changes:
+        lowpass.set_cutoff(changes['filter_cutoff'])
+
+
 class PeriodThrottle:
     """The original sender's ~freq: at most one frame per `period` (s, by frame timestamp)
     for each key; a period of 0 lets every frame through."""

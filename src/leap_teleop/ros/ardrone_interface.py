@@ -3,7 +3,8 @@
 One row per endpoint: (kind, name relative to the drone's namespace, the type the
 simulator uses, the driver's type). The two type columns differ only in the package
 name where the project carries its own MD5-identical copy of a driver type. The node
-(`nodes/ardrone_sim.py`) registers exactly these; a rostest compares them with the
+(`nodes/ardrone_sim.py`, with `drone_state_topics` and `drone_camera_topics`) registers
+exactly these; a rostest compares them with the
 running node's and a unit test with the table in docs/robots.md.
 """
 

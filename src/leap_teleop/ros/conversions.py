@@ -13,17 +13,19 @@ order, but every joint of the controller exactly once. Anything malformed raises
 CommandError with a reason the node logs; the arm then keeps its current trajectory.
 
 AR.Drone: the driver's navdata, imu, mag, odometry, TF and camera messages that ardrone_sim
-publishes (DroneMessages, camera_info_msg, rgb_image_msg).
+publishes (DroneMessages, camera_info_msg, rgb_image_msg); the pilot's input from a Hand
+(pilot_input) and its cmd_vel (twist_msg).
 """
 import math
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import Point, Pose, TransformStamped, Vector3, Vector3Stamped
+from geometry_msgs.msg import Point, Pose, TransformStamped, Twist, Vector3, Vector3Stamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from leap_teleop.drone.pilot import PilotInput
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.tracker import hand_angles
@@ -599,6 +601,23 @@ def rgb_image_msg(rgb, stamp, frame_id):
     msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
     msg.data = rgb.tobytes()
     return msg
+
+
+# -- AR.Drone: the pilot's input and commands --------------------------------------------
+
+def pilot_input(msg):
+    """The drone pilot's PilotInput from a leap_teleop/Hand (metres, unit vectors, the
+    capture stamp in s)."""
+    p, n, d = msg.palm_position, msg.palm_normal, msg.direction
+    return PilotInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z), (d.x, d.y, d.z),
+                      msg.header.stamp.to_sec())
+
+
+def twist_msg(twist):
+    """A geometry_msgs/Twist from (linear x, y, z, angular x, y, z)."""
+    t = Twist()
+    t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = twist
+    return t
 
 
 # -- UR10 arm: trajectory commands and status -------------------------------------------

@@ -5,8 +5,16 @@ import textwrap
 import rospkg
 import rospy
 
-from leap_teleop.params import Param, ParamError, check_params  # noqa: F401 (re-exported)
+from leap_teleop.params import (  # noqa: F401 (Param, ParamError re-exported)
+    Param,
+    ParamError,
+    check_params,
+    unknown_param_warnings,
+)
 from leap_teleop.ros.signals import init_node
+
+# Private parameters a library the nodes use reads itself (diagnostic_updater's period).
+LIBRARY_PARAMS = ('diagnostic_period',)
 
 
 def handle_help(node_name, description, params, argv=None):
@@ -29,6 +37,7 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
     handle_help(script, doc, params, argv)
     init_node(name)
+    warn_unknown_params(name, params)
     try:
         p = read_params(params)
         return p, build(p)
@@ -42,6 +51,16 @@ def read_params(params):
     (ParamError names the first bad one)."""
     return check_params(params, {name: rospy.get_param('~' + name, params[name].default)
                                  for name in params})
+
+
+def warn_unknown_params(node, params):
+    """Warn once for each private parameter set for this node that `params` does not declare
+    (a misspelt or renamed one would otherwise be ignored without a word)."""
+    prefix = rospy.get_name().rstrip('/') + '/'
+    found = {name[len(prefix):].split('/')[0] for name in rospy.get_param_names()
+             if name.startswith(prefix)}
+    for text in unknown_param_warnings(node, list(params) + list(LIBRARY_PARAMS), found):
+        rospy.logwarn(text)
 
 
 def package_path(*parts):

@@ -141,10 +141,10 @@ class ArmTeleop:
         self._servo.gain = float(p.servo_gain)
 
     def diagnostics(self):
-        """(warn, summary, [(key, value)]) of the status, for a diagnostics report:
-        warn while holding."""
+        """(level 'ok' | 'warn', summary, [(key, value)]) of the status, for a diagnostics
+        report: warn while holding."""
         s = self.status
-        return (s.state == HOLDING, '%s: %s' % (s.state, s.reason),
+        return ('warn' if s.state == HOLDING else 'ok', '%s: %s' % (s.state, s.reason),
                 [('origin set', s.origin_set), ('rejected inputs', s.rejected_inputs),
                  ('IK failures', s.ik_failures)])
 

@@ -127,6 +127,12 @@ class ArmTeleopParams:
         p.validate()
         return p
 
+    def summary(self):
+        """The settings an operator checks first, in words (the node logs them at start)."""
+        return ('mode %s, orientation %s, gripper %s, max joint speed %.3g rad/s, acceleration '
+                '%.3g rad/s^2' % (self.mode, self.orientation, self.gripper_mode,
+                                  self.max_joint_speed, self.max_joint_accel))
+
     def validate(self):
         """Check every field against TELEOP_PARAMS (ParamError, a ValueError, names the
         first bad one), then what involves two fields."""

@@ -19,30 +19,19 @@ Everything is relative to the node's namespace, so drones run side by side in th
 namespaces (~tf_prefix keeps their TF frames apart, as with the driver).
 """
 import rospy
-import tf2_ros
-from geometry_msgs.msg import Twist, Vector3Stamped
-from nav_msgs.msg import Odometry, Path
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image, Imu
-from sensor_msgs.srv import SetCameraInfo, SetCameraInfoResponse
+from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 from std_srvs.srv import Empty as EmptySrv
 from std_srvs.srv import EmptyResponse, Trigger, TriggerResponse
-from visualization_msgs.msg import MarkerArray
 
 from leap_teleop import srv
-from leap_teleop.drone.cameras import CAMERAS
-from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner, calibration_error, static_frames
-from leap_teleop.msg import Navdata, navdata_altitude
-from leap_teleop.ros.conversions import DroneMessages, camera_info_msg, rgb_image_msg, transform_msg
-from leap_teleop.ros.markers import PathTrail, drone_markers
+from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner
+from leap_teleop.ros.drone_camera_topics import DroneCameraTopics
+from leap_teleop.ros.drone_state_topics import DroneStateTopics
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 
 PARAMS = RUNNER_PARAMS      # declared beside the simulation; --help and docs/nodes.md read it
-# The drone state, published each ~looprate tick in this order (DroneMessages' names).
-STATE_TOPICS = (('navdata', Navdata), ('mag', Vector3Stamped), ('navdata_altitude', navdata_altitude),
-                ('imu', Imu), ('odometry', Odometry))
 # Service: (type, answer, DroneSimRunner's command, the request's fields it takes). Like the
 # driver, every answer is true: the simulated firmware logs why it ignored a command.
 SERVICES = {
@@ -64,35 +53,13 @@ class ArDroneSimNode:
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.runner = DroneSimRunner(p, self.use_sim_time, warn=lambda key, text:
                                      rospy.logwarn('ardrone_sim: %s', text))
-        self.sim, self.frames, call = self.runner.sim, self.runner.frames, self.runner.call
-        pub = rospy.Publisher
-        self.state_pubs = {name: pub('ardrone/' + name, kind, queue_size=25) for name, kind in
-                           STATE_TOPICS if name != 'navdata_altitude' or p['enable_navdata_altitude']}
-        self.clock_pub = pub('/clock', Clock, queue_size=10) if self.use_sim_time else None
-        self.image_pubs, self.info_pubs, self.info = {}, {}, {}
-        for name in ('front', 'bottom', None):      # None: the video channel's camera
-            topic = 'ardrone/%s/' % name if name else 'ardrone/'
-            self.image_pubs[name] = pub(topic + 'image_raw', Image, queue_size=2)
-            self.info_pubs[name] = pub(topic + 'camera_info', CameraInfo, queue_size=2)
-            if name:
-                self.info[name] = camera_info_msg(CAMERAS[name], self.frames.cameras[name])
-                rospy.Service(topic + 'set_camera_info', SetCameraInfo,
-                              lambda req, n=name: self.on_set_camera_info(n, req))
-        self.tf = tf2_ros.TransformBroadcaster()
-        self.static_tf = tf2_ros.StaticTransformBroadcaster()
-        self.static_tf.sendTransform([transform_msg(*f, stamp=rospy.Time.now()) for f in
-                                      static_frames(self.frames, p['world_frame'],
-                                                    p['odom_in_world'])])
-        self.trail = PathTrail(int(p['path_length']), float(p['path_min_step']))
-        self.path_pub = pub('ardrone/path', Path, queue_size=2, latch=True)
-        if p['markers']:
-            self.marker_pub = pub('ardrone/markers', MarkerArray, queue_size=1, latch=True)
-            self.marker_pub.publish(drone_markers(self.frames.base))
+        self.state = DroneStateTopics(p, self.runner.frames, self.runner.path_gate, self.use_sim_time)
+        self.cameras = DroneCameraTopics(self.runner.frames.cameras)
+        sim, call = self.runner.sim, self.runner.call
         rospy.Subscriber('cmd_vel', Twist, lambda m: call(
-            self.sim.set_cmd_vel, m.linear.x, m.linear.y, m.linear.z, m.angular.x, m.angular.y,
+            sim.set_cmd_vel, m.linear.x, m.linear.y, m.linear.z, m.angular.x, m.angular.y,
             m.angular.z), queue_size=10)
-        for topic, command in (('takeoff', self.sim.takeoff), ('land', self.sim.land),
-                               ('reset', self.sim.reset)):
+        for topic, command in (('takeoff', sim.takeoff), ('land', sim.land), ('reset', sim.reset)):
             rospy.Subscriber('ardrone/' + topic, Empty, lambda _, c=command: call(c))
         for name, (kind, response, command, fields) in SERVICES.items():
             rospy.Service('ardrone/' + name, kind, lambda req, c=getattr(self.runner, command),
@@ -111,47 +78,12 @@ class ArDroneSimNode:
         except (OSError, ValueError, RuntimeError) as e:
             return TriggerResponse(success=False, message='snapshot failed: %s' % e)
 
-    def on_set_camera_info(self, name, req):
-        """Any calibration of the camera's size is kept for this run (the lens stays ideal)."""
-        info = req.camera_info
-        error = calibration_error(name, info.width, info.height)
-        if not error:
-            info.header.frame_id = self.frames.cameras[name]
-            self.info[name] = info
-        return SetCameraInfoResponse(success=not error, status_message=error)
-
-    # -- outputs --------------------------------------------------------------------
-    def stamp(self, sim_time):
-        return rospy.Time.from_sec(sim_time) if self.use_sim_time else rospy.Time.now()
-
     def publish(self):
+        """One loop tick's state (on the loop's thread)."""
         reading = self.runner.read()
-        stamp = self.stamp(reading.time)
-        if self.clock_pub is not None:
-            self.clock_pub.publish(Clock(clock=stamp))
-        m = DroneMessages(reading, stamp, self.frames.base, self.frames.odom,
-                          with_altitude='navdata_altitude' in self.state_pubs)
-        for name, pub in self.state_pubs.items():
-            pub.publish(getattr(m, name))
-        self.tf.sendTransform(m.transform)
+        self.state.publish(reading)
         if reading.new_state:
             rospy.loginfo('ardrone_sim: state %d (%s)', reading.nav['state'], reading.new_state)
-        self.publish_path(stamp, (reading.pos[0], reading.pos[1], reading.altitude), reading.quat)
-
-    def publish_path(self, stamp, xyz, quat):
-        gate = self.runner.path_gate
-        if gate.period is not None:
-            self.trail.add(stamp, xyz, quat)
-            if self.trail.changed and gate.open(stamp.to_sec()):
-                self.path_pub.publish(self.trail.to_msg(self.frames.odom, stamp))
-                gate.sent(stamp.to_sec())
-
-    def publish_image(self, name, rgb, stamp, active):
-        msg, info = rgb_image_msg(rgb, stamp, self.frames.cameras[name]), self.info[name]
-        info.header.stamp = stamp
-        for key in (name, None) if active else (name,):
-            self.image_pubs[key].publish(msg)
-            self.info_pubs[key].publish(info)
 
     def camera_failed(self, e):
         if not rospy.is_shutdown():
@@ -167,7 +99,7 @@ def main(argv=None):
     try:
         with closed_at_shutdown():
             node.publish()
-            node.runner.start_cameras(node.publish_image, node.camera_failed, node.stamp)
+            node.runner.start_cameras(node.cameras.publish, node.camera_failed, node.state.stamp)
             node.runner.run(node.publish, rospy.is_shutdown)
     except rospy.ROSInterruptException:
         pass

@@ -1,0 +1,26 @@
+"""A node's /diagnostics: one diagnostic_updater task filled from a report of plain values."""
+import diagnostic_updater
+import rospy
+from diagnostic_msgs.msg import DiagnosticStatus
+
+LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR}
+
+
+def diagnostics_updater(hardware_id, task, report, input_age=None):
+    """A diagnostic_updater.Updater (its update() publishes at most every ~diagnostic_period)
+    with one task named `task`: report() gives (level 'ok' | 'warn' | 'error', summary,
+    [(key, value)]); the age of the input behind the commands (an InputAgeWindow, read on
+    the thread that calls update()) follows those values."""
+    def run(stat):
+        level, summary, values = report()
+        stat.summary(LEVELS[level], summary)
+        if input_age is not None:
+            values = values + input_age.diagnostic_values(rospy.get_time())
+        for key, value in values:
+            stat.add(key, value)
+        return stat
+
+    updater = diagnostic_updater.Updater()
+    updater.setHardwareID(hardware_id)
+    updater.add(task, run)
+    return updater

@@ -1,0 +1,68 @@
+"""The sender's hand topics: per side leapcobot (what the arms read), Hand and the shared
+GestureEvent topic (what the pilot reads); on request the old leapros and leap messages of
+one side and the leap_motion driver's topics (DriverInterface)."""
+import rospy
+
+from leap_teleop.hands.sender_setup import PeriodThrottle
+from leap_teleop.msg import GestureEvent, Hand, leap, leapros
+from leap_teleop.ros import conversions
+from leap_teleop.ros.driver_topics import DriverInterface
+from leap_teleop.ros.graph import wait_for_subscribers
+
+
+class HandTopics:
+    """Publishes each hand of a LeapInterface as soon as it is recognised (on the source's
+    thread), from the sender's checked ~params `p`."""
+
+    def __init__(self, p, interface):
+        self.p = p
+        self.sides = list(p['sides'])
+        q = int(p['queue_size'])
+        gestures = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
+        self.pubs = {side: {'leapcobot': rospy.Publisher(p['leapcobot_topic_' + side],
+                                                         conversions.LEAPCOBOT_TYPES[side],
+                                                         queue_size=q),
+                            'hand': rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q),
+                            'gesture': gestures}
+                     for side in self.sides}
+        # One leapcobot message per side, refilled every frame (conversions.to_leapcobot).
+        self._leapcobot = {side: conversions.LEAPCOBOT_TYPES[side]() for side in self.sides}
+        self.throttle = PeriodThrottle(p['freq'])
+        self.published = 0
+        self.leapros_side = p['leapros_side']
+        self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
+                        if p['leapros_topic'] else None)
+        self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
+                     if p['leap_topic'] else None)
+        interface.add_hand_listener(self.on_hand)
+        self.driver = DriverInterface(p, q)
+        if self.driver.pubs:
+            interface.add_listener(self.driver.on_frame)
+
+    def wait_for_subscribers(self, topics=()):
+        """Block until every topic in `topics` (default: every leapcobot topic) has a
+        subscriber; False on shutdown."""
+        own = {pub.resolved_name: pub for pubs in self.pubs.values() for pub in pubs.values()}
+        for pub in [self.leapros, self.leap] + list(self.driver.pubs.values()):
+            if pub is not None:
+                own[pub.resolved_name] = pub
+        names = [rospy.resolve_name(t) for t in topics] or [
+            pubs['leapcobot'].resolved_name for pubs in self.pubs.values()]
+        return wait_for_subscribers(own, names, 'sender')
+
+    def on_hand(self, frame, state):
+        """Publish one side's messages as soon as that side is recognised."""
+        side = state.side
+        pubs = self.pubs.get(side)
+        if pubs is None or not self.throttle.due(side, frame.timestamp):
+            return
+        for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
+                                                   self._leapcobot[side]):
+            pubs[kind].publish(msg)
+        if side == self.leapros_side:
+            if self.leapros is not None:
+                self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
+                                                            self.p['frame_id']))
+            if self.leap is not None:
+                self.leap.publish(conversions.to_leap(state, self.p['frame_id']))
+        self.published += 1

@@ -1,0 +1,67 @@
+"""The arm teleop as the ur10_arm node runs it, without ROS: ArmTeleop behind one lock
+(callbacks feed it from their threads and never wait for a step), stepped at the rate and
+right after each new hand, and when its status is reported."""
+import threading
+
+from leap_teleop.ur10.teleop import HOLDING, ArmTeleop
+
+
+class ArmTeleopRunner:
+    """One arm's ArmTeleop, fed by on_hand / on_joints from any thread and stepped by run()."""
+
+    def __init__(self, params, rate):
+        self.teleop = ArmTeleop(params)
+        self.period = 1.0 / float(rate)
+        self.lock = threading.Lock()
+        self.wake = threading.Event()
+
+    def on_hand(self, hand, now):
+        """Store one ArmInput and wake the loop; returns why it was ignored (None if it was not)."""
+        with self.lock:
+            why = self.teleop.on_hand(hand, now)
+        self.wake.set()
+        return why
+
+    def on_joints(self, q, now):
+        with self.lock:
+            self.teleop.on_joints(q, now)
+
+    def retune(self, changes):
+        """Checked changes of reconfigurable parameters, applied between two steps."""
+        with self.lock:
+            self.teleop.retune(changes)
+
+    def run(self, clock, stopped, tick):
+        """Until stopped(): wait one period or for the next hand, step at clock(), then
+        tick(command, (state, reason, origin_set), now) outside the lock."""
+        while not stopped():
+            self.wake.wait(self.period)
+            self.wake.clear()
+            now = clock()
+            with self.lock:
+                cmd = self.teleop.step(now)
+                status = self.teleop.status
+                snapshot = (status.state, status.reason, status.origin_set)
+            tick(cmd, snapshot, now)
+
+
+class StatusReporter:
+    """When to publish the status: at once when the (state, reason, origin_set) snapshot
+    changes, else at `rate` per second. Each change is told to info(text), or warn(text)
+    for a hold, as 'STATE (REASON)'."""
+
+    def __init__(self, rate, info, warn):
+        self.period = 1.0 / float(rate)
+        self.info, self.warn = info, warn
+        self._last = None
+        self._last_sent = 0.0
+
+    def due(self, snapshot, now):
+        """True when the status goes out now (time `now`, s)."""
+        changed = snapshot != self._last
+        if changed:
+            (self.warn if snapshot[0] == HOLDING else self.info)('%s (%s)' % snapshot[:2])
+        elif now - self._last_sent < self.period:
+            return False
+        self._last, self._last_sent = snapshot, now
+        return True

@@ -1,0 +1,60 @@
+"""The arm node's loop without ROS: callbacks wake the step at once, changes are applied
+between steps, and the status goes out on a change (logged) or at its rate."""
+import threading
+import time
+
+from leap_teleop.ur10.kinematics import HOME_Q
+from leap_teleop.ur10.teleop import DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleopParams
+from leap_teleop.ur10.teleop_runner import ArmTeleopRunner, StatusReporter
+
+
+def test_a_hand_wakes_the_step_before_the_period_ends():
+    runner = ArmTeleopRunner(ArmTeleopParams(), rate=0.5)          # a 2 s period
+    stop, ticks = threading.Event(), []
+    thread = threading.Thread(target=runner.run, args=(time.monotonic, stop.is_set,
+                                                       lambda *a: ticks.append(a)))
+    thread.start()
+    try:
+        runner.on_joints(HOME_Q, time.monotonic())
+        time.sleep(0.2)
+        assert ticks == []                                          # waiting for the period
+        sent = time.monotonic()
+        assert not runner.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), stamp=sent), sent)
+        deadline = time.monotonic() + 1.0
+        while not ticks and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert ticks and ticks[0][2] - sent < 0.5, ticks
+        cmd, snapshot, _ = ticks[0]
+        assert snapshot == (DISARMED, 'waiting for thumbs-up', False)
+        assert cmd.points is None                                   # disarmed: nothing moves
+    finally:
+        stop.set()
+        runner.wake.set()
+        thread.join(5.0)
+    assert not thread.is_alive()
+
+
+def test_a_bad_hand_is_refused_with_a_reason_and_retune_reaches_the_teleop():
+    runner = ArmTeleopRunner(ArmTeleopParams(), rate=100.0)
+    why = runner.on_hand(ArmInput(present=True, palm_mm=(float('nan'), 0.0, 0.0), stamp=1.0), 1.0)
+    assert why and runner.teleop.status.rejected_inputs == 1
+    runner.retune({'max_joint_speed': 0.02})
+    assert runner.teleop.p.max_joint_speed == 0.02
+
+
+def test_the_status_goes_out_on_a_change_or_at_its_rate():
+    said = []
+    r = StatusReporter(2.0, lambda t: said.append(('info', t)), lambda t: said.append(('warn', t)))
+    armed = ('armed', 'thumbs-up', False)
+    assert r.due(armed, 10.0) and said == [('info', 'armed (thumbs-up)')]
+    assert not r.due(armed, 10.1) and not r.due(armed, 10.49)      # 2 Hz: not yet
+    assert r.due(armed, 10.5) and len(said) == 1                     # due, not a change
+    assert r.due((HOLDING, 'input stalled', True), 10.6)             # a change: at once
+    assert said[-1] == ('warn', 'holding (input stalled)')
+    assert r.due((TRACKING, 'input back', True), 10.61) and said[-1][0] == 'info'
+
+
+def test_the_params_summary_names_what_an_operator_checks():
+    assert ArmTeleopParams(max_joint_speed=0.05).summary() == (
+        'mode imitation, orientation fixed, gripper binary, max joint speed 0.05 rad/s, '
+        'acceleration %.3g rad/s^2' % ArmTeleopParams().max_joint_accel)
