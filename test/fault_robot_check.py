@@ -32,6 +32,8 @@ LIMITS = {
                              gt=0),
     'moving_speed': limit('the arm moves: a joint faster than this', 'rad/s', gt=0),
     'move_timeout_s': limit('... within this of the long move', 's', gt=0),
+    'away_rad': limit('... and a joint this far from home before the simulator is killed', 'rad',
+                      gt=0),
     'disarm_timeout_s': limit('the simulator killed: disarmed within this', 's', gt=0),
     'respawn_timeout_s': limit('roslaunch respawns the simulator within this', 's', gt=0),
     'max_cpu': limit('the arm node\'s CPU share while the simulator is gone below this',
@@ -116,6 +118,9 @@ class FaultRobot(unittest.TestCase):
         self.assertTrue(wait_for(lambda: (w.arm_speed(time.monotonic() - 0.1, time.monotonic())
                                           or 0) > lim.moving_speed, lim.move_timeout_s),
                         'the arm never moved')
+        # Far enough from home that the respawned simulator is told from a stall.
+        self.assertTrue(wait_for(lambda: np.max(np.abs(w.q_at(time.monotonic()) - kin.HOME_Q))
+                                 > lim.away_rad, lim.move_timeout_s), 'the arm never left home')
         t_kill = kill(sim_pid)
         self.assertTrue(wait_for(lambda: w.first_status('disarmed', t_kill)[0] is not None,
                                  lim.disarm_timeout_s),

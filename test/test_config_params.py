@@ -82,9 +82,9 @@ def test_every_override_names_a_yaml_setting():
 def test_ur10_teleop_yaml_sets_every_teleop_parameter_but_the_expert_ones():
     with open(os.path.join(CONFIG, 'ur10_teleop.yaml')) as f:
         data = yaml.safe_load(f)
-    # The file documents the teleop; these two stay at their defaults, node wiring is
+    # The file documents the teleop; these stay at their defaults, node wiring is
     # set by the launch files.
-    assert set(TELEOP_PARAMS) - set(data) == {'max_input_age', 'joint_timeout'}
+    assert set(TELEOP_PARAMS) - set(data) == {'max_input_age', 'joint_timeout', 'joint_loss_after'}
 
 
 @pytest.mark.parametrize('cls, table', [(ArmTeleopParams, TELEOP_PARAMS),

@@ -106,11 +106,20 @@ def test_lost_joint_states_disarm_without_commanding_the_old_pose():
     a = Arm()
     a.arm_with_origin()
     assert a.period(hand(palm_mm=(0.0, 260.0, 0.0))).q is not None
+    # joint_timeout (0.5 s = 62.5 periods) holds: nothing is commanded to an unknown pose.
     cmds = [a.period(hand(palm_mm=(0.0, 260.0, 0.0)), joints=False) for _ in range(80)]
-    assert a.t.status.state == DISARMED
-    assert all(c.q is None for c in cmds[-10:])
-    assert not any(c.q is not None and np.allclose(c.q, a.q) and i > 62
-                   for i, c in enumerate(cmds))   # no hold sent once the robot is gone
+    assert a.t.status.state == HOLDING and 'no joint states' in a.t.status.reason
+    assert not any(c.q is not None or c.points is not None for c in cmds[63:])
+    # joint_loss_after (3 s) without states: the robot is gone, still nothing commanded.
+    reasons = []
+    for _ in range(320):
+        cmd = a.period(hand(palm_mm=(0.0, 260.0, 0.0)), joints=False)
+        assert cmd.q is None and cmd.points is None
+        reasons.append((a.t.status.state, a.t.status.reason))
+    assert reasons[-1][0] == DISARMED
+    first = next(i for i, r in enumerate(reasons) if r[0] == DISARMED)
+    assert reasons[first][1] == 'no joint states for 3.00 s'
+    assert 80 + first == pytest.approx(3.0 / 0.008, abs=2)
     # The simulator comes back at home: nothing moves until thumbs-up + rock, and the
     # new origin is the new pose (no jump back to the old target).
     a.q = HOME.copy()
@@ -121,6 +130,69 @@ def test_lost_joint_states_disarm_without_commanding_the_old_pose():
     a.period(hand(rock=True, palm_mm=(0.0, 260.0, 0.0)))
     cmd = a.period(hand(palm_mm=(0.0, 260.0, 0.0)))
     np.testing.assert_allclose(cmd.q, HOME, atol=1e-6)
+
+
+def test_a_joint_state_stall_holds_then_resumes_from_the_current_pose_without_a_jump():
+    a = Arm()
+    a.arm_with_origin()
+    for _ in range(20):
+        a.period(hand(palm_mm=(0.0, 260.0, -40.0)))
+    assert a.t.status.state == TRACKING
+    q_before = a.q.copy()
+    # A loaded simulator sends no joint states for 1 s while the hand moves 80 mm; the
+    # robot runs each trajectory it gets to its end (rest).
+    cmds = []
+    for i in range(125):
+        cmds.append(a.period(hand(palm_mm=(80.0 * i / 125, 260.0, -40.0)), joints=False))
+        if cmds[-1].points is not None:
+            a.q = cmds[-1].points[-1][1].copy()
+    assert a.t.status.state == HOLDING and a.t.status.origin_set
+    assert not any(c.q is not None for c in cmds[63:])
+    q_stopped = a.q.copy()             # where the last trajectory before the hold left it
+    assert np.max(np.abs(q_stopped - q_before)) > 0.02
+    # States come back (the robot where it stopped): the origin is re-anchored, no jump.
+    cmd = a.period(hand(palm_mm=(80.0, 260.0, -40.0)))
+    assert a.t.status.state == TRACKING, a.t.status.reason
+    assert 'joint states back after' in a.t.status.reason
+    assert 'origin re-anchored' in a.t.status.reason
+    # The TCP target is where the arm is (the tool may turn on toward pointing down) and
+    # the trajectory starts at rest from the current joints: no step.
+    step_mm = 1000 * np.linalg.norm(kin.fk(cmd.q)[:3, 3] - kin.fk(q_stopped)[:3, 3])
+    assert step_mm < 0.5, step_mm
+    h, acc = a.t.p.command_horizon, a.t.p.max_joint_accel
+    assert np.max(np.abs(cmd.points[0][1] - q_stopped)) <= 0.5 * acc * h * h + 1e-9
+    cmd = a.period(hand(palm_mm=(80.0, 280.0, -40.0)))    # and follows the hand from there
+    assert cmd.q is not None and a.t.status.state == TRACKING
+
+
+def test_joint_states_back_at_another_pose_after_a_stall_disarm_without_a_command():
+    a = Arm()
+    a.arm_with_origin()
+    for _ in range(30):
+        a.period(hand(palm_mm=(60.0, 300.0, -60.0)))
+    for _ in range(125):                             # 1 s without states (< joint_loss_after)
+        a.period(hand(palm_mm=(60.0, 300.0, -60.0)), joints=False)
+    assert a.t.status.state == HOLDING
+    a.q = HOME.copy()                                # a simulator restarted at home
+    cmd = a.period(hand(palm_mm=(60.0, 300.0, -60.0)))
+    assert a.t.status.state == DISARMED and 'another pose' in a.t.status.reason
+    assert cmd.q is None and cmd.points is None
+    for _ in range(5):
+        assert a.period(hand(palm_mm=(60.0, 300.0, -60.0))).q is None
+
+
+def test_a_fist_during_a_joint_state_stall_disarms_at_once_without_a_command():
+    a = Arm()
+    a.arm_with_origin()
+    for _ in range(70):
+        a.period(hand(palm_mm=(0.0, 260.0, 0.0)), joints=False)
+    assert a.t.status.state == HOLDING
+    cmd = a.period(hand(fist=True), joints=False)
+    assert a.t.status.state == DISARMED and a.t.status.reason == 'fist'
+    assert cmd.q is None and cmd.points is None
+    for _ in range(5):                                 # states back: still disarmed
+        assert a.period(hand(palm_mm=(0.0, 260.0, 0.0))).q is None
+    assert a.t.status.state == DISARMED
 
 
 def test_clock_jumping_back_disarms_and_forgets_the_robot():

@@ -159,6 +159,16 @@ def test_scripts_are_few_line_wrappers(script):
     assert 'main' in text
 
 
+NODES = os.path.join(PACKAGE, 'ros', 'nodes')
+
+
+@pytest.mark.parametrize('node', sorted(f for f in os.listdir(NODES) if f.endswith('.py')))
+def test_nodes_are_about_a_hundred_lines(node):
+    # A node is wiring: parameters, the library object, topics, spin. Logic grows elsewhere.
+    with open(os.path.join(NODES, node)) as f:
+        assert len(f.readlines()) <= 110, node
+
+
 def test_every_module_the_architecture_page_names_exists():
     text = open(os.path.join(ROOT, 'docs', 'architecture.md')).read()
     named = set(re.findall(r'(?<![\w.])((?:hands|control|ur10|drone|ros)(?:\.\w+)+|params|vectors)'

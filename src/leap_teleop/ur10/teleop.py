@@ -15,8 +15,10 @@ joint servo with speed and acceleration limits whose trajectories keep the veloc
 continuous (servo.py), IK failures hold the arm instead of raising, stale input holds at
 once and resumes from the current pose when fresh input returns within disarm_after (the
 origin is re-anchored, so nothing jumps), while a longer silence, a lost hand or a fist
-disarms (watchdog), stale joint states or the clock jumping back (a simulator restart)
-disarm without commanding the old pose, and every state change says why.
+disarms (watchdog). Stale joint states (a loaded simulator) hold without commanding
+anything and resume the same way when states return within joint_loss_after; a longer
+loss or the clock jumping back (a simulator restart) disarms without commanding the old
+pose. Every state change says why.
 """
 import math
 from dataclasses import dataclass, field
@@ -34,6 +36,9 @@ DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
 # While tracking, an IK answer this far (rad, any joint) from the last goal is another
 # arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
 MAX_GOAL_JUMP = 1.0
+# Joint states back after a stall further than this (rad) outside where the last
+# trajectory could have left the robot: another robot state, not a stall.
+RESUME_TOLERANCE = 0.02
 _TWO_PI = 2 * math.pi
 
 
@@ -124,7 +129,8 @@ class ArmTeleop:
         self._last_step = None
         self._gripper_sent = None
         self._thumb_up_since = None       # capture time the current thumbs-up began
-        self._stalled = None              # holding for stale input: when input last came
+        self._stalled = None              # holding: (what stalled, when it last came)
+        self._resume_box = None           # joint stall: (lo, hi) joints it may resume in
 
     def retune(self, changes):
         """Apply checked changes ({name: value}, the node's reconfigurable ones) while
@@ -227,6 +233,33 @@ class ArmTeleop:
             self.status.input_stamp = cmd.input_stamp
         return cmd
 
+    def _joints_stalled(self, now):
+        """No joint states for joint_timeout: the robot's pose is unknown, so nothing is
+        commanded (its last trajectory ends at rest). A stall (a loaded simulator) holds and
+        stays armed; joint_loss_after without states, or any stall while disarmed, forgets
+        the robot. A fist or a lost hand still disarms at once."""
+        if self.status.state == DISARMED:
+            return self._lose_robot('no joint states for %.2f s' % self.p.joint_timeout)
+        if now - self._joints_rx > self.p.joint_loss_after:
+            return self._lose_robot('no joint states for %.2f s' % self.p.joint_loss_after)
+        hand = self._hand
+        if (hand is not None and now - self._hand_rx <= self.p.input_timeout
+                and (not hand.present or hand.fist)):
+            self._stalled = self._stalled or ('joint states', self._joints_rx)   # no hold
+            return self._disarm('fist' if hand.present else 'hand left the sensor', now)
+        if self._stalled is None or self._stalled[0] != 'joint states':
+            self._stalled = ('joint states', self._joints_rx)
+            # Where the robot may be when states return: between its last state and the
+            # rest its last trajectory ends at.
+            end = self._servo.state_at(math.inf, self._q)[0]
+            self._resume_box = (np.minimum(self._q, end) - RESUME_TOLERANCE,
+                                np.maximum(self._q, end) + RESUME_TOLERANCE)
+            self._target = self._goal = None
+            self._servo.reset()
+            self._set(HOLDING, 'no joint states for %.2f s: holding, disarms after %.2f s'
+                      % (self.p.joint_timeout, self.p.joint_loss_after))
+        return ArmCommand()
+
     def _step(self, now):
         jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
@@ -234,7 +267,12 @@ class ArmTeleop:
         if jumped_back:
             return self._lose_robot('the clock jumped back (simulation restarted?)')
         if self._joints_rx is not None and now - self._joints_rx > self.p.joint_timeout:
-            return self._lose_robot('no joint states for %.2f s' % self.p.joint_timeout)
+            return self._joints_stalled(now)
+        if self._stalled is not None and self._stalled[0] == 'joint states':
+            lo, hi = self._resume_box
+            if np.any(self._q < lo) or np.any(self._q > hi):
+                return self._lose_robot('joint states came back at another pose (the robot '
+                                        'restarted or was moved): disarmed')
         if self._q is None:
             self._set(DISARMED, 'waiting for joint states')
             return ArmCommand()
@@ -249,7 +287,7 @@ class ArmTeleop:
                 return ArmCommand()
             # A stall: stop at once, but stay armed for a while in case input resumes.
             held = self._hold(now)
-            self._stalled = self._hand_rx
+            self._stalled = ('hand input', self._hand_rx)
             self._set(HOLDING, 'no hand input for %.2f s: holding, disarms after %.2f s '
                       '(watchdog)' % (self.p.input_timeout, self.p.disarm_after))
             return held
@@ -277,7 +315,9 @@ class ArmTeleop:
         else:
             hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
         if self._stalled is not None:
-            back = 'hand input back after %.2f s' % (self._hand_rx - self._stalled)
+            what, since = self._stalled
+            fresh = self._hand_rx if what == 'hand input' else self._joints_rx
+            back = '%s back after %.2f s' % (what, fresh - since)
             self._stalled = None
             if self._palm_ref is not None:
                 # Re-anchor: the hand where it is now maps to the pose the arm holds.

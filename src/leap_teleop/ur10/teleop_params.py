@@ -82,8 +82,12 @@ TELEOP_PARAMS = {
                          gt=0.0, le=2000.0),
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
                                  'best latency', unit='s', gt=0.0, le=10.0),
-    'joint_timeout': Param(0.5, 'no joint states this long -> disarm (robot gone)', unit='s',
+    'joint_timeout': Param(0.5, 'no joint states this long -> hold (commands stop); fresh '
+                                'states resume from the current pose', unit='s',
                            gt=0.0, le=10.0),
+    'joint_loss_after': Param(3.0, 'no joint states this long -> disarm and forget the robot '
+                                   '(gone or restarted); at least joint_timeout', unit='s',
+                              gt=0.0, le=30.0),
     'arm_hold_s': Param(0.3, 'a thumbs-up must be held this long before it arms', unit='s',
                         ge=0.0, le=5.0),
 }
@@ -145,6 +149,9 @@ class ArmTeleopParams:
             raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
         if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
             raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
+        if self.joint_loss_after < self.joint_timeout:
+            raise ValueError('joint_loss_after (%g s) must be at least joint_timeout (%g s)'
+                             % (self.joint_loss_after, self.joint_timeout))
         if self.disarm_after < self.input_timeout:
             raise ValueError('disarm_after (%g s) must be at least input_timeout (%g s)'
                              % (self.disarm_after, self.input_timeout))

@@ -1,15 +1,14 @@
 """ur10_sim: the simulated UR10 work cell (every arm of ~config in one PyBullet process).
 
-Per arm, in the namespace named in the config (ur10_1, ur10_2): subscribes
-arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory, joint names
-with or without the '<arm>_' prefix; header.stamp 0 = start now) and publishes
-joint_states (six arm joints + '<arm>_finger_joint', prefixed) at ~joint_state_rate.
-Sets <arm>/robot_description if it is not set yet (launch files set it first, for
-robot_state_publisher). Private: ~object_poses (leap_teleop/ObjectPoses), services ~reset
-and ~snapshot (std_srvs/Trigger; snapshot answers with the PNG's path). A malformed
-command is rejected with a rate-limited warning and the arm keeps its current trajectory
-(as ros_control's JointTrajectoryController). With /use_sim_time true it publishes
-/clock and can run faster than real time (~realtime_factor, 0 = as fast as possible).
+Per arm, in the namespace named in the config (ur10_1, ur10_2): subscribes arm_controller/command
+and gripper/command (trajectory_msgs/JointTrajectory, joint names with or without the '<arm>_'
+prefix; header.stamp 0 = start now) and publishes joint_states (six arm joints +
+'<arm>_finger_joint', prefixed) at ~joint_state_rate. Sets <arm>/robot_description if it is not set
+yet (launch files set it first, for robot_state_publisher). Private: ~object_poses
+(leap_teleop/ObjectPoses), services ~reset and ~snapshot (std_srvs/Trigger; snapshot answers with
+the PNG's path). A malformed command is rejected with a rate-limited warning and the arm keeps its
+current trajectory (as ros_control's JointTrajectoryController). With /use_sim_time true it
+publishes /clock and can run faster than real time (~realtime_factor, 0 = as fast as possible).
 Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's description and exits.
 """
 import sys
