@@ -1,10 +1,10 @@
-# make demo | make test | make check | make lint | make bench | make eval | make train | make setup | make clean
+# make demo | make test | make check | make lint | make bench | make eval | make train | make soak | make loaded | make setup | make clean
 SHELL := /bin/bash
 ENV := ./env.sh
 PYTEST_ARGS ?=
 GUI ?= 0
 
-.PHONY: setup demo test check lint bench eval train soak clean
+.PHONY: setup demo test check lint bench eval train soak loaded clean
 
 setup:
 	@bash tools/setup.sh
@@ -38,6 +38,11 @@ train: setup
 
 soak: setup
 	@$(ENV) python -m tools.soak
+
+# The load margin: make demo, then every rostest, each beside two CPU hogs (one per core).
+loaded: setup
+	@$(ENV) python -m tools.under_load --hogs 2 -- python -m tools.demo --out demo_output
+	@$(ENV) python -m tools.under_load --hogs 2 -- python -m pytest test/test_rostests.py -q
 
 clean:
 	rm -rf .ws build devel bench_results.json soak_results.json eval_results.json people_results.json demo_output

@@ -108,6 +108,10 @@ BY_CI = {'make test', 'make setup',
 # Not run by any test, and why.
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
+    'make loaded': 'the demo and every rostest again, beside two CPU hogs (~15 wall '
+        'minutes); the integrator runs it, test_under_load.py checks tools.under_load',
+    'python -m tools.under_load --hogs 2 -- make demo': 'part of make loaded; '
+        'test_under_load.py runs tools.under_load with a measuring command',
     'python -m tools.bench --only arm_motion': 'a benchmark, part of make bench (the '
         'integrator runs it); test_bench_ros_processes.py checks the bench runner itself',
     'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
