@@ -236,6 +236,27 @@ def test_stall_shorter_than_disarm_after_resumes_from_the_current_pose_without_a
                                [0.0, 0.0, 0.05], atol=1e-6)
 
 
+def test_a_small_gap_after_a_stall_keeps_the_origin_and_is_caught_up_within_the_limits():
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=2.0)
+    q = HOME.copy()
+    cmd, q = follow(t, c, hand(palm_mm=(0.0, 260.0, -60.0)), 60, q)
+    palm_ref, tcp_ref = t._palm_ref.copy(), t._tcp_ref.copy()
+    holds = [x for x in stall(t, c, 0.5, q=q) if sent(x)]
+    q = holds[0].points[-1][1]
+    # The hand moved 20 mm meanwhile: 0.05 m of TCP (scale 2.5), less than reanchor_beyond.
+    palm = np.array((20.0, 260.0, -60.0))
+    cmd, _ = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+    assert t.status.state == TRACKING and 'same origin' in t.status.reason, t.status.reason
+    np.testing.assert_allclose(t._palm_ref, palm_ref)            # the mapping is kept
+    np.testing.assert_allclose(t.status.target, tcp_ref + t._axes @ (palm - palm_ref) * 0.001 * t.p.scale,
+                               atol=1e-6)
+    # No step: the trajectory starts at rest from the current joints, within the limits.
+    h, a = t.p.command_horizon, t.p.max_joint_accel
+    assert np.max(np.abs(cmd.points[0][1] - q)) <= 0.5 * a * h * h + 1e-9
+    assert np.max(np.abs(cmd.points[0][2])) <= a * h + 1e-9
+    check_points(cmd, t.p.max_joint_speed, t.p.max_joint_accel)
+
+
 def test_stall_while_armed_without_origin_resumes_armed():
     t = ArmTeleop()
     c = Clock()

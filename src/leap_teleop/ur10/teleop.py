@@ -14,8 +14,9 @@ see input_check), the target is clamped to a workspace box, motion is commanded 
 joint servo with speed and acceleration limits whose trajectories keep the velocity
 continuous (servo.py), IK failures hold the arm instead of raising, stale input holds at
 once and resumes from the current pose when fresh input returns within disarm_after (the
-origin is re-anchored, so nothing jumps), while a longer silence, a lost hand or a fist
-disarms (watchdog). Stale joint states (a loaded simulator) hold without commanding
+origin is re-anchored when the hand moved more than reanchor_beyond meanwhile, so nothing
+jumps; a smaller gap is caught up within the servo's limits), while a longer silence, a
+lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold without commanding
 anything and resume the same way when states return within joint_loss_after; a longer
 loss or the clock jumping back (a simulator restart) disarms without commanding the old
 pose. Every state change says why.
@@ -320,9 +321,14 @@ class ArmTeleop:
             back = '%s back after %.2f s' % (what, fresh - since)
             self._stalled = None
             if self._palm_ref is not None:
-                # Re-anchor: the hand where it is now maps to the pose the arm holds.
-                self._set_origin(palm, hand_rot, now)
-                self._set(TRACKING, back + ': origin re-anchored')
+                gap = self._resume_gap(palm, now)
+                if gap > self.p.reanchor_beyond:
+                    # Re-anchor: the hand where it is now maps to the pose the arm holds.
+                    self._set_origin(palm, hand_rot, now)
+                    self._set(TRACKING, back + ': origin re-anchored')
+                else:
+                    # The servo catches up within its limits; the mapping stays.
+                    self._set(TRACKING, back + ': same origin, %.3f m to catch up' % gap)
             else:
                 self._set(ARMED, back + '; show rock to set the origin')
         if hand.rock:
@@ -366,6 +372,15 @@ class ArmTeleop:
         cmd.points = self._servo.track(now, self._q, q, goal_velocity)
         cmd.stamp = now
         return cmd
+
+    def _resume_gap(self, palm, now):
+        """How far (m) the old origin would put the target from the arm's pose; joystick
+        mode has no such target (its origin is the dead zone's centre): infinite."""
+        if self.p.mode != 'imitation':
+            return math.inf
+        target = np.clip(self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
+                         self._lo, self._hi)
+        return float(np.linalg.norm(target - kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]))
 
     def _set_origin(self, palm, hand_rot, now):
         self._palm_ref = palm.copy()
