@@ -12,10 +12,11 @@ setup:
 demo: setup
 	@$(ENV) python -m tools.demo --gui $(GUI)
 
-# Everything: the linter, then every test (unit, integration, rostests, the workspace).
+# Everything: the linter, then every test (unit, integration, rostests, the workspace), on
+# two workers; a file's tests stay on one worker, so its module fixtures are built once.
 test: setup
 	@$(ENV) ruff check src tools test scripts
-	@$(ENV) python -m pytest test/ $(PYTEST_ARGS)
+	@$(ENV) python -m pytest test/ -n 2 --dist loadfile $(PYTEST_ARGS)
 
 # The unit tests that need no ROS master, no simulator and no model fitting: for while you work.
 check: setup
