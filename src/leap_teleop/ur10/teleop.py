@@ -16,8 +16,9 @@ continuous (servo.py), IK failures hold the arm instead of raising, stale input 
 once and resumes from the current pose when fresh input returns within disarm_after (the
 origin is re-anchored when the hand moved more than reanchor_beyond meanwhile, so nothing
 jumps; a smaller gap is caught up within the servo's limits), while a longer silence, a
-lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold without commanding
-anything and resume the same way when states return within joint_loss_after; a longer
+lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold
+without commanding anything; states back within joint_loss_after resume on the same
+origin (the hand's input never stopped), caught up within the servo's limits; a longer
 loss or the clock jumping back (a simulator restart) disarms without commanding the old
 pose. Every state change says why.
 """
@@ -321,8 +322,10 @@ class ArmTeleop:
             back = '%s back after %.2f s' % (what, fresh - since)
             self._stalled = None
             if self._palm_ref is not None:
+                # After a joint-state stall the hand's input never stopped: the mapping
+                # the operator followed stays, and the servo catches up within its limits.
                 gap = self._resume_gap(palm, now)
-                if gap > self.p.reanchor_beyond:
+                if what == 'hand input' and gap > self.p.reanchor_beyond:
                     # Re-anchor: the hand where it is now maps to the pose the arm holds.
                     self._set_origin(palm, hand_rot, now)
                     self._set(TRACKING, back + ': origin re-anchored')
