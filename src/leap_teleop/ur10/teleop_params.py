@@ -82,7 +82,7 @@ TELEOP_PARAMS = {
                          gt=0.0, le=2000.0),
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
                                  'best latency', unit='s', gt=0.0, le=10.0),
-    'reanchor_beyond': Param(0.1, 'after a stall, the origin is re-anchored only when the hand '
+    'reanchor_beyond': Param(0.1, 'after a hand-input stall, the origin is re-anchored only when the hand '
                                   'would put the target further than this from where the arm '
                                   'is; a smaller gap is caught up at the servo\'s limits, so '
                                   'the hand-to-arm mapping is kept', unit='m', ge=0.0, le=2.0),
