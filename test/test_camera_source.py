@@ -281,6 +281,26 @@ def test_annotated_view(detections):
     assert len(msg.data) == width * height * 3 and msg.header.stamp.to_sec() == 12.5
 
 
+def test_annotated_view_draws_the_latency_notes_bottom_left(detections):
+    width, height, found = detections['thumbs_up__mps__hand_thumb_up.jpg']
+    bgr = np.zeros((height, width, 3), np.uint8)
+    notes = []
+    published = []
+    view = CameraView(False, lambda frame, img: published.append(img), notes=lambda: notes,
+                      clock=lambda: 1.0)          # no frame rate drawn
+
+    class NotedFrame:
+        id, timestamp = 7, 12.5
+    for lines in ([], ['capture -> stage, p50 / p99:', 'leap_sender published: 3.0 / 4.0 ms']):
+        notes[:] = lines
+        view.on_image(NotedFrame, bgr, [])
+        view.on_frame(NotedFrame, {})
+    bare, noted = published
+    rows = np.nonzero((noted != bare).any(axis=(1, 2)))[0]
+    cols = np.nonzero((noted != bare).any(axis=(0, 2)))[0]
+    assert len(rows) and rows.min() > height // 2 and cols.min() < width // 10  # bottom left
+
+
 def test_record_frames_and_bag_from_camera_footage(tmp_path):
     """record_frames and recording_to_bag take the video source like any other."""
     import rosbag

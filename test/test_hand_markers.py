@@ -156,6 +156,18 @@ def test_drone_markers_are_frame_locked_primitives_with_unique_ids():
                abs(m.pose.position.y) + m.scale.y / 2 <= 0.3 for m in out.markers)
 
 
+def test_latency_marker_is_text_above_the_hands_and_deletes_when_empty():
+    m = viz.latency_marker(['capture -> stage, p50 / p99:', 'ur10_1/ur10_arm command: 9.0 / 12.0 ms'],
+                           'leap_hands', (0.0, 0.45, 0.0), 12.5, scale=2.0)
+    assert (m.ns, m.type, m.action) == ('latency', Marker.TEXT_VIEW_FACING, Marker.ADD)
+    assert m.header.frame_id == 'leap_hands' and m.header.stamp.to_sec() == 12.5
+    assert m.text.splitlines()[1] == 'ur10_1/ur10_arm command: 9.0 / 12.0 ms'
+    assert (m.pose.position.y, m.scale.z) == (0.45, pytest.approx(0.05))
+    assert m.lifetime.to_sec() > 1.0          # outlives the 1 s refresh, clears when it stops
+    gone = viz.latency_marker([], 'leap_hands', (0.0, 0.45, 0.0), 13.0)
+    assert (gone.ns, gone.id, gone.action) == ('latency', 0, Marker.DELETE)
+
+
 def test_path_trail_is_bounded_and_spaced():
     trail = viz.PathTrail(max_points=5, min_step=0.1)
     q = (0.0, 0.0, 0.0, 1.0)
@@ -232,3 +244,50 @@ def test_node_publishes_markers_and_deletes_on_a_private_master():
     assert len(deletes) == 1                 # once, not per absent frame
     assert arrays[-1] == deletes[0]
     assert 'palm_position is not finite' in err
+
+
+LATENCY_CLIENT = r'''
+import json, time
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from visualization_msgs.msg import MarkerArray
+rospy.init_node('latency_client')
+got = []
+rospy.Subscriber('leapmotion/hand_markers', MarkerArray,
+                 lambda m: got.extend([k.ns, k.action, k.text, k.header.frame_id] for k in m.markers))
+pub = rospy.Publisher('/diagnostics', DiagnosticArray, queue_size=10)
+status = DiagnosticStatus(name='ur10_1/ur10_arm: teleop', values=[
+    KeyValue('input age p50 (ms, last 10 s)', '9.0'), KeyValue('input age p99 (ms, last 10 s)', '12.5'),
+    KeyValue('input age samples', '300')])
+deadline = time.time() + 20
+while not got and time.time() < deadline:
+    pub.publish(DiagnosticArray(status=[status]))
+    time.sleep(0.5)
+time.sleep(7.0)                          # no more reports: the text goes after 5 s
+print(json.dumps(got))
+'''
+
+
+def test_node_shows_the_reported_input_ages_as_a_text_marker_then_clears_it():
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
+    here = os.path.dirname(os.path.abspath(__file__))
+    script = os.path.join(here, '..', 'scripts', 'hand_markers.py')
+    with ros_master() as env:
+        node = spawn_node(env, [sys.executable, script])
+        try:
+            out = subprocess.run([sys.executable, '-c', LATENCY_CLIENT], env=env,
+                                 capture_output=True, text=True, timeout=60)
+        finally:
+            stop_spawned(node)
+    assert out.returncode == 0, out.stderr
+    markers = json.loads(out.stdout.strip().splitlines()[-1])
+    assert markers and all(ns == 'latency' and frame == 'leap_hands' for ns, _, _, frame in markers)
+    assert markers[0][1] == Marker.ADD
+    assert markers[0][2].splitlines() == ['capture -> stage, p50 / p99:',
+                                          'ur10_1/ur10_arm command: 9.0 / 12.5 ms']
+    assert markers[-1][1] == Marker.DELETE and [m[1] for m in markers].count(Marker.DELETE) == 1

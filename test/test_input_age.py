@@ -80,3 +80,46 @@ def test_pilot_twists_and_gesture_commands_carry_the_capture_stamp():
     pilot.watchdog(0.5)                                   # the watchdog's hover: no input
     cmd = pilot.queue.popleft()
     assert cmd.kind == 'twist' and cmd.twist == (0.0,) * 6 and cmd.input_stamp == 0.0
+
+
+def test_stage_ages_keep_one_window_per_stage_with_its_own_keys():
+    from leap_teleop.control.input_age import StageAges
+    ages = StageAges(('recognized', 'published'), window_s=10.0)
+    for k in range(100):
+        stamp = 50.0 + k * 0.01
+        ages.add('recognized', stamp + 0.002, stamp)
+        ages.add('published', stamp + 0.003 + (0.01 if k == 99 else 0.0), stamp)
+    ages.add('not a stage', 51.0, 50.0)               # ignored, not a crash
+    ages.add('published', 51.0, 0.0)                  # unstamped: no sample
+    summary = ages.summary(51.5)
+    p50, p99, n = summary['recognized']
+    assert n == 100 and p50 == pytest.approx(0.002) and p99 == pytest.approx(0.002)
+    p50, p99, n = summary['published']
+    assert n == 100 and p50 == pytest.approx(0.003) and 0.003 < p99 < 0.013
+    values = dict(ages.diagnostic_values(51.5))
+    assert values['input age (recognized) p50 (ms, last 10 s)'] == '2.0'
+    assert values['input age (published) samples'] == '100'
+    assert 'input stamp of the last command' not in values     # a command's key only
+    assert dict(ages.diagnostic_values(70.0))['input age (published) samples'] == '0'
+
+
+def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
+    import threading
+
+    from leap_teleop.control.input_age import StageAges
+    ages = StageAges(('published',), window_s=1000.0)
+    n = 4000                                  # within a window's 5000 samples
+    done = threading.Event()
+    reads = []
+
+    def writer():
+        for k in range(n):
+            ages.add('published', 1.0 + k * 1e-4 + 0.005, 1.0 + k * 1e-4)
+        done.set()
+    t = threading.Thread(target=writer)
+    t.start()
+    while not done.is_set():                  # the reader drains while the writer appends
+        reads.append(ages.summary(10.0)['published'][2])
+    t.join()
+    assert ages.summary(10.0)['published'][2] == n         # nothing lost, nothing twice
+    assert reads == sorted(reads)

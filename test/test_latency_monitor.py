@@ -1,11 +1,12 @@
-"""latency_monitor: the input-age table from /diagnostics (pure part and the command)."""
+"""latency_monitor: the per-stage input-age table from /diagnostics (pure part and the
+command)."""
 import os
 import subprocess
 import sys
 
 import pytest
 
-from leap_teleop.control.input_age import InputAgeWindow, age_row, age_table
+from leap_teleop.control.input_age import InputAgeWindow, LatencyBoard, StageAges, age_rows, age_table
 from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
 SCRIPTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'scripts')
@@ -15,20 +16,51 @@ def test_rows_read_back_what_the_window_reports():
     w = InputAgeWindow(window_s=10.0)
     for i in range(100):
         w.add(1.0 + i * 0.01, 1.0 + i * 0.01 - 0.004 - (0.02 if i == 99 else 0.0))
-    name, p50, p99, n = age_row('/ur10_1/ur10_arm: teleop', w.diagnostic_values(2.0))
-    assert name == '/ur10_1/ur10_arm: teleop' and n == 100
+    [(name, stage, p50, p99, n)] = age_rows('ur10_1/ur10_arm: teleop', w.diagnostic_values(2.0))
+    assert name == 'ur10_1/ur10_arm: teleop' and stage == 'command' and n == 100
     assert p50 == pytest.approx(4.0, abs=0.05) and 4.0 < p99 <= 24.0
 
 
+def test_a_sender_status_gives_one_row_per_stage():
+    ages = StageAges(('recognized', 'published'))
+    for i in range(50):
+        ages.add('recognized', 1.0 + i * 0.01 + 0.001, 1.0 + i * 0.01)
+        ages.add('published', 1.0 + i * 0.01 + 0.0015, 1.0 + i * 0.01)
+    values = [('frames', '50')] + ages.diagnostic_values(2.0)
+    rows = age_rows('leap_sender: hand stages', values)
+    assert [(r[1], r[4]) for r in rows] == [('recognized', 50), ('published', 50)]
+    assert rows[0][2] == pytest.approx(1.0) and rows[1][2] == pytest.approx(1.5)
+
+
 def test_a_status_without_input_age_is_no_row_and_empty_windows_read_na():
-    assert age_row('/camera: fps', [('fps', '30')]) is None
-    row = age_row('/drone_pilot: pilot', InputAgeWindow().diagnostic_values(5.0))
-    assert row == ('/drone_pilot: pilot', None, None, 0)
-    text = age_table([row, ('/ur10_1/ur10_arm: teleop', 4.0, 9.5, 120)])
+    assert age_rows('camera: fps', [('fps', '30')]) == []
+    [row] = age_rows('drone_pilot: pilot', InputAgeWindow().diagnostic_values(5.0))
+    assert row == ('drone_pilot: pilot', 'command', None, None, 0)
+    text = age_table([row, ('ur10_1/ur10_arm: teleop', 'command', 4.0, 9.5, 120)])
     lines = text.splitlines()
-    assert 'p50 ms' in lines[0] and len(lines) == 3
-    assert lines[1].startswith('/drone_pilot: pilot') and 'n/a' in lines[1]
-    assert lines[2].split()[-3:] == ['4.0', '9.5', '120']
+    assert 'p50 ms' in lines[0] and 'stage' in lines[0] and len(lines) == 3
+    assert lines[1].startswith('drone_pilot: pilot') and 'n/a' in lines[1]
+    assert lines[2].split()[-4:] == ['command', '4.0', '9.5', '120']
+
+
+def test_the_table_is_in_data_path_order_and_the_board_forgets_silent_nodes():
+    board = LatencyBoard(stale_after_s=5.0)
+    arm = InputAgeWindow()
+    arm.add(10.0, 9.99)
+    sender = StageAges(('recognized', 'published'))
+    sender.add('recognized', 10.0, 9.998)
+    sender.add('published', 10.0, 9.997)
+    assert board.on_status('ur10_1/ur10_arm: teleop', arm.diagnostic_values(10.0), 10.0)
+    assert board.on_status('leap_sender: hand stages', sender.diagnostic_values(10.0), 10.0)
+    assert not board.on_status('camera: fps', [('fps', '30')], 10.0)
+    stages = [line.split()[-4] for line in board.table().splitlines()[1:]]
+    assert stages == ['recognized', 'published', 'command']
+    assert board.notes(12.0) == ['capture -> stage, p50 / p99:',
+                                 'leap_sender published: 3.0 / 3.0 ms',
+                                 'ur10_1/ur10_arm command: 10.0 / 10.0 ms']
+    assert board.on_status('leap_sender: hand stages', sender.diagnostic_values(14.0), 14.0)
+    assert [r[0] for r in board.rows(16.0)] == ['leap_sender: hand stages'] * 2
+    assert board.notes(30.0) == []
 
 
 @pytest.mark.integration
@@ -42,7 +74,7 @@ def test_the_command_prints_the_pilots_row_from_a_running_node():
         finally:
             stop_spawned(pilot)
     assert p.returncode == 0, p.stderr[-2000:]
-    assert 'capture -> command' in p.stdout and 'drone_pilot' in p.stdout, p.stdout
+    assert 'capture -> stage' in p.stdout and 'drone_pilot' in p.stdout, p.stdout
 
 
 def test_main_takes_its_arguments_without_the_program_name():

@@ -1,21 +1,28 @@
-"""Age of the input behind each command, over a sliding time window, no ROS.
+"""Age of the hand input at each stage of the pipeline, over a sliding time window, no ROS.
 
 A consuming node (arm, pilot) adds one sample per command it sends that follows hand
-input: the command's time minus the capture stamp of that input. `summary()` gives the
-median and 99th percentile over the last `window_s` seconds, for /diagnostics.
+input: the command's time minus the capture stamp of that input. The sender adds one per
+hand frame at each of its stages (recognized, published) through StageAges. `summary()`
+gives the median and 99th percentile over the last `window_s` seconds, for /diagnostics;
+LatencyBoard reads those values back into one row per (node, stage).
 """
 import collections
 import math
+import re
 
 import numpy as np
 
 
 class InputAgeWindow:
-    def __init__(self, window_s=10.0, max_samples=5000):
+    def __init__(self, window_s=10.0, max_samples=5000, stage=None):
+        """stage: None for a consumer's commands (keys 'input age p50 ...'), else the
+        stage's name (keys 'input age (recognized) p50 ...')."""
         if not (math.isfinite(window_s) and window_s > 0):
             raise ValueError('window_s must be a positive number of seconds, not %r'
                              % (window_s,))
         self.window_s = float(window_s)
+        self.stage = stage
+        self._label = 'input age' if stage is None else 'input age (%s)' % stage
         self._samples = collections.deque(maxlen=int(max_samples))   # (time, age s)
         self.last_stamp = 0.0          # capture stamp of the input behind the latest sample
 
@@ -49,28 +56,70 @@ class InputAgeWindow:
 
         def fmt(s):
             return 'n/a' if s is None else '%.1f' % (1000.0 * s)
-        return [('input age p50 (ms, last %g s)' % self.window_s, fmt(p50)),
-                ('input age p99 (ms, last %g s)' % self.window_s, fmt(p99)),
-                ('input age samples', str(n)),
-                ('input stamp of the last command', '%.6f' % self.last_stamp)]
+        values = [('%s p50 (ms, last %g s)' % (self._label, self.window_s), fmt(p50)),
+                  ('%s p99 (ms, last %g s)' % (self._label, self.window_s), fmt(p99)),
+                  ('%s samples' % self._label, str(n))]
+        if self.stage is None:
+            values.append(('input stamp of the last command', '%.6f' % self.last_stamp))
+        return values
 
 
-def age_row(name, values):
-    """(name, p50 ms, p99 ms, samples) from one diagnostic status's (key, value) pairs as
-    diagnostic_values writes them; None when the status carries no input age."""
+class StageAges:
+    """One InputAgeWindow per stage, fed from a hot thread and read on another without a
+    lock: add() only appends to a deque (atomic in CPython); diagnostic_values(), on the
+    reading thread, moves what was added into the windows first."""
+
+    def __init__(self, stages, window_s=10.0, max_pending=20000):
+        self.windows = {stage: InputAgeWindow(window_s, stage=stage) for stage in stages}
+        self._pending = collections.deque(maxlen=int(max_pending))   # (stage, time, stamp)
+
+    def add(self, stage, now, input_stamp):
+        """Input captured at `input_stamp` reached `stage` at `now` (same clock, s)."""
+        self._pending.append((stage, now, input_stamp))
+
+    def _drain(self):
+        pending, windows = self._pending, self.windows
+        while pending:
+            stage, now, stamp = pending.popleft()
+            window = windows.get(stage)
+            if window is not None:
+                window.add(now, stamp)
+
+    def summary(self, now):
+        """{stage: (p50 s, p99 s, samples)} over each window."""
+        self._drain()
+        return {stage: w.summary(now) for stage, w in self.windows.items()}
+
+    def diagnostic_values(self, now):
+        """Every stage's window values, in the order the stages were given."""
+        self._drain()
+        return [kv for w in self.windows.values() for kv in w.diagnostic_values(now)]
+
+
+# The stages in data-path order; 'command' is a consumer's (keys without a stage name).
+STAGES = ('recognized', 'published', 'command', 'applied')
+_KEY = re.compile(r'^input age(?: \((?P<stage>[\w ]+)\))? (?:(?P<field>p50|p99) \(ms\b.*|samples)$')
+
+
+def age_rows(name, values):
+    """[(name, stage, p50 ms, p99 ms, samples)] from one diagnostic status's (key, value)
+    pairs as diagnostic_values writes them, one per stage it reports; [] when it carries
+    no input age."""
     got = {}
     for key, value in values:
-        for field in ('p50', 'p99'):
-            if key.startswith('input age %s' % field):
-                got[field] = _ms(value)
-        if key == 'input age samples':
+        m = _KEY.match(key)
+        if m is None:
+            continue
+        row = got.setdefault(m.group('stage') or 'command', {})
+        if m.group('field'):
+            row[m.group('field')] = _ms(value)
+        else:
             try:
-                got['n'] = int(value)
+                row['n'] = int(value)
             except (TypeError, ValueError):
-                got['n'] = 0
-    if not got:
-        return None
-    return name, got.get('p50'), got.get('p99'), got.get('n', 0)
+                row['n'] = 0
+    return [(name, stage, row.get('p50'), row.get('p99'), row.get('n', 0))
+            for stage, row in got.items()]
 
 
 def _ms(text):
@@ -81,12 +130,68 @@ def _ms(text):
     return x if math.isfinite(x) else None
 
 
+def _path_order(row):
+    name, stage = row[0], row[1]
+    return (STAGES.index(stage) if stage in STAGES else len(STAGES), stage, name)
+
+
 def age_table(rows):
-    """The rows as a fixed-width text table, sorted by name."""
+    """The rows as a fixed-width text table in data-path order (stage, then node)."""
     def cell(x):
         return '%8.1f' % x if x is not None else '     n/a'
-    lines = ['%-44s %8s %8s %8s' % ('capture -> command (input age)', 'p50 ms', 'p99 ms',
-                                    'samples')]
-    for name, p50, p99, n in sorted(rows):
-        lines.append('%-44s %s %s %8d' % (name[:44], cell(p50), cell(p99), n))
+    lines = ['%-36s %-10s %8s %8s %8s' % ('capture -> stage (input age)', 'stage', 'p50 ms',
+                                          'p99 ms', 'samples')]
+    for name, stage, p50, p99, n in sorted(rows, key=_path_order):
+        lines.append('%-36s %-10s %s %s %8d' % (name[:36], stage[:10], cell(p50), cell(p99), n))
     return '\n'.join(lines)
+
+
+def node_name(status_name):
+    """'ur10_1/ur10_arm: teleop' -> 'ur10_1/ur10_arm' (diagnostic_updater's names)."""
+    return status_name.split(': ', 1)[0]
+
+
+class LatencyBoard:
+    """The latest row of each (node, stage), as heard on /diagnostics, for a table, an
+    overlay or a marker. on_status() and the readers may run on different threads: each
+    update replaces the dict, readers take it whole."""
+
+    def __init__(self, stale_after_s=5.0):
+        self.stale_after_s = float(stale_after_s)
+        self._rows = {}              # (status name, stage) -> (row, time heard)
+
+    def on_status(self, name, values, now):
+        """One DiagnosticStatus's name and (key, value) pairs; True if it had input ages."""
+        rows = age_rows(name, values)
+        if rows:
+            new = dict(self._rows)
+            for row in rows:
+                new[row[0], row[1]] = (row, now)
+            self._rows = new
+        return bool(rows)
+
+    def rows(self, now=None):
+        """Every row (those not heard for stale_after_s dropped when `now` is given)."""
+        return [row for row, heard in self._rows.values()
+                if now is None or now - heard <= self.stale_after_s]
+
+    def table(self, now=None):
+        return age_table(self.rows(now))
+
+    def summary_lines(self, now=None, stages=STAGES):
+        """Short lines, data-path order: 'ur10_1/ur10_arm command 12.3 / 20.1 ms'."""
+        lines = []
+        for name, stage, p50, p99, n in sorted(self.rows(now), key=_path_order):
+            if stage not in stages:
+                continue
+            if p50 is None:
+                lines.append('%s %s: no samples' % (node_name(name), stage))
+            else:
+                lines.append('%s %s: %.1f / %.1f ms' % (node_name(name), stage, p50, p99))
+        return lines
+
+    def notes(self, now=None):
+        """What the camera overlay and the RViz text show: a title, then the sender's
+        published and each consumer's command rows; [] when nothing reports."""
+        lines = self.summary_lines(now, stages=('published', 'command'))
+        return ['capture -> stage, p50 / p99:'] + lines if lines else []

@@ -1,5 +1,6 @@
 """The annotated camera view: what the camera source sees, with each hand's landmarks,
-its side, the gestures the recognizer holds for it and the processed frame rate drawn on
+its side, the gestures the recognizer holds for it, the processed frame rate and, when
+given, the pipeline's latency lines (capture -> published, capture -> command) drawn on
 the image (ros.conversions.image_message makes it a message).
 """
 import time
@@ -25,9 +26,10 @@ def held_gestures(state):
     return [g for g in GESTURES if getattr(state, g, False) is True]
 
 
-def draw(bgr, landmarks, mirrored, states=None, fps=None):
+def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=()):
     """A copy of bgr with every hand drawn. landmarks: HandLandmarks list as detected in
-    this image; states: {side: HandState} (gestures), optional; fps: shown top left."""
+    this image; states: {side: HandState} (gestures), optional; fps: shown top left;
+    notes: lines of text shown bottom left (the latency)."""
     import cv2
     out = bgr.copy()
     h, w = out.shape[:2]
@@ -51,6 +53,9 @@ def draw(bgr, landmarks, mirrored, states=None, fps=None):
         _text(out, label, (max(2, x), max(16, y)), colour, thick)
     if fps is not None:
         _text(out, '%.1f fps' % fps, (6, 20), (255, 255, 255), thick)
+    step = 18 * thick
+    for k, line in enumerate(reversed(list(notes))):
+        _text(out, line, (6, h - 8 - k * step), (255, 255, 255), thick)
     return out
 
 
@@ -66,10 +71,12 @@ class CameraView:
     """Joins a camera source's images with the recognizer's states: give on_image to the
     source (source.on_image) and on_frame to LeapInterface.add_listener; publish(frame,
     image) receives each annotated image. wanted() -> False skips the drawing (no one
-    is looking)."""
+    is looking). notes() gives the lines drawn bottom left (called per drawn image)."""
 
-    def __init__(self, mirrored, publish, wanted=lambda: True, clock=time.monotonic):
+    def __init__(self, mirrored, publish, wanted=lambda: True, clock=time.monotonic,
+                 notes=tuple):
         self.mirrored = mirrored
+        self.notes = notes
         self.publish = publish
         self.wanted = wanted
         self.clock = clock
@@ -90,4 +97,5 @@ class CameraView:
         pending, self._pending = self._pending, None
         if pending is None or pending[0] != frame.id or not self.wanted():
             return
-        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps))
+        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps,
+                                 self.notes()))

@@ -28,16 +28,21 @@ def camera_model(p, timeout=10.0):
 
 def camera_view(p):
     """The annotated camera view (CameraView publishing on ~annotated_image_topic) when
-    that is set and the source is a camera; else None."""
+    that is set and the source is a camera; else None. Its notes are the input ages heard
+    on /diagnostics: this sender's capture -> published and each consumer's capture ->
+    command."""
     if p['source'] not in CAMERA_SOURCES or not p['annotated_image_topic']:
         return None
     from sensor_msgs.msg import Image
 
     from leap_teleop.hands.camera_view import CameraView
+    from leap_teleop.ros.latency_monitor import LatencyMonitor
 
     pub = rospy.Publisher(p['annotated_image_topic'], Image, queue_size=2)
+    monitor = LatencyMonitor()
     view = CameraView(p['mirror'] != p['input_mirrored'],
                       lambda frame, img: pub.publish(conversions.image_message(img, frame.timestamp,
                                                                    p['frame_id'])),
-                      wanted=lambda: pub.get_num_connections() > 0)
+                      wanted=lambda: pub.get_num_connections() > 0,
+                      notes=lambda: monitor.board.notes(rospy.get_time()))
     return view

@@ -9,8 +9,9 @@ LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': Dia
 def diagnostics_updater(hardware_id, task, report, input_age=None):
     """A diagnostic_updater.Updater (its update() publishes at most every ~diagnostic_period)
     with one task named `task`: report() gives (level 'ok' | 'warn' | 'error', summary,
-    [(key, value)]); the age of the input behind the commands (an InputAgeWindow, read on
-    the thread that calls update()) follows those values."""
+    [(key, value)]); the age of the input behind the commands (an InputAgeWindow, or the
+    sender's StageAges: anything with diagnostic_values(now), read on the thread that
+    calls update()) follows those values."""
     def run(stat):
         level, summary, values = report()
         stat.summary(LEVELS[level], summary)
@@ -24,3 +25,10 @@ def diagnostics_updater(hardware_id, task, report, input_age=None):
     updater.setHardwareID(hardware_id)
     updater.add(task, run)
     return updater
+
+
+def update_every(updater, period_s=0.25):
+    """A rospy.Timer calling updater.update() (which publishes once per ~diagnostic_period)
+    every period_s, for a node whose own loop is a hot path that should not carry it (the
+    sender); keep the timer referenced."""
+    return rospy.Timer(rospy.Duration.from_sec(period_s), lambda _event: updater.update())

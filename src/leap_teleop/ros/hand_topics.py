@@ -3,6 +3,7 @@ GestureEvent topic (what the pilot reads); on request the old leapros and leap m
 one side and the leap_motion driver's topics (DriverInterface)."""
 import rospy
 
+from leap_teleop.control.input_age import StageAges
 from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import GestureEvent, Hand, leap, leapros
 from leap_teleop.ros import conversions
@@ -12,10 +13,14 @@ from leap_teleop.ros.graph import wait_for_subscribers
 
 class HandTopics:
     """Publishes each hand of a LeapInterface as soon as it is recognised (on the source's
-    thread), from the sender's checked ~params `p`."""
+    thread), from the sender's checked ~params `p`. `ages` gets each hand's capture ->
+    recognized and capture -> published (read them on another thread: StageAges)."""
 
-    def __init__(self, p, interface):
+    def __init__(self, p, interface, clock=rospy.get_time):
         self.p = p
+        self.clock = clock
+        self.ages = StageAges(('recognized', 'published'))
+        self.interface = interface
         self.sides = list(p['sides'])
         q = int(p['queue_size'])
         gestures = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
@@ -50,11 +55,21 @@ class HandTopics:
             pubs['leapcobot'].resolved_name for pubs in self.pubs.values()]
         return wait_for_subscribers(own, names, 'sender')
 
+    def report(self):
+        """The sender's /diagnostics (level, summary, values); the stage ages follow them."""
+        i = self.interface
+        return ('ok', '%d frames, %d hands published' % (i.frames_seen, self.published),
+                [('frames', str(i.frames_seen)), ('frames without a capture time', str(i.rejected_frames)),
+                 ('hands published', str(self.published))])
+
     def on_hand(self, frame, state):
         """Publish one side's messages as soon as that side is recognised."""
         side = state.side
         pubs = self.pubs.get(side)
-        if pubs is None or not self.throttle.due(side, frame.timestamp):
+        if pubs is None:
+            return
+        self.ages.add('recognized', self.clock(), frame.timestamp)
+        if not self.throttle.due(side, frame.timestamp):
             return
         for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
@@ -65,4 +80,5 @@ class HandTopics:
                                                             self.p['frame_id']))
             if self.leap is not None:
                 self.leap.publish(conversions.to_leap(state, self.p['frame_id']))
+        self.ages.add('published', self.clock(), frame.timestamp)
         self.published += 1

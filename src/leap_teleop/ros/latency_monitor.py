@@ -1,5 +1,6 @@
-"""latency_monitor: a live table of each consumer's input age (capture -> command, p50 /
-p99 over its window) read from /diagnostics, as the arm nodes and pilots report it.
+"""latency_monitor: a live table of the age of the hand input at each stage (capture ->
+sender recognized, published, arm / pilot command; p50 / p99 over each node's window),
+read from /diagnostics, one row per (node, stage) in data-path order.
 
 usage: rosrun leap_teleop latency_monitor [--once] [--timeout S]
   --once      print one table (1.5 s after the first report), then exit
@@ -12,23 +13,28 @@ import threading
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 
-from leap_teleop.control.input_age import age_row, age_table
+from leap_teleop.control.input_age import LatencyBoard
 
 
 class LatencyMonitor:
-    def __init__(self):
-        self.rows = {}
+    """Subscribes /diagnostics and keeps a LatencyBoard of every node's input ages (also
+    used by hand_markers' text marker and the sender's camera overlay)."""
+
+    def __init__(self, subscribe=True):
+        self.board = LatencyBoard()
         self.heard = threading.Event()
+        self.sub = (rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics,
+                                     queue_size=20) if subscribe else None)
 
     def on_diagnostics(self, msg):
+        now = rospy.get_time()
         for status in msg.status:
-            row = age_row(status.name, [(kv.key, kv.value) for kv in status.values])
-            if row is not None:
-                self.rows[status.name] = row
+            if self.board.on_status(status.name, [(kv.key, kv.value) for kv in status.values],
+                                    now):
                 self.heard.set()
 
     def table(self):
-        return age_table(list(self.rows.values()))
+        return self.board.table()
 
 
 def main(argv=None):
@@ -39,7 +45,6 @@ def main(argv=None):
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
     rospy.init_node('latency_monitor', anonymous=True, disable_signals=True)
     monitor = LatencyMonitor()
-    rospy.Subscriber('/diagnostics', DiagnosticArray, monitor.on_diagnostics, queue_size=20)
     try:
         if not monitor.heard.wait(args.timeout):
             print('latency_monitor: no node reported an input age on /diagnostics in %g s'

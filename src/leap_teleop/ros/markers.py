@@ -1,7 +1,8 @@
 """RViz helpers: hand markers from the rich Hand message and from the driver-compatible
-DriverHuman, a drone body made of primitive markers, and a bounded pose trail for
-nav_msgs/Path. Message building only: no node, no master needed (the ROS adapters are
-nodes/hand_markers.py, nodes/sender.py and nodes/ardrone_sim.py)."""
+DriverHuman, a text marker of the pipeline's latency, a drone body made of primitive
+markers, and a bounded pose trail for nav_msgs/Path. Message building only: no node, no
+master needed (the ROS adapters are nodes/hand_markers.py, nodes/sender.py and
+nodes/ardrone_sim.py)."""
 import collections
 import math
 
@@ -206,6 +207,31 @@ class HandMarkerThrottle:
         out = hand_markers(hand, self.frame_id, self.lifetime, self.scale)
         self._last[hand.side] = (now, state)
         return out
+
+
+LATENCY_NS = 'latency'
+LATENCY_RGB = (1.0, 1.0, 1.0)
+
+
+def latency_marker(lines, frame_id, position, stamp, scale=1.0, lifetime=3.0):
+    """A TEXT_VIEW_FACING Marker (namespace 'latency') of `lines` at `position` (x, y, z)
+    in frame_id, stamped `stamp` (s); with no lines, a DELETE (nothing is reporting). The
+    lifetime clears it when its publisher stops."""
+    m = Marker()
+    m.header.stamp = rospy.Time.from_sec(stamp)
+    m.header.frame_id = frame_id
+    m.ns, m.id, m.type = LATENCY_NS, 0, Marker.TEXT_VIEW_FACING
+    if not lines:
+        m.action = Marker.DELETE
+        return m
+    m.action = Marker.ADD
+    m.pose.position = Point(*[float(v) for v in position])
+    m.pose.orientation.w = 1.0
+    m.scale.z = 0.025 * scale
+    m.color = _colour(LATENCY_RGB)
+    m.text = '\n'.join(lines)
+    m.lifetime = rospy.Duration.from_sec(lifetime)
+    return m
 
 
 def drone_markers(frame_id='ardrone_base_link', ns='ardrone'):

@@ -6,13 +6,16 @@ palm and fingertip spheres, palm -> tip lines, a palm-normal arrow and a label, 
 by the recognised state (grey open, red fist, green thumbs-up, blue pinch, yellow rock,
 purple thumbs-down),
 deleted when the hand leaves. The frame is the message's (leap_hands; the sender
-publishes the static TF world -> leap_hands).
+publishes the static TF world -> leap_hands). With ~latency_text, a text marker above the
+hands (namespace 'latency', once a second) shows the input ages reported on /diagnostics:
+the sender's capture -> published and each arm's and pilot's capture -> command, p50 / p99.
 """
 import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.msg import Hand
-from leap_teleop.ros.markers import HandMarkerThrottle
+from leap_teleop.ros.latency_monitor import LatencyMonitor
+from leap_teleop.ros.markers import HandMarkerThrottle, latency_marker
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
 
 PARAMS = {
@@ -26,6 +29,12 @@ PARAMS = {
                       unit='s', ge=0.0, le=3600.0),
     'frame_id': Param('', 'frame for the markers; empty = the Hand message\'s frame'),
     'scale': Param(1.0, 'size factor for spheres, lines and text', gt=0.0, le=100.0),
+    'latency_text': Param(True, 'show the input ages from /diagnostics (capture -> published, '
+                                'capture -> command) as a text marker'),
+    'latency_frame': Param('leap_hands', 'frame of the latency text', empty_ok=False),
+    'latency_position': Param([0.0, 0.45, 0.0], 'where the latency text stands in '
+                              'latency_frame (leap_hands: y is up, above the hands)', unit='m',
+                              length=3, ge=-100.0, le=100.0),
 }
 
 
@@ -37,6 +46,20 @@ class HandMarkersNode:
         self.log = RateLimitedLog()
         topics = p['hand_topics']
         self.subs = [rospy.Subscriber(t, Hand, self.on_hand, queue_size=5) for t in topics]
+        self.p = p
+        self.latency_shown = False
+        if p['latency_text']:
+            self.latency = LatencyMonitor()
+            self.timer = rospy.Timer(rospy.Duration(1.0), self.on_latency_timer)
+
+    def on_latency_timer(self, _event):
+        now = rospy.get_time()
+        lines = self.latency.board.notes(now)
+        if lines or self.latency_shown:        # one DELETE once reports stop
+            self.pub.publish(MarkerArray([latency_marker(lines, self.p['latency_frame'],
+                                                         self.p['latency_position'], now,
+                                                         self.p['scale'])]))
+        self.latency_shown = bool(lines)
 
     def on_hand(self, msg):
         try:

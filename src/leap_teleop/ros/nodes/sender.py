@@ -17,6 +17,7 @@ from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.ros.camera_topics import camera_model, camera_view
 from leap_teleop.ros.conversions import transform_msg
+from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.hand_topics import HandTopics
 from leap_teleop.ros.node import package_path, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
@@ -47,6 +48,9 @@ def main(argv=None):
                               dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None,
                               bindings=bindings)
     topics = HandTopics(p, interface)
+    # The stage ages go out from a timer's thread: the source's thread only stamps them.
+    diagnostics = update_every(diagnostics_updater('leap_sender', 'hand stages', topics.report,  # noqa: F841
+                                                   topics.ages))
     reconfigure = Reconfigure('sender', PARAMS, RECONFIGURABLE, p,  # noqa: F841 (kept alive)
                               lambda changes: retune_sender(interface.recognizers().values(),
                                                             topics.driver.lowpass, changes))
