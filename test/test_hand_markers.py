@@ -158,11 +158,11 @@ def test_drone_markers_are_frame_locked_primitives_with_unique_ids():
 
 def test_latency_marker_is_text_above_the_hands_and_deletes_when_empty():
     m = viz.latency_marker(['capture -> stage, p50 / p99:', 'ur10_1/ur10_arm command: 9.0 / 12.0 ms'],
-                           'leap_hands', (0.0, 0.45, 0.0), 12.5, scale=2.0)
+                           'leap_hands', (0.0, 0.6, 0.0), 12.5, scale=2.0)
     assert (m.ns, m.type, m.action) == ('latency', Marker.TEXT_VIEW_FACING, Marker.ADD)
     assert m.header.frame_id == 'leap_hands' and m.header.stamp.to_sec() == 12.5
     assert m.text.splitlines()[1] == 'ur10_1/ur10_arm command: 9.0 / 12.0 ms'
-    assert (m.pose.position.y, m.scale.z) == (0.45, pytest.approx(0.05))
+    assert (m.pose.position.y, m.scale.z) == (0.6, pytest.approx(0.1))
     assert m.lifetime.to_sec() > 1.0          # outlives the 1 s refresh, clears when it stops
     gone = viz.latency_marker([], 'leap_hands', (0.0, 0.45, 0.0), 13.0)
     assert (gone.ns, gone.id, gone.action) == ('latency', 0, Marker.DELETE)

@@ -53,15 +53,15 @@ def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=()):
         _text(out, label, (max(2, x), max(16, y)), colour, thick)
     if fps is not None:
         _text(out, '%.1f fps' % fps, (6, 20), (255, 255, 255), thick)
-    step = 18 * thick
+    small = max(1, thick - 1)           # smaller than the labels: several lines, kept out of the way
     for k, line in enumerate(reversed(list(notes))):
-        _text(out, line, (6, h - 8 - k * step), (255, 255, 255), thick)
+        _text(out, line, (6, h - 6 - k * 14 * thick), (255, 255, 255), small, 0.35 * thick)
     return out
 
 
-def _text(img, text, org, colour, thick):
+def _text(img, text, org, colour, thick, scale=None):
     import cv2
-    scale = 0.5 * thick
+    scale = scale or 0.5 * thick
     cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), thick + 2,
                 cv2.LINE_AA)
     cv2.putText(img, text, org, cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thick, cv2.LINE_AA)

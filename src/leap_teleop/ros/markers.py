@@ -227,7 +227,7 @@ def latency_marker(lines, frame_id, position, stamp, scale=1.0, lifetime=3.0):
     m.action = Marker.ADD
     m.pose.position = Point(*[float(v) for v in position])
     m.pose.orientation.w = 1.0
-    m.scale.z = 0.025 * scale
+    m.scale.z = 0.05 * scale            # line height, m: readable beside a whole arm
     m.color = _colour(LATENCY_RGB)
     m.text = '\n'.join(lines)
     m.lifetime = rospy.Duration.from_sec(lifetime)
