@@ -32,9 +32,9 @@ PARAMS = {
     'latency_text': Param(True, 'show the input ages from /diagnostics (capture -> published, '
                                 'capture -> command) as a text marker'),
     'latency_frame': Param('leap_hands', 'frame of the latency text', empty_ok=False),
-    'latency_position': Param([0.0, 0.6, 0.0], 'where the latency text stands in '
-                              'latency_frame (leap_hands: y is up, above the hands)', unit='m',
-                              length=3, ge=-100.0, le=100.0),
+    'latency_position': Param([0.0, 0.4, 0.3], 'where the latency text stands in latency_frame '
+                              '(leap_hands: y up, z toward the user): above the hands, in front',
+                              unit='m', length=3, ge=-100.0, le=100.0),
 }
 
 
