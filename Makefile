@@ -13,10 +13,12 @@ demo: setup
 	@$(ENV) python -m tools.demo --gui $(GUI)
 
 # Everything: the linter, then every test (unit, integration, rostests, the workspace), on
-# two workers; a file's tests stay on one worker, so its module fixtures are built once.
+# TEST_WORKERS workers; test/conftest.py makes each file one work unit (its module fixtures
+# are built once) except the rostests, one unit each, and hands the longest out first.
+TEST_WORKERS ?= 2
 test: setup
 	@$(ENV) ruff check src tools test scripts
-	@$(ENV) python -m pytest test/ -n 2 --dist loadfile $(PYTEST_ARGS)
+	@$(ENV) python -m pytest test/ -n $(TEST_WORKERS) --dist loadgroup --no-loadscope-reorder $(PYTEST_ARGS)
 
 # The unit tests that need no ROS master, no simulator and no model fitting: for while you work.
 check: setup

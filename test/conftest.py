@@ -21,3 +21,28 @@ def leapjs_data():
     if not os.path.isdir(path):
         pytest.fail('the shared LeapJS recordings are not at %s: set $LEAPJS_DATA' % path)
     return path
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Work units for `make test`'s two workers (`--dist loadgroup`): a test file is one
+    unit, so its module fixtures are built once, except the rostests, each a unit of its
+    own, so the two workers share them; the longest units are handed out first."""
+    if not getattr(config.option, 'loadgroup', False):   # set on the workers
+        return
+    for item in items:
+        rostest = item.get_closest_marker('rostest') is not None
+        item.add_marker(pytest.mark.xdist_group(item.name if rostest else item.path.name))
+    # Longest first, keeping each file's tests together and in order: the minutes-long
+    # fits, builds and simulations, then the rostests, then the rest.
+    def rank(item):
+        if item.get_closest_marker('slow') is not None:
+            return 0
+        if item.get_closest_marker('rostest') is not None:
+            return 1
+        return 2 if item.get_closest_marker('integration') is not None else 3
+    order = {}
+    for i, item in enumerate(items):
+        r, first = order.get(item.path, (3, i))
+        order[item.path] = (min(r, rank(item)), first)
+    items.sort(key=lambda item: order[item.path])
