@@ -277,8 +277,8 @@ def window(secs=2.5):
     t0 = time.monotonic()
     time.sleep(secs)
     starts = len([t for t in fists if t > t0 + 0.3])
-    lag = [abs(filtered[k][1] - raw[k][1]) for k in filtered
-           if k in raw and filtered[k][0] > t0 + 0.3]
+    got, seen = dict(filtered), dict(raw)     # copies: the subscribers keep adding
+    lag = [abs(got[k][1] - seen[k][1]) for k in got if k in seen and got[k][0] > t0 + 0.3]
     return starts, sum(lag) / max(len(lag), 1)
 
 out = {'default': window()}
