@@ -204,6 +204,7 @@ class DronePilot:
         return self.navdata_lost_since is None and self.navdata_fresh(now)
 
     def on_hand(self, hand, now):
+        """Take one PilotInput; returns why it was ignored (None if it was not)."""
         with self._lock:
             why = None
             if hand.present and not all(math.isfinite(v) for v in tuple(hand.palm)
@@ -222,7 +223,7 @@ class DronePilot:
                 # Not fed to the watchdog: a stream of bad messages hovers, then lands.
                 self.rejected_inputs += 1
                 self._warn('hand', 'ignored a Hand message: %s' % why)
-                return
+                return why
             self.last_hand_time = now
             if not hand.present:
                 self._lose(now)

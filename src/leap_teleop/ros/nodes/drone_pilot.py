@@ -3,16 +3,14 @@
 Reads leap_teleop/Hand (~hand_topic) and leap_teleop/GestureEvent (~gesture_topic, only
 events of ~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardrone/land
 and calls ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip;
-~mode tilt (palm offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only
-queue commands; a worker thread runs the watchdog and publishes them; the flip service
-call runs on a thread of its own and is abandoned after ~service_timeout, so a hung
-simulator or driver never stops a hover or a landing. Without navdata for
-~navdata_timeout the drone state is unknown: no takeoff, hover, land after ~land_after.
-See leap_teleop.drone.pilot for the mapping and the watchdogs. Rejected Hand messages
-(non-finite, out of order, late), worker faults and flip call outcomes are counted and
-reported on /diagnostics. RECONFIGURABLE parameters (dead zones, scales, the command cap,
-the flip's thresholds) can be changed while running with dynamic_reconfigure; modes, rates,
-watchdog times and topics are start-up only.
+~mode tilt (palm offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only queue
+commands; a worker thread runs the watchdog and publishes them; the flip call runs on its
+own thread, abandoned after ~service_timeout (a hung driver never stops a hover or a
+landing). Without navdata for ~navdata_timeout the drone state is unknown: no takeoff,
+hover, land after ~land_after. See leap_teleop.drone.pilot for the mapping and the watchdogs. Rejected Hand messages,
+worker faults and flip call outcomes are counted on /diagnostics. RECONFIGURABLE
+parameters (dead zones, scales, the command cap, the flip's thresholds) can be changed
+while running with dynamic_reconfigure; modes, rates, watchdog times and topics cannot.
 """
 import threading
 
@@ -24,6 +22,7 @@ from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.ros import conversions
 from leap_teleop.ros.ardrone_commands import ArdroneCommands
 from leap_teleop.ros.diagnostics import diagnostics_updater
+from leap_teleop.ros.hand_subscription import HandSubscription
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.service_call import ServiceCall
@@ -42,7 +41,8 @@ class DronePilotNode:
         self.commands = ArdroneCommands(p['service_timeout'])
         hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
-        rospy.Subscriber(hand_topic, Hand, self.on_hand, queue_size=5, tcp_nodelay=True)
+        self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot',
+                                         p['resubscribe_after'], queue_size=5)
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
         self.diagnostics = diagnostics_updater('drone_pilot_%s' % p['side'], 'pilot', self.report,
@@ -64,8 +64,8 @@ class DronePilotNode:
             self.pilot.rejected_inputs += 1
             self.log.warn('side', 'pilot: ignored a Hand of side %d on %s (following side %d)',
                           msg.side, self.hand_topic, self.side)
-            return
-        self.pilot.on_hand(conversions.pilot_input(msg), rospy.get_time())
+            return 'side %d' % msg.side
+        return self.pilot.on_hand(conversions.pilot_input(msg), rospy.get_time())
 
     def on_gesture(self, msg):
         if msg.side == self.side:
@@ -83,7 +83,8 @@ class DronePilotNode:
     def report(self):
         """The diagnostics (on the worker's thread, through its `extra`)."""
         level, summary, values = self.worker.diagnostics(rospy.get_time())
-        return level, summary, values + [('twists published', self.commands.twists)]
+        return level, summary, (values + [('twists published', self.commands.twists)]
+                                + self.hand_sub.diagnostic_values())
 
     def retune(self, changes):
         for name, value in changes.items():

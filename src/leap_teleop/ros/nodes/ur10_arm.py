@@ -18,6 +18,7 @@ from leap_teleop.ros import conversions
 from leap_teleop.ros.arm_topics import ArmCommandTopics
 from leap_teleop.ros.diagnostics import diagnostics_updater
 from leap_teleop.ros.graph import TopicTypeWatch, wait_for_first_message
+from leap_teleop.ros.hand_subscription import HandSubscription
 from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
@@ -45,8 +46,9 @@ class ArmNode:
         rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
         self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('ur10_arm: %s', text),
                                        lambda text: rospy.logwarn('ur10_arm: %s', text))
-        self.diagnostics = diagnostics_updater('ur10_arm_%s' % p['hand'], 'teleop',
-                                               self.runner.teleop.diagnostics, self.topics.input_age)
+        self.hand_sub = None            # from wait_for_robot on
+        self.diagnostics = diagnostics_updater('ur10_arm_%s' % p['hand'], 'teleop', self.report,
+                                               self.topics.input_age)
         rospy.loginfo('ur10_arm: %s hand on %s drives %s (%s)', p['hand'],
                       rospy.resolve_name(self.hand_topic), self.topics.arm.resolved_name,
                       params.summary())
@@ -57,6 +59,7 @@ class ArmNode:
         why = self.runner.on_hand(hand, rospy.get_time())
         if why:
             self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)
+        return why
 
     def on_joints(self, msg):
         try:
@@ -73,13 +76,18 @@ class ArmNode:
         ~wait_for_subscribers then starts its session exactly when the arm is ready."""
         if not wait_for_first_message(self.joints_seen, 'joint_states', 'ur10_arm'):
             return False
-        rospy.Subscriber(self.hand_topic, self.hand_type, self.on_hand, queue_size=50, tcp_nodelay=True)
+        self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
+                                         self.p['resubscribe_after'], queue_size=50)
         side = self.p['hand']
         self.type_watch = TopicTypeWatch(
             self.hand_topic, self.hand_type, 'ur10_arm', 'this arm (hand %s)' % side,
             "no hand input arrives; publish the %s hand there or set ~hand_topic / the launch "
             "file's topic" % side, self.log)
         return True
+
+    def report(self):
+        level, summary, values = self.runner.teleop.diagnostics()
+        return level, summary, values + (self.hand_sub.diagnostic_values() if self.hand_sub else [])
 
     def tick(self, cmd, snapshot, now):
         """After each step, on the control loop's thread."""

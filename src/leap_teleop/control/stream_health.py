@@ -1,0 +1,80 @@
+"""When a consumer should re-establish its input connection, no ROS.
+
+A standing backlog can form anywhere along one connection (the publisher's queue, both
+socket buffers) and keep every message late long after the load that built it is gone;
+a connection can also fall silent while its publisher lives on and serves others. Neither
+heals by itself. Dropping the connection and subscribing afresh clears both. This class
+decides when: input refused as late for `after` seconds without one message on time
+(again every `after` seconds while that lasts: late input is refused anyway, and the
+backlog may clear at any moment), or no message at all for `after` seconds while a
+publisher is connected. Silence can be legitimate (a paused bag, a source waiting for a
+device), so each silent re-subscription doubles the wait before the next (up to
+`max_wait`) until a message comes: a few log lines, not a storm.
+"""
+from leap_teleop.params import Param
+
+# A consumer node's ~param (the arm nodes, the pilots).
+STREAM_HEALTH_PARAMS = {
+    'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
+                                    'message late, or with none while a publisher is connected '
+                                    '(silent ones back off to 8 s); 0 = never', unit='s',
+                               ge=0.0, le=60.0),
+}
+
+
+class StreamHealth:
+    def __init__(self, after, max_wait=8.0):
+        """after: seconds of late-only or silent input before a re-subscription; 0 = never.
+        max_wait: the longest wait between silent re-subscriptions."""
+        self.after = float(after)
+        self.max_wait = max(float(max_wait), self.after)
+        self.wait = self.after
+        self.resubscriptions = 0
+        self.since = None           # start of the current judgement (first message or check,
+                                    # or the last re-subscription)
+        self.last_rx = None         # last message of any kind
+        self.late_since = None      # first late message since the last one on time
+        self.silent = False         # the last re-subscription was for silence
+
+    def on_message(self, now, late):
+        """A message arrived at `now`; `late` when the consumer refused it as late."""
+        self.last_rx = now
+        if self.since is None:
+            self.since = now
+        if late:
+            if self.late_since is None:
+                self.late_since = now
+        else:
+            self.late_since = None
+        self.wait = self.after
+
+    def due(self, now, publishers):
+        """Why the connection should be re-established now (None: it should not).
+        publishers: how many publishers the subscription is connected to."""
+        if self.after <= 0:
+            return None
+        if self.since is None:
+            self.since = now
+        if now < self.since:                     # the clock jumped back: judge afresh
+            self.since, self.late_since = now, None
+            return None
+        if self.late_since is not None:
+            late_for = now - max(self.late_since, self.since)
+            if late_for >= self.after:
+                self.silent = False
+                return 'every message late for %.1f s' % late_for
+        quiet_since = max(self.since, self.last_rx if self.last_rx is not None else self.since)
+        if publishers > 0 and now - quiet_since >= self.wait:
+            self.silent = True
+            return 'no message for %.1f s while %d publisher%s connected' % (
+                now - quiet_since, publishers, ' is' if publishers == 1 else 's are')
+        return None
+
+    def resubscribed(self, now):
+        """The connection was re-established at `now`: judge afresh; after a silent one,
+        wait twice as long for the next unless a message comes first."""
+        self.resubscriptions += 1
+        self.since = now
+        self.late_since = None
+        if self.silent:
+            self.wait = min(2.0 * self.wait, self.max_wait)

@@ -1,0 +1,57 @@
+"""A consumer's hand-input subscription: counts what arrives per publisher and
+re-establishes the connection when its input stays late or silent while a publisher is
+connected (control.stream_health says when)."""
+import collections
+import threading
+
+import rospy
+
+from leap_teleop.control.stream_health import StreamHealth
+
+
+class HandSubscription:
+    def __init__(self, topic, msg_type, callback, node, resubscribe_after, queue_size,
+                 check_period=0.25):
+        """callback(msg) returns why the message was refused (None if it was not); a
+        reason starting with 'late' counts against the connection."""
+        self.topic, self.msg_type, self.callback = topic, msg_type, callback
+        self.node, self.queue_size = node, queue_size
+        self.health = StreamHealth(resubscribe_after)
+        self.received = collections.Counter()          # per publisher (caller id)
+        self._lock = threading.Lock()
+        self.sub = self._subscribe()
+        # Its own timer thread: a re-subscription talks to the master and may block; no
+        # watchdog of the node shares this thread.
+        self.timer = (rospy.Timer(rospy.Duration.from_sec(check_period), self._check)
+                      if resubscribe_after > 0 else None)
+
+    def _subscribe(self):
+        return rospy.Subscriber(self.topic, self.msg_type, self._on_message,
+                                queue_size=self.queue_size, tcp_nodelay=True)
+
+    def _on_message(self, msg):
+        header = getattr(msg, '_connection_header', None) or {}
+        self.received[header.get('callerid', '?')] += 1
+        why = self.callback(msg)
+        with self._lock:
+            self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
+
+    def _check(self, _event=None):
+        now = rospy.get_time()
+        with self._lock:
+            why = self.health.due(now, self.sub.get_num_connections())
+            if why is None:
+                return
+            self.health.resubscribed(now)
+        # Unregister first: a second Subscriber on the same topic would share the old
+        # connections instead of making new ones.
+        self.sub.unregister()
+        self.sub = self._subscribe()
+        rospy.logwarn('%s: re-subscribed to %s (%s); next after %.1f s more of the same',
+                      self.node, rospy.resolve_name(self.topic), why, self.health.wait)
+
+    def diagnostic_values(self):
+        counts = dict(self.received)        # a copy: the callback thread adds publishers
+        values = [('hand messages received', str(sum(counts.values())))]
+        values += [('hand messages from %s' % caller, str(n)) for caller, n in sorted(counts.items())]
+        return values + [('hand re-subscriptions', str(self.health.resubscriptions))]

@@ -1,0 +1,148 @@
+"""When a consumer re-establishes its hand connection (control.stream_health), and a real
+subscription doing it under a private master (ros.hand_subscription)."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from leap_teleop.control.stream_health import StreamHealth
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def feed(health, t0, t1, late, step=0.01):
+    t = t0
+    while t < t1:
+        health.on_message(t, late)
+        t += step
+
+
+def test_on_time_input_never_asks():
+    h = StreamHealth(0.5)
+    feed(h, 0.0, 10.0, late=False)
+    assert all(h.due(t / 10.0, 1) is None for t in range(100))
+
+
+def test_late_input_asks_after_its_time_and_again_while_it_lasts():
+    h = StreamHealth(0.5)
+    feed(h, 0.0, 1.0, late=False)
+    assert h.due(1.0, 1) is None
+    feed(h, 1.0, 1.4, late=True)
+    assert h.due(1.4, 1) is None
+    feed(h, 1.4, 1.5, late=True)
+    why = h.due(1.5, 1)
+    assert why and why.startswith('every message late for 0.5')
+    h.resubscribed(1.5)
+    assert h.wait == 0.5                    # late input: no back-off
+    feed(h, 1.5, 1.9, late=True)
+    assert h.due(1.9, 1) is None
+    feed(h, 1.9, 2.01, late=True)
+    assert h.due(2.01, 1)
+    h.resubscribed(2.01)
+    # one message on time ends the streak
+    feed(h, 2.01, 2.3, late=True)
+    h.on_message(2.3, late=False)
+    feed(h, 2.31, 2.7, late=True)
+    assert h.due(2.7, 1) is None            # the streak began again at 2.31
+    assert h.resubscriptions == 2
+
+
+def test_silence_asks_only_with_a_publisher_and_backs_off():
+    h = StreamHealth(0.5, max_wait=2.0)
+    feed(h, 0.0, 1.0, late=False)
+    assert h.due(5.0, 0) is None            # nobody publishes: nothing to re-establish
+    why = h.due(5.0, 1)
+    assert why and 'no message for' in why and '1 publisher is connected' in why
+    waits = []
+    t = 5.0
+    for _ in range(4):
+        h.resubscribed(t)
+        waits.append(h.wait)
+        assert h.due(t + h.wait - 0.01, 1) is None
+        t += h.wait
+        assert h.due(t, 2)
+    assert waits == [1.0, 2.0, 2.0, 2.0]
+    h.on_message(t, late=False)             # a message: the short wait again
+    assert h.wait == 0.5
+
+
+def test_zero_disables_and_a_clock_jump_back_starts_afresh():
+    h = StreamHealth(0.0)
+    feed(h, 0.0, 5.0, late=True)
+    assert h.due(5.0, 1) is None
+    h = StreamHealth(0.5)
+    feed(h, 10.0, 11.0, late=True)
+    assert h.due(11.0, 1)
+    assert h.due(1.0, 1) is None            # a simulator restarted its /clock
+
+
+CLIENT = r'''
+import json, sys, time
+import rospy
+from leap_teleop.control.input_check import InputStream
+from leap_teleop.msg import Hand
+from leap_teleop.ros.hand_subscription import HandSubscription
+
+rospy.init_node('stream_health_client')
+stream = InputStream(max_age=0.25, gap=1.0)
+pub = rospy.Publisher('hands', Hand, queue_size=100, tcp_nodelay=True)
+sub = HandSubscription('hands', Hand, lambda m: stream.check(m.header.stamp.to_sec(), rospy.get_time()),
+                       'client', 0.5, queue_size=5)
+deadline = time.monotonic() + 20
+while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
+    time.sleep(0.05)
+
+def publish(secs, delay):
+    end = time.monotonic() + secs
+    while time.monotonic() < end:
+        h = Hand(present=True)
+        h.header.stamp = rospy.Time.from_sec(rospy.get_time() - delay)
+        pub.publish(h)
+        time.sleep(0.01)
+
+out = {}
+def phase(name, secs, delay=None):
+    before = sub.health.resubscriptions
+    if delay is None:
+        time.sleep(secs)
+    else:
+        publish(secs, delay)
+    out[name] = {'resubscriptions': sub.health.resubscriptions - before,
+                 'received': sum(sub.received.values()),
+                 'connections': sub.sub.get_num_connections()}
+
+phase('on_time', 1.5, 0.0)
+phase('late', 2.0, 0.6)          # a standing backlog, as the consumer sees it
+phase('on_time_again', 1.5, 0.0)
+phase('silent', 2.6)             # the publisher lives on, sends nothing
+out['diagnostics'] = dict(sub.diagnostic_values())
+print(json.dumps(out))
+'''
+
+
+@pytest.mark.integration
+def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_got():
+    from tools.bench.ros_processes import ros_master
+    with ros_master() as env:
+        proc = subprocess.run([sys.executable, '-c', CLIENT], env=env, cwd=ROOT, timeout=120,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out['on_time']['resubscriptions'] == 0, out
+    # 2 s of late input: one re-subscription every 0.5 s of it (the first after 0.5 s)
+    assert 2 <= out['late']['resubscriptions'] <= 4, out
+    assert out['late']['connections'] == 1, out
+    # after them, messages arrive on the new connection and are on time: no more
+    assert out['on_time_again']['resubscriptions'] <= 1, out
+    assert out['on_time_again']['received'] - out['late']['received'] > 50, out
+    # 2.6 s of silence with the publisher connected: after 0.5 s, then 1 s later (back-off)
+    assert 1 <= out['silent']['resubscriptions'] <= 2, out
+    assert out['silent']['connections'] == 1, out
+    diag = out['diagnostics']
+    assert diag['hand messages from /stream_health_client'] == diag['hand messages received']
+    assert int(diag['hand re-subscriptions']) == sum(
+        out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent'))
+    assert 'client: re-subscribed to /hands (every message late for' in proc.stderr, proc.stderr[-3000:]
