@@ -21,13 +21,13 @@ def feed(health, t0, t1, late, step=0.01):
 
 
 def test_on_time_input_never_asks():
-    h = StreamHealth(0.5)
+    h = StreamHealth(0.5, 2.0)
     feed(h, 0.0, 10.0, late=False)
     assert all(h.due(t / 10.0, 1) is None for t in range(100))
 
 
 def test_late_input_asks_after_its_time_and_again_while_it_lasts():
-    h = StreamHealth(0.5)
+    h = StreamHealth(0.5, 2.0)
     feed(h, 0.0, 1.0, late=False)
     assert h.due(1.0, 1) is None
     feed(h, 1.0, 1.4, late=True)
@@ -36,7 +36,7 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     why = h.due(1.5, 1)
     assert why and why.startswith('every message late for 0.5')
     h.resubscribed(1.5)
-    assert h.wait == 0.5                    # late input: no back-off
+    assert h.wait == 2.0                    # late input: no back-off
     feed(h, 1.5, 1.9, late=True)
     assert h.due(1.9, 1) is None
     feed(h, 1.9, 2.01, late=True)
@@ -51,7 +51,7 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
 
 
 def test_silence_asks_only_with_a_publisher_and_backs_off():
-    h = StreamHealth(0.5, max_wait=2.0)
+    h = StreamHealth(0.5, 0.5)
     feed(h, 0.0, 1.0, late=False)
     assert h.due(5.0, 0) is None            # nobody publishes: nothing to re-establish
     why = h.due(5.0, 1)
@@ -64,16 +64,16 @@ def test_silence_asks_only_with_a_publisher_and_backs_off():
         assert h.due(t + h.wait - 0.01, 1) is None
         t += h.wait
         assert h.due(t, 2)
-    assert waits == [1.0, 2.0, 2.0, 2.0]
+    assert waits == [1.0, 2.0, 2.0, 2.0]    # up to 4 x silent_after
     h.on_message(t, late=False)             # a message: the short wait again
     assert h.wait == 0.5
 
 
 def test_zero_disables_and_a_clock_jump_back_starts_afresh():
-    h = StreamHealth(0.0)
+    h = StreamHealth(0.0, 0.0)
     feed(h, 0.0, 5.0, late=True)
-    assert h.due(5.0, 1) is None
-    h = StreamHealth(0.5)
+    assert h.due(5.0, 1) is None and h.due(50.0, 1) is None
+    h = StreamHealth(0.5, 2.0)
     feed(h, 10.0, 11.0, late=True)
     assert h.due(11.0, 1)
     assert h.due(1.0, 1) is None            # a simulator restarted its /clock
@@ -90,7 +90,8 @@ rospy.init_node('stream_health_client')
 stream = InputStream(max_age=0.25, gap=1.0)
 pub = rospy.Publisher('hands', Hand, queue_size=100, tcp_nodelay=True)
 sub = HandSubscription('hands', Hand, lambda m: stream.check(m.header.stamp.to_sec(), rospy.get_time()),
-                       'client', 0.5, queue_size=5)
+                       'client', {'resubscribe_after': 0.5, 'resubscribe_silent_after': 0.5},
+                       queue_size=5)
 deadline = time.monotonic() + 20
 while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
     time.sleep(0.05)

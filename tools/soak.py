@@ -37,6 +37,10 @@ import xmlrpc.client
 import numpy as np
 
 ARMS = {'ur10_1': ('right', 'cube_red'), 'ur10_2': ('left', 'cube_yellow')}
+PLAYER = '/soak'           # this process's node: the consumers count what came from it
+# Each consumer node (as its /diagnostics status names it) and the topic it reads.
+CONSUMERS = {'ur10_1/ur10_arm': '/leapmotion/data_right', 'ur10_2/ur10_arm': '/leapmotion/data_left',
+             'drone/drone_pilot': '/drone/leapmotion/hand_right'}
 # The graph's own nodes: one that is gone (refused a parameter, crashed) ends the soak
 # rather than leaving its figures out.
 NODES = ('/ur10_sim', '/ur10_1/ur10_arm', '/ur10_2/ur10_arm', '/drone/drone_pilot',
@@ -60,14 +64,20 @@ LAUNCH = """<launch>
   <param name="ur10_1/ur10_arm/input_timeout" value="{input_timeout}"/>
   <param name="ur10_1/ur10_arm/disarm_after" value="{disarm_after}"/>
   <param name="ur10_1/ur10_arm/max_input_age" value="{max_age}"/>
+  <param name="ur10_1/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
+  <param name="ur10_1/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
   <param name="ur10_2/ur10_arm/input_timeout" value="{input_timeout}"/>
   <param name="ur10_2/ur10_arm/disarm_after" value="{disarm_after}"/>
   <param name="ur10_2/ur10_arm/max_input_age" value="{max_age}"/>
+  <param name="ur10_2/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
+  <param name="ur10_2/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
   <group ns="drone">
     <rosparam command="load" file="$(find leap_teleop)/config/ardrone.yaml"/>
     <param name="drone_pilot/hand_timeout" value="{hand_timeout}"/>
     <param name="drone_pilot/disarm_after" value="{disarm_after}"/>
     <param name="drone_pilot/max_input_age" value="{max_age}"/>
+    <param name="drone_pilot/resubscribe_after" value="{resubscribe_after}"/>
+    <param name="drone_pilot/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
     <node pkg="leap_teleop" type="drone_pilot.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
       <param name="realtime_factor" value="{rtf}"/>
@@ -137,6 +147,7 @@ class SoakMonitor:
         rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self.on_objects, queue_size=2)
         from diagnostic_msgs.msg import DiagnosticArray
         self.diag_rejected = {}
+        self.consumer_received, self.resubscriptions = {}, {}   # per consumer, their own count
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
 
     def on_diag(self, msg):
@@ -145,6 +156,10 @@ class SoakMonitor:
                 for kv in st.values:
                     if kv.key == 'rejected inputs':
                         self.diag_rejected[st.name] = int(kv.value)
+                    elif kv.key == 'hand messages from %s' % PLAYER:
+                        self.consumer_received[st.name] = int(kv.value)
+                    elif kv.key == 'hand re-subscriptions':
+                        self.resubscriptions[st.name] = int(kv.value)
 
     def _seq(self, topic, msg):
         seq = msg.header.seq
@@ -237,7 +252,8 @@ def run(minutes, rtf, rate_hz=None, log=print):
         env = dict(env, ROS_LOG_DIR=log_dir)
         with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
             f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
-                                  hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf))
+                                  hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
+                                  resubscribe_after=0.5 * rtf, resubscribe_silent_after=2.0 * rtf))
             launch_file = f.name
         subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
         graph = subprocess.Popen(['roslaunch', launch_file], env=env,
@@ -275,7 +291,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     log('[soak] session %.1f s sim, %d messages; %d cycles = %.1f sim minutes at x%g'
         % (cycle_len, len(session), cycles, cycles * cycle_len / 60.0, rtf))
 
-    rospy.init_node('soak', disable_signals=True)
+    rospy.init_node(PLAYER.lstrip('/'), disable_signals=True)
     types = {'/leapmotion/data_right': conversions.LEAPCOBOT_TYPES['right'],
              '/leapmotion/data_left': conversions.LEAPCOBOT_TYPES['left'],
              '/drone/leapmotion/hand_right': Hand, '/drone/leapmotion/gestures': GestureEvent}
@@ -353,7 +369,15 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     rejected = {arm: int(s.rejected_inputs) for arm, s in status.items()}
     with mon.lock:
         rejected.update({n: v for n, v in mon.diag_rejected.items() if 'pilot' in n})
-    dropped = sum(lost_inputs.values()) + sum(gaps.values())
+        got = dict(mon.consumer_received)
+        resubscribed = dict(mon.resubscriptions)
+    # What each consumer itself received from the player, against what the player sent on
+    # its topic (a consumer that never reported counts as having received nothing).
+    lost_by_consumer = {}
+    for consumer, topic in CONSUMERS.items():
+        counts = [n for name, n in got.items() if name.startswith(consumer + ':')]
+        lost_by_consumer[consumer] = sent[topic] - (counts[0] if counts else 0)
+    dropped = sum(lost_inputs.values()) + sum(gaps.values()) + sum(lost_by_consumer.values())
     growth = {}
     for n, samples in rss.items():
         if len(samples) >= 2 and samples[0][1] > 0:
@@ -380,13 +404,16 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
                                                    1e3 * percentile([v for _, v in lat.get('arm', [])], 99)))
     log('[soak] hand -> cmd_vel latency p50: first %.2f ms, last %.2f ms (drift %+.2f ms)'
         % (dr_first, dr_last, dr_drift))
-    log('[soak] lost inputs %s, sequence gaps %s, rejected by the nodes %s'
-        % (lost_inputs, gaps, rejected))
+    log('[soak] lost inputs (the monitor) %s, lost per consumer (their own counts) %s, '
+        'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s'
+        % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
     log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
         % (sum(placed), 2 * cycles, flights, cycles))
     figures = {
         'soak.rss_growth_pct': max(growth.values()) if growth else float('nan'),
         'soak.dropped_msgs': dropped,
+        'soak.consumer_lost_msgs': sum(lost_by_consumer.values()),
+        'soak.resubscriptions': sum(resubscribed.values()),
         'soak.rejected_inputs': sum(rejected.values()),
         'soak.sim_minutes': sim / 60.0,
         'soak.sim_wall_ratio': sim / wall,
@@ -400,8 +427,13 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     sources = {
         'soak.rss_growth_pct': 'VmRSS of each node after cycle 1 vs the end, the largest '
                                'growth (%s)' % nodes,
-        'soak.dropped_msgs': 'hand messages sent minus received %s, plus sequence gaps %s'
-                             % (lost_inputs, gaps),
+        'soak.dropped_msgs': 'hand messages sent minus received by the monitor %s and by '
+                             'each consumer %s, plus sequence gaps %s'
+                             % (lost_inputs, lost_by_consumer, gaps),
+        'soak.consumer_lost_msgs': 'hand messages the player sent minus what each consumer '
+                                   'counted from it (its /diagnostics) %s' % lost_by_consumer,
+        'soak.resubscriptions': 'hand connections the consumers re-established %s'
+                                % resubscribed,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'
                                 % rejected,
         'soak.sim_minutes': '/clock of the UR10 simulator',

@@ -6,29 +6,31 @@ a connection can also fall silent while its publisher lives on and serves others
 heals by itself. Dropping the connection and subscribing afresh clears both. This class
 decides when: input refused as late for `after` seconds without one message on time
 (again every `after` seconds while that lasts: late input is refused anyway, and the
-backlog may clear at any moment), or no message at all for `after` seconds while a
+backlog may clear at any moment), or no message at all for `silent_after` seconds while a
 publisher is connected. Silence can be legitimate (a paused bag, a source waiting for a
-device), so each silent re-subscription doubles the wait before the next (up to
-`max_wait`) until a message comes: a few log lines, not a storm.
+device), so each silent re-subscription doubles the wait before the next (up to four
+times `silent_after`) until a message comes: a few log lines, not a storm.
 """
 from leap_teleop.params import Param
 
 # A consumer node's ~param (the arm nodes, the pilots).
 STREAM_HEALTH_PARAMS = {
     'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
-                                    'message late, or with none while a publisher is connected '
-                                    '(silent ones back off to 8 s); 0 = never', unit='s',
+                                    'message late (again while it lasts); 0 = never', unit='s',
                                ge=0.0, le=60.0),
+    'resubscribe_silent_after': Param(2.0, 're-establish it after this long without any message '
+                                           'while a publisher is connected (backing off to 4x); '
+                                           '0 = never', unit='s', ge=0.0, le=60.0),
 }
 
 
 class StreamHealth:
-    def __init__(self, after, max_wait=8.0):
-        """after: seconds of late-only or silent input before a re-subscription; 0 = never.
-        max_wait: the longest wait between silent re-subscriptions."""
+    def __init__(self, after, silent_after):
+        """after: seconds of late-only input before a re-subscription; silent_after: of no
+        input while a publisher is connected; 0 = never."""
         self.after = float(after)
-        self.max_wait = max(float(max_wait), self.after)
-        self.wait = self.after
+        self.silent_after = float(silent_after)
+        self.wait = self.silent_after
         self.resubscriptions = 0
         self.since = None           # start of the current judgement (first message or check,
                                     # or the last re-subscription)
@@ -46,25 +48,23 @@ class StreamHealth:
                 self.late_since = now
         else:
             self.late_since = None
-        self.wait = self.after
+        self.wait = self.silent_after
 
     def due(self, now, publishers):
         """Why the connection should be re-established now (None: it should not).
         publishers: how many publishers the subscription is connected to."""
-        if self.after <= 0:
-            return None
         if self.since is None:
             self.since = now
         if now < self.since:                     # the clock jumped back: judge afresh
             self.since, self.late_since = now, None
             return None
-        if self.late_since is not None:
+        if self.late_since is not None and self.after > 0:
             late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
                 self.silent = False
                 return 'every message late for %.1f s' % late_for
         quiet_since = max(self.since, self.last_rx if self.last_rx is not None else self.since)
-        if publishers > 0 and now - quiet_since >= self.wait:
+        if publishers > 0 and self.silent_after > 0 and now - quiet_since >= self.wait:
             self.silent = True
             return 'no message for %.1f s while %d publisher%s connected' % (
                 now - quiet_since, publishers, ' is' if publishers == 1 else 's are')
@@ -77,4 +77,4 @@ class StreamHealth:
         self.since = now
         self.late_since = None
         if self.silent:
-            self.wait = min(2.0 * self.wait, self.max_wait)
+            self.wait = min(2.0 * self.wait, 4.0 * self.silent_after)

@@ -10,20 +10,20 @@ from leap_teleop.control.stream_health import StreamHealth
 
 
 class HandSubscription:
-    def __init__(self, topic, msg_type, callback, node, resubscribe_after, queue_size,
-                 check_period=0.25):
+    def __init__(self, topic, msg_type, callback, node, p, queue_size, check_period=0.25):
         """callback(msg) returns why the message was refused (None if it was not); a
-        reason starting with 'late' counts against the connection."""
+        reason starting with 'late' counts against the connection. p: the node's params
+        (STREAM_HEALTH_PARAMS)."""
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
         self.node, self.queue_size = node, queue_size
-        self.health = StreamHealth(resubscribe_after)
+        self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
         self._lock = threading.Lock()
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
         # watchdog of the node shares this thread.
         self.timer = (rospy.Timer(rospy.Duration.from_sec(check_period), self._check)
-                      if resubscribe_after > 0 else None)
+                      if self.health.after > 0 or self.health.silent_after > 0 else None)
 
     def _subscribe(self):
         return rospy.Subscriber(self.topic, self.msg_type, self._on_message,
@@ -47,8 +47,7 @@ class HandSubscription:
         # connections instead of making new ones.
         self.sub.unregister()
         self.sub = self._subscribe()
-        rospy.logwarn('%s: re-subscribed to %s (%s); next after %.1f s more of the same',
-                      self.node, rospy.resolve_name(self.topic), why, self.health.wait)
+        rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
 
     def diagnostic_values(self):
         counts = dict(self.received)        # a copy: the callback thread adds publishers
