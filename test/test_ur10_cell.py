@@ -220,7 +220,13 @@ def test_no_grasp_without_both_fingers_on_the_cube(cell):
         cell.step(4)
         assert cell.grasped(ARM) is None
     go(cube + [0.0, 0.0, 0.2])
-    assert cell.object_poses()['cube_green'][0][2] < cube[2] + 0.01
+    # Not carried: a held cube would be ~0.16 m up with the fingers. The fingertips sliding
+    # off its top may drag it up a few mm for an instant (how far is chaotic: contact
+    # dynamics at the solver's precision, as is where it lands), so it is checked back
+    # down on the table after.
+    assert cell.object_poses()['cube_green'][0][2] < cube[2] + 0.05
+    cell.run(0.5)
+    assert abs(cell.object_poses()['cube_green'][0][2] - cube[2]) < 2e-3
 
 
 def test_two_arms_do_not_interfere():
