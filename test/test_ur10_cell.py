@@ -18,7 +18,7 @@ from leap_teleop.ros.conversions import (
     trajectory_points,
 )
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.cell import UR10Cell
+from leap_teleop.ur10.cell import CUBE_SETTLE_TIME, UR10Cell
 from leap_teleop.ur10.pick_place import pick_place_plan, play_together, run_plan
 from leap_teleop.ur10.trajectory import TrajectoryError
 
@@ -127,6 +127,17 @@ def test_cubes_at_rest_sleep_and_wake_when_touched(cell):
     moving = [n for n, b in cell.cubes.items()
               if np.any(np.asarray(p.getBaseVelocity(b, physicsClientId=cell.client)[0]) != 0.0)]
     assert sorted(moving) == sorted(cell.cubes)
+
+
+def test_settled_cubes_sleep_soon_where_they_lay(cell):
+    """After a reset the cubes settle and sleep within ~CUBE_SETTLE_TIME (the engine alone
+    waits 2 s), where they lay."""
+    cell.reset()
+    cell.run(CUBE_SETTLE_TIME + 0.25)
+    for c in cell.config.cubes:
+        lin, ang = p.getBaseVelocity(cell.cubes[c.name], physicsClientId=cell.client)
+        assert np.all(np.asarray(lin + ang) == 0.0), c.name
+        assert np.linalg.norm(cell.object_poses()[c.name][0] - c.xyz) < 1e-4, c.name
 
 
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
