@@ -36,9 +36,15 @@ SOLVER_ITERATIONS = 40
 CUBE_SLEEP_THRESHOLD = 1e-6
 # A cube that has stayed that still for this long is put to sleep at once: the physics would
 # only do so after 2 s (its fixed timeout), solving the resting contacts of every cube after a
-# reset or a drop all that time. Settled cubes move ~1e-6 mm/s, so nothing visible changes.
+# reset or a drop all that time. Settled cubes move < 1 um/s, so nothing visible changes.
 CUBE_SETTLE_TIME = 0.25
 CUBE_CHECK_EVERY = 12          # physics steps between those stillness checks (20 Hz)
+# The shoulder link is tested at SWEEP_SAMPLES pan angles (2 deg apart: its points, all
+# < 0.25 m from the axis, move < 9 mm between two) against each static body; a body always
+# farther than SWEEP_CLEARANCE (the engine's 0.02 m contact threshold + those 9 mm) is
+# left out of its collision checks. The table is 0.037 m below it.
+SWEEP_SAMPLES = 180
+SWEEP_CLEARANCE = 0.03
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -128,14 +134,27 @@ class UR10Cell:
                                     maxVelocity=float(vmax), physicsClientId=self.client)
 
     def _ignore_fixed_link(self, arm):
-        """No collision checks between the arm's base_link and the static scene: it is fixed
-        to the world, so nothing there can ever move it or be moved by it, yet the engine
-        would find its contact with the table (its rows are zero) and test it against the
-        floor and the trays at every step."""
+        """No collision checks between the static scene (floor, table, trays) and the arm
+        links it can never touch or move: base_link, fixed to the world (its contact with
+        the table gave zero rows to the solver at every step), and the shoulder link when
+        it stays clear of that body all around its pan joint (it moves with no other
+        joint). The engine would otherwise test these pairs at every step."""
         c = self.client
         base_link = p.getJointInfo(arm.body, arm.arm_joints[0], physicsClientId=c)[16]
-        for body in [self.floor, self.table, *self.trays.values()]:
+        pan = shoulder = arm.arm_joints[0]     # the pan joint moves the shoulder link
+        static = [self.floor, self.table, *self.trays.values()]
+        clear = set(static)
+        for angle in np.linspace(-np.pi, np.pi, SWEEP_SAMPLES, endpoint=False):
+            p.resetJointState(arm.body, pan, float(angle), physicsClientId=c)
+            clear = {b for b in clear
+                     if not p.getClosestPoints(arm.body, b, SWEEP_CLEARANCE, linkIndexA=shoulder,
+                                               physicsClientId=c)}
+        p.resetJointState(arm.body, pan, float(arm.cfg.home[0]), physicsClientId=c)
+        for body in static:
             p.setCollisionFilterPair(arm.body, body, base_link, -1, 0, physicsClientId=c)
+            if body in clear:
+                p.setCollisionFilterPair(arm.body, body, shoulder, -1, 0, physicsClientId=c)
+        arm.static_clear = clear
 
     # ---- scene -------------------------------------------------------------------------
     def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
