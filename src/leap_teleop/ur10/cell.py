@@ -113,7 +113,7 @@ class UR10Cell:
                               flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
             self.arms[a.name] = arm = _Arm(a, body, c)
             self._cap_arm_speed(arm)
-            self._ignore_fixed_link(arm)
+            self._skip_untouchable_pairs(arm)
             for j in arm.fingers + [arm.knuckle]:
                 p.changeDynamics(body, j, jointLowerLimit=0.0,
                                  jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
@@ -133,7 +133,7 @@ class UR10Cell:
                                     positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
                                     maxVelocity=float(vmax), physicsClientId=self.client)
 
-    def _ignore_fixed_link(self, arm):
+    def _skip_untouchable_pairs(self, arm):
         """No collision checks between the static scene (floor, table, trays) and the arm
         links it can never touch or move: base_link, fixed to the world (its contact with
         the table gave zero rows to the solver at every step), and the shoulder link when
@@ -154,7 +154,6 @@ class UR10Cell:
             p.setCollisionFilterPair(arm.body, body, base_link, -1, 0, physicsClientId=c)
             if body in clear:
                 p.setCollisionFilterPair(arm.body, body, shoulder, -1, 0, physicsClientId=c)
-        arm.static_clear = clear
 
     # ---- scene -------------------------------------------------------------------------
     def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
