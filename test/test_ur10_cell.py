@@ -18,7 +18,7 @@ from leap_teleop.ros.conversions import (
     trajectory_points,
 )
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.cell import UR10Cell
+from leap_teleop.ur10.cell import CUBE_SETTLE_TIME, UR10Cell
 from leap_teleop.ur10.pick_place import pick_place_plan, play_together, run_plan
 from leap_teleop.ur10.trajectory import TrajectoryError
 
@@ -129,6 +129,17 @@ def test_cubes_at_rest_sleep_and_wake_when_touched(cell):
     assert sorted(moving) == sorted(cell.cubes)
 
 
+def test_settled_cubes_sleep_soon_where_they_lay(cell):
+    """After a reset the cubes settle and sleep within ~CUBE_SETTLE_TIME (the engine alone
+    waits 2 s), where they lay."""
+    cell.reset()
+    cell.run(CUBE_SETTLE_TIME + 0.25)
+    for c in cell.config.cubes:
+        lin, ang = p.getBaseVelocity(cell.cubes[c.name], physicsClientId=cell.client)
+        assert np.all(np.asarray(lin + ang) == 0.0), c.name
+        assert np.linalg.norm(cell.object_poses()[c.name][0] - c.xyz) < 1e-4, c.name
+
+
 def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
     q0 = cell.joint_state(ARM)[0]
     target = q0 + np.array([1.2, -0.4, 0.6, 0.8, -0.9, 1.5])
@@ -220,7 +231,13 @@ def test_no_grasp_without_both_fingers_on_the_cube(cell):
         cell.step(4)
         assert cell.grasped(ARM) is None
     go(cube + [0.0, 0.0, 0.2])
-    assert cell.object_poses()['cube_green'][0][2] < cube[2] + 0.01
+    # Not carried: a held cube would be ~0.16 m up with the fingers. The fingertips sliding
+    # off its top may drag it up a few mm for an instant (how far is chaotic: contact
+    # dynamics at the solver's precision, as is where it lands), so it is checked back
+    # down on the table after.
+    assert cell.object_poses()['cube_green'][0][2] < cube[2] + 0.05
+    cell.run(0.5)
+    assert abs(cell.object_poses()['cube_green'][0][2] - cube[2]) < 2e-3
 
 
 def test_two_arms_do_not_interfere():

@@ -15,7 +15,9 @@ sim.ur10_raw_rtf_1arm       bare PyBullet stepping of the same one-arm scene doi
                             motor call per arm and gripper per step; no follower, grasp
                             checks or state reads).
 sim.ur10_rtf_ratio_vs_raw   sim.ur10_rtf_1arm / sim.ur10_raw_rtf_1arm: the cost of the
-                            cell's control layer.
+                            cell's control layer, less what it saves: the cell puts settled
+                            cubes to sleep after 0.25 s, the bare replay's wait for the
+                            engine's 2 s, so the ratio can exceed 1.
 sim.ur10_static_rtf_1arm    stepSimulation of the scene with nothing moving (for scale: a
                             moving arm in contact costs the physics engine about twice that).
 """

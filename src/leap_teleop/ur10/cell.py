@@ -34,6 +34,17 @@ SOLVER_ITERATIONS = 40
 # A cube moving slower than this ((m/s)^2 + (rad/s)^2, ~1 mm/s) for 2 s sleeps until
 # something touches it: the physics then skips the cubes at rest (~6e-13 when settled).
 CUBE_SLEEP_THRESHOLD = 1e-6
+# A cube that has stayed that still for this long is put to sleep at once: the physics would
+# only do so after 2 s (its fixed timeout), solving the resting contacts of every cube after a
+# reset or a drop all that time. Settled cubes move < 1 um/s, so nothing visible changes.
+CUBE_SETTLE_TIME = 0.25
+CUBE_CHECK_EVERY = 12          # physics steps between those stillness checks (20 Hz)
+# The shoulder link is tested at SWEEP_SAMPLES pan angles (2 deg apart: its points, all
+# < 0.25 m from the axis, move < 9 mm between two) against each static body; a body always
+# farther than SWEEP_CLEARANCE (the engine's 0.02 m contact threshold + those 9 mm) is
+# left out of its collision checks. The table is 0.037 m below it.
+SWEEP_SAMPLES = 180
+SWEEP_CLEARANCE = 0.03
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -73,6 +84,9 @@ class _Arm:
         # target sent: each is reused while it is still what step() would compute.
         self.sampled = (None, None, None)
         self.gripper_sent = None
+        # The desired position whose hold (zero velocity) the arm's motors were last sent:
+        # PyBullet's motors keep their targets, so a hold is sent once.
+        self.held = None
 
 
 class UR10Cell:
@@ -99,10 +113,12 @@ class UR10Cell:
                               flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
             self.arms[a.name] = arm = _Arm(a, body, c)
             self._cap_arm_speed(arm)
+            self._skip_untouchable_pairs(arm)
             for j in arm.fingers + [arm.knuckle]:
                 p.changeDynamics(body, j, jointLowerLimit=0.0,
                                  jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
                                  physicsClientId=c)
+        self._arm_bodies = {a.body for a in self.arms.values()}
         self.reset()
 
     def _cap_arm_speed(self, arm):
@@ -116,6 +132,28 @@ class UR10Cell:
                                     targetVelocity=0.0, force=fj,
                                     positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
                                     maxVelocity=float(vmax), physicsClientId=self.client)
+
+    def _skip_untouchable_pairs(self, arm):
+        """No collision checks between the static scene (floor, table, trays) and the arm
+        links it can never touch or move: base_link, fixed to the world (its contact with
+        the table gave zero rows to the solver at every step), and the shoulder link when
+        it stays clear of that body all around its pan joint (it moves with no other
+        joint). The engine would otherwise test these pairs at every step."""
+        c = self.client
+        base_link = p.getJointInfo(arm.body, arm.arm_joints[0], physicsClientId=c)[16]
+        pan = shoulder = arm.arm_joints[0]     # the pan joint moves the shoulder link
+        static = [self.floor, self.table, *self.trays.values()]
+        clear = set(static)
+        for angle in np.linspace(-np.pi, np.pi, SWEEP_SAMPLES, endpoint=False):
+            p.resetJointState(arm.body, pan, float(angle), physicsClientId=c)
+            clear = {b for b in clear
+                     if not p.getClosestPoints(arm.body, b, SWEEP_CLEARANCE, linkIndexA=shoulder,
+                                               physicsClientId=c)}
+        p.resetJointState(arm.body, pan, float(arm.cfg.home[0]), physicsClientId=c)
+        for body in static:
+            p.setCollisionFilterPair(arm.body, body, base_link, -1, 0, physicsClientId=c)
+            if body in clear:
+                p.setCollisionFilterPair(arm.body, body, shoulder, -1, 0, physicsClientId=c)
 
     # ---- scene -------------------------------------------------------------------------
     def _box(self, half, xyz, rgba, mass=0.0, friction=0.8):
@@ -158,6 +196,7 @@ class UR10Cell:
                              sleepThreshold=CUBE_SLEEP_THRESHOLD, physicsClientId=c)
             self.cubes[cube.name] = body
         self._cube_by_body = {b: n for n, b in self.cubes.items()}
+        self._still_checks = {b: 0 for b in self.cubes.values()}   # consecutive still checks
 
     # ---- commands ----------------------------------------------------------------------
     def arm(self, name):
@@ -193,27 +232,9 @@ class UR10Cell:
         for _ in range(n):
             t = self.time + dt
             for arm in self.arms.values():
-                # PyBullet's motor sets the step's velocity to targetVelocity +
-                # positionGain * (targetPosition - q) / dt. The feed-forward is the desired
-                # motion over this step and the correction acts on the error now, so a joint
-                # on its trajectory lands on the next desired position and its acceleration
-                # is the trajectory's (a target for the end of the step with the velocity
-                # there counts that step twice: ~30 % acceleration overshoot). One call for
-                # the six joints; their speed caps were set once (_cap_arm_speed).
-                follower = arm.arm_follower
-                last_t, last_segments, last_q = arm.sampled
-                if last_t == self.time and last_segments is follower.segments:
-                    q_now = last_q        # the trajectory is the one sampled a step ago
-                else:
-                    q_now = follower.sample(self.time)[0].copy()
-                q_next = follower.sample(t)[0].copy()
-                arm.sampled = (t, follower.segments, q_next)
-                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
-                                            targetPositions=q_now.tolist(),
-                                            targetVelocities=((q_next - q_now) / dt).tolist(),
-                                            forces=_ARM_FORCES, positionGains=_ARM_KP,
-                                            velocityGains=_ARM_KD, physicsClientId=c)
-                g = float(arm.gripper_follower.sample(t)[0][0])
+                self._drive_arm(arm, t)
+                gripper = arm.gripper_follower
+                g = float((gripper.sample(t)[0] if gripper.segments else gripper.q)[0])
                 if g != arm.gripper_sent:     # PyBullet's motors keep their targets
                     f = g * FINGER_TRAVEL / GRIPPER_CLOSED
                     p.setJointMotorControlArray(arm.body, arm.gripper_joints,
@@ -227,6 +248,65 @@ class UR10Cell:
             if self.steps % GRASP_CHECK_EVERY == 0:
                 for arm in self.arms.values():
                     self._update_grasp(arm)
+            if self.steps % CUBE_CHECK_EVERY == 0:
+                self._sleep_settled_cubes()
+
+    def _drive_arm(self, arm, t):
+        """The arm's motor targets for the step from self.time to t.
+
+        PyBullet's motor sets the step's velocity to targetVelocity + positionGain *
+        (targetPosition - q) / dt. The feed-forward is the desired motion over this step and
+        the correction acts on the error now, so a joint on its trajectory lands on the next
+        desired position and its acceleration is the trajectory's (a target for the end of
+        the step with the velocity there counts that step twice: ~30 % acceleration
+        overshoot). One call for the six joints; their speed caps were set once
+        (_cap_arm_speed)."""
+        follower = arm.arm_follower
+        if not follower.segments:
+            # Holding: the target is the held position at zero velocity, what the motors
+            # keep once sent (the follower replaces q, never changes it in place).
+            q = follower.q
+            arm.sampled = (t, follower.segments, q)
+            if arm.held is not q:
+                p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
+                                            targetPositions=q.tolist(),
+                                            targetVelocities=[0.0] * 6,
+                                            forces=_ARM_FORCES, positionGains=_ARM_KP,
+                                            velocityGains=_ARM_KD, physicsClientId=self.client)
+                arm.held = q
+            return
+        last_t, last_segments, last_q = arm.sampled
+        if last_t == self.time and last_segments is follower.segments:
+            q_now = last_q        # the trajectory is the one sampled a step ago
+        else:
+            q_now = follower.sample(self.time)[0].copy()
+        q_next = follower.sample(t)[0].copy()
+        arm.sampled = (t, follower.segments, q_next)
+        arm.held = None
+        p.setJointMotorControlArray(arm.body, arm.arm_joints, p.POSITION_CONTROL,
+                                    targetPositions=q_now.tolist(),
+                                    targetVelocities=((q_next - q_now) / self.dt).tolist(),
+                                    forces=_ARM_FORCES, positionGains=_ARM_KP,
+                                    velocityGains=_ARM_KD, physicsClientId=self.client)
+
+    def _sleep_settled_cubes(self):
+        """Put to sleep each cube that has been still for CUBE_SETTLE_TIME and touches no
+        arm (a sleeping cube reads exactly still and wakes when something touches it)."""
+        c = self.client
+        needed = int(round(CUBE_SETTLE_TIME / (self.dt * CUBE_CHECK_EVERY)))
+        for body, checks in self._still_checks.items():
+            (vx, vy, vz), (wx, wy, wz) = p.getBaseVelocity(body, physicsClientId=c)
+            motion = vx * vx + vy * vy + vz * vz + wx * wx + wy * wy + wz * wz
+            # exactly 0: asleep already
+            checks = checks + 1 if 0.0 < motion < CUBE_SLEEP_THRESHOLD else 0
+            if checks >= needed:
+                checks = 0
+                # A cube an arm touches or holds is in play: the physics decides.
+                if not any(cp[2] in self._arm_bodies
+                           for cp in p.getContactPoints(bodyA=body, physicsClientId=c)):
+                    p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_SLEEP,
+                                     physicsClientId=c)
+            self._still_checks[body] = checks
 
     def run(self, seconds):
         """Step for the given simulated time."""
@@ -244,9 +324,15 @@ class UR10Cell:
 
     def _update_grasp(self, arm):
         c = self.client
-        contacts = [[cp for cp in p.getContactPoints(bodyA=arm.body, linkIndexA=link,
-                                                     physicsClientId=c)
-                     if cp[2] in self._cube_by_body] for link in arm.finger_links]
+        # One query for the arm (each query walks every contact in the world), split by finger.
+        left_link, right_link = arm.finger_links
+        contacts = ([], [])
+        for cp in p.getContactPoints(bodyA=arm.body, physicsClientId=c):
+            if cp[2] in self._cube_by_body:
+                if cp[3] == left_link:
+                    contacts[0].append(cp)
+                elif cp[3] == right_link:
+                    contacts[1].append(cp)
         axis = None
         if contacts[0] or contacts[1]:      # the TCP's pose only matters for a cube contact
             orn = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
@@ -369,6 +455,7 @@ class UR10Cell:
             arm.gripper_follower.hold([0.0])
             arm.sampled = (None, None, None)
             arm.gripper_sent = None
+            arm.held = None
             arm.touching = ([], [])
         for cube in self.config.cubes:
             p.resetBasePositionAndOrientation(self.cubes[cube.name], cube.xyz, cube.quaternion,
@@ -377,6 +464,7 @@ class UR10Cell:
             # A sleeping cube moved back stays asleep: wake it to settle as a new one does.
             p.changeDynamics(self.cubes[cube.name], -1,
                              activationState=p.ACTIVATION_STATE_WAKE_UP, physicsClientId=c)
+            self._still_checks[self.cubes[cube.name]] = 0
 
     def pose_state(self):
         """What a picture needs, copied: every body's base pose and joint positions."""
