@@ -36,7 +36,6 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     why = h.due(1.5, 1)
     assert why and why.startswith('every message late for 0.5')
     h.resubscribed(1.5)
-    assert h.wait == 2.0                    # late input: no back-off
     feed(h, 1.5, 1.9, late=True)
     assert h.due(1.9, 1) is None
     feed(h, 1.9, 2.01, late=True)
@@ -50,23 +49,19 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     assert h.resubscriptions == 2
 
 
-def test_silence_asks_only_with_a_publisher_and_backs_off():
-    h = StreamHealth(0.5, 0.5)
-    feed(h, 0.0, 1.0, late=False)
-    assert h.due(5.0, 0) is None            # nobody publishes: nothing to re-establish
-    why = h.due(5.0, 1)
-    assert why and 'no message for' in why and '1 publisher is connected' in why
-    waits = []
-    t = 5.0
-    for _ in range(4):
-        h.resubscribed(t)
-        waits.append(h.wait)
-        assert h.due(t + h.wait - 0.01, 1) is None
-        t += h.wait
-        assert h.due(t, 2)
-    assert waits == [1.0, 2.0, 2.0, 2.0]    # up to 4 x silent_after
-    h.on_message(t, late=False)             # a message: the short wait again
-    assert h.wait == 0.5
+def test_silence_after_input_asks_once_and_only_with_a_publisher():
+    h = StreamHealth(0.5, 2.0)
+    assert h.due(0.0, 1) is None and h.due(30.0, 1) is None    # never heard: a start-up wait
+    feed(h, 30.0, 31.0, late=False)
+    assert h.due(32.9, 1) is None
+    assert h.due(33.5, 0) is None           # nobody publishes: nothing to re-establish
+    why = h.due(33.5, 1)
+    assert why and 'no message for 2.5 s' in why and '1 publisher is connected' in why
+    h.resubscribed(33.5)
+    assert h.due(60.0, 2) is None           # once per silence: a paused bag costs one line
+    feed(h, 60.0, 61.0, late=False)         # the next silence asks again
+    assert h.due(63.0, 1)
+    assert h.resubscriptions == 1
 
 
 def test_zero_disables_and_a_clock_jump_back_starts_afresh():
@@ -139,8 +134,8 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     # after them, messages arrive on the new connection and are on time: no more
     assert out['on_time_again']['resubscriptions'] <= 1, out
     assert out['on_time_again']['received'] - out['late']['received'] > 50, out
-    # 2.6 s of silence with the publisher connected: after 0.5 s, then 1 s later (back-off)
-    assert 1 <= out['silent']['resubscriptions'] <= 2, out
+    # 2.6 s of silence with the publisher connected: once, after 0.5 s
+    assert out['silent']['resubscriptions'] == 1, out
     assert out['silent']['connections'] == 1, out
     diag = out['diagnostics']
     assert diag['hand messages from /stream_health_client'] == diag['hand messages received']

@@ -253,7 +253,9 @@ def run(minutes, rtf, rate_hz=None, log=print):
         with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
             f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
                                   hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
-                                  resubscribe_after=0.5 * rtf, resubscribe_silent_after=2.0 * rtf))
+                                  resubscribe_after=0.5 * rtf,
+                                  # longer than the pause between two cycles
+                                  resubscribe_silent_after=8.0 * rtf))
             launch_file = f.name
         subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
         graph = subprocess.Popen(['roslaunch', launch_file], env=env,

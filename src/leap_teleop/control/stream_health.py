@@ -6,10 +6,10 @@ a connection can also fall silent while its publisher lives on and serves others
 heals by itself. Dropping the connection and subscribing afresh clears both. This class
 decides when: input refused as late for `after` seconds without one message on time
 (again every `after` seconds while that lasts: late input is refused anyway, and the
-backlog may clear at any moment), or no message at all for `silent_after` seconds while a
-publisher is connected. Silence can be legitimate (a paused bag, a source waiting for a
-device), so each silent re-subscription doubles the wait before the next (up to four
-times `silent_after`) until a message comes: a few log lines, not a storm.
+backlog may clear at any moment), or, on a connection that delivered since it was made,
+no message at all for `silent_after` seconds while a publisher is connected. Silence can
+be legitimate (a paused bag, a source waiting for a device), so a silent connection is
+re-made once per silence, not again until a message has come: one log line, not a storm.
 """
 from leap_teleop.params import Param
 
@@ -18,9 +18,9 @@ STREAM_HEALTH_PARAMS = {
     'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
                                     'message late (again while it lasts); 0 = never', unit='s',
                                ge=0.0, le=60.0),
-    'resubscribe_silent_after': Param(2.0, 're-establish it after this long without any message '
-                                           'while a publisher is connected (backing off to 4x); '
-                                           '0 = never', unit='s', ge=0.0, le=60.0),
+    'resubscribe_silent_after': Param(2.0, 're-establish it, once, after this long without any '
+                                           'message while a publisher is connected; 0 = never',
+                                      unit='s', ge=0.0, le=60.0),
 }
 
 
@@ -30,17 +30,17 @@ class StreamHealth:
         input while a publisher is connected; 0 = never."""
         self.after = float(after)
         self.silent_after = float(silent_after)
-        self.wait = self.silent_after
         self.resubscriptions = 0
         self.since = None           # start of the current judgement (first message or check,
                                     # or the last re-subscription)
         self.last_rx = None         # last message of any kind
         self.late_since = None      # first late message since the last one on time
-        self.silent = False         # the last re-subscription was for silence
+        self.heard = False          # a message came since the connection was made
 
     def on_message(self, now, late):
         """A message arrived at `now`; `late` when the consumer refused it as late."""
         self.last_rx = now
+        self.heard = True
         if self.since is None:
             self.since = now
         if late:
@@ -48,7 +48,6 @@ class StreamHealth:
                 self.late_since = now
         else:
             self.late_since = None
-        self.wait = self.silent_after
 
     def due(self, now, publishers):
         """Why the connection should be re-established now (None: it should not).
@@ -61,20 +60,16 @@ class StreamHealth:
         if self.late_since is not None and self.after > 0:
             late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
-                self.silent = False
                 return 'every message late for %.1f s' % late_for
-        quiet_since = max(self.since, self.last_rx if self.last_rx is not None else self.since)
-        if publishers > 0 and self.silent_after > 0 and now - quiet_since >= self.wait:
-            self.silent = True
+        if (self.heard and publishers > 0 and self.silent_after > 0
+                and now - self.last_rx >= self.silent_after):
             return 'no message for %.1f s while %d publisher%s connected' % (
-                now - quiet_since, publishers, ' is' if publishers == 1 else 's are')
+                now - self.last_rx, publishers, ' is' if publishers == 1 else 's are')
         return None
 
     def resubscribed(self, now):
-        """The connection was re-established at `now`: judge afresh; after a silent one,
-        wait twice as long for the next unless a message comes first."""
+        """The connection was re-established at `now`: judge it afresh."""
         self.resubscriptions += 1
         self.since = now
         self.late_since = None
-        if self.silent:
-            self.wait = min(2.0 * self.wait, 4.0 * self.silent_after)
+        self.heard = False
