@@ -36,6 +36,9 @@ arm.max_joint_accel          largest commanded joint acceleration in all these r
                              from the velocities PyBullet reports for the simulated joints,
                              differenced over 3 physics steps (12.5 ms; differentiating the
                              positions twice would read numerics as motion).
+arm.max_joint_accel_measured_real  the same over the real-motion runs, which hold the
+                             joints at the bound for long stretches (the solver's residual
+                             shows more there).
 """
 import math
 
@@ -392,9 +395,11 @@ def run():
     results = {}
     loops = [tracking(results), jitter(results, 5.0 / 6.0, 'arm.jitter_at_rest_mm'),
              jitter(results, 5.0, 'arm.jitter_at_rest_sigma5_mm'), orientation(results),
-             onset(results), tracking_real(results), jitter_real(results)]
-    results['arm.max_joint_accel'] = max(loop.max_accel_cmd for loop in loops)
+             onset(results)]
+    real = [tracking_real(results), jitter_real(results)]
+    results['arm.max_joint_accel'] = max(loop.max_accel_cmd for loop in loops + real)
     results['arm.max_joint_accel_measured'] = max(loop.max_accel_measured for loop in loops)
+    results['arm.max_joint_accel_measured_real'] = max(loop.max_accel_measured for loop in real)
     results['arm.ur10_joint_accel_limit'] = float(np.min(kin.MAX_JOINT_ACCEL))
     for key in sorted(results):
         print('  %-32s %.5g' % (key, results[key]))
