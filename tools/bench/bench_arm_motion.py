@@ -33,7 +33,8 @@ arm.jitter_at_rest_mm_real   a real hand held still (LeapJS `pinch`: the palm wi
                              palm (what the arm would do unfiltered).
 arm.max_joint_accel          largest commanded joint acceleration in all these runs (the
                              controller's desired state), rad/s^2; arm.max_joint_accel_measured
-                             from the velocities PyBullet reports for the simulated joints,
+                             (the synthetic runs) from the velocities PyBullet reports for the
+                             simulated joints,
                              differenced over 3 physics steps (12.5 ms; differentiating the
                              positions twice would read numerics as motion).
 arm.max_joint_accel_measured_real  the same over the real-motion runs, which hold the
