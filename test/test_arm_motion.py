@@ -79,10 +79,11 @@ def _follow(servo, goals, dt=0.008, substeps=4, delay_steps=0):
     return out
 
 
+@pytest.mark.parametrize('reach_fast', [False, True])
 @pytest.mark.parametrize('delay_steps', [0, 1])
-def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps):
+def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps, reach_fast):
     servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0,
-                       lower=kin.JOINT_LOWER, upper=kin.JOINT_UPPER)
+                       lower=kin.JOINT_LOWER, upper=kin.JOINT_UPPER, reach_fast=reach_fast)
     t = np.arange(400) * 0.008
     goals = [kin.HOME_Q + 0.4 * np.sin(2 * math.pi * 0.5 * tk) * np.ones(6) for tk in t]
     goals[200:] = [goals[200] + 0.3] * 200                 # and a step
@@ -93,6 +94,47 @@ def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps):
     # A delayed command starts from the controller's state: a small correction only.
     assert np.max(accel) <= math.pi * (1.0 if delay_steps == 0 else 1.6) + 1e-6
     np.testing.assert_allclose(states[-1][0], goals[-1], atol=1e-3)     # gets there
+
+
+def _ramp_lag(**servo_args):
+    """Velocity lag (s) of the desired joint behind a goal that starts moving at 0.06 rad/s
+    (a change the bound allows within one horizon), its velocity fed forward as the teleop
+    does."""
+    servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0,
+                       **servo_args)
+    t = np.arange(100) * 0.008
+    goals = [kin.HOME_Q + 0.06 * max(tk - 0.1, 0.0) for tk in t]
+    q0 = kin.HOME_Q.copy()
+    follower = TrajectoryFollower(q0, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    qd = []
+    for k, goal in enumerate(goals):
+        ff = None if k == 0 else (goal - goals[k - 1]) / 0.008
+        follower.command(t[k], servo.track(t[k], follower.q, goal, ff))
+        for j in range(4):
+            follower.sample(t[k] + 0.002 * (j + 1))
+            qd.append(follower.qd[0])
+    qd = np.asarray(qd)
+    # When the joint first reaches half the goal's speed, after the goal started.
+    return (np.argmax(qd >= 0.03) + 1) * 0.002 - 0.1
+
+
+def test_servo_reaching_fast_cuts_the_velocity_lag_within_the_bound():
+    slow, fast = _ramp_lag(), _ramp_lag(reach_fast=True)
+    assert fast < slow - 0.005
+    # The bound: 0.03 rad/s at pi rad/s^2 takes 9.5 ms.
+    assert fast >= 0.03 / math.pi - 1e-9
+
+
+def test_servo_lead_aims_ahead_of_a_moving_goal():
+    servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0,
+                       lead=0.05)
+    plain = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0)
+    q, goal, v = kin.HOME_Q.copy(), kin.HOME_Q + 0.001, np.full(6, 0.02)
+    ahead = servo.track(0.0, q, goal, v)[0][2]
+    here = plain.track(0.0, q, goal, v)[0][2]
+    assert np.all(ahead > here)
+    # No goal velocity: nothing to extrapolate, the same command.
+    np.testing.assert_allclose(servo.track(0.0, q, goal)[0][1], plain.track(0.0, q, goal)[0][1])
 
 
 def test_servo_stops_by_itself_when_commands_stop():

@@ -114,6 +114,8 @@ NOT_RUN = {
         'test_under_load.py runs tools.under_load with a measuring command',
     'python -m tools.bench --only arm_motion': 'a benchmark, part of make bench (the '
         'integrator runs it); test_bench_ros_processes.py checks the bench runner itself',
+    'python -m tools.lag_tradeoff': 'tens of minutes of closed-loop runs (a measurement '
+        'for the docs); test_arm_real_motion.py runs its real-motion figures on one take',
     'make demo GUI=1': 'needs a display; make demo runs headless in test_demo.py',
     'make clean': 'deletes the build the other tests use',
     'rosrun leap_teleop record_frames my_take.json.gz --source leap': 'needs a Leap device; '

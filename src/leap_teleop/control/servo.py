@@ -13,20 +13,28 @@ second point brings the joints to rest with the same deceleration bound. So:
 * if commands stop (the node dies) the robot decelerates to rest by itself.
 
 The correction is min(gain * |e|, sqrt(2 a |e|)): proportional near the goal and no faster
-than it can still stop at the goal with the acceleration limit.
+than it can still stop at the goal with the acceleration limit. With a `lead`, the error is
+taken to the goal extrapolated that far ahead along its own velocity: the joints, which
+need time to change speed within the acceleration bound, start toward where the goal is
+heading instead of where it was (a short prediction; 0 = none). With `reach_fast`, the
+first point's velocity is reached at the acceleration bound (every joint together) and
+held to the horizon, instead of spread evenly over it.
 """
 
 import numpy as np
 
 
 class JointServo:
-    def __init__(self, max_speed, max_accel, horizon=0.032, gain=10.0, lower=None, upper=None):
+    def __init__(self, max_speed, max_accel, horizon=0.024, gain=10.0, lower=None, upper=None,
+                 lead=0.0, reach_fast=False):
         self.max_speed = np.asarray(max_speed, dtype=float)
         self.max_accel = np.asarray(max_accel, dtype=float)
         self.horizon = float(horizon)
         self.gain = float(gain)
+        self.lead = float(lead)
+        self.reach_fast = bool(reach_fast)
         self.lower, self.upper = lower, upper
-        self._plan = None      # (t0, q0, v0, vA, h, t_stop): parabola to t0 + h, then rest
+        self._plan = None      # (t0, q0, v0, vA, t1, h, t_stop): to vA by t1, on to h, rest
 
     def reset(self):
         """Forget the plan (the next call starts from the measured joints, at rest)."""
@@ -41,12 +49,15 @@ class JointServo:
         there is no plan or it has ended."""
         if self._plan is None:
             return np.array(q_measured, dtype=float), np.zeros(len(q_measured))
-        t0, q0, v0, vA, h, t_stop = self._plan
+        t0, q0, v0, vA, t1, h, t_stop = self._plan
         tau = max(t - t0, 0.0)
-        if tau <= h:
-            a = (vA - v0) / h
+        if tau <= t1:
+            a = (vA - v0) / t1
             return q0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
-        qA = q0 + 0.5 * (v0 + vA) * h
+        q1 = q0 + 0.5 * (v0 + vA) * t1
+        if tau <= h:
+            return q1 + vA * (tau - t1), vA.copy()
+        qA = q1 + vA * (h - t1)
         tau2 = tau - h
         if tau2 >= t_stop:
             self._plan = None      # at rest: later calls follow the measured joints
@@ -57,28 +68,39 @@ class JointServo:
     def _clip(self, q):
         return q if self.lower is None else np.clip(q, self.lower, self.upper)
 
-    def _plan_points(self, now, q, v, vA, h):
-        """Plan (q, v) at now -> (qA, vA) at now + h -> rest; its trajectory points."""
-        qA = q + 0.5 * (v + vA) * h
+    def _plan_points(self, now, q, v, vA, h, t1=None):
+        """Plan (q, v) at now -> vA at now + t1 (constant acceleration; t1 = h when not
+        given) -> (qA, vA) at now + h -> rest; its trajectory points."""
+        t1 = h if t1 is None or t1 > h - 1e-9 else t1
+        q1 = q + 0.5 * (v + vA) * t1
+        qA = q1 + vA * (h - t1)
         t_stop = float(np.max(np.abs(vA) / self.max_accel))
-        self._plan = (now, q.copy(), v.copy(), vA.copy(), h, t_stop)
+        self._plan = (now, q.copy(), v.copy(), vA.copy(), max(t1, 1e-9), h, t_stop)
+        points = [(t1, self._clip(q1), vA.copy())] if t1 < h else []
         if t_stop <= 1e-9:
-            return [(h, self._clip(qA), np.zeros_like(vA))]
+            return points + [(h, self._clip(qA), np.zeros_like(vA))]
         qS = qA + 0.5 * vA * t_stop
-        return [(h, self._clip(qA), vA.copy()), (h + t_stop, self._clip(qS), np.zeros_like(vA))]
+        return points + [(h, self._clip(qA), vA.copy()),
+                         (h + t_stop, self._clip(qS), np.zeros_like(vA))]
 
     def track(self, now, q_measured, goal, goal_velocity=None):
         """Trajectory points [(time_from_start, q, qd)] heading for `goal`, from now."""
         q, v = self.state_at(now, q_measured)
-        e = np.asarray(goal, dtype=float) - q
+        ff = 0.0 if goal_velocity is None else np.asarray(goal_velocity, dtype=float)
+        e = np.asarray(goal, dtype=float) + ff * self.lead - q
         mag = np.abs(e)
         correction = np.sign(e) * np.minimum(self.gain * mag,
                                              np.sqrt(2.0 * self.max_accel * mag))
-        ff = 0.0 if goal_velocity is None else np.asarray(goal_velocity, dtype=float)
         v_des = np.clip(ff + correction, -self.max_speed, self.max_speed)
         step = self.max_accel * self.horizon
         vA = v + np.clip(v_des - v, -step, step)
-        return self._plan_points(now, q, v, vA, self.horizon)
+        t1 = None
+        if self.reach_fast:
+            # Reach vA as soon as the acceleration bound allows (every joint together),
+            # then hold it to the horizon: the velocity lags the goal's by ~t1/2 instead
+            # of horizon/2. A short first segment (>= 1 ms) keeps the points apart.
+            t1 = max(float(np.max(np.abs(vA - v) / self.max_accel)), 1e-3)
+        return self._plan_points(now, q, v, vA, self.horizon, t1)
 
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):
         """Points that bring the joints to rest as fast as the acceleration limit

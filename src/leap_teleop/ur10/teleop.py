@@ -114,7 +114,8 @@ class ArmTeleop:
         speed = np.minimum(self.p.max_joint_speed, kin.MAX_JOINT_SPEED)
         self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
                                  self.p.command_horizon, self.p.servo_gain,
-                                 kin.JOINT_LOWER, kin.JOINT_UPPER)
+                                 kin.JOINT_LOWER, kin.JOINT_UPPER, self.p.servo_lead,
+                                 self.p.servo_reach_fast)
         self.status = ArmTeleopStatus()
         self._hand = None
         self._hand_rx = None
@@ -147,6 +148,7 @@ class ArmTeleop:
         self._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
         self._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
         self._servo.gain = float(p.servo_gain)
+        self._servo.lead = float(p.servo_lead)
 
     def diagnostics(self):
         """(level 'ok' | 'warn', summary, [(key, value)]) of the status, for a diagnostics

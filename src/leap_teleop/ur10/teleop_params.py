@@ -67,7 +67,13 @@ TELEOP_PARAMS = {
                              le=float(min(kin.MAX_JOINT_ACCEL))),
     'servo_gain': Param(10.0, 'joint error -> velocity correction on top of the goal\'s own '
                               'velocity', unit='1/s', gt=0.0, le=100.0),
-    'command_horizon': Param(0.032, 'time of each trajectory\'s first point (with its '
+    'servo_lead': Param(0.0, 'the servo aims at the joint goal extrapolated this far ahead '
+                             'along its velocity (a short prediction; 0 = none)', unit='s',
+                        ge=0.0, le=0.1),
+    'servo_reach_fast': Param(False, 'each command reaches its velocity as fast as the '
+                                     'acceleration bound allows, then holds it to the '
+                                     'horizon (else: evenly over the horizon)'),
+    'command_horizon': Param(0.024, 'time of each trajectory\'s first point (with its '
                                     'velocity; the second is rest)', unit='s',
                              ge=0.004, le=0.5),
     'min_duration': Param(0.05, 'shortest hold trajectory sent', unit='s', gt=0.0, le=5.0),
@@ -118,7 +124,7 @@ ARM_RECONFIGURABLE = ('scale', 'dead_zone', 'joystick_gain', 'max_tcp_speed',
                       'orientation_scale', 'max_tool_tilt', 'max_tool_turn',
                       'filter_min_cutoff_hz', 'filter_beta', 'filter_d_cutoff_hz',
                       'rotation_min_cutoff_hz', 'rotation_beta', 'rotation_d_cutoff_hz',
-                      'max_joint_speed', 'max_joint_accel', 'servo_gain',
+                      'max_joint_speed', 'max_joint_accel', 'servo_gain', 'servo_lead',
                       'gripper_binary_closed', 'arm_hold_s')
 
 
