@@ -316,6 +316,23 @@ def test_stale_input_never_moves_the_robot():
     assert t.status.state == DISARMED and not any(sent(x) for x in cmds)
 
 
+def test_a_new_input_connection_judges_lateness_afresh():
+    # A baseline taken while this node's clock lagged (sim time) makes every later message
+    # look late by a constant: refused until the connection is re-made and judged afresh.
+    t, c = armed_with_origin()
+    base = c.t
+
+    def at(stamp, now):
+        h = hand(palm_mm=(0.0, 210.0, 0.0))
+        h.stamp = base + stamp
+        return t.on_hand(h, base + now)
+    assert at(0.6, 0.0) is None             # received "before" it was stamped: clock lagging
+    assert all(at(0.61 + 0.01 * k, 0.612 + 0.01 * k).startswith('late') for k in range(3))
+    t.new_input_connection()
+    assert not any(at(0.65 + 0.01 * k, 0.652 + 0.01 * k) for k in range(3))
+    assert at(0.70, 1.2).startswith('late')  # held up on top of the new baseline: refused
+
+
 def test_disarm_after_must_be_at_least_input_timeout():
     with pytest.raises(ValueError, match='disarm_after'):
         ArmTeleopParams.from_dict({'input_timeout': 0.5, 'disarm_after': 0.3})

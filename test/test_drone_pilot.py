@@ -306,6 +306,19 @@ def test_stale_input_never_flies_the_drone():
     assert pilot.hand_present is False
 
 
+def test_a_new_input_connection_judges_lateness_afresh():
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot.on_navdata(3, 1000, 0.0)
+    pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.6), 0.0)        # the clock lagged: a low baseline
+    assert all(pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.01 * k), 0.01 * k + 0.01)
+               for k in range(1, 4))                          # then every message late
+    pilot.new_input_connection()
+    assert not any(pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.05 + 0.01 * k), 0.06 + 0.01 * k)
+                   for k in range(3))
+    # held up on top of the new baseline: refused
+    assert pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.08), 0.6).startswith('late')
+
+
 def test_paper_mode_loss_longer_than_disarm_after_needs_the_capture_pose_again():
     pilot = DronePilot(PilotConfig(mode='paper', navdata_timeout=10.0, disarm_after=1.0))
     pilot.on_navdata(3, 1000, 0.0)

@@ -203,6 +203,11 @@ class DronePilot:
         the navdata stale (and hovered) in between."""
         return self.navdata_lost_since is None and self.navdata_fresh(now)
 
+    def new_input_connection(self):
+        """The Hand input's connection was re-made: judge its lateness afresh."""
+        with self._lock:
+            self._stream.reset()
+
     def on_hand(self, hand, now):
         """Take one PilotInput; returns why it was ignored (None if it was not)."""
         with self._lock:

@@ -10,11 +10,14 @@ from leap_teleop.control.stream_health import StreamHealth
 
 
 class HandSubscription:
-    def __init__(self, topic, msg_type, callback, node, p, queue_size, check_period=0.25):
+    def __init__(self, topic, msg_type, callback, node, p, queue_size, on_new_connection,
+                 check_period=0.25):
         """callback(msg) returns why the message was refused (None if it was not); a
         reason starting with 'late' counts against the connection. p: the node's params
-        (STREAM_HEALTH_PARAMS)."""
+        (STREAM_HEALTH_PARAMS). on_new_connection() is called after each re-subscription:
+        the consumer judges the new connection's lateness afresh."""
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
+        self.on_new_connection = on_new_connection
         self.node, self.queue_size = node, queue_size
         self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
@@ -46,6 +49,7 @@ class HandSubscription:
         # Unregister first: a second Subscriber on the same topic would share the old
         # connections instead of making new ones.
         self.sub.unregister()
+        self.on_new_connection()
         self.sub = self._subscribe()
         rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
 

@@ -159,6 +159,11 @@ class ArmTeleop:
                  ('IK failures', s.ik_failures)])
 
     # -- input (cheap; called from subscriber callbacks) ----------------------------
+    def new_input_connection(self):
+        """The hand input's connection was re-made: judge its lateness afresh (a baseline
+        taken while this node's clock lagged would refuse every message for ever)."""
+        self._stream.reset()
+
     def on_hand(self, hand, now):
         """Store one hand message. Returns None, or why it was rejected."""
         palm = np.asarray(hand.palm_mm, dtype=float)

@@ -26,6 +26,10 @@ class ArmTeleopRunner:
         with self.lock:
             self.teleop.on_joints(q, now)
 
+    def new_input_connection(self):
+        with self.lock:
+            self.teleop.new_input_connection()
+
     def retune(self, changes):
         """Checked changes of reconfigurable parameters, applied between two steps."""
         with self.lock:

@@ -77,7 +77,7 @@ class ArmNode:
         if not wait_for_first_message(self.joints_seen, 'joint_states', 'ur10_arm'):
             return False
         self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
-                                         self.p, queue_size=50)
+                                         self.p, 50, self.runner.new_input_connection)
         side = self.p['hand']
         self.type_watch = TopicTypeWatch(
             self.hand_topic, self.hand_type, 'ur10_arm', 'this arm (hand %s)' % side,
