@@ -1,9 +1,13 @@
 """The arm bench's real hand motion: the palm paths it replays and its figures on them."""
 import numpy as np
+import pytest
 
 from tools import hand_paths
 from tools.bench import bench_arm_motion as bench
 from tools.closed_loop import sim_params
+
+# runs the simulated cell: not in make check
+pytestmark = pytest.mark.integration
 
 
 def test_real_paths_are_moving_hands_of_both_people_and_the_leapjs_takes(leapjs_data):
