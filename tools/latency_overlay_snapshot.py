@@ -1,9 +1,10 @@
 """Save the sender's annotated camera view with its latency lines, from a running graph.
 
-A private master, the sender playing the shared clip of a fist then a thumbs-up (looping,
-paced at 30 frames/s like a webcam) through MediaPipe, one ur10_arm and the UR10
-simulator. The clip's thumbs-up arms the arm. Once /diagnostics has the sender's
-capture -> published and the arm's capture -> command with numbers (the arm's over at
+A private master, the sender playing the shared clip of a fist then a thumbs-up through
+MediaPipe (looping, at the clip's 25 frames/s, every frame processed, as ur10_single.launch
+plays a video; with late frames dropped, one run at load 16 on 2 cores never armed the
+arm), one ur10_arm and the UR10 simulator. The clip's thumbs-up arms the arm. Once
+/diagnostics has the sender's capture -> published and the arm's capture -> command with numbers (the arm's over at
 least MIN_COMMANDS commands, the first report WARM_S old) and the sender has had
 SETTLE_S to hear them too, the next annotated image that shows the hand and at least
 three latency lines is written as a PNG (palette colours, to keep it small).
@@ -43,7 +44,7 @@ def _node(script, *args):
 def graph_commands(clip):
     """The sender, arm and simulator command lines."""
     sender = _node('sender.py', '__name:=leap_sender', '_source:=video', '_video:=%s' % clip,
-                   '_loop:=true', '_rate:=30', '_video_drop_late:=true', '_sides:=[right]',
+                   '_loop:=true', '_sides:=[right]',
                    '_wait_for_subscribers:=true',
                    '_annotated_image_topic:=%s' % IMAGE_TOPIC)
     # As camera_video_ur10.test: MediaPipe on a shared 2-core machine delivers some frames
