@@ -44,6 +44,8 @@ COVERED = {
     'source devel/setup.bash': WORKSPACE,
     'make demo': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     'make eval': 'test_eval_gestures.py::test_main_writes_the_json',
+    './env.sh python -m tools.latency_overlay_snapshot docs/camera_latency.png':
+        'test_latency_overlay_snapshot.py::test_the_command_writes_the_overlay_picture',
     './env.sh rosrun leap_teleop latency_monitor':
         'test_latency_monitor.py::test_the_command_prints_the_pilots_row_from_a_running_node',
     'make check': 'test_make_targets.py::test_make_check_runs_the_unit_tests_only',
