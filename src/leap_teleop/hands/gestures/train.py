@@ -206,17 +206,22 @@ def add_keypoint_row(ds, pts, cls, person, label, copies=1):
 
 
 def add_keypoints(ds, path, label=None, person=None):
-    persons, labels, xy = gd.read_keypoints(path, label=label, person=person)
-    n = 0
-    for p, lab, pts in zip(persons, labels, xy):
+    sources = []
+    persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
+    n = skipped = 0
+    for p, lab, src, pts in zip(persons, labels, sources, xy):
         cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
         if cls is None:
+            continue
+        if label is None and gd.mislabelled_keypoints(p, src):
+            skipped += 1
             continue
         # the rarer gestures (few people recorded a thumb or an OK sign) count more
         add_keypoint_row(ds, pts, cls, p, lab,
                          RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
         n += 1
-    ds.sources.append('%s (%d rows)' % (os.path.basename(path), n))
+    ds.sources.append('%s (%d rows%s)' % (os.path.basename(path), n, ', %d mislabelled left out'
+                                          % skipped if skipped else ''))
 
 
 # The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
