@@ -47,11 +47,12 @@ def fits_once():
     Harikumar4: a fold fitted on the same rows is fitted once for both."""
     real, memo = tg.models_without, {}
 
-    def models_without(x, y, persons, labels, held, stride=tg.FIT_STRIDE, log=print):
-        key = _fingerprint(x, y, persons, labels), stride
+    def models_without(x, y, persons, labels, held, stride=tg.FIT_STRIDE, log=print,
+                       alpha=tg.L2):
+        key = _fingerprint(x, y, persons, labels), stride, alpha
         todo = sorted(p for p in set(held) if (key, p) not in memo)
         if todo:
-            for p, m in real(x, y, persons, labels, todo, stride, log).items():
+            for p, m in real(x, y, persons, labels, todo, stride, log, alpha=alpha).items():
                 memo[key, p] = m
         return {p: copy.deepcopy(memo[key, p]) for p in sorted(held)}
     with pytest.MonkeyPatch.context() as mp:

@@ -2,6 +2,7 @@
 orientation, tracker noise, a missing joint), and the thumbs-up guard beside it: a
 thumbs-down or a sideways thumb never arms an arm, a held thumbs-up does."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -130,3 +131,39 @@ def test_camera_thumb_guard_wants_the_thumb_up_in_the_picture():
         assert camera_thumb_points(upside_down) == 'down'
         for turn in (math.radians(80), -math.radians(80)):
             assert camera_thumb_points(rotate_keypoints(xy - centre, turn) + centre) is None
+
+
+def test_keypoint_features_ignore_the_cameras_roll_and_scale_but_not_the_mirror():
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    from leap_teleop.hands.gestures.features import (
+        KEYPOINT_FEATURES,
+        keypoint_features,
+        mirror_keypoints,
+        rotate_keypoints,
+    )
+    _, _, xy = gesture_data.read_keypoints(os.path.join(gesture_data.KEYPOINTS, 'CharlesCai7.csv'))
+    for q in xy[::60]:
+        a = keypoint_features(q)
+        assert a.shape == (KEYPOINT_FEATURES,)
+        for turn in (0.3, 1.6, math.pi):
+            np.testing.assert_allclose(keypoint_features(rotate_keypoints(q, turn) * 7.0), a,
+                                       atol=1e-9)
+        assert not np.allclose(keypoint_features(mirror_keypoints(q)), a)
+    assert keypoint_features(np.zeros((21, 2))) is None
+
+
+def test_keypoint_classes_that_show_another_pose_are_left_out_of_the_fit():
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    from leap_teleop.hands.gestures import train
+    ds = train.Dataset('keypoints')
+    train.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'))
+    labels = set(ds.label)
+    # Close (four fingers up) and Ok (a side-view thumbs-up) are out; the rest are in
+    assert 'fist' not in labels and 'ok' not in labels
+    assert {'open', 'pointing', 'other'} <= labels
+    assert ds.sources == ['ASHISH74888.csv (678 rows, 234 mislabelled left out)']
+    # a user's file is never second-guessed
+    ds = train.Dataset('keypoints')
+    train.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'),
+                        label='mine', person='user:me')
+    assert set(ds.y) == {'mine'} and len(ds.y) == 2 * 2 * 912

@@ -10,9 +10,11 @@ frame, plus fingertip gaps and the cosines between successive bones.
   every hand, so where they sit says nothing), from a tracker's 3-D joints (Leap SDKs, recordings, scripts, a camera's
   lifted landmarks). None when the hand lacks the joints: such a hand shows no gesture.
 - `keypoint_features(xy)`: 21 2-D image landmarks (MediaPipe order), the only thing a
-  webcam's community keypoint files hold, in the picture's own orientation (the model
-  learns small turns from turned copies). Image y grows downward; a left hand is a
-  mirrored right one, so callers score both the landmarks and their mirror image.
+  webcam's community keypoint files hold, turned in the picture so that the wrist ->
+  middle knuckle axis points up (people hold their hands and cameras at any roll; which
+  way the thumb points in the picture is the thumbs-up guard's business, not the
+  model's). Image y grows downward; a left hand is a mirrored right one, so callers
+  score both the landmarks and their mirror image.
 """
 import math
 
@@ -21,7 +23,7 @@ import numpy as np
 from leap_teleop.hands.gestures.geometry import TIP_PAIRS, hand_geometry
 
 LEAP_FEATURES = 5 * 3 * 3 + 5 * 3 * 3 + 7 + 10
-KEYPOINT_FEATURES = 21 * 2 + 20 * 2 + 7 + 15
+KEYPOINT_FEATURES = 21 * 2 + 20 * 2 + 7 + 15 + 5 + 5 + 3
 _TIP_A = np.array([a for a, _ in TIP_PAIRS])
 _TIP_B = np.array([b for _, b in TIP_PAIRS])
 # where each finger's two successive-bone cosines sit in the (15, 15) Gram matrix of its
@@ -64,22 +66,49 @@ def normalize_keypoints(xy):
     return p / m
 
 
-def keypoint_features(xy):
-    """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale: normalised as
-    the community does, so the picture's up stays up: a thumbs-up and a thumbs-down differ
-    by it), or None. Not mirror-invariant by itself: see module doc."""
+def upright_keypoints(xy):
+    """The community-normalised landmarks (normalize_keypoints) turned so that the wrist
+    -> middle knuckle axis points up (-y), divided again by the largest absolute
+    coordinate; (21, 2) or None when degenerate."""
     p = normalize_keypoints(xy)
+    if p is None:
+        return None
+    ax, ay = p[9]
+    n = math.hypot(ax, ay)
+    if n > 1e-6:
+        c, s = -ay / n, ax / n
+        p = p @ np.array([[c, -s], [s, c]])
+        p /= np.abs(p).max()
+    return p
+
+
+def keypoint_features(xy):
+    """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale and roll), or
+    None: the upright landmarks, bone directions, fingertip gaps and the cosines between
+    successive bones, each finger's straightness (knuckle-to-tip distance over its bones'
+    length), each tip's reach from the wrist and the thumb tip's gaps to the index
+    knuckles. Not mirror-invariant by itself: see module doc."""
+    p = upright_keypoints(xy)
     if p is None:
         return None
     w = math.hypot(*(p[5] - p[17]))             # palm width, the unit of the gaps
     if not w > 1e-6:
         w = 1e-6
     chain = p[_CHAINS]                               # (5, 5, 2)
-    bones = _unit_rows(np.diff(chain, axis=1))       # (5, 4, 2)
+    d = np.diff(chain, axis=1)
+    length = np.sqrt((d * d).sum(axis=2))            # (5, 4)
+    bones = d / np.maximum(length[..., None], 1e-9)
     tips = p[_MP_TIPS]
     gaps = np.sqrt(((tips[_TIP_A] - tips[_TIP_B]) ** 2).sum(axis=1)) / w
     cos = (bones[:, 1:] * bones[:, :-1]).sum(axis=2)  # (5, 3)
-    out = np.concatenate((p.ravel(), bones.ravel(), np.minimum(gaps, 10.0), cos.ravel()))
+    # a folded finger's tip comes back towards its knuckle: a fist and a thumb out of it
+    # differ by the thumb's straightness and how far its tip sits from the index
+    straight = (np.sqrt(((chain[:, 4] - chain[:, 1]) ** 2).sum(axis=1))
+                / np.maximum(length[:, 1:].sum(axis=1), 1e-9))
+    reach = np.sqrt((tips * tips).sum(axis=1))
+    thumb = np.sqrt(((p[4] - p[[5, 9, 6]]) ** 2).sum(axis=1)) / w
+    out = np.concatenate((p.ravel(), bones.ravel(), np.minimum(gaps, 10.0), cos.ravel(),
+                          straight, reach, np.minimum(thumb, 10.0)))
     return out if np.isfinite(out).all() else None
 
 

@@ -40,6 +40,11 @@ from leap_teleop.hands.sources import leapjs
 SEED = 0
 HIDDEN_UNITS = 64
 L2 = 1e-3
+# The keypoint model learns from few people (one to three a class): ten times the weight
+# decay of the Leap model keeps it from fitting one person's habits (leave-one-person-out:
+# thumbs-up 0.75 -> 0.80 with the landmark noise below, every false-positive rate <= 0.02).
+KEYPOINT_L2 = 1e-2
+L2_OF = {'leap': L2, 'keypoints': KEYPOINT_L2}
 MAX_ITER = 80
 # Consecutive frames of one pose are nearly the same: fitting on every other one halves the
 # time and loses nothing measurable.
@@ -198,25 +203,33 @@ def add_guinevere(ds, root):
 
 def add_keypoint_row(ds, pts, cls, person, label, copies=1):
     """A keypoint row and its mirror image (a left hand is a mirrored right one), the
-    first copy as recorded, further copies turned in the picture by up to TURN_RAD."""
+    first copy as recorded, further copies turned in the picture by up to TURN_RAD with
+    KEYPOINT_NOISE on every landmark."""
     for k in range(copies):
         q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
+        if k:
+            q = q + ds.rng.normal(0.0, KEYPOINT_NOISE, q.shape)
         ds.add(keypoint_features(q), cls, person, label, augmented=k > 0)
         ds.add(keypoint_features(mirror_keypoints(q)), cls, person, label, augmented=k > 0)
 
 
 def add_keypoints(ds, path, label=None, person=None):
-    persons, labels, xy = gd.read_keypoints(path, label=label, person=person)
-    n = 0
-    for p, lab, pts in zip(persons, labels, xy):
+    sources = []
+    persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
+    n = skipped = 0
+    for p, lab, src, pts in zip(persons, labels, sources, xy):
         cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
         if cls is None:
+            continue
+        if label is None and gd.mislabelled_keypoints(p, src):
+            skipped += 1
             continue
         # the rarer gestures (few people recorded a thumb or an OK sign) count more
         add_keypoint_row(ds, pts, cls, p, lab,
                          RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
         n += 1
-    ds.sources.append('%s (%d rows)' % (os.path.basename(path), n))
+    ds.sources.append('%s (%d rows%s)' % (os.path.basename(path), n, ', %d mislabelled left out'
+                                          % skipped if skipped else ''))
 
 
 # The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
@@ -231,6 +244,8 @@ VIEW_STRIDE = 2
 # the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
 TURN_RAD = 0.45
 RARE_KEYPOINT_COPIES = 4
+# Landmark noise on those copies, in the keypoint files' units (the largest coordinate is 1)
+KEYPOINT_NOISE = 0.015
 PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
 
 
@@ -290,8 +305,8 @@ def fit_rows(labels, persons, rows):
     return np.concatenate([rows] + [thumbs] * (THUMB_TAKE_REPEAT - 1))
 
 
-def fit(x, y, seed=SEED):
-    """A PoseClassifier fitted on rows x with class names y."""
+def fit(x, y, seed=SEED, alpha=L2):
+    """A PoseClassifier fitted on rows x with class names y (alpha: the L2 weight decay)."""
     import warnings
 
     from sklearn.exceptions import ConvergenceWarning
@@ -304,7 +319,7 @@ def fit(x, y, seed=SEED):
     z = (x - mean) / scale
     with threadpool_limits(1), warnings.catch_warnings():
         warnings.simplefilter('ignore', ConvergenceWarning)
-        m = MLPClassifier((HIDDEN_UNITS,), alpha=L2, max_iter=MAX_ITER,
+        m = MLPClassifier((HIDDEN_UNITS,), alpha=alpha, max_iter=MAX_ITER,
                           random_state=seed).fit(z, y)
     w1, b1 = m.coefs_[1], m.intercepts_[1]
     if len(m.classes_) == 2:    # one logistic output: the same as softmax over (0, z)
@@ -318,17 +333,17 @@ _FOLD_DATA = None
 
 
 def _fit_without(person):
-    x, y, persons, labels, stride = _FOLD_DATA
+    x, y, persons, labels, stride, alpha = _FOLD_DATA
     rows = fit_rows(labels, persons, strided(np.where(persons != person)[0], stride))
-    return fit(x[rows], y[rows])
+    return fit(x[rows], y[rows], alpha=alpha)
 
 
-def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print):
+def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print, alpha=L2):
     """{person: model fitted on everyone else} for each held-out person, two folds at a
     time (one per core; each fit is seeded, so the result does not depend on the order)."""
     global _FOLD_DATA
     import multiprocessing
-    _FOLD_DATA = (x, y, persons, labels, stride)
+    _FOLD_DATA = (x, y, persons, labels, stride, alpha)
     held = sorted(held)
     out = {}
     try:
@@ -349,7 +364,7 @@ def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print, clean=None
     per = {c: {} for c in classes}
     confusion = collections.defaultdict(collections.Counter)
     held = sorted(set(persons) if held is None else held)
-    models = models_without(x, y, persons, labels, held, stride, log)
+    models = models_without(x, y, persons, labels, held, stride, log, alpha=L2_OF[family])
     for person in held:
         test = persons == person
         model = models[person]
@@ -458,11 +473,12 @@ def train(family, data_dir, adds=(), report=True, log=print):
             'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
                      'MLPClassifier, alpha %g, %d iterations, seed %d; fitted on every %s '
                      'frame, %s)'
-                     % (HIDDEN_UNITS, L2, MAX_ITER, SEED, {1: '', 2: 'second'}.get(
+                     % (HIDDEN_UNITS, L2_OF[family], MAX_ITER, SEED, {1: '', 2: 'second'}.get(
                          FIT_STRIDE, '%dth' % FIT_STRIDE),
                         'each Leap hand also with %g mm of noise on every joint'
                         % JOINT_NOISE_MM if family == 'leap' else
-                        'each row also as its mirror image'),
+                        'each row also as its mirror image, and turned with %g of '
+                        'landmark noise' % KEYPOINT_NOISE),
             'command': 'python -m leap_teleop.hands.gestures.train --family %s%s' % (
                 family, ''.join(' --add %s --label %s' % (path, label) for path, label in adds)),
             'date': datetime.date.today().isoformat()}
@@ -485,7 +501,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
     mine = np.char.startswith(persons.astype(str), 'user:')
     rows = np.union1d(strided(np.where(~mine)[0]), np.where(mine)[0])
     rows = fit_rows(labels, persons, rows)
-    model = fit(x[rows], y[rows])
+    model = fit(x[rows], y[rows], alpha=L2_OF[family])
     model.family = family
     model.card = card
     card['seconds'] = round(time.time() - t0, 1)
