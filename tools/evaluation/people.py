@@ -39,7 +39,7 @@ from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
-from leap_teleop.hands.gestures.pose import HELD, classify_pose
+from leap_teleop.hands.gestures.pose import HELD, MIN_P, classify_pose
 from tools.evaluation.results_file import write_results
 
 ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
@@ -52,12 +52,26 @@ KEYPOINT_EXPECT = {'open': 'open', 'fist': 'fist', 'thumb_up': 'thumb_up',
 PHOTO_EXPECT = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist', 'thumbs_up': 'thumb_up',
                 'thumbs_down': 'thumb_down', 'ok': 'pinch', 'pinch_o': 'pinch'}
 GESTURES = ('fist', 'open', 'pinch', 'rock', 'thumb_up', 'thumb_down')
+MODEL_CLASS = {'thumb_up': 'thumb', 'thumb_down': 'thumb'}   # else the gesture's own name
 
 
 def _read(s):
     """What a decision dict says: the one gesture on, or 'nothing'."""
     on = [g for g in HELD if s.get(g)]
     return on[0] if on else 'nothing'
+
+
+def why_missed(s, want):
+    """Why a decision dict misses the gesture `want`: the model chose another class
+    ('model: CLASS'), its class was below MIN_P ('below MIN_P'), or a guard said no
+    ('guard': the thumb's measured direction or THUMB_UP_MIN_P); 'no joints' when the hand
+    could not be judged."""
+    label = s.get('label') or ''
+    if not label:
+        return 'no joints'
+    if label != MODEL_CLASS.get(want, want):
+        return 'model: ' + label
+    return 'below MIN_P' if s.get('probability', 0.0) < MIN_P else 'guard'
 
 
 class Tally:
@@ -67,12 +81,16 @@ class Tally:
         self.pos = collections.defaultdict(lambda: collections.defaultdict(lambda: [0, 0]))
         self.neg = collections.defaultdict(lambda: collections.defaultdict(lambda: [0, 0]))
         self.confusion = collections.defaultdict(collections.Counter)
+        self.missed = collections.defaultdict(collections.Counter)
 
-    def add(self, person, label, want, read):
+    def add(self, person, label, want, read, why=None):
+        """`why`: why_missed's cause when a positive is missed (counted per gesture)."""
         for g in GESTURES:
             if want == g:
                 self.pos[g][person][0] += read == g
                 self.pos[g][person][1] += 1
+                if read != g and why is not None:
+                    self.missed[g][why] += 1
             else:
                 self.neg[g][person][0] += read == g
                 self.neg[g][person][1] += 1
@@ -91,7 +109,8 @@ class Tally:
                       'positives': int(sum(n for _, n in self.pos[g].values())),
                       'fpr_pooled': pooled[0] / pooled[1] if pooled[1] else None,
                       'fpr_worst': max(fpr.values()) if fpr else None,
-                      'fpr_worst_person': max(fpr, key=fpr.get) if fpr else None}
+                      'fpr_worst_person': max(fpr, key=fpr.get) if fpr else None,
+                      'missed_because': dict(self.missed[g].most_common())}
         return {'per_gesture': out,
                 'confusion': {k: dict(v) for k, v in sorted(self.confusion.items())}}
 
@@ -146,18 +165,22 @@ def leap_people(data_dir, log=print):
                     continue
                 frames = gd.read_take(path)
                 want = LEAP_EXPECT.get(gesture)
+                thumb_up_frames = 0
                 for d in frames:
                     hand = gd.first_hand(d)
                     if hand is not None:
-                        read = _read(_decide(hand, model))
+                        decision = _decide(hand, model)
+                        read = _read(decision)
+                        thumb_up_frames += read == 'thumb_up'
                         if want is not None:
-                            tally.add(person, gesture, want, read)
+                            tally.add(person, gesture, want, read, why_missed(decision, want))
                         elif read == 'thumb_up':    # unlabelled frames count for this only
                             tally.add(person, gesture, 'unlabelled', read)
                 armed, events = take_outcome(frames, model)
                 take_rows.append({'person': person, 'take': os.path.basename(path),
                                   'gesture': gesture, 'thumb_up_armed': armed['thumb_up'],
                                   'thumb_down_held': armed['thumb_down'],
+                                  'thumb_up_frames': thumb_up_frames,
                                   'events': dict(events)})
         elif person == 'leapjs_takes':
             from leap_teleop.hands.gestures.datasets import UP, expected
@@ -170,15 +193,18 @@ def leap_people(data_dir, log=print):
                     goal = 'thumb_up' if up else 'nothing'
                 else:
                     goal = {'none': 'nothing'}.get(cls, cls)
-                tally.add(person, take + ':' + cls, goal, _read(_decide(hand, model)))
+                decision = _decide(hand, model)
+                tally.add(person, take + ':' + cls, goal, _read(decision),
+                          why_missed(decision, goal))
         else:
             for p, label, frame in gti:
                 if p != person:
                     continue
                 hand = gd.first_hand(frame)
                 if hand is not None:
-                    tally.add(person, label, LEAP_EXPECT.get(label, 'nothing'),
-                              _read(_decide(hand, model)))
+                    want = LEAP_EXPECT.get(label, 'nothing')
+                    decision = _decide(hand, model)
+                    tally.add(person, label, want, _read(decision), why_missed(decision, want))
         log('  leap: scored %s (%.0f s)' % (person, time.time() - t0))
     out = tally.summary()
     out['takes'] = take_summary(take_rows)
@@ -192,6 +218,11 @@ def take_summary(rows):
     circle = [r for r in rows if any(k.startswith('circle') for k in r['events'])]
     return {'takes': len(rows),
             'thumbs_up_takes_armed': [sum(r['thumb_up_armed'] for r in up), len(up)],
+            # a thumbs-up take that did not arm: lost per frame (no frame read thumbs-up)
+            # or by the temporal filter and the hold (some did)
+            'thumbs_up_takes_not_armed': {'%s/%s' % (r['person'], r['take']):
+                                          r.get('thumb_up_frames', 0)
+                                          for r in up if not r['thumb_up_armed']},
             'thumbs_down_takes_armed': sum(r['thumb_up_armed'] for r in down),
             'thumbs_down_takes_held': [sum(r['thumb_down_held'] for r in down), len(down)],
             'takes_armed_not_thumbs_up': sorted(r['take'] for r in rows
@@ -227,11 +258,13 @@ def keypoint_people(data_dir, log=print):
         if person in real:
             for lab, src, pts in real[person]:
                 hand = TrackedHand(side='right', image_landmarks=pts)
-                read = _read(classify_pose(hand, None, model))
+                decision = classify_pose(hand, None, model)
+                read = _read(decision)
                 if gd.mislabelled_keypoints(person, src):
                     mislabelled['%s %s' % (person, src)][read] += 1
                     continue
-                tally.add(person, lab, KEYPOINT_EXPECT.get(lab, 'nothing'), read)
+                want = KEYPOINT_EXPECT.get(lab, 'nothing')
+                tally.add(person, lab, want, read, why_missed(decision, want))
         elif person.startswith('photo:'):
             for source, lab, xy in photo_hands:
                 if 'photo:' + source == person and lab in gd.PHOTO_LABELS:
@@ -270,6 +303,13 @@ def print_people(title, r):
         print('  %-11s %-26s %-22s %.4f / %.4f (%s)' % (
             g, rec, s['worst_person'] or '-', s['fpr_pooled'], s['fpr_worst'],
             s['fpr_worst_person']))
+    missed = ['%s: %s' % (g, ', '.join('%s %d' % kv for kv in s['missed_because'].items()))
+              for g, s in r['per_gesture'].items() if s.get('missed_because')]
+    if missed:
+        print('  missed frames, because (the model chose another class, was below MIN_P, '
+              'or a guard said no):')
+        for line in missed:
+            print('    ' + line)
     print('  confusion (recorded label -> share read as):')
     for lab, row in r['confusion'].items():
         tot = sum(row.values())
@@ -287,6 +327,8 @@ def print_people(title, r):
               % (t['thumbs_up_takes_armed'][0], t['thumbs_up_takes_armed'][1],
                  t['thumbs_down_takes_armed'], len(t['takes_with_fold_or_unfold']), t['takes'],
                  100.0 * t['fold_unfold_rate'], len(t['takes_with_circle'])))
+        for take, n in t['thumbs_up_takes_not_armed'].items():
+            print('  thumbs-up take %s did not arm: %d of its frames read thumbs-up' % (take, n))
 
 
 def run(data_dir, families=('leap', 'keypoints'), log=print):
