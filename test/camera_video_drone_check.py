@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""rostest node: the drone, landed, takes off on the unfold the video source reads in a
-real person's clip."""
+"""rostest node: the drone, landed, takes off on the gesture the video source reads in a
+real person's clip (the takeoff event the sender sends for it, per its bindings)."""
 import os
 import sys
 import unittest
@@ -22,7 +22,7 @@ LIMITS = {
 
 
 class CameraFliesDrone(unittest.TestCase):
-    def test_unfold_from_video_takes_off(self):
+    def test_gesture_from_video_takes_off(self):
         lim = read_limits(LIMITS)
         start, taking_off = navdata_code(lim.start_state), navdata_code(lim.takeoff_state)
         airborne = navdata_codes(lim.airborne_states)
