@@ -123,3 +123,12 @@ def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
     t.join()
     assert ages.summary(10.0)['published'][2] == n         # nothing lost, nothing twice
     assert reads == sorted(reads)
+
+
+def test_a_full_window_keeps_its_newest_samples():
+    w = InputAgeWindow(window_s=100.0, max_samples=64)
+    for k in range(1000):
+        w.add(10.0 + k * 0.01, 10.0 + k * 0.01 - (0.001 if k < 936 else 0.002))
+    ages = w.ages(20.0)
+    assert len(ages) == 64 and np.all(ages == pytest.approx(0.002))
+    assert w.summary(20.0)[2] == 64

@@ -6,7 +6,7 @@ hand frame at each of its stages (recognized, published) through StageAges. `sum
 gives the median and 99th percentile over the last `window_s` seconds, for /diagnostics;
 LatencyBoard reads those values back into one row per (node, stage).
 """
-import collections
+import array
 import math
 import re
 
@@ -14,7 +14,13 @@ import numpy as np
 
 
 class InputAgeWindow:
-    def __init__(self, window_s=10.0, max_samples=5000, stage=None):
+    """Ages in a fixed ring of `max_samples` (time, age) slots: add() stores two floats
+    and moves a counter, so a hot thread can feed it at a few hundred hertz, and a
+    reader on another thread (diagnostics) copies the ring without a lock and without
+    holding the interpreter for long (a long hold delays the hot thread's next frame).
+    One writer thread per window."""
+
+    def __init__(self, window_s=10.0, max_samples=8192, stage=None):
         """stage: None for a consumer's commands (keys 'input age p50 ...'), else the
         stage's name (keys 'input age (recognized) p50 ...')."""
         if not (math.isfinite(window_s) and window_s > 0):
@@ -23,7 +29,12 @@ class InputAgeWindow:
         self.window_s = float(window_s)
         self.stage = stage
         self._label = 'input age' if stage is None else 'input age (%s)' % stage
-        self._samples = collections.deque(maxlen=int(max_samples))   # (time, age s)
+        self._size = int(max_samples)
+        self._times = array.array('d', bytes(8 * self._size))
+        self._ages = array.array('d', bytes(8 * self._size))
+        self._times_view = np.frombuffer(self._times)
+        self._ages_view = np.frombuffer(self._ages)
+        self._added = 0
         self.last_stamp = 0.0          # capture stamp of the input behind the latest sample
 
     def add(self, now, input_stamp):
@@ -32,20 +43,28 @@ class InputAgeWindow:
         if not (input_stamp > 0 and math.isfinite(input_stamp) and math.isfinite(now)):
             return None
         age = now - input_stamp
-        self._samples.append((now, age))
+        i = self._added % self._size
+        # age before time: a reader racing this write sees the slot's old time (outside
+        # its window, or a recent sample's) with a real age, never a made-up one
+        self._ages[i] = age
+        self._times[i] = now
+        self._added += 1
         self.last_stamp = input_stamp
         return age
 
-    def _recent(self, now):
-        while self._samples and (self._samples[0][0] < now - self.window_s
-                                 or self._samples[0][0] > now + 1e-6):
-            self._samples.popleft()        # old, or from before the clock jumped back
-        return [age for _, age in self._samples]
+    def ages(self, now):
+        """The ages (s, an array) of the samples taken in the last window_s seconds up to
+        `now` (samples from after `now` belong to a clock that has since jumped back)."""
+        k = min(self._added, self._size)
+        times = self._times_view[:k].copy()
+        ages = self._ages_view[:k].copy()
+        keep = (times >= now - self.window_s) & (times <= now + 1e-6)
+        return ages[keep]
 
     def summary(self, now):
         """(p50 s, p99 s, samples) over the last window_s seconds; (None, None, 0) if empty."""
-        ages = self._recent(now)
-        if not ages:
+        ages = self.ages(now)
+        if not len(ages):
             return None, None, 0
         p50, p99 = np.percentile(ages, [50, 99])
         return float(p50), float(p99), len(ages)
@@ -65,34 +84,26 @@ class InputAgeWindow:
 
 
 class StageAges:
-    """One InputAgeWindow per stage, fed from a hot thread and read on another without a
-    lock: add() only appends to a deque (atomic in CPython); diagnostic_values(), on the
-    reading thread, moves what was added into the windows first."""
+    """One InputAgeWindow per stage, fed from the hot thread (one writer) and read on
+    another (diagnostics) without a lock."""
 
-    def __init__(self, stages, window_s=10.0, max_pending=20000):
-        self.windows = {stage: InputAgeWindow(window_s, stage=stage) for stage in stages}
-        self._pending = collections.deque(maxlen=int(max_pending))   # (stage, time, stamp)
+    def __init__(self, stages, window_s=10.0, max_samples=8192):
+        self.windows = {stage: InputAgeWindow(window_s, max_samples, stage=stage)
+                        for stage in stages}
 
     def add(self, stage, now, input_stamp):
-        """Input captured at `input_stamp` reached `stage` at `now` (same clock, s)."""
-        self._pending.append((stage, now, input_stamp))
-
-    def _drain(self):
-        pending, windows = self._pending, self.windows
-        while pending:
-            stage, now, stamp = pending.popleft()
-            window = windows.get(stage)
-            if window is not None:
-                window.add(now, stamp)
+        """Input captured at `input_stamp` reached `stage` at `now` (same clock, s); an
+        unknown stage is no sample."""
+        window = self.windows.get(stage)
+        if window is not None:
+            window.add(now, input_stamp)
 
     def summary(self, now):
         """{stage: (p50 s, p99 s, samples)} over each window."""
-        self._drain()
         return {stage: w.summary(now) for stage, w in self.windows.items()}
 
     def diagnostic_values(self, now):
         """Every stage's window values, in the order the stages were given."""
-        self._drain()
         return [kv for w in self.windows.values() for kv in w.diagnostic_values(now)]
 
 
