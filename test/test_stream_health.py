@@ -92,7 +92,8 @@ def judge(msg):
 
 pub = rospy.Publisher('hands', Hand, queue_size=100, tcp_nodelay=True)
 sub = HandSubscription('hands', Hand, judge, 'client',
-                       {'resubscribe_after': 0.5, 'resubscribe_silent_after': 0.5}, 5, stream.reset)
+                       {'resubscribe_after': 0.5, 'resubscribe_silent_after': 0.5,
+                        'hand_queue_size': 5}, stream.reset)
 deadline = time.monotonic() + 20
 while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
     time.sleep(0.05)

@@ -13,8 +13,12 @@ re-made once per silence, not again until a message has come: one log line, not 
 """
 from leap_teleop.params import Param
 
-# A consumer node's ~param (the arm nodes, the pilots).
-STREAM_HEALTH_PARAMS = {
+# A consumer node's ~params for its hand subscription (the arm nodes, the pilots).
+HAND_SUBSCRIPTION_PARAMS = {
+    # Deep enough for a second of hand frames behind a scheduling stall: late ones are
+    # refused by age anyway, and a backlog that stays is cleared by re-subscribing.
+    'hand_queue_size': Param(50, 'hand messages buffered on the subscription before the '
+                                 'oldest is dropped', ge=1, le=2000),
     'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
                                     'message late (again while it lasts); 0 = never', unit='s',
                                ge=0.0, le=60.0),

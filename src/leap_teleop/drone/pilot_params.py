@@ -4,7 +4,7 @@ PilotConfig (its fields and defaults are generated from PILOT_PARAMS), of drone_
 The drone_pilot block of config/ardrone.yaml sets the same names (a test keeps it inside
 these declarations).
 """
-from leap_teleop.control.stream_health import STREAM_HEALTH_PARAMS
+from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
 from leap_teleop.params import Param, check_params, declared_fields
 
 # Every PilotConfig field. Watchdog times have upper bounds too: a huge timeout is a
@@ -56,7 +56,7 @@ PILOT_NODE_PARAMS = {
     'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False),
     'service_timeout': Param(0.5, 'a flight animation call (its own thread) is abandoned '
                                   'after this long', unit='s', gt=0.0, le=10.0),
-    **STREAM_HEALTH_PARAMS,
+    **HAND_SUBSCRIPTION_PARAMS,
     **PILOT_PARAMS,
 }
 

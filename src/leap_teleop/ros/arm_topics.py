@@ -15,11 +15,12 @@ class ArmCommandTopics:
     ~status. input_age keeps the age of the hand input behind each command sent (read and
     written on the sending thread only)."""
 
-    def __init__(self, prefix):
+    def __init__(self, prefix, queue_size=10):
         self.arm_joints = [prefix + n for n in JOINT_NAMES]
         self.gripper_joint = prefix + GRIPPER_JOINT
-        self.arm = rospy.Publisher('arm_controller/command', JointTrajectory, queue_size=10)
-        self.gripper = rospy.Publisher('gripper/command', JointTrajectory, queue_size=10)
+        self.arm = rospy.Publisher('arm_controller/command', JointTrajectory,
+                                   queue_size=queue_size)
+        self.gripper = rospy.Publisher('gripper/command', JointTrajectory, queue_size=queue_size)
         self.status = rospy.Publisher('~status', ArmStatus, queue_size=10, latch=True)
         self.input_age = InputAgeWindow()
 

@@ -10,15 +10,16 @@ from leap_teleop.control.stream_health import StreamHealth
 
 
 class HandSubscription:
-    def __init__(self, topic, msg_type, callback, node, p, queue_size, on_new_connection,
+    def __init__(self, topic, msg_type, callback, node, p, on_new_connection,
                  check_period=0.25):
         """callback(msg) returns why the message was refused (None if it was not); a
         reason starting with 'late' counts against the connection. p: the node's params
-        (STREAM_HEALTH_PARAMS). on_new_connection() is called after each re-subscription:
-        the consumer judges the new connection's lateness afresh."""
+        (HAND_SUBSCRIPTION_PARAMS: queue size, when to re-subscribe). on_new_connection()
+        is called after each re-subscription: the consumer judges the new connection's
+        lateness afresh."""
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
         self.on_new_connection = on_new_connection
-        self.node, self.queue_size = node, queue_size
+        self.node, self.queue_size = node, int(p['hand_queue_size'])
         self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
         self._lock = threading.Lock()

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from leap_teleop.control.stream_health import STREAM_HEALTH_PARAMS
+from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
 from leap_teleop.params import Param, check_params, declared_fields
 from leap_teleop.ur10 import kinematics as kin
 
@@ -114,7 +114,9 @@ ARM_NODE_PARAMS = {
     'joint_prefix': Param('', 'prefix of the joint names in commands (e.g. ur10_1_)'),
     'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
                          ge=0.1, le=1000.0),
-    **STREAM_HEALTH_PARAMS,
+    'command_queue_size': Param(10, 'arm and gripper commands queued per subscriber',
+                                ge=1, le=2000),
+    **HAND_SUBSCRIPTION_PARAMS,
     **TELEOP_PARAMS,
 }
 

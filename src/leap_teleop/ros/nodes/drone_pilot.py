@@ -41,7 +41,7 @@ class DronePilotNode:
         self.commands = ArdroneCommands(p['service_timeout'])
         hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
-        self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p, 50,
+        self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
                                          self.pilot.new_input_connection)
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)

@@ -41,7 +41,7 @@ class ArmNode:
         self.joint_index = JointStateIndex()
         self.hand_topic = p['hand_topic'] or conversions.default_topics(p['hand'])['leapcobot']
         self.hand_type = conversions.LEAPCOBOT_TYPES[p['hand']]
-        self.topics = ArmCommandTopics(p['joint_prefix'])
+        self.topics = ArmCommandTopics(p['joint_prefix'], p['command_queue_size'])
         self.joints_seen = threading.Event()
         rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
         self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('ur10_arm: %s', text),
@@ -77,7 +77,7 @@ class ArmNode:
         if not wait_for_first_message(self.joints_seen, 'joint_states', 'ur10_arm'):
             return False
         self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
-                                         self.p, 50, self.runner.new_input_connection)
+                                         self.p, self.runner.new_input_connection)
         side = self.p['hand']
         self.type_watch = TopicTypeWatch(
             self.hand_topic, self.hand_type, 'ur10_arm', 'this arm (hand %s)' % side,

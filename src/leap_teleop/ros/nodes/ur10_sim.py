@@ -34,14 +34,14 @@ class UR10SimNode:
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.runner = CellRunner(p, self.use_sim_time, rospy.get_time, self._reject)
         self.cell = self.runner.cell
-        self.clock_pub = (rospy.Publisher('/clock', Clock, queue_size=10)
-                          if self.use_sim_time else None)
+        self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10) if self.use_sim_time else None
         self.js_pubs = {}
         for arm in self.cell.config.arms:
             ns = arm.name
             if not rospy.has_param(ns + '/robot_description'):
                 rospy.set_param(ns + '/robot_description', arm_urdf(arm))
-            self.js_pubs[ns] = rospy.Publisher(ns + '/joint_states', JointState, queue_size=20)
+            self.js_pubs[ns] = rospy.Publisher(ns + '/joint_states', JointState,
+                                              queue_size=p['joint_states_queue_size'])
             for kind, (topic, _) in KINDS.items():
                 rospy.Subscriber(ns + '/' + topic, JointTrajectory, self.on_command,
                                  callback_args=(ns, kind), queue_size=20, tcp_nodelay=True)
