@@ -47,7 +47,9 @@ def test_each_run_writes_a_fresh_file(tmp_path):
 @pytest.mark.parametrize('outcome', ['measured', 'raised'])
 def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
     from tools import soak
-    def run(minutes, rtf, rate_hz=None, log=print):
+    def run(minutes, rtf, rate_hz=None, log=print, **options):
+        assert options == {'player_queue': 2000, 'hand_queue': 50, 'command_queue': 10,
+                           'joint_states_queue': 20, 'burst_minutes': 0.0, 'burst_hogs': 2}
         if outcome == 'raised':
             raise SystemExit('[soak] the graph died: ur10_sim')
         return ({'soak.dropped_msgs': 0, 'soak.rss_growth_pct': 1.5,
@@ -68,6 +70,25 @@ def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome
         assert results['_sources'] == {'soak.dropped_msgs': 'sent minus received',
                                        'soak.rss_growth_pct': 'VmRSS'}
         assert list(results['_failed']) == ['soak.arm_latency_drift_ms']
+
+
+@pytest.mark.parametrize('args', [['--hand-queue', '0'], ['--player-queue', '-1'],
+                                  ['--command-queue', '0'], ['--joint-states-queue', '2001'],
+                                  ['--burst-minutes', '61'], ['--burst-hogs', '17']])
+def test_the_soak_refuses_options_out_of_range(args, capsys):
+    from tools import soak
+    with pytest.raises(SystemExit) as e:
+        soak.main(args)
+    assert e.value.code == 2 and args[0] in capsys.readouterr().err
+
+
+def test_cycles_after_a_load_burst_are_those_that_began_after_it():
+    from tools.soak import LoadBurst
+    assert LoadBurst(0.0, 2, print).after(4) == [0, 1, 2, 3]     # no burst: every cycle
+    burst = LoadBurst(1.0, 2, print)
+    assert burst.after(4) == []                                   # not over yet: none
+    burst.ended_in_cycle = 1
+    assert burst.after(4) == [2, 3]
 
 
 def test_the_median_interval_narrows_with_rounds_and_holds_the_median():

@@ -66,11 +66,16 @@ LAUNCH = """<launch>
   <param name="ur10_1/ur10_arm/max_input_age" value="{max_age}"/>
   <param name="ur10_1/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
   <param name="ur10_1/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
+  <param name="ur10_1/ur10_arm/hand_queue_size" value="{hand_queue_size}"/>
+  <param name="ur10_1/ur10_arm/command_queue_size" value="{command_queue_size}"/>
   <param name="ur10_2/ur10_arm/input_timeout" value="{input_timeout}"/>
   <param name="ur10_2/ur10_arm/disarm_after" value="{disarm_after}"/>
   <param name="ur10_2/ur10_arm/max_input_age" value="{max_age}"/>
   <param name="ur10_2/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
   <param name="ur10_2/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
+  <param name="ur10_2/ur10_arm/hand_queue_size" value="{hand_queue_size}"/>
+  <param name="ur10_2/ur10_arm/command_queue_size" value="{command_queue_size}"/>
+  <param name="ur10_sim/joint_states_queue_size" value="{joint_states_queue_size}"/>
   <group ns="drone">
     <rosparam command="load" file="$(find leap_teleop)/config/ardrone.yaml"/>
     <param name="drone_pilot/hand_timeout" value="{hand_timeout}"/>
@@ -78,6 +83,7 @@ LAUNCH = """<launch>
     <param name="drone_pilot/max_input_age" value="{max_age}"/>
     <param name="drone_pilot/resubscribe_after" value="{resubscribe_after}"/>
     <param name="drone_pilot/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
+    <param name="drone_pilot/hand_queue_size" value="{hand_queue_size}"/>
     <node pkg="leap_teleop" type="drone_pilot.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
       <param name="realtime_factor" value="{rtf}"/>
@@ -242,8 +248,72 @@ def percentile(xs, q):
     return float(np.percentile(xs, q)) if xs else float('nan')
 
 
-def run(minutes, rtf, rate_hz=None, log=print):
-    """Run the soak; returns (figures, {figure: what it was measured on})."""
+class LoadBurst:
+    """Heavy work beside the soak for its first `minutes` of wall time: `hogs` processes
+    spinning on a core each and a second ROS graph (the single-arm pick and place, looping,
+    under its own master). `ended_in_cycle` is the soak cycle that was running when it
+    stopped (None before): the cycles after it are judged as back to full function."""
+
+    def __init__(self, minutes, hogs, log):
+        self.seconds, self.n_hogs, self.log = 60.0 * minutes, hogs, log
+        self.hogs, self.graph, self.master, self.timer = [], None, None, None
+        self.ended_in_cycle = None
+        self.cycle = lambda: None
+
+    def start(self, cycle):
+        """cycle(): the soak's current cycle index."""
+        if self.seconds <= 0:
+            return
+        from tools.bench.ros_processes import ros_master
+        from tools.under_load import start_hogs
+        self.cycle = cycle
+        self.hogs = start_hogs(self.n_hogs)
+        self.master = ros_master()
+        env = self.master.__enter__()
+        env = dict(env, ROS_LOG_DIR=tempfile.mkdtemp(prefix='soak_burst_logs_'))
+        self.graph = subprocess.Popen(['roslaunch', 'leap_teleop', 'ur10_single.launch',
+                                       'loop:=true'], env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.DEVNULL, start_new_session=True)
+        self.log('[soak] load burst: %d CPU hogs and a second ROS graph (ur10_single, '
+                 'looping) for %.1f wall minutes' % (self.n_hogs, self.seconds / 60.0))
+        self.timer = threading.Timer(self.seconds, self.stop)
+        self.timer.daemon = True
+        self.timer.start()
+
+    def stop(self):
+        if self.graph is None and not self.hogs:
+            return
+        from tools.under_load import stop_hogs
+        stop_hogs(self.hogs)
+        self.hogs = []
+        if self.graph is not None:
+            try:
+                os.killpg(self.graph.pid, signal.SIGINT)
+                self.graph.wait(30)
+            except (OSError, subprocess.TimeoutExpired):
+                os.killpg(self.graph.pid, signal.SIGKILL)
+            self.graph = None
+            self.master.__exit__(None, None, None)
+        if self.ended_in_cycle is None:
+            self.ended_in_cycle = self.cycle()
+            self.log('[soak] load burst over during cycle %d' % (self.ended_in_cycle + 1))
+
+    def after(self, cycles):
+        """The cycle indices that began after the burst ended (every one without a burst)."""
+        if self.seconds <= 0:
+            return list(range(cycles))
+        if self.ended_in_cycle is None:
+            return []
+        return list(range(self.ended_in_cycle + 1, cycles))
+
+
+def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
+        command_queue=10, joint_states_queue=20, burst_minutes=0.0, burst_hogs=2):
+    """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
+    the player's publisher queue per connection; hand_queue, command_queue,
+    joint_states_queue: the nodes' ~hand_queue_size, ~command_queue_size (arm nodes),
+    ~joint_states_queue_size (simulator); a load burst (LoadBurst) of burst_minutes with
+    burst_hogs."""
     from leap_teleop.ros.node import package_path
     from tools.bench.ros_processes import ros_master
     with ros_master() as env:
@@ -255,15 +325,21 @@ def run(minutes, rtf, rate_hz=None, log=print):
                                   hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
                                   resubscribe_after=0.5 * rtf,
                                   # longer than the pause between two cycles
-                                  resubscribe_silent_after=8.0 * rtf))
+                                  resubscribe_silent_after=8.0 * rtf,
+                                  hand_queue_size=hand_queue,
+                                  command_queue_size=command_queue,
+                                  joint_states_queue_size=joint_states_queue))
             launch_file = f.name
         subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
         graph = subprocess.Popen(['roslaunch', launch_file], env=env,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                  start_new_session=True)
+        burst = LoadBurst(burst_minutes, burst_hogs, log)
         try:
-            return _soak(env, minutes, rtf, rate_hz, log, package_path, graph)
+            return _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue,
+                         burst)
         finally:
+            burst.stop()
             try:
                 os.killpg(graph.pid, signal.SIGINT)
                 graph.wait(30)
@@ -272,7 +348,7 @@ def run(minutes, rtf, rate_hz=None, log=print):
             os.unlink(launch_file)
 
 
-def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
+def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, burst):
     import rospy
     from std_srvs.srv import Trigger
 
@@ -297,7 +373,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     types = {'/leapmotion/data_right': conversions.LEAPCOBOT_TYPES['right'],
              '/leapmotion/data_left': conversions.LEAPCOBOT_TYPES['left'],
              '/drone/leapmotion/hand_right': Hand, '/drone/leapmotion/gestures': GestureEvent}
-    pubs = {t: rospy.Publisher(t, ty, queue_size=2000, tcp_nodelay=True)
+    pubs = {t: rospy.Publisher(t, ty, queue_size=player_queue, tcp_nodelay=True)
             for t, ty in types.items()}
     mon = SoakMonitor({'arms': {s: arm_topics[s]['leapcobot'] for s in arm_topics},
                    'drone': drone_topics['right']['hand']})
@@ -315,6 +391,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
     master_uri = env['ROS_MASTER_URI']
     rss, placed, flights = {}, [], 0
     wall0, sim0 = time.monotonic(), rospy.get_time()
+    burst.start(lambda: mon.cycle)
     for cycle in range(cycles):
         mon.cycle = cycle
         reset()
@@ -358,6 +435,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
         if graph.poll() is not None:
             raise SystemExit('[soak] the graph died: %s' % graph.stderr.read()[-2000:])
     wall, sim = time.monotonic() - wall0, rospy.get_time() - sim0
+    burst.stop()
     time.sleep(2.0)
 
     # -- figures ----------------------------------------------------------------------
@@ -411,6 +489,13 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
         % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
     log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
         % (sum(placed), 2 * cycles, flights, cycles))
+    after = burst.after(cycles)
+    with mon.lock:
+        flown = {c for c, s in mon.nav_states if s == 6}
+    placed_after = sum(placed[c] for c in after)
+    flown_after = sum(1 for c in after if c in flown)
+    log('[soak] after the load burst (%d cycles): %d/%d cubes placed, %d/%d cycles flew'
+        % (len(after), placed_after, 2 * len(after), flown_after, len(after)))
     figures = {
         'soak.rss_growth_pct': max(growth.values()) if growth else float('nan'),
         'soak.dropped_msgs': dropped,
@@ -423,8 +508,14 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
         'soak.arm_latency_drift_ms': arm_drift,
         'soak.drone_latency_drift_ms': dr_drift,
         'soak.pick_place_success_pct': 100.0 * sum(placed) / (2 * cycles),
+        'soak.pick_place_after_burst_pct': (100.0 * placed_after / (2 * len(after))
+                                            if after else float('nan')),
+        'soak.flights_after_burst_pct': (100.0 * flown_after / len(after)
+                                         if after else float('nan')),
     }
-    run_of = '%d cycles, %.1f sim minutes at x%.2f' % (cycles, sim / 60.0, sim / wall)
+    run_of = ('%d cycles, %.1f sim minutes at x%.2f; player queue %d; load burst %s' % (
+                  cycles, sim / 60.0, sim / wall, player_queue,
+                  'of %.1f wall minutes' % (burst.seconds / 60.0) if burst.seconds > 0 else 'none'))
     nodes = ', '.join(sorted(growth)) or 'no node sampled twice'
     sources = {
         'soak.rss_growth_pct': 'VmRSS of each node after cycle 1 vs the end, the largest '
@@ -447,6 +538,11 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph):
                                        'first %d (%d samples)' % (k, k, len(lat.get('drone', []))),
         'soak.pick_place_success_pct': 'cubes in their trays after each cycle (%d/%d)'
                                        % (sum(placed), 2 * cycles),
+        'soak.pick_place_after_burst_pct': 'cubes in their trays after each cycle that began '
+                                           'after the load burst (%d/%d)'
+                                           % (placed_after, 2 * len(after)),
+        'soak.flights_after_burst_pct': 'cycles that began after the load burst with a '
+                                        'takeoff (%d/%d)' % (flown_after, len(after)),
     }
     return figures, {key: '%s; %s' % (text, run_of) for key, text in sources.items()}
 
@@ -460,14 +556,41 @@ def main(argv=None):
                     help='sim time / wall time target (1.5 keeps 2 cores below saturation)')
     ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
                     '(default the scripts\' 120)')
+    ap.add_argument('--player-queue', type=int, default=2000,
+                    help='the player\'s publisher queue per connection (default 2000)')
+    ap.add_argument('--hand-queue', type=int, default=50,
+                    help='the consumers\' ~hand_queue_size (default 50, the nodes\' default)')
+    ap.add_argument('--command-queue', type=int, default=10,
+                    help='the arm nodes\' ~command_queue_size (default 10, their default)')
+    ap.add_argument('--joint-states-queue', type=int, default=20,
+                    help='the simulator\'s ~joint_states_queue_size (default 20, its default)')
+    ap.add_argument('--burst-minutes', type=float, default=0.0,
+                    help='load burst in the first wall minutes: CPU hogs and a second ROS '
+                         'graph (default 0: none)')
+    ap.add_argument('--burst-hogs', type=int, default=2, help='CPU hogs in the burst')
     ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
+    for name, value, lo, hi in (('--player-queue', args.player_queue, 1, 100000),
+                                ('--hand-queue', args.hand_queue, 1, 2000),
+                                ('--command-queue', args.command_queue, 1, 2000),
+                                ('--joint-states-queue', args.joint_states_queue, 1, 2000),
+                                ('--burst-minutes', args.burst_minutes, 0.0, 60.0),
+                                ('--burst-hogs', args.burst_hogs, 0, 16)):
+        if not lo <= value <= hi:
+            ap.error('%s must be between %g and %g, not %g' % (name, lo, hi, value))
     run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
-                'rate_hz': args.rate}
+                'rate_hz': args.rate, 'player_queue': args.player_queue,
+                'hand_queue': args.hand_queue, 'command_queue': args.command_queue,
+                'joint_states_queue': args.joint_states_queue, 'burst_minutes': args.burst_minutes,
+                'burst_hogs': args.burst_hogs}
     figures, sources, failed = {}, {}, {}
     try:
         figures, sources = run(args.minutes, args.rtf, args.rate,
-                               log=lambda s: print(s, flush=True))
+                               log=lambda s: print(s, flush=True),
+                               player_queue=args.player_queue, hand_queue=args.hand_queue,
+                               command_queue=args.command_queue,
+                               joint_states_queue=args.joint_states_queue,
+                               burst_minutes=args.burst_minutes, burst_hogs=args.burst_hogs)
     except (Exception, SystemExit) as e:     # noqa: BLE001 - recorded in _failed, exit 1
         traceback.print_exc()
         failed['soak'] = '%s: %s' % (type(e).__name__, e)
