@@ -388,20 +388,16 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     strokes = load_strokes(strokes_dir)
     hands = template_hands(leap_people_dir)
     people = sorted(strokes)
-
-    def make():
-        rec = GestureRecognizer()
-        if rules is not None:
-            rec.circles = CircleDetector(rules)
-        return rec
-
+    rules = rules or DRAWN
+    # The recognizer runs once over every stroke and take; its circle detector's calls
+    # are replayed through the rules here and, with loso, through every candidate.
+    stroke_calls = record_strokes(strokes, hands)
     per_person, per_symbol, fired = {}, {}, []
     total = _zero_counts()
     for kind in HANDS:
-        for k, person in enumerate(people):
-            hand = hands[kind][k % len(hands[kind])]
-            for symbol, (t, xyz) in sorted(strokes[person].items()):
-                events = draw(hand, t, xyz, make())
+        for person in people:
+            for symbol in sorted(strokes[person]):
+                events = replay(stroke_calls[kind, person, symbol], rules)
                 sym_kind = _kind(symbol)
                 for c in (per_person.setdefault(person, _zero_counts()),
                           per_symbol.setdefault(symbol, _zero_counts()), total):
@@ -414,8 +410,10 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
                                       for t_, e in events]})
     frames = {'guinevere/' + k: v for k, v in load_guinevere(leap_people_dir).items()}
     frames.update(('leapjs/' + k, v) for k, v in leapjs_takes(leapjs_dir).items())
-    takes = {name: len(take_circles(dicts, make)) for name, dicts in sorted(frames.items())}
-    out = {'rules': _rules_dict(rules or DRAWN), 'people': people, 'total': total,
+    take_calls = record_takes(frames)
+    takes = {name: sum(len(replay(calls, rules)) for calls in sides)
+             for name, sides in sorted(take_calls.items())}
+    out = {'rules': _rules_dict(rules), 'people': people, 'total': total,
            'per_person': per_person, 'per_symbol': per_symbol, 'fired': fired,
            'worst_person': min(people, key=lambda p: (_recall(per_person[p]),
                                                       -per_person[p]['loop_free_fired'])),
@@ -424,7 +422,7 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
                      'leapjs': sum(k.startswith('leapjs/') for k in takes)},
            'takes_with_circles': sum(1 for v in takes.values() if v)}
     if loso:
-        fit = CircleFit(record_strokes(strokes, hands), record_takes(frames))
+        fit = CircleFit(stroke_calls, take_calls)
         out['loso'] = fit.loso(people)
     return out
 
