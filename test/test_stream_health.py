@@ -64,6 +64,39 @@ def test_silence_after_input_asks_once_and_only_with_a_publisher():
     assert h.resubscriptions == 1
 
 
+def test_a_connection_remade_for_lateness_that_brings_nothing_is_remade_again():
+    # Seen in a soak: input late under load, a re-subscription, then nothing for minutes.
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=True)
+    assert h.due(1.0, 1)
+    h.resubscribed(1.0)
+    assert h.due(2.9, 1) is None
+    why = h.due(3.0, 1)                     # connected or not: its publisher was sending
+    assert why and 'after re-subscribing' in why
+    h.resubscribed(3.0)
+    assert h.due(6.9, 1) is None and h.due(7.0, 1)      # backing off: 2 s, 4 s, ...
+    h.resubscribed(7.0)
+    assert h.due(14.9, 0) is None and h.due(15.0, 0)
+    h.resubscribed(15.0)
+    assert h.due(30.9, 0) is None and h.due(31.0, 0)    # ... up to 8 x 2 s
+    h.resubscribed(31.0)
+    assert h.due(46.9, 0) is None and h.due(47.0, 0)
+    h.resubscribed(47.0)
+    feed(h, 47.5, 48.0, late=False)         # it delivers: judged as any connection
+    assert h.due(49.9, 1) is None and h.due(50.0, 1)
+    h.resubscribed(50.0)
+    assert h.due(51.9, 0) is None and h.due(52.0, 0)     # the back-off starts afresh
+
+
+def test_a_connection_remade_for_silence_is_remade_again_only_unconnected():
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    assert h.due(3.0, 1)
+    h.resubscribed(3.0)
+    assert h.due(30.0, 1) is None           # connected and quiet: a paused bag, one line
+    assert h.due(30.0, 0)                   # not connected: the connection did not form
+
+
 def test_zero_disables_and_a_clock_jump_back_starts_afresh():
     h = StreamHealth(0.0, 0.0)
     feed(h, 0.0, 5.0, late=True)

@@ -10,6 +10,11 @@ backlog may clear at any moment), or, on a connection that delivered since it wa
 no message at all for `silent_after` seconds while a publisher is connected. Silence can
 be legitimate (a paused bag, a source waiting for a device), so a silent connection is
 re-made once per silence, not again until a message has come: one log line, not a storm.
+A re-made connection can itself fail to form on a loaded machine (seen in a soak: late
+input, a re-subscription, then nothing for minutes). So a re-made connection that has
+brought nothing for `silent_after` seconds is re-made again, backing off to 8x, when it is
+not connected to any publisher or when it replaced a late stream (whose publisher was
+sending a moment ago: its silence is not a pause).
 """
 from leap_teleop.params import Param
 
@@ -40,6 +45,10 @@ class StreamHealth:
         self.last_rx = None         # last message of any kind
         self.late_since = None      # first late message since the last one on time
         self.heard = False          # a message came since the connection was made
+        self.remade = False         # the connection is a re-subscription's
+        self.remade_late = False    # ... replacing a late stream
+        self.fruitless = 0          # re-subscriptions in a row that brought nothing
+        self._why = None            # 'late' or 'silent': the reason due() gave last
 
     def on_message(self, now, late):
         """A message arrived at `now`; `late` when the consumer refused it as late."""
@@ -64,16 +73,27 @@ class StreamHealth:
         if self.late_since is not None and self.after > 0:
             late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
+                self._why = 'late'
                 return 'every message late for %.1f s' % late_for
         if (self.heard and publishers > 0 and self.silent_after > 0
                 and now - self.last_rx >= self.silent_after):
+            self._why = 'silent'
             return 'no message for %.1f s while %d publisher%s connected' % (
                 now - self.last_rx, publishers, ' is' if publishers == 1 else 's are')
+        if (self.remade and not self.heard and self.silent_after > 0
+                and (publishers == 0 or self.remade_late)
+                and now - self.since >= self.silent_after * 2 ** min(self.fruitless, 3)):
+            self._why = 'late' if self.remade_late else 'silent'
+            return 'no message %.1f s after re-subscribing (%d publisher%s connected)' % (
+                now - self.since, publishers, '' if publishers == 1 else 's')
         return None
 
     def resubscribed(self, now):
         """The connection was re-established at `now`: judge it afresh."""
         self.resubscriptions += 1
+        self.fruitless = self.fruitless + 1 if (self.remade and not self.heard) else 0
+        self.remade_late = self._why == 'late'
+        self.remade = True
         self.since = now
         self.late_since = None
         self.heard = False
