@@ -308,7 +308,7 @@ class LoadBurst:
 
 
 def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
-        command_queue=10, joint_states_queue=20, burst_minutes=0.0, burst_hogs=2):
+        command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2):
     """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
     the player's publisher queue per connection; hand_queue, command_queue,
     joint_states_queue: the nodes' ~hand_queue_size, ~command_queue_size (arm nodes),
@@ -560,10 +560,10 @@ def main(argv=None):
                     help='the player\'s publisher queue per connection (default 2000)')
     ap.add_argument('--hand-queue', type=int, default=50,
                     help='the consumers\' ~hand_queue_size (default 50, the nodes\' default)')
-    ap.add_argument('--command-queue', type=int, default=10,
-                    help='the arm nodes\' ~command_queue_size (default 10, their default)')
-    ap.add_argument('--joint-states-queue', type=int, default=20,
-                    help='the simulator\'s ~joint_states_queue_size (default 20, its default)')
+    ap.add_argument('--command-queue', type=int, default=50,
+                    help='the arm nodes\' ~command_queue_size (default 50, their default)')
+    ap.add_argument('--joint-states-queue', type=int, default=100,
+                    help='the simulator\'s ~joint_states_queue_size (default 100, its default)')
     ap.add_argument('--burst-minutes', type=float, default=0.0,
                     help='load burst in the first wall minutes: CPU hogs and a second ROS '
                          'graph (default 0: none)')

@@ -15,7 +15,7 @@ class ArmCommandTopics:
     ~status. input_age keeps the age of the hand input behind each command sent (read and
     written on the sending thread only)."""
 
-    def __init__(self, prefix, queue_size=10):
+    def __init__(self, prefix, queue_size=50):
         self.arm_joints = [prefix + n for n in JOINT_NAMES]
         self.gripper_joint = prefix + GRIPPER_JOINT
         self.arm = rospy.Publisher('arm_controller/command', JointTrajectory,
