@@ -110,6 +110,9 @@ BY_CI = {'make test', 'make setup',
 # Not run by any test, and why.
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
+    'python -m tools.soak --minutes 4 --burst-minutes 1': 'a shorter soak with a load burst '
+        '(~4 wall minutes of the full graph beside CPU hogs); test_bench_ros_processes.py '
+        'checks its options and results file',
     'make loaded': 'the demo and every rostest again, beside two CPU hogs (~15 wall '
         'minutes); the integrator runs it, test_under_load.py checks tools.under_load',
     'python -m tools.under_load --hogs 2 -- make demo': 'part of make loaded; '
