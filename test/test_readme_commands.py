@@ -110,6 +110,8 @@ BY_CI = {'make test', 'make setup',
 # Not run by any test, and why.
 NOT_RUN = {
     'make soak': '20 wall minutes; the integrator runs it',
+    'python -m tools.soak --burst-minutes 3': 'make soak with a load burst (~26 wall '
+        'minutes); test_bench_ros_processes.py checks its options and results file',
     'python -m tools.soak --minutes 4 --burst-minutes 1': 'a shorter soak with a load burst '
         '(~4 wall minutes of the full graph beside CPU hogs); test_bench_ros_processes.py '
         'checks its options and results file',
