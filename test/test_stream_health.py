@@ -189,3 +189,43 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     assert int(diag['hand re-subscriptions']) == sum(
         out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent'))
     assert 'client: re-subscribed to /hands (every message late for' in proc.stderr, proc.stderr[-3000:]
+
+
+def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscription(monkeypatch):
+    # An exception in a check would end its timer's thread: no later check would run.
+    import rospy
+
+    from leap_teleop.ros import hand_subscription as hs
+
+    class FakeSubscriber:
+        def __init__(self):
+            self.closed = False
+
+        def get_num_connections(self):
+            return 1
+
+        def unregister(self):
+            self.closed = True
+
+    import threading
+    sub = hs.HandSubscription.__new__(hs.HandSubscription)
+    sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
+    sub.health = StreamHealth(0.5, 2.0)
+    first = sub.sub = FakeSubscriber()
+    made, logs = [], []
+
+    def fail():
+        raise RuntimeError('master unreachable')
+    sub.on_new_connection = fail
+    monkeypatch.setattr(sub, '_subscribe', lambda: made.append(FakeSubscriber()) or made[-1])
+    monkeypatch.setattr(rospy, 'get_time', lambda: 10.0)
+    monkeypatch.setattr(rospy, 'resolve_name', lambda name: '/' + name)
+    monkeypatch.setattr(rospy, 'logerr_throttle', lambda period, text: logs.append(text))
+    monkeypatch.setattr(rospy, 'logwarn', lambda *a: logs.append(a[0] % a[1:]))
+    feed(sub.health, 8.0, 9.9, late=True)
+    sub._check()                               # due, unregistered, then the failure
+    assert first.closed and sub.sub is None and not made
+    assert 'checking the connection to /hands failed: master unreachable' in logs[-1]
+    sub._check()                               # the next check subscribes afresh
+    assert len(made) == 1 and sub.sub is made[0]
+    assert logs[-1] == 'client: re-subscribed to /hands'

@@ -25,8 +25,9 @@ class HandSubscription:
         self._lock = threading.Lock()
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
-        # watchdog of the node shares this thread.
-        self.timer = (rospy.Timer(rospy.Duration.from_sec(check_period), self._check)
+        # watchdog of the node shares this thread. reset: a /clock that jumps back (a
+        # restarted simulator) would otherwise end the timer's thread.
+        self.timer = (rospy.Timer(rospy.Duration.from_sec(check_period), self._check, reset=True)
                       if self.health.after > 0 or self.health.silent_after > 0 else None)
 
     def _subscribe(self):
@@ -41,6 +42,18 @@ class HandSubscription:
             self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
 
     def _check(self, _event=None):
+        # An exception would end the timer's thread, and every later check with it.
+        try:
+            self._check_once()
+        except Exception as e:   # noqa: BLE001 - logged; the next check tries again
+            rospy.logerr_throttle(5.0, '%s: checking the connection to %s failed: %s'
+                                  % (self.node, rospy.resolve_name(self.topic), e))
+
+    def _check_once(self):
+        if self.sub is None:         # a re-subscription that failed half-way: finish it
+            self.sub = self._subscribe()
+            rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
+            return
         now = rospy.get_time()
         with self._lock:
             why = self.health.due(now, self.sub.get_num_connections())
@@ -49,7 +62,8 @@ class HandSubscription:
             self.health.resubscribed(now)
         # Unregister first: a second Subscriber on the same topic would share the old
         # connections instead of making new ones.
-        self.sub.unregister()
+        old, self.sub = self.sub, None
+        old.unregister()
         self.on_new_connection()
         self.sub = self._subscribe()
         rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
