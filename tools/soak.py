@@ -259,6 +259,7 @@ class LoadBurst:
         self.hogs, self.graph, self.master, self.timer = [], None, None, None
         self.ended_in_cycle = None
         self.cycle = lambda: None
+        self._lock = threading.Lock()     # stop() runs on the timer's thread and the soak's
 
     def start(self, cycle):
         """cycle(): the soak's current cycle index."""
@@ -281,6 +282,12 @@ class LoadBurst:
         self.timer.start()
 
     def stop(self):
+        with self._lock:
+            self._stop()
+
+    def _stop(self):
+        if self.timer is not None:
+            self.timer.cancel()
         if self.graph is None and not self.hogs:
             return
         from tools.under_load import stop_hogs
