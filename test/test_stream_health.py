@@ -71,30 +71,52 @@ def test_a_connection_remade_for_lateness_that_brings_nothing_is_remade_again():
     assert h.due(1.0, 1)
     h.resubscribed(1.0)
     assert h.due(2.9, 1) is None
-    why = h.due(3.0, 1)                     # connected or not: its publisher was sending
+    why = h.due(3.0, 1)                     # connected: its publisher was sending
     assert why and 'after re-subscribing' in why
     h.resubscribed(3.0)
     assert h.due(6.9, 1) is None and h.due(7.0, 1)      # backing off: 2 s, 4 s, ...
     h.resubscribed(7.0)
-    assert h.due(14.9, 0) is None and h.due(15.0, 0)
+    assert h.due(14.9, 1) is None and h.due(15.0, 1)
     h.resubscribed(15.0)
-    assert h.due(30.9, 0) is None and h.due(31.0, 0)    # ... up to 8 x 2 s
+    assert h.due(30.9, 1) is None and h.due(31.0, 1)    # ... up to 8 x 2 s
     h.resubscribed(31.0)
-    assert h.due(46.9, 0) is None and h.due(47.0, 0)
+    assert h.due(46.9, 1) is None and h.due(47.0, 1)
     h.resubscribed(47.0)
     feed(h, 47.5, 48.0, late=False)         # it delivers: judged as any connection
     assert h.due(49.9, 1) is None and h.due(50.0, 1)
     h.resubscribed(50.0)
-    assert h.due(51.9, 0) is None and h.due(52.0, 0)     # the back-off starts afresh
+    assert not h.wants_listing(50.4, 0) and h.wants_listing(50.5, 0)  # the back-off starts afresh
 
 
-def test_a_connection_remade_for_silence_is_remade_again_only_unconnected():
+def test_a_connection_remade_for_silence_is_not_remade_again_while_connected():
     h = StreamHealth(0.5, 2.0)
     feed(h, 0.0, 1.0, late=False)
     assert h.due(3.0, 1)
     h.resubscribed(3.0)
     assert h.due(30.0, 1) is None           # connected and quiet: a paused bag, one line
-    assert h.due(30.0, 0)                   # not connected: the connection did not form
+
+
+def test_no_connected_publisher_while_the_master_lists_one_is_remade_with_back_off():
+    # Seen in soaks: the publisher dropped a consumer's fresh connection and lived on.
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    assert not h.wants_listing(1.0, 1)
+    assert not h.wants_listing(1.1, 0) and not h.wants_listing(1.5, 0)
+    assert h.wants_listing(1.6, 0)          # 0.5 s without a connected publisher: ask
+    assert h.due(1.6, 0, listed=0) is None  # nobody publishes (a sender stopped) ...
+    assert not h.wants_listing(3.5, 0) and h.wants_listing(3.6, 0)   # ... ask in 2 s
+    why = h.due(3.6, 0, listed=1)
+    assert why == 'connected to none of the 1 publisher the master lists for 2.5 s', why
+    h.resubscribed(3.6)
+    assert not h.wants_listing(4.0, 0) and h.wants_listing(4.1, 0)
+    assert h.due(4.1, 0, listed=2)          # the new one did not form either ...
+    h.resubscribed(4.1)
+    assert not h.wants_listing(5.0, 0) and h.wants_listing(5.1, 0)   # ... back off: 1 s
+    assert h.due(5.1, 0) is None            # not asked, no verdict on the listing
+    h.resubscribed(5.1)
+    assert not h.wants_listing(5.2, 1) and h.due(5.2, 1) is None     # formed: no asking
+    assert not h.wants_listing(8.0, 1)
+    assert not StreamHealth(0.0, 2.0).wants_listing(100.0, 0)         # 0 = never
 
 
 def test_zero_disables_and_a_clock_jump_back_starts_afresh():
@@ -158,6 +180,9 @@ phase('late', 2.0, 0.6)          # every message 0.6 s late, as a standing backl
                                  # clock's baseline makes them look
 phase('on_time_again', 1.5, 0.0)
 phase('silent', 2.6)             # the publisher lives on, sends nothing
+for c in pub.impl.connections:   # the publisher drops the connection and lives on
+    c.close()
+phase('dropped', 2.0, 0.0)
 out['diagnostics'] = dict(sub.diagnostic_values())
 print(json.dumps(out))
 '''
@@ -184,11 +209,19 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     # 2.6 s of silence with the publisher connected: once, after 0.5 s
     assert out['silent']['resubscriptions'] == 1, out
     assert out['silent']['connections'] == 1, out
+    # the publisher dropped the connection: nothing tells the subscriber, it finds no
+    # connected publisher while the master lists one, and re-subscribes once
+    assert out['dropped']['resubscriptions'] == 1, out
+    assert out['dropped']['connections'] == 1, out
+    assert out['dropped']['received'] - out['silent']['received'] > 50, out
     diag = out['diagnostics']
     assert diag['hand messages from /stream_health_client'] == diag['hand messages received']
     assert int(diag['hand re-subscriptions']) == sum(
-        out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent'))
+        out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent',
+                                            'dropped'))
     assert 'client: re-subscribed to /hands (every message late for' in proc.stderr, proc.stderr[-3000:]
+    assert ('client: re-subscribed to /hands (connected to none of the 1 publisher the master '
+            'lists for') in proc.stderr, proc.stderr[-3000:]
 
 
 def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscription(monkeypatch):

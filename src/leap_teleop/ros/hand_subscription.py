@@ -1,9 +1,11 @@
 """A consumer's hand-input subscription: counts what arrives per publisher and
-re-establishes the connection when its input stays late or silent while a publisher is
-connected (control.stream_health says when)."""
+re-establishes the connection when its input stays late, falls silent while a publisher
+is connected, or loses every publisher the master still lists (control.stream_health
+says when)."""
 import collections
 import threading
 
+import rosgraph
 import rospy
 
 from leap_teleop.control.stream_health import StreamHealth
@@ -55,8 +57,13 @@ class HandSubscription:
             rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
             return
         now = rospy.get_time()
+        publishers = self.sub.get_num_connections()
         with self._lock:
-            why = self.health.due(now, self.sub.get_num_connections())
+            ask = self.health.wants_listing(now, publishers)
+        # Outside the lock: the master may be slow, the message callback must not wait.
+        listed = self._listed_publishers() if ask else None
+        with self._lock:
+            why = self.health.due(now, publishers, listed)
             if why is None:
                 return
             self.health.resubscribed(now)
@@ -67,6 +74,12 @@ class HandSubscription:
         self.on_new_connection()
         self.sub = self._subscribe()
         rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
+
+    def _listed_publishers(self):
+        """How many publishers the master lists for the topic."""
+        topic = rospy.resolve_name(self.topic)
+        state = rosgraph.Master(rospy.get_name()).getSystemState()
+        return sum(len(nodes) for name, nodes in state[0] if name == topic)
 
     def diagnostic_values(self):
         counts = dict(self.received)        # a copy: the callback thread adds publishers
