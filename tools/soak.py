@@ -387,10 +387,12 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
     sent = {t: 0 for t in types}
     reset = rospy.ServiceProxy('/ur10_sim/reset', Trigger)
     reset.wait_for_service(120)
-    # Every subscriber of the player's topics connected (arm nodes, pilot, monitor).
+    # Every subscriber of the player's topics connected: a consumer (arm node, pilot) on
+    # each, and the monitor on each but the gestures.
+    wanted = {t: 1 if t == '/drone/leapmotion/gestures' else 2 for t in types}
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not (
-            all(pubs[t].get_num_connections() >= 2 for t in types)):
+            all(pubs[t].get_num_connections() >= n for t, n in wanted.items())):
         time.sleep(0.2)
     while time.monotonic() < deadline and rospy.get_time() == 0:
         time.sleep(0.1)
@@ -596,6 +598,8 @@ def main(argv=None):
                 'joint_states_queue': args.joint_states_queue, 'burst_minutes': args.burst_minutes,
                 'burst_hogs': args.burst_hogs}
     figures, sources, failed = {}, {}, {}
+    # A plain kill ends the soak as Ctrl-C does: its graph and load burst are stopped.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     try:
         figures, sources = run(args.minutes, args.rtf, args.rate,
                                log=lambda s: print(s, flush=True),
