@@ -27,7 +27,9 @@ def test_the_command_runs_beside_busy_hogs_which_stop_after_it():
                          timeout=60)
     assert out.returncode == 0, out.stderr
     seen = json.loads(next(line for line in out.stdout.splitlines() if line.startswith('{')))
-    assert len(seen['pids']) == 1 and seen['cpu'][0] > 50.0, seen     # a core's worth
+    # Spinning: a core's worth on an idle machine, less beside other work (47 % seen
+    # beside the rest of make test), and near 0 if it slept.
+    assert len(seen['pids']) == 1 and seen['cpu'][0] > 20.0, seen
     import psutil
     assert not any(psutil.pid_exists(pid) and psutil.Process(pid).status() != 'zombie'
                    for pid in seen['pids'])
