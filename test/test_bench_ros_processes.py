@@ -123,3 +123,18 @@ def test_a_lost_reply_weighs_in_the_tail():
     assert _p99_ms(times) == pytest.approx(1.0)
     assert _p99_ms(np.append(times, [0.8, 0.9])) > 700.0   # slow replies stay in the tail
     assert _p99_ms(times, lost=2) == math.inf
+
+
+def test_a_spawned_node_that_writes_much_to_stderr_does_not_block():
+    # A pipe nobody drains fills after 64 KiB and blocks the writer at its next line.
+    import subprocess
+    import sys
+
+    from tools.bench import ros_processes
+    proc = ros_processes.spawn_node({}, [sys.executable, '-c',
+                                         'import sys; sys.stderr.write("warning\\n" * 100000)'])
+    try:
+        assert proc.wait(30) == 0
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError('the node blocked writing its stderr')

@@ -338,9 +338,16 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
                                   joint_states_queue_size=joint_states_queue))
             launch_file = f.name
         subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True)
+        # To a file, not a pipe: the nodes share roslaunch's stderr (their warnings go
+        # there even with output="log"), and a pipe nobody drains fills after 64 KiB and
+        # then blocks every node at its next warning: a 30-minute soak froze all three
+        # consumers that way in its last minutes.
+        graph_err = open(os.path.join(log_dir, 'roslaunch-stderr.log'), 'w+b')
         graph = subprocess.Popen(['roslaunch', launch_file], env=env,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                 stdout=subprocess.DEVNULL, stderr=graph_err,
                                  start_new_session=True)
+        graph.err_path = graph_err.name
+        graph_err.close()
         burst = LoadBurst(burst_minutes, burst_hogs, log)
         try:
             return _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue,
@@ -442,7 +449,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
             'wall min (x%.2f)' % (cycle + 1, cycles, ok, flights, sim / 60, wall / 60,
                                    sim / wall))
         if graph.poll() is not None:
-            raise SystemExit('[soak] the graph died: %s' % graph.stderr.read()[-2000:])
+            with open(graph.err_path, errors='replace') as err:
+                raise SystemExit('[soak] the graph died: %s' % err.read()[-2000:])
     wall, sim = time.monotonic() - wall0, rospy.get_time() - sim0
     burst.stop()
     time.sleep(2.0)

@@ -50,8 +50,10 @@ def _wait_for_master(env, timeout=15.0):
 
 
 def spawn_node(env, args):
-    """Start `args` (a command list) as a ROS process; stop it with stop_spawned()."""
-    return subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    """Start `args` (a command list) as a ROS process; stop it with stop_spawned(). Its
+    output is dropped (its log is in ROS_LOG_DIR): a pipe nobody reads would block it once
+    64 KiB of warnings had filled it."""
+    return subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
 def stop_spawned(proc, timeout=10.0):
