@@ -84,7 +84,7 @@ def fit_circle(pts):
     algebraic (Kasa) fit in it. (centre (3,), unit normal (3,), radius, rms radial
     residual, unwrapped angle of each point about the centre, right-handed about the
     normal) or None when degenerate."""
-    p = np.array(pts, dtype=float)
+    p = np.asarray(pts, dtype=float)
     c = p.mean(axis=0)
     q = p - c
     _, vecs = np.linalg.eigh(q.T @ q)
@@ -117,9 +117,10 @@ def fit_circle(pts):
 class _CircleTrack:
     """One point's path (the palm or a fingertip); see the circles section above."""
     __slots__ = ('spacing2', 'r_min', 'r_max', 'spans', 'jump2', 'min_len', 'ts', 'pts',
-                 'cross', 'length', 'speed', 'head', 'wait', 'v_max', 'arc', 'min_roundness')
+                 'cross', 'length', 'speed', 'head', 'wait', 'v_max', 'arc', 'min_roundness',
+                 'fits')
 
-    def __init__(self, spacing, r_min, rules, v_max=math.inf):
+    def __init__(self, spacing, r_min, rules, v_max=math.inf, fits=None):
         self.spacing2 = spacing * spacing
         self.r_min, self.r_max = r_min, rules.r_max
         self.spans = tuple(f * rules.max_s for f in SPAN_FRACTIONS)
@@ -127,6 +128,7 @@ class _CircleTrack:
         self.v_max = v_max
         self.jump2 = (25 * spacing + 2 * self.r_max) ** 2
         self.min_len = self.arc * r_min         # path length of the smallest circle
+        self.fits = _FITS if fits is None else fits
         self.reset()
 
     def reset(self):
@@ -232,28 +234,53 @@ class _CircleTrack:
         return hit
 
     def _fit(self, pts):
-        fit = fit_circle(pts)
+        # Trim to the shortest tail that sweeps the arc about the fitted centre, refit.
+        p = np.array(pts, dtype=float)
+        start = self.fits.arc_start(p, self.arc)
+        if start is None:
+            return None
+        hit = self.fits.tail_circle(p[start:])
+        if hit is None:
+            return None
+        axis, radius, centre, sweep = hit
+        # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
+        if abs(sweep) < 0.9 * self.arc or not self.r_min <= radius <= self.r_max:
+            return None
+        return axis, radius, centre
+
+
+class CircleFits:
+    """The two fits that decide a track's circle, on its roundest stretch ((n, 3) array):
+    where the shortest tail sweeping the arc starts, and that tail's circle. They read
+    the points and the arc only, not the rules' other numbers or the track's state, so
+    a caller replaying many rules over the same paths may cache them (a subclass)."""
+
+    def arc_start(self, p, arc):
+        """Index of the shortest tail of `p` (at least CIRCLE_MIN_POINTS) that sweeps
+        `arc` about the circle fitted to all of `p`; None without one."""
+        fit = fit_circle(p)
         if fit is None:
             return None
-        # Trim to the shortest tail that sweeps the arc about the fitted centre, refit.
-        arc = self.arc
         tail = np.flatnonzero(np.abs(fit[4][-1] - fit[4]) >= arc)
-        if not len(tail) or len(pts) - int(tail[-1]) < CIRCLE_MIN_POINTS:
+        if not len(tail) or len(p) - int(tail[-1]) < CIRCLE_MIN_POINTS:
             return None
-        fit = fit_circle(pts[int(tail[-1]):])
+        return int(tail[-1])
+
+    def tail_circle(self, p):
+        """(axis: the unit normal the path turns right-handed about, radius, centre, signed
+        sweep rad) of the circle fitted to `p` when the path goes round it one way and
+        stays close to it all along; else None."""
+        fit = fit_circle(p)
         if fit is None:
             return None
         centre, normal, radius, residual, angles = fit
         sweep = float(angles[-1] - angles[0])
         travel = float(np.sum(np.abs(np.diff(angles))))
-        # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
-        if (abs(sweep) < 0.9 * arc or travel > CIRCLE_MAX_TRAVEL * abs(sweep)
-                or not self.r_min <= radius <= self.r_max
-                or residual > CIRCLE_MAX_RESIDUAL * radius):
+        if travel > CIRCLE_MAX_TRAVEL * abs(sweep) or residual > CIRCLE_MAX_RESIDUAL * radius:
             return None
         # Every point near the circle, not just most: a half circle plus the straight way
         # out to it sweeps 270 deg about a centre between them with a modest rms residual.
-        q = np.asarray(pts[int(tail[-1]):]) - centre
+        q = p - centre
         q -= np.outer(q @ normal, normal)                   # in the circle's plane
         deviation = np.abs(np.sqrt(np.einsum('ij,ij->i', q, q)) - radius)
         if deviation.max() > CIRCLE_MAX_DEVIATION * radius:
@@ -263,7 +290,7 @@ class _CircleTrack:
         # index) also close a round-enough loop.
         if _cornered(q, normal):
             return None
-        return (normal if sweep > 0 else -normal), radius, centre
+        return (normal if sweep > 0 else -normal), radius, centre, sweep
 
 
 def _cornered(q, normal):
@@ -287,22 +314,24 @@ def _cornered(q, normal):
 
 
 _ZERO3 = (0.0, 0.0, 0.0)
+_FITS = CircleFits()
 
 
 class CircleDetector:
     """Circles of one hand: traced by the palm, or by the index tip while pointing; one
     event per circle (both paths are forgotten when one fires), at most one per
-    CIRCLE_REFRACTORY_S. `rules`: a CircleRules (default DRAWN).
+    CIRCLE_REFRACTORY_S. `rules`: a CircleRules (default DRAWN); `fits`: the CircleFits
+    that fit the circles (default: one that computes each).
 
     Direction: a fingertip circle is clockwise when it turns clockwise seen along the
     finger (the Leap SDK's convention: normal . pointable direction > 0); a palm circle
     is clockwise as the device sees it, looking up +y (the scripted source's `cw`)."""
 
-    def __init__(self, rules=None):
+    def __init__(self, rules=None, fits=None):
         rules = DRAWN if rules is None else rules
         self.rules = rules
-        self.palm_track = _CircleTrack(PALM_SPACING, CIRCLE_R_MIN, rules)
-        self.tip_track = _CircleTrack(TIP_SPACING, CIRCLE_R_MIN, rules, rules.tip_v_max)
+        self.palm_track = _CircleTrack(PALM_SPACING, CIRCLE_R_MIN, rules, fits=fits)
+        self.tip_track = _CircleTrack(TIP_SPACING, CIRCLE_R_MIN, rules, rules.tip_v_max, fits)
         self._normals = deque()                 # (t, palm normal) over the tip's stretch
         self._normal_span = rules.max_s
         self._tip_v_max = rules.tip_v_max
