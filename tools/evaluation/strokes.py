@@ -25,6 +25,7 @@ import argparse
 import dataclasses
 import glob
 import gzip
+import hashlib
 import json
 import math
 import os
@@ -34,7 +35,7 @@ import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datasets
-from leap_teleop.hands.gestures.circles import DRAWN, CircleRules
+from leap_teleop.hands.gestures.circles import DRAWN, CircleFits, CircleRules
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation.results_file import write_results
@@ -201,10 +202,36 @@ def _recording_recognizer(calls):
     return rec
 
 
-def replay(calls, rules):
+class CachedFits(CircleFits):
+    """CircleFits that fits each stretch of path once: the rules replayed over the same
+    calls differ in a number or two, and their detectors fit the same stretches over
+    and over. A stretch is known by a 128-bit digest of its points (not its few kB)."""
+
+    def __init__(self):
+        self._starts, self._tails = {}, {}
+
+    def arc_start(self, p, arc):
+        key = (_digest(p), arc)
+        if key not in self._starts:
+            self._starts[key] = super().arc_start(p, arc)
+        return self._starts[key]
+
+    def tail_circle(self, p):
+        key = _digest(p)
+        if key not in self._tails:
+            self._tails[key] = super().tail_circle(p)
+        return self._tails[key]
+
+
+def _digest(p):
+    return hashlib.blake2b(np.ascontiguousarray(p).data, digest_size=16).digest()
+
+
+def replay(calls, rules, fits=None):
     """Circle events [(time s, HandEvent)] of a CircleDetector with `rules` fed the
-    recorded calls (None: the hand left)."""
-    det = CircleDetector(rules)
+    recorded calls (None: the hand left); `fits`: its CircleFits (e.g. a CachedFits
+    shared by the replays of many rules)."""
+    det = CircleDetector(rules, fits)
     out = []
     for c in calls:
         if c is None:
@@ -265,18 +292,21 @@ LOOP_FREE_WEIGHT = 2
 
 class CircleFit:
     """Leave-one-person-out choice of CircleRules from recorded calls (record_strokes,
-    record_takes); each rules' outcome is computed once."""
+    record_takes); each rules' outcome is computed once, and each circle fit once
+    (`fits`, default a new CachedFits)."""
 
-    def __init__(self, stroke_calls, take_calls):
+    def __init__(self, stroke_calls, take_calls, fits=None):
         self.stroke_calls = stroke_calls
         self.take_calls = take_calls
+        self.fits = CachedFits() if fits is None else fits
         self._cache = {}
 
     def outcome(self, rules):
         """({(hand kind, person, symbol): circle events}, circle events on the takes)."""
         if rules not in self._cache:
-            strokes = {key: len(replay(calls, rules)) for key, calls in self.stroke_calls.items()}
-            takes = sum(len(replay(calls, rules)) for sides in self.take_calls.values()
+            strokes = {key: len(replay(calls, rules, self.fits))
+                       for key, calls in self.stroke_calls.items()}
+            takes = sum(len(replay(calls, rules, self.fits)) for sides in self.take_calls.values()
                         for calls in sides)
             self._cache[rules] = strokes, takes
         return self._cache[rules]
@@ -392,12 +422,13 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     # The recognizer runs once over every stroke and take; its circle detector's calls
     # are replayed through the rules here and, with loso, through every candidate.
     stroke_calls = record_strokes(strokes, hands)
+    fits = CachedFits()
     per_person, per_symbol, fired = {}, {}, []
     total = _zero_counts()
     for kind in HANDS:
         for person in people:
             for symbol in sorted(strokes[person]):
-                events = replay(stroke_calls[kind, person, symbol], rules)
+                events = replay(stroke_calls[kind, person, symbol], rules, fits)
                 sym_kind = _kind(symbol)
                 for c in (per_person.setdefault(person, _zero_counts()),
                           per_symbol.setdefault(symbol, _zero_counts()), total):
@@ -411,7 +442,7 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     frames = {'guinevere/' + k: v for k, v in load_guinevere(leap_people_dir).items()}
     frames.update(('leapjs/' + k, v) for k, v in leapjs_takes(leapjs_dir).items())
     take_calls = record_takes(frames)
-    takes = {name: sum(len(replay(calls, rules)) for calls in sides)
+    takes = {name: sum(len(replay(calls, rules, fits)) for calls in sides)
              for name, sides in sorted(take_calls.items())}
     out = {'rules': _rules_dict(rules), 'people': people, 'total': total,
            'per_person': per_person, 'per_symbol': per_symbol, 'fired': fired,
@@ -422,7 +453,7 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
                      'leapjs': sum(k.startswith('leapjs/') for k in takes)},
            'takes_with_circles': sum(1 for v in takes.values() if v)}
     if loso:
-        fit = CircleFit(stroke_calls, take_calls)
+        fit = CircleFit(stroke_calls, take_calls, fits)
         out['loso'] = fit.loso(people)
     return out
 
