@@ -35,7 +35,7 @@ import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datasets
-from leap_teleop.hands.gestures.circles import DRAWN, CircleFits, CircleRules
+from leap_teleop.hands.gestures.circles import DRAWN, TIP_RULES, CircleFits, CircleRules, index_draws
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation.results_file import write_results
@@ -292,22 +292,40 @@ LOOP_FREE_WEIGHT = 2
 
 class CircleFit:
     """Leave-one-person-out choice of CircleRules from recorded calls (record_strokes,
-    record_takes); each rules' outcome is computed once, and each circle fit once
-    (`fits`, default a new CachedFits)."""
+    record_takes); each rules' outcome is computed once, each circle fit once (`fits`,
+    default a new CachedFits), and a recording without pointing frames is replayed once
+    for rules that differ only in TIP_RULES."""
 
     def __init__(self, stroke_calls, take_calls, fits=None):
         self.stroke_calls = stroke_calls
         self.take_calls = take_calls
         self.fits = CachedFits() if fits is None else fits
         self._cache = {}
+        self._events = {}                   # (recording, rules read) -> circle events
+        self._tip_free = {key for key, calls in (*stroke_calls.items(), *self._take_sides())
+                          if not any(c is not None and index_draws(c[3]) for c in calls)}
+        self._tip_default = {name: getattr(CircleRules, name) for name in TIP_RULES}
+
+    def _take_sides(self):
+        """((take, side), recorded calls) of every take."""
+        for name, sides in self.take_calls.items():
+            for k, calls in enumerate(sides):
+                yield (name, k), calls
+
+    def _n_events(self, key, calls, rules):
+        read = rules
+        if key in self._tip_free:
+            read = dataclasses.replace(rules, **self._tip_default)
+        if (key, read) not in self._events:
+            self._events[key, read] = len(replay(calls, rules, self.fits))
+        return self._events[key, read]
 
     def outcome(self, rules):
         """({(hand kind, person, symbol): circle events}, circle events on the takes)."""
         if rules not in self._cache:
-            strokes = {key: len(replay(calls, rules, self.fits))
+            strokes = {key: self._n_events(key, calls, rules)
                        for key, calls in self.stroke_calls.items()}
-            takes = sum(len(replay(calls, rules, self.fits)) for sides in self.take_calls.values()
-                        for calls in sides)
+            takes = sum(self._n_events(key, calls, rules) for key, calls in self._take_sides())
             self._cache[rules] = strokes, takes
         return self._cache[rules]
 

@@ -41,6 +41,11 @@ class CircleRules:
     min_across: float = 0.7
 
 
+# The rules read only on the index tip's path (while index_draws): a replay without
+# pointing frames does not depend on them.
+TIP_RULES = ('tip_v_max', 'min_across')
+
+
 # Fitted (tools.evaluation.strokes.CircleFit, `python -m tools.evaluation.strokes
 # --loso` prints them) on the 7 development people's strokes (GestureMidAir: circles
 # 120-260 mm across, one loop in 1.7-2.5 s), drawn by translated real pointing and open
@@ -77,6 +82,13 @@ CIRCLE_MAX_CORNER = 2.5            # most turning in an eighth of the path / an 
 CIRCLE_RETRY_POINTS = 1            # after a failed fit, new points before the next one
 PALM_SMOOTHING = 0.35              # exponential smoothing factor of the palm path
 CIRCLE_REFRACTORY_S = 0.25         # one event per circle even when the hand changes track
+
+
+def index_draws(extended):
+    """Whether the index tip's path is followed, from the 5 extended flags: index out,
+    middle and ring folded (an open hand that moves or turns carries every fingertip
+    round loops nobody drew)."""
+    return extended[1] and not (extended[2] or extended[3])
 
 
 def fit_circle(pts):
@@ -428,10 +440,9 @@ class CircleDetector:
         # The palm always (a whole hand going round; a pointing hand's palm follows its
         # finger, and keeps its circle when the pose reads a frame or two as not
         # pointing: 3 % of such frames lost 6 of the 7 people's circles without it);
-        # the index tip while pointing (index out, middle and ring folded): an open hand
-        # that moves or turns carries every fingertip round loops nobody drew.
+        # the index tip while pointing (index_draws).
         found = self._palm(timestamp, geometry)
-        if extended[1] and not (extended[2] or extended[3]):
+        if index_draws(extended):
             tip = self._tip(hand, timestamp, geometry)
             if found is None:
                 found = tip
