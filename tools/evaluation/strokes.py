@@ -208,13 +208,13 @@ class CachedFits(CircleFits):
     and over. A stretch is known by a 128-bit digest of its points (not its few kB)."""
 
     def __init__(self):
-        self._starts, self._tails = {}, {}
+        self._sweeps, self._tails = {}, {}
 
-    def arc_start(self, p, arc):
-        key = (_digest(p), arc)
-        if key not in self._starts:
-            self._starts[key] = super().arc_start(p, arc)
-        return self._starts[key]
+    def sweeps(self, p):
+        key = _digest(p)
+        if key not in self._sweeps:
+            self._sweeps[key] = super().sweeps(p)
+        return self._sweeps[key]
 
     def tail_circle(self, p):
         key = _digest(p)

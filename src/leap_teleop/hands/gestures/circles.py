@@ -265,18 +265,27 @@ class CircleFits:
     """The two fits that decide a track's circle, on its roundest stretch ((n, 3) array):
     where the shortest tail sweeping the arc starts, and that tail's circle. They read
     the points and the arc only, not the rules' other numbers or the track's state, so
-    a caller replaying many rules over the same paths may cache them (a subclass)."""
+    a caller replaying many rules over the same paths may cache them (a subclass: the
+    fits are `sweeps` and `tail_circle`)."""
 
     def arc_start(self, p, arc):
         """Index of the shortest tail of `p` (at least CIRCLE_MIN_POINTS) that sweeps
         `arc` about the circle fitted to all of `p`; None without one."""
-        fit = fit_circle(p)
-        if fit is None:
+        sweeps = self.sweeps(p)
+        if sweeps is None:
             return None
-        tail = np.flatnonzero(np.abs(fit[4][-1] - fit[4]) >= arc)
+        tail = np.flatnonzero(sweeps >= arc)
         if not len(tail) or len(p) - int(tail[-1]) < CIRCLE_MIN_POINTS:
             return None
         return int(tail[-1])
+
+    def sweeps(self, p):
+        """The angle (rad, >= 0) the path sweeps from each point of `p` to its last one,
+        about the circle fitted to all of `p`; None when degenerate."""
+        fit = fit_circle(p)
+        if fit is None:
+            return None
+        return np.abs(fit[4][-1] - fit[4])
 
     def tail_circle(self, p):
         """(axis: the unit normal the path turns right-handed about, radius, centre, signed
