@@ -523,7 +523,7 @@ def main(argv=None):
                     help='leap_people folder (gti_dev.jsonl.gz, guinevere/)')
     ap.add_argument('--leapjs', default=None, help='LeapJS takes folder')
     ap.add_argument('--loso', action='store_true',
-                    help='also refit the circle rules leave-one-person-out (~2 min)')
+                    help='also refit the circle rules leave-one-person-out (about 1 min)')
     ap.add_argument('--json', help='write the results here as JSON')
     args = ap.parse_args(argv)
     try:
