@@ -138,3 +138,5 @@ def test_a_spawned_node_that_writes_much_to_stderr_does_not_block():
     except subprocess.TimeoutExpired:
         proc.kill()
         raise AssertionError('the node blocked writing its stderr')
+    ros_processes.stop_spawned(proc)
+    assert proc.stderr.read() == b'warning\n' * 100000       # kept, to read afterwards

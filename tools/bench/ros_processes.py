@@ -51,9 +51,13 @@ def _wait_for_master(env, timeout=15.0):
 
 def spawn_node(env, args):
     """Start `args` (a command list) as a ROS process; stop it with stop_spawned(). Its
-    output is dropped (its log is in ROS_LOG_DIR): a pipe nobody reads would block it once
-    64 KiB of warnings had filled it."""
-    return subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    stderr goes to a temporary file, `proc.stderr`, to read once stop_spawned() has
+    returned: a pipe nobody reads while it runs would block it once 64 KiB of warnings
+    had filled it."""
+    err = tempfile.TemporaryFile()
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.DEVNULL, stderr=err)
+    proc.stderr = err
+    return proc
 
 
 def stop_spawned(proc, timeout=10.0):
@@ -64,6 +68,8 @@ def stop_spawned(proc, timeout=10.0):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+    if proc.stderr is not None and proc.stderr.seekable():
+        proc.stderr.seek(0)             # spawn_node's file: read from the start
 
 
 def interrupt_group(proc, timeout=30.0):
