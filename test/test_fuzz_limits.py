@@ -6,13 +6,15 @@ bursts), the pilot's worker and the live sources' queue behind the fault rostest
 
 Example budget (per `make test` run): 3000 + 2500 + 3000 + 150 + 100 here, on top of 3000
 in test_arm_teleop.py, 1500 in test_params.py and ~400 in test_gesture_recognizer.py /
-test_classify_frames.py.
+test_classify_frames.py. The two event-sequence tests draw a seed and build their events
+with numpy (test/fuzz_values.py): half the time of drawing every value through hypothesis.
 """
 import logging
 import math
 
 import numpy as np
 import pytest
+from fuzz_values import either, wild
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -25,8 +27,6 @@ from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
 HOME = kin.HOME_Q.copy()
-wild = st.one_of(st.floats(-600, 600), st.floats(allow_nan=True, allow_infinity=True),
-                 st.sampled_from([0.0, 1e9, -1e9, 1e-300]))
 
 
 # -- the stream checks --------------------------------------------------------------------
@@ -280,18 +280,27 @@ def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
 
 
 # -- fuzz: arm mapping over event sequences --------------------------------------------------
-events = st.one_of(
-    st.tuples(st.just('hand'), st.tuples(wild, wild, wild), wild,
-              st.tuples(*[st.booleans()] * 5), st.floats(-1.0, 0.01),
-              st.tuples(*[st.one_of(st.floats(-3.5, 3.5), wild)] * 3)),
-    st.tuples(st.just('joints'), st.one_of(
-        st.tuples(*[st.floats(-6.2, 6.2)] * 6),
-        st.tuples(*[wild] * 6))),
-    st.tuples(st.just('time'), st.one_of(st.floats(-0.5, 1.0), st.just(0.3))))
+@st.composite
+def arm_events(draw, max_size=8):
+    """1..max_size events for the arm: a hand (palm, pinch value, flags, stamp age, angles),
+    joint states (in range, or wild) or time passing (usually a little, sometimes back)."""
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
+    seq = []
+    for _ in range(draw(st.integers(1, max_size))):
+        kind = rng.integers(0, 3)
+        if kind == 0:
+            seq.append(('hand', wild(rng, 3), wild(rng), tuple(bool(b) for b in rng.integers(0, 2, 5)),
+                        float(rng.uniform(-1.0, 0.01)),
+                        tuple(either(rng, lambda r: float(r.uniform(-3.5, 3.5))) for _ in range(3))))
+        elif kind == 1:
+            seq.append(('joints', either(rng, lambda r: tuple(float(x) for x in r.uniform(-6.2, 6.2, 6)), 6)))
+        else:
+            seq.append(('time', float(rng.uniform(-0.5, 1.0)) if rng.integers(0, 2) else 0.3))
+    return seq
 
 
 @settings(max_examples=2500, deadline=None, suppress_health_check=list(HealthCheck))
-@given(seq=st.lists(events, min_size=1, max_size=8),
+@given(seq=arm_events(),
        mode=st.sampled_from(['imitation', 'joystick']),
        gripper_mode=st.sampled_from(['binary', 'proportional']),
        cutoff=st.sampled_from([0.0, 0.3]),
@@ -347,16 +356,32 @@ def test_fuzz_arm_sequences_never_leave_the_limits(seq, mode, gripper_mode, cuto
 # -- fuzz: drone pilot ------------------------------------------------------------------------
 GESTURES = ['unfold', 'fold', 'circle_cw', 'circle_ccw', 'hand_lost', 'fist', 'swipe', '',
             'x' * 300]
-pilot_events = st.one_of(
-    st.tuples(st.just('hand'), st.booleans(), st.tuples(wild, wild, wild),
-              st.tuples(wild, wild, wild), st.tuples(wild, wild, wild), st.floats(-1.0, 0.01)),
-    st.tuples(st.just('gesture'), st.sampled_from(GESTURES), st.one_of(wild, st.just(0.035))),
-    st.tuples(st.just('nav'), st.integers(-5, 300), wild),
-    st.tuples(st.just('time'), st.one_of(st.floats(-1.0, 4.0), st.just(0.2))))
+
+
+@st.composite
+def pilot_events(draw, max_size=10):
+    """1..max_size events for the pilot: a hand (present, palm, normal, direction, stamp
+    age), a gesture (known, empty, unknown or overlong; with a wild or usual radius),
+    navdata (any state code, wild altitude) or time passing."""
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
+    seq = []
+    for _ in range(draw(st.integers(1, max_size))):
+        kind = rng.integers(0, 4)
+        if kind == 0:
+            seq.append(('hand', bool(rng.integers(0, 2)), wild(rng, 3), wild(rng, 3), wild(rng, 3),
+                        float(rng.uniform(-1.0, 0.01))))
+        elif kind == 1:
+            seq.append(('gesture', GESTURES[rng.integers(0, len(GESTURES))],
+                        either(rng, lambda r: 0.035)))
+        elif kind == 2:
+            seq.append(('nav', int(rng.integers(-5, 301)), wild(rng)))
+        else:
+            seq.append(('time', float(rng.uniform(-1.0, 4.0)) if rng.integers(0, 2) else 0.2))
+    return seq
 
 
 @settings(max_examples=3000, deadline=None, suppress_health_check=list(HealthCheck))
-@given(seq=st.lists(pilot_events, min_size=1, max_size=10),
+@given(seq=pilot_events(),
        mode=st.sampled_from(['tilt', 'paper']), max_cmd=st.sampled_from([1.0, 0.5, 0.25]))
 def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
     pilot = DronePilot(PilotConfig(mode=mode, max_cmd=max_cmd))
