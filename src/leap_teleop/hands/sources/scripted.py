@@ -203,8 +203,13 @@ class ScriptedSource(HandSource):
                         hand.palm_position = hand.palm_position + self._rng.normal(
                             0.0, self.noise_mm, 3)
                     hands.append(hand)
-            # Live pacing stamps the moment the frame is complete, as a device would;
-            # fast-as-possible runs keep the ideal grid (their time is virtual).
-            stamp = self._clock() if self.realtime else t0_wall + k * period
+            # Live pacing stamps the moment the frame is complete, as a device stamps its
+            # capture, but never more than half a period after the time its pose belongs
+            # to: frames made late after a stall then keep their spacing (stamped on
+            # completion they squeezed a stretch of motion into a few ms, a hand moving at
+            # many m/s), and their age says how late they are. Fast-as-possible runs keep
+            # the grid (their time is virtual).
+            grid = t0_wall + k * period
+            stamp = min(max(self._clock(), grid), grid + 0.5 * period) if self.realtime else grid
             yield Frame(id=k + 1, timestamp=stamp, hands=hands)
             k += 1
