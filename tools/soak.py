@@ -12,8 +12,8 @@ own code (LeapInterface + conversions), restamped with the sim time when sent, i
 each cycle resets the UR10 cell first.
 
 Input timeouts (arm input_timeout / disarm_after / max_input_age, pilot hand_timeout /
-disarm_after / max_input_age) are sim seconds; the soak scales them by --rtf so that they
-keep their real-time wall tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
+disarm_after / max_input_age / navdata_timeout / land_after) are sim seconds; the soak
+scales them by --rtf so that they keep their real-time wall tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
 and hand -> cmd_vel latency per cycle (wall clock) and its drift (median of the last
 cycles minus the first), lost messages (hand topics: sent vs received; joint_states,
 arm commands, navdata: sequence gaps), inputs the nodes rejected, pick and place and
@@ -79,6 +79,8 @@ LAUNCH = """<launch>
   <group ns="drone">
     <rosparam command="load" file="$(find leap_teleop)/config/ardrone.yaml"/>
     <param name="drone_pilot/hand_timeout" value="{hand_timeout}"/>
+    <param name="drone_pilot/navdata_timeout" value="{navdata_timeout}"/>
+    <param name="drone_pilot/land_after" value="{land_after}"/>
     <param name="drone_pilot/disarm_after" value="{disarm_after}"/>
     <param name="drone_pilot/max_input_age" value="{max_age}"/>
     <param name="drone_pilot/resubscribe_after" value="{resubscribe_after}"/>
@@ -330,6 +332,7 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
         with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
             f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
                                   hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
+                                  navdata_timeout=0.5 * rtf, land_after=3.0 * rtf,
                                   resubscribe_after=0.5 * rtf,
                                   # longer than the pause between two cycles
                                   resubscribe_silent_after=8.0 * rtf,
