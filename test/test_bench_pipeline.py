@@ -52,8 +52,7 @@ def test_a_driver_record_gives_ages_of_its_hands_only():
 
 @pytest.mark.integration
 def test_a_short_run_measures_both_sources_through_the_real_graph():
-    # The clip's thumbs-up must arm the arm on a loaded machine too: searches in the call.
-    got = bench_pipeline.measure(rounds=1, duration=4.0, search_thread=False)
+    got = bench_pipeline.measure(rounds=1, duration=4.0)
     assert set(got) == {'leap_recording', 'video'}
     for source, (ages, transit, rocks) in got.items():
         # ~114 recorded frames/s and 30 video frames/s for 4 s; the clip arms the arm

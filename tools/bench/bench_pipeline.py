@@ -81,7 +81,7 @@ def _data(folder, name, var):
     return path
 
 
-def _sender_cmd(source, search_thread=True):
+def _sender_cmd(source):
     cmd = [sys.executable, package_path('scripts', 'sender.py'), '__name:=leap_sender',
            '_sides:=[right]', '_loop:=true', '_wait_for_subscribers:=true',
            '_wait_topics:=[%s]' % GATE]
@@ -89,8 +89,7 @@ def _sender_cmd(source, search_thread=True):
         return cmd + ['_source:=recording',
                       '_recording:=%s' % _data(data_dir(), RECORDING, 'LEAPJS_DATA')]
     return cmd + ['_source:=video', '_video:=%s' % _data(HANDS_DATA, CLIP, 'HANDS_DATA'),
-                  '_rate:=%d' % VIDEO_HZ, '_video_drop_late:=true',
-                  '_search_thread:=%s' % str(bool(search_thread)).lower()]
+                  '_rate:=%d' % VIDEO_HZ, '_video_drop_late:=true']
 
 
 def _arm_cmd():
@@ -100,11 +99,11 @@ def _arm_cmd():
             '_rate:=10.0', '_status_rate:=1000.0']
 
 
-def measure_round(env, source, duration, search_thread=True):
+def measure_round(env, source, duration):
     """One sender on `source` into the running arm: the driver's record (dict)."""
     with tempfile.NamedTemporaryFile(suffix='.json', delete=False) as f:
         out = f.name
-    sender = ros_processes.spawn_node(env, _sender_cmd(source, search_thread))
+    sender = ros_processes.spawn_node(env, _sender_cmd(source))
     try:
         cmd = [sys.executable, '-m', 'tools.bench.pipeline_driver', '--out', out,
                '--gate', GATE, '--duration', str(duration)]
@@ -126,11 +125,9 @@ def round_ages(data):
     return ages, transit
 
 
-def measure(rounds=ROUNDS, duration=DURATION_S, sources=SOURCES, search_thread=True):
+def measure(rounds=ROUNDS, duration=DURATION_S, sources=SOURCES):
     """{source: (ages s, capture -> Hand receipt s, rocks sent)} over alternating rounds
-    under one master, simulator and arm node. search_thread=False: the video source looks
-    for hands in its own call, so what it recognizes does not depend on the machine's load
-    (a test's choice; the figures are measured with the thread, as a webcam runs)."""
+    under one master, simulator and arm node."""
     got = {s: ([], [], 0) for s in sources}
     with ros_processes.ros_master() as env:
         sim = ros_processes.spawn_node(env, [sys.executable, package_path('scripts', 'ur10_sim.py'),
@@ -139,7 +136,7 @@ def measure(rounds=ROUNDS, duration=DURATION_S, sources=SOURCES, search_thread=T
         try:
             for _ in range(rounds):
                 for source in sources:
-                    data = measure_round(env, source, duration, search_thread)
+                    data = measure_round(env, source, duration)
                     ages, transit = round_ages(data)
                     p50, p99, n = summary_ms(ages) if ages else (np.nan, np.nan, 0)
                     # The sender's share: its Hand message received by the driver.
