@@ -28,10 +28,11 @@ case "${ROS_HOSTNAME:-$ROS_IP}" in
       export LD_PRELOAD="$_lt_root/.ws/loopback_bind.so${LD_PRELOAD:+:$LD_PRELOAD}"
     fi ;;
 esac
-# Compiled modules go to .ws/pycache, not next to the sources: every node and test process
-# then skips recompiling the project and its generated messages (~0.1-0.2 s CPU each).
-unset PYTHONDONTWRITEBYTECODE
-export PYTHONPYCACHEPREFIX="$_lt_root/.ws/pycache"
+# Python's own default: compiled modules are kept (in __pycache__/, ignored by git), so
+# each node and test process does not compile the project and its generated messages
+# again (~0.1-0.2 s CPU each). A cache prefix would also recompile the standard library,
+# the venv and ROS once into it.
+unset PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX
 # the project tooling (tools/: evaluation, benchmarks, demo, soak) is not installed
 export PYTHONPATH="$_lt_root${PYTHONPATH:+:$PYTHONPATH}"
 set -- "${_lt_args[@]}"

@@ -6,9 +6,10 @@ import sys
 import numpy as np
 
 # What no sensor sends but a broken one or a fuzzer might: non-finite, zero, signed zero,
-# huge, tiny and subnormal values.
-SPECIAL = np.array([np.nan, np.inf, -np.inf, 0.0, -0.0, 1e9, -1e9, 1e-300,
-                    sys.float_info.max, -sys.float_info.max, 5e-324])
+# huge, tiny, the smallest normal and subnormal values, either sign.
+SPECIAL = np.array([np.nan, -np.nan, np.inf, -np.inf, 0.0, -0.0, 1e9, -1e9, 1e-300, -1e-300,
+                    1e308, -1e308, sys.float_info.max, -sys.float_info.max,
+                    sys.float_info.min, -sys.float_info.min, 5e-324, -5e-324])
 
 
 def wild(rng, n=None):
@@ -21,6 +22,15 @@ def wild(rng, n=None):
     any_size = rng.uniform(-1.0, 1.0, size) * 10.0 ** rng.uniform(-300.0, 300.0, size)
     v = np.where(kind == 0, plausible, np.where(kind == 1, special, any_size))
     return float(v[0]) if n is None else tuple(float(x) for x in v)
+
+
+def within(rng, lo, hi):
+    """A float in [lo, hi]: a quarter of the time exactly lo, hi, 0.0 or -0.0 (when inside),
+    else uniform."""
+    if rng.integers(0, 4) == 0:
+        edges = [x for x in (lo, hi, 0.0, -0.0) if lo <= x <= hi]
+        return float(edges[rng.integers(0, len(edges))])
+    return float(rng.uniform(lo, hi))
 
 
 def either(rng, usual, n=None):

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from fuzz_values import either, wild
+from fuzz_values import either, wild, within
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -289,13 +289,13 @@ def arm_events(draw, max_size=8):
     for _ in range(draw(st.integers(1, max_size))):
         kind = rng.integers(0, 3)
         if kind == 0:
-            seq.append(('hand', wild(rng, 3), wild(rng), tuple(bool(b) for b in rng.integers(0, 2, 5)),
-                        float(rng.uniform(-1.0, 0.01)),
-                        tuple(either(rng, lambda r: float(r.uniform(-3.5, 3.5))) for _ in range(3))))
+            seq.append(('hand', wild(rng, 3), either(rng, lambda r: within(r, 0.0, 1.0)),
+                        tuple(bool(b) for b in rng.integers(0, 2, 5)), within(rng, -1.0, 0.01),
+                        tuple(either(rng, lambda r: within(r, -3.5, 3.5)) for _ in range(3))))
         elif kind == 1:
-            seq.append(('joints', either(rng, lambda r: tuple(float(x) for x in r.uniform(-6.2, 6.2, 6)), 6)))
+            seq.append(('joints', either(rng, lambda r: tuple(within(r, -6.2, 6.2) for _ in range(6)), 6)))
         else:
-            seq.append(('time', float(rng.uniform(-0.5, 1.0)) if rng.integers(0, 2) else 0.3))
+            seq.append(('time', within(rng, -0.5, 1.0) if rng.integers(0, 2) else 0.3))
     return seq
 
 
@@ -369,14 +369,14 @@ def pilot_events(draw, max_size=10):
         kind = rng.integers(0, 4)
         if kind == 0:
             seq.append(('hand', bool(rng.integers(0, 2)), wild(rng, 3), wild(rng, 3), wild(rng, 3),
-                        float(rng.uniform(-1.0, 0.01))))
+                        within(rng, -1.0, 0.01)))
         elif kind == 1:
             seq.append(('gesture', GESTURES[rng.integers(0, len(GESTURES))],
                         either(rng, lambda r: 0.035)))
         elif kind == 2:
             seq.append(('nav', int(rng.integers(-5, 301)), wild(rng)))
         else:
-            seq.append(('time', float(rng.uniform(-1.0, 4.0)) if rng.integers(0, 2) else 0.2))
+            seq.append(('time', within(rng, -1.0, 4.0) if rng.integers(0, 2) else 0.2))
     return seq
 
 

@@ -13,14 +13,15 @@ each cycle resets the UR10 cell first.
 
 Input timeouts (arm input_timeout / disarm_after / max_input_age, pilot hand_timeout /
 disarm_after / max_input_age / navdata_timeout / land_after) are sim seconds; the soak
-scales them by --rtf so that they keep their real-time wall tolerance. Measured: RSS of every node (after the first cycle vs the end), hand -> arm command
-and hand -> cmd_vel latency per cycle (wall clock) and its drift (median of the last
-cycles minus the first), lost messages (hand topics: sent vs received; joint_states,
-arm commands, navdata: sequence gaps), inputs the nodes rejected, pick and place and
-flight successes. Writes soak_results.json afresh (soak.rss_growth_pct, goal <= 5;
-soak.dropped_msgs = messages lost in transport, goal 0; soak.rejected_inputs = inputs the
-nodes refused as late / out of order / invalid; and the rest), as `make bench` writes its
-file: this run's figures only, `_sources` and `_failed` (a soak that fails writes no figure).
+scales them by --rtf so that they keep their real-time wall tolerance. Measured: RSS of
+every node (after the first cycle vs the end), hand -> arm command and hand -> cmd_vel
+latency per cycle (wall clock) and its drift (median of the last cycles minus the
+first), lost messages (hand topics: sent vs received; joint_states, arm commands,
+navdata: sequence gaps), inputs the nodes rejected, pick and place and flight successes.
+Writes soak_results.json afresh (soak.rss_growth_pct, goal <= 5; soak.dropped_msgs =
+messages lost in transport, goal 0; soak.rejected_inputs = inputs the nodes refused as
+late / out of order / invalid; and the rest), as `make bench` writes its file: this
+run's figures only, `_sources` and `_failed` (a soak that fails writes no figure).
 """
 import argparse
 import os
