@@ -203,17 +203,8 @@ class ScriptedSource(HandSource):
                         hand.palm_position = hand.palm_position + self._rng.normal(
                             0.0, self.noise_mm, 3)
                     hands.append(hand)
-            # Live pacing stamps the moment the frame is complete, as a device stamps its
-            # capture, less how far beyond half a period it is late (measured on the
-            # monotonic clock, so the stamps follow the given clock's jumps and rate):
-            # frames made late after a stall keep their spacing (stamped on completion
-            # they squeezed a stretch of motion into a few ms, a hand moving at many
-            # m/s), and their age says how late they are. Fast-as-possible runs keep the
-            # grid (their time is virtual).
-            if self.realtime:
-                late = time.monotonic() - (t0_mono + k * period)
-                stamp = self._clock() - max(0.0, late - 0.5 * period)
-            else:
-                stamp = t0_wall + k * period
+            # Live pacing stamps the moment the frame is complete, as a device would;
+            # fast-as-possible runs keep the ideal grid (their time is virtual).
+            stamp = self._clock() if self.realtime else t0_wall + k * period
             yield Frame(id=k + 1, timestamp=stamp, hands=hands)
             k += 1
