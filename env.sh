@@ -30,8 +30,8 @@ case "${ROS_HOSTNAME:-$ROS_IP}" in
 esac
 # Python's own default: compiled modules are kept (in __pycache__/, ignored by git), so
 # each node and test process does not compile the project and its generated messages
-# again (~0.05 s CPU for the arm node's imports). A cache prefix would also recompile the standard library,
-# the venv and ROS once into it.
+# again (~0.05 s CPU for the arm node's imports). A cache prefix would also recompile
+# the standard library, the venv and ROS once into it.
 unset PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX
 # the project tooling (tools/: evaluation, benchmarks, demo, soak) is not installed
 export PYTHONPATH="$_lt_root${PYTHONPATH:+:$PYTHONPATH}"
