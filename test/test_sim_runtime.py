@@ -3,7 +3,14 @@ import os
 
 import pytest
 
-from leap_teleop.sim_runtime import Every, RealtimePacer, SendGate, pace_factor, snapshot_path
+from leap_teleop.sim_runtime import (
+    MAX_LAG_S,
+    Every,
+    RealtimePacer,
+    SendGate,
+    pace_factor,
+    snapshot_path,
+)
 
 
 class ManualClock:
@@ -45,6 +52,23 @@ def test_pacer_behind_restarts_instead_of_sprinting():
     assert pacer.t0_sim == 0.2 and pacer.t0_wall == clock.now
     assert pacer.wait(0.3) == pytest.approx(0.1)        # paced from the restart
     assert clock.sleeps == [pytest.approx(0.1)]
+
+
+def test_a_simulation_that_is_the_clock_never_sprints_its_time_on():
+    # Under /use_sim_time the simulation's time is everyone's: after a 0.1 s stall it runs
+    # on from where it is (its consumers see no jump); in wall time it makes the stall good.
+    for sim_time, sprint in ((True, False), (False, True)):
+        clock = ManualClock()
+        pacer = RealtimePacer(1.0, sim_time=0.0, max_lag=MAX_LAG_S[sim_time], clock=clock,
+                              sleep=clock.sleep)
+        clock.now += 0.1 + 0.004                          # stalled during a 4 ms step
+        pacer.wait(0.004)
+        steps = 0
+        while not clock.sleeps:                           # steps run back to back
+            clock.now += 0.001
+            steps += 1
+            pacer.wait(0.004 * (steps + 1))
+        assert (steps > 10) == sprint, (sim_time, steps)
 
 
 def test_pacer_at_factor_zero_only_yields():

@@ -13,6 +13,14 @@ def pace_factor(factor, use_sim_time):
     return float(factor), None
 
 
+# How far behind its schedule a simulation may sprint to catch up. In wall time the
+# physics must keep up with the world's clock (a stall is made good within half a second);
+# under /use_sim_time the simulation is the clock: a sprint would move everyone's time on
+# by as much at once (every consumer then sees its input that much late, and an input
+# gap that long), so after a stall longer than a few steps it simply runs on slower.
+MAX_LAG_S = {False: 0.5, True: 0.02}
+
+
 class RealtimePacer:
     """Holds a simulation at `factor` x wall time: `wait(sim_time)` after each step sleeps
     until the wall clock has caught up. More than `max_lag` s behind (a loaded machine), it

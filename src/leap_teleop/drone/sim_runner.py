@@ -11,7 +11,7 @@ import pybullet as pb
 from leap_teleop.drone import cameras
 from leap_teleop.drone.sim import CAMERA_FRONT, STATE_NAMES, ArDroneSim, DroneParams
 from leap_teleop.params import Param
-from leap_teleop.sim_runtime import RealtimePacer, SendGate, pace_factor, snapshot_path
+from leap_teleop.sim_runtime import MAX_LAG_S, RealtimePacer, SendGate, pace_factor, snapshot_path
 
 _D = DroneParams()
 # Default camera rates: what 2 shared cores render (in the camera process) while the
@@ -154,6 +154,7 @@ class DroneSimRunner:
         self.cameras = None
         self.path_gate = SendGate(1.0 / p['path_rate'] if p['path_rate'] > 0 else None)
         self.steps = max(1, int(round(self.sim.p.physics_rate / float(p['looprate']))))
+        self.use_sim_time = use_sim_time
         self.factor, self.pace_warning = pace_factor(float(p['realtime_factor']),
                                                      use_sim_time)
         self._last_state = None
@@ -203,7 +204,7 @@ class DroneSimRunner:
 
     def run(self, publish, stopped):
         """Step, then publish(), until stopped(); paced to ~realtime_factor."""
-        pacer = RealtimePacer(self.factor, self.sim.time)
+        pacer = RealtimePacer(self.factor, self.sim.time, MAX_LAG_S[bool(self.use_sim_time)])
         while not stopped():
             with self.lock:
                 for _ in range(self.steps):

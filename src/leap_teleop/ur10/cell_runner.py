@@ -8,7 +8,7 @@ import threading
 from dataclasses import dataclass
 
 from leap_teleop.params import Param
-from leap_teleop.sim_runtime import Every, RealtimePacer, pace_factor, snapshot_path
+from leap_teleop.sim_runtime import MAX_LAG_S, Every, RealtimePacer, pace_factor, snapshot_path
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT, build_urdf
@@ -130,7 +130,7 @@ class CellRunner:
 
     def run(self, publish, stopped):
         """step() then publish(tick) until stopped(); paced to ~realtime_factor."""
-        pacer = RealtimePacer(self.factor, self.cell.time)
+        pacer = RealtimePacer(self.factor, self.cell.time, MAX_LAG_S[bool(self.use_sim_time)])
         while not stopped():
             tick = self.step()
             publish(tick)
