@@ -23,11 +23,12 @@ MAX_LAG_S = {False: 0.5, True: 0.02}
 
 class RealtimePacer:
     """Holds a simulation at `factor` x wall time: `wait(sim_time)` after each step sleeps
-    until the wall clock has caught up. More than `max_lag` s behind (a loaded machine), it
-    starts counting afresh instead of sprinting to catch up. factor 0 = as fast as possible
-    (it only yields, so callbacks get in)."""
+    until the wall clock has caught up. More than `max_lag` s behind (a loaded machine; see
+    MAX_LAG_S), it starts counting afresh instead of sprinting to catch up. factor 0 = as
+    fast as possible (it only yields, so callbacks get in)."""
 
-    def __init__(self, factor, sim_time, max_lag=0.5, clock=time.monotonic, sleep=time.sleep):
+    def __init__(self, factor, sim_time, max_lag=MAX_LAG_S[False], clock=time.monotonic,
+                 sleep=time.sleep):
         self.factor, self.max_lag = float(factor), max_lag
         self.clock, self.sleep = clock, sleep
         self.restart(sim_time)
