@@ -2,6 +2,8 @@
 the data behind each figure recorded, frames counted as received, slow replies kept."""
 import json
 import math
+import os
+import sys
 import types
 
 import numpy as np
@@ -33,6 +35,35 @@ def test_a_figure_without_a_stated_source_names_its_module():
     modules = {'bench_a': fake(lambda: {'a.x': 3}, doc='Sender throughput.\nmore')}
     _, sources, _ = bench_main.collect(['bench_a'], load=modules.get)
     assert sources == {'a.x': 'bench_a: Sender throughput.'}
+
+
+def test_each_module_runs_in_a_fresh_interpreter_of_its_own(tmp_path, monkeypatch):
+    """What one benchmark leaves behind (imports, heap, threads) never reaches the next:
+    each run() is in a new process that starts without the parent's modules."""
+    pkg = tmp_path / 'fresh_bench_pkg'
+    pkg.mkdir()
+    (pkg / '__init__.py').write_text('')
+    (pkg / 'bench_where.py').write_text(
+        '"""Where it ran."""\nimport os, sys\n'
+        'def run():\n'
+        '    with open(%r, "a") as f:\n'
+        '        f.write("%%d %%d\\n" %% (os.getpid(), "fresh_bench_marker" in sys.modules))\n'
+        '    return {"where.x": 1.0}\n' % str(tmp_path / 'runs.txt'))
+    (pkg / 'bench_boom.py').write_text('def run():\n    raise ValueError("child says no")\n')
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(sys.modules, 'fresh_bench_marker', types.ModuleType('marker'))
+
+    def load(name):
+        return bench_main.fresh_process_module(name, package='fresh_bench_pkg')
+    figures, sources, failed = bench_main.collect(['bench_where', 'bench_where', 'bench_boom'],
+                                                  load=load)
+    assert figures == {'where.x': 1.0}
+    assert sources == {'where.x': 'bench_where: Where it ran.'}
+    assert failed == {'bench_boom': 'ValueError: child says no'}
+    runs = [line.split() for line in (tmp_path / 'runs.txt').read_text().splitlines()]
+    pids = [int(pid) for pid, _ in runs]
+    assert len(pids) == 2 and len(set(pids)) == 2 and os.getpid() not in pids
+    assert [marker for _, marker in runs] == ['0', '0']     # nothing of the parent's
 
 
 def test_each_run_writes_a_fresh_file(tmp_path):

@@ -1,11 +1,12 @@
 """Run every benchmark module, print a table, write bench_results.json afresh: this run's
 figures only, with the data each came from (`_sources`) and the modules that failed
-(`_failed`).
+(`_failed`). Each module runs in a fresh interpreter of its own: a figure must not depend
+on which modules ran before it (their heap, threads and imports slowed the CPU-bound ones
+that followed).
 
 usage: python -m tools.bench [--only AREA ...] [--out bench_results.json]
 """
 import argparse
-import importlib
 import math
 import pkgutil
 import sys
@@ -13,6 +14,7 @@ import time
 import traceback
 
 import tools.bench as bench_pkg
+from tools.bench.fresh_process import fresh_process_module
 from tools.bench.results import utc_now, write_results
 
 
@@ -21,11 +23,10 @@ def discover():
                   if m.name.startswith('bench_'))
 
 
-def collect(modules, load=None):
+def collect(modules, load=fresh_process_module):
     """Run each module's run(); returns (figures, sources, failed). A module that raises or
     returns a non-finite figure is recorded as failed and contributes no figure; a figure
     without a stated source gets its module's first docstring line."""
-    load = load or (lambda name: importlib.import_module('tools.bench.' + name))
     figures, sources, failed = {}, {}, {}
     for name in modules:
         print('[bench] %s ...' % name, flush=True)
