@@ -175,6 +175,7 @@ def test_joint_states_back_at_another_pose_after_a_stall_disarm_without_a_comman
     a.q = HOME.copy()                                # a simulator restarted at home
     cmd = a.period(hand(palm_mm=(60.0, 300.0, -60.0)))
     assert a.t.status.state == DISARMED and 'another pose' in a.t.status.reason
+    assert 'rad beyond where its last trajectory could have left it' in a.t.status.reason
     assert cmd.q is None and cmd.points is None
     for _ in range(5):
         assert a.period(hand(palm_mm=(60.0, 300.0, -60.0))).q is None

@@ -1,4 +1,5 @@
 """UR10 snapshots are drawn outside the simulator: the physics keeps stepping meanwhile."""
+import os
 import threading
 import time
 
@@ -59,3 +60,18 @@ def test_render_only_cell_takes_the_copied_poses():
     finally:
         a.close()
         b.close()
+
+
+def test_the_renderer_yields_the_cpu_to_the_simulation(tmp_path):
+    """On a loaded machine a picture waits, not the physics and the nodes driving it: the
+    renderer process runs at the lowest priority."""
+    cell = UR10Cell()
+    renderer = SnapshotRenderer(cell.config)
+    try:
+        renderer.render(cell.pose_state(), str(tmp_path / 'a.png'), 64, 48)
+        pid = renderer._proc.pid
+        assert os.getpriority(os.PRIO_PROCESS, pid) == 19
+        assert os.getpriority(os.PRIO_PROCESS, os.getpid()) < 19   # only the renderer
+    finally:
+        renderer.close()
+        cell.close()

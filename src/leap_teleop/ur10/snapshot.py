@@ -3,7 +3,8 @@
 PyBullet keeps Python's global lock while it renders: a render on another thread of the
 simulator still stalls its physics loop for the whole picture. The renderer process owns a
 render-only UR10Cell (same config, never stepped); the simulator copies the poses under
-its lock (UR10Cell.pose_state) and sends them here.
+its lock (UR10Cell.pose_state) and sends them here. The renderer runs at the lowest CPU
+priority: on a busy machine a picture waits, never the physics and the nodes driving it.
 """
 import os
 import pickle
@@ -11,9 +12,12 @@ import select
 import subprocess
 import sys
 
+RENDER_NICENESS = 19     # a picture is for people; the simulation it shows comes first
+
 
 def serve(inp, out):
     """The renderer process: a config, then (state, path, w, h) jobs, until EOF."""
+    os.nice(max(0, RENDER_NICENESS - os.nice(0)))
     config = pickle.load(inp)
     from leap_teleop.ur10.cell import UR10Cell
     cell = UR10Cell(config)

@@ -279,9 +279,13 @@ class ArmTeleop:
             return self._joints_stalled(now)
         if self._stalled is not None and self._stalled[0] == 'joint states':
             lo, hi = self._resume_box
-            if np.any(self._q < lo) or np.any(self._q > hi):
-                return self._lose_robot('joint states came back at another pose (the robot '
-                                        'restarted or was moved): disarmed')
+            outside = np.maximum(lo - self._q, self._q - hi)
+            if np.any(outside > 0):
+                j = int(np.argmax(outside))
+                return self._lose_robot('joint states came back at another pose (joint %d '
+                                        '%.3f rad beyond where its last trajectory could '
+                                        'have left it: the robot restarted or was moved): '
+                                        'disarmed' % (j + 1, outside[j] + RESUME_TOLERANCE))
         if self._q is None:
             self._set(DISARMED, 'waiting for joint states')
             return ArmCommand()
