@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.ur10.cell import UR10Cell
-from leap_teleop.ur10.snapshot import SnapshotRenderer
+from leap_teleop.ur10.snapshot import RENDER_NICENESS, SnapshotRenderer
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
 pytestmark = pytest.mark.integration
@@ -64,14 +64,14 @@ def test_render_only_cell_takes_the_copied_poses():
 
 def test_the_renderer_yields_the_cpu_to_the_simulation(tmp_path):
     """On a loaded machine a picture waits, not the physics and the nodes driving it: the
-    renderer process runs at the lowest priority."""
+    renderer process runs at a low priority."""
     cell = UR10Cell()
     renderer = SnapshotRenderer(cell.config)
     try:
         renderer.render(cell.pose_state(), str(tmp_path / 'a.png'), 64, 48)
         pid = renderer._proc.pid
-        assert os.getpriority(os.PRIO_PROCESS, pid) == 19
-        assert os.getpriority(os.PRIO_PROCESS, os.getpid()) < 19   # only the renderer
+        assert os.getpriority(os.PRIO_PROCESS, pid) == RENDER_NICENESS > 0
+        assert os.getpriority(os.PRIO_PROCESS, os.getpid()) < RENDER_NICENESS   # only it
     finally:
         renderer.close()
         cell.close()

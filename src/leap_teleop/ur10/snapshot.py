@@ -3,8 +3,8 @@
 PyBullet keeps Python's global lock while it renders: a render on another thread of the
 simulator still stalls its physics loop for the whole picture. The renderer process owns a
 render-only UR10Cell (same config, never stepped); the simulator copies the poses under
-its lock (UR10Cell.pose_state) and sends them here. The renderer runs at the lowest CPU
-priority: on a busy machine a picture waits, never the physics and the nodes driving it.
+its lock (UR10Cell.pose_state) and sends them here. The renderer runs at a low CPU
+priority: on a busy machine a picture waits, not the physics and the nodes driving it.
 """
 import os
 import pickle
@@ -12,7 +12,7 @@ import select
 import subprocess
 import sys
 
-RENDER_NICENESS = 19     # a picture is for people; the simulation it shows comes first
+RENDER_NICENESS = 10     # a picture is for people; the simulation it shows comes first
 
 
 def serve(inp, out):
@@ -81,7 +81,10 @@ class SnapshotRenderer:
                 self._proc.wait(2.0)
             except (OSError, subprocess.TimeoutExpired):
                 self._proc.kill()
-                self._proc.wait(2.0)
+                try:
+                    self._proc.wait(2.0)
+                except subprocess.TimeoutExpired:    # killed; reaped by the next wait
+                    pass
             self._proc = None
 
 
