@@ -34,8 +34,11 @@ def pytest_collection_modifyitems(config, items):
         rostest = item.get_closest_marker('rostest') is not None
         item.add_marker(pytest.mark.xdist_group(item.name if rostest else item.path.name))
     # Longest first, keeping each file's tests together and in order: the minutes-long
-    # fits, builds and simulations, then the rostests, then the rest.
+    # fits, builds and simulations, then the rostests, then the rest; the whole demo
+    # last, beside the short unit tests rather than beside another ROS graph.
     def rank(item):
+        if item.get_closest_marker('last') is not None:
+            return 4
         if item.get_closest_marker('slow') is not None:
             return 0
         if item.get_closest_marker('rostest') is not None:
@@ -43,6 +46,6 @@ def pytest_collection_modifyitems(config, items):
         return 2 if item.get_closest_marker('integration') is not None else 3
     order = {}
     for i, item in enumerate(items):
-        r, first = order.get(item.path, (3, i))
+        r, first = order.get(item.path, (4, i))
         order[item.path] = (min(r, rank(item)), first)
     items.sort(key=lambda item: order[item.path])

@@ -5,8 +5,9 @@ import sys
 
 import pytest
 
-# needs a ROS master, a simulator, a subprocess or a build: not in make check
-pytestmark = pytest.mark.integration
+# needs a ROS master, a simulator, a subprocess or a build: not in make check; the
+# heaviest graph of all, so make test runs it last, beside the short unit tests
+pytestmark = [pytest.mark.integration, pytest.mark.last]
 
 
 def test_demo_succeeds_and_writes_its_outputs(tmp_path):
