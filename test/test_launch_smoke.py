@@ -9,6 +9,7 @@ import sys
 import time
 
 import pytest
+import yaml
 
 from leap_teleop.hands.gestures.datasets import data_dir
 from tools.bench import ros_processes
@@ -196,6 +197,17 @@ def test_documented_arg_values_parse(launch, args, nodes):
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
     assert proc.returncode == 0, proc.stdout
     assert nodes <= set(proc.stdout.split()), proc.stdout
+
+
+def test_the_demo_graph_gets_the_light_pictures_it_sets():
+    # Its cameras once stayed at 5 Hz each: ardrone.launch set them after the demo did.
+    proc = subprocess.run(['roslaunch', '--dump-params', 'leap_teleop', 'demo.launch'],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout
+    params = yaml.safe_load(proc.stdout)
+    assert params['/drone/ardrone_sim/front_rate'] == 2.0
+    assert params['/drone/ardrone_sim/bottom_rate'] == 0.0
+    assert params['/ur10_sim/snapshot_size'] == [400, 300]
 
 
 def test_every_launch_file_is_covered():
