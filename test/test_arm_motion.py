@@ -96,6 +96,26 @@ def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps, r
     np.testing.assert_allclose(states[-1][0], goals[-1], atol=1e-3)     # gets there
 
 
+def test_servo_reach_brackets_the_rest_of_its_plan_and_the_turn_back():
+    import copy
+    servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0)
+    q0 = kin.HOME_Q.copy()
+    servo.track(0.0, q0, q0 + 0.005)          # moving on at 0.05 rad/s
+    q1 = servo.state_at(0.032, q0)[0]
+    servo.track(0.032, q1, q1 - 0.1)          # then a goal behind: each joint turns back
+    lo, hi = servo.reach(0.032, q1)
+    probe = copy.deepcopy(servo)
+    dense = np.array([probe._planned(probe._plan, tau)[0] for tau in np.linspace(0, 0.2, 4001)])
+    np.testing.assert_allclose(lo, dense.min(axis=0), atol=1e-9)
+    np.testing.assert_allclose(hi, dense.max(axis=0), atol=1e-9)
+    assert np.all(hi > q1 + 1e-6) and np.all(hi > dense[-1] + 1e-6)   # the turning point
+    # From later on, only what is still ahead; with no plan, the measured joints.
+    later_lo, later_hi = servo.reach(0.032 + 0.05, q1)
+    assert np.all(later_hi < hi) and np.all(later_lo >= lo - 1e-12)
+    servo.reset()
+    assert [list(x) for x in servo.reach(1.0, q1)] == [list(q1), list(q1)]
+
+
 def _ramp_lag(**servo_args):
     """Velocity lag (s) of the desired joint behind a goal that starts moving at 0.06 rad/s
     (a change the bound allows within one horizon), its velocity fed forward as the teleop

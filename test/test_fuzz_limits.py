@@ -181,6 +181,29 @@ def test_joint_states_back_at_another_pose_after_a_stall_disarm_without_a_comman
         assert a.period(hand(palm_mm=(60.0, 300.0, -60.0))).q is None
 
 
+@pytest.mark.parametrize('beyond, resumes', [(0.05, True), (-0.05, False)])
+def test_a_robot_still_moving_when_states_stopped_may_coast_its_braking_distance(beyond,
+                                                                                resumes):
+    # The last state reports joint 1 turning at 0.6 rad/s (a simulator that was catching up
+    # when it stalled): it can coast 0.6^2 / (2 pi) = 0.057 rad on, but not back.
+    a = Arm()
+    a.arm_with_origin()
+    for _ in range(10):                    # the hand at the origin: the servo plans no motion
+        a.period(hand())
+    a.now += 0.008
+    a.t.on_joints(a.q, a.now, [0.6, 0, 0, 0, 0, 0])
+    a.t.step(a.now)
+    for _ in range(70):
+        a.period(hand(), joints=False)
+    assert a.t.status.state == HOLDING
+    a.q = a.q + [beyond, 0, 0, 0, 0, 0]
+    a.period(hand())
+    if resumes:
+        assert a.t.status.state == TRACKING and 'joint states back' in a.t.status.reason
+    else:
+        assert a.t.status.state == DISARMED and 'another pose' in a.t.status.reason
+
+
 def test_a_fist_during_a_joint_state_stall_disarms_at_once_without_a_command():
     a = Arm()
     a.arm_with_origin()

@@ -47,10 +47,18 @@ class JointServo:
     def state_at(self, t, q_measured):
         """(q, v) the last plan commands at time t; the measured joints at rest when
         there is no plan or it has ended."""
-        if self._plan is None:
+        plan = self._plan
+        if plan is None:
             return np.array(q_measured, dtype=float), np.zeros(len(q_measured))
-        t0, q0, v0, vA, t1, h, t_stop = self._plan
-        tau = max(t - t0, 0.0)
+        tau = max(t - plan[0], 0.0)
+        if tau - plan[5] >= plan[6]:
+            self._plan = None      # at rest: later calls follow the measured joints
+        return self._planned(plan, tau)
+
+    @staticmethod
+    def _planned(plan, tau):
+        """(q, v) of `plan` tau s after its start."""
+        t0, q0, v0, vA, t1, h, t_stop = plan
         if tau <= t1:
             a = (vA - v0) / t1
             return q0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
@@ -58,12 +66,28 @@ class JointServo:
         if tau <= h:
             return q1 + vA * (tau - t1), vA.copy()
         qA = q1 + vA * (h - t1)
-        tau2 = tau - h
-        if tau2 >= t_stop:
-            self._plan = None      # at rest: later calls follow the measured joints
-            return qA + 0.5 * vA * t_stop, np.zeros_like(vA)
+        if t_stop <= 0.0:
+            return qA, np.zeros_like(vA)
+        tau2 = min(tau - h, t_stop)
         dec = vA / t_stop
         return qA + vA * tau2 - 0.5 * dec * tau2 * tau2, vA - dec * tau2
+
+    def reach(self, t, q_measured):
+        """(lo, hi): per joint, the extremes of the positions the last plan commands from
+        time t until it rests (the measured joints when there is none). Its segments are
+        constant accelerations, so a joint turns back at most once, in the first."""
+        if self._plan is None:
+            q = np.array(q_measured, dtype=float)
+            return q, q.copy()
+        t0, q0, v0, vA, t1, h, t_stop = self._plan
+        start = max(t - t0, 0.0)
+        taus = [start, t1, h, h + t_stop]
+        a = (vA - v0) / t1
+        with np.errstate(divide='ignore', invalid='ignore'):
+            turns = np.where(a != 0.0, -v0 / a, -1.0)      # where v crosses 0 in segment 1
+        taus += [float(x) for x in turns if 0.0 < x < t1]
+        qs = np.array([self._planned(self._plan, tau)[0] for tau in taus if tau >= start])
+        return qs.min(axis=0), qs.max(axis=0)
 
     def _clip(self, q):
         return q if self.lower is None else np.clip(q, self.lower, self.upper)

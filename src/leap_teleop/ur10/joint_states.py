@@ -24,3 +24,11 @@ class JointStateIndex:
                 index.append(match[0])
             self._index, self._count = index, len(names)
         return [positions[i] for i in self._index]
+
+    def velocities(self, names, velocities):
+        """The six velocities, or None when the message carries none (velocity may be
+        empty); KeyError as positions()."""
+        self.positions(names, names)
+        if len(velocities) != len(names):
+            return None
+        return [velocities[i] for i in self._index]

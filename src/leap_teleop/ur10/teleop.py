@@ -38,9 +38,13 @@ DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
 # While tracking, an IK answer this far (rad, any joint) from the last goal is another
 # arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
 MAX_GOAL_JUMP = 1.0
-# Joint states back after a stall further than this (rad) outside where the last
-# trajectory could have left the robot: another robot state, not a stall.
+# Joint states back after a stall further than this (rad) outside where the robot could
+# have got to (its last trajectory to rest, or its braking distance at the speed it last
+# reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
+# A reported joint speed beyond this (rad/s; the UR10's fastest joints turn at 2 pi) is
+# read as this for the braking distance.
+MAX_REPORTED_SPEED = 2 * math.pi
 _TWO_PI = 2 * math.pi
 
 
@@ -120,6 +124,7 @@ class ArmTeleop:
         self._hand = None
         self._hand_rx = None
         self._q = None
+        self._qd = np.zeros(6)             # the joint velocities last reported
         self._joints_rx = None
         self._stream = InputStream(self.p.max_input_age, self.p.input_timeout)
         self._palm_ref = None
@@ -188,13 +193,17 @@ class ArmTeleop:
             self._thumb_up_since = hand.stamp
         return None
 
-    def on_joints(self, q, now=None):
-        """Store the arm's joint positions; with `now`, their staleness is watched."""
+    def on_joints(self, q, now=None, qd=None):
+        """Store the arm's joint positions (and velocities, when the state has them);
+        with `now`, their staleness is watched."""
         q = np.asarray(q, dtype=float)
         # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
         if (q.shape == (6,) and np.all(np.isfinite(q)) and np.all(q >= kin.JOINT_LOWER - 0.01)
                 and np.all(q <= kin.JOINT_UPPER + 0.01)):
             self._q = np.clip(q, kin.JOINT_LOWER, kin.JOINT_UPPER)
+            qd = None if qd is None else np.asarray(qd, dtype=float)
+            ok = qd is not None and qd.shape == (6,) and np.all(np.isfinite(qd))
+            self._qd = np.clip(qd, -MAX_REPORTED_SPEED, MAX_REPORTED_SPEED) if ok else np.zeros(6)
             self._joints_rx = now
             return True
         return False
@@ -217,6 +226,7 @@ class ArmTeleop:
         """The robot's state is unknown (simulator or driver gone / restarted): forget it
         and disarm without a hold, which would command the old pose to a new robot."""
         self._q = self._joints_rx = self._hand = None
+        self._qd = np.zeros(6)
         self._stalled = None
         self._stream.reset()
         self._servo.reset()
@@ -258,11 +268,15 @@ class ArmTeleop:
             return self._disarm('fist' if hand.present else 'hand left the sensor', now)
         if self._stalled is None or self._stalled[0] != 'joint states':
             self._stalled = ('joint states', self._joints_rx)
-            # Where the robot may be when states return: between its last state and the
-            # rest its last trajectory ends at.
-            end = self._servo.state_at(math.inf, self._q)[0]
-            self._resume_box = (np.minimum(self._q, end) - RESUME_TOLERANCE,
-                                np.maximum(self._q, end) + RESUME_TOLERANCE)
+            # Where the robot may be when states return: wherever its last trajectory
+            # goes on to until it rests, or as far as it takes to brake from the speed it
+            # last reported (a robot still moving when the servo planned it at rest).
+            lo, hi = self._servo.reach(self._joints_rx, self._q)
+            brake = self._qd * np.abs(self._qd) / (2.0 * self.p.max_joint_accel)
+            self._resume_box = (np.minimum(np.minimum(self._q, lo), self._q + brake)
+                                - RESUME_TOLERANCE,
+                                np.maximum(np.maximum(self._q, hi), self._q + brake)
+                                + RESUME_TOLERANCE)
             self._target = self._goal = None
             self._servo.reset()
             self._set(HOLDING, 'no joint states for %.2f s: holding, disarms after %.2f s'

@@ -22,9 +22,9 @@ class ArmTeleopRunner:
         self.wake.set()
         return why
 
-    def on_joints(self, q, now):
+    def on_joints(self, q, now, qd=None):
         with self.lock:
-            self.teleop.on_joints(q, now)
+            self.teleop.on_joints(q, now, qd)
 
     def new_input_connection(self):
         with self.lock:

@@ -64,10 +64,11 @@ class ArmNode:
     def on_joints(self, msg):
         try:
             q = self.joint_index.positions(msg.name, msg.position)
+            qd = self.joint_index.velocities(msg.name, msg.velocity)
         except KeyError as e:
             self.log.warn('joints', 'ur10_arm: joint_states lacks %s', e.args[0])
             return
-        self.runner.on_joints(q, rospy.get_time())
+        self.runner.on_joints(q, rospy.get_time(), qd)
         self.joints_seen.set()
 
     def wait_for_robot(self):
