@@ -394,6 +394,35 @@ def test_proportional_gripper_follows_pinch_value_and_sends_changes_only():
     assert drive(t, c, hand(pinch=False)).gripper == 0.0
 
 
+def _pinch_far_away(t, c, periods, q=HOME):
+    """Pinch with the hand 100 mm from the origin while the robot reports q: the
+    gripper commands sent, one per period."""
+    far = (PALM[0] + 100.0, PALM[1], PALM[2])
+    return [drive(t, c, hand(palm_mm=far, pinch=True), q=q) for _ in range(periods)]
+
+
+def test_a_grasp_waits_until_the_tool_is_where_the_hand_put_it():
+    t, c = armed_with_origin()
+    # The robot has not moved yet (still catching up): the grasp waits.
+    cmds = _pinch_far_away(t, c, 60)
+    assert [cmd.gripper for cmd in cmds] == [None] * 60 and cmds[-1].q is not None
+    # It gets there: the grasp goes in that period, once.
+    cmds = _pinch_far_away(t, c, 3, q=cmds[-1].q)
+    assert [cmd.gripper for cmd in cmds] == [pytest.approx(0.43), None, None]
+    # Letting go waits the same way for the tool.
+    cmds = [drive(t, c, hand(palm_mm=PALM), q=cmds[-1].q) for _ in range(3)]
+    assert [cmd.gripper for cmd in cmds] == [None] * 3
+    assert drive(t, c, hand(palm_mm=PALM), q=HOME).gripper == 0.0
+
+
+@pytest.mark.parametrize('wait_s', [1.0, 0.0])
+def test_a_grasp_waits_no_longer_than_gripper_wait_s(wait_s):
+    t, c = armed_with_origin(gripper_wait_s=wait_s)
+    sent = [k for k, cmd in enumerate(_pinch_far_away(t, c, 200)) if cmd.gripper is not None]
+    # The robot never gets there (held, stalled or out of reach): the grasp goes anyway.
+    assert len(sent) == 1 and abs(sent[0] - wait_s / 0.008) <= 1      # 8 ms periods
+
+
 @pytest.mark.parametrize('bad', [dict(mode='fly'), dict(gripper_mode='maybe'),
                                  dict(axis_map=((1, 0), (0, 1))), dict(max_joint_speed=0),
                                  dict(workspace_min=(1, 1, 1), workspace_max=(0, 0, 0))])

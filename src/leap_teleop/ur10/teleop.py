@@ -125,6 +125,7 @@ class ArmTeleop:
         self._hand_rx = None
         self._q = None
         self._qd = np.zeros(6)             # the joint velocities last reported
+        self._gripper_asked = None         # when the hand asked for a change not yet sent
         self._joints_rx = None
         self._stream = InputStream(self.p.max_input_age, self.p.input_timeout)
         self._palm_ref = None
@@ -361,8 +362,9 @@ class ArmTeleop:
                 self._set(ARMED, back + '; show rock to set the origin')
         if hand.rock:
             self._set_origin(palm, hand_rot, now)
-        cmd = ArmCommand(gripper=self._gripper_command(hand), input_stamp=hand.stamp)
+        cmd = ArmCommand(input_stamp=hand.stamp)
         if self._palm_ref is None:
+            cmd.gripper = self._gripper_command(hand, now)
             return cmd
         palm_f = self._filter.update(palm, now)
         offset = palm_f - self._palm_ref
@@ -373,6 +375,7 @@ class ArmTeleop:
         target = np.clip(target, self._lo, self._hi)
         rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
         self._target = target
+        cmd.gripper = self._gripper_command(hand, now)
         self.status.target = tuple(target)
         self.status.target_rotation = tuple(map(tuple, rotation))
         seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
@@ -453,12 +456,26 @@ class ArmTeleop:
             v *= self.p.max_tcp_speed / speed
         return base + v * dt
 
-    def _gripper_command(self, hand):
+    def _gripper_command(self, hand, now):
         if self.p.gripper_mode == 'binary':
             want = self.p.gripper_binary_closed if hand.pinch else 0.0
         else:
             want = min(max(hand.pinch_value, 0.0), 0.8) if hand.pinch else 0.0
         if self._gripper_sent is not None and abs(want - self._gripper_sent) < 0.01:
+            self._gripper_asked = None
             return None
+        # Closing or opening waits (up to gripper_wait_s) until the tool is where the hand
+        # puts it: the hand closed there, and an arm still catching up (after a stall, or
+        # behind a hand faster than its limits) would grasp or release short of it.
+        # Changes of an already closed proportional grip go at once.
+        if self._gripper_asked is None:
+            self._gripper_asked = now
+        toggles = self._gripper_sent is None or (want > 0.0) != (self._gripper_sent > 0.0)
+        if (toggles and self._target is not None and self._q is not None
+                and now - self._gripper_asked < self.p.gripper_wait_s
+                and np.linalg.norm(kin.fk(self._q)[:3, 3] - self._target)
+                > 0.001 * self.p.gripper_reach_mm):
+            return None
+        self._gripper_asked = None
         self._gripper_sent = want
         return want

@@ -85,6 +85,12 @@ TELEOP_PARAMS = {
                           choices=GRIPPER_MODES),
     'gripper_binary_closed': Param(0.43, 'binary: knuckle when closed', unit='rad',
                                    ge=0.0, le=0.8),
+    'gripper_reach_mm': Param(10.0, 'the gripper opens or closes once the tool is this close '
+                                     'to where the hand puts it (an arm still catching up '
+                                     'would grasp or release short of it)', unit='mm',
+                              gt=0.0, le=500.0),
+    'gripper_wait_s': Param(1.0, 'longest an opening or closing waits for the tool to get '
+                                 'there (0 = at once)', unit='s', ge=0.0, le=10.0),
     'max_palm_mm': Param(1000.0, '|palm| beyond this is a tracking error, ignored', unit='mm',
                          gt=0.0, le=2000.0),
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
@@ -129,7 +135,8 @@ ARM_RECONFIGURABLE = ('scale', 'dead_zone', 'joystick_gain', 'max_tcp_speed',
                       'filter_min_cutoff_hz', 'filter_beta', 'filter_d_cutoff_hz',
                       'rotation_min_cutoff_hz', 'rotation_beta', 'rotation_d_cutoff_hz',
                       'max_joint_speed', 'max_joint_accel', 'servo_gain', 'servo_lead',
-                      'gripper_binary_closed', 'arm_hold_s')
+                      'gripper_binary_closed', 'gripper_reach_mm', 'gripper_wait_s',
+                      'arm_hold_s')
 
 
 @declared_fields(TELEOP_PARAMS)
