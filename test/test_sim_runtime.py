@@ -43,13 +43,16 @@ def test_pacer_sleeps_until_the_wall_clock_catches_up_with_sim_time():
 
 
 def test_pacer_behind_restarts_instead_of_sprinting():
-    clock = ManualClock()
-    pacer = RealtimePacer(1.0, sim_time=0.0, clock=clock, sleep=clock.sleep)
+    clock, behind = ManualClock(), []
+    pacer = RealtimePacer(1.0, sim_time=0.0, clock=clock, sleep=clock.sleep,
+                          on_behind=behind.append)
     clock.now += 0.3                                    # a little late: no sleep, no restart
     assert pacer.wait(0.1) == pytest.approx(-0.2) and pacer.t0_sim == 0.0
+    assert behind == []
     clock.now += 2.0                                    # far behind (loaded machine)
     assert pacer.wait(0.2) < -0.5
     assert pacer.t0_sim == 0.2 and pacer.t0_wall == clock.now
+    assert behind == [pytest.approx(2.1)]               # and says by how much
     assert pacer.wait(0.3) == pytest.approx(0.1)        # paced from the restart
     assert clock.sleeps == [pytest.approx(0.1)]
 

@@ -25,12 +25,14 @@ class RealtimePacer:
     """Holds a simulation at `factor` x wall time: `wait(sim_time)` after each step sleeps
     until the wall clock has caught up. More than `max_lag` s behind (a loaded machine; see
     MAX_LAG_S), it starts counting afresh instead of sprinting to catch up. factor 0 = as
-    fast as possible (it only yields, so callbacks get in)."""
+    fast as possible (it only yields, so callbacks get in). on_behind(lag) hears of each
+    fresh start, so a simulation that stalled can say so."""
 
     def __init__(self, factor, sim_time, max_lag=MAX_LAG_S[False], clock=time.monotonic,
-                 sleep=time.sleep):
+                 sleep=time.sleep, on_behind=None):
         self.factor, self.max_lag = float(factor), max_lag
         self.clock, self.sleep = clock, sleep
+        self.on_behind = on_behind      # on_behind(s behind) when it starts counting afresh
         self.restart(sim_time)
 
     def restart(self, sim_time):
@@ -46,6 +48,8 @@ class RealtimePacer:
             self.sleep(delay)
         elif delay < -self.max_lag:
             self.restart(sim_time)
+            if self.on_behind is not None:
+                self.on_behind(-delay)
         return delay
 
 

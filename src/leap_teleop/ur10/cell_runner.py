@@ -128,9 +128,11 @@ class CellRunner:
         tick.clock = self.use_sim_time and self.clock_due.due(tick.time)
         return tick
 
-    def run(self, publish, stopped):
-        """step() then publish(tick) until stopped(); paced to ~realtime_factor."""
-        pacer = RealtimePacer(self.factor, self.cell.time, MAX_LAG_S[bool(self.use_sim_time)])
+    def run(self, publish, stopped, on_behind=None):
+        """step() then publish(tick) until stopped(); paced to ~realtime_factor.
+        on_behind(lag) hears of each time the loop fell more than MAX_LAG_S behind."""
+        pacer = RealtimePacer(self.factor, self.cell.time, MAX_LAG_S[bool(self.use_sim_time)],
+                              on_behind=on_behind)
         while not stopped():
             tick = self.step()
             publish(tick)

@@ -70,6 +70,10 @@ class UR10SimNode:
         rospy.loginfo('ur10_sim: reset (arms home, grippers open, cubes at their start)')
         return TriggerResponse(success=True, message='reset')
 
+    def on_behind(self, lag):
+        self.log.warn('behind', 'ur10_sim: the physics loop fell %.2f s behind the wall clock '
+                      '(a loaded machine); it goes on from now', lag)
+
     def on_snapshot(self, _req):
         try:
             return TriggerResponse(success=True, message=self.runner.snapshot())
@@ -103,7 +107,7 @@ def main(argv=None):
         rospy.logwarn('ur10_sim: %s', node.runner.pace_warning)
     try:
         with closed_at_shutdown():
-            node.runner.run(node.publish, rospy.is_shutdown)
+            node.runner.run(node.publish, rospy.is_shutdown, node.on_behind)
     except rospy.ROSInterruptException:
         pass
     finally:
