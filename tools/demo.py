@@ -240,13 +240,15 @@ def main(argv=None):
              'drone:=%s' % str('drone' in tasks).lower()],
             env=env, stdout=log, stderr=subprocess.STDOUT)
         try:
-            summary = run_demo(tasks, out, durations)
+            mon, summary, shots = run_demo(tasks, durations)
         finally:
             launch.send_signal(2)
             try:
                 launch.wait(20)
             except subprocess.TimeoutExpired:
                 launch.kill()
+    # The pictures after the graph has gone: on 2 cores it would slow them and they it.
+    write_pictures(mon, summary, shots, tasks, out)
     if 'ur10' in tasks:
         # The rotated-cube task (yaw orientation mode), in the closed loop in simulated time.
         from tools import rotated_task
@@ -255,7 +257,9 @@ def main(argv=None):
     return report(summary, out)
 
 
-def run_demo(tasks, out, durations):
+def run_demo(tasks, durations):
+    """Watch the sessions to their end: (the monitor, the summary of each task, the
+    snapshots taken: {name: [PNG or None]} and {PNG: hand insets})."""
     mon = DemoMonitor(tasks)
     services = {}
     if 'ur10' in tasks:
@@ -298,6 +302,16 @@ def run_demo(tasks, out, durations):
         summary['tasks'].update(evaluate_ur10(mon))
     if 'drone' in tasks:
         summary['tasks'].update(evaluate_drone(mon))
+    for name, task in summary['tasks'].items():
+        task['session_s'] = round(durations['drone' if name.startswith('drone') else 'ur10'], 1)
+    mon.rospy.signal_shutdown('demo done')
+    return mon, summary, (pngs, insets)
+
+
+def write_pictures(mon, summary, shots, tasks, out):
+    """The cell GIF (each frame with its hand insets) and the drone's pictures in `out`;
+    their names go into summary['gifs']."""
+    pngs, insets = shots
     for png, hand_pics in insets.items():
         from tools.demo_pictures import arm_frame_with_insets
         if os.path.exists(png):
@@ -311,10 +325,8 @@ def run_demo(tasks, out, durations):
             summary.setdefault('gifs', []).append('%s.gif' % name)
     if 'drone' in tasks:
         summary.setdefault('gifs', []).extend(drone_pictures(mon, out))
-    for name, task in summary['tasks'].items():
-        task['session_s'] = round(durations['drone' if name.startswith('drone') else 'ur10'], 1)
-    mon.rospy.signal_shutdown('demo done')
-    return summary
+
+
 
 
 def drone_pictures(mon, out):
@@ -325,9 +337,8 @@ def drone_pictures(mon, out):
         return []
     say('rendering the drone pictures (%d poses, %d camera frames)'
         % (len(mon.drone_track), len(mon.drone_camera)))
-    # Copies: the monitor's subscribers keep appending while the pictures are drawn.
-    track, states = list(mon.drone_track), list(mon.drone_state_times)
-    gestures, camera = list(mon.drone_gestures), list(mon.drone_camera)
+    track, states = mon.drone_track, mon.drone_state_times
+    gestures, camera = mon.drone_gestures, mon.drone_camera
     written = []
     try:
         demo_pictures.flight_plot(track, states, gestures, os.path.join(out, 'drone_flight.png'))
