@@ -44,7 +44,8 @@ def hand(stamp, **kw):
 
 
 def test_arm_commands_and_status_carry_the_capture_stamp_of_their_hand():
-    t = ArmTeleop(ArmTeleopParams(arm_hold_s=0.0, filter_min_cutoff_hz=0.0))
+    # The grasp goes with the first command (no wait for the tool): one command, both.
+    t = ArmTeleop(ArmTeleopParams(arm_hold_s=0.0, filter_min_cutoff_hz=0.0, gripper_wait_s=0.0))
     t.on_joints(kin.HOME_Q)
     now = 100.0
     for h in (hand(99.95, thumb_up=True), hand(99.96, rock=True)):

@@ -36,8 +36,7 @@ class UR10SimNode:
         self.cell = self.runner.cell
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10) if self.use_sim_time else None
         self.js_pubs = {}
-        for arm in self.cell.config.arms:
-            ns = arm.name
+        for arm, ns in ((a, a.name) for a in self.cell.config.arms):
             if not rospy.has_param(ns + '/robot_description'):
                 rospy.set_param(ns + '/robot_description', arm_urdf(arm))
             self.js_pubs[ns] = rospy.Publisher(ns + '/joint_states', JointState,
@@ -69,10 +68,6 @@ class UR10SimNode:
         self.runner.reset()
         rospy.loginfo('ur10_sim: reset (arms home, grippers open, cubes at their start)')
         return TriggerResponse(success=True, message='reset')
-
-    def on_behind(self, lag):
-        self.log.warn('behind', 'ur10_sim: the physics loop fell %.2f s behind the wall clock '
-                      '(a loaded machine); it goes on from now', lag)
 
     def on_snapshot(self, _req):
         try:
@@ -107,7 +102,8 @@ def main(argv=None):
         rospy.logwarn('ur10_sim: %s', node.runner.pace_warning)
     try:
         with closed_at_shutdown():
-            node.runner.run(node.publish, rospy.is_shutdown, node.on_behind)
+            node.runner.run(node.publish, rospy.is_shutdown, lambda lag: node.log.warn(
+                'behind', 'ur10_sim: the physics loop fell %.2f s behind the wall clock', lag))
     except rospy.ROSInterruptException:
         pass
     finally:
