@@ -415,6 +415,21 @@ def test_a_grasp_waits_until_the_tool_is_where_the_hand_put_it():
     assert drive(t, c, hand(palm_mm=PALM), q=HOME).gripper == 0.0
 
 
+def test_the_grasps_wait_starts_again_after_a_stall():
+    t, c = armed_with_origin()
+    near = (PALM[0] + 50.0, PALM[1], PALM[2])         # within reanchor_beyond: caught up
+    for _ in range(100):                               # 0.8 s of waiting for the tool
+        assert drive(t, c, hand(palm_mm=near, pinch=True), q=HOME).gripper is None
+    for _ in range(40):                                # 0.32 s without hand input: held
+        t.step(c.tick())
+    assert t.status.state == HOLDING
+    sent = [drive(t, c, hand(palm_mm=near, pinch=True), q=HOME).gripper for _ in range(150)]
+    assert t.status.state == TRACKING and 'same origin' in t.status.reason
+    # Not at once for the time already spent waiting before the stall: a full wait.
+    first = next(k for k, g in enumerate(sent) if g is not None)
+    assert abs(first - 1.0 / 0.008) <= 1
+
+
 @pytest.mark.parametrize('wait_s', [1.0, 0.0])
 def test_a_grasp_waits_no_longer_than_gripper_wait_s(wait_s):
     t, c = armed_with_origin(gripper_wait_s=wait_s)

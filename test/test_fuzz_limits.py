@@ -181,17 +181,19 @@ def test_joint_states_back_at_another_pose_after_a_stall_disarm_without_a_comman
         assert a.period(hand(palm_mm=(60.0, 300.0, -60.0))).q is None
 
 
-@pytest.mark.parametrize('beyond, resumes', [(0.05, True), (-0.05, False)])
-def test_a_robot_still_moving_when_states_stopped_may_coast_its_braking_distance(beyond,
+@pytest.mark.parametrize('beyond, speed, resumes', [
+    (0.05, 0.6, True), (-0.05, 0.6, False), (0.11, 0.6, False), (-0.01, 0.6, True),
+    (0.2, 5.0, False)])          # a spike brakes from max_joint_speed: 0.16 rad at most
+def test_a_robot_still_moving_when_states_stopped_may_coast_its_braking_distance(beyond, speed,
                                                                                 resumes):
     # The last state reports joint 1 turning at 0.6 rad/s (a simulator that was catching up
-    # when it stalled): it can coast 0.6^2 / (2 pi) = 0.057 rad on, but not back.
-    a = Arm()
+    # when it stalled): it can coast 0.6^2 / (2 pi) = 0.057 rad on (+ 0.02), not back.
+    a = Arm(max_joint_speed=1.0, max_joint_accel=math.pi)
     a.arm_with_origin()
     for _ in range(10):                    # the hand at the origin: the servo plans no motion
         a.period(hand())
     a.now += 0.008
-    a.t.on_joints(a.q, a.now, [0.6, 0, 0, 0, 0, 0])
+    a.t.on_joints(a.q, a.now, [speed, 0, 0, 0, 0, 0])
     a.t.step(a.now)
     for _ in range(70):
         a.period(hand(), joints=False)

@@ -327,8 +327,6 @@ def write_pictures(mon, summary, shots, tasks, out):
         summary.setdefault('gifs', []).extend(drone_pictures(mon, out))
 
 
-
-
 def drone_pictures(mon, out):
     """The chase-view GIF and the flight plot of the recorded flight."""
     from tools import demo_pictures

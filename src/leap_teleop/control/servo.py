@@ -66,9 +66,9 @@ class JointServo:
         if tau <= h:
             return q1 + vA * (tau - t1), vA.copy()
         qA = q1 + vA * (h - t1)
-        if t_stop <= 0.0:
-            return qA, np.zeros_like(vA)
-        tau2 = min(tau - h, t_stop)
+        if tau - h >= t_stop:                           # at rest (exactly)
+            return qA + 0.5 * vA * t_stop, np.zeros_like(vA)
+        tau2 = tau - h
         dec = vA / t_stop
         return qA + vA * tau2 - 0.5 * dec * tau2 * tau2, vA - dec * tau2
 

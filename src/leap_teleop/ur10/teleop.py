@@ -42,9 +42,6 @@ MAX_GOAL_JUMP = 1.0
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
-# A reported joint speed beyond this (rad/s; the UR10's fastest joints turn at 2 pi) is
-# read as this for the braking distance.
-MAX_REPORTED_SPEED = 2 * math.pi
 _TWO_PI = 2 * math.pi
 
 
@@ -204,7 +201,7 @@ class ArmTeleop:
             self._q = np.clip(q, kin.JOINT_LOWER, kin.JOINT_UPPER)
             qd = None if qd is None else np.asarray(qd, dtype=float)
             ok = qd is not None and qd.shape == (6,) and np.all(np.isfinite(qd))
-            self._qd = np.clip(qd, -MAX_REPORTED_SPEED, MAX_REPORTED_SPEED) if ok else np.zeros(6)
+            self._qd = qd if ok else np.zeros(6)
             self._joints_rx = now
             return True
         return False
@@ -228,7 +225,7 @@ class ArmTeleop:
         and disarm without a hold, which would command the old pose to a new robot."""
         self._q = self._joints_rx = self._hand = None
         self._qd = np.zeros(6)
-        self._stalled = None
+        self._stalled = self._gripper_sent = self._gripper_asked = None   # a new robot
         self._stream.reset()
         self._servo.reset()
         if self.status.state != DISARMED:
@@ -241,6 +238,7 @@ class ArmTeleop:
         # A stall has already sent its hold: the arm is stopping or at rest.
         was_moving = self.status.state in (ARMED, TRACKING, HOLDING) and self._stalled is None
         self._stalled = None
+        self._gripper_asked = None
         self._set(DISARMED, reason)
         self.status.origin_set = False
         self._palm_ref = self._tcp_ref = self._target = None
@@ -273,12 +271,15 @@ class ArmTeleop:
             # goes on to until it rests, or as far as it takes to brake from the speed it
             # last reported (a robot still moving when the servo planned it at rest).
             lo, hi = self._servo.reach(self._joints_rx, self._q)
-            brake = self._qd * np.abs(self._qd) / (2.0 * self.p.max_joint_accel)
+            # Its trajectories never ran a joint faster than max_joint_speed: a faster
+            # report (a spike, a sprinting simulator) brakes from that speed.
+            v = np.clip(self._qd, -self.p.max_joint_speed, self.p.max_joint_speed)
+            brake = v * np.abs(v) / (2.0 * self.p.max_joint_accel)
             self._resume_box = (np.minimum(np.minimum(self._q, lo), self._q + brake)
                                 - RESUME_TOLERANCE,
                                 np.maximum(np.maximum(self._q, hi), self._q + brake)
                                 + RESUME_TOLERANCE)
-            self._target = self._goal = None
+            self._target = self._goal = self._gripper_asked = None   # its wait starts again
             self._servo.reset()
             self._set(HOLDING, 'no joint states for %.2f s: holding, disarms after %.2f s'
                       % (self.p.joint_timeout, self.p.joint_loss_after))
@@ -316,6 +317,7 @@ class ArmTeleop:
             # A stall: stop at once, but stay armed for a while in case input resumes.
             held = self._hold(now)
             self._stalled = ('hand input', self._hand_rx)
+            self._gripper_asked = None                      # its wait starts again
             self._set(HOLDING, 'no hand input for %.2f s: holding, disarms after %.2f s '
                       '(watchdog)' % (self.p.input_timeout, self.p.disarm_after))
             return held
