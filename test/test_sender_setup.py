@@ -90,3 +90,7 @@ def test_joint_states_are_found_by_name_prefix_and_order():
     with pytest.raises(KeyError) as e:
         index.positions(JOINT_NAMES[:5], list(range(5)))
     assert e.value.args[0] == JOINT_NAMES[5]
+    # Velocities in the same order, or None when the message carries none.
+    velocities = [0.5] + [0.1 * i for i in range(6)]
+    assert index.velocities(names, velocities) == pytest.approx([0.5, 0.4, 0.3, 0.2, 0.1, 0.0])
+    assert index.velocities(names, []) is None

@@ -3,8 +3,8 @@ from leap_teleop.ur10.kinematics import JOINT_NAMES
 
 
 class JointStateIndex:
-    """The arm joints' positions in JOINT_NAMES order from a joint_states message's names and
-    positions. A name matches a joint exactly or with a prefix ending in '_' or '/'
+    """The arm joints' positions (and velocities) in JOINT_NAMES order from a joint_states
+    message's names and values. A name matches a joint exactly or with a prefix ending in '_' or '/'
     (ur10_1_shoulder_pan_joint); the first match wins. The lookup is kept while the list's
     length stays the same."""
 
@@ -14,6 +14,15 @@ class JointStateIndex:
 
     def positions(self, names, positions):
         """The six positions; KeyError (its argument the joint's name) when one is missing."""
+        return [positions[i] for i in self._lookup(names)]
+
+    def velocities(self, names, velocities):
+        """The six velocities, or None when the message carries none (velocity may be
+        empty); KeyError as positions()."""
+        index = self._lookup(names)
+        return [velocities[i] for i in index] if len(velocities) == len(names) else None
+
+    def _lookup(self, names):
         if self._index is None or len(names) != self._count:
             index = []
             for joint in JOINT_NAMES:
@@ -23,12 +32,4 @@ class JointStateIndex:
                     raise KeyError(joint)
                 index.append(match[0])
             self._index, self._count = index, len(names)
-        return [positions[i] for i in self._index]
-
-    def velocities(self, names, velocities):
-        """The six velocities, or None when the message carries none (velocity may be
-        empty); KeyError as positions()."""
-        self.positions(names, names)
-        if len(velocities) != len(names):
-            return None
-        return [velocities[i] for i in self._index]
+        return self._index
