@@ -3,6 +3,7 @@ import diagnostic_updater
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 
+DEFAULT_PERIOD_S = 1.0     # diagnostic_updater's own default
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR}
 
 
@@ -21,6 +22,10 @@ def diagnostics_updater(hardware_id, task, report, input_age=None):
             stat.add(key, value)
         return stat
 
+    # The updater re-reads ~diagnostic_period four times a second through rospy's param
+    # cache, which keeps only parameters that exist: unset, each read is a master call.
+    if not rospy.has_param('~diagnostic_period'):
+        rospy.set_param('~diagnostic_period', DEFAULT_PERIOD_S)
     updater = diagnostic_updater.Updater()
     updater.setHardwareID(hardware_id)
     updater.add(task, run)
