@@ -58,3 +58,39 @@ def test_the_params_summary_names_what_an_operator_checks():
     assert ArmTeleopParams(max_joint_speed=0.05).summary() == (
         'mode imitation, orientation fixed, gripper binary, max joint speed 0.05 rad/s, '
         'acceleration %.3g rad/s^2' % ArmTeleopParams().max_joint_accel)
+
+
+def _count_steps(hand_interval, hands, rate=10.0):
+    """Steps of a runner at `rate` fed `hands` hands `hand_interval` s apart, then 0.5 s
+    of no hands: (steps while hands came, steps after)."""
+    runner = ArmTeleopRunner(ArmTeleopParams(), rate=rate)
+    stop, ticks = threading.Event(), []
+    thread = threading.Thread(target=runner.run, args=(time.monotonic, stop.is_set,
+                                                       lambda *a: ticks.append(a[2])))
+    runner.on_joints(HOME_Q, time.monotonic())
+    thread.start()
+    try:
+        time.sleep(0.01)
+        start = time.monotonic()
+        for k in range(hands):
+            time.sleep(max(0.0, start + (k + 1) * hand_interval - time.monotonic()))
+            now = time.monotonic()
+            runner.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), stamp=now), now)
+        time.sleep(0.005)
+        during = len(ticks)
+        time.sleep(0.5)
+        after = len(ticks) - during
+    finally:
+        stop.set()
+        runner.wake.set()
+        thread.join(5.0)
+    return during, after
+
+
+def test_a_hand_stream_near_the_rate_steps_once_per_hand():
+    # Hands 110 ms apart against a 100 ms period: a timer restarted at each hand would
+    # end 10 ms before the next hand and step twice per hand.
+    during, after = _count_steps(0.110, 10)
+    assert 10 <= during <= 12, during
+    # hands stop: the timer steps at the rate again (0.5 s: the first 150 ms, then 100)
+    assert 3 <= after <= 5, after
