@@ -5,17 +5,22 @@ builds it (the one slower test; a few minutes on two cores):
 * `catkin_make` builds it next to `leap_motion` (the classic driver's message package, with
   a leapros consumer), `catkin_make run_tests` targets run a rostest and the pytest suite
   (narrowed to the message tests) with passing results, `catkin_make install` installs it,
-  and from the install space alone every launch file starts with its defaults (a
-  private master each, headless), shows a sign of life of its own (SIGNS_OF_LIFE) and
-  stops cleanly on Ctrl-C, and the installed sender feeds the classic consumer its leapros;
+  and from the install space alone every launch file resolves with its defaults (its
+  includes, args, rosparam files and param commands; every node it names is installed;
+  every file a parameter names exists), the launch files that together start every node
+  type (INSTALLED_RUNS) start (a private master each, headless), show a sign of life of
+  their own (SIGNS_OF_LIFE) and stop cleanly on Ctrl-C, and the installed sender feeds
+  the classic consumer its leapros;
 * `catkin build` (catkin-tools) builds the same sources in a second workspace.
 
 Builds run in a clean environment (Debian's ROS under /usr, the venv's python with the
 dependencies first on PATH): nothing of the project's own .ws leaks in.
 PYTHON_EXECUTABLE is the venv's python, as tools/setup.sh sets it.
 """
+import json
 import os
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -149,16 +154,10 @@ def gesture_bag(path):
     return str(path)
 
 
-# Per top-level launch file (defaults): what shows it is running, in launch_check.py's
-# terms. Drone graphs: the simulator's navdata; UR10 graphs: the simulator's joint states
-# and, where a sender waits for its arms, the sender's hand frames (so the arms
-# subscribed); the arm alone: its command topic.
+# Per launch file started from the install space (defaults): what shows it is running, in
+# launch_check.py's terms: the demo's arms, drone and sender; the driver-compatible
+# topics; a recorder subscribed; a replayed bag's frames.
 SIGNS_OF_LIFE = {
-    'ardrone.launch': ['--topic', '/ardrone/navdata:leap_teleop/Navdata',
-                       '--advertised', '/cmd_vel'],
-    'ardrone_dual.launch': ['--topic', '/drone1/ardrone/navdata:leap_teleop/Navdata',
-                            '--topic', '/drone2/ardrone/navdata:leap_teleop/Navdata'],
-    'ardrone_sim.launch': ['--topic', '/ardrone/navdata:leap_teleop/Navdata'],
     'demo.launch': ['--topic', '/ur10_2/joint_states:sensor_msgs/JointState',
                     '--topic', '/drone/ardrone/navdata:leap_teleop/Navdata',
                     '--topic', '/leapmotion/hand_left:leap_teleop/Hand'],
@@ -167,25 +166,37 @@ SIGNS_OF_LIFE = {
     'record.launch': ['--subscribed', '/leapmotion/data_right', '--subscribed', '/tf_static'],
     'replay.launch': ['--topic', '/leapmotion/data_right:leap_teleop/leapcobotright',
                       '--count', '30'],
-    'sender.launch': ['--topic', '/leapmotion/hand_right:leap_teleop/Hand', '--count', '30'],
-    'ur10_arm.launch': ['--advertised', '/ur10_1/arm_controller/command',
-                        '--subscribed', '/ur10_1/joint_states'],
-    'ur10_dual.launch': ['--topic', '/ur10_2/joint_states:sensor_msgs/JointState',
-                         '--topic', '/leapmotion/hand_left:leap_teleop/Hand'],
-    'ur10_dual_sim.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState',
-                             '--topic', '/ur10_2/joint_states:sensor_msgs/JointState'],
-    'ur10_sim.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState'],
-    'ur10_single.launch': ['--topic', '/ur10_1/joint_states:sensor_msgs/JointState',
-                           '--topic', '/leapmotion/hand_right:leap_teleop/Hand'],
 }
 
 
-def signs_of_life(launch, tmp_path):
-    """(launch args, launch_check.py args) to start `launch` with its defaults (replay.launch
-    needs its bag) and recognise it running."""
-    assert launch in SIGNS_OF_LIFE, 'no sign of life for %s: add one to SIGNS_OF_LIFE' % launch
-    args = ['bag:=' + gesture_bag(tmp_path / 'gestures.bag')] if launch == 'replay.launch' else []
-    return args, SIGNS_OF_LIFE[launch]
+# Started from the install space: together they start every node type any launch file
+# names with its defaults (checked below). The smoke tests start every launch file from
+# the source tree; the others here differ from these only in how many of the same nodes
+# run, in which namespaces, so they are resolved without being started.
+INSTALLED_RUNS = tuple(SIGNS_OF_LIFE)
+
+# Run in the install space's environment: each launch file loaded as roslaunch loads it
+# (includes, args, rosparam files, param commands run); per file, its node types with the
+# executables roslaunch would start and the parameter values that are paths.
+RESOLVE_LAUNCHES = textwrap.dedent("""
+    import json, os, sys
+    import roslaunch.config, roslaunch.xmlloader, roslib.packages
+    out = {}
+    for path, argv in json.loads(sys.argv[1]):
+        cfg = roslaunch.config.ROSLaunchConfig()
+        roslaunch.xmlloader.XmlLoader(resolve_anon=False).load(path, cfg, argv=argv,
+                                                                verbose=False)
+        nodes = sorted({(n.package, n.type) for n in cfg.nodes})
+        out[os.path.basename(path)] = {
+            'nodes': [[pkg, kind, roslib.packages.find_node(pkg, kind)] for pkg, kind in nodes],
+            'paths': sorted(v for v in (p.value for p in cfg.params.values())
+                            if isinstance(v, str) and v.startswith('/') and '\\n' not in v)}
+    print(json.dumps(out))""")
+
+
+def launch_args(launch, tmp_path):
+    """The args to start `launch` with its defaults: replay.launch needs its bag."""
+    return ['bag:=' + gesture_bag(tmp_path / 'gestures.bag')] if launch == 'replay.launch' else []
 
 
 @pytest.mark.rostest
@@ -237,11 +248,23 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
     installed = installed_env(env, setup)
     assert sorted(os.listdir(share / 'launch')) == sorted(
         f for f in os.listdir(os.path.join(ROOT, 'launch')) if f.endswith('.launch'))
-    for launch in sorted(os.listdir(share / 'launch')):
-        launch_args, check = signs_of_life(launch, tmp_path)
+    launches = sorted(os.listdir(share / 'launch'))
+    resolved = json.loads(sh('%s -c %s %s' % (PYTHON, shlex.quote(RESOLVE_LAUNCHES), shlex.quote(
+        json.dumps([[str(share / 'launch' / f), launch_args(f, tmp_path)]
+                    for f in launches]))), env, ws, setup=setup).splitlines()[-1])
+    for launch in launches:
+        for pkg, kind, found in resolved[launch]['nodes']:
+            assert found, '%s: node %s/%s is not installed' % (launch, pkg, kind)
+            if pkg == 'leap_teleop':
+                assert all(p.startswith(str(install)) for p in found), (launch, kind, found)
+        for path in resolved[launch]['paths']:
+            assert not path.startswith(str(install)) or os.path.exists(path), (launch, path)
+    kinds = {launch: {tuple(n[:2]) for n in resolved[launch]['nodes']} for launch in launches}
+    assert set().union(*kinds.values()) == set().union(*(kinds[f] for f in INSTALLED_RUNS))
+    for launch in INSTALLED_RUNS:
         (tmp_path / launch).mkdir()
-        run_launches(tmp_path / launch, [[launch] + launch_args], check, 90, env=installed,
-                     clean_exit=True)
+        run_launches(tmp_path / launch, [[launch] + launch_args(launch, tmp_path)],
+                     SIGNS_OF_LIFE[launch], 90, env=installed, clean_exit=True)
     # The installed sender feeds the classic consumer (leap_motion/leapros, same MD5).
     port = free_port()
     env_run = dict(env, ROS_MASTER_URI='http://127.0.0.1:%d' % port)
