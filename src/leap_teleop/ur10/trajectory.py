@@ -68,10 +68,11 @@ def _hermite_peak(q0, q1, v0, v1, T):
     A = 3 * v0 + 3 * v1 - 6 * d
     B = 6 * d - 4 * v0 - 2 * v1
     peak = np.abs(v1)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        s = np.where(np.abs(A) > 1e-12, -B / (2 * A), -1.0)
+    # The vertex where A is not ~0 (the simulator runs this per command: array methods
+    # and a masked divide instead of np.any / np.errstate, which cost more than the math).
+    s = np.divide(-B, 2 * A, out=np.full_like(A, -1.0), where=np.abs(A) > 1e-12)
     inside = (s > 0.0) & (s < 1.0)
-    if np.any(inside):
+    if inside.any():
         vs = (A * s + B) * s + v0
         peak = np.where(inside, np.maximum(peak, np.abs(vs)), peak)
     return peak
@@ -83,11 +84,11 @@ def _peak_ratio(seg, vmax):
     t0, t1, q0, q1, v0, v1, a0 = seg[:7]
     T = t1 - t0
     if v0 is None:
-        return float(np.max(np.abs(q1 - q0) / (T * vmax))) if T > 0 else math.inf
+        return float((np.abs(q1 - q0) / (T * vmax)).max()) if T > 0 else math.inf
     if T <= 0:
         return math.inf
     if a0 is None:
-        return float(np.max(_hermite_peak(q0, q1, v0, v1, T) / vmax))
+        return float((_hermite_peak(q0, q1, v0, v1, T) / vmax).max())
     return max(float(np.max(np.abs(_state(seg, t0 + s * T)[1]) / vmax)) for s in _SAMPLES[1:])
 
 
@@ -105,6 +106,7 @@ class TrajectoryFollower:
         self.vmax = np.broadcast_to(np.asarray(max_speed, dtype=float), (self.n,)).copy()
         self.lower = None if lower is None else np.asarray(lower, dtype=float)
         self.upper = None if upper is None else np.asarray(upper, dtype=float)
+        self._limits = None if lower is None else (self.lower - 1e-9, self.upper + 1e-9)
         self.qd = np.zeros(self.n)
         self.qdd = np.zeros(self.n)
         self.segments = []     # (t0, t1, q0, q1, v0|None, v1|None, a0|None, a1|None)
@@ -127,7 +129,7 @@ class TrajectoryFollower:
         if value is None or not len(value):
             return None
         value = np.asarray(value, dtype=float)
-        if value.shape != (self.n,) or not np.all(np.isfinite(value)):
+        if value.shape != (self.n,) or not np.isfinite(value).all():
             raise TrajectoryError('point %d: %s must be %d finite numbers' % (k, what, self.n))
         return value
 
@@ -150,10 +152,9 @@ class TrajectoryFollower:
             if tfs < last_t:
                 raise TrajectoryError('point %d: time_from_start goes backwards' % k)
             last_t = tfs
-            if pos.shape != (self.n,) or not np.all(np.isfinite(pos)):
+            if pos.shape != (self.n,) or not np.isfinite(pos).all():
                 raise TrajectoryError('point %d: positions must be %d finite numbers' % (k, self.n))
-            if self.lower is not None and (np.any(pos < self.lower - 1e-9)
-                                           or np.any(pos > self.upper + 1e-9)):
+            if self._limits is not None and ((pos < self._limits[0]) | (pos > self._limits[1])).any():
                 raise TrajectoryError('point %d: positions outside the joint limits' % k)
             vel = self._vector(vel, k, 'velocities')
             if vel is not None:
@@ -175,7 +176,7 @@ class TrajectoryFollower:
             a0 = None if acc is None else a_prev
             seg = (t_prev, t1, q_prev, pos, v0, vel, a0, acc)
             T = t1 - t_prev
-            if np.all(q_prev == pos) and vel is None:
+            if vel is None and (q_prev == pos).all():
                 ratio = 0.0
             else:
                 ratio = _peak_ratio(seg, self.vmax)
