@@ -123,7 +123,7 @@ CASES = [
 @pytest.mark.parametrize('launches, check_args, timeout', [c[1:] for c in CASES],
                          ids=[c[0] for c in CASES])
 def test_launch_reaches_its_purpose(launches, check_args, timeout, tmp_path):
-    run_launches(tmp_path, launches, check_args, timeout)
+    run_launches(tmp_path, launches, check_args, timeout, clean_exit=True)
 
 
 @pytest.mark.rostest
@@ -198,8 +198,10 @@ def test_documented_arg_values_parse(launch, args, nodes):
     import roslaunch.config
     import roslaunch.xmlloader
     config = roslaunch.config.ROSLaunchConfig()
-    roslaunch.xmlloader.XmlLoader(resolve_anon=False).load(
-        os.path.join(ROOT, 'launch', launch), config, argv=['roslaunch'] + args, verbose=False)
+    loader = roslaunch.xmlloader.XmlLoader(resolve_anon=False)
+    loader.ignore_unset_args = False    # as roslaunch sets it: a missing arg is named
+    loader.load(os.path.join(ROOT, 'launch', launch), config, argv=['roslaunch'] + args,
+                verbose=False)
     names = {rosgraph.names.ns_join(n.namespace, n.name) for n in config.nodes}
     assert nodes <= names, sorted(names)
 
