@@ -10,7 +10,7 @@ from leap_teleop.control.servo import JointServo
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.orientation import hand_rotation
-from leap_teleop.ur10.trajectory import TrajectoryFollower, _hermite, _hermite_peak
+from leap_teleop.ur10.trajectory import TrajectoryError, TrajectoryFollower, _hermite, _hermite_peak
 
 
 # -- One Euro filter --------------------------------------------------------------------
@@ -196,3 +196,14 @@ def test_follower_interpolates_quintic_segments_with_accelerations():
     assert f.qdd[0] == pytest.approx(0.0, abs=1e-9)
     q, _ = f.sample(0.25)
     assert q[0] == pytest.approx(10 * 0.25 ** 3 - 15 * 0.25 ** 4 + 6 * 0.25 ** 5)
+
+
+def test_a_follower_takes_both_joint_limits_or_neither():
+    for lower, upper in ((kin.JOINT_LOWER, None), (None, kin.JOINT_UPPER)):
+        with pytest.raises(ValueError, match='both'):
+            TrajectoryFollower(kin.HOME_Q, kin.MAX_JOINT_SPEED, lower, upper)
+    follower = TrajectoryFollower(kin.HOME_Q, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    beyond = np.array(kin.HOME_Q, dtype=float)
+    beyond[0] = kin.JOINT_UPPER[0] + 1e-6
+    with pytest.raises(TrajectoryError, match='joint limits'):
+        follower.command(0.0, [(1.0, beyond, None)])

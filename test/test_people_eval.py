@@ -58,7 +58,7 @@ def fits_once():
 
     def models_without(x, y, persons, labels, held, stride=tg.FIT_STRIDE, log=print,
                        alpha=tg.L2):
-        key = _fingerprint(x, y, persons, labels), stride, alpha
+        key = _fingerprint(x, y, persons, labels), stride, alpha, tg.MAX_ITER
         todo = sorted(p for p in set(held) if (key, p) not in memo)
         if todo:
             for p, m in real(x, y, persons, labels, todo, stride, log, alpha=alpha).items():
@@ -67,9 +67,6 @@ def fits_once():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(tg, 'models_without', models_without)
         mp.setattr(tg, 'build', build)
-        # These tests check what the commands write, not how well they fit (the Leap folds
-        # above and make eval judge that): a few iterations fit the same code path.
-        mp.setattr(tg, 'MAX_ITER', FEW_ITERATIONS)
         yield memo
 
 
@@ -123,6 +120,9 @@ HELD_KEYPOINT_PEOPLE = ['kinivi', 'Harikumar4']
 
 def test_train_command_writes_a_model_and_its_card(fits_once, tmp_path, capsys, monkeypatch):
     from leap_teleop.hands.gestures import PoseClassifier
+    # what the command writes, not how well it fits (the Leap folds above and make eval
+    # judge that): a few iterations run the same code
+    monkeypatch.setattr(tg, 'MAX_ITER', FEW_ITERATIONS)
     # Its leave-one-person-out narrowed to two people (make train holds out every one;
     # each fold is the same code): fits_once fits them once for this and the next test.
     real = tg.lopo
@@ -142,6 +142,7 @@ def test_train_command_writes_a_model_and_its_card(fits_once, tmp_path, capsys, 
 
 def test_evaluate_people_command_writes_its_figures(fits_once, tmp_path, monkeypatch):
     import json
+    monkeypatch.setattr(tg, 'MAX_ITER', FEW_ITERATIONS)     # as in the test above
     # the keypoint half, two people held out (make eval holds out every one)
     real = tg.models_without
     monkeypatch.setattr(tg, 'models_without', lambda x, y, persons, labels, held, **kw: real(

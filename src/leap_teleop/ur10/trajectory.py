@@ -104,6 +104,8 @@ class TrajectoryFollower:
         self.q = np.array(q0, dtype=float)
         self.n = len(self.q)
         self.vmax = np.broadcast_to(np.asarray(max_speed, dtype=float), (self.n,)).copy()
+        if (lower is None) != (upper is None):
+            raise ValueError('joint limits: give both lower and upper, or neither')
         self.lower = None if lower is None else np.asarray(lower, dtype=float)
         self.upper = None if upper is None else np.asarray(upper, dtype=float)
         self._limits = None if lower is None else (self.lower - 1e-9, self.upper + 1e-9)
