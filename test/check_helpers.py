@@ -115,6 +115,19 @@ def node_pid(name, timeout=30.0, call_timeout=2.0):
     raise AssertionError('node %s did not come up (last: %r)' % (name, last))
 
 
+def publishes_to_a_subscriber(node, topic, call_timeout=2.0):
+    """True once `node` has a live outbound connection on `topic` (the node's own bus
+    info): a message it publishes then reaches a subscriber. A subscriber the master lists
+    is not yet connected, and a one-shot command (a takeoff) sent before that is lost."""
+    try:
+        uri = rosgraph.Master('/check').lookupNode(node)
+        proxy = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(call_timeout))
+        connections = proxy.getBusInfo('/check')[2]
+    except (rosgraph.MasterError, OSError, xmlrpc.client.Error):
+        return False
+    return any(c[4] == topic and c[2] == 'o' and c[5] for c in connections)
+
+
 def kill(pid):
     os.kill(pid, signal.SIGKILL)
     t = time.monotonic()

@@ -11,7 +11,7 @@ from geometry_msgs.msg import Twist
 from leap_teleop.drone.sim import FLYING, HOVERING, LANDED, LANDING
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 
-from check_helpers import limit, pilot_hand, read_limits, wait_for
+from check_helpers import limit, pilot_hand, publishes_to_a_subscriber, read_limits, wait_for
 
 LIMITS = {
     'ready_timeout_s': limit('wait this long for the drone landed and the pilot listening',
@@ -59,9 +59,12 @@ class DroneWatchdog(unittest.TestCase):
     def fly_forward(self):
         """Engage with an unfold, take off, then hold the hand 100 mm forward."""
         lim = self.lim
+        # ... and the pilot's takeoff reaches the simulator (sent once, on the unfold)
         self.assertTrue(self.wait_for(lambda: self.state == LANDED
                                       and self.hand_pub.get_num_connections() > 0
-                                      and self.gesture_pub.get_num_connections() > 0,
+                                      and self.gesture_pub.get_num_connections() > 0
+                                      and publishes_to_a_subscriber('/drone_pilot',
+                                                                    '/ardrone/takeoff'),
                                       lim.ready_timeout_s))
         self.hand(0.0)
         time.sleep(0.1)
