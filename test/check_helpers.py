@@ -97,18 +97,21 @@ class _TimedTransport(xmlrpc.client.Transport):
         return conn
 
 
+def node_proxy(name, call_timeout=2.0):
+    """An XML-RPC proxy to a running node, looked up through the master; each call to it is
+    bounded by call_timeout. Raises rosgraph.MasterError, OSError or xmlrpc.client.Error."""
+    uri = rosgraph.Master('/check').lookupNode(name)
+    return xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(call_timeout))
+
+
 def node_pid(name, timeout=30.0, call_timeout=2.0):
-    """The pid of a running node (asks the node itself through the master). Each call to
-    the node is bounded by call_timeout, so one that hangs (a node gone or stalled under
-    load) is retried instead of using up the whole timeout."""
-    master = rosgraph.Master('/fault_check')
+    """The pid of a running node (asks the node itself). A call that hangs (a node gone or
+    stalled under load) is retried instead of using up the whole timeout."""
     deadline = time.monotonic() + timeout
     last = None
     while time.monotonic() < deadline:
         try:
-            uri = master.lookupNode(name)
-            proxy = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(call_timeout))
-            return proxy.getPid('/fault_check')[2]
+            return node_proxy(name, call_timeout).getPid('/check')[2]
         except (rosgraph.MasterError, OSError, xmlrpc.client.Error) as e:
             last = e
             time.sleep(0.2)
@@ -118,11 +121,10 @@ def node_pid(name, timeout=30.0, call_timeout=2.0):
 def publishes_to_a_subscriber(node, topic, call_timeout=2.0):
     """True once `node` has a live outbound connection on `topic` (the node's own bus
     info): a message it publishes then reaches a subscriber. A subscriber the master lists
-    is not yet connected, and a one-shot command (a takeoff) sent before that is lost."""
+    is not yet connected; a check that waits for this does not lean on how long the pilot
+    holds a one-shot command for its driver."""
     try:
-        uri = rosgraph.Master('/check').lookupNode(node)
-        proxy = xmlrpc.client.ServerProxy(uri, transport=_TimedTransport(call_timeout))
-        connections = proxy.getBusInfo('/check')[2]
+        connections = node_proxy(node, call_timeout).getBusInfo('/check')[2]
     except (rosgraph.MasterError, OSError, xmlrpc.client.Error):
         return False
     return any(c[4] == topic and c[2] == 'o' and c[5] for c in connections)

@@ -56,6 +56,9 @@ PILOT_NODE_PARAMS = {
     'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False),
     'service_timeout': Param(0.5, 'a flight animation call (its own thread) is abandoned '
                                   'after this long', unit='s', gt=0.0, le=10.0),
+    'takeoff_hold': Param(1.0, 'a takeoff sent before the driver listens on ardrone/takeoff '
+                               'waits this long for it, then is dropped (a land waits until '
+                               'it listens)', unit='s', ge=0.0, le=5.0),
     **HAND_SUBSCRIPTION_PARAMS,
     **PILOT_PARAMS,
 }

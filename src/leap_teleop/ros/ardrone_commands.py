@@ -5,19 +5,25 @@ from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
 from leap_teleop.control.input_age import InputAgeWindow
+from leap_teleop.drone.one_shot import HeldOneShot
 from leap_teleop.ros import conversions
 from leap_teleop.srv import FlightAnim
 
 
 class ArdroneCommands:
-    """send(cmd) publishes a pilot Command and never blocks; flip() calls the service and
-    may block (run it on a thread of its own). `twists` counts the Twists sent; input_age
-    keeps the age of the hand input behind each command sent (the sending thread only)."""
+    """send(cmd) publishes a pilot Command and never blocks; a takeoff or land with no
+    subscriber yet is held (see HeldOneShot) and send_held() sends it later; flip() calls
+    the service and may block (run it on a thread of its own). `twists` counts the Twists
+    sent; input_age keeps the age of the hand input behind each command sent. Every method
+    but flip runs on the sending thread only."""
 
-    def __init__(self, service_timeout):
+    def __init__(self, service_timeout, takeoff_hold, warn):
         self.cmd_vel = rospy.Publisher('cmd_vel', Twist, queue_size=10)
-        self.takeoff = rospy.Publisher('ardrone/takeoff', Empty, queue_size=2)
-        self.land = rospy.Publisher('ardrone/land', Empty, queue_size=2)
+        self.one_shot_pubs = {'takeoff': rospy.Publisher('ardrone/takeoff', Empty, queue_size=2),
+                              'land': rospy.Publisher('ardrone/land', Empty, queue_size=2)}
+        self.one_shot = HeldOneShot(
+            self._publish_one_shot, lambda kind: self.one_shot_pubs[kind].get_num_connections() > 0,
+            takeoff_hold, warn=warn, info=lambda text: rospy.loginfo('pilot: %s', text))
         self.flight_animation = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
         self.service_timeout = service_timeout
         self.twists = 0
@@ -28,12 +34,22 @@ class ArdroneCommands:
         if cmd.kind == 'twist':
             self.cmd_vel.publish(conversions.twist_msg(cmd.twist))
             self.twists += 1
-        elif cmd.kind == 'takeoff':
-            rospy.loginfo('pilot: takeoff')
-            self.takeoff.publish(Empty())
-        elif cmd.kind == 'land':
-            rospy.loginfo('pilot: land')
-            self.land.publish(Empty())
+            self.input_age.add(rospy.get_time(), cmd.input_stamp)
+        elif cmd.kind in self.one_shot_pubs:
+            self.one_shot.send(cmd)
+
+    def send_held(self):
+        """A held takeoff or land, once its driver listens (call this often)."""
+        self.one_shot.send_held()
+
+    def diagnostic_values(self):
+        return [('twists published', self.twists),
+                ('takeoff / land held for the driver', self.one_shot.held),
+                ('takeoffs dropped (no driver)', self.one_shot.dropped)]
+
+    def _publish_one_shot(self, cmd):
+        rospy.loginfo('pilot: %s', cmd.kind)
+        self.one_shot_pubs[cmd.kind].publish(Empty())
         self.input_age.add(rospy.get_time(), cmd.input_stamp)
 
     def flip(self, anim_type, duration):

@@ -1,23 +1,24 @@
 """drone_pilot: flies an AR.Drone (ardrone_autonomy interface) from Leap hand gestures.
 
-Reads leap_teleop/Hand (~hand_topic) and leap_teleop/GestureEvent (~gesture_topic, only
-events of ~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardrone/land
-and calls ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip;
-~mode tilt (palm offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only queue
-commands; a worker thread runs the watchdog and publishes them; the flip call runs on its
-own thread, abandoned after ~service_timeout (a hung driver never stops a hover or a
-landing). Without navdata for ~navdata_timeout the drone state is unknown: no takeoff,
-hover, land after ~land_after. See leap_teleop.drone.pilot for the mapping and the watchdogs. Rejected Hand messages,
-worker faults and flip call outcomes are counted on /diagnostics. RECONFIGURABLE
-parameters (dead zones, scales, the command cap, the flip's thresholds) can be changed
-while running with dynamic_reconfigure; modes, rates, watchdog times and topics cannot.
+Reads leap_teleop/Hand (~hand_topic), leap_teleop/GestureEvent (~gesture_topic, events of
+~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardrone/land and calls
+ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip; ~mode tilt (palm
+offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only queue commands; a worker
+thread runs the watchdog and publishes them (a takeoff or land waits for the driver to
+listen, a takeoff at most ~takeoff_hold); the flip call runs on its own thread, abandoned
+after ~service_timeout. Without navdata for ~navdata_timeout the drone state is unknown: no
+takeoff, hover, land after ~land_after (see leap_teleop.drone.pilot). Rejected Hand
+messages, worker faults and flip call outcomes are counted on /diagnostics. RECONFIGURABLE
+parameters (dead zones, scales, the command cap, the flip's thresholds) change live with
+dynamic_reconfigure; modes, rates, watchdog times and topics do not.
 """
 import threading
 
 import rospy
 
 from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotWorker
-from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_RECONFIGURABLE
+from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
+from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
 from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.ros import conversions
 from leap_teleop.ros.ardrone_commands import ArdroneCommands
@@ -28,17 +29,13 @@ from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.service_call import ServiceCall
 from leap_teleop.ros.signals import closed_at_shutdown
 
-# The declarations live beside the pilot they configure; re-exported for --help and the docs.
-PARAMS = PILOT_NODE_PARAMS
-RECONFIGURABLE = PILOT_RECONFIGURABLE
-
 
 class DronePilotNode:
     def __init__(self, p):
         self.side = conversions.SIDE_CODES[p['side']]
         self.log = RateLimitedLog(2.0)
         self.pilot = DronePilot(PilotConfig().update(p), warn=self.warn)
-        self.commands = ArdroneCommands(p['service_timeout'])
+        self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], self.warn)
         hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
         self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
@@ -51,7 +48,7 @@ class DronePilotNode:
                                   ServiceCall(self.commands.flip, p['service_timeout'], 'flip'),
                                   rospy.get_time, warn=self.warn,
                                   info=lambda text: rospy.loginfo('pilot: %s', text),
-                                  extra=self.diagnostics.update)
+                                  extra=self.every_step)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)
 
@@ -80,10 +77,14 @@ class DronePilotNode:
         with closed_at_shutdown():
             self.worker.run(lambda: self._stop.is_set() or rospy.is_shutdown())
 
+    def every_step(self):           # on the worker's thread
+        self.commands.send_held()
+        self.diagnostics.update()
+
     def report(self):
-        """The diagnostics (on the worker's thread, through its `extra`)."""
+        """The diagnostics (on the worker's thread, through every_step)."""
         level, summary, values = self.worker.diagnostics(rospy.get_time())
-        return level, summary, (values + [('twists published', self.commands.twists)]
+        return level, summary, (values + self.commands.diagnostic_values()
                                 + self.hand_sub.diagnostic_values())
 
     def retune(self, changes):
@@ -96,8 +97,7 @@ class DronePilotNode:
 
 
 def main(argv=None):
-    p, node = start_node('drone_pilot.py', 'drone_pilot', __doc__, PARAMS, DronePilotNode,
-                         argv)
+    p, node = start_node('drone_pilot.py', 'drone_pilot', __doc__, PARAMS, DronePilotNode, argv)
     rospy.on_shutdown(node.stop)
     try:
         if not rospy.core.is_shutdown_requested():

@@ -1,0 +1,62 @@
+"""Takeoff and land are one message each, so one published before the driver's subscriber
+has connected is lost for good (a twist is not: the next one replaces it). HeldOneShot
+keeps the latest takeoff or land until its topic has a subscriber: a takeoff for at most
+`takeoff_hold` seconds, since a drone leaving the ground long after the gesture would
+surprise the person who made it; a land for as long as it takes, since landing is the
+safe action whenever the driver appears.
+"""
+import time
+
+
+class HeldOneShot:
+    """send(cmd) publishes a takeoff / land Command at once when connected(kind) says its
+    topic has a subscriber, else holds it (a newer one replaces it: the latest gesture
+    wins); send_held(), called often on the same thread, publishes it once connected and
+    drops a takeoff held longer than takeoff_hold. Counts: held, dropped."""
+
+    def __init__(self, publish, connected, takeoff_hold, clock=time.monotonic, warn=None,
+                 info=None):
+        self.publish = publish
+        self.connected = connected
+        self.takeoff_hold = float(takeoff_hold)
+        self.clock = clock                    # wall pacing: how long a connection takes
+        self.warn = warn or (lambda key, text: None)
+        self.info = info or (lambda text: None)
+        self.pending = None                   # (Command, time it was held)
+        self.held = 0
+        self.dropped = 0
+
+    def send(self, cmd):
+        """True when published now; False when held for the driver."""
+        if self.pending is not None:
+            self.warn('one_shot_replaced', '%s held for the driver replaced by %s'
+                      % (self.pending[0].kind, cmd.kind))
+            self.pending = None
+        if self.connected(cmd.kind):
+            self.publish(cmd)
+            return True
+        self.pending = (cmd, self.clock())
+        self.held += 1
+        self.warn('held_' + cmd.kind, 'nothing listens on ardrone/%s yet: the %s waits for '
+                  'the driver%s' % (cmd.kind, cmd.kind,
+                                    ' (%.2f s at most)' % self.takeoff_hold
+                                    if cmd.kind == 'takeoff' else ''))
+        return False
+
+    def send_held(self):
+        """The held Command once published, else None."""
+        if self.pending is None:
+            return None
+        cmd, since = self.pending
+        waited = self.clock() - since
+        if self.connected(cmd.kind):
+            self.pending = None
+            self.publish(cmd)
+            self.info('%s sent after waiting %.2f s for the driver' % (cmd.kind, waited))
+            return cmd
+        if cmd.kind == 'takeoff' and waited > self.takeoff_hold:
+            self.pending = None
+            self.dropped += 1
+            self.warn('takeoff_dropped', 'takeoff dropped: nothing listened on ardrone/takeoff '
+                      'within %.2f s' % self.takeoff_hold)
+        return None
