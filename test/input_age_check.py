@@ -4,7 +4,8 @@ pilot (engaged, navdata from here: hovering). ArmStatus.input_stamp is the captu
 of one of the hands sent, a recent one; both nodes report the age of the input behind
 their commands (p50 / p99 over a window, and the sample count) on /diagnostics. A
 scripted sender reports its stages (capture -> recognized, -> published) there too, and
-latency_monitor's board has one row per (node, stage) in data-path order."""
+latency_monitor's board has one row per (node, stage) in data-path order, the UR10
+simulator's command waits (command -> applied) last."""
 import sys
 import threading
 import time
@@ -102,12 +103,17 @@ class InputAge(unittest.TestCase):
             self.assertLessEqual(p50s['recognized'], p50s['published'] + 0.1)
             table = monitor.table()
             rospy.loginfo('latency_monitor:\n%s', table)
-            rows = [line.split() for line in table.splitlines()[1:]]
+            ages, _, waits = table.partition('command -> applied (simulator)')
+            rows = [line.split() for line in ages.splitlines()[1:]]
             stages = [(row[0], row[-4]) for row in rows]
             self.assertEqual(stages[:2], [('stages/leap_sender:', 'recognized'),
                                           ('stages/leap_sender:', 'published')], table)
             self.assertEqual(sorted(stages[2:]), [('drone_pilot:', 'command'),
                                                   ('ur10_1/ur10_arm:', 'command')], table)
+            # The simulator's command waits, under their own heading: one row per arm.
+            rows += [line.split() for line in waits.splitlines()[1:]]
+            self.assertEqual([(row[0], row[2], row[-4]) for row in rows[4:]],
+                             [('ur10_sim:', 'ur10_1', 'applied')], table)
             self.assertTrue(all(int(row[-1]) > lim.min_samples for row in rows), table)
             status = [s for t, s in list(w.status) if t > t0][-1]
             self.assertIn(status.input_stamp, set(sent))

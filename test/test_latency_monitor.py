@@ -6,7 +6,14 @@ import sys
 
 import pytest
 
-from leap_teleop.control.input_age import InputAgeWindow, LatencyBoard, StageAges, age_rows, age_table
+from leap_teleop.control.input_age import (
+    CommandWaits,
+    InputAgeWindow,
+    LatencyBoard,
+    StageAges,
+    age_rows,
+    age_table,
+)
 from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
 SCRIPTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'scripts')
@@ -61,6 +68,32 @@ def test_the_table_is_in_data_path_order_and_the_board_forgets_silent_nodes():
     assert board.on_status('leap_sender: hand stages', sender.diagnostic_values(14.0), 14.0)
     assert [r[0] for r in board.rows(16.0)] == ['leap_sender: hand stages'] * 2
     assert board.notes(30.0) == []
+
+
+def test_a_simulators_command_waits_are_rows_of_their_own_after_the_commands():
+    clock = [50.0]
+    waits = CommandWaits(('ur10_1', 'ur10_2'), clock=lambda: clock[0])
+    for i in range(40):
+        waits.add('ur10_1', 40.0 + i * 0.1, 40.0 + i * 0.1 + 0.002)
+    waits.add('ur10_9', 49.0, 49.5)                   # not a robot of this cell: no sample
+    values = waits.diagnostic_values(123456.0)      # another clock's now: ignored
+    assert not any(k.startswith('input age') for k, _ in values)
+    rows = age_rows('ur10_sim: cell', values)
+    assert [(r[0], r[1], r[4]) for r in rows] == [('ur10_sim: cell ur10_1', 'applied', 40),
+                                                  ('ur10_sim: cell ur10_2', 'applied', 0)]
+    assert rows[0][2] == pytest.approx(2.0) and rows[1][2] is None
+    board = LatencyBoard()
+    arm = InputAgeWindow()
+    arm.add(10.0, 9.99)
+    board.on_status('ur10_sim: cell', values, 10.0)
+    board.on_status('ur10_1/ur10_arm: teleop', arm.diagnostic_values(10.0), 10.0)
+    lines = board.table().splitlines()
+    assert lines[0].startswith('capture -> stage') and lines[1].split()[-4] == 'command'
+    assert lines[2].startswith('command -> applied (simulator)')
+    assert [line.split()[:4] for line in lines[3:]] == [
+        ['ur10_sim:', 'cell', 'ur10_1', 'applied'], ['ur10_sim:', 'cell', 'ur10_2', 'applied']]
+    assert board.notes(10.0) == ['capture -> stage, p50 / p99:',
+                                 'ur10_1/ur10_arm command: 10.0 / 10.0 ms']
 
 
 @pytest.mark.integration

@@ -45,6 +45,18 @@ def test_command_kinds_name_the_controllers_joints():
     assert KINDS['gripper'] == ('gripper/command', ('finger_joint',))
 
 
+def test_each_arm_reports_how_long_its_commands_waited_for_the_physics(runner):
+    q = np.array(HOME_Q) + [0.1, 0, 0, 0, 0, 0]
+    for _ in range(3):
+        runner.queue(ARM, 'arm', [(0.5, q, None)], 0.0)
+        runner.step()
+    runner.queue(ARM, 'arm', [(0.5, [np.nan] * 6, None)], 0.0)     # refused: no sample
+    runner.step()
+    p50, p99, n = runner.command_waits.windows[ARM].summary(runner.command_waits.clock())
+    assert n == 3 and 0.0 <= p50 <= p99 < 1.0
+    assert set(runner.command_waits.windows) == set(runner.cell.arm_names)
+
+
 def test_queued_commands_apply_at_the_next_step_stamped_in_ros_time(runner):
     q = np.array(HOME_Q) + [0.2, 0, 0, 0, 0, 0]
     assert not runner.queue(ARM, 'arm', [(0.5, q, None)], 0.0)

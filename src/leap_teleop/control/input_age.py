@@ -2,13 +2,15 @@
 
 A consuming node (arm, pilot) adds one sample per command it sends that follows hand
 input: the command's time minus the capture stamp of that input. The sender adds one per
-hand frame at each of its stages (recognized, published) through StageAges. `summary()`
-gives the median and 99th percentile over the last `window_s` seconds, for /diagnostics;
-LatencyBoard reads those values back into one row per (node, stage).
+hand frame at each of its stages (recognized, published) through StageAges. A simulator
+adds, per robot, how long each command waited before its physics applied it (CommandWaits).
+`summary()` gives the median and 99th percentile over the last `window_s` seconds, for
+/diagnostics; LatencyBoard reads those values back into one row per (node, stage).
 """
 import array
 import math
 import re
+import time
 
 import numpy as np
 
@@ -20,15 +22,16 @@ class InputAgeWindow:
     holding the interpreter for long (a long hold delays the hot thread's next frame).
     One writer thread per window."""
 
-    def __init__(self, window_s=10.0, max_samples=8192, stage=None):
+    def __init__(self, window_s=10.0, max_samples=8192, stage=None, label=None):
         """stage: None for a consumer's commands (keys 'input age p50 ...'), else the
-        stage's name (keys 'input age (recognized) p50 ...')."""
+        stage's name (keys 'input age (recognized) p50 ...'); label replaces the keys'
+        'input age ...' prefix for a window of another quantity."""
         if not (math.isfinite(window_s) and window_s > 0):
             raise ValueError('window_s must be a positive number of seconds, not %r'
                              % (window_s,))
         self.window_s = float(window_s)
         self.stage = stage
-        self._label = 'input age' if stage is None else 'input age (%s)' % stage
+        self._label = label or ('input age' if stage is None else 'input age (%s)' % stage)
         self._size = int(max_samples)
         self._times = array.array('d', bytes(8 * self._size))
         self._ages = array.array('d', bytes(8 * self._size))
@@ -107,21 +110,50 @@ class StageAges:
         return [kv for w in self.windows.values() for kv in w.diagnostic_values(now)]
 
 
-# The stages in data-path order; 'command' is a consumer's (keys without a stage name).
+class CommandWaits:
+    """How long each robot's commands waited in a simulator between their receipt and the
+    physics step that applied them, one window per robot (keys 'command wait (ur10_1) p50
+    ...'). The commands carry no capture stamp, so this is the stage after 'command', not
+    an input age. Times on its own monotonic clock; one writer thread."""
+
+    def __init__(self, robots, window_s=10.0, clock=time.monotonic):
+        self.clock = clock
+        self.windows = {r: InputAgeWindow(window_s, 2048, stage=r, label='command wait (%s)' % r)
+                        for r in robots}
+
+    def add(self, robot, received, applied):
+        """A command of `robot` received at `received`, applied at `applied` (this clock)."""
+        window = self.windows.get(robot)
+        if window is not None:
+            window.add(applied, received)
+
+    def diagnostic_values(self, _now=None):
+        """Every robot's window values (the caller's clock is not this one: ignored)."""
+        now = self.clock()
+        return [kv for w in self.windows.values() for kv in w.diagnostic_values(now)]
+
+
+# The stages in data-path order; 'command' is a consumer's (keys without a stage name);
+# 'applied' rows are a simulator's command waits, measured from the command's receipt.
 STAGES = ('recognized', 'published', 'command', 'applied')
-_KEY = re.compile(r'^input age(?: \((?P<stage>[\w ]+)\))? (?:(?P<field>p50|p99) \(ms\b.*|samples)$')
+_KEY = re.compile(r'^(?P<what>input age|command wait)(?: \((?P<stage>[\w ]+)\))? '
+                  r'(?:(?P<field>p50|p99) \(ms\b.*|samples)$')
 
 
 def age_rows(name, values):
     """[(name, stage, p50 ms, p99 ms, samples)] from one diagnostic status's (key, value)
-    pairs as diagnostic_values writes them, one per stage it reports; [] when it carries
-    no input age."""
+    pairs as diagnostic_values writes them, one per stage it reports (a command wait is
+    stage 'applied', its robot added to the name); [] when it carries neither."""
     got = {}
     for key, value in values:
         m = _KEY.match(key)
         if m is None:
             continue
-        row = got.setdefault(m.group('stage') or 'command', {})
+        if m.group('what') == 'command wait':
+            row_key = ('%s %s' % (name, m.group('stage') or ''), 'applied')
+        else:
+            row_key = (name, m.group('stage') or 'command')
+        row = got.setdefault(row_key, {})
         if m.group('field'):
             row[m.group('field')] = _ms(value)
         else:
@@ -129,8 +161,8 @@ def age_rows(name, values):
                 row['n'] = int(value)
             except (TypeError, ValueError):
                 row['n'] = 0
-    return [(name, stage, row.get('p50'), row.get('p99'), row.get('n', 0))
-            for stage, row in got.items()]
+    return [(row_name, stage, row.get('p50'), row.get('p99'), row.get('n', 0))
+            for (row_name, stage), row in got.items()]
 
 
 def _ms(text):
@@ -147,12 +179,18 @@ def _path_order(row):
 
 
 def age_table(rows):
-    """The rows as a fixed-width text table in data-path order (stage, then node)."""
+    """The rows as a fixed-width text table in data-path order (stage, then node); a
+    simulator's command waits ('applied') under a heading of their own."""
     def cell(x):
         return '%8.1f' % x if x is not None else '     n/a'
-    lines = ['%-36s %-10s %8s %8s %8s' % ('capture -> stage (input age)', 'stage', 'p50 ms',
-                                          'p99 ms', 'samples')]
+
+    def heading(title):
+        return '%-36s %-10s %8s %8s %8s' % (title, 'stage', 'p50 ms', 'p99 ms', 'samples')
+    lines, waits = [heading('capture -> stage (input age)')], False
     for name, stage, p50, p99, n in sorted(rows, key=_path_order):
+        if stage == 'applied' and not waits:
+            waits = True
+            lines.append(heading('command -> applied (simulator)'))
         lines.append('%-36s %-10s %s %s %8d' % (name[:36], stage[:10], cell(p50), cell(p99), n))
     return '\n'.join(lines)
 

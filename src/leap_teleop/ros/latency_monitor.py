@@ -1,6 +1,7 @@
 """latency_monitor: a live table of the age of the hand input at each stage (capture ->
 sender recognized, published, arm / pilot command; p50 / p99 over each node's window),
-read from /diagnostics, one row per (node, stage) in data-path order.
+read from /diagnostics, one row per (node, stage) in data-path order; then, per arm, how
+long the UR10 simulator's commands waited for the physics step that applied them.
 
 usage: rosrun leap_teleop latency_monitor [--once] [--timeout S]
   --once      print one table (1.5 s after the first report), then exit

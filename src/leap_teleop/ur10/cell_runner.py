@@ -5,8 +5,10 @@ snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
 import argparse
 import collections
 import threading
+import time
 from dataclasses import dataclass
 
+from leap_teleop.control.input_age import CommandWaits
 from leap_teleop.params import Param
 from leap_teleop.sim_runtime import MAX_LAG_S, Every, RealtimePacer, pace_factor, snapshot_path
 from leap_teleop.ur10.config import load_config
@@ -70,7 +72,8 @@ class CellRunner:
     """UR10Cell behind one lock. Callbacks `queue` commands (bounded: when the loop stalls,
     the oldest are dropped); each `step` applies them, steps the physics and says what is
     due. `reject(arm, kind, why)` hears of a command the cell refused; `ros_time()` is the
-    clock command stamps are in."""
+    clock command stamps are in. command_waits keeps, per arm, how long its commands
+    waited between queue() and the step that applied them (wall time)."""
 
     def __init__(self, p, use_sim_time, ros_time, reject):
         from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
@@ -81,6 +84,7 @@ class CellRunner:
         self.renderer = SnapshotRenderer(self.cell.config)
         self.pending = collections.deque()         # validated commands for the loop
         self.dropped_commands = 0
+        self.command_waits = CommandWaits(self.cell.arm_names)
         self.use_sim_time = use_sim_time
         self.factor, self.pace_warning = pace_factor(float(p['realtime_factor']),
                                                      use_sim_time)
@@ -96,19 +100,21 @@ class CellRunner:
         if dropped:                                # the loop stalled: newer commands win
             self.pending.popleft()
             self.dropped_commands += 1
-        self.pending.append((arm, kind, points, stamp))
+        self.pending.append((arm, kind, points, stamp, time.monotonic()))
         return dropped
 
     def _apply_pending(self):
         """Hand queued commands to the cell (lock held)."""
         cell = self.cell
+        now = time.monotonic()
         while self.pending:
-            arm, kind, points, stamp = self.pending.popleft()
+            arm, kind, points, stamp, received = self.pending.popleft()
             # A stamped start in ROS time -> cell time; 0 = now.
             start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
             command = cell.command_arm if kind == 'arm' else cell.command_gripper
             try:
                 command(arm, points, start)
+                self.command_waits.add(arm, received, now)
             except TrajectoryError as e:
                 self.reject(arm, kind, e)
 

@@ -7,20 +7,21 @@ prefix; header.stamp 0 = start now) and publishes joint_states (six arm joints +
 yet (launch files set it first, for robot_state_publisher). Private: ~object_poses
 (leap_teleop/ObjectPoses), services ~reset and ~snapshot (std_srvs/Trigger; snapshot answers with
 the PNG's path). A malformed command is rejected with a rate-limited warning and the arm keeps its
-current trajectory (as ros_control's JointTrajectoryController). With /use_sim_time true it
-publishes /clock and can run faster than real time (~realtime_factor, 0 = as fast as possible).
-Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's description and exits.
+current trajectory (as ros_control's JointTrajectoryController). /diagnostics: per arm, how long
+commands wait for the physics step that applies them; commands rejected or dropped. With
+/use_sim_time true it publishes /clock and can run faster than real time (~realtime_factor,
+0 = as fast as possible). Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's
+description and exits.
 """
 import sys
 
 import rospy
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
-from leap_teleop.msg import ObjectPoses
-from leap_teleop.ros.conversions import CommandError, joint_state_msg, object_poses_msg, trajectory_points
+from leap_teleop.ros.cell_state_topics import CellStateTopics
+from leap_teleop.ros.conversions import CommandError, trajectory_points
+from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, arm_urdf, urdf_from_args
@@ -34,19 +35,23 @@ class UR10SimNode:
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.runner = CellRunner(p, self.use_sim_time, rospy.get_time, self._reject)
         self.cell = self.runner.cell
-        self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10) if self.use_sim_time else None
-        self.js_pubs = {}
+        self.topics = CellStateTopics(self.cell.config, p['joint_states_queue_size'],
+                                      self.use_sim_time)
         for arm, ns in ((a, a.name) for a in self.cell.config.arms):
             if not rospy.has_param(ns + '/robot_description'):
                 rospy.set_param(ns + '/robot_description', arm_urdf(arm))
-            self.js_pubs[ns] = rospy.Publisher(ns + '/joint_states', JointState,
-                                              queue_size=p['joint_states_queue_size'])
             for kind, (topic, _) in KINDS.items():
                 rospy.Subscriber(ns + '/' + topic, JointTrajectory, self.on_command,
                                  callback_args=(ns, kind), queue_size=20, tcp_nodelay=True)
-        self.obj_pub = rospy.Publisher('~object_poses', ObjectPoses, queue_size=5)
         rospy.Service('~reset', Trigger, self.on_reset)
         rospy.Service('~snapshot', Trigger, self.on_snapshot)
+        self.rejected = 0
+        self.diagnostics = diagnostics_updater('ur10_sim', 'cell', lambda: (
+            'ok', 'arms %s' % ', '.join(self.cell.arm_names),
+            [('commands rejected', self.rejected),
+             ('commands dropped (physics loop behind)', self.runner.dropped_commands)]),
+            self.runner.command_waits)
+        self.diagnostics_timer = update_every(self.diagnostics)
 
     # -- inputs: validate here, apply in the loop ---------------------------------------
     def on_command(self, msg, args):
@@ -61,6 +66,7 @@ class UR10SimNode:
                           'behind', self.runner.dropped_commands)
 
     def _reject(self, arm, kind, why):
+        self.rejected += 1
         self.log.warn((arm, kind), 'ur10_sim: %s/%s rejected: %s; the arm keeps its '
                       'current trajectory', arm, KINDS[kind][0], why)
 
@@ -74,17 +80,6 @@ class UR10SimNode:
             return TriggerResponse(success=True, message=self.runner.snapshot())
         except (OSError, ValueError, TypeError, RuntimeError, TimeoutError) as e:
             return TriggerResponse(success=False, message='snapshot failed: %s' % e)
-
-    # -- outputs --------------------------------------------------------------------------
-    def publish(self, tick):
-        stamp = rospy.Time.from_sec(tick.time) if self.use_sim_time else rospy.Time.now()
-        if tick.clock:
-            self.clock_pub.publish(Clock(clock=stamp))
-        for arm, (q, qd, g, gd) in (tick.joint_states or {}).items():
-            self.js_pubs[arm].publish(joint_state_msg(self.cell.config.arm(arm).prefix,
-                                                      q, qd, g, gd, stamp))
-        if tick.object_poses:
-            self.obj_pub.publish(object_poses_msg(*tick.object_poses, stamp=stamp))
 
 
 def main(argv=None):
@@ -102,7 +97,7 @@ def main(argv=None):
         rospy.logwarn('ur10_sim: %s', node.runner.pace_warning)
     try:
         with closed_at_shutdown():
-            node.runner.run(node.publish, rospy.is_shutdown, lambda lag: node.log.warn(
+            node.runner.run(node.topics.publish, rospy.is_shutdown, lambda lag: node.log.warn(
                 'behind', 'ur10_sim: the physics loop fell %.2f s behind the wall clock', lag))
     except rospy.ROSInterruptException:
         pass
