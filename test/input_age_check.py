@@ -77,8 +77,10 @@ class InputAge(unittest.TestCase):
                 arm = next((v for k, v in diag.items() if ARM in k), {})
                 pilot = next((v for k, v in diag.items() if 'pilot' in k), {})
                 sender = diag.get(SENDER, {})
+                sim = diag.get('ur10_sim: cell', {})
                 return (int(arm.get(SAMPLES, 0)) > lim.min_samples
                         and int(pilot.get(SAMPLES, 0)) > lim.min_samples
+                        and int(sim.get('command wait (%s) samples' % ARM, 0)) > lim.min_samples
                         and all(int(sender.get(keys[2], 0)) > lim.min_stage_samples
                                 for keys in STAGE_KEYS.values()), arm, pilot)
             self.assertTrue(wait_for(lambda: ready()[0], lim.samples_timeout_s), diag)

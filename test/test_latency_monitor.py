@@ -94,6 +94,12 @@ def test_a_simulators_command_waits_are_rows_of_their_own_after_the_commands():
         ['ur10_sim:', 'cell', 'ur10_1', 'applied'], ['ur10_sim:', 'cell', 'ur10_2', 'applied']]
     assert board.notes(10.0) == ['capture -> stage, p50 / p99:',
                                  'ur10_1/ur10_arm command: 10.0 / 10.0 ms']
+    # Any robot name between the brackets; a stage of another name stays among the ages.
+    assert age_rows('sim: cell', [('command wait (cell/arm_2) samples', '3')]) == [
+        ('sim: cell cell/arm_2', 'applied', None, None, 3)]
+    text = age_table(rows + [('filter: hands', 'filtered', 1.0, 2.0, 5)])
+    assert [line.split()[0] for line in text.splitlines()] == [
+        'capture', 'filter:', 'command', 'ur10_sim:', 'ur10_sim:']
 
 
 @pytest.mark.integration

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from leap_teleop.drone.one_shot import HeldOneShot
-from leap_teleop.drone.pilot import Command
+from leap_teleop.drone.pilot import Command, DronePilot, PilotConfig, PilotInput, PilotWorker
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
@@ -23,10 +23,11 @@ class Driver:
         self.published = []
         self.now = 100.0
         self.warnings = []
+        self.wanted = True                   # what the pilot says of a held takeoff
 
     def hold(self, takeoff_hold=1.0):
         return HeldOneShot(self.published.append, lambda kind: kind in self.listening,
-                           takeoff_hold, clock=lambda: self.now,
+                           takeoff_hold, lambda: self.wanted, clock=lambda: self.now,
                            warn=lambda key, text: self.warnings.append(key))
 
 
@@ -67,14 +68,37 @@ def test_a_takeoff_held_past_the_hold_is_dropped_not_sent_late():
     assert h.send_held() is None and not d.published
 
 
-def test_a_zero_hold_never_sends_a_takeoff_late():
+def test_a_zero_hold_never_holds_a_takeoff():
     d = Driver()
     h = d.hold(0.0)
+    assert not h.send(Command('takeoff'))
+    assert h.pending is None and h.dropped == 1 and h.held == 0
+    d.listening.add('takeoff')
+    assert h.send_held() is None and not d.published
+
+
+def test_a_stalled_caller_never_sends_a_takeoff_late():
+    d = Driver()
+    h = d.hold(1.0)
     h.send(Command('takeoff'))
-    d.now += 0.001
-    h.send_held()
+    d.now += 5.0                             # the worker was stopped; the driver came meanwhile
     d.listening.add('takeoff')
     assert h.send_held() is None and not d.published and h.dropped == 1
+
+
+def test_a_takeoff_the_pilot_no_longer_wants_is_dropped():
+    d = Driver()
+    h = d.hold(1.0)
+    h.send(Command('takeoff'))
+    d.wanted = False                         # a fold, a lost hand or stale navdata since
+    d.listening.add('takeoff')
+    assert h.send_held() is None and not d.published and h.dropped == 1
+    d.wanted = True
+    h.send(Command('land'))                  # a land is never the pilot's to withdraw
+    assert kinds(d.published) == []
+    d.wanted = False
+    d.listening.add('land')
+    assert h.send_held().kind == 'land'
 
 
 def test_a_land_waits_as_long_as_it_takes():
@@ -86,6 +110,41 @@ def test_a_land_waits_as_long_as_it_takes():
         assert h.send_held() is None
     d.listening.add('land')
     assert h.send_held().kind == 'land' and h.dropped == 0
+
+
+def test_the_pilot_wants_a_held_takeoff_only_until_a_fold_a_lost_hand_or_stale_navdata():
+    def landed_after_unfold():
+        pilot = DronePilot(PilotConfig())
+        pilot.on_navdata(2, 0, 10.0)
+        pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -1.0)),
+                      10.0)
+        assert not pilot.takeoff_still_wanted(10.0)          # nobody asked yet
+        pilot.on_gesture('unfold', True, 10.01)
+        assert pilot.takeoff_still_wanted(10.02)
+        return pilot
+    pilot = landed_after_unfold()
+    pilot.on_gesture('fold', True, 10.05)
+    assert not pilot.takeoff_still_wanted(10.06)
+    pilot = landed_after_unfold()
+    pilot.on_gesture('hand_lost', True, 10.05)
+    assert not pilot.takeoff_still_wanted(10.06)
+    pilot = landed_after_unfold()
+    assert not pilot.takeoff_still_wanted(10.0 + pilot.cfg.navdata_timeout + 0.01)
+    pilot = landed_after_unfold()
+    pilot.on_navdata(3, 1000, 10.03)                       # already flying
+    assert not pilot.takeoff_still_wanted(10.04)
+
+
+def test_the_worker_sends_a_held_land_even_when_its_watchdog_fails():
+    class WatchdogFails(DronePilot):
+        def watchdog(self, now):
+            raise RuntimeError('broken watchdog')
+    calls = []
+    worker = PilotWorker(WatchdogFails(PilotConfig()), lambda cmd: None, flip_call=None,
+                         clock=lambda: 1.0, send_held=lambda: calls.append('held'))
+    worker.step()
+    worker.step()
+    assert calls == ['held', 'held'] and worker.errors == 2
 
 
 def test_the_latest_one_shot_replaces_a_held_one():
@@ -164,7 +223,7 @@ out['late_takeoff'] = wait(lambda: got['takeoff'], 3.0) and len(got['takeoff'])
 state['nav'] = 3
 time.sleep(0.5)
 gesture('fold')                            # nothing listens on ardrone/land yet
-time.sleep(1.5)                            # past the takeoff hold: a land still waits
+time.sleep(3.5)                            # past the takeoff hold: a land still waits
 listen('land')
 out['late_land'] = wait(lambda: got['land'], 3.0) and len(got['land'])
 out['held'] = wait(lambda: held and held[-1] == 2, 5.0) and held[-1]
@@ -178,7 +237,7 @@ def test_the_pilot_holds_takeoff_and_land_until_the_driver_listens():
     from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
     with ros_master() as env:
         node = spawn_node(env, [sys.executable, os.path.join(SCRIPTS, 'drone_pilot.py'),
-                                '_takeoff_hold:=0.6'])
+                                '_takeoff_hold:=3.0'])
         try:
             run = subprocess.run([sys.executable, '-c', CLIENT], env=env, capture_output=True,
                                  text=True, timeout=120)

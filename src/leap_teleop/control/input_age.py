@@ -81,7 +81,7 @@ class InputAgeWindow:
         values = [('%s p50 (ms, last %g s)' % (self._label, self.window_s), fmt(p50)),
                   ('%s p99 (ms, last %g s)' % (self._label, self.window_s), fmt(p99)),
                   ('%s samples' % self._label, str(n))]
-        if self.stage is None:
+        if self.stage is None and self._label == 'input age':      # a consumer's commands
             values.append(('input stamp of the last command', '%.6f' % self.last_stamp))
         return values
 
@@ -118,7 +118,7 @@ class CommandWaits:
 
     def __init__(self, robots, window_s=10.0, clock=time.monotonic):
         self.clock = clock
-        self.windows = {r: InputAgeWindow(window_s, 2048, stage=r, label='command wait (%s)' % r)
+        self.windows = {r: InputAgeWindow(window_s, label='command wait (%s)' % r)
                         for r in robots}
 
     def add(self, robot, received, applied):
@@ -136,7 +136,7 @@ class CommandWaits:
 # The stages in data-path order; 'command' is a consumer's (keys without a stage name);
 # 'applied' rows are a simulator's command waits, measured from the command's receipt.
 STAGES = ('recognized', 'published', 'command', 'applied')
-_KEY = re.compile(r'^(?P<what>input age|command wait)(?: \((?P<stage>[\w ]+)\))? '
+_KEY = re.compile(r'^(?P<what>input age|command wait)(?: \((?P<stage>[^()]+)\))? '
                   r'(?:(?P<field>p50|p99) \(ms\b.*|samples)$')
 
 
@@ -174,8 +174,11 @@ def _ms(text):
 
 
 def _path_order(row):
+    """Stage in data-path order (another stage's name after 'command', before the
+    simulator's 'applied' rows, which close the table), then node."""
     name, stage = row[0], row[1]
-    return (STAGES.index(stage) if stage in STAGES else len(STAGES), stage, name)
+    rank = STAGES.index(stage) if stage in STAGES else STAGES.index('applied') - 0.5
+    return (rank, stage, name)
 
 
 def age_table(rows):

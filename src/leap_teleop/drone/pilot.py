@@ -172,6 +172,7 @@ class DronePilot:
         self.lost_since = None
         self._landed_for_loss = False
         self.engaged = False             # tilt: unfold seen, not folded since
+        self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
         self.reference = None            # tilt: (palm xyz m, yaw deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
@@ -202,6 +203,13 @@ class DronePilot:
         callback reads the clock before it takes the lock, so the watchdog may have found
         the navdata stale (and hovered) in between."""
         return self.navdata_lost_since is None and self.navdata_fresh(now)
+
+    def takeoff_still_wanted(self, now):
+        """A takeoff held back (its driver not listening yet) may still go: no fold and no
+        lost hand since the unfold, and fresh navdata still says landed."""
+        with self._lock:
+            return (self._takeoff_asked and self._navdata_ok(now)
+                    and self.drone_state == LANDED)
 
     def new_input_connection(self):
         """The Hand input's connection was re-made: judge its lateness afresh."""
@@ -262,6 +270,7 @@ class DronePilot:
                     if self._last_hand is not None and self.hand_present:
                         self._capture(self._last_hand)
                 if state == LANDED:
+                    self._takeoff_asked = True
                     self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
@@ -270,6 +279,7 @@ class DronePilot:
                                % state)
             elif name == 'fold':
                 self.engaged = False
+                self._takeoff_asked = False
                 self.reference = None
                 if state is None or state in AIRBORNE_STATES:
                     self.queue.push(Command('land', stamp=now, input_stamp=stamp))
@@ -327,6 +337,7 @@ class DronePilot:
 
     # -- watchdog ----------------------------------------------------------------------
     def _lose(self, now):
+        self._takeoff_asked = False
         if self.hand_present or self.lost_since is None:
             self.lost_since = now
         was_present = self.hand_present
@@ -420,13 +431,16 @@ class PilotWorker:
     """The one thread that acts: runs the watchdog and drains the queue. Twists, takeoff
     and land go out through `send(cmd)` (publishing, never blocking); a flip goes to
     `flip_call` (a ServiceCall: its own thread and timeout), so a peer that never answers
-    cannot stop the watchdog. Any exception in a step is caught, counted and answered
-    with the safe action: hover at once, land once the fault has lasted land_after."""
+    cannot stop the watchdog. `send_held()` (when given) runs first in every step: a
+    takeoff or land the sender holds until its driver listens. Any exception in a step is
+    caught, counted and answered with the safe action: hover at once, land once the fault
+    has lasted land_after."""
 
     def __init__(self, pilot, send, flip_call, clock, warn=None, info=None,
-                 mono=None, extra=None):
+                 mono=None, extra=None, send_held=None):
         self.pilot = pilot
         self.send = send
+        self.send_held = send_held              # a held takeoff / land, each step
         self.flip_call = flip_call
         self.clock = clock                      # the watchdog's clock (ROS time)
         self.mono = mono or time.monotonic      # the queue's pacing clock
@@ -442,6 +456,8 @@ class PilotWorker:
         """One pass; returns how long to wait for the next (s, at most 0.02)."""
         now = self.clock()
         try:
+            if self.send_held is not None:
+                self.send_held()        # first: a faulty watchdog must not keep a land back
             self.pilot.watchdog(now)
             self._poll_flip()
             if self.extra is not None:

@@ -17,13 +17,14 @@ class ArdroneCommands:
     sent; input_age keeps the age of the hand input behind each command sent. Every method
     but flip runs on the sending thread only."""
 
-    def __init__(self, service_timeout, takeoff_hold, warn):
+    def __init__(self, service_timeout, takeoff_hold, takeoff_wanted, warn):
         self.cmd_vel = rospy.Publisher('cmd_vel', Twist, queue_size=10)
         self.one_shot_pubs = {'takeoff': rospy.Publisher('ardrone/takeoff', Empty, queue_size=2),
                               'land': rospy.Publisher('ardrone/land', Empty, queue_size=2)}
         self.one_shot = HeldOneShot(
             self._publish_one_shot, lambda kind: self.one_shot_pubs[kind].get_num_connections() > 0,
-            takeoff_hold, warn=warn, info=lambda text: rospy.loginfo('pilot: %s', text))
+            takeoff_hold, takeoff_wanted, warn=warn,
+            info=lambda text: rospy.loginfo('pilot: %s', text))
         self.flight_animation = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
         self.service_timeout = service_timeout
         self.twists = 0

@@ -5,7 +5,7 @@ long the UR10 simulator's commands waited for the physics step that applied them
 
 usage: rosrun leap_teleop latency_monitor [--once] [--timeout S]
   --once      print one table (1.5 s after the first report), then exit
-  --timeout   give up (exit 1) when no node reports an input age within S seconds
+  --timeout   give up (exit 1) when no node reports an input age or a command wait within S seconds
 """
 import argparse
 import sys

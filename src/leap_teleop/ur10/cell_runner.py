@@ -5,7 +5,6 @@ snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
 import argparse
 import collections
 import threading
-import time
 from dataclasses import dataclass
 
 from leap_teleop.control.input_age import CommandWaits
@@ -100,13 +99,12 @@ class CellRunner:
         if dropped:                                # the loop stalled: newer commands win
             self.pending.popleft()
             self.dropped_commands += 1
-        self.pending.append((arm, kind, points, stamp, time.monotonic()))
+        self.pending.append((arm, kind, points, stamp, self.command_waits.clock()))
         return dropped
 
     def _apply_pending(self):
         """Hand queued commands to the cell (lock held)."""
         cell = self.cell
-        now = time.monotonic()
         while self.pending:
             arm, kind, points, stamp, received = self.pending.popleft()
             # A stamped start in ROS time -> cell time; 0 = now.
@@ -114,7 +112,7 @@ class CellRunner:
             command = cell.command_arm if kind == 'arm' else cell.command_gripper
             try:
                 command(arm, points, start)
-                self.command_waits.add(arm, received, now)
+                self.command_waits.add(arm, received, self.command_waits.clock())
             except TrajectoryError as e:
                 self.reject(arm, kind, e)
 

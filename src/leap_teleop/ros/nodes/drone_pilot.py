@@ -35,7 +35,8 @@ class DronePilotNode:
         self.side = conversions.SIDE_CODES[p['side']]
         self.log = RateLimitedLog(2.0)
         self.pilot = DronePilot(PilotConfig().update(p), warn=self.warn)
-        self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], self.warn)
+        self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], lambda: (
+            self.pilot.takeoff_still_wanted(rospy.get_time())), self.warn)
         hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
         self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
@@ -48,7 +49,8 @@ class DronePilotNode:
                                   ServiceCall(self.commands.flip, p['service_timeout'], 'flip'),
                                   rospy.get_time, warn=self.warn,
                                   info=lambda text: rospy.loginfo('pilot: %s', text),
-                                  extra=self.every_step)
+                                  extra=self.diagnostics.update,
+                                  send_held=self.commands.send_held)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)
 
@@ -77,12 +79,8 @@ class DronePilotNode:
         with closed_at_shutdown():
             self.worker.run(lambda: self._stop.is_set() or rospy.is_shutdown())
 
-    def every_step(self):           # on the worker's thread
-        self.commands.send_held()
-        self.diagnostics.update()
-
     def report(self):
-        """The diagnostics (on the worker's thread, through every_step)."""
+        """The diagnostics (on the worker's thread, through its `extra`)."""
         level, summary, values = self.worker.diagnostics(rospy.get_time())
         return level, summary, (values + self.commands.diagnostic_values()
                                 + self.hand_sub.diagnostic_values())

@@ -14,6 +14,7 @@ commands wait for the physics step that applies them; commands rejected or dropp
 description and exits.
 """
 import sys
+import threading
 
 import rospy
 from std_srvs.srv import Trigger, TriggerResponse
@@ -32,6 +33,8 @@ PARAMS = RUNNER_PARAMS      # declared beside the cell; --help and docs/nodes.md
 class UR10SimNode:
     def __init__(self, p):
         self.log = RateLimitedLog(2.0)
+        self.rejected = 0                  # counted on the subscribers' threads
+        self._rejected_lock = threading.Lock()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
         self.runner = CellRunner(p, self.use_sim_time, rospy.get_time, self._reject)
         self.cell = self.runner.cell
@@ -45,7 +48,6 @@ class UR10SimNode:
                                  callback_args=(ns, kind), queue_size=20, tcp_nodelay=True)
         rospy.Service('~reset', Trigger, self.on_reset)
         rospy.Service('~snapshot', Trigger, self.on_snapshot)
-        self.rejected = 0
         self.diagnostics = diagnostics_updater('ur10_sim', 'cell', lambda: (
             'ok', 'arms %s' % ', '.join(self.cell.arm_names),
             [('commands rejected', self.rejected),
@@ -66,7 +68,8 @@ class UR10SimNode:
                           'behind', self.runner.dropped_commands)
 
     def _reject(self, arm, kind, why):
-        self.rejected += 1
+        with self._rejected_lock:
+            self.rejected += 1
         self.log.warn((arm, kind), 'ur10_sim: %s/%s rejected: %s; the arm keeps its '
                       'current trajectory', arm, KINDS[kind][0], why)
 
