@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import pytest
+from pilot_client import PILOT_FEED
 
 from leap_teleop.drone.one_shot import HeldOneShot
 from leap_teleop.drone.pilot import Command, DronePilot, PilotConfig, PilotInput, PilotWorker
@@ -171,13 +172,11 @@ def test_a_connected_send_clears_a_held_one():
 
 
 CLIENT = r'''
-import json, threading, time
+import json, time
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 from std_msgs.msg import Empty
-from leap_teleop.msg import GestureEvent, Hand, Navdata
 rospy.init_node('driver_late')
-state = {'nav': 2}
 got = {'takeoff': [], 'land': []}
 held = []
 
@@ -186,18 +185,7 @@ def on_diagnostics(msg):
                 if kv.key == 'takeoff / land held for the driver')
 
 rospy.Subscriber('/diagnostics', DiagnosticArray, on_diagnostics, queue_size=10)
-hand_pub = rospy.Publisher('leapmotion/hand_right', Hand, queue_size=10)
-nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
-gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
-
-def feed():
-    while not rospy.is_shutdown():
-        h = Hand(side=0, present=True)
-        h.header.stamp = rospy.Time.now()
-        h.palm_position.y, h.palm_normal.y, h.direction.z = 0.2, -1.0, -1.0
-        hand_pub.publish(h)
-        nav_pub.publish(Navdata(state=state['nav'], altd=1000))
-        time.sleep(0.02)
+''' + PILOT_FEED + r'''
 
 def wait(cond, timeout=20.0):
     t_end = time.monotonic() + timeout
@@ -212,7 +200,6 @@ def listen(kind):
 def gesture(name):
     gesture_pub.publish(GestureEvent(side=0, gesture=name, active=True))
 
-threading.Thread(target=feed, daemon=True).start()
 out = {'wired': wait(lambda: gesture_pub.get_num_connections() > 0
                      and nav_pub.get_num_connections() > 0)}
 time.sleep(1.0)                            # fresh navdata: landed

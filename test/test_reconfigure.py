@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import pytest
+from pilot_client import PILOT_FEED
 
 from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
 from leap_teleop.ros.reconfigure import bounds, config_type
@@ -108,27 +109,11 @@ def get(node):
 
 PILOT_CLIENT = CLIENT_HEAD + r'''
 from geometry_msgs.msg import Twist
-from leap_teleop.msg import GestureEvent, Hand, Navdata
 rospy.init_node('pilot_client')
-state = {'nav': 2, 'palm': (0.0, 0.2, 0.0)}
 twists = []
 rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m.linear.y)),
                  queue_size=1000)
-hand_pub = rospy.Publisher('leapmotion/hand_right', Hand, queue_size=10)
-nav_pub = rospy.Publisher('ardrone/navdata', Navdata, queue_size=10)
-gesture_pub = rospy.Publisher('leapmotion/gestures', GestureEvent, queue_size=10)
-
-def feed():
-    while not rospy.is_shutdown():
-        h = Hand(side=0, present=True)
-        h.header.stamp = rospy.Time.now()
-        h.palm_position.x, h.palm_position.y, h.palm_position.z = state['palm']
-        h.palm_normal.y, h.direction.z = -1.0, -1.0
-        hand_pub.publish(h)
-        nav_pub.publish(Navdata(state=state['nav'], altd=1000))
-        time.sleep(0.02)
-
-threading.Thread(target=feed, daemon=True).start()
+''' + PILOT_FEED + r'''
 time.sleep(2.0)
 gesture_pub.publish(GestureEvent(side=0, gesture='unfold', active=True))
 time.sleep(0.5)
