@@ -46,7 +46,7 @@ class ArdroneCommands:
     def diagnostic_values(self):
         return [('twists published', self.twists),
                 ('takeoff / land held for the driver', self.one_shot.held),
-                ('takeoffs dropped (no driver)', self.one_shot.dropped)]
+                ('held takeoffs dropped (too late or withdrawn)', self.one_shot.dropped)]
 
     def _publish_one_shot(self, cmd):
         rospy.loginfo('pilot: %s', cmd.kind)
