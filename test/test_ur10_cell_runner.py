@@ -55,6 +55,33 @@ def test_each_arm_reports_how_long_its_commands_waited_for_the_physics(runner):
     p50, p99, n = runner.command_waits.windows[ARM].summary(runner.command_waits.clock())
     assert n == 3 and 0.0 <= p50 <= p99 < 1.0
     assert set(runner.command_waits.windows) == set(runner.cell.arm_names)
+    runner.reset()                                  # waits from before a reset are gone
+    assert runner.command_waits.windows[ARM].summary(runner.command_waits.clock())[2] == 0
+    runner.queue(ARM, 'arm', [(0.5, q, None)], 0.0)
+    runner.step()
+    assert runner.command_waits.windows[ARM].summary(runner.command_waits.clock())[2] == 1
+
+
+def test_the_cell_warns_for_a_while_after_a_dropped_or_refused_command(runner, monkeypatch):
+    now = [100.0]
+    monkeypatch.setattr(runner.command_waits, 'clock', lambda: now[0])
+    monkeypatch.setattr(cell_runner, 'MAX_PENDING', 1)
+    level, summary, values = runner.report(0)
+    assert level == 'ok' and summary == 'arms ur10_1'
+    assert dict(values) == {'commands rejected': 0, 'commands dropped (physics loop behind)': 0}
+    runner.queue(ARM, 'gripper', [(0.1, [0.1], None)], 0.0)
+    runner.queue(ARM, 'gripper', [(0.2, [0.1], None)], 0.0)       # drops the first
+    now[0] += 1.0
+    level, summary, values = runner.report(0)
+    assert level == 'warn' and 'refused or dropped' in summary
+    assert dict(values)['commands dropped (physics loop behind)'] == 1
+    now[0] += cell_runner.TROUBLE_S - 0.5
+    assert runner.report(0)[0] == 'warn'
+    now[0] += 1.0
+    assert runner.report(0)[0] == 'ok'                              # nothing new since
+    assert runner.report(3)[0] == 'warn'                            # three refused
+    now[0] += cell_runner.TROUBLE_S + 0.1
+    assert runner.report(3)[0] == 'ok'
 
 
 def test_queued_commands_apply_at_the_next_step_stamped_in_ros_time(runner):

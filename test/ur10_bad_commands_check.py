@@ -14,6 +14,7 @@ import unittest
 import numpy as np
 import rospy
 import rostest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -32,6 +33,8 @@ LIMITS = {
                             'this', gt=0),
     'reach_tolerance_rad': limit('the valid command is reached this closely ...', 'rad', gt=0),
     'reach_timeout_s': limit('... within this', 's', gt=0),
+    'diagnostics_timeout_s': limit('the sim\'s /diagnostics warns and counts the rejected '
+                                   'commands within this', 's', gt=0),
 }
 PREFIX = ARM + '_'
 NAMES = [PREFIX + n for n in JOINT_NAMES]
@@ -53,7 +56,9 @@ class BadCommands(unittest.TestCase):
         self.q = None
         self.g = None
         self.warnings = []
+        self.cell_status = None
         rospy.Subscriber(ARM + '/joint_states', JointState, self.on_joints, queue_size=20)
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics, queue_size=20)
         rospy.Subscriber('/rosout', Log, self.on_log, queue_size=100)
         self.arm_pub = rospy.Publisher(ARM + '/arm_controller/command', JointTrajectory,
                                        queue_size=5)
@@ -81,6 +86,12 @@ class BadCommands(unittest.TestCase):
         if msg.level == Log.WARN and msg.name.endswith('ur10_sim'):
             with self.lock:
                 self.warnings.append(msg.msg)
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name == 'ur10_sim: cell':
+                with self.lock:
+                    self.cell_status = (status.level, {kv.key: kv.value for kv in status.values})
 
     def joints(self):
         with self.lock:
@@ -148,6 +159,17 @@ class BadCommands(unittest.TestCase):
         while rospy.get_time() < deadline and np.max(np.abs(self.joints()[0] - target)) > tol:
             rospy.sleep(0.05)
         self.assertLess(np.max(np.abs(self.joints()[0] - target)), tol)
+
+        # The sim's /diagnostics says so: WARN, and every refused command counted.
+        def cell_warns():
+            with self.lock:
+                status = self.cell_status
+            return status is not None and status[0] == DiagnosticStatus.WARN and int(
+                status[1].get('commands rejected', 0)) >= len(cases) + 1
+        deadline = rospy.get_time() + self.lim.diagnostics_timeout_s
+        while rospy.get_time() < deadline and not cell_warns():
+            rospy.sleep(0.05)
+        self.assertTrue(cell_warns(), 'ur10_sim: cell status %r' % (self.cell_status,))
 
 
 if __name__ == '__main__':

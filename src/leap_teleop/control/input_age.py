@@ -55,6 +55,10 @@ class InputAgeWindow:
         self.last_stamp = input_stamp
         return age
 
+    def clear(self):
+        """Forget every sample (on the writer's thread)."""
+        self._added = 0
+
     def ages(self, now):
         """The ages (s, an array) of the samples taken in the last window_s seconds up to
         `now` (samples from after `now` belong to a clock that has since jumped back)."""
@@ -126,6 +130,11 @@ class CommandWaits:
         window = self.windows.get(robot)
         if window is not None:
             window.add(applied, received)
+
+    def clear(self):
+        """Forget every robot's samples (on the writer's thread)."""
+        for w in self.windows.values():
+            w.clear()
 
     def diagnostic_values(self, _now=None):
         """Every robot's window values (the caller's clock is not this one: ignored)."""

@@ -4,6 +4,7 @@ each step (joint states, object poses, /clock, in sim time), pacing to the wall 
 snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
 import argparse
 import collections
+import math
 import threading
 from dataclasses import dataclass
 
@@ -38,6 +39,7 @@ RUNNER_PARAMS = {
 }
 
 MAX_PENDING = 100               # commands queued for the physics loop (bounded)
+TROUBLE_S = 10.0                # s the cell's status stays WARN after a dropped or refused command
 SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
 # Command kind: (topic in the arm's namespace, the joints a command names).
 KINDS = {'arm': ('arm_controller/command', tuple(JOINT_NAMES)),
@@ -84,6 +86,7 @@ class CellRunner:
         self.pending = collections.deque()         # validated commands for the loop
         self.dropped_commands = 0
         self.command_waits = CommandWaits(self.cell.arm_names)
+        self._counts_seen, self._trouble_at = (0, 0), -math.inf
         self.use_sim_time = use_sim_time
         self.factor, self.pace_warning = pace_factor(float(p['realtime_factor']),
                                                      use_sim_time)
@@ -146,6 +149,23 @@ class CellRunner:
         with self.lock:
             self.pending.clear()
             self.cell.reset()
+            self.command_waits.clear()      # waits from before the reset say nothing now
+
+    def report(self, rejected):
+        """The cell's /diagnostics (level, summary, values); `rejected` counts the commands
+        refused so far (the node's and the cell's). WARN for TROUBLE_S after a command was
+        refused or dropped: a count alone is easy to miss in a monitor."""
+        now = self.command_waits.clock()
+        counts = (rejected, self.dropped_commands)
+        if counts != self._counts_seen:
+            self._counts_seen, self._trouble_at = counts, now
+        summary = 'arms %s' % ', '.join(self.cell.arm_names)
+        trouble = now - self._trouble_at < TROUBLE_S
+        if trouble:
+            summary += '; commands refused or dropped in the last %g s' % TROUBLE_S
+        return ('warn' if trouble else 'ok'), summary, [
+            ('commands rejected', rejected),
+            ('commands dropped (physics loop behind)', self.dropped_commands)]
 
     def snapshot(self):
         """The path of a PNG of the cell now. Only the poses are copied under the physics

@@ -8,7 +8,8 @@ yet (launch files set it first, for robot_state_publisher). Private: ~object_pos
 (leap_teleop/ObjectPoses), services ~reset and ~snapshot (std_srvs/Trigger; snapshot answers with
 the PNG's path). A malformed command is rejected with a rate-limited warning and the arm keeps its
 current trajectory (as ros_control's JointTrajectoryController). /diagnostics: per arm, how long
-commands wait for the physics step that applies them; commands rejected or dropped. With
+commands wait for the physics step that applies them; commands rejected or dropped (WARN for
+10 s after one). With
 /use_sim_time true it publishes /clock and can run faster than real time (~realtime_factor,
 0 = as fast as possible). Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's
 description and exits.
@@ -48,11 +49,8 @@ class UR10SimNode:
                                  callback_args=(ns, kind), queue_size=20, tcp_nodelay=True)
         rospy.Service('~reset', Trigger, self.on_reset)
         rospy.Service('~snapshot', Trigger, self.on_snapshot)
-        self.diagnostics = diagnostics_updater('ur10_sim', 'cell', lambda: (
-            'ok', 'arms %s' % ', '.join(self.cell.arm_names),
-            [('commands rejected', self.rejected),
-             ('commands dropped (physics loop behind)', self.runner.dropped_commands)]),
-            self.runner.command_waits)
+        self.diagnostics = diagnostics_updater('ur10_sim', 'cell', lambda: self.runner.report(
+            self.rejected), self.runner.command_waits)
         self.diagnostics_timer = update_every(self.diagnostics)
 
     # -- inputs: validate here, apply in the loop ---------------------------------------
