@@ -22,14 +22,19 @@ class Driver:
     def __init__(self):
         self.listening = set()
         self.published = []
+        self.waits = []                      # None: sent at once, else seconds held
         self.now = 100.0
         self.warnings = []
         self.wanted = True                   # what the pilot says of a held takeoff
 
     def hold(self, takeoff_hold=1.0):
-        return HeldOneShot(self.published.append, lambda kind: kind in self.listening,
+        return HeldOneShot(self.publish, lambda kind: kind in self.listening,
                            takeoff_hold, lambda: self.wanted, clock=lambda: self.now,
                            warn=lambda key, text: self.warnings.append(key))
+
+    def publish(self, cmd, waited):
+        self.published.append(cmd)
+        self.waits.append(waited)
 
 
 def kinds(cmds):
@@ -42,7 +47,7 @@ def test_a_listened_one_shot_goes_out_at_once():
     h = d.hold()
     assert h.send(Command('takeoff')) and h.send(Command('land'))
     assert kinds(d.published) == ['takeoff', 'land'] and h.pending is None
-    assert h.held == 0 and not d.warnings
+    assert h.held == 0 and not d.warnings and d.waits == [None, None]
 
 
 def test_a_takeoff_waits_for_the_driver_within_the_hold():
@@ -56,6 +61,7 @@ def test_a_takeoff_waits_for_the_driver_within_the_hold():
     d.now += 0.4
     sent = h.send_held()
     assert sent.kind == 'takeoff' and sent.input_stamp == 99.9
+    assert d.waits == [pytest.approx(0.9)]                     # the log line says so
     assert kinds(d.published) == ['takeoff'] and h.send_held() is None      # once only
 
 

@@ -9,21 +9,21 @@ import time
 
 
 class HeldOneShot:
-    """send(cmd) publishes a takeoff / land Command at once when connected(kind) says its
-    topic has a subscriber, else holds it (a newer one replaces it: the latest gesture
-    wins); send_held(), called often on the same thread, publishes it once connected, and
+    """send(cmd) publishes a takeoff / land Command at once (publish(cmd, None)) when
+    connected(kind) says its topic has a subscriber, else holds it (a newer one replaces it: the latest gesture
+    wins); send_held(), called often on the same thread, publishes it once connected
+    (publish(cmd, seconds it was held)), and
     drops a takeoff held longer than takeoff_hold or that takeoff_wanted() no longer
     allows. Counts: held, dropped (takeoffs)."""
 
     def __init__(self, publish, connected, takeoff_hold, takeoff_wanted=None,
-                 clock=time.monotonic, warn=None, info=None):
+                 clock=time.monotonic, warn=None):
         self.publish = publish
         self.connected = connected
         self.takeoff_hold = float(takeoff_hold)
         self.takeoff_wanted = takeoff_wanted or (lambda: True)
         self.clock = clock                    # wall pacing: how long a connection takes
         self.warn = warn or (lambda key, text: None)
-        self.info = info or (lambda text: None)
         self.pending = None                   # (Command, time it was held)
         self.held = 0
         self.dropped = 0
@@ -36,7 +36,7 @@ class HeldOneShot:
                       % (self.pending[0].kind, cmd.kind))
             self.pending = None
         if self.connected(cmd.kind):
-            self.publish(cmd)
+            self.publish(cmd, None)
             return True
         if cmd.kind == 'takeoff' and self.takeoff_hold <= 0.0:
             self._drop('nothing listens on ardrone/takeoff (takeoff_hold 0)')
@@ -68,8 +68,7 @@ class HeldOneShot:
         if not self.connected(cmd.kind):
             return None
         self.pending = None
-        self.publish(cmd)
-        self.info('%s sent after waiting %.2f s for the driver' % (cmd.kind, waited))
+        self.publish(cmd, waited)
         return cmd
 
     def _drop(self, why):

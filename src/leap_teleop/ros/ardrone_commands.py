@@ -23,8 +23,7 @@ class ArdroneCommands:
                               'land': rospy.Publisher('ardrone/land', Empty, queue_size=2)}
         self.one_shot = HeldOneShot(
             self._publish_one_shot, lambda kind: self.one_shot_pubs[kind].get_num_connections() > 0,
-            takeoff_hold, takeoff_wanted, warn=warn,
-            info=lambda text: rospy.loginfo('pilot: %s', text))
+            takeoff_hold, takeoff_wanted, warn=warn)
         self.flight_animation = rospy.ServiceProxy('ardrone/setflightanimation', FlightAnim)
         self.service_timeout = service_timeout
         self.twists = 0
@@ -48,8 +47,9 @@ class ArdroneCommands:
                 ('takeoff / land held for the driver', self.one_shot.held),
                 ('held takeoffs dropped (too late or withdrawn)', self.one_shot.dropped)]
 
-    def _publish_one_shot(self, cmd):
-        rospy.loginfo('pilot: %s', cmd.kind)
+    def _publish_one_shot(self, cmd, waited):
+        rospy.loginfo('pilot: %s%s', cmd.kind, '' if waited is None else
+                      ' (sent after waiting %.2f s for the driver)' % waited)
         self.one_shot_pubs[cmd.kind].publish(Empty())
         self.input_age.add(rospy.get_time(), cmd.input_stamp)
 
