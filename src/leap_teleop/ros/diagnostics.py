@@ -3,6 +3,8 @@ import diagnostic_updater
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 
+from leap_teleop.ros.signals import closed_at_shutdown
+
 DEFAULT_PERIOD_S = 1.0     # diagnostic_updater's own default
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR}
 
@@ -36,4 +38,11 @@ def update_every(updater, period_s=0.25):
     """A rospy.Timer calling updater.update() (which publishes once per ~diagnostic_period)
     every period_s, for a node whose own loop is a hot path that should not carry it (the
     sender); keep the timer referenced."""
-    return rospy.Timer(rospy.Duration.from_sec(period_s), lambda _event: updater.update())
+    return rospy.Timer(rospy.Duration.from_sec(period_s), lambda _event: update(updater))
+
+
+def update(updater):
+    """updater.update(), quiet when the node is shutting down: a timer's last call can race
+    the shutdown that closes /diagnostics ("publish() to a closed topic")."""
+    with closed_at_shutdown():
+        updater.update()

@@ -17,6 +17,7 @@ from leap_teleop.msg import Hand
 from leap_teleop.ros.latency_monitor import LatencyMonitor
 from leap_teleop.ros.markers import HandMarkerThrottle, latency_marker
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
+from leap_teleop.ros.signals import closed_at_shutdown
 
 PARAMS = {
     'hand_topics': Param(['leapmotion/hand_right', 'leapmotion/hand_left'],
@@ -56,9 +57,10 @@ class HandMarkersNode:
         now = rospy.get_time()
         lines = self.latency.board.notes(now)
         if lines or self.latency_shown:        # one DELETE once reports stop
-            self.pub.publish(MarkerArray([latency_marker(lines, self.p['latency_frame'],
-                                                         self.p['latency_position'], now,
-                                                         self.p['scale'])]))
+            with closed_at_shutdown():         # a last tick can race the shutdown
+                self.pub.publish(MarkerArray([latency_marker(
+                    lines, self.p['latency_frame'], self.p['latency_position'], now,
+                    self.p['scale'])]))
         self.latency_shown = bool(lines)
 
     def on_hand(self, msg):
