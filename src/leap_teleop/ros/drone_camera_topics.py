@@ -9,6 +9,7 @@ from sensor_msgs.srv import SetCameraInfo, SetCameraInfoResponse
 from leap_teleop.drone.cameras import CAMERAS
 from leap_teleop.drone.sim_runner import calibration_error
 from leap_teleop.ros.conversions import camera_info_msg, rgb_image_msg
+from leap_teleop.ros.signals import closed_at_shutdown
 
 
 class DroneCameraTopics:
@@ -39,9 +40,11 @@ class DroneCameraTopics:
 
     def publish(self, name, rgb, stamp, active):
         """Camera `name`'s picture (an RGB array) taken at `stamp`, also on the video
-        channel's topics when it is the `active` camera."""
+        channel's topics when it is the `active` camera. Called on the cameras' thread,
+        which may deliver one more picture while the node shuts down: that one is dropped."""
         msg, info = rgb_image_msg(rgb, stamp, self.frames[name]), self.info[name]
         info.header.stamp = stamp
-        for key in (name, None) if active else (name,):
-            self.image_pubs[key].publish(msg)
-            self.info_pubs[key].publish(info)
+        with closed_at_shutdown():
+            for key in (name, None) if active else (name,):
+                self.image_pubs[key].publish(msg)
+                self.info_pubs[key].publish(info)

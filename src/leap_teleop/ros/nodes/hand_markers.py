@@ -70,7 +70,8 @@ class HandMarkersNode:
             self.log.warn('bad-hand', 'hand_markers: skipping a Hand message: %s', e)
             return
         if out is not None:
-            self.pub.publish(out)
+            with closed_at_shutdown():         # a message can arrive while it shuts down
+                self.pub.publish(out)
 
 
 def main(argv=None):
