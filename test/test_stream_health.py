@@ -7,6 +7,7 @@ import sys
 
 import pytest
 
+from leap_teleop.control.sequence_gaps import SequenceGaps
 from leap_teleop.control.stream_health import StreamHealth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -138,9 +139,10 @@ from leap_teleop.ros.hand_subscription import HandSubscription
 
 rospy.init_node('stream_health_client')
 stream = InputStream(max_age=0.25, gap=1.0)
-refused = []
+refused, seqs = [], []
 
 def judge(msg):
+    seqs.append(msg.header.seq)
     why = stream.check(msg.header.stamp.to_sec(), rospy.get_time())
     refused.append(why is not None)
     return why
@@ -176,6 +178,7 @@ def phase(name, secs, delay=None):
                  'tail_refused': sum(verdicts[-20:])}
 
 phase('on_time', 1.5, 0.0)
+pub.impl.seq += 5                # five messages numbered and lost before this subscriber
 phase('late', 2.0, 0.6)          # every message 0.6 s late, as a standing backlog or a lagged
                                  # clock's baseline makes them look
 phase('on_time_again', 1.5, 0.0)
@@ -184,6 +187,7 @@ for c in pub.impl.connections:   # the publisher drops the connection and lives 
     c.close()
 phase('dropped', 2.0, 0.0)
 out['diagnostics'] = dict(sub.diagnostic_values())
+out['seq_span'] = seqs[-1] - seqs[0] + 1     # what was sent from the first message on
 print(json.dumps(out))
 '''
 
@@ -216,6 +220,11 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     assert out['dropped']['received'] - out['silent']['received'] > 50, out
     diag = out['diagnostics']
     assert diag['hand messages from /stream_health_client'] == diag['hand messages received']
+    # What never came: the five numbered and never sent at least (and what the dropped
+    # connection lost, if anything), and with what came, all sent from the first message on.
+    missed = int(diag['hand messages missed from /stream_health_client'])
+    assert missed == int(diag['hand messages missed (sequence gaps)']) >= 5, diag
+    assert int(diag['hand messages received']) + missed == out['seq_span'], (diag, out)
     assert int(diag['hand re-subscriptions']) == sum(
         out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent',
                                             'dropped'))
@@ -262,3 +271,13 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     sub._check()                               # the next check subscribes afresh
     assert len(made) == 1 and sub.sub is made[0]
     assert logs[-1] == 'client: re-subscribed to /hands'
+
+
+def test_sequence_gaps_count_what_each_publisher_sent_that_never_came():
+    gaps = SequenceGaps()
+    assert [gaps.add('/player', s) for s in (7, 8, 9, 12, 13)] == [0, 0, 0, 2, 0]
+    assert [gaps.add('/other', s) for s in (1, 3)] == [0, 1]   # counted per publisher
+    assert gaps.add('/player', 1) == 0          # numbers going back: a restarted publisher
+    assert gaps.add('/player', 5) == 3
+    assert dict(gaps.missed) == {'/player': 5, '/other': 1} and gaps.total() == 6
+    assert gaps.add('/player', 5) == 0 and gaps.total() == 6   # a repeat is no loss

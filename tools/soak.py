@@ -17,7 +17,9 @@ scales them by --rtf so that they keep their real-time wall tolerance. Measured:
 every node (after the first cycle vs the end), hand -> arm command and hand -> cmd_vel
 latency per cycle (wall clock) and its drift (median of the last cycles minus the
 first), lost messages (hand topics: sent vs received; joint_states, arm commands,
-navdata: sequence gaps), inputs the nodes rejected, pick and place and flight successes.
+navdata: sequence gaps; each consumer's own count of gaps in the player's numbering, in
+all and after the load burst), inputs the nodes rejected, pick and place and flight
+successes.
 Writes soak_results.json afresh (soak.rss_growth_pct, goal <= 5; soak.dropped_msgs =
 messages lost in transport, goal 0; soak.rejected_inputs = inputs the nodes refused as
 late / out of order / invalid; and the rest), as `make bench` writes its file: this
@@ -157,6 +159,7 @@ class SoakMonitor:
         from diagnostic_msgs.msg import DiagnosticArray
         self.diag_rejected = {}
         self.consumer_received, self.resubscriptions = {}, {}   # per consumer, their own count
+        self.consumer_missed = {}           # ... of the player's messages that never came
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
 
     def on_diag(self, msg):
@@ -167,6 +170,8 @@ class SoakMonitor:
                         self.diag_rejected[st.name] = int(kv.value)
                     elif kv.key == 'hand messages from %s' % PLAYER:
                         self.consumer_received[st.name] = int(kv.value)
+                    elif kv.key == 'hand messages missed from %s' % PLAYER:
+                        self.consumer_missed[st.name] = int(kv.value)
                     elif kv.key == 'hand re-subscriptions':
                         self.resubscriptions[st.name] = int(kv.value)
 
@@ -317,6 +322,12 @@ class LoadBurst:
         return list(range(self.ended_in_cycle + 1, cycles))
 
 
+def _per_consumer(by_status):
+    """{consumer: count} from {diagnostic status name: count} (CONSUMERS' order)."""
+    return {c: n for c in CONSUMERS for name, n in by_status.items()
+            if name.startswith(c + ':')}
+
+
 def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
         command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2):
     """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
@@ -409,7 +420,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         time.sleep(0.1)
     cell = load_config('ur10_dual_cell.yaml')
     master_uri = env['ROS_MASTER_URI']
-    rss, placed, flights = {}, [], 0
+    rss, placed, flights, missed_by_cycle = {}, [], 0, []
     wall0, sim0 = time.monotonic(), rospy.get_time()
     burst.start(lambda: mon.cycle)
     for cycle in range(cycles):
@@ -441,6 +452,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                 missed.append('%s %s' % (arm, 'no cube pose' if off is None else
                                          '%.0f mm from the tray centre' % (1e3 * off)))
         placed.append(ok)
+        with mon.lock:                  # as of each consumer's last /diagnostics (1 Hz)
+            missed_by_cycle.append(_per_consumer(mon.consumer_missed))
         with mon.lock:
             flights = sum(1 for c, s in mon.nav_states if s == 6)
         if cycle == 0 or cycle == cycles - 1 or cycle % 5 == 4:
@@ -484,6 +497,13 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         counts = [n for name, n in got.items() if name.startswith(consumer + ':')]
         lost_by_consumer[consumer] = sent[topic] - (counts[0] if counts else 0)
     dropped = sum(lost_inputs.values()) + sum(gaps.values()) + sum(lost_by_consumer.values())
+    # What the consumers saw missing in the player's numbering, and of it what went missing
+    # after the load burst (from the end of the cycle it ended in).
+    with mon.lock:
+        missed = _per_consumer(mon.consumer_missed)
+    after = burst.after(cycles)
+    before_after = missed_by_cycle[after[0] - 1] if after and after[0] > 0 else {}
+    missed_after = {c: n - before_after.get(c, 0) for c, n in missed.items()} if after else {}
     growth = {}
     for n, samples in rss.items():
         if len(samples) >= 2 and samples[0][1] > 0:
@@ -513,9 +533,10 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
     log('[soak] lost inputs (the monitor) %s, lost per consumer (their own counts) %s, '
         'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s'
         % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
+    log('[soak] missed per consumer (gaps in the player\'s numbering, their own counts) %s; '
+        'after the load burst %s' % (missed, missed_after))
     log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
         % (sum(placed), 2 * cycles, flights, cycles))
-    after = burst.after(cycles)
     # A cycle flew when the drone took off (the gesture topic) and the pilot steered it
     # from the hand (a moving cmd_vel after hand input; the hand topic is its own
     # connection, which can fail while the gestures still arrive).
@@ -530,6 +551,9 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'soak.rss_growth_pct': max(growth.values()) if growth else float('nan'),
         'soak.dropped_msgs': dropped,
         'soak.consumer_lost_msgs': sum(lost_by_consumer.values()),
+        'soak.consumer_missed_msgs': sum(missed.values()),
+        'soak.consumer_missed_after_burst_msgs': (sum(missed_after.values()) if after
+                                                  else float('nan')),
         'soak.resubscriptions': sum(resubscribed.values()),
         'soak.rejected_inputs': sum(rejected.values()),
         'soak.sim_minutes': sim / 60.0,
@@ -555,6 +579,11 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                              % (lost_inputs, lost_by_consumer, gaps),
         'soak.consumer_lost_msgs': 'hand messages the player sent minus what each consumer '
                                    'counted from it (its /diagnostics) %s' % lost_by_consumer,
+        'soak.consumer_missed_msgs': 'gaps in the header numbers of the player\'s hand '
+                                     'messages, each consumer\'s own count (its /diagnostics) '
+                                     '%s' % missed,
+        'soak.consumer_missed_after_burst_msgs': 'the same, counted from the end of the cycle '
+                                                 'the load burst ended in %s' % missed_after,
         'soak.resubscriptions': 'hand connections the consumers re-established %s'
                                 % resubscribed,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'

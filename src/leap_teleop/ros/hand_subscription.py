@@ -1,13 +1,14 @@
-"""A consumer's hand-input subscription: counts what arrives per publisher and
-re-establishes the connection when its input stays late, falls silent while a publisher
-is connected, or loses every publisher the master still lists (control.stream_health
-says when)."""
+"""A consumer's hand-input subscription: counts what arrives and what went missing (header
+sequence gaps) per publisher, and re-establishes the connection when its input stays late,
+falls silent while a publisher is connected, or loses every publisher the master still
+lists (control.stream_health says when)."""
 import collections
 import threading
 
 import rosgraph
 import rospy
 
+from leap_teleop.control.sequence_gaps import SequenceGaps
 from leap_teleop.control.stream_health import StreamHealth
 
 
@@ -24,6 +25,7 @@ class HandSubscription:
         self.node, self.queue_size = node, int(p['hand_queue_size'])
         self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
+        self.gaps = SequenceGaps()                     # what each publisher sent that never came
         self._lock = threading.Lock()
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
@@ -37,10 +39,11 @@ class HandSubscription:
                                 queue_size=self.queue_size, tcp_nodelay=True)
 
     def _on_message(self, msg):
-        header = getattr(msg, '_connection_header', None) or {}
-        self.received[header.get('callerid', '?')] += 1
+        caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
+        self.received[caller] += 1
         why = self.callback(msg)
         with self._lock:
+            self.gaps.add(caller, msg.header.seq)
             self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
 
     def _check(self, _event=None):
@@ -83,6 +86,11 @@ class HandSubscription:
 
     def diagnostic_values(self):
         counts = dict(self.received)        # a copy: the callback thread adds publishers
-        values = [('hand messages received', str(sum(counts.values())))]
-        values += [('hand messages from %s' % caller, str(n)) for caller, n in sorted(counts.items())]
+        with self._lock:
+            missed = dict(self.gaps.missed)
+        values = [('hand messages received', str(sum(counts.values()))),
+                  ('hand messages missed (sequence gaps)', str(sum(missed.values())))]
+        for caller, n in sorted(counts.items()):
+            values += [('hand messages from %s' % caller, str(n)),
+                       ('hand messages missed from %s' % caller, str(missed.get(caller, 0)))]
         return values + [('hand re-subscriptions', str(self.health.resubscriptions))]
