@@ -30,6 +30,11 @@ LIMITS = {
     'moving_again_speed': limit('the session goes on: a joint faster than this ...', 'rad/s',
                                 gt=0),
     'moving_again_timeout_s': limit('... within this of the resume', 's', gt=0),
+    'max_commands_while_stale': limit('commands received between the hold and the resume '
+                                      'status, at most: the hold\'s own and the resume\'s '
+                                      'first, each sent with its status on another '
+                                      'connection (under load they arrive out of order)',
+                                      ge=0),
 }
 
 
@@ -68,10 +73,13 @@ class FaultSenderStall(unittest.TestCase):
         states = [s.state for t, s in list(w.status) if t >= t_stop]
         self.assertNotIn('disarmed', states, 'a short stall disarmed the arm')
         self.assertNotIn('armed', states, 'the arm needed a new thumbs-up')
-        # Stale input moves nothing: from the hold until the resume, only the hold itself.
+        # Stale input moves nothing: from the hold until the resume the arm sends nothing
+        # but the hold itself (tracking, it sends one command per control period).
         cmds = list(w.arm_cmds)
-        during = [t for t, _ in cmds if t_hold + 0.05 < t < t_resume - 0.05]
-        self.assertEqual(during, [], 'arm commands while the input was stale')
+        during = [round(t - t_hold, 3) for t, _ in cmds if t_hold < t < t_resume]
+        self.assertLessEqual(len(during), lim.max_commands_while_stale,
+                             'arm commands while the input was stale (s after the hold; the '
+                             'resume %.3f s after it): %s' % (t_resume - t_hold, during))
         # No jump: the first commands after the resume start where the arm is.
         after = [(t, q) for t, q in cmds if t >= t_resume - 0.05][:10]
         self.assertTrue(after, 'no command after the resume')
