@@ -10,11 +10,11 @@ import time
 
 class HeldOneShot:
     """send(cmd) publishes a takeoff / land Command at once (publish(cmd, None)) when
-    connected(kind) says its topic has a subscriber, else holds it (a newer one replaces it: the latest gesture
-    wins); send_held(), called often on the same thread, publishes it once connected
-    (publish(cmd, seconds it was held)), and
-    drops a takeoff held longer than takeoff_hold or that takeoff_wanted() no longer
-    allows. Counts: held, dropped (takeoffs)."""
+    connected(kind) says its topic has a subscriber, else holds it (a newer one replaces
+    it: the latest gesture wins); send_held(), called often on the same thread, publishes
+    it once connected (publish(cmd, seconds it was held)), and drops a takeoff held longer
+    than takeoff_hold or that takeoff_wanted() no longer allows. Counts: held, dropped
+    (takeoffs)."""
 
     def __init__(self, publish, connected, takeoff_hold, takeoff_wanted=None,
                  clock=time.monotonic, warn=None):
