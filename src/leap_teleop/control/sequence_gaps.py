@@ -1,8 +1,9 @@
 """The messages a consumer never got, counted from their header sequence numbers (no ROS).
 
-rospy numbers the messages a process publishes on a topic (header.seq: one count per topic
-and process, whatever the connection), so a jump in the numbers of one publisher's
-messages is what this consumer lost on the way: in the publisher's queue, a socket, its
+rospy numbers the messages a process publishes on a topic while any subscriber listens
+(header.seq: one count per topic and process, whatever the connection), so a jump in the
+numbers of one publisher's messages is what this consumer lost on the way, or missed
+while others got it: in the publisher's queue, a socket, its
 own subscription queue, or a connection re-made in between. A number that goes back is a
 restarted publisher (or a looping bag): a new count, nothing lost. roscpp keeps the number
 the message carries, so `rosbag play` shows the recording's own gaps, and a publisher
