@@ -30,11 +30,9 @@ LIMITS = {
     'moving_again_speed': limit('the session goes on: a joint faster than this ...', 'rad/s',
                                 gt=0),
     'moving_again_timeout_s': limit('... within this of the resume', 's', gt=0),
-    'max_commands_while_stale': limit('commands received between the hold and the resume '
-                                      'status, at most: the hold\'s own and the resume\'s '
-                                      'first, each sent with its status on another '
-                                      'connection (under load they arrive out of order)',
-                                      ge=0),
+    'min_silence_fraction': limit('the command stream falls silent between the hold and '
+                                  'the resume for at least this share of the time between '
+                                  'their status messages', gt=0, le=1),
 }
 
 
@@ -74,12 +72,20 @@ class FaultSenderStall(unittest.TestCase):
         self.assertNotIn('disarmed', states, 'a short stall disarmed the arm')
         self.assertNotIn('armed', states, 'the arm needed a new thumbs-up')
         # Stale input moves nothing: from the hold until the resume the arm sends nothing
-        # but the hold itself (tracking, it sends one command per control period).
+        # but the hold itself (tracking, it sends a command every control period). Judged
+        # as a silence in the command stream, not by the statuses' receipt times: commands
+        # and statuses come on two connections, which a loaded machine delays differently.
         cmds = list(w.arm_cmds)
-        during = [round(t - t_hold, 3) for t, _ in cmds if t_hold < t < t_resume]
-        self.assertLessEqual(len(during), lim.max_commands_while_stale,
-                             'arm commands while the input was stale (s after the hold; the '
-                             'resume %.3f s after it): %s' % (t_resume - t_hold, during))
+        near = [t for t, _ in cmds if t_hold - 1.0 < t < t_resume + 1.0]
+        gaps = [(b - a, a, b) for a, b in zip(near, near[1:]) if a < t_resume and b > t_hold]
+        silence, start, end = max(gaps) if gaps else (0.0, t_hold, t_hold)
+        rospy.loginfo('FAULT sender stall: commands silent for %.3f s of the %.3f s from hold '
+                      'to resume', silence, t_resume - t_hold)
+        self.assertGreaterEqual(
+            silence, lim.min_silence_fraction * (t_resume - t_hold),
+            'the arm went on commanding while the input was stale: its longest silence around '
+            'the stall %.3f s (from %.3f to %.3f s after the hold status), hold to resume '
+            '%.3f s' % (silence, start - t_hold, end - t_hold, t_resume - t_hold))
         # No jump: the first commands after the resume start where the arm is.
         after = [(t, q) for t, q in cmds if t >= t_resume - 0.05][:10]
         self.assertTrue(after, 'no command after the resume')
