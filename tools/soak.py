@@ -420,11 +420,13 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         time.sleep(0.1)
     cell = load_config('ur10_dual_cell.yaml')
     master_uri = env['ROS_MASTER_URI']
-    rss, placed, flights, missed_by_cycle = {}, [], 0, []
+    rss, placed, flights, missed_at_start = {}, [], 0, []
     wall0, sim0 = time.monotonic(), rospy.get_time()
     burst.start(lambda: mon.cycle)
     for cycle in range(cycles):
         mon.cycle = cycle
+        with mon.lock:                  # as of each consumer's last /diagnostics (1 Hz)
+            missed_at_start.append(_per_consumer(mon.consumer_missed))
         reset()
         t0 = rospy.get_time()
         for t, topic, msg in session:
@@ -452,8 +454,6 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                 missed.append('%s %s' % (arm, 'no cube pose' if off is None else
                                          '%.0f mm from the tray centre' % (1e3 * off)))
         placed.append(ok)
-        with mon.lock:                  # as of each consumer's last /diagnostics (1 Hz)
-            missed_by_cycle.append(_per_consumer(mon.consumer_missed))
         with mon.lock:
             flights = sum(1 for c, s in mon.nav_states if s == 6)
         if cycle == 0 or cycle == cycles - 1 or cycle % 5 == 4:
@@ -498,12 +498,13 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         lost_by_consumer[consumer] = sent[topic] - (counts[0] if counts else 0)
     dropped = sum(lost_inputs.values()) + sum(gaps.values()) + sum(lost_by_consumer.values())
     # What the consumers saw missing in the player's numbering, and of it what went missing
-    # after the load burst (from the end of the cycle it ended in).
+    # after the load burst (from the start of the first cycle after it).
     with mon.lock:
-        missed = _per_consumer(mon.consumer_missed)
+        missed_msgs = _per_consumer(mon.consumer_missed)
     after = burst.after(cycles)
-    before_after = missed_by_cycle[after[0] - 1] if after and after[0] > 0 else {}
-    missed_after = {c: n - before_after.get(c, 0) for c, n in missed.items()} if after else {}
+    baseline = missed_at_start[after[0]] if after else {}
+    missed_after = ({c: n - baseline.get(c, 0) for c, n in missed_msgs.items()} if after
+                    else {})
     growth = {}
     for n, samples in rss.items():
         if len(samples) >= 2 and samples[0][1] > 0:
@@ -534,7 +535,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s'
         % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
     log('[soak] missed per consumer (gaps in the player\'s numbering, their own counts) %s; '
-        'after the load burst %s' % (missed, missed_after))
+        'after the load burst %s' % (missed_msgs, missed_after))
     log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
         % (sum(placed), 2 * cycles, flights, cycles))
     # A cycle flew when the drone took off (the gesture topic) and the pilot steered it
@@ -551,7 +552,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'soak.rss_growth_pct': max(growth.values()) if growth else float('nan'),
         'soak.dropped_msgs': dropped,
         'soak.consumer_lost_msgs': sum(lost_by_consumer.values()),
-        'soak.consumer_missed_msgs': sum(missed.values()),
+        'soak.consumer_missed_msgs': sum(missed_msgs.values()),
         'soak.consumer_missed_after_burst_msgs': (sum(missed_after.values()) if after
                                                   else float('nan')),
         'soak.resubscriptions': sum(resubscribed.values()),
@@ -581,9 +582,10 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                                    'counted from it (its /diagnostics) %s' % lost_by_consumer,
         'soak.consumer_missed_msgs': 'gaps in the header numbers of the player\'s hand '
                                      'messages, each consumer\'s own count (its /diagnostics) '
-                                     '%s' % missed,
-        'soak.consumer_missed_after_burst_msgs': 'the same, counted from the end of the cycle '
-                                                 'the load burst ended in %s' % missed_after,
+                                     '%s' % missed_msgs,
+        'soak.consumer_missed_after_burst_msgs': 'the same, counted from the start of the '
+                                                 'first cycle after the load burst (every '
+                                                 'cycle without one) %s' % missed_after,
         'soak.resubscriptions': 'hand connections the consumers re-established %s'
                                 % resubscribed,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'

@@ -56,7 +56,8 @@ class InputAgeWindow:
         return age
 
     def clear(self):
-        """Forget every sample (on the writer's thread)."""
+        """Forget every sample (never beside add(): on the writer's thread or under its
+        lock)."""
         self._added = 0
 
     def ages(self, now):
@@ -132,7 +133,7 @@ class CommandWaits:
             window.add(applied, received)
 
     def clear(self):
-        """Forget every robot's samples (on the writer's thread)."""
+        """Forget every robot's samples (never beside add())."""
         for w in self.windows.values():
             w.clear()
 

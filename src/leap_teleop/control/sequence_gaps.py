@@ -4,11 +4,16 @@ rospy numbers the messages a process publishes on a topic while any subscriber l
 (header.seq: one count per topic and process, whatever the connection), so a jump in the
 numbers of one publisher's messages is what this consumer lost on the way, or missed
 while others got it: in the publisher's queue, a socket, its own subscription queue, or
-a connection re-made in between. A number that goes back is a restarted publisher (or a
-looping bag): a new count, nothing lost. roscpp keeps the number the message carries, so
+a connection re-made in between. A number that goes back to 1, or far back, is a
+restarted publisher (or a looping bag): a new count, nothing lost. One that goes back a
+little is a straggler (an old connection's last message, delivered after the new one's
+first): ignored. roscpp keeps the number the message carries, so
 `rosbag play` shows the recording's own gaps, and a publisher that leaves it 0 shows none.
 """
 import collections
+
+# Further back than any subscription queue holds (hand_queue_size <= 2000): a new count.
+RESTART_DROP = 4000
 
 
 class SequenceGaps:
@@ -20,8 +25,12 @@ class SequenceGaps:
         """One message from `publisher` numbered `seq`; returns how many were missed
         just before it."""
         last = self.last.get(publisher)
+        if last is not None and seq <= last:
+            if seq <= 1 or last - seq > RESTART_DROP:
+                self.last[publisher] = seq          # a restarted publisher
+            return 0
         self.last[publisher] = seq
-        if last is None or seq <= last:
+        if last is None:
             return 0
         gap = seq - last - 1
         if gap:

@@ -41,9 +41,10 @@ class HandSubscription:
     def _on_message(self, msg):
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
-        why = self.callback(msg)
         with self._lock:
             self.gaps.add(caller, msg.header.seq)
+        why = self.callback(msg)
+        with self._lock:
             self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
 
     def _check(self, _event=None):

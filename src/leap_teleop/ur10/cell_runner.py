@@ -39,7 +39,7 @@ RUNNER_PARAMS = {
 }
 
 MAX_PENDING = 100               # commands queued for the physics loop (bounded)
-TROUBLE_S = 10.0                # s the cell's status stays WARN after a dropped or refused command
+TROUBLE_S = 10.0                # wall s the cell's status stays WARN after a dropped or refused command
 SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
 # Command kind: (topic in the arm's namespace, the joints a command names).
 KINDS = {'arm': ('arm_controller/command', tuple(JOINT_NAMES)),
@@ -153,10 +153,12 @@ class CellRunner:
 
     def report(self, rejected):
         """The cell's /diagnostics (level, summary, values); `rejected` counts the commands
-        refused so far (the node's and the cell's). WARN for TROUBLE_S after a command was
-        refused or dropped: a count alone is easy to miss in a monitor."""
+        refused so far (the node's and the cell's). WARN for TROUBLE_S (wall clock) after a
+        command was refused or dropped: a count alone is easy to miss in a monitor. One
+        caller thread (the diagnostics timer)."""
         now = self.command_waits.clock()
-        counts = (rejected, self.dropped_commands)
+        dropped = self.dropped_commands          # the subscriber threads count on
+        counts = (rejected, dropped)
         if counts != self._counts_seen:
             self._counts_seen, self._trouble_at = counts, now
         summary = 'arms %s' % ', '.join(self.cell.arm_names)
@@ -165,7 +167,7 @@ class CellRunner:
             summary += '; commands refused or dropped in the last %g s' % TROUBLE_S
         return ('warn' if trouble else 'ok'), summary, [
             ('commands rejected', rejected),
-            ('commands dropped (physics loop behind)', self.dropped_commands)]
+            ('commands dropped (physics loop behind)', dropped)]
 
     def snapshot(self):
         """The path of a PNG of the cell now. Only the poses are copied under the physics

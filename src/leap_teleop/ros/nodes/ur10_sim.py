@@ -9,7 +9,7 @@ yet (launch files set it first, for robot_state_publisher). Private: ~object_pos
 the PNG's path). A malformed command is rejected with a rate-limited warning and the arm keeps its
 current trajectory (as ros_control's JointTrajectoryController). /diagnostics: per arm, how long
 commands wait for the physics step that applies them; commands rejected or dropped (WARN for
-10 s after one). With
+10 wall s after one). With
 /use_sim_time true it publishes /clock and can run faster than real time (~realtime_factor,
 0 = as fast as possible). Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's
 description and exits.
