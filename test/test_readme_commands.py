@@ -117,6 +117,8 @@ NOT_RUN = {
         'checks its options and results file',
     'python -m tools.soak --minutes 5 --burst-minutes 1': 'the same, five simulated minutes '
         '(~6 wall minutes); test_bench_ros_processes.py checks its options and results file',
+    'python -m tools.soak --minutes 4 --burst-minutes 1 --hand-queue 50': 'the same with the '
+        'consumers\' hand queue named (the reliability page\'s series)',
     'make loaded': 'the demo and every rostest again, beside two CPU hogs (~15 wall '
         'minutes); the integrator runs it, test_under_load.py checks tools.under_load',
     'python -m tools.under_load --hogs 2 -- make demo': 'part of make loaded; '
