@@ -7,8 +7,8 @@ while others got it: in the publisher's queue, a socket, its own subscription qu
 a connection re-made in between. A number that goes back to 1, or far back, is a
 restarted publisher (or a looping bag): a new count, nothing lost. One that goes back a
 little is a straggler (an old connection's last message, delivered after the new one's
-first): ignored. roscpp keeps the number the message carries, so
-`rosbag play` shows the recording's own gaps, and a publisher that leaves it 0 shows none.
+first): ignored. roscpp keeps the number the message carries, so `rosbag play` shows the
+recording's own gaps, and a publisher that leaves it 0 shows none.
 """
 import collections
 
