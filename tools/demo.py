@@ -195,8 +195,11 @@ def evaluate_drone(mon):
     names = _compress(mon.drone_states)
     key = [s for s in mon.drone_states if s in (2, 6, 9, 8)]
     ok = key == [2, 6, 9, 8, 2] and 4 in mon.drone_states
+    # The gestures the drone's sender recognized: a flight without its flip says whether
+    # the circle was never seen or was seen and not acted on.
     result = {'success': bool(ok), 'state_sequence': names,
-              'navdata_states': list(mon.drone_states)}
+              'navdata_states': list(mon.drone_states),
+              'gestures': [name for _, name in mon.drone_gestures]}
     if mon.drone_odom is not None:
         p = mon.drone_odom.pose.pose.position
         result['final_xyz'] = [round(p.x, 3), round(p.y, 3), round(p.z, 3)]
@@ -359,6 +362,8 @@ def report(summary, out):
         details = ' -> '.join(task.get('state_sequence', [])) or task.get('cube', '')
         print('%-26s %-8s %-12s %s' % (name, 'yes' if task['success'] else 'NO',
                                       '%.3f' % err if err is not None else '-', details))
+        if not task['success'] and 'gestures' in task:
+            print('%-26s %-8s %-12s gestures: %s' % ('', '', '', ', '.join(task['gestures'])))
     print('\nwrote %s/summary.json and %s' % (out, ', '.join(summary.get('gifs', [])) or 'no GIFs'))
     ok = all(t['success'] for t in summary['tasks'].values())
     print('demo %s' % ('succeeded' if ok else 'FAILED'))
