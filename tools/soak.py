@@ -492,10 +492,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         resubscribed = dict(mon.resubscriptions)
     # What each consumer itself received from the player, against what the player sent on
     # its topic (a consumer that never reported counts as having received nothing).
-    lost_by_consumer = {}
-    for consumer, topic in CONSUMERS.items():
-        counts = [n for name, n in got.items() if name.startswith(consumer + ':')]
-        lost_by_consumer[consumer] = sent[topic] - (counts[0] if counts else 0)
+    got = _per_consumer(got)
+    lost_by_consumer = {c: sent[topic] - got.get(c, 0) for c, topic in CONSUMERS.items()}
     dropped = sum(lost_inputs.values()) + sum(gaps.values()) + sum(lost_by_consumer.values())
     # What the consumers saw missing in the player's numbering, and of it what went missing
     # after the load burst (from the start of the first cycle after it).

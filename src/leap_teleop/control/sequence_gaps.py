@@ -36,6 +36,3 @@ class SequenceGaps:
         if gap:
             self.missed[publisher] += gap
         return gap
-
-    def total(self):
-        return sum(self.missed.values())
