@@ -181,6 +181,30 @@ def test_palm_circle_of_the_drone_flight_fires_once_it_is_drawn_with_its_radius(
     assert e.source == 'palm' and e.value == pytest.approx(0.035, abs=0.0015)
 
 
+@pytest.mark.parametrize('pause_s', [0.02, 0.05, 0.1, 0.3])
+def test_a_pause_while_drawing_the_drone_flight_circle_keeps_it(pause_s):
+    # The hand stops for pause_s (no frames) at points spread over the circle: a starved
+    # sender whose script waits, or a tracker that drops out. Stretches of the path chosen
+    # in steps of a fifth of max_s lost this circle for pauses of 20 to 100 ms.
+    import os
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config',
+                          'gestures', 'drone_flight.yaml')
+    frames = list(ScriptedSource(script, realtime=False).frames())
+    t0 = frames[0].timestamp
+    for pause_at in np.arange(12.8, 14.3, 0.1):
+        rec, circles = GestureRecognizer(), []
+        for f in frames:
+            t = f.timestamp - t0 + (pause_s if f.timestamp - t0 >= pause_at else 0.0)
+            hand = f.hand('right')
+            if hand is None:
+                rec.reset()
+                continue
+            circles += [e.gesture for e in rec.update(hand, t0 + t).events
+                        if e.gesture.startswith('circle')]
+        assert circles == ['circle_cw'], 'paused %.2f s at %.1f s: %s' % (pause_s, pause_at,
+                                                                         circles)
+
+
 def test_fit_circle_recovers_a_noisy_tilted_arc():
     from leap_teleop.hands.gestures import fit_circle
     rng = np.random.default_rng(1)
