@@ -60,14 +60,16 @@ class DemoMonitor:
         self.hand_events = {}             # side -> (time, gesture) of the latest event
         self.arm_states = {arm: [] for arm in UR10_TASKS}
         self.cubes = {}
-        self.first_frame, self.last_frame = {}, {}
+        self.first_frame = {}
         from leap_teleop.msg import Hand, leapcobotright
         if 'ur10' in tasks:
             rospy.Subscriber('/leapmotion/data_right', leapcobotright,
-                             lambda m: self._on_frame('ur10'), queue_size=1)
+                             lambda m: self.first_frame.setdefault('ur10', time.monotonic()),
+                             queue_size=1)
         if 'drone' in tasks:
             rospy.Subscriber('/drone/leapmotion/hand_right', Hand,
-                             lambda m: self._on_frame('drone'), queue_size=1)
+                             lambda m: self.first_frame.setdefault('drone', time.monotonic()),
+                             queue_size=1)
         if 'drone' in tasks:
             from sensor_msgs.msg import Image
 
@@ -92,11 +94,6 @@ class DemoMonitor:
             for arm in UR10_TASKS:
                 rospy.Subscriber('/%s/ur10_arm/status' % arm, ArmStatus,
                                  lambda m, a=arm: self._on_arm(a, m), queue_size=20)
-
-    def _on_frame(self, task):
-        now = time.monotonic()
-        self.first_frame.setdefault(task, now)
-        self.last_frame[task] = now
 
     def _on_nav(self, msg):
         if not self.drone_states or self.drone_states[-1] != msg.state:
@@ -283,11 +280,8 @@ def run_demo(tasks, durations):
     next_shot, last_print = t0, t0
     while True:
         now = time.monotonic()
-        # Each session runs from its sender's first frame for its script's duration, longer
-        # when a starved sender paused its script (until its frames stop); the demo ends
-        # when all are over.
-        ends = [max(mon.first_frame.get(task, now) + d, mon.last_frame.get(task, now))
-                + SETTLE_S for task, d in durations.items()]
+        # Each session runs from its sender's first frame; the demo ends when all are over.
+        ends = [mon.first_frame.get(task, now) + d + SETTLE_S for task, d in durations.items()]
         if now >= max(ends) or now - t0 > MAX_WAIT_S:
             break
         if now >= next_shot:
