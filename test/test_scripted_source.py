@@ -74,46 +74,6 @@ def test_realtime_pacing_matches_the_rate():
     assert 0.45 < elapsed < 1.0
 
 
-MOVING = {'rate_hz': 100, 'hands': {'right': [
-    {'pose': 'open', 'palm': [0, 200, 0], 'duration': 0.01},
-    {'pose': 'open', 'palm': [100, 200, 0], 'duration': 1.0}]}}     # 100 mm/s
-
-
-def read_with_a_stall(stall_s, after=10):
-    """Frames of MOVING read live by a reader that stalls once: (source, stamps, palm x,
-    wall time each frame was received)."""
-    source = ScriptedSource(GestureScript(MOVING), realtime=True)
-    out = []
-    for f in source.frames():
-        out.append((f.timestamp, f.hand('right').palm_position[0], time.time()))
-        if len(out) == after:
-            time.sleep(stall_s)
-    stamps, xs, received = (np.array(v) for v in zip(*out))
-    return source, stamps, xs, received
-
-
-def test_a_short_stall_is_caught_up_with_the_frames_spacing_kept():
-    source, stamps, xs, received = read_with_a_stall(0.04)
-    assert source.pauses == 0 and len(xs) == 101
-    assert np.all(np.diff(stamps) > 0)
-    # the catch-up burst keeps the motion's speed in its stamps (not one instant)
-    speed = (np.diff(xs) / np.diff(stamps))[2:]          # from when the palm moves
-    assert np.all((speed > 40) & (speed < 250)), [
-        (i, round(v)) for i, v in enumerate(speed) if not 40 < v < 250]
-    assert received[10] - stamps[10] > 0.025             # stamped near its slot
-    assert np.all(received[-10:] - stamps[-10:] < 0.05)  # on time again
-
-
-def test_a_long_stall_pauses_the_script_instead_of_a_backlog():
-    source, stamps, xs, received = read_with_a_stall(0.3)
-    assert source.pauses == 1 and len(xs) == 101         # nothing skipped
-    assert np.all(np.diff(stamps) > 0)
-    # the hand waited: no jump in the path, fresh stamps, a 0.3 s silence
-    assert np.all(np.abs(np.diff(xs)[2:] - 1.0) < 0.01)
-    assert np.all(received - stamps < 0.05)
-    assert 0.28 < stamps[10] - stamps[9] < 0.6
-
-
 def test_loop_restarts_and_stop_ends_it():
     src = ScriptedSource(GestureScript({'hands': {'right': [{'pose': 'fist', 'duration': 0.1}]}}),
                          rate_hz=100, realtime=False, loop=True)

@@ -32,9 +32,6 @@ from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
 DEFAULT_PALM = (0.0, 200.0, 0.0)
-# Live pacing: a frame due longer ago than this pauses the script (see frames()); shorter
-# delays are caught up. Well inside the consumers' input age limits.
-MAX_CATCH_UP_S = 0.1
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
 
 
@@ -183,7 +180,6 @@ class ScriptedSource(HandSource):
         self.noise_mm = script.noise_mm if noise_mm is None else float(noise_mm)
         self._rng = np.random.default_rng(script.seed if seed is None else seed)
         self._clock = clock
-        self.pauses = 0              # live pacing: times the script waited for its reader
 
     def frames(self):
         period = 1.0 / self.rate_hz
@@ -195,15 +191,9 @@ class ScriptedSource(HandSource):
             if i >= n_frames and not self.loop:
                 return
             if self.realtime:
-                late = time.monotonic() - (t0_mono + k * period)
-                if late < 0:
-                    time.sleep(-late)
-                elif late > MAX_CATCH_UP_S:
-                    # A stalled reader (a starved process): the scripted hand waits for
-                    # it, as a performer would, instead of replaying the backlog as old
-                    # frames or skipping part of the gesture. Readers see a silence.
-                    self.pauses += 1
-                    t0_mono += late
+                delay = t0_mono + k * period - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
             script_t = i * period
             hands = []
             for side in SIDES:
@@ -213,15 +203,8 @@ class ScriptedSource(HandSource):
                         hand.palm_position = hand.palm_position + self._rng.normal(
                             0.0, self.noise_mm, 3)
                     hands.append(hand)
-            if self.realtime:
-                # Stamped when complete, as a device would, but never more than half a
-                # period after its slot: a short catch-up keeps its frames' spacing
-                # (stamping them all with one time squeezes the motion into an instant,
-                # which breaks what is judged over time, a circle), and two stamps stay
-                # at least half a period apart.
-                late = time.monotonic() - (t0_mono + k * period)
-                stamp = self._clock() - max(0.0, late - 0.5 * period)
-            else:
-                stamp = t0_wall + k * period      # fast-as-possible: virtual time
+            # Live pacing stamps the moment the frame is complete, as a device would;
+            # fast-as-possible runs keep the ideal grid (their time is virtual).
+            stamp = self._clock() if self.realtime else t0_wall + k * period
             yield Frame(id=k + 1, timestamp=stamp, hands=hands)
             k += 1

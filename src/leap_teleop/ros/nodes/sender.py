@@ -82,9 +82,7 @@ def main(argv=None):
     if interface.error is not None:
         rospy.logerr('sender: the hand source failed: %s', interface.error)
     if interface.finished.is_set() and not rospy.is_shutdown():
-        pauses = getattr(interface.source, 'pauses', 0)
-        rospy.loginfo('sender: source ended after %d frames%s', interface.frames_seen,
-                      ' (the script waited for this node %d times)' % pauses if pauses else '')
+        rospy.loginfo('sender: source ended after %d frames', interface.frames_seen)
         if p['shutdown_on_end']:
             rospy.sleep(0.5)   # let subscribers drain the last frames
             rospy.signal_shutdown('source ended')
