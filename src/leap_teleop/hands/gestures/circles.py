@@ -69,7 +69,7 @@ CIRCLE_R_MIN = 25.0
 PALM_SPACING = 2.0                 # mm, path resampling (the palm is noisier)
 TIP_SPACING = 1.0
 # Stretches looked at, as fractions of rules.max_s. Steps of a tenth: with fifths, a loop
-# that just closes within one stretch was missed when its hand paused for 20 ms.
+# that just closes within one stretch was lost to a 20-100 ms pause of the input.
 SPAN_FRACTIONS = (0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 # A hand that rolls or pitches swings its fingertips round loops with the fingers still:
 # a drawn fingertip circle keeps the palm facing one way (largest angle between palm
