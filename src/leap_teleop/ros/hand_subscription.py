@@ -41,10 +41,9 @@ class HandSubscription:
     def _on_message(self, msg):
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
-        with self._lock:
-            self.gaps.add(caller, msg.header.seq)
         why = self.callback(msg)
-        with self._lock:
+        with self._lock:                 # one hold per message: this is every hand message
+            self.gaps.add(caller, msg.header.seq)
             self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
 
     def _check(self, _event=None):
