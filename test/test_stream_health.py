@@ -50,54 +50,6 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     assert h.resubscriptions == 2
 
 
-def feed_ages(health, t0, t1, age_at, step=0.01):
-    """Late messages every `step` s from t0 to t1, each `age_at(t)` s old."""
-    t = t0
-    while t < t1:
-        health.on_message(t, True, age_at(t))
-        t += step
-
-
-def test_a_standing_backlog_asks_even_with_drain_steps_on():
-    # the same age on every message (the soak's 0.61 s for minutes), a few ms of jitter
-    h = StreamHealth(0.5, 2.0, drain_step=0.05)
-    feed_ages(h, 0.0, 0.49, lambda t: 0.61 + 0.004 * ((t * 100) % 3))
-    assert h.due(0.49, 1) is None
-    feed_ages(h, 0.49, 0.51, lambda t: 0.61)
-    assert (h.due(0.51, 1) or '').startswith('every message late for 0.5')
-
-
-def test_a_growing_backlog_asks():
-    # a consumer falling further behind: its messages only get older
-    h = StreamHealth(0.5, 2.0, drain_step=0.05)
-    feed_ages(h, 0.0, 0.51, lambda t: 0.3 + 0.5 * t)
-    assert h.due(0.51, 1)
-
-
-def test_a_draining_backlog_is_left_to_drain():
-    # a starved consumer: 0.2 s without CPU (its messages age), then it reads its queue
-    # (their age falls); late throughout, but a new connection would lose its queue
-    h = StreamHealth(0.5, 2.0, drain_step=0.05)
-
-    def age(t):
-        return 0.3 + (t % 0.3 if t % 0.3 < 0.2 else 0.2 - 2.0 * (t % 0.3 - 0.2))
-    feed_ages(h, 0.0, 3.0, age)
-    assert all(h.due(0.5 + k / 10.0, 1) is None for k in range(26))
-    # it stops draining (stuck at one age, from 3.0 s): asked 0.5 s after the last fall
-    feed_ages(h, 3.0, 3.4, lambda t: 0.45)
-    assert h.due(3.4, 1) is None
-    feed_ages(h, 3.4, 3.5, lambda t: 0.45)
-    assert h.due(3.5, 1)
-    assert h.resubscriptions == 0
-
-
-def test_drain_steps_off_or_unstamped_messages_keep_the_plain_late_time():
-    for h, ages in ((StreamHealth(0.5, 2.0), lambda t: 1.0 - t),
-                    (StreamHealth(0.5, 2.0, drain_step=0.05), lambda t: None)):
-        feed_ages(h, 0.0, 0.51, ages)
-        assert h.due(0.51, 1), h.drain_step
-
-
 def test_silence_after_input_asks_once_and_only_with_a_publisher():
     h = StreamHealth(0.5, 2.0)
     assert h.due(0.0, 1) is None and h.due(30.0, 1) is None    # never heard: a start-up wait
@@ -198,7 +150,7 @@ def judge(msg):
 pub = rospy.Publisher('hands', Hand, queue_size=100, tcp_nodelay=True)
 sub = HandSubscription('hands', Hand, judge, 'client',
                        {'resubscribe_after': 0.5, 'resubscribe_silent_after': 0.5,
-                        'resubscribe_drain_step': 0.05, 'hand_queue_size': 5}, stream.reset)
+                        'hand_queue_size': 5}, stream.reset)
 deadline = time.monotonic() + 20
 while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
     time.sleep(0.05)

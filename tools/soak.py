@@ -69,7 +69,6 @@ LAUNCH = """<launch>
   <param name="ur10_1/ur10_arm/max_input_age" value="{max_age}"/>
   <param name="ur10_1/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
   <param name="ur10_1/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
-  <param name="ur10_1/ur10_arm/resubscribe_drain_step" value="{resubscribe_drain_step}"/>
   <param name="ur10_1/ur10_arm/hand_queue_size" value="{hand_queue_size}"/>
   <param name="ur10_1/ur10_arm/command_queue_size" value="{command_queue_size}"/>
   <param name="ur10_2/ur10_arm/input_timeout" value="{input_timeout}"/>
@@ -77,7 +76,6 @@ LAUNCH = """<launch>
   <param name="ur10_2/ur10_arm/max_input_age" value="{max_age}"/>
   <param name="ur10_2/ur10_arm/resubscribe_after" value="{resubscribe_after}"/>
   <param name="ur10_2/ur10_arm/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
-  <param name="ur10_2/ur10_arm/resubscribe_drain_step" value="{resubscribe_drain_step}"/>
   <param name="ur10_2/ur10_arm/hand_queue_size" value="{hand_queue_size}"/>
   <param name="ur10_2/ur10_arm/command_queue_size" value="{command_queue_size}"/>
   <param name="ur10_sim/joint_states_queue_size" value="{joint_states_queue_size}"/>
@@ -90,7 +88,6 @@ LAUNCH = """<launch>
     <param name="drone_pilot/max_input_age" value="{max_age}"/>
     <param name="drone_pilot/resubscribe_after" value="{resubscribe_after}"/>
     <param name="drone_pilot/resubscribe_silent_after" value="{resubscribe_silent_after}"/>
-    <param name="drone_pilot/resubscribe_drain_step" value="{resubscribe_drain_step}"/>
     <param name="drone_pilot/hand_queue_size" value="{hand_queue_size}"/>
     <node pkg="leap_teleop" type="drone_pilot.py" name="drone_pilot"/>
     <node pkg="leap_teleop" type="ardrone_sim.py" name="ardrone_sim">
@@ -332,13 +329,12 @@ def _per_consumer(by_status):
 
 
 def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
-        command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2,
-        drain_step=0.05):
+        command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2):
     """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
     the player's publisher queue per connection; hand_queue, command_queue,
     joint_states_queue: the nodes' ~hand_queue_size, ~command_queue_size (arm nodes),
     ~joint_states_queue_size (simulator); a load burst (LoadBurst) of burst_minutes with
-    burst_hogs; drain_step: the consumers' ~resubscribe_drain_step (0 = off)."""
+    burst_hogs."""
     from leap_teleop.ros.node import package_path
     from tools.bench.ros_processes import ros_master
     with ros_master() as env:
@@ -352,7 +348,6 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
                                   resubscribe_after=0.5 * rtf,
                                   # longer than the pause between two cycles
                                   resubscribe_silent_after=8.0 * rtf,
-                                  resubscribe_drain_step=drain_step * rtf,
                                   hand_queue_size=hand_queue,
                                   command_queue_size=command_queue,
                                   joint_states_queue_size=joint_states_queue))
@@ -635,9 +630,6 @@ def main(argv=None):
                     help='load burst in the first wall minutes: CPU hogs and a second ROS '
                          'graph (default 0: none)')
     ap.add_argument('--burst-hogs', type=int, default=2, help='CPU hogs in the burst')
-    ap.add_argument('--drain-step', type=float, default=0.05,
-                    help='the consumers\' ~resubscribe_drain_step, s (default 0.05, the '
-                         'nodes\' default; 0: re-subscribe a late stream even while it drains)')
     ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
     for name, value, lo, hi in (('--player-queue', args.player_queue, 1, 100000),
@@ -645,15 +637,14 @@ def main(argv=None):
                                 ('--command-queue', args.command_queue, 1, 2000),
                                 ('--joint-states-queue', args.joint_states_queue, 1, 2000),
                                 ('--burst-minutes', args.burst_minutes, 0.0, 60.0),
-                                ('--burst-hogs', args.burst_hogs, 0, 16),
-                                ('--drain-step', args.drain_step, 0.0, 10.0)):
+                                ('--burst-hogs', args.burst_hogs, 0, 16)):
         if not lo <= value <= hi:
             ap.error('%s must be between %g and %g, not %g' % (name, lo, hi, value))
     run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
                 'rate_hz': args.rate, 'player_queue': args.player_queue,
                 'hand_queue': args.hand_queue, 'command_queue': args.command_queue,
                 'joint_states_queue': args.joint_states_queue, 'burst_minutes': args.burst_minutes,
-                'burst_hogs': args.burst_hogs, 'drain_step': args.drain_step}
+                'burst_hogs': args.burst_hogs}
     figures, sources, failed = {}, {}, {}
     # A plain kill ends the soak as Ctrl-C does: its graph and load burst are stopped.
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
@@ -663,8 +654,7 @@ def main(argv=None):
                                player_queue=args.player_queue, hand_queue=args.hand_queue,
                                command_queue=args.command_queue,
                                joint_states_queue=args.joint_states_queue,
-                               burst_minutes=args.burst_minutes, burst_hogs=args.burst_hogs,
-                               drain_step=args.drain_step)
+                               burst_minutes=args.burst_minutes, burst_hogs=args.burst_hogs)
     except (Exception, SystemExit) as e:     # noqa: BLE001 - recorded in _failed, exit 1
         traceback.print_exc()
         failed['soak'] = '%s: %s' % (type(e).__name__, e)

@@ -1,28 +1,25 @@
 """When a consumer should re-establish its input connection, no ROS.
 
 A standing backlog can form anywhere along one connection (the publisher's queue, both
-socket buffers) and keep every message late long after the load that built it is gone; a
-connection can also fall silent while its publisher lives on and serves others. Neither
+socket buffers) and keep every message late long after the load that built it is gone;
+a connection can also fall silent while its publisher lives on and serves others. Neither
 heals by itself. Dropping the connection and subscribing afresh clears both. This class
-decides when: input refused as late for `after` seconds without one message on time and
-without a sign of the backlog draining (again every `after` seconds while that lasts:
-late input is refused anyway, and the backlog may clear at any moment), or, on a
-connection that delivered since it was made, no message at all for `silent_after`
-seconds while a publisher is connected. A backlog drains when its messages' age falls
-`drain_step` seconds below the highest age seen since the last such fall: a starved
-consumer catching up is not a standing backlog (which keeps one age), and a new
-connection would lose what the old one still holds. Silence can be legitimate (a paused
-bag, a source waiting for a device), so a silent connection is re-made once per silence,
-not again until a message has come: one log line, not a storm. A connection can also be
-dropped by its publisher while the publisher lives on (seen in soaks: a rospy publisher,
-finishing the teardown of a consumer's old connection, also dropped its new one, 40 ms
-old; rospy matches connections by a cached socket number). rospy does not reconnect
-then: the master still lists the publisher, so nothing tells the subscriber. So a
-subscription connected to no publisher for `after` seconds (longer after fruitless
-tries, up to 8x) asks whether the master lists one, and is re-made when it does. A
-re-made connection that replaced a late stream and has brought nothing for `silent_after`
-seconds is re-made again too, with the same back-off: its publisher was sending a moment
-ago, its silence is not a pause.
+decides when: input refused as late for `after` seconds without one message on time
+(again every `after` seconds while that lasts: late input is refused anyway, and the
+backlog may clear at any moment), or, on a connection that delivered since it was made,
+no message at all for `silent_after` seconds while a publisher is connected. Silence can
+be legitimate (a paused bag, a source waiting for a device), so a silent connection is
+re-made once per silence, not again until a message has come: one log line, not a storm.
+A connection can also be dropped by its publisher while the publisher lives on (seen
+in soaks: a rospy publisher, finishing the teardown of a consumer's old connection, also
+dropped its new one, 40 ms old; rospy matches connections by a cached socket number).
+rospy does not reconnect then: the master still lists the publisher, so nothing tells the
+subscriber. So a subscription
+connected to no publisher for `after` seconds (longer after fruitless tries, up to 8x)
+asks whether the master lists one, and is re-made when it does. A re-made connection that
+replaced a late stream and has brought nothing for `silent_after` seconds is re-made again
+too, with the same back-off: its publisher was sending a moment ago, its silence is not a
+pause.
 """
 from leap_teleop.params import Param
 
@@ -36,10 +33,6 @@ HAND_SUBSCRIPTION_PARAMS = {
                                     'message late (again while it lasts), or connected to no '
                                     'publisher while the master lists one; 0 = never', unit='s',
                                ge=0.0, le=60.0),
-    'resubscribe_drain_step': Param(0.05, 'a late stream whose messages\' age falls this much is '
-                                          'draining its backlog: its late time starts again, no '
-                                          're-subscription; 0 = re-subscribe regardless',
-                                    unit='s', ge=0.0, le=10.0),
     'resubscribe_silent_after': Param(2.0, 're-establish it, once, after this long without any '
                                            'message while a publisher is connected; 0 = never',
                                       unit='s', ge=0.0, le=60.0),
@@ -47,21 +40,16 @@ HAND_SUBSCRIPTION_PARAMS = {
 
 
 class StreamHealth:
-    def __init__(self, after, silent_after, drain_step=0.0):
+    def __init__(self, after, silent_after):
         """after: seconds of late-only input, or of no connected publisher, before a
-        re-subscription; silent_after: of no input while a publisher is connected; 0 = never;
-        drain_step: the fall of the messages' age (s) that shows a late backlog draining
-        (0 = not looked at)."""
+        re-subscription; silent_after: of no input while a publisher is connected; 0 = never."""
         self.after = float(after)
         self.silent_after = float(silent_after)
-        self.drain_step = float(drain_step)
         self.resubscriptions = 0
         self.since = None           # start of the current judgement (first message or check,
                                     # or the last re-subscription)
         self.last_rx = None         # last message of any kind
         self.late_since = None      # first late message since the last one on time
-        self.drained_at = None      # last sign of the late backlog draining
-        self.age_peak = None        # highest message age since then
         self.unconnected_since = None   # first check that found no connected publisher
         self.ask_at = None          # when to ask the master whether one is listed
         self.heard = False          # a message came since the connection was made
@@ -70,24 +58,17 @@ class StreamHealth:
         self.fruitless = 0          # re-subscriptions in a row that brought nothing
         self._why = None            # 'late' or 'silent': the reason due() gave last
 
-    def on_message(self, now, late, age=None):
-        """A message arrived at `now`; `late` when the consumer refused it as late; `age`:
-        its receive time minus its stamp (s; None when it has no stamp)."""
+    def on_message(self, now, late):
+        """A message arrived at `now`; `late` when the consumer refused it as late."""
         self.last_rx = now
         self.heard = True
         if self.since is None:
             self.since = now
-        if not late:
-            self.late_since = self.drained_at = self.age_peak = None
-            return
-        if self.late_since is None:
-            self.late_since = now
-        if age is None or self.drain_step <= 0:
-            return
-        if self.age_peak is None or age > self.age_peak:
-            self.age_peak = age
-        elif age <= self.age_peak - self.drain_step:
-            self.drained_at, self.age_peak = now, age
+        if late:
+            if self.late_since is None:
+                self.late_since = now
+        else:
+            self.late_since = None
 
     def _backoff(self):
         return 2 ** min(self.fruitless, 3)
@@ -114,10 +95,7 @@ class StreamHealth:
             self.ask_at = None
             return None
         if self.late_since is not None and self.after > 0:
-            start = max(self.late_since, self.since)
-            if self.drained_at is not None:
-                start = max(start, self.drained_at)
-            late_for = now - start
+            late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
                 self._why = 'late'
                 return 'every message late for %.1f s' % late_for
@@ -149,7 +127,7 @@ class StreamHealth:
         self.remade_late = self._why == 'late'
         self.remade = True
         self.since = now
-        self.late_since = self.drained_at = self.age_peak = None
+        self.late_since = None
         self.unconnected_since = now         # until the new connection forms
         self.ask_at = now + self.after * self._backoff()
         self.heard = False

@@ -23,8 +23,7 @@ class HandSubscription:
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
         self.on_new_connection = on_new_connection
         self.node, self.queue_size = node, int(p['hand_queue_size'])
-        self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'],
-                                   p['resubscribe_drain_step'])
+        self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
         self.gaps = SequenceGaps()                     # what each publisher sent that never came
         self._lock = threading.Lock()
@@ -43,11 +42,9 @@ class HandSubscription:
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
         why = self.callback(msg)
-        now, stamp = rospy.get_time(), msg.header.stamp.to_sec()
         with self._lock:                 # one hold per message: this is every hand message
             self.gaps.add(caller, msg.header.seq)
-            self.health.on_message(now, bool(why) and why.startswith('late'),
-                                   now - stamp if stamp > 0 else None)
+            self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
 
     def _check(self, _event=None):
         # An exception would end the timer's thread, and every later check with it.
