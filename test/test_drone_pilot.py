@@ -185,6 +185,32 @@ def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
     assert drain(pilot) == []                              # land only once
 
 
+def test_a_landed_drone_gets_no_land_when_its_navdata_pauses_while_the_hand_is_gone():
+    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=0.5))
+    pilot.on_navdata(2, 0, 0.0)                            # landed
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.1)
+    pilot.on_hand(hand((0, 0, 0), present=False), 0.2)    # the hand goes
+    drain(pilot)
+    for k in range(3, 60):                                 # navdata pauses from 0.5 s
+        pilot.watchdog(0.1 * k)
+    assert 'land' not in kinds(drain(pilot))
+
+
+def test_a_takeoff_then_lost_navdata_and_hand_still_lands():
+    # the takeoff went out after the last navdata (which said landed): it may be flying
+    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=0.5))
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.1)
+    pilot.on_gesture('unfold', True, 0.2)
+    assert kinds(drain(pilot)) == ['takeoff']
+    pilot.on_hand(hand((0, 0, 0), present=False), 0.3)
+    for k in range(4, 40):
+        pilot.watchdog(0.1 * k)
+    out = kinds(drain(pilot))
+    # hovered, then landed: for the lost hand and for the lost navdata, each once
+    assert out == ['twist', 'land', 'twist', 'land'], out
+
+
 def test_silence_counts_as_a_lost_hand():
     pilot = airborne(PilotConfig(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)

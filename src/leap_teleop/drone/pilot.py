@@ -173,6 +173,7 @@ class DronePilot:
         self._landed_for_loss = False
         self.engaged = False             # tilt: unfold seen, not folded since
         self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
+        self._takeoff_at = None          # when the last takeoff was queued
         self.reference = None            # tilt: (palm xyz m, yaw deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
@@ -186,10 +187,11 @@ class DronePilot:
         with self._lock:
             self.drone_state = int(state)
             self.altitude = float(altd_mm) / 1000.0
+            first = self.last_navdata_time is None
             self.last_navdata_time = now
             if self.navdata_lost_since is not None:
-                self._warn('navdata_back', 'navdata back after %.2f s'
-                           % (now - self.navdata_lost_since))
+                self._warn('navdata_back', 'navdata %s after %.2f s' % (
+                    'arrived' if first else 'back', now - self.navdata_lost_since))
             self.navdata_lost_since = None
             self._landed_for_navdata = False
 
@@ -271,6 +273,7 @@ class DronePilot:
                         self._capture(self._last_hand)
                 if state == LANDED:
                     self._takeoff_asked = True
+                    self._takeoff_at = now
                     self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
@@ -354,6 +357,7 @@ class DronePilot:
                 # The clock jumped back (a /clock publisher restarted): the hand is stale.
                 self._warn('clock', 'the clock jumped back: hovering')
                 self.last_hand_time = None
+                self._takeoff_at = None
                 self._stream.reset()
                 self.lost_since = None
                 self._lose(now)
@@ -367,7 +371,7 @@ class DronePilot:
             if (self.lost_since is not None and not self._landed_for_loss
                     and now - self.lost_since >= self.cfg.land_after
                     and (self.drone_state in AIRBORNE_STATES
-                         or self.navdata_lost_since is not None)):
+                         or (self.navdata_lost_since is not None and not self._known_landed()))):
                 self._landed_for_loss = True
                 self.engaged = False
                 self.reference = None
@@ -387,16 +391,22 @@ class DronePilot:
                    % (now - self.lost_since, 'a new unfold' if self.cfg.mode == 'tilt'
                       else 'the capture pose'))
 
+    def _known_landed(self):
+        """The last navdata said landed and no takeoff was queued after it."""
+        return (self.drone_state == LANDED
+                and (self._takeoff_at is None or self._takeoff_at < self.last_navdata_time))
+
     def _navdata_watchdog(self, now):
         """Stale navdata: hover at once (again every HOVER_REPEAT s), land after land_after
-        unless the last fresh navdata said landed; the state counts as unknown meanwhile."""
+        unless the last fresh navdata said landed (and no takeoff went out since); the state
+        counts as unknown meanwhile."""
         if self.navdata_fresh(now):
             return
         if self.navdata_lost_since is None:
             self.navdata_lost_since = now
             self._last_hover = None
             self._warn('navdata', '%s: drone state unknown, hovering' % self._no_navdata(now))
-        if self.drone_state == LANDED or self._landed_for_navdata:
+        if self._known_landed() or self._landed_for_navdata:
             return
         if self._last_hover is None or not 0.0 <= now - self._last_hover < HOVER_REPEAT:
             self._last_hover = now
