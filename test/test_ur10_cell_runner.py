@@ -4,7 +4,14 @@ import pytest
 
 from leap_teleop.params import check_params
 from leap_teleop.ur10 import cell_runner
-from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, urdf_from_args
+from leap_teleop.ur10.cell_runner import (
+    KINDS,
+    RUNNER_PARAMS,
+    CellConfigError,
+    CellRunner,
+    print_urdf,
+    urdf_from_args,
+)
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
 from leap_teleop.ur10.model import build_urdf
@@ -157,5 +164,47 @@ def test_urdf_from_args_is_the_arms_description():
     text = urdf_from_args(['--urdf', 'ur10_2', '--config', 'ur10_dual_cell'])
     assert text == build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
     assert 'ur10_2_shoulder_pan_joint' in text
-    with pytest.raises(KeyError):
+    with pytest.raises(CellConfigError, match="no arm 'no_such_arm'"):
         urdf_from_args(['--urdf', 'no_such_arm'])
+
+
+BAD_CELLS = [
+    # (file text or None for a missing file, what the one line says)
+    (None, 'No such file or directory'),
+    ('arms: [\n', 'not valid YAML (line 2: '),
+    ('arms: [1]\n', 'an entry of the wrong shape'),
+    ('arms:\n  - {base_xyz: [0, 0, 0]}\n', "an entry lacks 'name'"),
+    ('arms:\n  - {name: ur10_1, base_xyz: [1, 2]}\n', 'base_xyz must be 3 numbers'),
+    ('arms: []\n', 'needs a non-empty "arms" list'),
+    ('arms:\n  - {name: ur10_1}\n', "no arm 'ur10_9' in the cell"),
+]
+
+
+@pytest.mark.parametrize('text, why', BAD_CELLS, ids=[b[1] for b in BAD_CELLS])
+def test_urdf_of_a_bad_cell_is_one_line_and_status_1(text, why, tmp_path, capsys):
+    # Every sim launch runs --urdf for robot_description: it once ended in a traceback.
+    path = tmp_path / 'cell.yaml'
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(SystemExit) as e:
+        print_urdf(['--urdf', 'ur10_9', '--config', str(path)])
+    line = str(e.value.code)        # a str: Python prints it on stderr, status 1
+    assert line.startswith('ur10_sim.py --urdf: cell config %s: ' % path) and why in line, line
+    assert '\n' not in line and capsys.readouterr().out == ''
+
+
+def test_the_node_reports_a_cell_that_is_not_yaml_as_a_bad_parameter(tmp_path):
+    # start_node turns a ValueError into its one fatal line; a YAML error was a traceback.
+    path = tmp_path / 'cell.yaml'
+    path.write_text('arms: [\n')
+    with pytest.raises(ValueError, match='not valid YAML'):
+        make([], config=str(path))
+
+
+def test_the_nodes_urdf_mode_ends_in_the_one_line(capsys):
+    from leap_teleop.ros.nodes.ur10_sim import main
+    with pytest.raises(SystemExit) as e:
+        main(['--urdf', 'ur10_9'])
+    assert str(e.value.code).startswith('ur10_sim.py --urdf: cell config ')
+    main(['--urdf', 'ur10_1'])
+    assert 'ur10_1_shoulder_pan_joint' in capsys.readouterr().out

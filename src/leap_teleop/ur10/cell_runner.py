@@ -5,13 +5,16 @@ snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
 import argparse
 import collections
 import math
+import sys
 import threading
 from dataclasses import dataclass
+
+import yaml
 
 from leap_teleop.control.input_age import CommandWaits
 from leap_teleop.params import Param
 from leap_teleop.sim_runtime import MAX_LAG_S, Every, RealtimePacer, pace_factor, snapshot_path
-from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.config import config_path, load_config
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT, build_urdf
 from leap_teleop.ur10.snapshot import SnapshotRenderer
@@ -51,13 +54,56 @@ def arm_urdf(arm):
     return build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
 
 
+class CellConfigError(ValueError):
+    """A cell config that cannot be read or does not describe a cell, or an arm it lacks:
+    one line naming the file."""
+
+
+def read_cell_config(name):
+    """load_config, each way a file can be bad (missing, not YAML, entries of the wrong
+    shape) as one CellConfigError line instead of the error of whichever step tripped."""
+    path = config_path(name)
+    try:
+        return load_config(name)
+    except OSError as e:
+        why = e.strerror or e
+    except yaml.YAMLError as e:     # its text spans lines and points into the file
+        mark = getattr(e, 'problem_mark', None)
+        why = 'not valid YAML (%s%s)' % ('line %d: ' % (mark.line + 1) if mark else '',
+                                         getattr(e, 'problem', None) or ' '.join(str(e).split()))
+    except ValueError as e:
+        why = str(e)
+        if why.startswith('cell config'):
+            raise CellConfigError(why) from None
+    except KeyError as e:           # parse_config's entry['name'] and the like
+        why = 'an entry lacks %r' % e.args[0]
+    except (TypeError, AttributeError) as e:
+        why = 'an entry of the wrong shape (%s)' % e
+    raise CellConfigError('cell config %s: %s' % (path, why)) from None
+
+
 def urdf_from_args(argv):
-    """--urdf ARM [--config FILE]: ARM's description (for <param command=>)."""
+    """--urdf ARM [--config FILE]: ARM's description (for <param command=>);
+    CellConfigError for a bad config or an arm it lacks."""
     ap = argparse.ArgumentParser(prog='ur10_sim.py --urdf')
     ap.add_argument('--urdf', required=True, metavar='ARM')
     ap.add_argument('--config', default=RUNNER_PARAMS['config'].default)
     args, _ = ap.parse_known_args(argv)
-    return arm_urdf(load_config(args.config).arm(args.urdf))
+    config = read_cell_config(args.config)
+    try:
+        return arm_urdf(config.arm(args.urdf))
+    except KeyError as e:
+        raise CellConfigError('cell config %s: %s' % (config.path, e.args[0])) from None
+
+
+def print_urdf(argv):
+    """ur10_sim.py --urdf: the description on stdout. Launch files run it for every sim, so
+    a bad config or arm is one line on stderr and status 1 (roslaunch shows it), no traceback."""
+    try:
+        text = urdf_from_args(argv)
+    except CellConfigError as e:
+        raise SystemExit('ur10_sim.py --urdf: %s' % e) from None
+    sys.stdout.write(text)
 
 
 @dataclass
@@ -79,7 +125,7 @@ class CellRunner:
     def __init__(self, p, use_sim_time, ros_time, reject):
         from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
         self.p, self.ros_time, self.reject = p, ros_time, reject
-        self.cell = UR10Cell(p['config'], gui=bool(p['gui']))
+        self.cell = UR10Cell(read_cell_config(p['config']), gui=bool(p['gui']))
         self.lock = threading.Lock()               # guards self.cell (physics)
         self.render_lock = threading.Lock()        # one snapshot at a time
         self.renderer = SnapshotRenderer(self.cell.config)

@@ -26,7 +26,7 @@ from leap_teleop.ros.conversions import CommandError, trajectory_points
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
-from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, arm_urdf, urdf_from_args
+from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, arm_urdf, print_urdf
 
 PARAMS = RUNNER_PARAMS      # declared beside the cell; --help and docs/nodes.md read it
 
@@ -85,8 +85,8 @@ class UR10SimNode:
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
-    if '--urdf' in argv:
-        sys.stdout.write(urdf_from_args(argv))
+    if '--urdf' in argv:        # a bad config: one line on stderr, status 1
+        print_urdf(argv)
         return
     p, node = start_node('ur10_sim.py', 'ur10_sim', __doc__, PARAMS, UR10SimNode,
                          [sys.argv[0]] + argv, errors=(ValueError, TypeError, KeyError, OSError))
