@@ -1,8 +1,10 @@
 """latency_monitor: the per-stage input-age table from /diagnostics (pure part and the
 command)."""
 import os
+import socket
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -121,3 +123,52 @@ def test_main_takes_its_arguments_without_the_program_name():
     with pytest.raises(SystemExit) as e:
         main(['--no-such-option'])       # refused by the parser, before any ROS call
     assert e.value.code == 2
+
+
+@pytest.fixture
+def no_init_node(monkeypatch):
+    # Without a master rospy.init_node retries forever: it must not be reached.
+    import rospy
+
+    def refuse(*_args, **_kw):
+        raise AssertionError('init_node without a master: it would keep trying forever')
+    monkeypatch.setattr(rospy, 'init_node', refuse)
+
+
+@pytest.mark.parametrize('value', ['nan', '-1', '0', 'inf'])
+def test_a_timeout_that_is_not_a_positive_number_is_refused(value, capsys, no_init_node):
+    from leap_teleop.ros.latency_monitor import main
+    with pytest.raises(SystemExit) as e:
+        main(['--once', '--timeout', value])     # nan was taken: "... in nan s"
+    assert e.value.code == 2
+    assert 'error: --timeout must be a number of seconds > 0' in capsys.readouterr().err
+
+
+def closed_port():
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def test_no_master_is_one_line_and_status_1(monkeypatch, capsys, no_init_node):
+    from leap_teleop.ros.latency_monitor import main
+    uri = 'http://127.0.0.1:%d' % closed_port()
+    monkeypatch.setenv('ROS_MASTER_URI', uri)
+    assert main(['--once', '--timeout', '2']) == 1
+    err = capsys.readouterr().err
+    assert err.startswith('latency_monitor: no ROS master at %s (' % uri) and err.count('\n') == 1
+
+
+def test_a_master_that_does_not_answer_is_given_up_after_the_timeout(monkeypatch, capsys,
+                                                                       no_init_node):
+    from leap_teleop.ros.latency_monitor import main
+    with socket.socket() as mute:         # accepts connections (backlog), never replies
+        mute.bind(('127.0.0.1', 0))
+        mute.listen(4)
+        uri = 'http://127.0.0.1:%d' % mute.getsockname()[1]
+        monkeypatch.setenv('ROS_MASTER_URI', uri)
+        start = time.monotonic()
+        assert main(['--once', '--timeout', '0.5']) == 1
+        assert time.monotonic() - start < 5.0
+    assert capsys.readouterr().err.startswith('latency_monitor: no ROS master at %s' % uri)
+    assert socket.getdefaulttimeout() is None     # the check's timeout is not left behind

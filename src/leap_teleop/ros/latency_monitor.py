@@ -6,11 +6,17 @@ long the UR10 simulator's commands waited for the physics step that applied them
 usage: rosrun leap_teleop latency_monitor [--once] [--timeout S]
   --once      print one table (1.5 s after the first report), then exit
   --timeout   give up (exit 1) when no node reports an input age or a command wait within S seconds
+              (or the ROS master does not answer within S seconds)
 """
 import argparse
+import math
+import socket
 import sys
 import threading
+import time
+import xmlrpc.client
 
+import rosgraph
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 
@@ -38,16 +44,42 @@ class LatencyMonitor:
         return self.board.table()
 
 
+def master_problem(timeout):
+    """(master URI, why it does not answer or None). rospy.init_node would retry forever."""
+    try:
+        uri = rosgraph.get_master_uri()
+    except ValueError as e:           # a malformed __master:= remapping
+        return '?', str(e)
+    old = socket.getdefaulttimeout()
+    socket.setdefaulttimeout(timeout)  # a host that drops packets would block the call for minutes
+    try:
+        rosgraph.Master('/latency_monitor', master_uri=uri).getPid()
+        return uri, None
+    except xmlrpc.client.ProtocolError as e:      # an HTTP server that is not a master
+        return uri, 'HTTP %s %s' % (e.errcode, e.errmsg)
+    except (OSError, ValueError, xmlrpc.client.Error, rosgraph.MasterException) as e:
+        return uri, getattr(e, 'strerror', None) or str(e) or type(e).__name__
+    finally:
+        socket.setdefaulttimeout(old)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog='latency_monitor', description=__doc__.split('\n\n')[0])
     ap.add_argument('--once', action='store_true', help='print one table, then exit')
     ap.add_argument('--timeout', type=float, default=30.0,
-                    help='seconds to wait for a first report (default 30)')
+                    help='seconds to wait for the master and a first report (default 30)')
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
+    if not (math.isfinite(args.timeout) and args.timeout > 0):   # nan: Event.wait returns at once
+        ap.error('--timeout must be a number of seconds > 0, got %s' % args.timeout)
+    deadline = time.monotonic() + args.timeout
+    uri, why = master_problem(args.timeout)
+    if why:
+        print('latency_monitor: no ROS master at %s (%s)' % (uri, why), file=sys.stderr)
+        return 1
     rospy.init_node('latency_monitor', anonymous=True, disable_signals=True)
     monitor = LatencyMonitor()
     try:
-        if not monitor.heard.wait(args.timeout):
+        if not monitor.heard.wait(max(0.0, deadline - time.monotonic())):
             print('latency_monitor: no node reported an input age on /diagnostics in %g s'
                   % args.timeout, file=sys.stderr)
             return 1
