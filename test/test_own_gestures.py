@@ -284,6 +284,44 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     assert 'bad.csv row 1: not a keypoint row' in capsys.readouterr().err
 
 
+@pytest.mark.parametrize('args, message', [
+    (['--out', '{tmp}/no_dir/m.npz'], '--out {tmp}/no_dir/m.npz: no folder {tmp}/no_dir'),
+    (['--out', '{tmp}'], '--out {tmp}: a folder'),
+    (['--family', 'keypoints', '--out', '{tmp}/m.npz'],
+     '--family keypoints: the --add files are Leap poses'),
+    (['--family', 'all'], '--family all: the --add files are Leap poses'),
+])
+def test_train_gestures_refuses_bad_arguments_before_the_fit(tmp_path, monkeypatch, capsys,
+                                                             args, message):
+    """The fit takes minutes: a bad --out or a --family that is not the files' is refused
+    before it, in one line."""
+    monkeypatch.setattr(train_gestures, 'train',
+                        lambda *a, **k: pytest.fail('fitted before checking the arguments'))
+    samples = tmp_path / 'wave.jsonl'
+    samples.write_text('{}\n')
+    with pytest.raises(SystemExit) as stop:
+        train_gestures.main(['--add', str(samples), '--label', 'fist', '--no-report']
+                            + [a.format(tmp=tmp_path) for a in args])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert ': error: ' + message.format(tmp=tmp_path) in err.splitlines()[-1], err
+
+
+@pytest.mark.parametrize('tool, sentence_end', [
+    (record_gestures, 'for train_gestures --add FILE --label NAME.'),
+    (train_gestures, 'and ship them as arrays with a model card.'),
+])
+def test_help_gives_the_whole_first_paragraph(tool, sentence_end, capsys):
+    with pytest.raises(SystemExit) as stop:
+        tool.main(['--help'])
+    assert stop.value.code == 0
+    assert sentence_end in ' '.join(capsys.readouterr().out.split())
+
+
+def test_record_gestures_usage_shows_seconds_as_optional():
+    assert '--label NAME [--seconds N]' in record_gestures.__doc__
+
+
 @pytest.mark.rostest
 def test_the_nodes_arm_on_a_bound_new_gesture(trained, tmp_path):
     """The real graph: sender (the user's model and bindings, a scripted V sign) ->

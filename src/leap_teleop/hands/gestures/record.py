@@ -1,7 +1,7 @@
 """Record samples of one gesture from any hand source, in the shared data's formats, for
 train_gestures --add FILE --label NAME.
 
-usage: rosrun leap_teleop record_gestures --source SOURCE --label NAME --seconds N
+usage: rosrun leap_teleop record_gestures --source SOURCE --label NAME [--seconds N]
            [--out FILE] [--person NAME] [--side right|left|any]
            [--script YAML] [--recording PATH] [--video PATH] [--device N|/dev/videoN]
            [--mirror] [--realtime 0|1]
@@ -132,7 +132,7 @@ def write(path, family, rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()))
     add_source_arguments(ap)
     ap.add_argument('--label', required=True, help='the gesture\'s name (the class to train)')
     ap.add_argument('--seconds', type=float, default=10.0,

@@ -459,6 +459,21 @@ def file_family(path):
     return 'keypoints' if path.lower().endswith('.csv') else 'leap'
 
 
+FAMILY_FILES = {'leap': 'Leap poses (.jsonl)', 'keypoints': 'keypoints (.csv)'}
+
+
+def unwritable(path):
+    """Why the model (and its card beside it) cannot be written at `path`, or None."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        return 'a folder: name the model file'
+    if not os.path.isdir(folder):
+        return 'no folder %s' % folder
+    if not os.access(folder, os.W_OK):
+        return 'cannot write in %s' % folder
+    return None
+
+
 def train(family, data_dir, adds=(), report=True, log=print):
     """(model, card) fitted on every person, the card holding the LOPO figures."""
     t0 = time.time()
@@ -509,7 +524,7 @@ def train(family, data_dir, adds=(), report=True, log=print):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()))
     ap.add_argument('--family', choices=('leap', 'keypoints', 'all'), default=None,
                     help='which model (default: all, or the family of the --add files)')
     ap.add_argument('--data', default=gd.SHARED_DATA,
@@ -535,10 +550,20 @@ def main(argv=None):
     families = {file_family(p) for p in args.add}
     if len(families) > 1:
         ap.error('--add files of one family at a time (Leap .jsonl or keypoint .csv)')
+    if families and args.family and args.family not in families:
+        # the user's rows would join the other family's model and break its fit
+        fam = next(iter(families))
+        ap.error('--family %s: the --add files are %s; give --family %s or leave it out'
+                 % (args.family, FAMILY_FILES[fam], fam))
     family = args.family or (families.pop() if families else 'all')
     todo = ('leap', 'keypoints') if family == 'all' else (family,)
     if args.out and len(todo) > 1:
         ap.error('--out names one model: give --family')
+    # checked before the fit, which takes minutes
+    for fam in todo:
+        problem = unwritable(args.out or DEFAULT_MODELS[fam])
+        if problem:
+            ap.error('--out %s: %s' % (args.out or DEFAULT_MODELS[fam], problem))
     for fam in todo:
         try:
             model, card = train(fam, args.data, adds, report=not args.no_report)
@@ -546,8 +571,12 @@ def main(argv=None):
             print('train_gestures: %s' % e, file=sys.stderr)
             return 2
         out = args.out or DEFAULT_MODELS[fam]
-        model.save(out)
-        write_card(out, card)
+        try:
+            model.save(out)
+            write_card(out, card)
+        except OSError as e:
+            print('train_gestures: cannot write %s: %s' % (out, e), file=sys.stderr)
+            return 1
         if 'leave_one_person_out' in card:
             print_lopo('%s model, leave-one-person-out:' % fam,
                        {'per_class': card['leave_one_person_out'], 'confusion': {}})
