@@ -175,6 +175,29 @@ def test_recorder_reports_a_missing_sdk(tmp_path, capsys):
     assert 'leap' in capsys.readouterr().err
 
 
+@pytest.mark.parametrize('args, message', [
+    (['--frames', '-5', '{tmp}/f.json'], '--frames -5: 0 (no limit) or more'),
+    (['--duration', 'nan', '{tmp}/f.json'], '--duration nan: 0 (no limit) or more seconds'),
+    (['--duration', '-1', '{tmp}/f.json'], '--duration -1: 0 (no limit) or more seconds'),
+    (['{tmp}/f.txt'], 'output {tmp}/f.txt: name it .json, .json.gz or .json.lz'),
+    (['{tmp}/no_dir/f.json'], 'output {tmp}/no_dir/f.json: no folder {tmp}/no_dir'),
+])
+def test_recorder_refuses_bad_arguments_before_recording(tmp_path, capsys, args, message):
+    script = os.path.join(os.path.dirname(__file__), '..', 'config', 'gestures', 'wave_hello.yaml')
+    assert record_frames.main(['--source', 'scripted', '--script', script, '--realtime', '0']
+                              + [a.format(tmp=tmp_path) for a in args]) == 2
+    assert capsys.readouterr().err == 'record_frames: %s\n' % message.format(tmp=tmp_path)
+    assert os.listdir(tmp_path) == []
+
+
+def test_recorder_help_gives_the_whole_first_paragraph(capsys):
+    with pytest.raises(SystemExit) as stop:
+        record_frames.main(['--help'])
+    assert stop.value.code == 0
+    assert '(replayable with the recording source, LeapJS Playback and classify_frames).' in ' '.join(
+        capsys.readouterr().out.split())
+
+
 # -- hardware backends with fake SDK modules -----------------------------------------------
 class V:
     def __init__(self, x, y, z):

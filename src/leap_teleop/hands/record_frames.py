@@ -11,6 +11,8 @@ LeapJS original) or plain .json. Stops at --duration seconds, --frames frames, t
 of a finite source, or Ctrl-C; the file is written on every way out.
 """
 import argparse
+import math
+import os
 import sys
 import time
 
@@ -41,8 +43,28 @@ def record(source, out, duration=None, max_frames=None, metadata=None):
     return len(frames)
 
 
+# the endings leapjs.save picks its compression by
+OUT_ENDINGS = ('.json', '.json.gz', '.json.lz')
+
+
+def argument_problem(args):
+    """What is wrong with the output file or the limits, in one line, or None."""
+    if not args.out.endswith(OUT_ENDINGS):
+        return 'output %s: name it .json, .json.gz or .json.lz' % args.out
+    folder = os.path.dirname(os.path.abspath(args.out))
+    if os.path.isdir(args.out):
+        return 'output %s: a folder: name the file' % args.out
+    if not os.path.isdir(folder):
+        return 'output %s: no folder %s' % (args.out, folder)
+    if not (math.isfinite(args.duration) and args.duration >= 0.0):
+        return '--duration %g: 0 (no limit) or more seconds' % args.duration
+    if args.frames < 0:
+        return '--frames %d: 0 (no limit) or more' % args.frames
+    return None
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()))
     ap.add_argument('out', help='output file: .json, .json.gz or .json.lz')
     add_source_arguments(ap, default='leap')
     ap.add_argument('--duration', type=float, default=0.0, help='seconds to record; 0 = no limit')
@@ -51,6 +73,10 @@ def main(argv=None):
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
+    problem = argument_problem(args)
+    if problem:     # before the source starts: a live take is not lost at the end
+        print('record_frames: %s' % problem, file=sys.stderr)
+        return 2
     try:
         source = source_from_args(args)
     except SourceError as e:
