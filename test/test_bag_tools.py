@@ -61,3 +61,66 @@ def test_to_bag_writes_a_scripted_session(tmp_path):
     for side in ('right', 'left'):
         assert got['leapmotion/data_' + side] == ('leap_teleop/leapcobot' + side, frames)
         assert got['leapmotion/hand_' + side] == ('leap_teleop/Hand', frames)
+
+
+# -- bad input ------------------------------------------------------------------------
+
+@pytest.mark.parametrize('args, message', [
+    (['--sides', 'middle'], "argument --sides: 'middle': one or more of right, left"),
+    (['--kinds', 'foo'], "argument --kinds: 'foo': one or more of leapcobot, hand, gesture"),
+    (['--start', 'nan'], "argument --start: 'nan': seconds since 1970, 0 or more"),
+    (['--start', '-5'], "argument --start: '-5': seconds since 1970, 0 or more"),
+    (['--start', 'inf'], "argument --start: 'inf': seconds since 1970, 0 or more"),
+])
+def test_recording_to_bag_refuses_bad_arguments(tmp_path, leapjs_data, capsys, args, message):
+    from leap_teleop.ros import recording_to_bag
+    with pytest.raises(SystemExit) as stop:
+        recording_to_bag.main([os.path.join(leapjs_data, 'grab.json.lz'), str(tmp_path / 'b.bag')]
+                              + args)
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err.splitlines()[-1]
+    assert os.listdir(tmp_path) == []
+
+
+def test_recording_to_bag_refuses_an_output_without_a_folder(tmp_path, leapjs_data, capsys):
+    from leap_teleop.ros import recording_to_bag
+    out = tmp_path / 'no_dir' / 'b.bag'
+    with pytest.raises(SystemExit) as stop:
+        recording_to_bag.main([os.path.join(leapjs_data, 'grab.json.lz'), str(out)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1].endswith(
+        ': error: %s: no folder %s' % (out, out.parent))
+
+
+def test_recording_to_bag_reports_the_frames_it_wrote(tmp_path, leapjs_data, capsys):
+    """A frame counts when it put a message into the bag; nothing to write is an error."""
+    from leap_teleop.ros import recording_to_bag
+    take = os.path.join(leapjs_data, 'grab.json.lz')
+    out = tmp_path / 'gestures.bag'
+    assert recording_to_bag.main([take, str(out), '--kinds', 'gesture']) == 0
+    said = capsys.readouterr().out
+    with rosbag.Bag(str(out)) as b:
+        stamps = {t for _, _, t in b.read_messages()}
+    assert 0 < len(stamps) < 374 and said == 'wrote %s: %d frames\n' % (out, len(stamps))
+    empty = tmp_path / 'empty.bag'
+    assert recording_to_bag.main([take, str(empty), '--sides', 'left', '--kinds', 'gesture']) == 1
+    assert capsys.readouterr().err.endswith(
+        'error: no gesture message for the left hand: nothing written to %s\n' % empty)
+    assert not empty.exists()
+    late = tmp_path / 'late.bag'    # the take's 3.4 s pass the end of ROS time
+    assert recording_to_bag.main([take, str(late), '--start', str(2 ** 32 - 2)]) == 1
+    assert 'past the end of ROS time' in capsys.readouterr().err
+    assert not late.exists()
+
+
+def test_recording_to_bag_help_gives_the_whole_first_paragraph(capsys):
+    from leap_teleop.ros import recording_to_bag
+    with pytest.raises(SystemExit) as stop:
+        recording_to_bag.main(['--help'])
+    assert stop.value.code == 0
+    out = ' '.join(capsys.readouterr().out.split())
+    assert "into a bag of the sender's topics." in out
+    for option, help_text in (('--sides SIDES', 'which hands'),
+                              ('--right-topic RIGHT_TOPIC', "the right hand's"),
+                              ('--left-topic LEFT_TOPIC', "the left hand's")):
+        assert '%s %s' % (option, help_text) in out, out

@@ -11,6 +11,8 @@ usage: rosrun leap_teleop recording_to_bag RECORDING.json[.lz|.gz] OUT.bag
        python -m leap_teleop.ros.recording_to_bag --video CLIP.mp4 OUT.bag   (also images / a glob)
 """
 import argparse
+import math
+import os
 import sys
 import time
 
@@ -22,21 +24,32 @@ from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, make_source
 from leap_teleop.ros import conversions
 
+KINDS = ('leapcobot', 'hand', 'gesture')
+ROS_TIME_END = 2 ** 32      # ROS time counts seconds in 32 unsigned bits
 
-def write_bag(source, out_path, sides=SIDES, topics=None, kinds=('leapcobot', 'hand', 'gesture'),
-              start=None, compression='bz2'):
-    """Run `source` through the sender logic into `out_path`; returns the frame count.
-    topics: {side: {kind: topic}}, default the sender's."""
+
+class PastRosTimeError(ValueError):
+    """A frame's time is past ROS time's end."""
+
+
+def write_bag(source, out_path, sides=SIDES, topics=None, kinds=KINDS, start=None,
+              compression='bz2'):
+    """Run `source` through the sender logic into `out_path`; returns the number of frames
+    that put at least one message into the bag (a frame without a valid capture time, or
+    with none of `kinds` to write, puts none). topics: {side: {kind: topic}}, default the
+    sender's. PastRosTimeError when a frame's time passes ROS time's end."""
     topics = topics or {side: conversions.default_topics(side) for side in sides}
     interface = LeapInterface(sides=list(sides))
     first_stamp = [None]
     offset = [0.0]
+    wrote = [False]
     count = 0
     with rosbag.Bag(out_path, 'w', compression=compression) as bag:
         def on_hand(frame, state):
             for kind, msg in conversions.hand_messages(state):
                 if kind in kinds:
                     bag.write(topics[state.side][kind], msg, msg.header.stamp)
+                    wrote[0] = True
 
         interface.add_hand_listener(on_hand)
         for frame in source.frames():
@@ -44,13 +57,40 @@ def write_bag(source, out_path, sides=SIDES, topics=None, kinds=('leapcobot', 'h
                 first_stamp[0] = frame.timestamp
                 offset[0] = (time.time() if start is None else start) - frame.timestamp
             frame.timestamp += offset[0]
+            if frame.timestamp >= ROS_TIME_END:     # rosbag fails on it only when closing
+                raise PastRosTimeError('a frame at %.0f s: past the end of ROS time (%d s)'
+                                       % (frame.timestamp, ROS_TIME_END))
+            wrote[0] = False
             interface.on_frame(frame)
-            count += 1
+            count += wrote[0]
     return count
 
 
+def comma_list(allowed):
+    """An argparse type: a comma-separated list of `allowed` names, in order, once each."""
+    def parse(text):
+        names = list(dict.fromkeys(n.strip() for n in text.split(',') if n.strip()))
+        unknown = [n for n in names if n not in allowed]
+        if unknown or not names:
+            raise argparse.ArgumentTypeError('%r: one or more of %s, comma-separated'
+                                             % (text, ', '.join(allowed)))
+        return names
+    return parse
+
+
+def start_time(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and 0.0 <= value < ROS_TIME_END):
+        raise argparse.ArgumentTypeError('%r: seconds since 1970, 0 or more and before %d '
+                                         '(the end of ROS time)' % (text, ROS_TIME_END))
+    return value
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+    ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()),
                                  epilog=__doc__.split('\n\n', 2)[-1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('recording', nargs='?', help='LeapJS recording (.json, .json.lz, .json.gz)')
@@ -58,15 +98,24 @@ def main(argv=None):
     ap.add_argument('--script', help='a gesture script instead of a recording')
     ap.add_argument('--video', help='camera footage instead of a recording: a video, an image, '
                                     'a folder or a glob of images (the video source)')
-    ap.add_argument('--sides', default='right,left')
-    ap.add_argument('--kinds', default='leapcobot,hand,gesture',
-                    help='which of leapcobot, hand, gesture to write')
-    ap.add_argument('--right-topic', default='leapmotion/data_right')
-    ap.add_argument('--left-topic', default='leapmotion/data_left')
-    ap.add_argument('--start', type=float, default=None, help='time of the first frame, s (epoch)')
+    ap.add_argument('--sides', default=list(SIDES), type=comma_list(SIDES),
+                    help='which hands to write, comma-separated (default: right,left)')
+    ap.add_argument('--kinds', default=list(KINDS), type=comma_list(KINDS),
+                    help='which messages to write, comma-separated (default: %s)' % ','.join(KINDS))
+    ap.add_argument('--right-topic', default='leapmotion/data_right',
+                    help="the right hand's leapcobot topic (default %(default)s)")
+    ap.add_argument('--left-topic', default='leapmotion/data_left',
+                    help="the left hand's leapcobot topic (default %(default)s)")
+    ap.add_argument('--start', type=start_time, default=None,
+                    help='time of the first frame, s (epoch; default: now)')
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
     if sum(bool(x) for x in (args.script, args.recording, args.video)) != 1:
         ap.error('give one of: a recording, --script, --video')
+    folder = os.path.dirname(os.path.abspath(args.out))
+    if os.path.isdir(args.out):
+        ap.error('%s: a folder: name the bag file' % args.out)
+    if not os.path.isdir(folder):
+        ap.error('%s: no folder %s' % (args.out, folder))
     try:
         if args.video:
             source = make_source('video', path=args.video, realtime=False)
@@ -77,13 +126,25 @@ def main(argv=None):
     except SourceError as e:
         print('error: %s' % e, file=sys.stderr)
         return 2
-    sides = [s for s in args.sides.split(',') if s]
-    topics = {side: conversions.default_topics(side) for side in sides}
+    topics = {side: conversions.default_topics(side) for side in args.sides}
     if 'right' in topics:
         topics['right']['leapcobot'] = args.right_topic
     if 'left' in topics:
         topics['left']['leapcobot'] = args.left_topic
-    n = write_bag(source, args.out, sides, topics, tuple(args.kinds.split(',')), args.start)
+    try:
+        n = write_bag(source, args.out, args.sides, topics, tuple(args.kinds), args.start)
+    except (OSError, rosbag.ROSBagException) as e:
+        print('error: cannot write %s: %s' % (args.out, e), file=sys.stderr)
+        return 1
+    except (PastRosTimeError, SourceError) as e:
+        os.remove(args.out)     # the bag was open: what it holds is a part of the take
+        print('error: %s: nothing written to %s' % (e, args.out), file=sys.stderr)
+        return 1
+    if not n:
+        os.remove(args.out)     # an empty bag replays nothing: no file rather than a silent one
+        print('error: no %s message for the %s hand: nothing written to %s' % (
+            ' or '.join(args.kinds), ' or '.join(args.sides), args.out), file=sys.stderr)
+        return 1
     print('wrote %s: %d frames' % (args.out, n))
     return 0
 
