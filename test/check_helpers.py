@@ -241,17 +241,19 @@ class NavdataStates:
             return list(self.states)
 
 
-class RejectedInputs:
-    """The 'rejected inputs' count each node reports on /diagnostics (by status name)."""
+class DiagnosticCounts:
+    """One integer value (`key`, e.g. 'rejected inputs') each node reports on /diagnostics,
+    by status name: the latest report of each."""
 
-    def __init__(self):
+    def __init__(self, key):
+        self.key = key
         self.values = {}
         rospy.Subscriber('/diagnostics', DiagnosticArray, self._diag, queue_size=20)
 
     def _diag(self, msg):
         for st in msg.status:
             for kv in st.values:
-                if kv.key == 'rejected inputs':
+                if kv.key == self.key:
                     self.values[st.name] = int(kv.value)
 
     def get(self, part):

@@ -5,7 +5,9 @@ queue 500 messages per connection; both consumers are SIGSTOPped for stop_s, so 
 of old hands piles up for them, then resumed (SIGCONT). The old hands must not drive them:
 the arm re-arms on a fresh thumbs-up and the pilot steers on a fresh unfold and offset,
 each within fresh_within_s of those gestures, and the arm's commands then follow hands no
-older than max_fresh_age_s."""
+older than max_fresh_age_s. What piled up is read, not lost: each consumer's count of the
+hands it missed (gaps in their sequence numbers, on /diagnostics) stays within
+max_missed."""
 import os
 import signal
 import sys
@@ -19,6 +21,7 @@ import rostest
 from leap_teleop.msg import ArmStatus
 
 from check_helpers import (
+    DiagnosticCounts,
     RightHands,
     Watch,
     arm_track_and_unfold,
@@ -42,7 +45,9 @@ LIMITS = {
     'max_fresh_age_s': limit("the arm's next commands follow hands no older than this", 's',
                              gt=0),
     'min_twist': limit('the pilot steers: a twist component at least this large', gt=0),
+    'max_missed': limit('hand messages each consumer may miss (sequence gaps) in the run', ge=0),
 }
+MISSED = 'hand messages missed (sequence gaps)'
 
 
 def fresh_tracking(statuses, max_age):
@@ -63,6 +68,7 @@ class ConsumerStop(unittest.TestCase):
     def test_stopped_consumers_act_on_fresh_input_after_the_resume(self):
         lim = read_limits(LIMITS)
         w = Watch(arm=ARM, drone=True)
+        missed = DiagnosticCounts(MISSED)
         statuses = []
         rospy.Subscriber('/%s/ur10_arm/status' % ARM, ArmStatus,
                          lambda m: statuses.append((rospy.get_time(), m)), queue_size=50)
@@ -126,6 +132,13 @@ class ConsumerStop(unittest.TestCase):
                           'never' if t_steer is None else '%.2f' % (t_steer - t_unfold))
             self.assertIsNotNone(t_steer, 'the pilot never steered on the fresh hand')
             self.assertLess(t_steer - t_unfold, lim.fresh_within_s)
+            missed.values.clear()            # reports from now on: the backlog was read
+            wait_for(lambda: None not in (missed.get('ur10_arm'), missed.get('pilot')), 5.0)
+            counts = (missed.get('ur10_arm'), missed.get('pilot'))
+            rospy.loginfo('FAULT consumers stopped: hand messages missed: arm %s, pilot %s',
+                          *counts)
+            self.assertNotIn(None, counts, 'no diagnostics report after the resume')
+            self.assertLessEqual(max(counts), lim.max_missed, counts)
         finally:
             stop.set()
 

@@ -16,7 +16,7 @@ import rostest
 from geometry_msgs.msg import Twist
 
 from check_helpers import (
-    RejectedInputs,
+    DiagnosticCounts,
     RightHands,
     Watch,
     arm_track_and_unfold,
@@ -46,7 +46,7 @@ class FaultHandBurst(unittest.TestCase):
     def test_stall_then_backlog_burst(self):
         lim = read_limits(LIMITS)
         w = Watch(arm=ARM)
-        rejected = RejectedInputs()
+        rejected = DiagnosticCounts('rejected inputs')
         twists = []
         rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m)),
                          queue_size=500)

@@ -24,7 +24,7 @@ from sensor_msgs.msg import JointState
 from leap_teleop.msg import Hand, leapcobotright
 from leap_teleop.ur10 import kinematics as kin
 
-from check_helpers import RejectedInputs, Watch, alive, kill, limit, node_pid, pilot_hand, read_limits, wait_for
+from check_helpers import DiagnosticCounts, Watch, alive, kill, limit, node_pid, pilot_hand, read_limits, wait_for
 
 ARM = 'ur10_1'
 LIMITS = {
@@ -107,7 +107,7 @@ class FaultRobot(unittest.TestCase):
     def test_sim_restart_then_bad_streams(self):
         self.lim = lim = read_limits(LIMITS)
         w = Watch(arm=ARM)
-        diag = RejectedInputs()
+        diag = DiagnosticCounts('rejected inputs')
         hand = HandStream()
         rospy.wait_for_message('/%s/joint_states' % ARM, JointState, timeout=60)
         hand.start()

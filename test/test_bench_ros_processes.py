@@ -79,7 +79,7 @@ def test_each_run_writes_a_fresh_file(tmp_path):
 def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
     from tools import soak
     def run(minutes, rtf, rate_hz=None, log=print, **options):
-        assert options == {'player_queue': 2000, 'hand_queue': 50, 'command_queue': 50,
+        assert options == {'player_queue': 2000, 'hand_queue': 500, 'command_queue': 50,
                            'joint_states_queue': 100, 'burst_minutes': 0.0, 'burst_hogs': 2}
         if outcome == 'raised':
             raise SystemExit('[soak] the graph died: ur10_sim')

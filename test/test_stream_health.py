@@ -50,6 +50,24 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     assert h.resubscriptions == 2
 
 
+def test_a_stall_of_the_consumer_itself_is_judged_afresh():
+    # The node stood still 2 s (SIGSTOP): its first check after it must not take the
+    # silence (nothing read yet) or the lateness for its input's fault.
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    feed(h, 1.0, 1.3, late=True)
+    h.stalled(3.3)
+    assert h.due(3.3, 1) is None
+    feed(h, 3.3, 3.7, late=True)            # the backlog read: late, for less than 0.5 s
+    assert h.due(3.7, 1) is None
+    feed(h, 3.7, 3.81, late=True)           # still late 0.5 s after the stall: a backlog
+    assert h.due(3.81, 1)
+    h2 = StreamHealth(0.5, 2.0)
+    feed(h2, 0.0, 1.0, late=False)
+    h2.stalled(3.0)
+    assert h2.due(4.9, 1) is None and h2.due(5.0, 1)   # silent 2 s from the stall on
+
+
 def test_silence_after_input_asks_once_and_only_with_a_publisher():
     h = StreamHealth(0.5, 2.0)
     assert h.due(0.0, 1) is None and h.due(30.0, 1) is None    # never heard: a start-up wait
@@ -254,6 +272,7 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     sub = hs.HandSubscription.__new__(hs.HandSubscription)
     sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
     sub.health = StreamHealth(0.5, 2.0)
+    sub.check_period, sub._last_check = 0.25, None
     first = sub.sub = FakeSubscriber()
     made, logs = [], []
 
@@ -272,6 +291,37 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     sub._check()                               # the next check subscribes afresh
     assert len(made) == 1 and sub.sub is made[0]
     assert logs[-1] == 'client: re-subscribed to /hands'
+
+
+def test_a_check_long_after_the_last_one_judges_afresh_instead_of_resubscribing(monkeypatch):
+    # A subscription whose node was stopped 2 s: the first check after it finds "no
+    # message for 2 s" but must not re-subscribe (the backlog is in the old connection).
+    import threading
+    import time as time_module
+
+    import rospy
+
+    from leap_teleop.ros import hand_subscription as hs
+
+    class Connected:
+        def get_num_connections(self):
+            return 1
+
+        def unregister(self):
+            raise AssertionError('re-subscribed after a stall of its own node')
+
+    sub = hs.HandSubscription.__new__(hs.HandSubscription)
+    sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
+    sub.health = StreamHealth(0.5, 2.0)
+    sub.check_period, sub.sub = 0.25, Connected()
+    monkeypatch.setattr(rospy, 'get_time', lambda: 12.5)
+    feed(sub.health, 0.0, 10.0, late=False)
+    sub._last_check = time_module.monotonic() - 2.0
+    sub._check_once()
+    assert sub.health.since == 12.5 and sub.health.resubscriptions == 0
+    monkeypatch.setattr(rospy, 'get_time', lambda: 13.0)
+    sub._check_once()                           # a check on time: nothing due yet
+    assert sub.health.resubscriptions == 0
 
 
 def test_sequence_gaps_count_what_each_publisher_sent_that_never_came():

@@ -328,7 +328,7 @@ def _per_consumer(by_status):
             if name.startswith(c + ':')}
 
 
-def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=50,
+def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500,
         command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2):
     """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
     the player's publisher queue per connection; hand_queue, command_queue,
@@ -620,8 +620,8 @@ def main(argv=None):
                     '(default the scripts\' 120)')
     ap.add_argument('--player-queue', type=int, default=2000,
                     help='the player\'s publisher queue per connection (default 2000)')
-    ap.add_argument('--hand-queue', type=int, default=50,
-                    help='the consumers\' ~hand_queue_size (default 50, the nodes\' default)')
+    ap.add_argument('--hand-queue', type=int, default=500,
+                    help='the consumers\' ~hand_queue_size (default 500, the nodes\' default)')
     ap.add_argument('--command-queue', type=int, default=50,
                     help='the arm nodes\' ~command_queue_size (default 50, their default)')
     ap.add_argument('--joint-states-queue', type=int, default=100,

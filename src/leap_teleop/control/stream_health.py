@@ -25,9 +25,11 @@ from leap_teleop.params import Param
 
 # A consumer node's ~params for its hand subscription (the arm nodes, the pilots).
 HAND_SUBSCRIPTION_PARAMS = {
-    # Deep enough for a second of hand frames behind a scheduling stall: late ones are
-    # refused by age anyway, and a backlog that stays is cleared by re-subscribing.
-    'hand_queue_size': Param(50, 'hand messages buffered on the subscription before the '
+    # rospy keeps only the newest queue_size messages of each socket read (up to 64 KiB:
+    # ~1000 leapcobot messages), so this many is what a stalled consumer can catch up on
+    # without a loss: 500 is 4 s of 120 Hz frames. Late ones are refused by age anyway, and
+    # a backlog that stays is cleared by re-subscribing.
+    'hand_queue_size': Param(500, 'hand messages buffered on the subscription before the '
                                  'oldest is dropped', ge=1, le=2000),
     'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
                                     'message late (again while it lasts), or connected to no '
@@ -69,6 +71,17 @@ class StreamHealth:
                 self.late_since = now
         else:
             self.late_since = None
+
+    def stalled(self, now):
+        """The consumer itself stood still (its checks stopped coming): the messages that
+        piled up meanwhile are not read yet, so its silence and lateness are judged afresh
+        from `now`."""
+        self.since = now
+        self.late_since = None
+        if self.last_rx is not None:
+            self.last_rx = now
+        if self.unconnected_since is not None:
+            self.unconnected_since = self.ask_at = None
 
     def _backoff(self):
         return 2 ** min(self.fruitless, 3)

@@ -4,12 +4,16 @@ falls silent while a publisher is connected, or loses every publisher the master
 lists (control.stream_health says when)."""
 import collections
 import threading
+import time
 
 import rosgraph
 import rospy
 
 from leap_teleop.control.sequence_gaps import SequenceGaps
 from leap_teleop.control.stream_health import StreamHealth
+
+# Checks missed in a row that mean the node itself stalled, not its input.
+STALL_CHECKS = 4
 
 
 class HandSubscription:
@@ -27,6 +31,8 @@ class HandSubscription:
         self.received = collections.Counter()          # per publisher (caller id)
         self.gaps = SequenceGaps()                     # what each publisher sent that never came
         self._lock = threading.Lock()
+        self.check_period = float(check_period)
+        self._last_check = None                        # time.monotonic() of the last check
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
         # watchdog of the node shares this thread. reset: a /clock that jumps back (a
@@ -55,6 +61,14 @@ class HandSubscription:
                                   % (self.node, rospy.resolve_name(self.topic), e))
 
     def _check_once(self):
+        mono, last = time.monotonic(), self._last_check
+        self._last_check = mono
+        if last is not None and mono - last > STALL_CHECKS * self.check_period:
+            # This process stood still (SIGSTOP, starved): the receive thread has not read
+            # what piled up yet, and re-subscribing now would lose it.
+            with self._lock:
+                self.health.stalled(rospy.get_time())
+            return
         if self.sub is None:         # a re-subscription that failed half-way: finish it
             self.sub = self._subscribe()
             rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
