@@ -297,7 +297,6 @@ def test_a_check_long_after_the_last_one_judges_afresh_instead_of_resubscribing(
     # A subscription whose node was stopped 2 s: the first check after it finds "no
     # message for 2 s" but must not re-subscribe (the backlog is in the old connection).
     import threading
-    import time as time_module
 
     import rospy
 
@@ -316,7 +315,7 @@ def test_a_check_long_after_the_last_one_judges_afresh_instead_of_resubscribing(
     sub.check_period, sub.sub = 0.25, Connected()
     monkeypatch.setattr(rospy, 'get_time', lambda: 12.5)
     feed(sub.health, 0.0, 10.0, late=False)
-    sub._last_check = time_module.monotonic() - 2.0
+    sub._last_check = 10.5                      # the last check, 2 s of ROS time before
     sub._check_once()
     assert sub.health.since == 12.5 and sub.health.resubscriptions == 0
     monkeypatch.setattr(rospy, 'get_time', lambda: 13.0)

@@ -4,7 +4,6 @@ falls silent while a publisher is connected, or loses every publisher the master
 lists (control.stream_health says when)."""
 import collections
 import threading
-import time
 
 import rosgraph
 import rospy
@@ -32,7 +31,7 @@ class HandSubscription:
         self.gaps = SequenceGaps()                     # what each publisher sent that never came
         self._lock = threading.Lock()
         self.check_period = float(check_period)
-        self._last_check = None                        # time.monotonic() of the last check
+        self._last_check = None                        # ROS time of the last check
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
         # watchdog of the node shares this thread. reset: a /clock that jumps back (a
@@ -61,19 +60,19 @@ class HandSubscription:
                                   % (self.node, rospy.resolve_name(self.topic), e))
 
     def _check_once(self):
-        mono, last = time.monotonic(), self._last_check
-        self._last_check = mono
-        if last is not None and mono - last > STALL_CHECKS * self.check_period:
+        # ROS time, as the timer's period: a simulation slower than real time is no stall
+        now, last = rospy.get_time(), self._last_check
+        self._last_check = now
+        if last is not None and now - last > STALL_CHECKS * self.check_period:
             # This process stood still (SIGSTOP, starved): the receive thread has not read
             # what piled up yet, and re-subscribing now would lose it.
             with self._lock:
-                self.health.stalled(rospy.get_time())
+                self.health.stalled(now)
             return
         if self.sub is None:         # a re-subscription that failed half-way: finish it
             self.sub = self._subscribe()
             rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
             return
-        now = rospy.get_time()
         publishers = self.sub.get_num_connections()
         with self._lock:
             ask = self.health.wants_listing(now, publishers)
