@@ -22,6 +22,11 @@ def test_demo_succeeds_and_writes_its_outputs(tmp_path):
                                      'ur10_1_rotated_cube', 'ur10_2_rotated_cube',
                                      'drone_flight'}
     assert all(task['success'] for task in summary['tasks'].values()), summary
+    # The graph (ur10_dual.launch and ardrone.launch inside) stopped cleanly on Ctrl-C.
+    assert summary['roslaunch_status'] == 0, summary
+    graph_log = (out / 'roslaunch.log').read_text(errors='replace')
+    for sign in ('process has died', 'escalating to SIG', 'Traceback'):
+        assert sign not in graph_log, '%r in roslaunch.log:\n%s' % (sign, graph_log[-4000:])
     for name in ('ur10.gif', 'drone.gif', 'drone_flight.png'):
         assert (out / name).stat().st_size > 10000
     assert len(list(out.glob("ur10_*.png"))) > 15

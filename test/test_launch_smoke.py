@@ -93,9 +93,8 @@ CASES = [
     ('ur10_single_hand_left', [['ur10_single.launch', 'hand:=left',
                                 'script:=' + os.path.join(GESTURES, 'ur10_pick_place_dual.yaml')]],
      ['--armed', 'ur10_1'], 90),
-    ('ur10_dual', [['ur10_dual.launch']],
-     ['--cube', 'ur10_1:cube_red', '--cube', 'ur10_2:cube_yellow',
-      '--cell', 'ur10_dual_cell.yaml'], 120),
+    # ur10_dual.launch with its defaults is the demo's arm half: test_demo.py runs it (and
+    # test_the_demo_runs_ur10_dual_launch_with_its_defaults keeps it so).
     ('ardrone', [['ardrone.launch']], ['--drone'], 120),
     # The leap_motion driver's stand-in: its Human, filtered Human and markers.
     ('leap_motion', [['leap_motion.launch']],
@@ -206,21 +205,53 @@ def test_documented_arg_values_parse(launch, args, nodes):
     assert nodes <= names, sorted(names)
 
 
-def test_the_demo_graph_gets_the_light_pictures_it_sets():
+@pytest.fixture(scope='module')
+def resolved():
+    """launch file -> ({param: value}, {node names}) with its defaults, as roslaunch's
+    loader resolves them (includes, args, param commands), each loaded once."""
+    import rosgraph.names
+    import roslaunch.config
+    import roslaunch.xmlloader
+    cache = {}
+
+    def load(launch):
+        if launch not in cache:
+            config = roslaunch.config.ROSLaunchConfig()
+            loader = roslaunch.xmlloader.XmlLoader(resolve_anon=False)
+            loader.ignore_unset_args = False
+            loader.load(os.path.join(ROOT, 'launch', launch), config, argv=['roslaunch'],
+                        verbose=False)
+            cache[launch] = ({name: p.value for name, p in config.params.items()},
+                             {rosgraph.names.ns_join(n.namespace, n.name) for n in config.nodes})
+        return cache[launch]
+    return load
+
+
+def test_the_demo_graph_gets_the_light_pictures_it_sets(resolved):
     # Its cameras once stayed at 5 Hz each: ardrone.launch set them after the demo did.
-    proc = subprocess.run(['roslaunch', '--dump-params', 'leap_teleop', 'demo.launch'],
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
-    assert proc.returncode == 0, proc.stdout
-    params = yaml.safe_load(proc.stdout)
+    params, _ = resolved('demo.launch')
     assert params['/drone/ardrone_sim/front_rate'] == 2.0
     assert params['/drone/ardrone_sim/bottom_rate'] == 0.0
     assert params['/ur10_sim/snapshot_size'] == [400, 300]
 
 
+def test_the_demo_runs_ur10_dual_launch_with_its_defaults(resolved):
+    # Outside the drone's namespace, demo.launch is ur10_dual.launch as a user starts it:
+    # the same nodes and parameter values, plus the smaller snapshots the demo asks for.
+    dual_params, dual_nodes = resolved('ur10_dual.launch')
+    demo_params, demo_nodes = resolved('demo.launch')
+    arms = {k: v for k, v in demo_params.items() if not k.startswith('/drone/')}
+    assert arms.pop('/ur10_sim/snapshot_size') == [400, 300]
+    assert arms == dual_params
+    assert {n for n in demo_nodes if not n.startswith('/drone/')} == dual_nodes
+
+
 def test_every_launch_file_is_covered():
     launches = {f for f in os.listdir(os.path.join(ROOT, 'launch')) if f.endswith('.launch')}
-    run = {args[0] for c in CASES for args in c[1]} | {'sender.launch', 'record.launch'}
+    run = {args[0] for c in CASES for args in c[1]} | {'sender.launch', 'record.launch',
+                                                        'ur10_dual.launch'}
     parsed = {c[0] for c in DOCUMENTED_VALUES}
-    # replay.launch runs in test_replay_remap.py, demo.launch in test_demo.py.
+    # replay.launch runs in test_replay_remap.py, demo.launch (with ur10_dual.launch's
+    # defaults in it) in test_demo.py.
     assert launches <= run | parsed, launches - run - parsed
     assert {'replay.launch', 'demo.launch'} <= parsed

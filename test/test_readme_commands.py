@@ -21,7 +21,8 @@ WORKSPACE = 'test_catkin_workspace.py::test_builds_tests_installs_and_runs_in_a_
 COVERED = {
     './env.sh python -m pytest test/test_arm_teleop.py': 'test_arm_teleop.py',
     './env.sh roslaunch leap_teleop ardrone.launch': SMOKE,
-    './env.sh roslaunch leap_teleop ur10_dual.launch': SMOKE,
+    # the demo's arm half, with the same defaults (test_launch_smoke.py checks that)
+    './env.sh roslaunch leap_teleop ur10_dual.launch': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     './env.sh rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
     'rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
     "./env.sh python -m leap_teleop.hands.classify_frames 'photos/*.jpg'":

@@ -250,6 +250,9 @@ def main(argv=None):
                 launch.wait(20)
             except subprocess.TimeoutExpired:
                 launch.kill()
+                launch.wait()
+    # How the graph took Ctrl-C (0: every node stopped on SIGINT), as a user's would.
+    summary['roslaunch_status'] = launch.returncode
     # The pictures after the graph has gone: on 2 cores it would slow them and they it.
     write_pictures(mon, summary, shots, tasks, out)
     if 'ur10' in tasks:
