@@ -9,7 +9,6 @@ import sys
 import time
 
 import pytest
-import yaml
 
 from leap_teleop.hands.gestures.datasets import data_dir
 from tools.bench import ros_processes
