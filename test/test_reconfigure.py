@@ -93,18 +93,31 @@ import json, subprocess, threading, time
 import rospy
 
 def dynparam(*args):
+    # the command-line tool, as a user runs it
     out = subprocess.run(['rosrun', 'dynamic_reconfigure', 'dynparam'] + [str(a) for a in args],
                          capture_output=True, text=True, timeout=60)
     return out.stdout + out.stderr
 
+_clients = {}
+
+def client(node):
+    # the server call `dynparam` makes, without a process (a second or so of CPU) per value
+    import dynamic_reconfigure.client
+    if node not in _clients:
+        _clients[node] = dynamic_reconfigure.client.Client(node, timeout=30)
+    return _clients[node]
+
 def set_each(node, name, values):
-    return [dynparam('set', node, name, v) for v in values]
+    out = []
+    for v in values:
+        try:
+            out.append(str(client(node).update_configuration({name: v})))
+        except Exception as e:      # what dynparam would print
+            out.append(repr(e))
+    return out
 
 def get(node):
-    import yaml
-    return yaml.safe_load(subprocess.run(['rosrun', 'dynamic_reconfigure', 'dynparam', 'get',
-                                          node], capture_output=True, text=True,
-                                         timeout=60).stdout)
+    return client(node).get_configuration(timeout=30)
 '''
 
 PILOT_CLIENT = CLIENT_HEAD + r'''
@@ -129,14 +142,14 @@ state['palm'] = (0.05, 0.2, 0.0)           # 50 mm right of the reference
 out['default'] = window()
 out['set'] = dynparam('set', '/drone_pilot', 'dead_zone', 0.06)
 out['wide_dead_zone'] = window()
-out['bad'] = set_each('/drone_pilot', 'dead_zone', ('nan', 0.9, -1))
+out['bad'] = set_each('/drone_pilot', 'dead_zone', (float('nan'), 0.9, -1.0))
 out['after_bad_dead_zone'] = window()
 out['dead_zone'] = get('/drone_pilot')['dead_zone']
 state['palm'] = (0.3, 0.2, 0.0)            # far: the command cap decides
 out['full'] = window()
 dynparam('set', '/drone_pilot', 'max_cmd', 0.1)
 out['capped'] = window()
-set_each('/drone_pilot', 'max_cmd', ('nan', 5, 0, -0.5))
+set_each('/drone_pilot', 'max_cmd', (float('nan'), 5.0, 0.0, -0.5))
 out['after_bad_cap'] = window()
 out['max_cmd'] = get('/drone_pilot')['max_cmd']
 print(json.dumps(out))
@@ -211,7 +224,7 @@ hand['rock'] = False
 out['speed_default'] = top_speed()
 dynparam('set', '/ur10_arm', 'max_joint_speed', 0.02)
 out['speed_slow'] = top_speed()
-set_each('/ur10_arm', 'max_joint_speed', ('nan', 10, 0, -1))
+set_each('/ur10_arm', 'max_joint_speed', (float('nan'), 10.0, 0.0, -1.0))
 out['speed_after_bad'] = top_speed()
 out['max_joint_speed'] = get('/ur10_arm')['max_joint_speed']
 print(json.dumps(out))
@@ -277,7 +290,7 @@ dynparam('set', '/leap_sender', 'filter_cutoff', 1.0)
 out['light_filter'] = window()
 dynparam('set', '/leap_sender', 'filter_cutoff', 40.0)
 out['heavy_filter'] = window()
-set_each('/leap_sender', 'filter_cutoff', ('nan', 0, -1, 5000))
+set_each('/leap_sender', 'filter_cutoff', (float('nan'), 0.0, -1.0, 5000.0))
 out['after_bad_cutoff'] = window()
 out['cutoff'] = get('/leap_sender')['filter_cutoff']
 print(json.dumps(out))
