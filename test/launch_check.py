@@ -3,6 +3,8 @@
 
   --cube ARM:CUBE     (repeatable) the cube rests in the arm's tray (--cell YAML)
   --armed ARM         the arm node reports armed or tracking (its hand input arrives)
+  --moved ARM         the arm's robot moves a joint by more than MOVED_RAD (its commands
+                      reach the robot)
   --drone             every --navdata drone took off, flew and is landed again
   --topic T:PKG/MSG  (repeatable) at least --count messages arrive on T
   --rosout TEXT       a node logs a line containing TEXT
@@ -22,6 +24,7 @@ import rosgraph
 import roslib.message
 import rospy
 from rosgraph_msgs.msg import Log
+from sensor_msgs.msg import JointState
 from std_msgs.msg import Empty
 
 from leap_teleop.msg import ArmStatus, Navdata
@@ -29,6 +32,7 @@ from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, o
 from leap_teleop.ur10.config import load_config
 
 LANDED, HOVERING, TAKING_OFF = 2, 4, 6
+MOVED_RAD = 0.05
 
 
 class LaunchProgress:
@@ -38,6 +42,7 @@ class LaunchProgress:
         self.args = args
         self.lock = threading.Lock()
         self.cubes, self.arm_states = {}, {}
+        self.joint_ranges = {}         # arm -> (lowest, highest) position of each joint
         self.states = {topic: [] for topic in args.navdata}
         self.counts = {spec.rsplit(':', 1)[0]: 0 for spec in args.topic}
         self.logged = []
@@ -50,6 +55,9 @@ class LaunchProgress:
             rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._objects, queue_size=2)
         for arm in args.armed:
             rospy.Subscriber('/%s/ur10_arm/status' % arm, ArmStatus, self._status, arm,
+                             queue_size=20)
+        for arm in args.moved:
+            rospy.Subscriber('/%s/joint_states' % arm, JointState, self._joints, arm,
                              queue_size=20)
         if args.drone:
             for topic in args.navdata:
@@ -75,6 +83,17 @@ class LaunchProgress:
     def _status(self, msg, arm):
         with self.lock:
             self.arm_states.setdefault(arm, set()).add(msg.state)
+
+    def _joints(self, msg, arm):
+        q = np.asarray(msg.position, dtype=float)
+        with self.lock:
+            lo, hi = self.joint_ranges.get(arm, (q, q))
+            if lo.shape == q.shape:
+                self.joint_ranges[arm] = (np.minimum(lo, q), np.maximum(hi, q))
+
+    def moved(self, arm):
+        lo, hi = self.joint_ranges.get(arm, (np.zeros(1), np.zeros(1)))
+        return float(np.max(hi - lo)) > MOVED_RAD
 
     def _nav(self, msg, topic):
         with self.lock:
@@ -132,6 +151,8 @@ class LaunchProgress:
             for arm in self.args.armed:
                 if not self.arm_states.get(arm, set()) & {'armed', 'tracking'}:
                     return False
+            if not all(self.moved(arm) for arm in self.args.moved):
+                return False
             for s in (self.states.values() if self.args.drone else ()):
                 if TAKING_OFF not in s or s[-1] != LANDED or s.index(TAKING_OFF) == len(s) - 1:
                     return False
@@ -142,9 +163,11 @@ class LaunchProgress:
     def report(self):
         with self.lock:
             return ('cubes (xy error m, height over tray floor m): %s; arm states: %s; '
-                    'navdata states: %s; messages: %s; logged: %s; not in the graph: %s'
+                    'arms moved: %s; navdata states: %s; messages: %s; logged: %s; '
+                    'not in the graph: %s'
                     % (self.cube_errors() if self.args.cube else '-', self.arm_states,
-                       self.states, self.counts, self.logged[:1], self.graph_missing()))
+                       {arm: self.moved(arm) for arm in self.args.moved}, self.states,
+                       self.counts, self.logged[:1], self.graph_missing()))
 
 
 def main():
@@ -153,6 +176,7 @@ def main():
     ap.add_argument('--cube', action='append', default=[])
     ap.add_argument('--cell', default='ur10_cell.yaml')
     ap.add_argument('--armed', action='append', default=[])
+    ap.add_argument('--moved', action='append', default=[])
     ap.add_argument('--drone', action='store_true')
     ap.add_argument('--navdata', action='append', default=[],
                     help='navdata topic (repeatable; default ardrone/navdata)')

@@ -110,10 +110,13 @@ CASES = [
       '--topic', '/ardrone/land:std_msgs/Empty'], 90),
     # Real robots: ur10_arm.launch per arm next to a robot (here the simulated one) and a
     # sender, each its own launch; the sim's speed, not the real-robot 0.05 rad/s default.
+    # The hand reaches the arm and the arm's commands the robot across the three; the whole
+    # pick and place through the same three files is ur10_single's (ur10_single.launch
+    # includes them).
     ('ur10_arm', [['ur10_sim.launch'], ['ur10_arm.launch', 'max_joint_speed:=1.0'],
                   ['sender.launch', 'script:=' + os.path.join(GESTURES, 'ur10_pick_place_single.yaml'),
                    'sides:=[right]', 'wait_for_subscribers:=true']],
-     ['--cube', 'ur10_1:cube_red'], 120),
+     ['--armed', 'ur10_1', '--moved', 'ur10_1'], 120),
 ]
 
 
