@@ -229,14 +229,15 @@ def test_builds_tests_installs_and_runs_in_a_users_workspace(tmp_path):
         pattern = r'run_tests_leap_teleop_rostest_(test_)?%s(__.*)?\.test$' % re.escape(name)
         assert any(re.match(pattern, t) for t in targets), (name, sorted(targets))
     assert len([t for t in targets if t.endswith('.test')]) == len(rostests), sorted(targets)
-    # run_tests: one rostest target and the pytest target, narrowed to the message tests.
-    out = sh('catkin_make %s run_tests_leap_teleop_rostest_test_sender.test '
+    # run_tests: one rostest target (the lightest graph, the sender alone) and the pytest
+    # target, narrowed to the message tests.
+    out = sh('catkin_make %s run_tests_leap_teleop_rostest_test_leapros.test '
              'run_tests_leap_teleop_pytest_suite && catkin_test_results build/test_results'
              % args, dict(env, PYTEST_ADDOPTS='-k test_messages -p no:cacheprovider'), ws,
              setup=devel)
     assert '0 errors, 0 failures' in out, out[-3000:]
     results = os.listdir(ws / 'build' / 'test_results' / 'leap_teleop')
-    assert 'pytest-suite.xml' in results and any('sender' in r for r in results), results
+    assert 'pytest-suite.xml' in results and any('leapros' in r for r in results), results
 
     sh('catkin_make %s install' % args, env, ws)
     install = ws / 'install'
