@@ -94,7 +94,8 @@ CASES = [
      ['--armed', 'ur10_1'], 90),
     # ur10_dual.launch with its defaults is the demo's arm half: test_demo.py runs it (and
     # test_the_demo_runs_ur10_dual_launch_with_its_defaults keeps it so).
-    ('ardrone', [['ardrone.launch']], ['--drone'], 120),
+    # ardrone.launch with its defaults flies in drone_flight.test (and, Ctrl-C included,
+    # inside the demo).
     # The leap_motion driver's stand-in: its Human, filtered Human and markers.
     ('leap_motion', [['leap_motion.launch']],
      ['--topic', '/leap_motion/leap_device:leap_teleop/DriverHuman',

@@ -20,7 +20,7 @@ WORKSPACE = 'test_catkin_workspace.py::test_builds_tests_installs_and_runs_in_a_
 # Documented command (after `cd ... &&`, without comments) -> test file::function that runs it.
 COVERED = {
     './env.sh python -m pytest test/test_arm_teleop.py': 'test_arm_teleop.py',
-    './env.sh roslaunch leap_teleop ardrone.launch': SMOKE,
+    './env.sh roslaunch leap_teleop ardrone.launch': 'drone_flight.test',
     # the demo's arm half, with the same defaults (test_launch_smoke.py checks that)
     './env.sh roslaunch leap_teleop ur10_dual.launch': 'test_demo.py::test_demo_succeeds_and_writes_its_outputs',
     './env.sh rosrun leap_teleop sender.py --help': 'test_scripts.py::test_rosrun_script_help',
