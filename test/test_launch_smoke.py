@@ -102,9 +102,13 @@ CASES = [
       '--topic', '/leap_motion/filtered_values:leap_teleop/DriverHuman',
       '--topic', '/leap_motion/visualization_marker_array:visualization_msgs/MarkerArray',
       '--topic', '/leapmotion/data:leap_teleop/leapros'], 60),
+    # Its sender's hands reach both pilots, which command both drones up; both whole
+    # flights through the same launch file are drone_dual.test's.
     ('ardrone_dual', [['ardrone_dual.launch']],
-     ['--drone', '--navdata', '/drone1/ardrone/navdata', '--navdata', '/drone2/ardrone/navdata'],
-     120),
+     ['--topic', '/drone1/ardrone/takeoff:std_msgs/Empty',
+      '--topic', '/drone2/ardrone/takeoff:std_msgs/Empty',
+      '--topic', '/drone1/ardrone/navdata:leap_teleop/Navdata',
+      '--topic', '/drone2/ardrone/navdata:leap_teleop/Navdata'], 120),
     # Next to a real driver: launch_check stands in for it (navdata, takeoff, land).
     ('ardrone_sim_false', [['ardrone.launch', 'sim:=false']],
      ['--driver', '--navdata', '/ardrone/navdata', '--topic', '/ardrone/takeoff:std_msgs/Empty',
