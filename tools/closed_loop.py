@@ -45,8 +45,9 @@ def run_session(script, cell_config, arms, params=None, control_hz=120.0, settle
                 on_period=None):
     """Play `script` into one ArmTeleop per arm ({arm name: hand side}) driving a
     UR10Cell. Returns (cell, {arm: ArmRun}); the caller closes the cell.
-    on_period(cell, t) is called every control period (for snapshots)."""
-    cell = UR10Cell(cell_config)
+    on_period(cell, t) is called every control period (for snapshots); without it the
+    cell is never rendered, so it loads no visual meshes."""
+    cell = UR10Cell(cell_config, visuals=on_period is not None)
     source = ScriptedSource(script, realtime=False, clock=lambda: 0.0)
     interface = LeapInterface()
     teleops = {arm: ArmTeleop(params or ArmTeleopParams()) for arm in arms}

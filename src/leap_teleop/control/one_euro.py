@@ -41,7 +41,12 @@ class OneEuroFilter:
     @property
     def speed(self):
         """|filtered derivative|, units of the signal per s."""
-        return 0.0 if self.derivative is None else float(np.linalg.norm(self.derivative))
+        d = self.derivative
+        if d is None:
+            return 0.0
+        if d.ndim == 1:
+            return math.sqrt(d.dot(d))     # np.linalg.norm's value, without its overhead
+        return float(np.linalg.norm(d))
 
     def reset(self, value=None, t=None):
         """Start over from value (None: from the next sample), at rest."""

@@ -90,7 +90,8 @@ class JointServo:
         return qs.min(axis=0), qs.max(axis=0)
 
     def _clip(self, q):
-        return q if self.lower is None else np.clip(q, self.lower, self.upper)
+        # np.clip's values; its wrapper costs more than the arithmetic on 6 joints.
+        return q if self.lower is None else np.minimum(np.maximum(q, self.lower), self.upper)
 
     def _plan_points(self, now, q, v, vA, h, t1=None):
         """Plan (q, v) at now -> vA at now + t1 (constant acceleration; t1 = h when not
@@ -98,14 +99,14 @@ class JointServo:
         t1 = h if t1 is None or t1 > h - 1e-9 else t1
         q1 = q + 0.5 * (v + vA) * t1
         qA = q1 + vA * (h - t1)
-        t_stop = float(np.max(np.abs(vA) / self.max_accel))
+        t_stop = float((np.abs(vA) / self.max_accel).max())
         self._plan = (now, q.copy(), v.copy(), vA.copy(), max(t1, 1e-9), h, t_stop)
         points = [(t1, self._clip(q1), vA.copy())] if t1 < h else []
         if t_stop <= 1e-9:
-            return points + [(h, self._clip(qA), np.zeros_like(vA))]
+            return points + [(h, self._clip(qA), np.zeros(vA.shape))]
         qS = qA + 0.5 * vA * t_stop
         return points + [(h, self._clip(qA), vA.copy()),
-                         (h + t_stop, self._clip(qS), np.zeros_like(vA))]
+                         (h + t_stop, self._clip(qS), np.zeros(vA.shape))]
 
     def track(self, now, q_measured, goal, goal_velocity=None):
         """Trajectory points [(time_from_start, q, qd)] heading for `goal`, from now."""
@@ -115,15 +116,15 @@ class JointServo:
         mag = np.abs(e)
         correction = np.sign(e) * np.minimum(self.gain * mag,
                                              np.sqrt(2.0 * self.max_accel * mag))
-        v_des = np.clip(ff + correction, -self.max_speed, self.max_speed)
+        v_des = np.minimum(np.maximum(ff + correction, -self.max_speed), self.max_speed)
         step = self.max_accel * self.horizon
-        vA = v + np.clip(v_des - v, -step, step)
+        vA = v + np.minimum(np.maximum(v_des - v, -step), step)
         t1 = None
         if self.reach_fast:
             # Reach vA as soon as the acceleration bound allows (every joint together),
             # then hold it to the horizon: the velocity lags the goal's by ~t1/2 instead
             # of horizon/2. A short first segment (>= 1 ms) keeps the points apart.
-            t1 = max(float(np.max(np.abs(vA - v) / self.max_accel)), 1e-3)
+            t1 = max(float((np.abs(vA - v) / self.max_accel).max()), 1e-3)
         return self._plan_points(now, q, v, vA, self.horizon, t1)
 
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):
@@ -132,8 +133,8 @@ class JointServo:
         stop, never a jump back."""
         q, v = self.state_at(now, q_measured)
         accel = self.max_accel if max_accel is None else np.asarray(max_accel, dtype=float)
-        t_stop = float(np.max(np.abs(v) / accel))
+        t_stop = float((np.abs(v) / accel).max())
         if t_stop <= 1e-9:
             self._plan = None
-            return [(min_duration, self._clip(q), np.zeros_like(q))]
-        return self._plan_points(now, q, v, np.zeros_like(v), t_stop)
+            return [(min_duration, self._clip(q), np.zeros(q.shape))]
+        return self._plan_points(now, q, v, np.zeros(v.shape), t_stop)

@@ -3,10 +3,12 @@
 Used by the scripted source (and by tests) so synthetic hands carry the same
 geometry a real Leap frame does: fingertips, joints, directions, SDK-style flags.
 """
+import math
+
 import numpy as np
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand, vec3
-from leap_teleop.vectors import unit
+from leap_teleop.vectors import cross3
 
 # pose -> (extended fingers, grab strength, pinch strength): the SDK-style flags.
 POSES = {
@@ -88,6 +90,15 @@ _PINCH_MEET = np.array([24.5, 44.1, 16.6])
 PINCH_GAP_MM = 12.0
 
 
+def _unit(v):
+    """The 3 floats v scaled to length 1; v itself when it has no direction."""
+    x, y, z = v
+    length = math.sqrt(x * x + y * y + z * z)
+    if length > 1e-9:
+        return (x / length, y / length, z / length)
+    return v
+
+
 def rpy_to_basis(roll, pitch, yaw, side):
     """Palm normal and hand direction after rotating the palm-down pose by Leap-SDK
     style roll (about -z), pitch (about x), yaw (about y), radians."""
@@ -112,11 +123,18 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
         normal, direction = PALM_DOWN
         if pose == 'thumbs_up':
             normal = _THUMBS_UP_NORMAL[side]
-    n = unit(vec3(normal), fallback=vec3(normal))
-    d = unit(vec3(direction), fallback=vec3(direction))
-    d = unit(d - n * np.dot(d, n), fallback=d - n * np.dot(d, n))
-    thumbward = np.cross(d, n) if side == 'right' else -np.cross(d, n)
-    basis = np.stack([thumbward, n, d], axis=1)       # columns: hand frame axes in Leap axes
+    # The hand frame in plain floats (a scripted source renders every frame): numpy's
+    # arithmetic, in its order, without its per-call cost on 3-vectors.
+    n = _unit(vec3(normal).tolist())
+    d = _unit(vec3(direction).tolist())
+    along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2]
+    d = _unit((d[0] - n[0] * along, d[1] - n[1] * along, d[2] - n[2] * along))
+    t = cross3(d, n)
+    if side != 'right':
+        t = (-t[0], -t[1], -t[2])
+    # columns: hand frame axes (thumbward, normal, direction) in Leap axes
+    basis = np.array([[t[0], n[0], d[0]], [t[1], n[1], d[1]], [t[2], n[2], d[2]]])
+    n, d = np.array(n), np.array(d)
     palm = vec3(palm)
     if pinch is None:
         pinch = 0.2 + float(np.clip(pinch_value, 0.0, 0.8))

@@ -90,12 +90,15 @@ class _Arm:
 
 
 class UR10Cell:
-    """The simulated work cell. config: a CellConfig, a path, or a file name in config/."""
+    """The simulated work cell. config: a CellConfig, a path, or a file name in config/.
+    visuals=False: the arms without their visual meshes, for a cell nothing renders (the
+    same physics; loading them is most of a cell's start-up)."""
 
-    def __init__(self, config='ur10_cell.yaml', gui=False):
+    def __init__(self, config='ur10_cell.yaml', gui=False, visuals=True):
         self.config = config if isinstance(config, CellConfig) else load_config(config)
         self.dt = 1.0 / self.config.physics_hz
         self.gui = bool(gui) and bool(os.environ.get('DISPLAY'))
+        self.visuals = bool(visuals) or self.gui
         self.client = p.connect(p.GUI if self.gui else p.DIRECT)
         self.time = 0.0
         self.steps = 0
@@ -109,7 +112,8 @@ class UR10Cell:
         self._build_scene()
         self.arms = {}
         for a in self.config.arms:
-            body = p.loadURDF(urdf_file(a.prefix, a.base_xyz, a.base_rpy), useFixedBase=True,
+            body = p.loadURDF(urdf_file(a.prefix, a.base_xyz, a.base_rpy, visuals=self.visuals),
+                              useFixedBase=True,
                               flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
             self.arms[a.name] = arm = _Arm(a, body, c)
             self._cap_arm_speed(arm)
@@ -486,6 +490,8 @@ class UR10Cell:
 
     def snapshot(self, path=None, width=640, height=480, eye=None, target=None, fov=None):
         """Render the cell (TinyRenderer, works headless); PNG bytes, also written to path."""
+        if not self.visuals:
+            raise RuntimeError('this cell was built with visuals=False: nothing to render')
         from PIL import Image
         cam = self.config.camera
         eye = eye if eye is not None else cam.get('eye', [1.9, -1.3, 1.8])

@@ -4,6 +4,7 @@ Everything a consumer needs to script the cell: where each arm's base is in the 
 its home joints, its tray, and where the cubes start. Poses for IK are in an arm's
 base_link frame; ArmConfig.to_base / to_world convert 4x4 world <-> base poses.
 """
+import functools
 import math
 import os
 from dataclasses import dataclass, field
@@ -70,14 +71,13 @@ class ArmConfig:
 
     @property
     def world_T_base(self):
-        T = np.eye(4)
-        T[:3, :3] = _rpy_matrix(self.base_rpy)
-        T[:3, 3] = self.base_xyz
-        return T
+        return _placement(self.base_xyz, self.base_rpy)
 
     def to_base(self, T_world):
         """A world 4x4 pose in this arm's base_link frame."""
-        return np.linalg.inv(self.world_T_base) @ np.asarray(T_world, dtype=float)
+        key = (np.asarray(self.base_xyz, dtype=float).tobytes(),
+               np.asarray(self.base_rpy, dtype=float).tobytes())
+        return _base_T_world(*key) @ np.asarray(T_world, dtype=float)
 
     def to_world(self, T_base):
         return self.world_T_base @ np.asarray(T_base, dtype=float)
@@ -85,6 +85,24 @@ class ArmConfig:
     def point_to_base(self, xyz_world):
         Tb = self.world_T_base
         return Tb[:3, :3].T @ (np.asarray(xyz_world, dtype=float) - Tb[:3, 3])
+
+
+def _placement(xyz, rpy):
+    """world_T_base of an arm whose base is at xyz, turned by rpy."""
+    T = np.eye(4)
+    T[:3, :3] = _rpy_matrix(rpy)
+    T[:3, 3] = xyz
+    return T
+
+
+@functools.lru_cache(maxsize=64)
+def _base_T_world(xyz_bytes, rpy_bytes):
+    """The inverse of an arm's placement, once per placement: np.linalg.inv leaves an
+    OpenBLAS worker thread spinning ~0.1 s after each call (a core's worth of CPU when a
+    control loop calls it every period)."""
+    inverse = np.linalg.inv(_placement(np.frombuffer(xyz_bytes), np.frombuffer(rpy_bytes)))
+    inverse.flags.writeable = False
+    return inverse
 
 
 @dataclass

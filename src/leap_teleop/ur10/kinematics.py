@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from leap_teleop.vectors import wrap_angle
+from leap_teleop.vectors import cross3, norm3
 
 D1, A2, A3, D4, D5, D6 = 0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922
 ALPHA = (math.pi / 2, 0.0, 0.0, math.pi / 2, -math.pi / 2, 0.0)
@@ -61,32 +61,53 @@ def rot_z(angle):
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+_I3 = np.eye(3)
+_I3.flags.writeable = False
+
+
 def rotation_from_vector(w):
     """Rotation matrix of the rotation vector w (axis * angle, rad): Rodrigues."""
-    w = np.asarray(w, dtype=float)
-    angle = float(np.linalg.norm(w))
+    # Plain floats up to the matrices (the arm's control period runs this): the same
+    # arithmetic as numpy on the 3-vector, without its per-call cost.
+    x, y, z = np.asarray(w, dtype=float).tolist()
+    angle = math.sqrt(x * x + y * y + z * z)
     if angle < 1e-12:
         return np.eye(3)
-    k = w / angle
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+    kx, ky, kz = x / angle, y / angle, z / angle
+    K = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    return _I3 + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
 
 
 def rotation_vector(R):
     """Rotation vector (axis * angle, angle in [0, pi]) of a rotation matrix."""
     R = np.asarray(R, dtype=float)
-    c = max(-1.0, min(1.0, (np.trace(R) - 1.0) / 2.0))
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+    c = max(-1.0, min(1.0, ((r00 + r11) + r22 - 1.0) / 2.0))
     angle = math.acos(c)
-    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    v = (r21 - r12, r02 - r20, r10 - r01)
     if angle < 1e-9:
-        return 0.5 * v
+        return np.array([0.5 * v[0], 0.5 * v[1], 0.5 * v[2]])
     if math.pi - angle < 1e-6:
         # Near pi the antisymmetric part vanishes: take the axis from R + I.
         B = (R + np.eye(3)) / 2.0
         k = B[:, int(np.argmax(np.diag(B)))]
         k = k / np.linalg.norm(k)
         return k * angle
-    return v * (angle / (2.0 * math.sin(angle)))
+    f = angle / (2.0 * math.sin(angle))
+    return np.array([v[0] * f, v[1] * f, v[2] * f])
+
+
+_DOWN = (0.0, 0.0, -1.0)
+
+
+def _swing(z, tilt):
+    """The rotation tilting straight down to the tool axis z by `tilt` (rad) about their
+    common normal; the identity when z is vertical."""
+    axis = cross3(_DOWN, z)
+    n = norm3(axis)
+    if n < 1e-12:
+        return np.eye(3)
+    return rotation_from_vector(((axis[0] / n) * tilt, (axis[1] / n) * tilt, (axis[2] / n) * tilt))
 
 
 def tilt_and_yaw(R):
@@ -94,14 +115,10 @@ def tilt_and_yaw(R):
     (rad), yaw = turn about the vertical of the tool once the tilt is undone (the yaw
     of tool_down(yaw)). Together with the tilt axis this is a swing-twist split."""
     R = np.asarray(R, dtype=float)
-    z = R[:, 2]
-    down = np.array([0.0, 0.0, -1.0])
-    tilt = math.acos(max(-1.0, min(1.0, float(z @ down))))
-    axis = np.cross(down, z)
-    n = float(np.linalg.norm(axis))
-    swing = np.eye(3) if n < 1e-12 else rotation_from_vector(axis / n * tilt)
-    level = swing.T @ R            # pointing straight down: tool_down(yaw)
-    upright = level @ TOOL_DOWN.T  # = rot_z(yaw)
+    z = R[:, 2].tolist()
+    tilt = math.acos(max(-1.0, min(1.0, z[0] * 0.0 + z[1] * 0.0 + z[2] * -1.0)))
+    level = _swing(z, tilt).T @ R       # pointing straight down: tool_down(yaw)
+    upright = level @ TOOL_DOWN.T       # = rot_z(yaw)
     return tilt, math.atan2(upright[1, 0], upright[0, 0])
 
 
@@ -113,11 +130,7 @@ def limit_tool_rotation(R, max_tilt, yaw_center, max_turn):
     turn = (yaw - yaw_center + math.pi) % (2 * math.pi) - math.pi
     if tilt <= max_tilt and abs(turn) <= max_turn:
         return R
-    z = R[:, 2]
-    down = np.array([0.0, 0.0, -1.0])
-    axis = np.cross(down, z)
-    n = float(np.linalg.norm(axis))
-    swing = np.eye(3) if n < 1e-12 else rotation_from_vector(axis / n * min(tilt, max_tilt))
+    swing = _swing(R[:, 2].tolist(), min(tilt, max_tilt))
     yaw = yaw_center + max(-max_turn, min(max_turn, turn))
     return swing @ tool_down(yaw)
 
@@ -130,9 +143,12 @@ def pose(position, rotation=TOOL_DOWN):
     return T
 
 
+_DH_COS_SIN_ALPHA = tuple((math.cos(a), math.sin(a)) for a in ALPHA)
+
+
 def _dh(i, theta):
     ct, st = math.cos(theta), math.sin(theta)
-    ca, sa = math.cos(ALPHA[i]), math.sin(ALPHA[i])
+    ca, sa = _DH_COS_SIN_ALPHA[i]
     return np.array([[ct, -st * ca, st * sa, _DH_A[i] * ct],
                      [st, ct * ca, -ct * sa, _DH_A[i] * st],
                      [0.0, sa, ca, _DH_D[i]],
@@ -201,6 +217,7 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
     psi = math.atan2(p5y, p5x)
     phi = math.acos(max(-1.0, min(1.0, D4 / r))) if r > 0 else 0.0
     sols = []
+    pi, two_pi = math.pi, 2.0 * math.pi
     for q1 in (psi + phi + math.pi / 2, psi - phi + math.pi / 2):
         s1, c1 = math.sin(q1), math.cos(q1)
         # z1 = (s1, -c1, 0): axis of joints 2, 3, 4; z1 . z6 = cos q5.
@@ -236,7 +253,10 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
                 s3 = math.sin(q3)
                 q2 = math.atan2(uy, ux) - math.atan2(A3 * s3, A2 + A3 * c3)
                 q4 = q234 - q2 - q3
-                sols.append(tuple(wrap_angle(q) for q in (q1, q2, q3, q4, q5, q6)))
+                # wrap_angle of each, inline (8 solutions per call on the control path)
+                sols.append(((q1 + pi) % two_pi - pi, (q2 + pi) % two_pi - pi,
+                             (q3 + pi) % two_pi - pi, (q4 + pi) % two_pi - pi,
+                             (q5 + pi) % two_pi - pi, (q6 + pi) % two_pi - pi))
     return sols
 
 
@@ -255,6 +275,14 @@ def nearest_in_limits(q, q_ref, lower=JOINT_LOWER, upper=JOINT_UPPER):
     return out
 
 
+def _limit_list(limit):
+    """Six joint limits as floats (a tuple of six floats, as the control loop passes its
+    own, is taken as it is)."""
+    if limit.__class__ is tuple and len(limit) == 6:
+        return limit
+    return np.broadcast_to(limit, (6,)).tolist()
+
+
 def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
     """The IK solution within the joint limits nearest to q_ref (max-abs joint distance);
     None when the pose is unreachable or no solution fits the limits. Never raises."""
@@ -262,25 +290,32 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
         ref = np.asarray(q_ref, dtype=float).reshape(6).tolist()
         if not all(math.isfinite(v) for v in ref):
             return None
-        lo = _LOWER_LIST if lower is JOINT_LOWER else np.broadcast_to(lower, (6,)).tolist()
-        hi = _UPPER_LIST if upper is JOINT_UPPER else np.broadcast_to(upper, (6,)).tolist()
+        lo = _LOWER_LIST if lower is JOINT_LOWER else _limit_list(lower)
+        hi = _UPPER_LIST if upper is JOINT_UPPER else _limit_list(upper)
     except (TypeError, ValueError):
         return None
     best, best_d = None, math.inf
     # Scalar code: the same arithmetic as nearest_in_limits, without per-joint numpy calls;
     # a candidate is dropped as soon as one joint is already no nearer than the best.
+    two_pi = _TWO_PI
     for sol in _ik_tuples(T, tcp=tcp, q6_free=ref[5]):
         out, d = [], 0.0
         for q, r, lo_j, hi_j in zip(sol, ref, lo, hi):
-            v = q + _TWO_PI * round((r - q) / _TWO_PI)
-            for _ in range(2):
-                if v > hi_j:
-                    v -= _TWO_PI
-                if v < lo_j:
-                    v += _TWO_PI
+            v = q + two_pi * round((r - q) / two_pi)
+            # twice: step back inside the limits if the nearest copy is outside
+            if v > hi_j:
+                v -= two_pi
+            if v < lo_j:
+                v += two_pi
+            if v > hi_j:
+                v -= two_pi
+            if v < lo_j:
+                v += two_pi
             if v > hi_j + 1e-12 or v < lo_j - 1e-12:
                 break
-            d = max(d, abs(v - r))
+            e = abs(v - r)
+            if e > d:
+                d = e
             if d >= best_d:
                 break
             out.append(v)

@@ -121,8 +121,10 @@ def _gripper_xml():
 """
 
 
-def build_urdf(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0)):
-    """The full description (XML string): UR10 + gripper, names prefixed, base placed."""
+def build_urdf(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0), visuals=True):
+    """The full description (XML string): UR10 + gripper, names prefixed, base placed.
+    visuals=False leaves out the arm's visual meshes (for a simulation nothing renders:
+    PyBullet takes ~0.5 s per arm to read them, and they play no part in the physics)."""
     robots = example_robot_data_dir()
     with open(os.path.join(robots, 'ur_description', 'urdf', 'ur10_robot.urdf')) as f:
         xml = f.read()
@@ -131,6 +133,8 @@ def build_urdf(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0)):
     xml = re.sub(r'<gazebo.*?</gazebo>', '', xml, flags=re.S)
     xml = re.sub(r'<transmission.*?</transmission>', '', xml, flags=re.S)
     xml = re.sub(r'<!--.*?-->', '', xml, flags=re.S)
+    if not visuals:
+        xml = re.sub(r'<visual>.*?</visual>', '', xml, flags=re.S)
     xml = xml.replace('</robot>', _gripper_xml() + '</robot>')
     # The arm's placement in the world.
     xyz = ' '.join('%.9g' % float(v) for v in base_xyz)
@@ -147,9 +151,10 @@ def build_urdf(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0)):
     return xml
 
 
-def urdf_file(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0), directory=None):
+def urdf_file(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0), directory=None,
+              visuals=True):
     """Write build_urdf(...) to a cache file (named by content hash) and return its path."""
-    xml = build_urdf(prefix, base_xyz, base_rpy)
+    xml = build_urdf(prefix, base_xyz, base_rpy, visuals)
     directory = directory or os.path.join(tempfile.gettempdir(),
                                           'leap_teleop_urdf_%d' % os.getuid())
     os.makedirs(directory, exist_ok=True)

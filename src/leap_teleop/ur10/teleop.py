@@ -43,6 +43,9 @@ MAX_GOAL_JUMP = 1.0
 # reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
 _TWO_PI = 2 * math.pi
+# Joint states this far outside the limits are corrupt, not rounding.
+_JOINTS_LOW = kin.JOINT_LOWER - 0.01
+_JOINTS_HIGH = kin.JOINT_UPPER + 0.01
 
 
 @dataclass
@@ -108,6 +111,8 @@ class ArmTeleop:
                                        kin.JOINT_LOWER)
         self._joint_upper = np.minimum(np.concatenate([kin.JOINT_UPPER[:3], self.p.wrist_upper]),
                                        kin.JOINT_UPPER)
+        # As floats: what the IK compares against every period.
+        self._ik_limits = (tuple(self._joint_lower.tolist()), tuple(self._joint_upper.tolist()))
         self._filter = OneEuroFilter(self.p.filter_min_cutoff_hz, self.p.filter_beta,
                                      self.p.filter_d_cutoff_hz)
         self._rotation_filter = OneEuroFilter(self.p.rotation_min_cutoff_hz,
@@ -130,6 +135,9 @@ class ArmTeleop:
         self._tool_ref = None          # tool rotation at the origin (base frame)
         self._yaw_ref = 0.0
         self._hand_rot_ref = None      # hand rotation vector at the origin (Leap axes)
+        self._hand_ref_rotation_t = None   # its rotation matrix, transposed
+        self._hand_rot_key = None      # (orientation mode, hand angles) of _hand_rot
+        self._hand_rot = None
         self._target = None
         self._goal = None              # (time, joint goal) of the last tracked target
         self._last_step = None
@@ -172,8 +180,8 @@ class ArmTeleop:
         palm = np.asarray(hand.palm_mm, dtype=float)
         angles = (hand.rotate, hand.turn, hand.swing)
         why = None
-        if hand.present and (not np.all(np.isfinite(palm))
-                             or np.any(np.abs(palm) > self.p.max_palm_mm)):
+        if hand.present and (not np.isfinite(palm).all()
+                             or (np.abs(palm) > self.p.max_palm_mm).any()):
             why = 'palm position %s is not a trackable hand' % (tuple(palm),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
@@ -196,11 +204,11 @@ class ArmTeleop:
         with `now`, their staleness is watched."""
         q = np.asarray(q, dtype=float)
         # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
-        if (q.shape == (6,) and np.all(np.isfinite(q)) and np.all(q >= kin.JOINT_LOWER - 0.01)
-                and np.all(q <= kin.JOINT_UPPER + 0.01)):
-            self._q = np.clip(q, kin.JOINT_LOWER, kin.JOINT_UPPER)
+        if (q.shape == (6,) and np.isfinite(q).all() and (q >= _JOINTS_LOW).all()
+                and (q <= _JOINTS_HIGH).all()):
+            self._q = np.minimum(np.maximum(q, kin.JOINT_LOWER), kin.JOINT_UPPER)
             qd = None if qd is None else np.asarray(qd, dtype=float)
-            ok = qd is not None and qd.shape == (6,) and np.all(np.isfinite(qd))
+            ok = qd is not None and qd.shape == (6,) and bool(np.isfinite(qd).all())
             self._qd = qd if ok else np.zeros(6)
             self._joints_rx = now
             return True
@@ -338,12 +346,7 @@ class ArmTeleop:
             return ArmCommand()
 
         palm = np.asarray(hand.palm_mm, dtype=float)
-        if self.p.orientation == 'fixed':
-            hand_rot = np.zeros(3)
-        elif self.p.orientation == 'yaw':     # the turn about the vertical alone
-            hand_rot = kin.rotation_vector(ori.hand_rotation(0.0, hand.turn, 0.0))
-        else:
-            hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
+        hand_rot = self._hand_rotation(hand)
         if self._stalled is not None:
             what, since = self._stalled
             fresh = self._hand_rx if what == 'hand input' else self._joints_rx
@@ -374,7 +377,7 @@ class ArmTeleop:
             target = self._tcp_ref + self._axes @ offset * 0.001 * self.p.scale
         else:
             target = self._joystick(offset, dt)
-        target = np.clip(target, self._lo, self._hi)
+        target = np.minimum(np.maximum(target, self._lo), self._hi)
         rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
         self._target = target
         cmd.gripper = self._gripper_command(hand, now)
@@ -382,10 +385,10 @@ class ArmTeleop:
         self.status.target_rotation = tuple(map(tuple, rotation))
         seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
         q = kin.ik_nearest(kin.pose(target, rotation), seed,
-                           lower=self._joint_lower, upper=self._joint_upper)
+                           lower=self._ik_limits[0], upper=self._ik_limits[1])
         why = 'no IK solution within the joint limits for'
         if (q is not None and self._goal is not None
-                and float(np.max(np.abs(q - self._goal[1]))) > MAX_GOAL_JUMP):
+                and float(np.abs(q - self._goal[1]).max()) > MAX_GOAL_JUMP):
             q, why = None, 'only another arm configuration reaches'
         if q is None:
             self.status.ik_failures += 1
@@ -406,13 +409,32 @@ class ArmTeleop:
         cmd.stamp = now
         return cmd
 
+    def _hand_rotation(self, hand):
+        """The hand's rotation since the origin as a rotation vector (Leap axes), as far as
+        the orientation mode follows it; computed once per new hand angles (the loop may
+        run more often than messages come, and a still hand repeats them)."""
+        mode = self.p.orientation
+        key = (mode, hand.rotate, hand.turn, hand.swing)
+        if key == self._hand_rot_key:
+            return self._hand_rot
+        if mode == 'fixed':
+            hand_rot = np.zeros(3)
+        elif mode == 'yaw':     # the turn about the vertical alone
+            hand_rot = kin.rotation_vector(ori.hand_rotation(0.0, hand.turn, 0.0))
+        else:
+            hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
+        hand_rot.flags.writeable = False
+        self._hand_rot_key, self._hand_rot = key, hand_rot
+        return hand_rot
+
     def _resume_gap(self, palm, now):
         """How far (m) the old origin would put the target from the arm's pose; joystick
         mode has no such target (its origin is the dead zone's centre): infinite."""
         if self.p.mode != 'imitation':
             return math.inf
-        target = np.clip(self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
-                         self._lo, self._hi)
+        target = np.minimum(np.maximum(
+            self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
+            self._lo), self._hi)
         return float(np.linalg.norm(target - kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]))
 
     def _set_origin(self, palm, hand_rot, now):
@@ -422,6 +444,7 @@ class ArmTeleop:
         self._tool_ref = tool[:3, :3].copy()
         self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
         self._hand_rot_ref = hand_rot.copy()
+        self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
         self._goal = None
         self._filter.reset(palm, now)
@@ -435,7 +458,7 @@ class ArmTeleop:
         if mode == 'fixed':
             return self._rotation
         # The hand's rotation since the origin, turned into the arm base's axes.
-        rel = kin.rotation_from_vector(hand_rot) @ kin.rotation_from_vector(self._hand_rot_ref).T
+        rel = kin.rotation_from_vector(hand_rot) @ self._hand_ref_rotation_t
         delta = kin.rotation_vector(ori.map_rotation(rel, self._axes_rotation))
         delta = delta * self.p.orientation_scale
         if mode == 'yaw':

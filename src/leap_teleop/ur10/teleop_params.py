@@ -10,6 +10,7 @@ import numpy as np
 from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
 from leap_teleop.params import Param, check_params, declared_fields
 from leap_teleop.ur10 import kinematics as kin
+from leap_teleop.ur10 import orientation as ori
 
 MODES = ('imitation', 'joystick')
 GRIPPER_MODES = ('binary', 'proportional')
@@ -168,7 +169,7 @@ class ArmTeleopParams:
         lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
         if np.any(lo >= hi):
             raise ValueError('workspace_min must be below workspace_max on every axis')
-        if not np.linalg.matrix_rank(np.asarray(self.axis_map, float)) == 3:
+        if not ori.axis_map_rank(self.axis_map) == 3:
             raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
         if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
             raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
