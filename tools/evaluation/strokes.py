@@ -30,13 +30,31 @@ import json
 import math
 import os
 import sys
+from bisect import bisect_left, bisect_right
 
 import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import CircleDetector, GestureRecognizer, datasets
-from leap_teleop.hands.gestures.circles import DRAWN, TIP_RULES, CircleFits, CircleRules, index_draws
+from leap_teleop.hands.gestures.circles import (
+    CIRCLE_MIN_POINTS,
+    CIRCLE_R_MIN,
+    CIRCLE_REFRACTORY_S,
+    CIRCLE_RETRY_POINTS,
+    DRAWN,
+    PALM_SMOOTHING,
+    PALM_SPACING,
+    SPAN_FRACTIONS,
+    TIP_RULES,
+    TIP_SPACING,
+    CircleFits,
+    CircleRules,
+    index_circle_cw,
+    index_draws,
+    track_circle,
+)
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
+from leap_teleop.hands.gestures.temporal import HandEvent
 from leap_teleop.hands.sources import leapjs
 from tools.evaluation.results_file import write_results
 from tools.evaluation.take_stream import recognize_take
@@ -243,6 +261,315 @@ def replay(calls, rules, fits=None):
     return out
 
 
+# -- replaying many rules over one recording: a CircleDetector's work that does not
+# depend on its rules, done once per recording. Which points a track keeps does not: the
+# smoothing and the resampling at the track's spacing read no rule, and a jump or an
+# event restarts the path at a point the track keeps either way. What the rules change
+# is where the path restarts, and the gate and fits along it; those are worked out per
+# stretch from a restart (one numpy pass per restart point and max_s, whatever the other
+# numbers), in the detector's own arithmetic, so the events are the detector's own.
+class _TrackPoints:
+    """The points a CircleDetector's track (palm or index tip) keeps over a recording,
+    with what its gate reads of each: the step's squared length (a jump restarts the
+    path there when longer than the rules allow), length, speed and its terms of the
+    area's prefix sums. `restart[frame]`: where the path restarts when an event clears
+    it at that frame (its last point, or the next one when it is empty)."""
+
+    def __init__(self, spacing, is_tip):
+        self.spacing, self.is_tip = spacing, is_tip     # the tip's swipes: rules.tip_v_max
+        self.spacing2 = spacing * spacing
+        self.frame, self.t, self.p, self.l2, self.step, self.speed = [], [], [], [], [], []
+        self.ab, self.hard = [], []             # [qy z, qz x, qx y, qz y, qx z, qy x]; a restart whatever the rules
+        self.restart = []
+        self.empty = True
+
+    def feed(self, frame, t, p):
+        """Whether the track keeps the point [x, y, z] (as _CircleTrack.add)."""
+        if not self.empty:
+            x, y, z = p
+            qx, qy, qz = self.p[-1]
+            sx, sy, sz = x - qx, y - qy, z - qz
+            l2 = sx * sx + sy * sy + sz * sz
+            if l2 < self.spacing2:
+                return False
+            if t >= self.t[-1]:
+                step = math.sqrt(l2)
+                dt = t - self.t[-1]
+                self._keep(frame, t, p, False, l2, step, step / dt if dt > 0.0 else math.inf,
+                           (qy * z, qz * x, qx * y, qz * y, qx * z, qy * x))
+                return True
+        self.empty = False
+        self._keep(frame, t, p, True, math.inf, 0.0, 0.0, (0.0,) * 6)
+        return True
+
+    def _keep(self, frame, t, p, hard, l2, step, speed, ab):
+        self.frame.append(frame)
+        self.t.append(t)
+        self.p.append(p)
+        self.hard.append(hard)
+        self.l2.append(l2)
+        self.step.append(step)
+        self.speed.append(speed)
+        self.ab.append(ab)
+
+    def end_frame(self):
+        n = len(self.t)
+        self.restart.append(n if self.empty else n - 1)
+
+    def finish(self, fits):
+        self.n = len(self.t)
+        self.ts = np.array(self.t, dtype=float)
+        self.pts = np.array(self.p, dtype=float).reshape(-1, 3)
+        self.l2 = np.array(self.l2, dtype=float)
+        self.steps = np.array(self.step, dtype=float)
+        self.ab = np.array(self.ab, dtype=float).reshape(-1, 6)
+        self.hard = np.array(self.hard, dtype=bool)
+        starts = np.flatnonzero(self.hard).tolist() + [self.n]
+        self.run_end = np.repeat(starts[1:], np.diff(starts)).tolist() if self.n else []
+        self.fits = fits
+        self._breaks, self._blocks, self._candidates, self._circles, self._first = {}, {}, {}, {}, {}
+
+    def segment_end(self, s, r_max):
+        """Where the path from `s` restarts next (a restart whatever the rules, or a jump
+        longer than r_max allows; the track's jump2)."""
+        breaks = self._breaks.get(r_max)
+        if breaks is None:
+            jump2 = (25 * self.spacing + 2 * r_max) ** 2
+            breaks = self._breaks[r_max] = np.flatnonzero(self.hard | (self.l2 > jump2)).tolist()
+        k = bisect_right(breaks, s)
+        return breaks[k] if k < len(breaks) else self.n
+
+    def candidates(self, s, rules):
+        """([frame], [n], [j]) of the points from `s` on (to the end of its run) where
+        the gate of a path restarted at `s` passes: the stretch from point j to point n
+        is the roundest past min_roundness (as _CircleTrack.add)."""
+        key = (s, rules.max_s, rules.arc, rules.min_roundness)
+        out = self._candidates.get(key)
+        if out is None:
+            out = self._candidates[key] = self._gate(s, rules)
+        return out
+
+    def _gate(self, s, rules):
+        hi = self.run_end[s]
+        if hi - s <= CIRCLE_MIN_POINTS:
+            return [], [], []
+        block = self._blocks.get((s, rules.max_s))
+        if block is None:
+            block = self._blocks[s, rules.max_s] = self._block(s, hi, rules.max_s)
+        js, perimeter, roundness, since_head = block
+        min_len = rules.arc * CIRCLE_R_MIN
+        n = np.arange(s, hi)
+        r = np.where((n - js >= CIRCLE_MIN_POINTS) & ~(perimeter < min_len)
+                     & (roundness > rules.min_roundness), roundness, -np.inf)
+        best = r.argmax(axis=0)
+        cols = np.arange(len(n))
+        ok = (r[best, cols] > -np.inf) & ~(since_head < min_len)
+        ns = n[ok]
+        return [self.frame[k] for k in ns.tolist()], ns.tolist(), js[best, cols][ok].tolist()
+
+    def _block(self, s, hi, max_s):
+        """Per point n of [s, hi) and per stretch (the track's spans): its start j, the
+        closed perimeter and the roundness of the stretch, and the path length since the
+        track's head; all as _CircleTrack.add computes them, the path restarted at s."""
+        ts, p = self.ts[s:hi], self.pts[s:hi]
+        # prefix sums from s, in add's order: length + step; cross + a - b per axis
+        length = np.concatenate(([0.0], np.cumsum(self.steps[s + 1:hi])))
+        ab = self.ab[s + 1:hi]
+        cross = np.zeros((hi - s, 3))
+        for axis in range(3):
+            terms = np.empty(2 * (hi - s - 1))
+            terms[0::2], terms[1::2] = ab[:, axis], -ab[:, axis + 3]
+            cross[1:, axis] = np.cumsum(terms)[1::2]
+        spans = np.array([f * max_s for f in SPAN_FRACTIONS])
+        n = np.arange(hi - s)
+        head = np.searchsorted(ts, ts - spans[-1])
+        js = np.minimum(np.searchsorted(ts, (ts[None, :] - spans[:, None]).ravel())
+                        .reshape(len(spans), -1), n)
+        x, y, z = p[:, 0], p[:, 1], p[:, 2]
+        a = p[js]
+        ex, ey, ez = x - a[..., 0], y - a[..., 1], z - a[..., 2]
+        perimeter = length - length[js] + np.sqrt(ex * ex + ey * ey + ez * ez)
+        cn, cj = cross, cross[js]
+        ax = cn[:, 0] - cj[..., 0] + y * a[..., 2] - z * a[..., 1]
+        ay = cn[:, 1] - cj[..., 1] + z * a[..., 0] - x * a[..., 2]
+        az = cn[:, 2] - cj[..., 2] + x * a[..., 1] - y * a[..., 0]
+        with np.errstate(divide='ignore', invalid='ignore'):
+            roundness = _TWO_PI * np.sqrt(ax * ax + ay * ay + az * az) / (perimeter * perimeter)
+        return js + s, perimeter, roundness, length - length[head]
+
+    def first_circle(self, s, rules, reads, verdict):
+        """(frame, *verdict) of the first circle the track closes from point s on (its
+        path restarted there, and again wherever the rules restart it) that `verdict`
+        (j, n, frame, hit, rules) -> (cw, radius, source, centre) or None keeps; None
+        without one. `reads`: the rules this track's circles depend on (a key)."""
+        key = (s, reads)
+        if key in self._first:
+            return self._first[key]
+        found = None
+        while s < self.n and found is None:
+            e = self.segment_end(s, rules.r_max)
+            frames, ns, js = self.candidates(s, rules)
+            failed = -math.inf                  # the last point whose fit failed
+            for k in range(bisect_left(ns, e)):
+                n, j = ns[k], js[k]
+                if n - failed <= CIRCLE_RETRY_POINTS:
+                    continue                    # the track's wait after a failed fit
+                if self.is_tip and max(self.speed[j + 1:n + 1]) > rules.tip_v_max:
+                    failed = n
+                    continue
+                hit = self.circle(j, n, rules)
+                if hit is None:
+                    failed = n
+                    continue
+                found = verdict(j, n, frames[k], hit, rules)
+                if found is not None:
+                    found = (frames[k],) + found
+                    break
+            s = e
+        self._first[key] = found
+        return found
+
+    def circle(self, j, n, rules):
+        """The track's circle on the stretch j..n, or None (as _CircleTrack.add)."""
+        key = (j, n, rules.arc)
+        hit = self._circles.get(key, False)
+        if hit is False:
+            # whatever the largest radius, checked below (its one use)
+            hit = self._circles[key] = track_circle(self.pts[j:n + 1].copy(), rules.arc,
+                                                    CIRCLE_R_MIN, math.inf, self.fits)
+        return hit if hit is None or hit[1] <= rules.r_max else None
+
+
+_TWO_PI = 2.0 * math.pi
+
+
+class RecordedCircles:
+    """One recording's calls to a CircleDetector (None: the hand left), for replays:
+    events(rules) is replay(calls, rules) at a fraction of its cost once the work that
+    does not depend on the rules is done (here, once). A recording whose time goes back
+    is replayed by a detector."""
+
+    def __init__(self, calls, fits):
+        self.calls, self.fits = calls, fits
+        times = [c[1] for c in calls if c is not None]
+        self.monotonic = all(b >= a for a, b in zip(times, times[1:]))
+        if self.monotonic:
+            self._walk(calls)
+        self._fast = {}
+
+    def _walk(self, calls):
+        """The detector's rule-free work, frame by frame (as CircleDetector.update)."""
+        self.palm, self.tip = palm, tip = _TrackPoints(PALM_SPACING, False), _TrackPoints(TIP_SPACING, True)
+        self.resets = []
+        # the index tip's stretches: palm normals (time, normal) and raw tip steps (time,
+        # squared length, duration) of each, and per tip point its stretch's extent
+        self.normals, self.steps = [], []
+        self.tip_stretch = []                   # per tip point: (first normal, its normal, first step, steps)
+        palm_smooth = tip_smooth = tip_prev = None
+        normals_from = steps_from = None
+        a = PALM_SMOOTHING
+        for frame, c in enumerate(calls):
+            if c is None:
+                self.resets.append(frame)
+                palm_smooth = None
+                palm.empty = True
+            else:
+                _, t, g, extended = c
+                x, y, z = g.palm
+                if palm_smooth is not None:
+                    sm = palm_smooth
+                    x, y, z = sm[0] + a * (x - sm[0]), sm[1] + a * (y - sm[1]), sm[2] + a * (z - sm[2])
+                palm_smooth = [x, y, z]
+                palm.feed(frame, t, palm_smooth)
+            if c is not None and index_draws(extended):
+                if normals_from is None:
+                    normals_from, steps_from = len(self.normals), len(self.steps)
+                self.normals.append((t, g.basis[1]))
+                tp = g.tips_world[1]
+                if math.isfinite(tp[0] + tp[1] + tp[2]):
+                    if tip_prev is not None and t > tip_prev[0]:
+                        pt = tip_prev[1]
+                        self.steps.append((t, (tp[0] - pt[0]) ** 2 + (tp[1] - pt[1]) ** 2
+                                           + (tp[2] - pt[2]) ** 2, t - tip_prev[0]))
+                    tip_prev = (t, tp)
+                    sm = tip_smooth
+                    if sm is not None:
+                        tp = [sm[0] + a * (tp[0] - sm[0]), sm[1] + a * (tp[1] - sm[1]),
+                              sm[2] + a * (tp[2] - sm[2])]
+                    tip_smooth = tp
+                    if tip.feed(frame, t, tp):
+                        self.tip_stretch.append((normals_from, len(self.normals) - 1,
+                                                 steps_from, len(self.steps)))
+            else:
+                tip_smooth = tip_prev = normals_from = steps_from = None
+                tip.empty = True
+            palm.end_frame()
+            tip.end_frame()
+        palm.finish(self.fits)
+        tip.finish(self.fits)
+        self.normal_t = [t for t, _ in self.normals]
+
+    def events(self, rules):
+        """Circle events [(time s, HandEvent)] of a CircleDetector with `rules` fed the
+        calls (as replay)."""
+        if not self.monotonic:
+            return replay(self.calls, rules, self.fits)
+        palm, tip = self.palm, self.tip
+        palm_rules = (rules.max_s, rules.arc, rules.min_roundness, rules.r_max)
+        out = []
+        last_event, last_frame = -math.inf, -1
+        palm_from = tip_from = 0
+        while True:
+            # Each track goes its own way until one closes a circle (the palm first within
+            # a frame, as the detector): the event clears both paths.
+            found = palm.first_circle(palm_from, rules, palm_rules, _palm_circle)
+            by_tip = tip.first_circle(tip_from, rules, rules, self._index_circle)
+            if by_tip is not None and (found is None or by_tip[0] < found[0]):
+                found = by_tip
+            if found is None:
+                return out
+            frame, cw, radius, source, centre = found
+            palm_from, tip_from = palm.restart[frame], tip.restart[frame]
+            if bisect_right(self.resets, frame) > bisect_right(self.resets, last_frame):
+                last_event = -math.inf          # the hand left since
+            t = self.calls[frame][1]
+            if t - last_event < CIRCLE_REFRACTORY_S:
+                continue
+            last_event, last_frame = t, frame
+            out.append((t, HandEvent('circle_cw' if cw else 'circle_ccw', True, radius * 1e-3,
+                                     source, tuple(float(c) for c in centre))))
+
+    def _index_circle(self, j, n, frame, hit, rules):
+        """CircleDetector._tip's verdict on the index tip's circle on the stretch j..n:
+        (cw, radius, 'index', centre) or None."""
+        t = self.calls[frame][1]
+        normals_from, normal, steps_from, steps_to = self.tip_stretch[n]
+        fast = self._last_fast(rules.tip_v_max)
+        k = fast[steps_to - 1] if steps_to > steps_from else -1
+        if k >= steps_from and t - self.steps[k][0] < rules.max_s:
+            return None                         # swiped within the stretch
+        first = bisect_left(self.normal_t, t - rules.max_s, normals_from, normal + 1)
+        hand, _, g, _ = self.calls[frame]
+        cw = index_circle_cw(hit[0], hand, g, self.normals[first:normal + 1], rules.min_across)
+        return None if cw is None else (cw, hit[1], 'index', hit[2])
+
+    def _last_fast(self, v_max):
+        """Per raw tip step, the last one so far faster than v_max (-1: none)."""
+        out = self._fast.get(v_max)
+        if out is None:
+            out, last = [], -1
+            for k, (_, d2, dt) in enumerate(self.steps):
+                if d2 > (v_max * dt) ** 2:
+                    last = k
+                out.append(last)
+            self._fast[v_max] = out
+        return out
+
+
+def _palm_circle(j, n, frame, hit, rules):
+    return hit[0][1] > 0, hit[1], 'palm', hit[2]
+
+
 def record_strokes(strokes, hands):
     """{(hand kind, person, symbol): recorded calls} of every stroke drawn with each hand."""
     out = {}
@@ -302,6 +629,7 @@ class CircleFit:
         self.fits = CachedFits() if fits is None else fits
         self._cache = {}
         self._events = {}                   # (recording, rules read) -> circle events
+        self._recordings = {}               # recording -> its RecordedCircles
         self._tip_free = {key for key, calls in (*stroke_calls.items(), *self._take_sides())
                           if not any(c is not None and index_draws(c[3]) for c in calls)}
         self._tip_default = {name: getattr(CircleRules, name) for name in TIP_RULES}
@@ -317,7 +645,10 @@ class CircleFit:
         if key in self._tip_free:
             read = dataclasses.replace(rules, **self._tip_default)
         if (key, read) not in self._events:
-            self._events[key, read] = len(replay(calls, rules, self.fits))
+            recording = self._recordings.get(key)
+            if recording is None:
+                recording = self._recordings[key] = RecordedCircles(calls, self.fits)
+            self._events[key, read] = len(recording.events(rules))
         return self._events[key, read]
 
     def outcome(self, rules):
@@ -441,12 +772,13 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     # are replayed through the rules here and, with loso, through every candidate.
     stroke_calls = record_strokes(strokes, hands)
     fits = CachedFits()
-    per_person, per_symbol, fired = {}, {}, []
+    per_person, per_symbol, fired, replayed = {}, {}, [], {}
     total = _zero_counts()
     for kind in HANDS:
         for person in people:
             for symbol in sorted(strokes[person]):
                 events = replay(stroke_calls[kind, person, symbol], rules, fits)
+                replayed[kind, person, symbol] = len(events)
                 sym_kind = _kind(symbol)
                 for c in (per_person.setdefault(person, _zero_counts()),
                           per_symbol.setdefault(symbol, _zero_counts()), total):
@@ -473,6 +805,9 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     if loso:
         fit = CircleFit(stroke_calls, take_calls, fits)
         out['loso'] = fit.loso(people)
+        # the refit's replays (RecordedCircles) against the detector's own on these rules
+        if fit.outcome(rules) != (replayed, sum(takes.values())):
+            raise RuntimeError('the refit replays the circle detector wrongly (rules %s)' % (rules,))
     return out
 
 

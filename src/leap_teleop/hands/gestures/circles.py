@@ -12,6 +12,7 @@ from leap_teleop.hands.gestures.geometry import f3 as _f3
 from leap_teleop.hands.gestures.temporal import HandEvent
 
 _isfinite = math.isfinite
+_sum = np.add.reduce
 
 # Each track (the smoothed palm, the index tip) keeps its recent path, resampled at a
 # small spacing (drops jitter while still). Cheap gate, per new point, for a few recent
@@ -97,14 +98,16 @@ def fit_circle(pts):
     algebraic (Kasa) fit in it. (centre (3,), unit normal (3,), radius, rms radial
     residual, unwrapped angle of each point about the centre, right-handed about the
     normal) or None when degenerate."""
+    # (np.add.reduce(.) / n: what mean() computes, without its wrapper's cost)
     p = np.asarray(pts, dtype=float)
-    c = p.mean(axis=0)
+    n = len(p)
+    c = _sum(p, 0) / n
     q = p - c
     _, vecs = np.linalg.eigh(q.T @ q)
     normal, u = vecs[:, 0], vecs[:, 2]
     v = vecs[:, 1]
-    if (u[1] * v[2] - u[2] * v[1]) * normal[0] + (u[2] * v[0] - u[0] * v[2]) * normal[1] \
-            + (u[0] * v[1] - u[1] * v[0]) * normal[2] < 0:
+    (n0, v0, u0), (n1, v1, u1), (n2, v2, u2) = vecs.tolist()
+    if (u1 * v2 - u2 * v1) * n0 + (u2 * v0 - u0 * v2) * n1 + (u0 * v1 - u1 * v0) * n2 < 0:
         v = -v                                  # u x v = normal
     x, y = q @ u, q @ v
     # x^2 + y^2 = 2 a x + 2 b y + k, normal equations (x, y are centred: sums are 0)
@@ -116,12 +119,13 @@ def fit_circle(pts):
     bx, by = float(x @ zz), float(y @ zz)
     cx = 0.5 * (syy * bx - sxy * by) / det
     cy = 0.5 * (sxx * by - sxy * bx) / det
-    r2 = float(zz.mean()) + cx * cx + cy * cy
+    r2 = float(_sum(zz)) / n + cx * cx + cy * cy
     dx, dy = x - cx, y - cy
     radius = math.sqrt(r2)
-    residual = float(np.sqrt(np.mean((np.sqrt(dx * dx + dy * dy) - radius) ** 2)))
+    off = np.sqrt(dx * dx + dy * dy) - radius
+    residual = math.sqrt(float(_sum(off * off)) / n)
     angles = np.arctan2(dy, dx)
-    step = np.diff(angles)
+    step = angles[1:] - angles[:-1]
     step -= 2 * math.pi * np.round(step / (2 * math.pi))
     angles = np.concatenate(([angles[0]], angles[0] + np.cumsum(step)))
     return c + cx * u + cy * v, normal, radius, residual, angles
@@ -241,25 +245,28 @@ class _CircleTrack:
         if max(self.speed[best_j + 1:]) > self.v_max:
             self.wait = CIRCLE_RETRY_POINTS
             return None
-        hit = self._fit(pts[best_j:])
+        hit = track_circle(np.array(pts[best_j:], dtype=float), self.arc, self.r_min, self.r_max,
+                           self.fits)
         if hit is None:
             self.wait = CIRCLE_RETRY_POINTS
         return hit
 
-    def _fit(self, pts):
-        # Trim to the shortest tail that sweeps the arc about the fitted centre, refit.
-        p = np.array(pts, dtype=float)
-        start = self.fits.arc_start(p, self.arc)
-        if start is None:
-            return None
-        hit = self.fits.tail_circle(p[start:])
-        if hit is None:
-            return None
-        axis, radius, centre, sweep = hit
-        # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
-        if abs(sweep) < 0.9 * self.arc or not self.r_min <= radius <= self.r_max:
-            return None
-        return axis, radius, centre
+
+def track_circle(p, arc, r_min, r_max, fits):
+    """(axis, radius mm, centre) of the circle a track's roundest stretch ((n, 3) array)
+    closes, or None: trimmed to the shortest tail that sweeps `arc` about the fitted
+    centre, refitted (`fits`: a CircleFits)."""
+    start = fits.arc_start(p, arc)
+    if start is None:
+        return None
+    hit = fits.tail_circle(p[start:])
+    if hit is None:
+        return None
+    axis, radius, centre, sweep = hit
+    # (the refit on the trimmed tail may read the arc a little shorter: 10% slack)
+    if abs(sweep) < 0.9 * arc or not r_min <= radius <= r_max:
+        return None
+    return axis, radius, centre
 
 
 class CircleFits:
@@ -335,6 +342,36 @@ def _cornered(q, normal):
     return float(window.max()) > CIRCLE_MAX_CORNER * total * m / len(head)
 
 
+def index_circle_cw(axis, hand, geometry, normals, min_across):
+    """Whether the index tip's circle about `axis` turns clockwise (True / False), or None
+    when it is no circle: drawn along the finger, or the palm turned meanwhile (`normals`:
+    (time, palm normal) over the stretch)."""
+    # Like the SDK's: a circle drawn roughly across the finger's axis (a loop in the
+    # plane the finger bends in is a tap or a fold, not a circle). The sense is then
+    # the SDK's: clockwise when the normal points along the finger.
+    ref = _f3(hand.fingers[1].direction)
+    if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
+        ref = geometry.basis[2]
+    along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
+    if abs(along) < min_across or _palm_turned(normals):
+        return None
+    return along > 0
+
+
+def _palm_turned(normals):
+    """Whether the palm normal turned more than CIRCLE_MAX_PALM_TURN_DEG over the
+    (time, normal) pairs (compared with their mean direction, half the pairwise angle)."""
+    ns = np.array([n for _, n in normals])
+    if len(ns) < 2:
+        return False
+    mean = ns.sum(axis=0)
+    norm = float(np.linalg.norm(mean))
+    if norm == 0.0:
+        return True
+    half = math.cos(math.radians(CIRCLE_MAX_PALM_TURN_DEG / 2.0))
+    return float((ns @ (mean / norm)).min()) < half
+
+
 _ZERO3 = (0.0, 0.0, 0.0)
 _FITS = CircleFits()
 
@@ -378,19 +415,6 @@ class CircleDetector:
         if len(self.tip_track.pts) > self.tip_track.head:
             self.tip_track.reset()
 
-    def _palm_turned(self):
-        """Whether the palm normal turned more than CIRCLE_MAX_PALM_TURN_DEG over the
-        recent stretch (compared with its mean direction, half the pairwise angle)."""
-        ns = np.array([n for _, n in self._normals])
-        if len(ns) < 2:
-            return False
-        mean = ns.sum(axis=0)
-        norm = float(np.linalg.norm(mean))
-        if norm == 0.0:
-            return True
-        half = math.cos(math.radians(CIRCLE_MAX_PALM_TURN_DEG / 2.0))
-        return float((ns @ (mean / norm)).min()) < half
-
     def _palm(self, timestamp, geometry):
         # Light smoothing: palm noise would otherwise scramble the turning at the palm
         # track's coarse spacing.
@@ -432,17 +456,10 @@ class CircleDetector:
         hit = self.tip_track.add(timestamp, tip)
         if hit is None or timestamp - self._tip_fast_at < self._normal_span:
             return None                         # (or swiped within the stretch)
-        # Like the SDK's: a circle drawn roughly across the finger's axis (a loop in the
-        # plane the finger bends in is a tap or a fold, not a circle). The sense is then
-        # the SDK's: clockwise when the normal points along the finger.
-        axis = hit[0]
-        ref = _f3(hand.fingers[1].direction)
-        if ref is None or not _isfinite(ref[0] + ref[1] + ref[2]):
-            ref = geometry.basis[2]
-        along = float(axis[0] * ref[0] + axis[1] * ref[1] + axis[2] * ref[2])
-        if abs(along) < self._min_across or self._palm_turned():
+        cw = index_circle_cw(hit[0], hand, geometry, normals, self._min_across)
+        if cw is None:
             return None
-        return along > 0, hit[1], 'index', hit[2]
+        return cw, hit[1], 'index', hit[2]
 
     def update(self, hand, timestamp, geometry, extended):
         """HandEvent or None, from the hand's HandGeometry (palm and tips) and the
