@@ -97,3 +97,26 @@ def test_a_urdf_without_visuals_differs_in_the_arms_visual_meshes_alone():
     assert '<visual>' in bare                       # the gripper's boxes keep theirs
     assert (re.sub('<visual>.*?</visual>', '', full, flags=re.S)
             == re.sub('<visual>.*?</visual>', '', bare, flags=re.S))
+
+
+def test_trajectory_float_paths_give_the_array_paths_floats():
+    from leap_teleop.ur10.trajectory import _hermite, _hermite_peak
+    rng = np.random.default_rng(6)
+    for _ in range(300):
+        q0, q1, v0, v1 = rng.normal(size=(4, 6)) * rng.choice([1e-6, 1.0, 5.0])
+        T, s = float(rng.uniform(1e-3, 2.0)), float(rng.choice([0.0, 1.0, rng.uniform()]))
+        fast, slow = _hermite(q0, q1, v0, v1, T, s), _hermite(q0, q1, v0, v1, T, np.float64(s))
+        assert all(a.tobytes() == b.tobytes() for a, b in zip(fast, slow))
+        rows = [x[None] for x in (q0, q1, v0, v1)]              # 2-D: the array path
+        assert _hermite_peak(q0, q1, v0, v1, T).tobytes() == _hermite_peak(*rows, T)[0].tobytes()
+
+
+def test_one_euro_3_vector_path_gives_the_array_paths_floats():
+    from leap_teleop.control.one_euro import OneEuroFilter
+    rng = np.random.default_rng(7)
+    flat, rows = OneEuroFilter(0.3, 4.0, 1.0), OneEuroFilter(0.3, 4.0, 1.0)
+    t = 0.0
+    for x in rng.normal(size=(300, 3)).cumsum(axis=0):
+        t += 0.008
+        a, b = flat.update(x, t), rows.update(x[None], t)      # (1, 3): the array path
+        assert a.tobytes() == b[0].tobytes() and flat.speed == rows.speed

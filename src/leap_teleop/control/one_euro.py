@@ -64,9 +64,26 @@ class OneEuroFilter:
         if dt <= 0.0:
             return self.value      # same or older time: nothing new to weigh
         self._t = t
+        if x.shape == (3,) and self.value.shape == (3,) and self.derivative.shape == (3,):
+            return self._update3(x.tolist(), dt)
         raw = (x - self.value) / dt
         self.derivative = self.derivative + smoothing_factor(self.d_cutoff_hz, dt) * (
             raw - self.derivative)
         cutoff = self.min_cutoff_hz + self.beta * self.speed
         self.value = self.value + smoothing_factor(cutoff, dt) * (x - self.value)
+        return self.value
+
+    def _update3(self, x, dt):
+        """update() of a 3-vector in plain floats (the arm filters its palm and rotation
+        every control period): the numpy expressions above, element by element."""
+        (x0, x1, x2), (v0, v1, v2) = x, self.value.tolist()
+        d0, d1, d2 = self.derivative.tolist()
+        a = smoothing_factor(self.d_cutoff_hz, dt)
+        d0 = d0 + a * ((x0 - v0) / dt - d0)
+        d1 = d1 + a * ((x1 - v1) / dt - d1)
+        d2 = d2 + a * ((x2 - v2) / dt - d2)
+        self.derivative = np.array([d0, d1, d2])
+        b = smoothing_factor(self.min_cutoff_hz + self.beta * math.sqrt(d0 * d0 + d1 * d1 + d2 * d2),
+                             dt)
+        self.value = np.array([v0 + b * (x0 - v0), v1 + b * (x1 - v1), v2 + b * (x2 - v2)])
         return self.value

@@ -21,10 +21,22 @@ first point's velocity is reached at the acceleration bound (every joint togethe
 held to the horizon, instead of spread evenly over it.
 """
 
+import math
+
 import numpy as np
 
 
+def _floats(x, n):
+    """x (one number or n numbers) as a list of n floats."""
+    a = np.asarray(x, dtype=float)
+    return a.tolist() if a.shape == (n,) else np.broadcast_to(a, (n,)).tolist()
+
+
 class JointServo:
+    """The arithmetic runs joint by joint in plain floats (the arm runs it every control
+    period, and numpy's per-call cost on 6 numbers is most of it), in the order and with
+    the tie rules of the numpy expressions in the comments, so that it gives their floats."""
+
     def __init__(self, max_speed, max_accel, horizon=0.024, gain=10.0, lower=None, upper=None,
                  lead=0.0, reach_fast=False):
         self.max_speed = np.asarray(max_speed, dtype=float)
@@ -34,7 +46,9 @@ class JointServo:
         self.lead = float(lead)
         self.reach_fast = bool(reach_fast)
         self.lower, self.upper = lower, upper
-        self._plan = None      # (t0, q0, v0, vA, t1, h, t_stop): to vA by t1, on to h, rest
+        # (t0, q0, v0, vA, t1, h, t_stop), q0 v0 vA tuples of floats: to vA by t1, on to h,
+        # then to rest.
+        self._plan = None
 
     def reset(self):
         """Forget the plan (the next call starts from the measured joints, at rest)."""
@@ -44,33 +58,51 @@ class JointServo:
     def moving(self):
         return self._plan is not None
 
-    def state_at(self, t, q_measured):
-        """(q, v) the last plan commands at time t; the measured joints at rest when
-        there is no plan or it has ended."""
+    def _state(self, t, q_measured):
+        """state_at as lists of floats."""
         plan = self._plan
         if plan is None:
-            return np.array(q_measured, dtype=float), np.zeros(len(q_measured))
+            q = np.asarray(q_measured, dtype=float).tolist()
+            return q, [0.0] * len(q)
         tau = max(t - plan[0], 0.0)
         if tau - plan[5] >= plan[6]:
             self._plan = None      # at rest: later calls follow the measured joints
         return self._planned(plan, tau)
 
+    def state_at(self, t, q_measured):
+        """(q, v) the last plan commands at time t; the measured joints at rest when
+        there is no plan or it has ended."""
+        if self._plan is None:
+            return np.array(q_measured, dtype=float), np.zeros(len(q_measured))
+        q, v = self._state(t, q_measured)
+        return np.array(q), np.array(v)
+
     @staticmethod
     def _planned(plan, tau):
-        """(q, v) of `plan` tau s after its start."""
+        """(q, v) of `plan` tau s after its start, as lists."""
         t0, q0, v0, vA, t1, h, t_stop = plan
         if tau <= t1:
-            a = (vA - v0) / t1
-            return q0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
-        q1 = q0 + 0.5 * (v0 + vA) * t1
+            # a = (vA - v0) / t1; q0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
+            q, v = [], []
+            for x, u, w in zip(q0, v0, vA):
+                a = (w - u) / t1
+                q.append(x + u * tau + 0.5 * a * tau * tau)
+                v.append(u + a * tau)
+            return q, v
+        q1 = [x + 0.5 * (u + w) * t1 for x, u, w in zip(q0, v0, vA)]
         if tau <= h:
-            return q1 + vA * (tau - t1), vA.copy()
-        qA = q1 + vA * (h - t1)
+            return [y + w * (tau - t1) for y, w in zip(q1, vA)], list(vA)
+        qA = [y + w * (h - t1) for y, w in zip(q1, vA)]
         if tau - h >= t_stop:                           # at rest (exactly)
-            return qA + 0.5 * vA * t_stop, np.zeros_like(vA)
+            return [y + 0.5 * w * t_stop for y, w in zip(qA, vA)], [0.0] * len(vA)
         tau2 = tau - h
-        dec = vA / t_stop
-        return qA + vA * tau2 - 0.5 * dec * tau2 * tau2, vA - dec * tau2
+        # dec = vA / t_stop; qA + vA * tau2 - 0.5 * dec * tau2 * tau2, vA - dec * tau2
+        q, v = [], []
+        for y, w in zip(qA, vA):
+            dec = w / t_stop
+            q.append(y + w * tau2 - 0.5 * dec * tau2 * tau2)
+            v.append(w - dec * tau2)
+        return q, v
 
     def reach(self, t, q_measured):
         """(lo, hi): per joint, the extremes of the positions the last plan commands from
@@ -82,59 +114,87 @@ class JointServo:
         t0, q0, v0, vA, t1, h, t_stop = self._plan
         start = max(t - t0, 0.0)
         taus = [start, t1, h, h + t_stop]
-        a = (vA - v0) / t1
-        with np.errstate(divide='ignore', invalid='ignore'):
-            turns = np.where(a != 0.0, -v0 / a, -1.0)      # where v crosses 0 in segment 1
-        taus += [float(x) for x in turns if 0.0 < x < t1]
+        for u, w in zip(v0, vA):
+            a = (w - u) / t1
+            if a != 0.0:
+                turn = -u / a                      # where v crosses 0 in segment 1
+                if 0.0 < turn < t1:
+                    taus.append(turn)
         qs = np.array([self._planned(self._plan, tau)[0] for tau in taus if tau >= start])
         return qs.min(axis=0), qs.max(axis=0)
 
-    def _clip(self, q):
-        # np.clip's values; its wrapper costs more than the arithmetic on 6 joints.
-        return q if self.lower is None else np.minimum(np.maximum(q, self.lower), self.upper)
+    def _limits(self, n):
+        return None if self.lower is None else (_floats(self.lower, n), _floats(self.upper, n))
+
+    @staticmethod
+    def _clip(q, limits):
+        """np.minimum(np.maximum(q, lower), upper) (np.clip's values) as an array."""
+        if limits is None:
+            return np.array(q)
+        out = []
+        for x, lo, hi in zip(q, *limits):
+            x = x if x > lo else lo
+            out.append(x if x < hi else hi)
+        return np.array(out)
 
     def _plan_points(self, now, q, v, vA, h, t1=None):
         """Plan (q, v) at now -> vA at now + t1 (constant acceleration; t1 = h when not
-        given) -> (qA, vA) at now + h -> rest; its trajectory points."""
+        given) -> (qA, vA) at now + h -> rest; its trajectory points. q, v, vA: lists."""
         t1 = h if t1 is None or t1 > h - 1e-9 else t1
-        q1 = q + 0.5 * (v + vA) * t1
-        qA = q1 + vA * (h - t1)
-        t_stop = float((np.abs(vA) / self.max_accel).max())
-        self._plan = (now, q.copy(), v.copy(), vA.copy(), max(t1, 1e-9), h, t_stop)
-        points = [(t1, self._clip(q1), vA.copy())] if t1 < h else []
+        n = len(q)
+        q1 = [x + 0.5 * (u + w) * t1 for x, u, w in zip(q, v, vA)]
+        qA = [y + w * (h - t1) for y, w in zip(q1, vA)]
+        t_stop = max([abs(w) / a for w, a in zip(vA, _floats(self.max_accel, n))])
+        self._plan = (now, tuple(q), tuple(v), tuple(vA), max(t1, 1e-9), h, t_stop)
+        limits = self._limits(n)
+        points = [(t1, self._clip(q1, limits), np.array(vA))] if t1 < h else []
         if t_stop <= 1e-9:
-            return points + [(h, self._clip(qA), np.zeros(vA.shape))]
-        qS = qA + 0.5 * vA * t_stop
-        return points + [(h, self._clip(qA), vA.copy()),
-                         (h + t_stop, self._clip(qS), np.zeros(vA.shape))]
+            return points + [(h, self._clip(qA, limits), np.zeros(n))]
+        qS = [y + 0.5 * w * t_stop for y, w in zip(qA, vA)]
+        return points + [(h, self._clip(qA, limits), np.array(vA)),
+                         (h + t_stop, self._clip(qS, limits), np.zeros(n))]
 
     def track(self, now, q_measured, goal, goal_velocity=None):
         """Trajectory points [(time_from_start, q, qd)] heading for `goal`, from now."""
-        q, v = self.state_at(now, q_measured)
-        ff = 0.0 if goal_velocity is None else np.asarray(goal_velocity, dtype=float)
-        e = np.asarray(goal, dtype=float) + ff * self.lead - q
-        mag = np.abs(e)
-        correction = np.sign(e) * np.minimum(self.gain * mag,
-                                             np.sqrt(2.0 * self.max_accel * mag))
-        v_des = np.minimum(np.maximum(ff + correction, -self.max_speed), self.max_speed)
-        step = self.max_accel * self.horizon
-        vA = v + np.minimum(np.maximum(v_des - v, -step), step)
+        q, v = self._state(now, q_measured)
+        n = len(q)
+        ff = [0.0] * n if goal_velocity is None else _floats(goal_velocity, n)
+        lead, gain, horizon = self.lead, self.gain, self.horizon
+        vA = []
+        for g, f, x, u, a, top in zip(_floats(goal, n), ff, q, v, _floats(self.max_accel, n),
+                                      _floats(self.max_speed, n)):
+            # e = goal + ff * lead - q; correction = np.sign(e) * np.minimum(gain * |e|,
+            # np.sqrt(2 a |e|)); v_des = clip(ff + correction, -max_speed, max_speed);
+            # vA = v + clip(v_des - v, -a horizon, a horizon)
+            e = g + f * lead - x
+            mag = abs(e)
+            near, far = gain * mag, math.sqrt(2.0 * a * mag)
+            m = near if near < far else far
+            v_des = f + (m if e > 0 else -m if e < 0 else 0.0 * m)
+            v_des = v_des if v_des > -top else -top
+            v_des = v_des if v_des < top else top
+            step = a * horizon
+            dv = v_des - u
+            dv = dv if dv > -step else -step
+            vA.append(u + (dv if dv < step else step))
         t1 = None
         if self.reach_fast:
             # Reach vA as soon as the acceleration bound allows (every joint together),
             # then hold it to the horizon: the velocity lags the goal's by ~t1/2 instead
             # of horizon/2. A short first segment (>= 1 ms) keeps the points apart.
-            t1 = max(float((np.abs(vA - v) / self.max_accel).max()), 1e-3)
-        return self._plan_points(now, q, v, vA, self.horizon, t1)
+            t1 = max(max([abs(w - u) / a for w, u, a in zip(vA, v, _floats(self.max_accel, n))]),
+                     1e-3)
+        return self._plan_points(now, q, v, vA, horizon, t1)
 
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):
         """Points that bring the joints to rest as fast as the acceleration limit
         (max_accel, default the servo's) allows: a hold where the commanded motion can
         stop, never a jump back."""
-        q, v = self.state_at(now, q_measured)
-        accel = self.max_accel if max_accel is None else np.asarray(max_accel, dtype=float)
-        t_stop = float((np.abs(v) / accel).max())
+        q, v = self._state(now, q_measured)
+        n = len(q)
+        accel = _floats(self.max_accel if max_accel is None else max_accel, n)
+        t_stop = max([abs(u) / a for u, a in zip(v, accel)])
         if t_stop <= 1e-9:
             self._plan = None
-            return [(min_duration, self._clip(q), np.zeros(q.shape))]
-        return self._plan_points(now, q, v, np.zeros(v.shape), t_stop)
+            return [(min_duration, self._clip(q, self._limits(n)), np.zeros(n))]
+        return self._plan_points(now, q, v, [0.0] * n, t_stop)

@@ -43,9 +43,17 @@ MAX_GOAL_JUMP = 1.0
 # reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
 _TWO_PI = 2 * math.pi
-# Joint states this far outside the limits are corrupt, not rounding.
-_JOINTS_LOW = kin.JOINT_LOWER - 0.01
-_JOINTS_HIGH = kin.JOINT_UPPER + 0.01
+# Joint states this far outside the limits are corrupt, not rounding (as floats: checked
+# on every state; NaN fails the comparisons, infinities the bounds).
+_JOINTS_LOW = (kin.JOINT_LOWER - 0.01).tolist()
+_JOINTS_HIGH = (kin.JOINT_UPPER + 0.01).tolist()
+
+
+def _within(v, limit):
+    """Every element of the array v finite and within +-limit."""
+    if v.shape == (3,):
+        return all(-limit <= x <= limit for x in v.tolist())
+    return bool(np.isfinite(v).all()) and not (np.abs(v) > limit).any()
 
 
 @dataclass
@@ -180,8 +188,7 @@ class ArmTeleop:
         palm = np.asarray(hand.palm_mm, dtype=float)
         angles = (hand.rotate, hand.turn, hand.swing)
         why = None
-        if hand.present and (not np.isfinite(palm).all()
-                             or (np.abs(palm) > self.p.max_palm_mm).any()):
+        if hand.present and not _within(palm, self.p.max_palm_mm):
             why = 'palm position %s is not a trackable hand' % (tuple(palm),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
@@ -204,11 +211,11 @@ class ArmTeleop:
         with `now`, their staleness is watched."""
         q = np.asarray(q, dtype=float)
         # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
-        if (q.shape == (6,) and np.isfinite(q).all() and (q >= _JOINTS_LOW).all()
-                and (q <= _JOINTS_HIGH).all()):
+        if q.shape == (6,) and all(lo <= v <= hi for v, lo, hi
+                                   in zip(q.tolist(), _JOINTS_LOW, _JOINTS_HIGH)):
             self._q = np.minimum(np.maximum(q, kin.JOINT_LOWER), kin.JOINT_UPPER)
             qd = None if qd is None else np.asarray(qd, dtype=float)
-            ok = qd is not None and qd.shape == (6,) and bool(np.isfinite(qd).all())
+            ok = qd is not None and qd.shape == (6,) and all(map(math.isfinite, qd.tolist()))
             self._qd = qd if ok else np.zeros(6)
             self._joints_rx = now
             return True

@@ -26,6 +26,17 @@ def _hermite(q0, q1, v0, v1, T, s):
     h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
     d00, d10, d01, d11 = 6 * s2 - 6 * s, 3 * s2 - 4 * s + 1, -6 * s2 + 6 * s, 3 * s2 - 2 * s
     e00, e10, e01, e11 = 12 * s - 6, 6 * s - 4, -12 * s + 6, 6 * s - 2
+    if s.__class__ is float and T > 0 and q0.ndim == 1:
+        # One instant (the simulator samples every physics step): joint by joint in plain
+        # floats, the arithmetic below in its order, without numpy's per-call cost.
+        h10, h11, d10, d11, e10, e11 = h10 * T, h11 * T, d10 * T, d11 * T, e10 * T, e11 * T
+        TT = T * T
+        q, v, a = [], [], []
+        for x0, x1, u0, u1 in zip(q0.tolist(), q1.tolist(), v0.tolist(), v1.tolist()):
+            q.append(h00 * x0 + h10 * u0 + h01 * x1 + h11 * u1)
+            v.append((d00 * x0 + d10 * u0 + d01 * x1 + d11 * u1) / T)
+            a.append((e00 * x0 + e10 * u0 + e01 * x1 + e11 * u1) / TT)
+        return np.array(q), np.array(v), np.array(a)
     q = h00 * q0 + h10 * T * v0 + h01 * q1 + h11 * T * v1
     v = (d00 * q0 + d10 * T * v0 + d01 * q1 + d11 * T * v1) / T
     a = (e00 * q0 + e10 * T * v0 + e01 * q1 + e11 * T * v1) / (T * T)
@@ -64,12 +75,28 @@ _SAMPLES = np.linspace(0.0, 1.0, 21)
 def _hermite_peak(q0, q1, v0, v1, T):
     """Per-joint max |v| over s in (0, 1] of a cubic Hermite: its velocity is the
     quadratic A s^2 + B s + v0, so the end and the vertex are the only candidates."""
+    if T > 0 and q0.ndim == 1:
+        # The simulator runs this per command: joint by joint in plain floats, the
+        # arithmetic below in its order, without numpy's per-call cost.
+        peaks = []
+        for x0, x1, u0, u1 in zip(q0.tolist(), q1.tolist(), v0.tolist(), v1.tolist()):
+            d = (x1 - x0) / T
+            A = 3 * u0 + 3 * u1 - 6 * d
+            peak = abs(u1)
+            if abs(A) > 1e-12:
+                B = 6 * d - 4 * u0 - 2 * u1
+                s = -B / (2 * A)
+                if 0.0 < s < 1.0:
+                    vs = abs((A * s + B) * s + u0)
+                    if vs > peak:
+                        peak = vs
+            peaks.append(peak)
+        return np.array(peaks)
     d = (q1 - q0) / T
     A = 3 * v0 + 3 * v1 - 6 * d
     B = 6 * d - 4 * v0 - 2 * v1
     peak = np.abs(v1)
-    # The vertex where A is not ~0 (the simulator runs this per command: array methods
-    # and a masked divide instead of np.any / np.errstate, which cost more than the math).
+    # The vertex where A is not ~0.
     s = np.divide(-B, 2 * A, out=np.full_like(A, -1.0), where=np.abs(A) > 1e-12)
     inside = (s > 0.0) & (s < 1.0)
     if inside.any():
@@ -160,7 +187,7 @@ class TrajectoryFollower:
                 raise TrajectoryError('point %d: positions outside the joint limits' % k)
             vel = self._vector(vel, k, 'velocities')
             if vel is not None:
-                vel = np.clip(vel, -self.vmax, self.vmax)
+                vel = np.minimum(np.maximum(vel, -self.vmax), self.vmax)    # np.clip's values
             acc = self._vector(acc, k, 'accelerations') if vel is not None else None
             parsed.append((start + tfs, pos, vel, acc))
         # Points already in the past are dropped, as the JTC does.
