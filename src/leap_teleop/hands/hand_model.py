@@ -3,6 +3,7 @@
 Used by the scripted source (and by tests) so synthetic hands carry the same
 geometry a real Leap frame does: fingertips, joints, directions, SDK-style flags.
 """
+import functools
 import math
 
 import numpy as np
@@ -90,6 +91,21 @@ _PINCH_MEET = np.array([24.5, 44.1, 16.6])
 PINCH_GAP_MM = 12.0
 
 
+@functools.lru_cache(maxsize=64)
+def _pinch_joints(pinch):
+    """The pinch pose's joints (as _local_joints) at this pinch strength, once per value."""
+    # Thumb and index tips meet as in a real OK sign; the gap closes from PINCH_GAP_MM
+    # (value 0) to 0 (value 0.8), so every pinch value is a pinch and pinch strength =
+    # 0.2 + value round-trips.
+    gap = PINCH_GAP_MM * (1.0 - (pinch - 0.2) / 0.8)
+    local = _LOCAL_JOINTS['pinch'].copy()
+    shift = np.array([[gap / 2.0, 0.0, 0.0], [-gap / 2.0, 0.0, 0.0]]) \
+        + (_PINCH_MEET - 0.5 * (local[0, 3] + local[1, 3]))
+    local[:2, 1:] += shift[:, None, :]
+    local.flags.writeable = False
+    return local
+
+
 def _unit(v):
     """The 3 floats v scaled to length 1; v itself when it has no direction."""
     x, y, z = v
@@ -139,16 +155,7 @@ def render_hand(side, pose, palm, normal=None, direction=None, pinch_value=0.0,
     if pinch is None:
         pinch = 0.2 + float(np.clip(pinch_value, 0.0, 0.8))
 
-    local = _LOCAL_JOINTS[pose]
-    if pose == 'pinch':
-        # Thumb and index tips meet as in a real OK sign; the gap closes from
-        # PINCH_GAP_MM (value 0) to 0 (value 0.8), so every pinch value is a pinch and
-        # pinch strength = 0.2 + value round-trips.
-        gap = PINCH_GAP_MM * (1.0 - (pinch - 0.2) / 0.8)
-        local = local.copy()
-        shift = np.array([[gap / 2.0, 0.0, 0.0], [-gap / 2.0, 0.0, 0.0]]) \
-            + (_PINCH_MEET - 0.5 * (local[0, 3] + local[1, 3]))
-        local[:2, 1:] += shift[:, None, :]
+    local = _pinch_joints(pinch) if pose == 'pinch' else _LOCAL_JOINTS[pose]
 
     # Every joint of every finger to Leap axes in one product: (5, 4, 3) = mcp, pip, dip, tip.
     world = local @ basis.T + palm

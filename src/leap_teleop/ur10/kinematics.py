@@ -196,7 +196,7 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
         if T.shape != (4, 4):
             return []
         (r0, r1, r2, _) = T.tolist()      # Python floats: much faster than numpy scalars
-        if not all(math.isfinite(v) for v in r0 + r1 + r2):
+        if not all(map(math.isfinite, r0 + r1 + r2)):
             return []
         # base_link -> DH base: negate x and y rows.
         xx, xy, xz = -r0[0], -r1[0], r2[0]
@@ -288,7 +288,7 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
     None when the pose is unreachable or no solution fits the limits. Never raises."""
     try:
         ref = np.asarray(q_ref, dtype=float).reshape(6).tolist()
-        if not all(math.isfinite(v) for v in ref):
+        if not all(map(math.isfinite, ref)):
             return None
         lo = _LOWER_LIST if lower is JOINT_LOWER else _limit_list(lower)
         hi = _UPPER_LIST if upper is JOINT_UPPER else _limit_list(upper)
@@ -313,7 +313,9 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
                 v += two_pi
             if v > hi_j + 1e-12 or v < lo_j - 1e-12:
                 break
-            e = abs(v - r)
+            e = v - r
+            if e < 0.0:
+                e = -e                   # abs(), without the call
             if e > d:
                 d = e
             if d >= best_d:

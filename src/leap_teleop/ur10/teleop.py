@@ -388,8 +388,8 @@ class ArmTeleop:
         rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
         self._target = target
         cmd.gripper = self._gripper_command(hand, now)
-        self.status.target = tuple(target)
-        self.status.target_rotation = tuple(map(tuple, rotation))
+        self.status.target = tuple(target.tolist())
+        self.status.target_rotation = tuple(map(tuple, rotation.tolist()))
         seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
         q = kin.ik_nearest(kin.pose(target, rotation), seed,
                            lower=self._ik_limits[0], upper=self._ik_limits[1])

@@ -72,6 +72,7 @@ class GestureScript:
             self.segments[side] = self._parse_segments(side, segs)
         self.duration = max([s[-1].start + s[-1].duration for s in self.segments.values() if s]
                             or [0.0])
+        self._last_basis = {}
 
     def _parse_segments(self, side, segs):
         where = '%s: hands.%s' % (self.name, side)
@@ -144,6 +145,19 @@ class GestureScript:
             return seg.palm0 + offset
         return seg.palm0 + (seg.palm1 - seg.palm0) * u
 
+    def _basis(self, side, roll, pitch, yaw):
+        """rpy_to_basis, again only when the orientation changed (a hand mostly holds
+        it): one remembered per side. Its arrays are read-only (render_hand copies)."""
+        key = (side, roll, pitch, yaw)
+        last = self._last_basis.get(side)
+        if last is not None and last[0] == key:
+            return last[1]
+        basis = rpy_to_basis(roll, pitch, yaw, side)
+        for a in basis:
+            a.flags.writeable = False
+        self._last_basis[side] = (key, basis)
+        return basis
+
     def hand_at(self, side, t):
         """The Hand of `side` at script time t (s), or None when absent."""
         for seg in self.segments.get(side, ()):
@@ -154,10 +168,10 @@ class GestureScript:
                 palm = self._palm(seg, u)
                 dt = 1e-3
                 velocity = (self._palm(seg, min(u + dt / seg.duration, 1.0)) - palm) / dt
-                rpy = seg.rpy0 + (seg.rpy1 - seg.rpy0) * u
+                rpy = (seg.rpy0 + (seg.rpy1 - seg.rpy0) * u).tolist()
                 normal = direction = None
-                if np.any(rpy != 0.0) or seg.pose != 'thumbs_up':
-                    normal, direction = rpy_to_basis(rpy[0], rpy[1], rpy[2], side)
+                if seg.pose != 'thumbs_up' or any(a != 0.0 for a in rpy):
+                    normal, direction = self._basis(side, *rpy)
                 return render_hand(side, seg.pose, palm, normal, direction,
                                    pinch_value=seg.value, velocity=velocity,
                                    confidence=seg.confidence)
