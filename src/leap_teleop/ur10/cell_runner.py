@@ -125,7 +125,10 @@ class CellRunner:
     def __init__(self, p, use_sim_time, ros_time, reject):
         from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
         self.p, self.ros_time, self.reject = p, ros_time, reject
-        self.cell = UR10Cell(read_cell_config(p['config']), gui=bool(p['gui']))
+        # Pictures come from the renderer process's own cell: this one, stepped, needs the
+        # arms' visual meshes only for a GUI (they take ~0.5 s per arm to load).
+        self.cell = UR10Cell(read_cell_config(p['config']), gui=bool(p['gui']),
+                             visuals=bool(p['gui']))
         self.lock = threading.Lock()               # guards self.cell (physics)
         self.render_lock = threading.Lock()        # one snapshot at a time
         self.renderer = SnapshotRenderer(self.cell.config)

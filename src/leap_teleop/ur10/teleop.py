@@ -52,8 +52,17 @@ _JOINTS_HIGH = (kin.JOINT_UPPER + 0.01).tolist()
 def _within(v, limit):
     """Every element of the array v finite and within +-limit."""
     if v.shape == (3,):
-        return all(-limit <= x <= limit for x in v.tolist())
+        x, y, z = v.tolist()
+        return -limit <= x <= limit and -limit <= y <= limit and -limit <= z <= limit
     return bool(np.isfinite(v).all()) and not (np.abs(v) > limit).any()
+
+
+def _joints_plausible(q):
+    """Six joint positions (floats) finite and not far outside the joint limits."""
+    for v, lo, hi in zip(q, _JOINTS_LOW, _JOINTS_HIGH):
+        if not lo <= v <= hi:
+            return False
+    return True
 
 
 @dataclass
@@ -192,7 +201,8 @@ class ArmTeleop:
             why = 'palm position %s is not a trackable hand' % (tuple(palm),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
-        elif not all(math.isfinite(a) and abs(a) <= _TWO_PI for a in angles):
+        elif not (-_TWO_PI <= hand.rotate <= _TWO_PI and -_TWO_PI <= hand.turn <= _TWO_PI
+                  and -_TWO_PI <= hand.swing <= _TWO_PI):     # finite, within a turn
             why = 'hand rotation %s is not an angle' % (angles,)
         else:
             why = self._stream.check(hand.stamp, now)
@@ -211,8 +221,7 @@ class ArmTeleop:
         with `now`, their staleness is watched."""
         q = np.asarray(q, dtype=float)
         # Non-finite or far outside the joint limits: a corrupt state, never echoed in a hold.
-        if q.shape == (6,) and all(lo <= v <= hi for v, lo, hi
-                                   in zip(q.tolist(), _JOINTS_LOW, _JOINTS_HIGH)):
+        if q.shape == (6,) and _joints_plausible(q.tolist()):
             self._q = np.minimum(np.maximum(q, kin.JOINT_LOWER), kin.JOINT_UPPER)
             qd = None if qd is None else np.asarray(qd, dtype=float)
             ok = qd is not None and qd.shape == (6,) and all(map(math.isfinite, qd.tolist()))
