@@ -23,6 +23,8 @@ the rules are chosen on the other six and scored on that person.
 """
 import argparse
 import dataclasses
+import functools
+import gc
 import glob
 import gzip
 import hashlib
@@ -115,6 +117,13 @@ def template_hands(folder=LEAP_PEOPLE_DATA):
     path = os.path.join(folder, 'gti_dev.jsonl.gz')
     if not os.path.exists(path):
         raise DataError('no %s (set $LEAP_PEOPLE_DATA)' % path)
+    stat = os.stat(path)
+    return {kind: list(hands) for kind, hands in _template_hands(path, stat.st_mtime_ns, stat.st_size).items()}
+
+
+@functools.lru_cache(maxsize=2)
+def _template_hands(path, mtime_ns, size):
+    # (read once per process and file version: the tests and run() both want them)
     best = {}
     labels = {label: kind for kind, (label, _) in HANDS.items()}
     with gzip.open(path, 'rt') as f:
@@ -154,12 +163,40 @@ def circle_events(events):
     return [e for e in events if e.active and e.gesture.startswith('circle')]
 
 
+def _mover(hand):
+    """point -> hand_at(hand, point) (the same sums), at a third of its cost: the hand's
+    joints moved in one addition, the moved Hand built directly."""
+    fingers = hand.fingers
+    names = ('tip', 'mcp', 'pip', 'dip')
+    joints = [hand.palm_position] + [getattr(f, a) for f in fingers for a in names
+                                     if getattr(f, a) is not None]
+    if not all(j.__class__ is np.ndarray and j.dtype == float and j.shape == (3,) for j in joints):
+        return lambda point: hand_at(hand, point)
+    base, index_tip, fields, make = np.array(joints), fingers[1].tip, vars(hand), type(hand)
+    rows, k = [], 1                         # per finger, the row of each joint in base (-1: none)
+    for f in fingers:
+        rows.append([])
+        for a in names:
+            present = getattr(f, a) is not None
+            rows[-1].append(k if present else -1)
+            k += present
+
+    def at(point):
+        moved = list(base + (np.asarray(point, dtype=float) - index_tip))
+        moved.append(None)
+        return make(**dict(fields, palm_position=moved[0], fingers=tuple(
+            Finger(moved[t], f.direction, f.extended, moved[m], moved[p], moved[d])
+            for f, (t, m, p, d) in zip(fingers, rows))))
+    return at
+
+
 def draw(hand, t, xyz, recognizer=None):
     """Circle events [(time s, HandEvent)] of `hand` moved along the path."""
     rec = recognizer or GestureRecognizer()
+    at = _mover(hand)
     out = []
     for k in range(len(t)):
-        state = rec.update(hand_at(hand, xyz[k]), t[k])
+        state = rec.update(at(xyz[k]), t[k])
         out += [(float(t[k]), e) for e in circle_events(state.events)]
     return out
 
@@ -764,6 +801,19 @@ def run(strokes_dir=STROKES_DATA, leap_people_dir=LEAP_PEOPLE_DATA, leapjs_dir=N
     recognized, loop-free / closed / looped strokes firing one, circle events on the
     Guinevere and LeapJS takes; with `loso`, the leave-one-person-out refit too. `rules`:
     CircleRules for the detector (default: the shipped ones). DataError without data."""
+    # The cyclic garbage collector paused: the recordings and takes are millions of
+    # containers, none in a cycle, that its collections would walk again and again (a
+    # third of the CPU).
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        return _run(strokes_dir, leap_people_dir, leapjs_dir, rules, loso)
+    finally:
+        if paused:
+            gc.enable()
+
+
+def _run(strokes_dir, leap_people_dir, leapjs_dir, rules, loso):
     strokes = load_strokes(strokes_dir)
     hands = template_hands(leap_people_dir)
     people = sorted(strokes)

@@ -98,6 +98,19 @@ def fit_circle(pts):
     algebraic (Kasa) fit in it. (centre (3,), unit normal (3,), radius, rms radial
     residual, unwrapped angle of each point about the centre, right-handed about the
     normal) or None when degenerate."""
+    fit = _plane_circle(pts)
+    if fit is None:
+        return None
+    c, normal, u, v, cx, cy, radius, dx, dy = fit
+    off = np.sqrt(dx * dx + dy * dy) - radius
+    residual = math.sqrt(float(_sum(off * off)) / len(dx))
+    return c + cx * u + cy * v, normal, radius, residual, _unwrapped_angles(dx, dy)
+
+
+def _plane_circle(pts):
+    """fit_circle's plane and circle in it: (mean point, normal, in-plane axes u, v, the
+    centre's u and v coordinates from the mean point, radius, each point's u and v
+    offsets from the centre), or None when degenerate."""
     # (np.add.reduce(.) / n: what mean() computes, without its wrapper's cost)
     p = np.asarray(pts, dtype=float)
     n = len(p)
@@ -120,15 +133,15 @@ def fit_circle(pts):
     cx = 0.5 * (syy * bx - sxy * by) / det
     cy = 0.5 * (sxx * by - sxy * bx) / det
     r2 = float(_sum(zz)) / n + cx * cx + cy * cy
-    dx, dy = x - cx, y - cy
-    radius = math.sqrt(r2)
-    off = np.sqrt(dx * dx + dy * dy) - radius
-    residual = math.sqrt(float(_sum(off * off)) / n)
+    return c, normal, u, v, cx, cy, math.sqrt(r2), x - cx, y - cy
+
+
+def _unwrapped_angles(dx, dy):
+    """The angle of each offset (dx, dy), unwrapped along the path."""
     angles = np.arctan2(dy, dx)
     step = angles[1:] - angles[:-1]
     step -= 2 * math.pi * np.round(step / (2 * math.pi))
-    angles = np.concatenate(([angles[0]], angles[0] + np.cumsum(step)))
-    return c + cx * u + cy * v, normal, radius, residual, angles
+    return np.concatenate(([angles[0]], angles[0] + np.cumsum(step)))
 
 
 class _CircleTrack:
@@ -290,10 +303,11 @@ class CircleFits:
     def sweeps(self, p):
         """The angle (rad, >= 0) the path sweeps from each point of `p` to its last one,
         about the circle fitted to all of `p`; None when degenerate."""
-        fit = fit_circle(p)
+        fit = _plane_circle(p)                 # (its angles only)
         if fit is None:
             return None
-        return np.abs(fit[4][-1] - fit[4])
+        angles = _unwrapped_angles(fit[7], fit[8])
+        return np.abs(angles[-1] - angles)
 
     def tail_circle(self, p):
         """(axis: the unit normal the path turns right-handed about, radius, centre, signed
