@@ -234,8 +234,12 @@ class _CircleTrack:
         best, best_j = self.min_roundness, -1
         last_j = -1
         for span in spans:
+            if last_j == head:
+                break                           # the longer stretches start there too
             j = bisect_left(ts, t - span, head, n)
             if j == last_j or n - j < CIRCLE_MIN_POINTS:
+                if j == head:
+                    break
                 continue
             last_j = j
             a = pts[j]
