@@ -45,7 +45,9 @@ def test_generated_sessions_are_up_to_date():
     assert main(['--check']) == 0
 
 
-@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+# 'full' here; 'yaw', the same session in the same closed loop, is the demo's rotated-cube
+# task, which test_demo.py holds to the same states, placement and squareness.
+@pytest.mark.parametrize('orientation', ['full'])
 def test_rotated_cubes_are_grasped_across_the_faces_and_placed_square(orientation):
     """Each arm picks a cube lying at 30 / 60 deg: the hand turns, the tool turns with it,
     the jaws close across the faces and the cube lands square in the tray."""

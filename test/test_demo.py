@@ -22,6 +22,12 @@ def test_demo_succeeds_and_writes_its_outputs(tmp_path):
                                      'ur10_1_rotated_cube', 'ur10_2_rotated_cube',
                                      'drone_flight'}
     assert all(task['success'] for task in summary['tasks'].values()), summary
+    # The rotated cubes in yaw orientation mode (tools.rotated_task, the closed loop):
+    # held as test_arm_closed_loop.py holds the full mode.
+    for arm in ('ur10_1', 'ur10_2'):
+        task = summary['tasks']['%s_rotated_cube' % arm]
+        assert task['state_sequence'] == ['disarmed', 'armed', 'tracking', 'disarmed'], task
+        assert task['placement_error_m'] < 0.02 and task['yaw_from_square_deg'] < 5.0, task
     # The graph (ur10_dual.launch and ardrone.launch inside) stopped cleanly on Ctrl-C.
     assert summary['roslaunch_status'] == 0, summary
     graph_log = (out / 'roslaunch.log').read_text(errors='replace')

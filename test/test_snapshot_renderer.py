@@ -75,3 +75,23 @@ def test_the_renderer_yields_the_cpu_to_the_simulation(tmp_path):
     finally:
         renderer.close()
         cell.close()
+
+
+def test_ctrl_c_leaves_the_renderer_to_its_simulator(tmp_path):
+    """Ctrl-C reaches the whole process group; the renderer lives on (no traceback in the
+    launch's log) until its simulator closes the pipe."""
+    import signal
+    cell = UR10Cell()
+    renderer = SnapshotRenderer(cell.config)
+    try:
+        renderer.render(cell.pose_state(), str(tmp_path / 'a.png'), 64, 48)
+        proc = renderer._proc
+        proc.send_signal(signal.SIGINT)
+        time.sleep(0.5)
+        assert proc.poll() is None
+        assert renderer.render(cell.pose_state(), str(tmp_path / 'b.png'), 64, 48)
+        renderer.close()
+        assert proc.returncode == 0
+    finally:
+        renderer.close()
+        cell.close()

@@ -9,6 +9,7 @@ priority: on a busy machine a picture waits, not the physics and the nodes drivi
 import os
 import pickle
 import select
+import signal
 import subprocess
 import sys
 
@@ -89,6 +90,10 @@ class SnapshotRenderer:
 
 
 if __name__ == '__main__':
+    # Ctrl-C reaches the whole process group: the simulator ends its renderer by closing
+    # the pipe (EOF, also when it dies), so the renderer ignores SIGINT instead of dying
+    # mid-picture with a traceback in the launch's log.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     # Replies go on the original stdout; anything the C libraries print goes to stderr.
     reply_fd = os.dup(1)
     os.dup2(2, 1)
