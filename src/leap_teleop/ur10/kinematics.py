@@ -218,16 +218,21 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
     phi = math.acos(max(-1.0, min(1.0, D4 / r))) if r > 0 else 0.0
     sols = []
     pi, two_pi = math.pi, 2.0 * math.pi
+    # Comparisons instead of abs / min / max calls below (the same results, NaN included):
+    # 8 solutions per call on the control path.
+    near_one = 1.0 + 1e-9
     for q1 in (psi + phi + math.pi / 2, psi - phi + math.pi / 2):
         s1, c1 = math.sin(q1), math.cos(q1)
         # z1 = (s1, -c1, 0): axis of joints 2, 3, 4; z1 . z6 = cos q5.
         c5 = (px * s1 - py * c1 - D4) / D6
-        if abs(c5) > 1.0 + 1e-9:
+        if c5 > near_one or c5 < -near_one:
             continue
-        c5 = max(-1.0, min(1.0, c5))
-        for q5 in (math.acos(c5), -math.acos(c5)):
+        c5 = c5 if c5 < 1.0 else 1.0        # max(-1.0, min(1.0, c5))
+        c5 = c5 if c5 > -1.0 else -1.0
+        a5 = math.acos(c5)
+        for q5 in (a5, -a5):
             s5 = math.sin(q5)
-            if abs(s5) > 1e-10:
+            if s5 > 1e-10 or s5 < -1e-10:
                 # z4 = (z1 x z6) / s5; z1 x z6 = (-c1 zz, -s1 zz, s1 zy + c1 zx)
                 z4x, z4y, z4z = -c1 * zz / s5, -s1 * zz / s5, (s1 * zy + c1 * zx) / s5
                 q6 = math.atan2(-(z4x * xx + z4y * xy + z4z * xz),
@@ -246,12 +251,14 @@ def _ik_tuples(T, tcp=True, q6_free=0.0, eps=1e-9):
             ux = c1 * o4x + s1 * o4y
             uy = o4z - D1
             c3 = (ux * ux + uy * uy - A2 * A2 - A3 * A3) / (2 * A2 * A3)
-            if abs(c3) > 1.0 + 1e-9:
+            if c3 > near_one or c3 < -near_one:
                 continue
-            c3 = max(-1.0, min(1.0, c3))
-            for q3 in (math.acos(c3), -math.acos(c3)):
+            c3 = c3 if c3 < 1.0 else 1.0        # max(-1.0, min(1.0, c3))
+            c3 = c3 if c3 > -1.0 else -1.0
+            a3, u_angle = math.acos(c3), math.atan2(uy, ux)
+            for q3 in (a3, -a3):
                 s3 = math.sin(q3)
-                q2 = math.atan2(uy, ux) - math.atan2(A3 * s3, A2 + A3 * c3)
+                q2 = u_angle - math.atan2(A3 * s3, A2 + A3 * c3)
                 q4 = q234 - q2 - q3
                 # wrap_angle of each, inline (8 solutions per call on the control path)
                 sols.append(((q1 + pi) % two_pi - pi, (q2 + pi) % two_pi - pi,
