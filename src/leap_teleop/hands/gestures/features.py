@@ -14,7 +14,8 @@ frame, plus fingertip gaps and the cosines between successive bones.
   middle knuckle axis points up (people hold their hands and cameras at any roll; which
   way the thumb points in the picture is the thumbs-up guard's business, not the
   model's). Image y grows downward; a left hand is a mirrored right one, so callers
-  score both the landmarks and their mirror image.
+  score both the landmarks and their mirror image. `keypoint_features_rows(xy)`: the
+  same numbers for many sets at once (training).
 """
 import math
 
@@ -110,6 +111,54 @@ def keypoint_features(xy):
     out = np.concatenate((p.ravel(), bones.ravel(), np.minimum(gaps, 10.0), cos.ravel(),
                           straight, reach, np.minimum(thumb, 10.0)))
     return out if np.isfinite(out).all() else None
+
+
+def keypoint_features_rows(xy):
+    """keypoint_features of n sets of landmarks (n, 21, 2) at once, for training: the same
+    numbers, each step done as keypoint_features does it on one set (math.hypot where it
+    takes math.hypot, the same matrix product, the same sums). (n, KEYPOINT_FEATURES)
+    rows and a mask of the sets that have features (keypoint_features not None); rows
+    outside the mask are zeros."""
+    p = np.array(xy, dtype=float).reshape(-1, 21, 2)
+    feats = np.zeros((len(p), KEYPOINT_FEATURES))
+    idx = np.flatnonzero(np.isfinite(p).all(axis=(1, 2)))
+    p = p[idx] - p[idx, :1]
+    m = np.abs(p).max(axis=(1, 2))
+    keep = m > 0.0
+    idx, p = idx[keep], p[keep] / m[keep, None, None]
+    # upright_keypoints: turned where the wrist -> middle knuckle axis has a length
+    hyp = math.hypot
+    ax, ay = p[:, 9, 0].tolist(), p[:, 9, 1].tolist()
+    n = np.array([hyp(a, b) for a, b in zip(ax, ay)])
+    turn = np.flatnonzero(n > 1e-6)
+    c, s = -p[turn, 9, 1] / n[turn], p[turn, 9, 0] / n[turn]
+    rot = np.empty((len(turn), 2, 2))
+    rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1] = c, -s, s, c
+    q = np.matmul(p[turn], rot)
+    q /= np.abs(q).max(axis=(1, 2))[:, None, None]
+    p[turn] = q
+    v = p[:, 5] - p[:, 17]
+    w = np.array([hyp(a, b) for a, b in zip(v[:, 0].tolist(), v[:, 1].tolist())])
+    w[~(w > 1e-6)] = 1e-6
+    chain = p[:, _CHAINS]                            # (n, 5, 5, 2)
+    d = np.diff(chain, axis=2)
+    length = np.sqrt((d * d).sum(axis=3))            # (n, 5, 4)
+    bones = d / np.maximum(length[..., None], 1e-9)
+    tips = p[:, _MP_TIPS]
+    gaps = np.sqrt(((tips[:, _TIP_A] - tips[:, _TIP_B]) ** 2).sum(axis=2)) / w[:, None]
+    cos = (bones[:, :, 1:] * bones[:, :, :-1]).sum(axis=3)
+    straight = (np.sqrt(((chain[:, :, 4] - chain[:, :, 1]) ** 2).sum(axis=2))
+                / np.maximum(length[:, :, 1:].sum(axis=2), 1e-9))
+    reach = np.sqrt((tips * tips).sum(axis=2))
+    thumb = np.sqrt(((p[:, 4, None] - p[:, [5, 9, 6]]) ** 2).sum(axis=2)) / w[:, None]
+    k = len(p)
+    out = np.concatenate((p.reshape(k, -1), bones.reshape(k, -1), np.minimum(gaps, 10.0),
+                          cos.reshape(k, -1), straight, reach, np.minimum(thumb, 10.0)), axis=1)
+    finite = np.isfinite(out).all(axis=1)
+    feats[idx[finite]] = out[finite]
+    ok = np.zeros(len(feats), dtype=bool)
+    ok[idx[finite]] = True
+    return feats, ok
 
 
 def rotate_keypoints(xy, angle):

@@ -26,13 +26,13 @@ import time
 
 import numpy as np
 
+from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier
 from leap_teleop.hands.gestures.features import (
     hand_landmarks,
-    keypoint_features,
+    keypoint_features_rows,
     leap_features,
-    mirror_keypoints,
     rotate_keypoints,
 )
 from leap_teleop.hands.sources import leapjs
@@ -119,12 +119,19 @@ class Dataset:
 
 def noisy_hand(hand, sigma, rng):
     """A copy of a Hand with Gaussian noise (mm) on every joint."""
-    fingers = tuple(dataclasses.replace(
-        f, tip=f.tip + rng.normal(0.0, sigma, 3), mcp=f.mcp + rng.normal(0.0, sigma, 3),
-        pip=f.pip + rng.normal(0.0, sigma, 3), dip=f.dip + rng.normal(0.0, sigma, 3))
-        if f.mcp is not None and f.pip is not None and f.dip is not None else f
-        for f in hand.fingers)
-    return dataclasses.replace(hand, fingers=fingers)
+    jointed = [f.mcp is not None and f.pip is not None and f.dip is not None
+               for f in hand.fingers]
+    # one draw for the whole hand: the same numbers, in the same order (tip, mcp, pip,
+    # dip of each jointed finger), as one draw per joint
+    noise = iter(rng.normal(0.0, sigma, (sum(jointed), 4, 3)))
+    fingers = []
+    for f, j in zip(hand.fingers, jointed):
+        if j:
+            n = next(noise)
+            f = Finger(f.tip + n[0], f.direction, f.extended, f.mcp + n[1], f.pip + n[2],
+                       f.dip + n[3])
+        fingers.append(f)
+    return dataclasses.replace(hand, fingers=tuple(fingers))
 
 
 def add_leap_poses(ds, path, label_map=None, label=None, person=None):
@@ -201,22 +208,36 @@ def add_guinevere(ds, root):
     ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
 
 
-def add_keypoint_row(ds, pts, cls, person, label, copies=1):
-    """A keypoint row and its mirror image (a left hand is a mirrored right one), the
-    first copy as recorded, further copies turned in the picture by up to TURN_RAD with
-    KEYPOINT_NOISE on every landmark."""
+def keypoint_copies(ds, pts, cls, person, label, copies=1):
+    """A keypoint row's copies for add_keypoint_rows: the first as recorded, further
+    copies turned in the picture by up to TURN_RAD with KEYPOINT_NOISE on every landmark."""
+    out = []
     for k in range(copies):
         q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
         if k:
             q = q + ds.rng.normal(0.0, KEYPOINT_NOISE, q.shape)
-        ds.add(keypoint_features(q), cls, person, label, augmented=k > 0)
-        ds.add(keypoint_features(mirror_keypoints(q)), cls, person, label, augmented=k > 0)
+        out.append((q, cls, person, label, k > 0))
+    return out
+
+
+def add_keypoint_rows(ds, rows):
+    """Keypoint rows [(landmarks, class, person, label, augmented)], each followed by its
+    mirror image (a left hand is a mirrored right one); their features computed at once."""
+    if not rows:
+        return
+    xy = np.repeat(np.array([np.reshape(q, (21, 2)) for q, *_ in rows], dtype=float), 2, axis=0)
+    xy[1::2, :, 0] = -xy[1::2, :, 0]
+    x, ok = keypoint_features_rows(xy)
+    for i, (_, cls, person, label, augmented) in enumerate(rows):
+        for j in (2 * i, 2 * i + 1):
+            ds.add(x[j] if ok[j] else None, cls, person, label, augmented=augmented)
 
 
 def add_keypoints(ds, path, label=None, person=None):
     sources = []
     persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
     n = skipped = 0
+    rows = []
     for p, lab, src, pts in zip(persons, labels, sources, xy):
         cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
         if cls is None:
@@ -225,9 +246,10 @@ def add_keypoints(ds, path, label=None, person=None):
             skipped += 1
             continue
         # the rarer gestures (few people recorded a thumb or an OK sign) count more
-        add_keypoint_row(ds, pts, cls, p, lab,
-                         RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
+        rows += keypoint_copies(ds, pts, cls, p, lab,
+                                RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
         n += 1
+    add_keypoint_rows(ds, rows)
     ds.sources.append('%s (%d rows%s)' % (os.path.basename(path), n, ', %d mislabelled left out'
                                           % skipped if skipped else ''))
 
@@ -262,6 +284,7 @@ def camera_view(landmarks, yaw, pitch):
 def add_leap_views(ds, path, seed=SEED):
     rng = np.random.default_rng(seed)
     n = 0
+    rows = []
     for i, (p, lab, frame) in enumerate(gd.read_pose_lines(path)):
         cls = gd.LEAP_LABELS.get(lab)
         # their thumbs point ahead along the fingers, unlike a webcam's thumbs-up
@@ -273,9 +296,9 @@ def add_leap_views(ds, path, seed=SEED):
             continue
         yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
         xy = rotate_keypoints(camera_view(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
-        ds.add(keypoint_features(xy), cls, 'leap:' + p, lab)
-        ds.add(keypoint_features(mirror_keypoints(xy)), cls, 'leap:' + p, lab)
+        rows.append((xy, cls, 'leap:' + p, lab, False))
         n += 1
+    add_keypoint_rows(ds, rows)
     ds.sources.append('%s seen as a webcam would (%d views)' % (os.path.basename(path), n))
 
 
@@ -290,11 +313,13 @@ def add_photos(ds, folder):
     """The labelled photos' hands, one person per photo source (a few photos each, from
     other people than the keypoint files): PHOTO_COPIES turned copies each."""
     n = 0
+    rows = []
     for source, label, xy in gd.photo_hands(folder):
         cls = gd.PHOTO_LABELS.get(label)
         if cls is not None:
-            add_keypoint_row(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
+            rows += keypoint_copies(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
             n += 1
+    add_keypoint_rows(ds, rows)
     ds.sources.append('the labelled photos of ../hands (%d hands)' % n)
 
 
@@ -343,6 +368,10 @@ def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print, al
     time (one per core; each fit is seeded, so the result does not depend on the order)."""
     global _FOLD_DATA
     import multiprocessing
+
+    # imported here, once, rather than by each forked worker again (seconds of CPU each)
+    import sklearn.neural_network  # noqa: F401
+    import threadpoolctl  # noqa: F401
     _FOLD_DATA = (x, y, persons, labels, stride, alpha)
     held = sorted(held)
     out = {}
@@ -419,6 +448,11 @@ def print_lopo(title, report):
 
 def build(family, data_dir, adds, log=print):
     """The Dataset of `family` from the shared data (when there) plus the user's files."""
+    with gd.paused_gc():
+        return _build(family, data_dir, adds)
+
+
+def _build(family, data_dir, adds):
     ds = Dataset(family)
     if family == 'leap':
         gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
