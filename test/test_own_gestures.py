@@ -1,7 +1,9 @@
 """Your own gestures, end to end: record samples from a scripted source, retrain with
 them, bind the new gesture to an action, and the sender's side and the arm logic act on
 it; plus bad input to each step. Needs the shared data (../shared/data): fails without."""
+import contextlib
 import csv
+import fcntl
 import gzip
 import json
 import os
@@ -50,24 +52,47 @@ def write_script(path, pose, seconds, rate=60):
     return str(path)
 
 
+@contextlib.contextmanager
+def run_wide_folder(tmp_path_factory, name):
+    """A folder of this test run, held by one process at a time: under make test's
+    workers, the one that every worker of the run sees (the rostests below are work units
+    of their own, often on the other worker, and would retrain again); alone, this
+    process's own."""
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get('PYTEST_XDIST_WORKER'):
+        root = root.parent          # the run's folder; each worker's is one inside it
+        name += '_' + os.environ.get('PYTEST_XDIST_TESTRUNUID', '')
+    folder = root / name
+    folder.mkdir(exist_ok=True)
+    with open(root / (name + '.lock'), 'w') as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield folder
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
 @pytest.fixture(scope='module')
 def trained(tmp_path_factory):
     """(samples file, model path, CPU seconds of the retrain): 'two' (V sign), which the
-    shipped model reads as none, recorded from the scripted source and added."""
+    shipped model reads as none, recorded from the scripted source and added. Done once
+    per test run; the tests only read what it wrote."""
     gti_path()
-    tmp = tmp_path_factory.mktemp('own')
-    samples = str(tmp / 'two.jsonl')
-    rc = record_gestures.main(['--source', 'scripted', '--script',
-                               write_script(tmp / 'two.yaml', 'two', 6.0), '--label', 'two',
-                               '--seconds', '5', '--realtime', '0', '--out', samples,
-                               '--person', 'tester'])
-    assert rc == 0
-    model = str(tmp / 'mine.npz')
-    t0 = time.process_time()
-    rc = train_gestures.main(['--add', samples, '--label', 'two', '--out', model, '--no-report'])
-    cpu = time.process_time() - t0
-    assert rc == 0
-    return samples, model, cpu
+    with run_wide_folder(tmp_path_factory, 'own_gestures_trained') as tmp:
+        samples, model, done = str(tmp / 'two.jsonl'), str(tmp / 'mine.npz'), tmp / 'cpu.json'
+        if not done.exists():
+            rc = record_gestures.main(['--source', 'scripted', '--script',
+                                       write_script(tmp / 'two.yaml', 'two', 6.0), '--label',
+                                       'two', '--seconds', '5', '--realtime', '0', '--out',
+                                       samples, '--person', 'tester'])
+            assert rc == 0
+            t0 = time.process_time()
+            rc = train_gestures.main(['--add', samples, '--label', 'two', '--out', model,
+                                      '--no-report'])
+            cpu = time.process_time() - t0
+            assert rc == 0
+            done.write_text(json.dumps(cpu))
+        return samples, model, json.loads(done.read_text())
 
 
 def test_recorded_samples_are_the_shared_pose_format(trained):

@@ -19,6 +19,22 @@ HELD = ('user_03', 'guinevere_01')
 FEW_ITERATIONS = 8
 
 
+@pytest.fixture(scope='module', autouse=True)
+def poses_read_once():
+    """The people's pose file feeds the Leap fit, the static-pose test and the keypoint
+    fit's camera views: read once for the module (its rows are only read)."""
+    real, memo = gd.read_pose_lines, {}
+
+    def read_pose_lines(path):
+        key = os.path.abspath(path)
+        if key not in memo:
+            memo[key] = real(path)
+        return memo[key]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(gd, 'read_pose_lines', read_pose_lines)
+        yield
+
+
 @pytest.fixture(scope='module')
 def folds():
     for sub in ('leap_people', 'leapjs'):
