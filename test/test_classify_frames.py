@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from leap_teleop.hands import classify_frames
 from leap_teleop.hands.classify_frames import Classifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.datasets import data_dir
@@ -27,6 +28,14 @@ def run_cli(args, stdin=None):
                        input=stdin, capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     return [json.loads(line) for line in p.stdout.splitlines()]
+
+
+def run_main(args, capsys):
+    """The same command in this process (its main, as `python -m` runs it): for the tests
+    that run it many times; the ones above and below keep the real subprocess."""
+    capsys.readouterr()
+    assert classify_frames.main(args) == 0
+    return [json.loads(line) for line in capsys.readouterr().out.splitlines()]
 
 
 def check_line(line):
@@ -79,11 +88,11 @@ def test_garbage_lines_never_stop_the_run():
 
 
 @pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
-def test_every_shared_recording_classifies():
+def test_every_shared_recording_classifies(capsys):
     takes = sorted(n for n in os.listdir(DATA) if n.endswith('.json.lz'))
     assert len(takes) == 13, takes          # the loop below checks every one of them
     for name in takes:
-        out = run_cli([os.path.join(DATA, name)])
+        out = run_main([os.path.join(DATA, name)], capsys)
         assert len(out) > 50
         assert any(h for o in out for h in o['hands']), name      # hands were classified
         for o in out:
@@ -125,7 +134,7 @@ def test_frame_parsing_never_raises(frames, stateless):
 KEYPOINTS = os.path.join(os.path.dirname(DATA), 'keypoints')
 
 
-def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
+def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path, capsys):
     from leap_teleop.hands.gestures import datasets as gesture_data
     path = os.path.join(KEYPOINTS, 'Harikumar4.csv')
     if not os.path.isfile(path):
@@ -135,8 +144,8 @@ def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
     community = tmp_path / 'keypoint.csv'
     community.write_text(''.join('7,' + ','.join('%.4f' % v for v in row.ravel()) + '\n'
                                  for row in xy[:20]))
-    a = run_cli(['--keypoints', str(community)])
-    b = run_cli(['--keypoints', path])[:20]
+    a = run_main(['--keypoints', str(community)], capsys)
+    b = run_main(['--keypoints', path], capsys)[:20]
     assert len(a) == 20 and [o['id'] for o in a] == list(range(20))
     for line in a:
         h, = line['hands']
@@ -145,7 +154,7 @@ def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path):
     assert [o['hands'][0]['thumb_up'] for o in a] == [o['hands'][0]['thumb_up'] for o in b]
 
 
-def test_keypoints_mirror_image_reads_the_same(tmp_path):
+def test_keypoints_mirror_image_reads_the_same(tmp_path, capsys):
     from leap_teleop.hands.gestures import datasets as gesture_data
     _, _, xy = gesture_data.read_keypoints(os.path.join(KEYPOINTS, 'Kazuhito00.csv'))
     rows = xy[::200]
@@ -156,7 +165,7 @@ def test_keypoints_mirror_image_reads_the_same(tmp_path):
         p = tmp_path / name
         p.write_text(''.join('0,' + ','.join(repr(float(v)) for v in r.ravel()) + '\n' for r in data))
         paths.append(str(p))
-    a, b = (run_cli(['--keypoints', p]) for p in paths)
+    a, b = (run_main(['--keypoints', p], capsys) for p in paths)
     assert [o['hands'] for o in a] == [o['hands'] for o in b]
 
 

@@ -9,8 +9,25 @@ from tools.evaluation import evaluate
 
 
 @pytest.fixture(scope='module')
-def results(leapjs_data):
-    return evaluate.evaluate(leapjs_data, verbose=False)
+def take_runs():
+    """{take: evaluate.run_take of it}: each take streamed once for this module (the
+    figures below and the tests that look at single takes share them)."""
+    return {}
+
+
+@pytest.fixture(scope='module')
+def results(leapjs_data, take_runs):
+    return evaluate.evaluate(leapjs_data, verbose=False, runs=take_runs)
+
+
+@pytest.fixture(scope='module')
+def run_take(leapjs_data, take_runs):
+    """evaluate.run_take of a shared take by its name, run once for the module."""
+    def run(take):
+        if take not in take_runs:
+            take_runs[take] = evaluate.run_take(datasets.find_take(leapjs_data, take))
+        return take_runs[take]
+    return run
 
 
 def test_all_takes_found(results):
@@ -67,10 +84,10 @@ def test_sdk_circles_counted_as_the_recordings_show(results):
     assert every['sdk_circles_in_recording'] == 5 + 1 + 5 + 1 + 2 and every['matched'] == 0
 
 
-def test_circle_ground_truth_counts_what_the_recordings_show(leapjs_data):
-    rows, sdk = evaluate.run_take(datasets.find_take(leapjs_data, 'flapping'))
+def test_circle_ground_truth_counts_what_the_recordings_show(run_take):
+    rows, sdk = run_take('flapping')
     assert len(sdk) == 8 and sum(c.in_recording for c in sdk.values()) == 4
-    rows, sdk = evaluate.run_take(datasets.find_take(leapjs_data, 'Waiting-110fps'))
+    rows, sdk = run_take('Waiting-110fps')
     assert len(sdk) == 2 and sum(c.in_recording for c in sdk.values()) == 1
     assert all(c.clockwise is not None for c in sdk.values())
 
@@ -117,8 +134,8 @@ def test_main_writes_the_json(tmp_path, results, leapjs_data):
     assert views['total']['fraction'] >= 0.9 and views['total']['false_thumb_up'] == 0, views
 
 
-def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):
-    rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, 'test-paddle-rightwards'))
+def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(run_take):
+    rows, _ = run_take('test-paddle-rightwards')
     labels = datasets.LEAPJS_LABELS['test-paddle-rightwards'][:3]
     verdicts = [datasets.expected(e['thumb_up'], r.hand) for r in rows for _, fr, e in labels
                 if r[0] in fr]
@@ -127,20 +144,20 @@ def test_paddle_thumb_labels_follow_the_sdk_thumb_direction(leapjs_data):
     assert verdicts.count(True) == 30 and verdicts.count(False) == 0 and verdicts.count(None) > 40
 
 
-def test_no_hand_sized_circle_on_takes_without_circles(leapjs_data):
+def test_no_hand_sized_circle_on_takes_without_circles(run_take):
     # taps (finger-tap), waves, grabs, claps, splays, a gun: the drone flips on a palm or
     # fingertip circle of flip_min_radius (25 mm) or more; none of these takes holds one
     # (their fingertip loops are 4-20 mm: reported, see circle_all_takes)
     for take in ('finger-tap-54fps', 'wave', 'grab', 'gun', 'three-claps', 'HandSplay-110fps',
                  'brian', 'confidence2'):
-        rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, take))
+        rows, _ = run_take(take)
         events = [e for r in rows for e in r[2].events if e.gesture.startswith('circle')]
         assert not [e for e in events if e.source == 'palm' or e.value >= 0.025], take
 
 
-def test_no_take_shows_rock_or_a_thumbs_down(leapjs_data):
+def test_no_take_shows_rock_or_a_thumbs_down(run_take):
     # No one makes horns or a thumbs-down in the shared takes; Waiting's finger taps (the
     # SDK's flags read them as rock) bend the fingers at the knuckle only.
     for take in datasets.EVERY_TAKE:
-        rows, _ = evaluate.run_take(datasets.find_take(leapjs_data, take))
+        rows, _ = run_take(take)
         assert not any(r[2].rock or r[2].thumb_down for r in rows), take

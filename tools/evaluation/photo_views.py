@@ -138,6 +138,11 @@ def lean_views(cv2, bgr, label, box):
             ('rot%+d' % -LEAN_ROTATION, _rotate(cv2, bgr, -LEAN_ROTATION))]
 
 
+# lean_views ignore the hand's box: run() skips the detection that finds it (the detector
+# judges stills one by one, so the other detections do not change)
+lean_views.uses_box = False
+
+
 def swapped(landmarks):
     """The detections with MediaPipe's handedness label swapped."""
     from leap_teleop.hands.sources.landmarks import HandLandmarks
@@ -209,8 +214,10 @@ def run(data_dir=datasets.HANDS_DATA, names=None, make_views=views, log=None):
             bgr = cv2.imread(os.path.join(data_dir, name), cv2.IMREAD_COLOR)
             if bgr is None:
                 raise FileNotFoundError('cannot read %s' % os.path.join(data_dir, name))
-            found, _ = pipe.detect(bgr)
-            box = _box(found, bgr.shape[1], bgr.shape[0])
+            box = None
+            if getattr(make_views, 'uses_box', True):
+                found, _ = pipe.detect(bgr)
+                box = _box(found, bgr.shape[1], bgr.shape[0])
             r = per_label.setdefault(label, {'cases': 0, 'right': 0, 'false_thumb_up': 0,
                                              'no_hand': 0, 'failures': []})
             for view, img in make_views(cv2, bgr, label, box):
