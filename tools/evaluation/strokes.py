@@ -364,7 +364,8 @@ class _TrackPoints:
         starts = np.flatnonzero(self.hard).tolist() + [self.n]
         self.run_end = np.repeat(starts[1:], np.diff(starts)).tolist() if self.n else []
         self.fits = fits
-        self._breaks, self._blocks, self._candidates, self._circles, self._first = {}, {}, {}, {}, {}
+        self._breaks, self._blocks, self._roundest, self._candidates = {}, {}, {}, {}
+        self._circles, self._first = {}, {}
 
     def segment_end(self, s, r_max):
         """Where the path from `s` restarts next (a restart whatever the rules, or a jump
@@ -387,22 +388,35 @@ class _TrackPoints:
         return out
 
     def _gate(self, s, rules):
+        # The roundest stretch wins when it beats min_roundness (add's loop keeps the first
+        # of equals): per min_roundness only that comparison differs.
+        roundest = self._roundest.get((s, rules.max_s, rules.arc))
+        if roundest is None:
+            roundest = self._roundest[s, rules.max_s, rules.arc] = self._roundest_stretches(s, rules)
+        n, j, r = roundest
+        ok = r > rules.min_roundness
+        ns = n[ok].tolist()
+        return [self.frame[k] for k in ns], ns, j[ok].tolist()
+
+    def _roundest_stretches(self, s, rules):
+        """(points n, their roundest stretch's start j, its roundness) from `s` on where
+        the path since the head is long enough and a stretch is long enough."""
         hi = self.run_end[s]
         if hi - s <= CIRCLE_MIN_POINTS:
-            return [], [], []
+            return np.empty(0, int), np.empty(0, int), np.empty(0)
         block = self._blocks.get((s, rules.max_s))
         if block is None:
             block = self._blocks[s, rules.max_s] = self._block(s, hi, rules.max_s)
         js, perimeter, roundness, since_head = block
         min_len = rules.arc * CIRCLE_R_MIN
         n = np.arange(s, hi)
-        r = np.where((n - js >= CIRCLE_MIN_POINTS) & ~(perimeter < min_len)
-                     & (roundness > rules.min_roundness), roundness, -np.inf)
+        r = np.where((n - js >= CIRCLE_MIN_POINTS) & ~(perimeter < min_len) & ~np.isnan(roundness),
+                     roundness, -np.inf)
         best = r.argmax(axis=0)
         cols = np.arange(len(n))
-        ok = (r[best, cols] > -np.inf) & ~(since_head < min_len)
-        ns = n[ok]
-        return [self.frame[k] for k in ns.tolist()], ns.tolist(), js[best, cols][ok].tolist()
+        r = r[best, cols]
+        ok = (r > -np.inf) & ~(since_head < min_len)
+        return n[ok], js[best, cols][ok], r[ok]
 
     def _block(self, s, hi, max_s):
         """Per point n of [s, hi) and per stretch (the track's spans): its start j, the
