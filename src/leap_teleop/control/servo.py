@@ -83,11 +83,13 @@ class JointServo:
         t0, q0, v0, vA, t1, h, t_stop = plan
         if tau <= t1:
             # a = (vA - v0) / t1; q0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
-            q, v = [], []
+            n = len(q0)
+            q, v, j = [0.0] * n, [0.0] * n, 0
             for x, u, w in zip(q0, v0, vA):
                 a = (w - u) / t1
-                q.append(x + u * tau + 0.5 * a * tau * tau)
-                v.append(u + a * tau)
+                q[j] = x + u * tau + 0.5 * a * tau * tau
+                v[j] = u + a * tau
+                j += 1
             return q, v
         q1 = [x + 0.5 * (u + w) * t1 for x, u, w in zip(q0, v0, vA)]
         if tau <= h:
@@ -131,11 +133,8 @@ class JointServo:
         """np.minimum(np.maximum(q, lower), upper) (np.clip's values) as an array."""
         if limits is None:
             return np.array(q)
-        out = []
-        for x, lo, hi in zip(q, *limits):
-            x = x if x > lo else lo
-            out.append(x if x < hi else hi)
-        return np.array(out)
+        return np.array([m if (m := x if x > lo else lo) < hi else hi
+                         for x, lo, hi in zip(q, *limits)])
 
     def _plan_points(self, now, q, v, vA, h, t1=None):
         """Plan (q, v) at now -> vA at now + t1 (constant acceleration; t1 = h when not
@@ -160,7 +159,7 @@ class JointServo:
         n = len(q)
         ff = [0.0] * n if goal_velocity is None else _floats(goal_velocity, n)
         lead, gain, horizon = self.lead, self.gain, self.horizon
-        vA = []
+        vA, j = [0.0] * n, 0
         for g, f, x, u, a, top in zip(_floats(goal, n), ff, q, v, _floats(self.max_accel, n),
                                       _floats(self.max_speed, n)):
             # e = goal + ff * lead - q; correction = np.sign(e) * np.minimum(gain * |e|,
@@ -176,7 +175,8 @@ class JointServo:
             step = a * horizon
             dv = v_des - u
             dv = dv if dv > -step else -step
-            vA.append(u + (dv if dv < step else step))
+            vA[j] = u + (dv if dv < step else step)
+            j += 1
         t1 = None
         if self.reach_fast:
             # Reach vA as soon as the acceleration bound allows (every joint together),

@@ -306,7 +306,7 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
     # a candidate is dropped as soon as one joint is already no nearer than the best.
     two_pi = _TWO_PI
     for sol in _ik_tuples(T, tcp=tcp, q6_free=ref[5]):
-        out, d = [], 0.0
+        out, d, j = [0.0] * 6, 0.0, 0
         for q, r, lo_j, hi_j in zip(sol, ref, lo, hi):
             v = q + two_pi * round((r - q) / two_pi)
             # twice: step back inside the limits if the nearest copy is outside
@@ -327,7 +327,8 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
                 d = e
             if d >= best_d:
                 break
-            out.append(v)
+            out[j] = v
+            j += 1
         else:
             best, best_d = out, d
     return None if best is None else np.array(best)
