@@ -669,9 +669,6 @@ GRID = {'tip_v_max': (1000.0, 1500.0, 2000.0, 3000.0, 4000.0),
 FIT_ORDER = ('tip_v_max', 'max_s', 'r_max', 'arc', 'min_roundness', 'min_across')
 FIT_PASSES = 2
 LOOP_FREE_WEIGHT = 2
-# A stroke's events read by the scores and counts: none, one, more than one (a circle
-# fired twice); the replay stops there.
-STROKE_EVENTS_READ = 2
 
 
 class CircleFit:
@@ -709,10 +706,10 @@ class CircleFit:
         return self._events[key, read]
 
     def outcome(self, rules):
-        """({(hand kind, person, symbol): circle events, up to STROKE_EVENTS_READ}, circle
-        events on the takes)."""
+        """({(hand kind, person, symbol): circle events, as many as are read (_events_read)},
+        circle events on the takes)."""
         if rules not in self._cache:
-            strokes = {key: self._n_events(key, calls, rules, STROKE_EVENTS_READ)
+            strokes = {key: self._n_events(key, calls, rules, _events_read(key[2]))
                        for key, calls in self.stroke_calls.items()}
             takes = sum(self._n_events(key, calls, rules) for key, calls in self._take_sides())
             self._cache[rules] = strokes, takes
@@ -765,6 +762,12 @@ class CircleFit:
                 _count(out, hand, _kind(symbol), n)
         out['take_events'] = takes
         return out
+
+
+def _events_read(symbol):
+    """How many of a stroke's circle events the scores and counts read (a replay stops
+    there): whether the circle fired and fired twice, whether any other stroke fired."""
+    return 2 if _kind(symbol) == 'circle' else 1
 
 
 def _rules_dict(rules):
@@ -877,7 +880,7 @@ def _run(strokes_dir, leap_people_dir, leapjs_dir, rules, loso):
         fit = CircleFit(stroke_calls, take_calls, fits)
         out['loso'] = fit.loso(people)
         # the refit's replays (RecordedCircles) against the detector's own on these rules
-        capped = {key: min(n, STROKE_EVENTS_READ) for key, n in replayed.items()}
+        capped = {key: min(n, _events_read(key[2])) for key, n in replayed.items()}
         if fit.outcome(rules) != (capped, sum(takes.values())):
             raise RuntimeError('the refit replays the circle detector wrongly (rules %s)' % (rules,))
     return out
