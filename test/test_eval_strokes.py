@@ -34,7 +34,7 @@ def hands():
 
 @pytest.fixture(scope='module')
 def loso_command(leapjs_data, tmp_path_factory):
-    """The LOSO command, run once (about 1-2 minutes): (exit code, its stdout, the JSON it
+    """The LOSO command, run once (about half a minute): (exit code, its stdout, the JSON it
     wrote, the results dict its run() returned). Its run() computes the shipped rules'
     figures before the refit, so the tests of those read them here instead of running
     the evaluation a second time."""

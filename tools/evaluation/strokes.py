@@ -682,9 +682,9 @@ LOOP_FREE_WEIGHT = 2
 
 class CircleFit:
     """Leave-one-person-out choice of CircleRules from recorded calls (record_strokes,
-    record_takes); each rules' outcome is computed once, each circle fit once (`fits`,
-    default a new CachedFits), and a recording without pointing frames is replayed once
-    for rules that differ only in TIP_RULES."""
+    record_takes), replayed through RecordedCircles; each rules' outcome is computed
+    once, each circle fit once (`fits`, default a new CachedFits), and a recording without
+    pointing frames is replayed once for rules that differ only in TIP_RULES."""
 
     def __init__(self, stroke_calls, take_calls, fits=None):
         self.stroke_calls = stroke_calls
@@ -942,7 +942,7 @@ def main(argv=None):
                     help='leap_people folder (gti_dev.jsonl.gz, guinevere/)')
     ap.add_argument('--leapjs', default=None, help='LeapJS takes folder')
     ap.add_argument('--loso', action='store_true',
-                    help='also refit the circle rules leave-one-person-out (about 1 min)')
+                    help='also refit the circle rules leave-one-person-out (about 30 s)')
     ap.add_argument('--json', help='write the results here as JSON')
     args = ap.parse_args(argv)
     try:
