@@ -158,7 +158,11 @@ print(json.dumps(out))
 
 @pytest.mark.rostest
 def test_dynparam_retunes_the_pilot_and_cannot_disable_its_limits():
-    out, err = run_node_and_client('drone_pilot.py', [], PILOT_CLIENT)
+    # A stream stalled past hand_timeout (0.15 s, easily reached on a loaded machine)
+    # re-captures the reference where the hand is: the windows below would read zeros.
+    out, err = run_node_and_client('drone_pilot.py', ['_hand_timeout:=2.0', '_navdata_timeout:=2.0'],
+                                   PILOT_CLIENT)
+    assert 'no Hand message' not in err, err[-3000:]
     assert out['default'] and all(y == pytest.approx(-0.2) for y in out['default']), out
     assert out['wide_dead_zone'] and all(y == 0.0 for y in out['wide_dead_zone']), out
     assert out['after_bad_dead_zone'] and all(y == 0.0 for y in out['after_bad_dead_zone'])
