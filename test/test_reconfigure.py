@@ -124,13 +124,25 @@ PILOT_CLIENT = CLIENT_HEAD + r'''
 from geometry_msgs.msg import Twist
 rospy.init_node('pilot_client')
 twists = []
-rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m.linear.y)),
+twist_sub = rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m.linear.y)),
                  queue_size=1000)
 ''' + PILOT_FEED + r'''
-time.sleep(2.0)
+
+def wait_until(ok, what, timeout=30.0):
+    # conditions, not fixed sleeps: on a loaded machine connections form late
+    deadline = time.monotonic() + timeout
+    while not ok():
+        if time.monotonic() > deadline:
+            raise SystemExit('timed out waiting for ' + what)
+        time.sleep(0.05)
+
+wait_until(lambda: min(c.get_num_connections() for c in (hand_pub, nav_pub, gesture_pub, twist_sub))
+           > 0, 'the pilot connected both ways')
 gesture_pub.publish(GestureEvent(side=0, gesture='unfold', active=True))
 time.sleep(0.5)
 state['nav'] = 3
+state['palm'] = (0.05, 0.2, 0.0)           # 50 mm right of the reference
+wait_until(lambda: twists and twists[-1][1] != 0.0, 'the pilot steering')
 
 def window(secs=1.2):
     t0 = time.monotonic()
@@ -138,7 +150,6 @@ def window(secs=1.2):
     return [y for t, y in twists if t > t0 + 0.3]
 
 out = {}
-state['palm'] = (0.05, 0.2, 0.0)           # 50 mm right of the reference
 out['default'] = window()
 out['set'] = dynparam('set', '/drone_pilot', 'dead_zone', 0.06)
 out['wide_dead_zone'] = window()
