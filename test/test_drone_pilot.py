@@ -462,6 +462,33 @@ def test_the_diagnostics_report_says_what_the_worker_and_pilot_see():
     assert dict(values)['worker faults'] == 1
 
 
+def test_a_hand_arriving_while_the_worker_reads_its_clock_is_not_a_clock_jump():
+    # The race a loaded machine hits: the worker reads the clock, a hand callback (its own
+    # thread, a later reading) gets in before the watchdog runs. Read outside the lock,
+    # that reading looked like the clock going back: hover, hand lost, reference moved.
+    import threading
+
+    from leap_teleop.drone.pilot import PilotWorker
+    from leap_teleop.ros.service_call import ServiceCall
+    warned = []
+    pilot = DronePilot(PilotConfig(), warn=lambda key, text: warned.append(key))
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(3, 1000, 0.01)
+
+    def clock():
+        callback = threading.Thread(target=pilot.on_hand, args=(hand((0.0, 0.2, 0.05)), 0.031))
+        callback.start()
+        callback.join(0.3)               # blocked on the pilot's lock: the watchdog goes first
+        return 0.03
+
+    worker = PilotWorker(pilot, lambda cmd: None, ServiceCall(lambda *a: True, 0.5, 'flip'), clock)
+    worker.step()
+    assert 'clock' not in warned and pilot.hand_present and pilot.engaged, warned
+    assert pilot.reference[0] == (0.0, 0.2, 0.0)          # the unfold's, not re-captured
+
+
 def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
     import time
 

@@ -160,7 +160,7 @@ class DronePilot:
         self.cfg = (config or PilotConfig()).validate()
         self._warn = warn or (lambda key, text: None)
         self.queue = CommandQueue(self.cfg.queue_size)
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()     # watchdog_at re-enters it in watchdog
         self.drone_state = None          # navdata state, None until known
         self.altitude = 0.0              # m
         self.last_navdata_time = None
@@ -350,6 +350,16 @@ class DronePilot:
             self._zero_sent = True
             self.queue.push(Command('twist', ZERO_TWIST, stamp=now))
 
+    def watchdog_at(self, clock):
+        """The watchdog at clock() read under the lock (returned). The callbacks read the
+        clock before they take the lock, so a reading taken before it could be older than
+        a hand or navdata that got in between: under load, a false 'clock jumped back'
+        (hover, and the reference re-captured wherever the hand was)."""
+        with self._lock:
+            now = clock()
+            self.watchdog(now)
+        return now
+
     def watchdog(self, now):
         """Call often (every ~20 ms): stale input -> hover; long loss -> land."""
         with self._lock:
@@ -464,11 +474,11 @@ class PilotWorker:
 
     def step(self):
         """One pass; returns how long to wait for the next (s, at most 0.02)."""
-        now = self.clock()
+        now = None
         try:
             if self.send_held is not None:
                 self.send_held()        # first: a faulty watchdog must not keep a land back
-            self.pilot.watchdog(now)
+            now = self.pilot.watchdog_at(self.clock)
             self._poll_flip()
             if self.extra is not None:
                 self.extra()
@@ -483,7 +493,7 @@ class PilotWorker:
             self.fault_since, self._fault_landed = None, False
             return 0.0 if cmd is not None else min(wait or 0.02, 0.02)
         except Exception as e:          # the worker must outlive any fault
-            self._fault(now, e)
+            self._fault(self.clock() if now is None else now, e)
             return 0.02
 
     def run(self, stopped):
