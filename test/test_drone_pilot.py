@@ -291,6 +291,28 @@ def test_a_stall_shorter_than_disarm_after_hovers_then_steers_on_without_a_jump(
     assert kinds(silence(pilot, t + 0.01, t + 0.05)) == []             # no landing
 
 
+def test_a_hand_held_through_a_stall_keeps_its_reference():
+    # Held 100 mm forward through a 0.6 s stall and back where it was lost: the forward
+    # command resumes, and the unfold's neutral still hovers. Re-captured there, the old
+    # neutral would have flown the drone backwards.
+    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    t += 0.01
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), t), t)
+    before = twists(drain(pilot))[-1]
+    assert before[0] == pytest.approx(0.7)
+    assert all(c.twist == (0.0,) * 6 for c in silence(pilot, t, t + 0.6))
+    t += 0.6
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), t), t)
+    assert twists(drain(pilot)) == [before]
+    pilot.on_hand(stamped((0.0, 0.2, 0.0), t + 0.01), t + 0.01)        # the unfold's neutral
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    # recapture_beyond 0 re-captures on every return: the old behaviour
+    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, recapture_beyond=0.0))
+    silence(pilot, t, t + 0.6)
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), t + 0.6), t + 0.6)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+
+
 @pytest.mark.parametrize('gone', ['silent', 'absent'])
 def test_a_loss_longer_than_disarm_after_needs_a_new_unfold_then_lands_after_land_after(gone):
     warnings = []

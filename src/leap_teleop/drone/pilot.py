@@ -13,7 +13,8 @@ recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included).
 Modes:
 
 - ``tilt`` (default): on unfold the palm position and hand yaw become the reference
-  (re-captured when the hand comes back after a loss, so it never jumps). Palm offset
+  (back after a short loss, kept if the palm is within ``recapture_beyond`` of where it
+  was lost, else re-captured where it is, so nothing jumps). Palm offset
   beyond ``dead_zone`` maps linearly to a command reaching 1 at ``dead_zone +
   full_scale``: away from the user (-Leap z) -> forward (linear.x), to the left
   (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
@@ -34,8 +35,9 @@ than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only whi
 says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
 the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present
 false, a hand_lost event, or no Hand message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; back within
-``disarm_after`` -> steering resumes from where the hand is (tilt: the reference is
-re-captured, so nothing jumps), without a new unfold; lost for ``disarm_after`` ->
+``disarm_after`` -> steering resumes without a new unfold (tilt: with the same reference
+when the palm is back within ``recapture_beyond`` of where it was lost, so a hand held
+through a stall gives the command it gave; else re-captured, so nothing jumps); lost for ``disarm_after`` ->
 steering is off until a new unfold (tilt) or capture pose (paper); lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
@@ -177,6 +179,7 @@ class DronePilot:
         self.reference = None            # tilt: (palm xyz m, yaw deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
+        self._hand_at_loss = None        # the last hand before the latest loss
         self._last_twist_out = None      # monotonic time of the last twist published
         self._zero_sent = False
         self._stream = InputStream(self.cfg.max_input_age, self.cfg.hand_timeout)
@@ -248,8 +251,8 @@ class DronePilot:
                 self.hand_present = True
                 self.lost_since = None
                 self._landed_for_loss = False
-                if self.engaged:
-                    self._capture(hand)        # resume from where the hand came back
+                if self.engaged and self._moved_since_loss(hand):
+                    self._capture(hand)        # back elsewhere: steer on from there
             self._last_hand = hand
             twist = self._twist(hand)
             if twist is None:
@@ -306,6 +309,14 @@ class DronePilot:
                                             input_stamp=stamp))
 
     # -- mapping ---------------------------------------------------------------------
+    def _moved_since_loss(self, hand):
+        """The palm came back recapture_beyond or further from where it was lost (or
+        where is not known). Nearer, the reference stays: the hand's offset is a rate
+        command, so re-capturing a hand held forward through a stall would turn the
+        old neutral into a command backwards."""
+        lost = self._hand_at_loss
+        return lost is None or math.dist(hand.palm, lost.palm) >= self.cfg.recapture_beyond
+
     def _capture(self, hand):
         self.reference = (tuple(hand.palm), leap_angles(hand.normal, hand.direction)[2])
 
@@ -345,6 +356,8 @@ class DronePilot:
             self.lost_since = now
         was_present = self.hand_present
         self.hand_present = False
+        if self._last_hand is not None:
+            self._hand_at_loss = self._last_hand
         self._last_hand = None
         if was_present or not self._zero_sent:
             self._zero_sent = True

@@ -27,8 +27,13 @@ PILOT_PARAMS = {
     'land_after': Param(3.0, 'lost hand or navdata this long -> land', unit='s',
                         gt=0.0, le=120.0),
     'disarm_after': Param(1.0, 'lost hand this long -> steering off until a new unfold; back '
-                               'sooner, it steers on from where it is', unit='s',
+                               'sooner, it steers on (see recapture_beyond)', unit='s',
                           gt=0.0, le=120.0),
+    'recapture_beyond': Param(0.05, 'tilt: back within disarm_after, the reference is '
+                                    're-captured where the hand is only when its palm came '
+                                    'back this far or further from where it was lost; nearer, '
+                                    'the reference is kept (0: always re-captured)',
+                              unit='m', ge=0.0, le=1.0),
     'navdata_timeout': Param(0.5, 'no navdata this long = drone state unknown: no takeoff, '
                                   'hover, then land', unit='s', gt=0.0, le=10.0),
     'dead_zone': Param(0.03, 'tilt: horizontal palm dead zone', unit='m', ge=0.0, le=0.5),
@@ -66,7 +71,8 @@ PILOT_NODE_PARAMS = {
 # Changeable while running (dynamic_reconfigure); the pilot reads each where it uses it.
 PILOT_RECONFIGURABLE = ('dead_zone', 'full_scale', 'z_dead_zone', 'z_full_scale',
                         'yaw_dead_zone', 'yaw_full_scale', 'max_cmd', 'paper_angle',
-                        'paper_scale', 'flip_min_altitude', 'flip_min_radius')
+                        'paper_scale', 'flip_min_altitude', 'flip_min_radius',
+                        'recapture_beyond')
 
 
 @declared_fields(PILOT_PARAMS)
