@@ -313,6 +313,22 @@ def test_a_hand_held_through_a_stall_keeps_its_reference():
     assert twists(drain(pilot)) == [(0.0,) * 6]
 
 
+def test_an_unfold_that_came_while_the_hand_was_away_captures_when_it_comes_back():
+    # Not engaged, the hand drops out briefly and the unfold arrives in the gap (its own
+    # topic): there is no reference to keep, so the hand's return captures one, even
+    # where the hand was lost.
+    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot.on_navdata(3, 1000, 0.0)
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.0), 0.0)
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.01, present=False), 0.01)
+    pilot.on_gesture('unfold', True, 0.02)
+    drain(pilot)
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.1), 0.1)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    pilot.on_hand(stamped((0.0, 0.2, -0.2), 0.11), 0.11)
+    assert twists(drain(pilot))[-1][0] == pytest.approx(0.7)
+
+
 @pytest.mark.parametrize('gone', ['silent', 'absent'])
 def test_a_loss_longer_than_disarm_after_needs_a_new_unfold_then_lands_after_land_after(gone):
     warnings = []

@@ -251,8 +251,8 @@ class DronePilot:
                 self.hand_present = True
                 self.lost_since = None
                 self._landed_for_loss = False
-                if self.engaged and self._moved_since_loss(hand):
-                    self._capture(hand)        # back elsewhere: steer on from there
+                if self.engaged and (self.reference is None or self._moved_since_loss(hand)):
+                    self._capture(hand)        # none yet, or back elsewhere: steer from here
             self._last_hand = hand
             twist = self._twist(hand)
             if twist is None:
@@ -410,6 +410,7 @@ class DronePilot:
         self.engaged = False
         self.reference = None
         self.paper_ref = None
+        self._hand_at_loss = None
         self._warn('disengaged', 'hand lost for %.2f s: steering off until %s'
                    % (now - self.lost_since, 'a new unfold' if self.cfg.mode == 'tilt'
                       else 'the capture pose'))
