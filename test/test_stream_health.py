@@ -244,6 +244,8 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     missed = int(diag['hand messages missed from /stream_health_client'])
     assert missed == int(diag['hand messages missed (sequence gaps)']) >= 5, diag
     assert int(diag['hand messages received']) + missed == out['seq_span'], (diag, out)
+    # the five lost before any re-subscription are not put down to one
+    assert 0 <= int(diag['hand messages missed across re-subscriptions']) <= missed - 5, diag
     assert int(diag['hand re-subscriptions']) == sum(
         out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent',
                                             'dropped'))
@@ -272,6 +274,7 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     sub = hs.HandSubscription.__new__(hs.HandSubscription)
     sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
     sub.health = StreamHealth(0.5, 2.0)
+    sub.gaps = SequenceGaps()
     sub.check_period, sub._last_check = 0.25, None
     first = sub.sub = FakeSubscriber()
     made, logs = [], []
@@ -312,6 +315,7 @@ def test_a_check_long_after_the_last_one_judges_afresh_instead_of_resubscribing(
     sub = hs.HandSubscription.__new__(hs.HandSubscription)
     sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
     sub.health = StreamHealth(0.5, 2.0)
+    sub.gaps = SequenceGaps()
     sub.check_period, sub.sub = 0.25, Connected()
     monkeypatch.setattr(rospy, 'get_time', lambda: 12.5)
     feed(sub.health, 0.0, 10.0, late=False)
@@ -336,3 +340,23 @@ def test_sequence_gaps_count_what_each_publisher_sent_that_never_came():
     assert [gaps.add('/player', s) for s in (9, 8, 10)] == [3, 0, 0] and sum(gaps.missed.values()) == 9
     assert gaps.add('/player', 5010) == 4999
     assert gaps.add('/player', 20) == 0 and gaps.add('/player', 22) == 1   # far back: a restart
+
+
+def test_a_gap_across_a_reconnection_is_counted_apart_once():
+    gaps = SequenceGaps()
+    assert [gaps.add('/player', s) for s in (1, 2, 5)] == [0, 0, 2]   # no re-connection: a loss
+    gaps.add('/other', 1)
+    gaps.reconnected()
+    # the old connection's straggler clears nothing; the new connection's first message
+    # shows what the re-connection cost, and only that first gap counts as its cost
+    assert [gaps.add('/player', s) for s in (4, 9, 12)] == [0, 3, 2]
+    assert gaps.add('/other', 2) == 0                # nothing lost from this one
+    assert gaps.add('/other', 4) == 1                # a later gap is no re-connection's
+    assert dict(gaps.missed) == {'/player': 7, '/other': 1}
+    assert dict(gaps.missed_across_reconnect) == {'/player': 3}
+    gaps.reconnected()
+    assert gaps.add('/player', 1) == 0 and gaps.add('/player', 3) == 1   # restarted: a new count
+    assert dict(gaps.missed_across_reconnect) == {'/player': 3}
+    gaps.reconnected()
+    assert gaps.add('/new', 10) == 0 and gaps.add('/new', 12) == 1   # unknown before it
+    assert dict(gaps.missed_across_reconnect) == {'/player': 3}

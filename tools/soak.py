@@ -160,6 +160,7 @@ class SoakMonitor:
         self.diag_rejected = {}
         self.consumer_received, self.resubscriptions = {}, {}   # per consumer, their own count
         self.consumer_missed = {}           # ... of the player's messages that never came
+        self.consumer_missed_reconnect = {}  # ... of them, across the consumer's re-subscriptions
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
 
     def on_diag(self, msg):
@@ -172,6 +173,8 @@ class SoakMonitor:
                         self.consumer_received[st.name] = int(kv.value)
                     elif kv.key == 'hand messages missed from %s' % PLAYER:
                         self.consumer_missed[st.name] = int(kv.value)
+                    elif kv.key == 'hand messages missed across re-subscriptions':
+                        self.consumer_missed_reconnect[st.name] = int(kv.value)
                     elif kv.key == 'hand re-subscriptions':
                         self.resubscriptions[st.name] = int(kv.value)
 
@@ -499,6 +502,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
     # after the load burst (from the start of the first cycle after it).
     with mon.lock:
         missed_msgs = _per_consumer(mon.consumer_missed)
+        missed_reconnect = _per_consumer(mon.consumer_missed_reconnect)
     after = burst.after(cycles)
     baseline = missed_at_start[after[0]] if after else {}
     missed_after = ({c: n - baseline.get(c, 0) for c, n in missed_msgs.items()} if after
@@ -533,7 +537,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s'
         % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
     log('[soak] missed per consumer (gaps in the player\'s numbering, their own counts) %s; '
-        'after the load burst %s' % (missed_msgs, missed_after))
+        'of them across their re-subscriptions %s; after the load burst %s'
+        % (missed_msgs, missed_reconnect, missed_after))
     log('[soak] pick and place: %d/%d cubes placed; %d drone takeoffs in %d cycles'
         % (sum(placed), 2 * cycles, flights, cycles))
     # A cycle flew when the drone took off (the gesture topic) and the pilot steered it
@@ -553,6 +558,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'soak.consumer_missed_msgs': sum(missed_msgs.values()),
         'soak.consumer_missed_after_burst_msgs': (sum(missed_after.values()) if after
                                                   else float('nan')),
+        'soak.consumer_missed_across_resubscriptions_msgs': sum(missed_reconnect.values()),
         'soak.resubscriptions': sum(resubscribed.values()),
         'soak.rejected_inputs': sum(rejected.values()),
         'soak.sim_minutes': sim / 60.0,
@@ -584,6 +590,12 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'soak.consumer_missed_after_burst_msgs': 'the same, counted from the start of the '
                                                  'first cycle after the load burst (every '
                                                  'cycle without one) %s' % missed_after,
+        'soak.consumer_missed_across_resubscriptions_msgs': 'of the consumers\' missed '
+                                                            'messages, the gaps across a '
+                                                            're-subscription (what the old '
+                                                            'connection held and what was sent '
+                                                            'while the new one formed) %s'
+                                                            % missed_reconnect,
         'soak.resubscriptions': 'hand connections the consumers re-established %s'
                                 % resubscribed,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'

@@ -9,6 +9,11 @@ restarted publisher (or a looping bag): a new count, nothing lost. One that goes
 little is a straggler (an old connection's last message, delivered after the new one's
 first): ignored. roscpp keeps the number the message carries, so `rosbag play` shows the
 recording's own gaps, and a publisher that leaves it 0 shows none.
+
+A consumer that drops its connection on purpose (a late or silent stream re-made) loses
+what the old one still held and what was sent while the new one formed: the first gap
+after a re-connection is also counted apart (`missed_across_reconnect`), so what that
+choice cost is told from losses with no such cause.
 """
 import collections
 
@@ -20,6 +25,12 @@ class SequenceGaps:
     def __init__(self):
         self.last = {}                          # per publisher: the last number seen
         self.missed = collections.Counter()     # per publisher: messages missed
+        self.missed_across_reconnect = collections.Counter()   # ... of them, by a re-connection
+        self._reconnected = set()               # publishers not heard since a re-connection
+
+    def reconnected(self):
+        """The consumer re-made its connection: each publisher's next gap is its cost."""
+        self._reconnected = set(self.last)
 
     def add(self, publisher, seq):
         """One message from `publisher` numbered `seq`; returns how many were missed
@@ -28,11 +39,15 @@ class SequenceGaps:
         if last is not None and seq <= last:
             if seq <= 1 or last - seq > RESTART_DROP:
                 self.last[publisher] = seq          # a restarted publisher
-            return 0
+                self._reconnected.discard(publisher)
+            return 0                                # a repeat or an old connection's straggler
         self.last[publisher] = seq
         if last is None:
             return 0
         gap = seq - last - 1
         if gap:
             self.missed[publisher] += gap
+            if publisher in self._reconnected:
+                self.missed_across_reconnect[publisher] += gap
+        self._reconnected.discard(publisher)
         return gap

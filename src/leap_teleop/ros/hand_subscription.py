@@ -70,6 +70,8 @@ class HandSubscription:
                 self.health.stalled(now)
             return
         if self.sub is None:         # a re-subscription that failed half-way: finish it
+            with self._lock:
+                self.gaps.reconnected()
             self.sub = self._subscribe()
             rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
             return
@@ -83,6 +85,7 @@ class HandSubscription:
             if why is None:
                 return
             self.health.resubscribed(now)
+            self.gaps.reconnected()
         # Unregister first: a second Subscriber on the same topic would share the old
         # connections instead of making new ones.
         old, self.sub = self.sub, None
@@ -101,8 +104,10 @@ class HandSubscription:
         counts = dict(self.received)        # a copy: the callback thread adds publishers
         with self._lock:
             missed = dict(self.gaps.missed)
+            across = sum(self.gaps.missed_across_reconnect.values())
         values = [('hand messages received', str(sum(counts.values()))),
-                  ('hand messages missed (sequence gaps)', str(sum(missed.values())))]
+                  ('hand messages missed (sequence gaps)', str(sum(missed.values()))),
+                  ('hand messages missed across re-subscriptions', str(across))]
         for caller, n in sorted(counts.items()):
             values += [('hand messages from %s' % caller, str(n)),
                        ('hand messages missed from %s' % caller, str(missed.get(caller, 0)))]
