@@ -85,11 +85,12 @@ class HandSubscription:
             if why is None:
                 return
             self.health.resubscribed(now)
-            self.gaps.reconnected()
         # Unregister first: a second Subscriber on the same topic would share the old
         # connections instead of making new ones.
         old, self.sub = self.sub, None
         old.unregister()
+        with self._lock:             # after the old connection's last message, so its
+            self.gaps.reconnected()  # next gap is the new connection's
         self.on_new_connection()
         self.sub = self._subscribe()
         rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
