@@ -173,7 +173,7 @@ class SoakMonitor:
                         self.consumer_received[st.name] = int(kv.value)
                     elif kv.key == 'hand messages missed from %s' % PLAYER:
                         self.consumer_missed[st.name] = int(kv.value)
-                    elif kv.key == 'hand messages missed across re-subscriptions':
+                    elif kv.key == 'hand messages missed from %s across re-subscriptions' % PLAYER:
                         self.consumer_missed_reconnect[st.name] = int(kv.value)
                     elif kv.key == 'hand re-subscriptions':
                         self.resubscriptions[st.name] = int(kv.value)

@@ -105,11 +105,13 @@ class HandSubscription:
         counts = dict(self.received)        # a copy: the callback thread adds publishers
         with self._lock:
             missed = dict(self.gaps.missed)
-            across = sum(self.gaps.missed_across_reconnect.values())
+            across = dict(self.gaps.missed_across_reconnect)
         values = [('hand messages received', str(sum(counts.values()))),
                   ('hand messages missed (sequence gaps)', str(sum(missed.values()))),
-                  ('hand messages missed across re-subscriptions', str(across))]
+                  ('hand messages missed across re-subscriptions', str(sum(across.values())))]
         for caller, n in sorted(counts.items()):
             values += [('hand messages from %s' % caller, str(n)),
-                       ('hand messages missed from %s' % caller, str(missed.get(caller, 0)))]
+                       ('hand messages missed from %s' % caller, str(missed.get(caller, 0))),
+                       ('hand messages missed from %s across re-subscriptions' % caller,
+                        str(across.get(caller, 0)))]
         return values + [('hand re-subscriptions', str(self.health.resubscriptions))]
