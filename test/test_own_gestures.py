@@ -7,6 +7,7 @@ import fcntl
 import gzip
 import json
 import os
+import re
 import time
 
 import numpy as np
@@ -198,7 +199,8 @@ def leapjs_dict(i, pose):
 
 def test_default_retrain_includes_the_leave_one_person_out_report(tmp_path, trained, capsys):
     """Without --no-report the card holds leave-one-person-out figures (on a small slice
-    of the shared poses, to keep the test short)."""
+    of the shared poses, to keep the test short), the user's own gesture among them: its
+    recall on their held-out file and how often shared people it never saw read as it."""
     keep, seen = [], {}
     with gzip.open(gti_path(), 'rt') as f:
         for line in f:
@@ -217,9 +219,22 @@ def test_default_retrain_includes_the_leave_one_person_out_report(tmp_path, trai
                                 '--label', 'two', '--out', model]) == 0
     out = capsys.readouterr().out
     assert 'leave-one-person-out' in out and 'user:two' in out
+    assert re.search(r'^  two +\d\.\d{3} / \d\.\d{3} .* \d\.\d{4} / \d\.\d{4}$', out, re.M), out
     card = open(os.path.splitext(model)[0] + '.md').read()
     assert '## Leave-one-person-out' in card
-    assert PoseClassifier.load(model, 'leap').card['leave_one_person_out']['two']['people'] == 1
+    assert re.search(r'^\| two \| \d\.\d{3} \| \d\.\d{3} \(.*\) \| \d\.\d{4} \| \d\.\d{4} \|$', card, re.M)
+    two = PoseClassifier.load(model, 'leap').card['leave_one_person_out']['two']
+    # the user's file and the three shared people (their V signs are the class too)
+    assert two['people'] == 4 and two['fpr_mean'] is not None
+
+
+@pytest.mark.parametrize('shared, held', [
+    (['a', 'b', 'c', 'd', 'e', 'f', 'g'], ['a', 'c', 'e']),
+    (['a', 'b'], ['a', 'b']),
+    ([], []),
+])
+def test_a_retrain_holds_out_a_few_shared_people_spread_over_them(shared, held):
+    assert train_gestures.report_people(shared) == held
 
 
 # -- bad input ------------------------------------------------------------------------
