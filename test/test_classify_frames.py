@@ -175,3 +175,49 @@ def test_malformed_keypoint_file_is_one_clear_error(tmp_path):
     p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', '--keypoints',
                         str(bad)], capture_output=True, text=True, timeout=60)
     assert p.returncode == 2 and 'row 1' in p.stderr and 'Traceback' not in p.stderr
+
+
+def test_pose_records_and_quantumleap_takes_classify_as_their_frames(tmp_path, capsys):
+    """The shared data's own forms (pose records, plain or gzipped, as the shared static
+    poses and record_gestures write them; QuantumLeap's {"frames": N, "data": [...]}
+    takes) give the lines their bare frames give."""
+    import gzip
+    frames = _dicts(['fist'] * 5 + ['open'] * 5 + ['pinch'] * 5)
+    bare = tmp_path / 'bare.jsonl'
+    bare.write_text(''.join(json.dumps(f) + '\n' for f in frames))
+    records = ''.join(json.dumps({'person': 'me', 'label': 'x', 'frame': f}) + '\n' for f in frames)
+    plain, packed = tmp_path / 'poses.jsonl', tmp_path / 'poses.jsonl.gz'
+    plain.write_text(records)
+    with gzip.open(packed, 'wt') as f:
+        f.write(records)
+    take = tmp_path / 'take.json.gz'
+    with gzip.open(take, 'wt') as f:
+        json.dump({'frames': len(frames), 'data': frames}, f)
+    want = run_main(['--stateless', str(bare)], capsys)
+    assert [o['hands'][0]['fist'] for o in want] == [True] * 5 + [False] * 10
+    assert [o['hands'][0]['open'] for o in want] == [False] * 5 + [True] * 5 + [False] * 5
+    for path in (plain, packed, take):
+        assert run_main(['--stateless', str(path)], capsys) == want, path
+    assert leapjs.load(str(take))[1] == frames
+
+
+def test_the_shared_people_files_classify(capsys):
+    """The shared static poses (gzipped pose records, the documented command) and a shared
+    dynamic take read as hands, the poses as they were recorded (fails without the shared
+    data)."""
+    import gzip
+    people = os.path.join(os.path.dirname(DATA), 'leap_people')
+    poses = os.path.join(people, 'gti_dev.jsonl.gz')
+    take = os.path.join(people, 'guinevere', '01', 'thumbs_up-1.json.gz')
+    for path in (poses, take):
+        if not os.path.isfile(path):
+            pytest.fail('the shared Leap people are not at %s' % people)
+    with gzip.open(poses, 'rt') as f:
+        labels = [json.loads(line)['label'] for line in f]
+    out = run_main(['--stateless', poses], capsys)
+    assert len(out) == len(labels) == 30675 and all(len(o['hands']) == 1 for o in out)
+    five = [o['hands'][0]['open'] for o, lab in zip(out, labels) if lab == 'five']
+    assert len(five) > 1000 and sum(five) >= 0.9 * len(five)
+    out = run_main([take], capsys)
+    assert len(out) > 30 and all(len(o['hands']) == 1 for o in out)
+    assert sum(o['hands'][0]['thumb_up'] for o in out) >= 0.5 * len(out)

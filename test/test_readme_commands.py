@@ -59,6 +59,8 @@ COVERED = {
     './env.sh python -m leap_teleop.hands.classify_frames --keypoints '
     '../shared/data/keypoints/Harikumar4.csv':
         'test_classify_frames.py::test_keypoints_in_both_csv_forms_give_one_line_per_row',
+    './env.sh python -m leap_teleop.hands.classify_frames --stateless '
+    '../shared/data/leap_people/gti_dev.jsonl.gz': 'test_classify_frames.py::test_the_shared_people_files_classify',
     'make train': 'test_people_eval.py::test_train_command_writes_a_model_and_its_card',
     'python -m tools.evaluation.people':
         'test_people_eval.py::test_evaluate_people_command_writes_its_figures',

@@ -20,11 +20,14 @@ letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does
 mirror.
 
 INPUT is a LeapJS Playback recording (.json, .json.gz, .json.lz; formatVersion 0.1, 1 or
-packed 2), or JSON Lines: one LeapJS frame dict per line (fields as in a recording:
+packed 2; also QuantumLeap's {"frames": N, "data": [...]}, the shared dynamic takes), or
+JSON Lines, plain or gzipped: one LeapJS frame dict per line (fields as in a recording:
 id, timestamp [us], hands[] with id, type, palmPosition, palmNormal, direction,
 grabStrength, pinchStrength, confidence; pointables[] with handId, type 0..4,
-tipPosition, dipPosition, pipPosition, mcpPosition, direction, extended). Without INPUT
-(or with "-") JSON Lines are read from stdin.
+tipPosition, dipPosition, pipPosition, mcpPosition, direction, extended), or one pose
+record per line as the shared static poses and record_gestures write them ({"person":
+..., "label": ..., "frame": FRAME}: FRAME is classified; isolated poses, so give
+--stateless). Without INPUT (or with "-") JSON Lines are read from stdin.
 
 Output, one line per input frame, in input order:
 
@@ -55,6 +58,8 @@ snapshot data whose frames are unrelated. Otherwise frames are a stream: a gestu
 turns on after 3 consistent frames and off after 3, per hand side.
 """
 import argparse
+import gzip
+import io
 import json
 import math
 import sys
@@ -142,19 +147,36 @@ def iter_json_lines(stream):
         if not line:
             continue
         try:
-            yield leapjs.parse_json(line)
+            d = leapjs.parse_json(line)
         except ValueError as e:
             yield e
+            continue
+        if isinstance(d, dict) and 'hands' not in d and isinstance(d.get('frame'), dict):
+            d = d['frame']          # a pose record: person, label and the frame
+        yield d
+
+
+def _open_lines(path):
+    """A text stream of a JSON Lines file, gzipped or not."""
+    with open(path, 'rb') as f:
+        gzipped = f.read(2) == b'\x1f\x8b'
+    if gzipped:
+        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8', errors='replace')
+    return open(path, encoding='utf-8', errors='replace')
 
 
 def looks_like_recording(path):
-    if path.endswith(('.lz', '.gz')):
+    if path.endswith('.lz'):
         return True
-    with open(path, 'rb') as f:
-        head = f.read(4096).lstrip()
-    # A recording is one JSON object with "frames"; JSON Lines start a frame per line.
-    return head.startswith(b'{') and b'"frames"' in head.split(b'\n', 1)[0][:4096] \
-        and b'"metadata"' in head
+    try:
+        with _open_lines(path) as f:
+            head = f.read(4096).lstrip()
+    except (OSError, EOFError, UnicodeError):
+        return True                 # unreadable as text: the recording reader says why
+    # A recording is one JSON document holding every frame (an object with "frames", or
+    # a bare list); JSON Lines hold one frame or pose record per line.
+    return head.startswith('[') or (head.startswith('{')
+                                    and '"frames"' in head.split('\n', 1)[0])
 
 
 def camera_input(path):
@@ -185,7 +207,7 @@ def frames_of(path):
     if looks_like_recording(path):
         _, dicts = leapjs.load(path)
         return iter(dicts)
-    return iter_json_lines(open(path, encoding='utf-8', errors='replace'))
+    return iter_json_lines(_open_lines(path))
 
 
 def main(argv=None):

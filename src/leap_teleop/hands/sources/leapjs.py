@@ -217,9 +217,13 @@ def _load_text(text, path):
                           'recording?' % (path, e))
     if isinstance(data, list):          # a bare list of frames
         data = {'metadata': {}, 'frames': data}
+    elif (isinstance(data, dict) and not isinstance(data.get('frames'), list)
+          and isinstance(data.get('data'), list)):
+        # QuantumLeap's form of its Leap datasets: {"frames": N, "data": [frame, ...]}
+        data = {'metadata': {}, 'frames': data['data']}
     if not isinstance(data, dict) or not isinstance(data.get('frames'), list):
         raise SourceError('recording %s has no "frames" list; a LeapJS Playback file is '
-                          '{"metadata": {...}, "frames": [...]}' % path)
+                          '{"metadata": {...}, "frames": [...]} (or {"data": [...]})' % path)
     metadata = data.get('metadata') if isinstance(data.get('metadata'), dict) else {}
     frames = [f if isinstance(f, dict) else None for f in unpack_frames(data['frames'], path)]
     if not frames:
