@@ -221,3 +221,21 @@ def test_the_shared_people_files_classify(capsys):
     out = run_main([take], capsys)
     assert len(out) > 30 and all(len(o['hands']) == 1 for o in out)
     assert sum(o['hands'][0]['thumb_up'] for o in out) >= 0.5 * len(out)
+
+
+def test_a_truncated_gzip_is_one_clear_error_after_the_frames_it_held(tmp_path):
+    import gzip
+    # open hands all over the place: frames that do not compress to a few bytes
+    frames = [leapjs.frame_to_dict(Frame(i, i / 100.0, [render_hand(
+        'right', 'open', (i * 0.37 % 100, 200 + i * 0.11 % 50, i * 0.53 % 80))]))
+        for i in range(400)]
+    whole = gzip.compress(''.join(json.dumps({'person': 'me', 'label': 'x', 'frame': f}) + '\n'
+                                  for f in frames).encode())
+    cut = tmp_path / 'cut.jsonl.gz'
+    cut.write_bytes(whole[:len(whole) // 2])
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', '--stateless',
+                        str(cut)], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and 'Traceback' not in p.stderr
+    assert 'cannot read on after' in p.stderr and str(cut) in p.stderr
+    lines = [json.loads(line) for line in p.stdout.splitlines()]
+    assert 0 < len(lines) < 400 and all(o['hands'][0]['open'] for o in lines)

@@ -46,7 +46,8 @@ Output, one line per input frame, in input order:
   (open -> fist), "circle_cw" / "circle_ccw" (palm or fingertip circle).
 - A line that is not a JSON object yields {"id": null, "timestamp": null, "hands": [],
   "error": "..."}; a frame with missing fields is classified from what is there (a hand
-  without fingers shows every gesture false).
+  without fingers shows every gesture false). Input that cannot be read on (a truncated
+  gzip) ends the run after the frames it held, with one line on stderr and status 2.
 
 --model MODEL (Leap frames) and --keypoint-model MODEL (camera hands, keypoint rows)
 classify with a user's model (train_gestures --out MODEL) instead of the shipped one;
@@ -63,6 +64,7 @@ import io
 import json
 import math
 import sys
+import zlib
 
 import numpy as np
 
@@ -165,14 +167,26 @@ def _open_lines(path):
     return open(path, encoding='utf-8', errors='replace')
 
 
+def _head(path, size=4096):
+    """The first `size` characters of a file, decompressed when gzipped (a truncated
+    stream still gives its start), or None when that cannot be read."""
+    try:
+        with open(path, 'rb') as f:
+            raw = f.read(1 << 16)
+        if raw[:2] == b'\x1f\x8b':
+            raw = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(raw, size)
+    except (OSError, zlib.error):
+        return None
+    return raw[:size].decode('utf-8', errors='replace')
+
+
 def looks_like_recording(path):
     if path.endswith('.lz'):
         return True
-    try:
-        with _open_lines(path) as f:
-            head = f.read(4096).lstrip()
-    except (OSError, EOFError, UnicodeError):
-        return True                 # unreadable as text: the recording reader says why
+    head = _head(path)
+    if head is None:
+        return True                 # unreadable: the recording reader says why
+    head = head.lstrip()
     # A recording is one JSON document holding every frame (an object with "frames", or
     # a bare list); JSON Lines hold one frame or pose record per line.
     return head.startswith('[') or (head.startswith('{')
@@ -254,6 +268,10 @@ def main(argv=None):
             n += 1
     except BrokenPipeError:
         return 0
+    except (OSError, EOFError) as e:    # a truncated or corrupt gzip stream, a read error
+        print('classify_frames: %s: cannot read on after %d frames (%s)' % (args.input, n, e),
+              file=sys.stderr)
+        return 2
     finally:
         if out is not sys.stdout:
             out.close()
