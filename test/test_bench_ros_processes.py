@@ -80,7 +80,8 @@ def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome
     from tools import soak
     def run(minutes, rtf, rate_hz=None, log=print, **options):
         assert options == {'player_queue': 2000, 'hand_queue': 500, 'command_queue': 50,
-                           'joint_states_queue': 100, 'burst_minutes': 0.0, 'burst_hogs': 2}
+                           'joint_states_queue': 100, 'burst_minutes': 0.0, 'burst_hogs': 2,
+                           'resubscribe_after': 0.5}
         if outcome == 'raised':
             raise SystemExit('[soak] the graph died: ur10_sim')
         return ({'soak.dropped_msgs': 0, 'soak.rss_growth_pct': 1.5,
@@ -105,7 +106,8 @@ def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome
 
 @pytest.mark.parametrize('args', [['--hand-queue', '0'], ['--player-queue', '-1'],
                                   ['--command-queue', '0'], ['--joint-states-queue', '2001'],
-                                  ['--burst-minutes', '61'], ['--burst-hogs', '17']])
+                                  ['--burst-minutes', '61'], ['--burst-hogs', '17'],
+                                  ['--resubscribe-after', '-0.1']])
 def test_the_soak_refuses_options_out_of_range(args, capsys):
     from tools import soak
     with pytest.raises(SystemExit) as e:

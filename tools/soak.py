@@ -332,12 +332,14 @@ def _per_consumer(by_status):
 
 
 def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500,
-        command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2):
+        command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2,
+        resubscribe_after=0.5):
     """Run the soak; returns (figures, {figure: what it was measured on}). player_queue:
     the player's publisher queue per connection; hand_queue, command_queue,
-    joint_states_queue: the nodes' ~hand_queue_size, ~command_queue_size (arm nodes),
-    ~joint_states_queue_size (simulator); a load burst (LoadBurst) of burst_minutes with
-    burst_hogs."""
+    joint_states_queue, resubscribe_after: the nodes' ~hand_queue_size,
+    ~command_queue_size (arm nodes), ~joint_states_queue_size (simulator) and the
+    consumers' ~resubscribe_after (wall seconds); a load burst (LoadBurst) of
+    burst_minutes with burst_hogs."""
     from leap_teleop.ros.node import package_path
     from tools.bench.ros_processes import ros_master
     with ros_master() as env:
@@ -348,7 +350,7 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500
             f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
                                   hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
                                   navdata_timeout=0.5 * rtf, land_after=3.0 * rtf,
-                                  resubscribe_after=0.5 * rtf,
+                                  resubscribe_after=resubscribe_after * rtf,
                                   # longer than the pause between two cycles
                                   resubscribe_silent_after=8.0 * rtf,
                                   hand_queue_size=hand_queue,
@@ -642,6 +644,9 @@ def main(argv=None):
                     help='load burst in the first wall minutes: CPU hogs and a second ROS '
                          'graph (default 0: none)')
     ap.add_argument('--burst-hogs', type=int, default=2, help='CPU hogs in the burst')
+    ap.add_argument('--resubscribe-after', type=float, default=0.5,
+                    help='the consumers\' ~resubscribe_after, wall s (default 0.5, the '
+                         'nodes\' default; 0 = never)')
     ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
     for name, value, lo, hi in (('--player-queue', args.player_queue, 1, 100000),
@@ -649,14 +654,15 @@ def main(argv=None):
                                 ('--command-queue', args.command_queue, 1, 2000),
                                 ('--joint-states-queue', args.joint_states_queue, 1, 2000),
                                 ('--burst-minutes', args.burst_minutes, 0.0, 60.0),
-                                ('--burst-hogs', args.burst_hogs, 0, 16)):
+                                ('--burst-hogs', args.burst_hogs, 0, 16),
+                                ('--resubscribe-after', args.resubscribe_after, 0.0, 60.0)):
         if not lo <= value <= hi:
             ap.error('%s must be between %g and %g, not %g' % (name, lo, hi, value))
     run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
                 'rate_hz': args.rate, 'player_queue': args.player_queue,
                 'hand_queue': args.hand_queue, 'command_queue': args.command_queue,
                 'joint_states_queue': args.joint_states_queue, 'burst_minutes': args.burst_minutes,
-                'burst_hogs': args.burst_hogs}
+                'burst_hogs': args.burst_hogs, 'resubscribe_after': args.resubscribe_after}
     figures, sources, failed = {}, {}, {}
     # A plain kill ends the soak as Ctrl-C does: its graph and load burst are stopped.
     signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
@@ -666,7 +672,8 @@ def main(argv=None):
                                player_queue=args.player_queue, hand_queue=args.hand_queue,
                                command_queue=args.command_queue,
                                joint_states_queue=args.joint_states_queue,
-                               burst_minutes=args.burst_minutes, burst_hogs=args.burst_hogs)
+                               burst_minutes=args.burst_minutes, burst_hogs=args.burst_hogs,
+                               resubscribe_after=args.resubscribe_after)
     except (Exception, SystemExit) as e:     # noqa: BLE001 - recorded in _failed, exit 1
         traceback.print_exc()
         failed['soak'] = '%s: %s' % (type(e).__name__, e)
