@@ -239,3 +239,20 @@ def test_a_truncated_gzip_is_one_clear_error_after_the_frames_it_held(tmp_path):
     assert 'cannot read on after' in p.stderr and str(cut) in p.stderr
     lines = [json.loads(line) for line in p.stdout.splitlines()]
     assert 0 < len(lines) < 400 and all(o['hands'][0]['open'] for o in lines)
+
+
+@pytest.mark.parametrize('layout', ['one line, long metadata', 'pretty-printed', 'bare list'])
+def test_a_recording_is_told_from_json_lines_by_its_shape(tmp_path, capsys, layout):
+    import gzip
+    frames = _dicts(['fist'] * 3 + ['open'] * 3)
+    if layout == 'bare list':
+        text = json.dumps(frames)
+    else:
+        doc = {'metadata': {'note': 'x' * 70000 if layout.startswith('one') else 'short'},
+               'frames': frames}
+        text = json.dumps(doc, indent=None if layout.startswith('one') else 2)
+    path = tmp_path / 'take.json.gz'
+    with gzip.open(path, 'wt') as f:
+        f.write(text)
+    out = run_main(['--stateless', str(path)], capsys)
+    assert [o['hands'][0]['open'] for o in out] == [False] * 3 + [True] * 3

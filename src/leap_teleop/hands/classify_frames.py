@@ -167,12 +167,15 @@ def _open_lines(path):
     return open(path, encoding='utf-8', errors='replace')
 
 
-def _head(path, size=4096):
-    """The first `size` characters of a file, decompressed when gzipped (a truncated
+HEAD_BYTES = 1 << 16     # far more than a frame or pose record's line
+
+
+def _head(path, size=HEAD_BYTES):
+    """The first `size` bytes of a file as text, decompressed when gzipped (a truncated
     stream still gives its start), or None when that cannot be read."""
     try:
         with open(path, 'rb') as f:
-            raw = f.read(1 << 16)
+            raw = f.read(size)
         if raw[:2] == b'\x1f\x8b':
             raw = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(raw, size)
     except (OSError, zlib.error):
@@ -181,16 +184,21 @@ def _head(path, size=4096):
 
 
 def looks_like_recording(path):
+    """A recording is one JSON document holding every frame (an object with "metadata"
+    and "frames", or "data", often on one long line or spread over many; or a bare list);
+    JSON Lines hold one frame or pose record per line."""
     if path.endswith('.lz'):
         return True
     head = _head(path)
     if head is None:
         return True                 # unreadable: the recording reader says why
     head = head.lstrip()
-    # A recording is one JSON document holding every frame (an object with "frames", or
-    # a bare list); JSON Lines hold one frame or pose record per line.
-    return head.startswith('[') or (head.startswith('{')
-                                    and '"frames"' in head.split('\n', 1)[0])
+    first, ended, _ = head.partition('\n')
+    if head.startswith('[') or (not ended and len(head.encode()) >= HEAD_BYTES - 4):
+        return True
+    first = first.strip()
+    return first.startswith('{') and (first == '{' or '"frames"' in first
+                                      or '"metadata"' in first)
 
 
 def camera_input(path):
