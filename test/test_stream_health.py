@@ -14,10 +14,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
 
-def feed(health, t0, t1, late, step=0.01):
+def feed(health, t0, t1, late, step=0.01, lag=0.6, growth=0.0):
+    """Messages every `step` s from t0 to t1, each `lag` s old (+ growth per s)."""
     t = t0
     while t < t1:
-        health.on_message(t, late)
+        health.on_message(t, late, lag + growth * (t - t0))
         t += step
 
 
@@ -48,6 +49,51 @@ def test_late_input_asks_after_its_time_and_again_while_it_lasts():
     feed(h, 2.31, 2.7, late=True)
     assert h.due(2.7, 1) is None            # the streak began again at 2.31
     assert h.resubscriptions == 2
+
+
+def test_late_input_is_judged_afresh_in_place_first_then_its_connection_is_remade():
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    feed(h, 1.0, 1.5, late=True)
+    assert h.due(1.5, 1).startswith('every message late') and h.judge_in_place()
+    h.judged_afresh(1.5)
+    feed(h, 1.5, 1.9, late=True)            # late again on the same connection
+    assert h.due(1.9, 1) is None
+    feed(h, 1.9, 2.01, late=True)
+    assert h.due(2.01, 1) and not h.judge_in_place()
+    h.resubscribed(2.01)
+    feed(h, 2.01, 2.6, late=True)           # a new connection: in place first again
+    assert h.due(2.6, 1) and h.judge_in_place()
+    assert (h.rejudgements, h.resubscriptions) == (1, 1)
+
+
+def test_a_delay_that_is_not_steady_remakes_the_connection_at_once():
+    # a backlog being delivered (each message less late than the last) or still building
+    for growth in (-1.5, 0.5):
+        h = StreamHealth(0.5, 2.0)
+        feed(h, 0.0, 1.0, late=False)
+        feed(h, 1.0, 1.5, late=True, lag=1.0, growth=growth)
+        assert h.due(1.5, 1).startswith('every message late') and not h.judge_in_place()
+    # unstamped input has no delay to judge: re-made as before
+    h = StreamHealth(0.5, 2.0)
+    for k in range(60):
+        h.on_message(k * 0.01, True)
+    assert h.due(0.6, 1) and not h.judge_in_place()
+
+
+def test_silence_is_never_judged_in_place():
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    assert h.due(3.0, 1).startswith('no message') and not h.judge_in_place()
+    # a late stream's re-made connection that brings nothing: re-made again, not judged
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=True)
+    assert h.due(1.0, 1) and h.judge_in_place()
+    h.judged_afresh(1.0)
+    feed(h, 1.0, 1.6, late=True)
+    assert h.due(1.6, 1) and not h.judge_in_place()
+    h.resubscribed(1.6)
+    assert h.due(3.7, 1).startswith('no message') and not h.judge_in_place()
 
 
 def test_a_stall_of_the_consumer_itself_is_judged_afresh():
@@ -173,23 +219,27 @@ deadline = time.monotonic() + 20
 while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
     time.sleep(0.05)
 
-def publish(secs, delay):
-    end = time.monotonic() + secs
+def publish(secs, delay, growth=0.0):
+    start = time.monotonic()
+    end = start + secs
     while time.monotonic() < end:
         h = Hand(present=True)
-        h.header.stamp = rospy.Time.from_sec(rospy.get_time() - delay)
+        grown = growth * (time.monotonic() - start)
+        h.header.stamp = rospy.Time.from_sec(rospy.get_time() - delay - grown)
         pub.publish(h)
         time.sleep(0.01)
 
 out = {}
-def phase(name, secs, delay=None):
+def phase(name, secs, delay=None, growth=0.0):
     before, judged = sub.health.resubscriptions, len(refused)
+    afresh = sub.health.rejudgements
     if delay is None:
         time.sleep(secs)
     else:
-        publish(secs, delay)
+        publish(secs, delay, growth)
     verdicts = refused[judged:]
     out[name] = {'resubscriptions': sub.health.resubscriptions - before,
+                 'judged_afresh': sub.health.rejudgements - afresh,
                  'received': sum(sub.received.values()),
                  'connections': sub.sub.get_num_connections(),
                  'refused': sum(verdicts), 'accepted': len(verdicts) - sum(verdicts),
@@ -200,6 +250,8 @@ pub.impl.seq += 5                # five messages numbered and lost before this s
 phase('late', 2.0, 0.6)          # every message 0.6 s late, as a standing backlog or a lagged
                                  # clock's baseline makes them look
 phase('on_time_again', 1.5, 0.0)
+phase('growing', 3.0, 0.0, growth=0.8)   # later and later: a backlog still building
+phase('on_time_at_last', 1.0, 0.0)
 phase('silent', 2.6)             # the publisher lives on, sends nothing
 for c in pub.impl.connections:   # the publisher drops the connection and lives on
     c.close()
@@ -220,15 +272,19 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out['on_time']['resubscriptions'] == 0 and out['on_time']['refused'] == 0, out
-    # 2 s of late input: refused for 0.5 s, then the connection is re-made and judged
-    # afresh: the steady delay is the new connection's baseline, so its messages are taken
-    assert out['late']['resubscriptions'] == 1, out
-    assert 30 <= out['late']['refused'] <= 150, out    # 0.5 s, the 0.25 s check, the new connection
+    # 2 s of late input: refused for 0.5 s, then judged afresh on the same connection: the
+    # steady delay is its new baseline, so its messages are taken, and none is dropped
+    assert out['late']['resubscriptions'] == 0 and out['late']['judged_afresh'] == 1, out
+    assert 30 <= out['late']['refused'] <= 150, out    # 0.5 s and the 0.25 s check
     assert out['late']['accepted'] >= 30 and out['late']['tail_refused'] == 0, out
     assert out['late']['connections'] == 1, out
     # on time again: taken on the same connection, nothing re-made
     assert out['on_time_again']['resubscriptions'] == 0 and out['on_time_again']['refused'] == 0, out
     assert out['on_time_again']['received'] - out['late']['received'] > 100, out
+    # a delay that keeps growing is no steady offset: the connection is re-made
+    assert out['growing']['judged_afresh'] == 0 and out['growing']['resubscriptions'] >= 1, out
+    assert out['on_time_at_last']['refused'] == 0 and out['on_time_at_last']['accepted'] > 50, out
+    assert out['on_time_at_last']['resubscriptions'] == 0, out
     # 2.6 s of silence with the publisher connected: once, after 0.5 s
     assert out['silent']['resubscriptions'] == 1, out
     assert out['silent']['connections'] == 1, out
@@ -248,9 +304,15 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     across = int(diag['hand messages missed across re-subscriptions'])
     assert 0 <= across <= missed - 5, diag
     assert int(diag['hand messages missed from /stream_health_client across re-subscriptions']) == across
-    assert int(diag['hand re-subscriptions']) == sum(
-        out[k]['resubscriptions'] for k in ('on_time', 'late', 'on_time_again', 'silent',
-                                            'dropped'))
+    phases = ('on_time', 'late', 'on_time_again', 'growing', 'on_time_at_last', 'silent',
+              'dropped')
+    assert int(diag['hand re-subscriptions']) == sum(out[k]['resubscriptions'] for k in phases)
+    assert int(diag['hand input judged afresh on its connection']) == sum(
+        out[k]['judged_afresh'] for k in phases)
+    err = proc.stderr
+    assert 'client: judging the input on /hands afresh on its connection (every message late' in err
+    assert err.index('judging the input on /hands afresh') < err.index(
+        're-subscribed to /hands (every message late'), err[-3000:]
     assert 'client: re-subscribed to /hands (every message late for' in proc.stderr, proc.stderr[-3000:]
     assert ('client: re-subscribed to /hands (connected to none of the 1 publisher the master '
             'lists for') in proc.stderr, proc.stderr[-3000:]
@@ -289,6 +351,7 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     monkeypatch.setattr(rospy, 'resolve_name', lambda name: '/' + name)
     monkeypatch.setattr(rospy, 'logerr_throttle', lambda period, text: logs.append(text))
     monkeypatch.setattr(rospy, 'logwarn', lambda *a: logs.append(a[0] % a[1:]))
+    sub.health.judged_afresh(8.0)              # late once already: now re-made
     feed(sub.health, 8.0, 9.9, late=True)
     sub._check()                               # due, unregistered, then the failure
     assert first.closed and sub.sub is None and not made

@@ -1,27 +1,40 @@
-"""When a consumer should re-establish its input connection, no ROS.
+"""When a consumer should judge its input afresh or re-establish its connection, no ROS.
 
-A standing backlog can form anywhere along one connection (the publisher's queue, both
-socket buffers) and keep every message late long after the load that built it is gone;
-a connection can also fall silent while its publisher lives on and serves others. Neither
-heals by itself. Dropping the connection and subscribing afresh clears both. This class
-decides when: input refused as late for `after` seconds without one message on time
-(again every `after` seconds while that lasts: late input is refused anyway, and the
-backlog may clear at any moment), or, on a connection that delivered since it was made,
-no message at all for `silent_after` seconds while a publisher is connected. Silence can
-be legitimate (a paused bag, a source waiting for a device), so a silent connection is
-re-made once per silence, not again until a message has come: one log line, not a storm.
-A connection can also be dropped by its publisher while the publisher lives on (seen
-in soaks: a rospy publisher, finishing the teardown of a consumer's old connection, also
-dropped its new one, 40 ms old; rospy matches connections by a cached socket number).
-rospy does not reconnect then: the master still lists the publisher, so nothing tells the
-subscriber. So a subscription
-connected to no publisher for `after` seconds (longer after fruitless tries, up to 8x)
-asks whether the master lists one, and is re-made when it does. A re-made connection that
-replaced a late stream and has brought nothing for `silent_after` seconds is re-made again
-too, with the same back-off: its publisher was sending a moment ago, its silence is not a
-pause.
+Every message of a connection can stay late long after a load has gone: the consumer
+judges lateness against the best latency it saw, and a best taken while its own clock
+lagged (under simulated time, a /clock that fell behind for a moment) makes every later
+message look late by a constant, for ever; a standing backlog (the publisher's queue,
+both socket buffers) would look the same. Input refused as late for `after` seconds
+without one message on time, its delay steady meanwhile (within STEADY_LAG_SPREAD_S), is
+first judged afresh on the same connection: that delay becomes the baseline, nothing is
+dropped, and a lagged baseline (the case seen in soaks) is healed. A delay that is not
+steady (a backlog being delivered, or still building), or late again on that connection
+for `after` seconds, has the connection dropped and made anew, which clears a backlog;
+again every `after` seconds while that lasts (late input is refused anyway, and the
+backlog may clear at any moment).
+
+A connection can also fall silent while its publisher lives on and serves others; that
+does not heal by itself either. On a connection that delivered since it was made, no
+message at all for `silent_after` seconds while a publisher is connected re-makes it.
+Silence can be legitimate (a paused bag, a source waiting for a device), so a silent
+connection is re-made once per silence, not again until a message has come: one log
+line, not a storm. A connection can also be dropped by its publisher while the publisher
+lives on (seen in soaks: a rospy publisher, finishing the teardown of a consumer's old
+connection, also dropped its new one, 40 ms old; rospy matches connections by a cached
+socket number). rospy does not reconnect then: the master still lists the publisher, so
+nothing tells the subscriber. So a subscription connected to no publisher for `after`
+seconds (longer after fruitless tries, up to 8x) asks whether the master lists one, and
+is re-made when it does. A re-made connection that replaced a late stream and has
+brought nothing for `silent_after` seconds is re-made again too, with the same back-off:
+its publisher was sending a moment ago, its silence is not a pause.
 """
+import math
+
 from leap_teleop.params import Param
+
+# How much the delay of late input may vary over a streak of `after` seconds and still
+# count as steady (a constant offset, not a backlog): s.
+STEADY_LAG_SPREAD_S = 0.1
 
 # A consumer node's ~params for its hand subscription (the arm nodes, the pilots).
 HAND_SUBSCRIPTION_PARAMS = {
@@ -31,10 +44,12 @@ HAND_SUBSCRIPTION_PARAMS = {
     # a backlog that stays is cleared by re-subscribing.
     'hand_queue_size': Param(500, 'hand messages buffered on the subscription before the '
                                  'oldest is dropped', ge=1, le=2000),
-    'resubscribe_after': Param(0.5, 're-establish the hand connection after this long with every '
-                                    'message late (again while it lasts), or connected to no '
-                                    'publisher while the master lists one; 0 = never', unit='s',
-                               ge=0.0, le=60.0),
+    'resubscribe_after': Param(0.5, 'after this long with every hand message late, judge their '
+                                    'lateness afresh on the same connection, and re-establish '
+                                    'it when they stay late this long again (again while it '
+                                    'lasts); also re-establish it after this long connected to '
+                                    'no publisher while the master lists one; 0 = never',
+                               unit='s', ge=0.0, le=60.0),
     'resubscribe_silent_after': Param(2.0, 're-establish it, once, after this long without any '
                                            'message while a publisher is connected; 0 = never',
                                       unit='s', ge=0.0, le=60.0),
@@ -59,9 +74,14 @@ class StreamHealth:
         self.remade_late = False    # ... replacing a late stream
         self.fruitless = 0          # re-subscriptions in a row that brought nothing
         self._why = None            # 'late' or 'silent': the reason due() gave last
+        self._late_messages = False  # ... and it was every message refused as late
+        self.rejudged = False       # lateness judged afresh on this connection already
+        self._lags = None           # (lowest, highest) delay of the current late streak
+        self.rejudgements = 0
 
-    def on_message(self, now, late):
-        """A message arrived at `now`; `late` when the consumer refused it as late."""
+    def on_message(self, now, late, lag=None):
+        """A message arrived at `now`; `late` when the consumer refused it as late; `lag`:
+        its arrival time minus its stamp (s), when it has one."""
         self.last_rx = now
         self.heard = True
         if self.since is None:
@@ -69,6 +89,10 @@ class StreamHealth:
         if late:
             if self.late_since is None:
                 self.late_since = now
+                self._lags = None
+            if lag is not None and math.isfinite(lag):
+                lo, hi = self._lags or (lag, lag)
+                self._lags = (min(lo, lag), max(hi, lag))
         else:
             self.late_since = None
 
@@ -110,8 +134,9 @@ class StreamHealth:
         if self.late_since is not None and self.after > 0:
             late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
-                self._why = 'late'
+                self._why, self._late_messages = 'late', True
                 return 'every message late for %.1f s' % late_for
+        self._late_messages = False
         if listed is not None and publishers == 0 and self.unconnected_since is not None:
             if listed > 0:
                 self._why = 'silent'
@@ -133,9 +158,25 @@ class StreamHealth:
                 now - self.since, publishers, '' if publishers == 1 else 's')
         return None
 
+    def judge_in_place(self):
+        """Whether the reason due() gave is met by judging the input's lateness afresh on
+        the same connection: every message late by a steady delay, and not judged afresh
+        on it yet."""
+        return (self._late_messages and not self.rejudged and self._lags is not None
+                and self._lags[1] - self._lags[0] <= STEADY_LAG_SPREAD_S)
+
+    def judged_afresh(self, now):
+        """The consumer judged its input's lateness afresh at `now`, on the same
+        connection: late again for `after` seconds, it is re-made."""
+        self.rejudged = True
+        self.rejudgements += 1
+        self.since = now
+        self.late_since = None
+
     def resubscribed(self, now):
         """The connection was re-established at `now`: judge it afresh."""
         self.resubscriptions += 1
+        self.rejudged = False
         self.fruitless = self.fruitless + 1 if (self.remade and not self.heard) else 0
         self.remade_late = self._why == 'late'
         self.remade = True

@@ -1,6 +1,7 @@
 """A consumer's hand-input subscription: counts what arrives and what went missing (header
-sequence gaps) per publisher, and re-establishes the connection when its input stays late,
-falls silent while a publisher is connected, or loses every publisher the master still
+sequence gaps) per publisher; when its input stays late, judges it afresh on the same
+connection, then re-establishes the connection if it stays late; re-establishes it too when
+it falls silent while a publisher is connected, or loses every publisher the master still
 lists (control.stream_health says when)."""
 import collections
 import threading
@@ -21,8 +22,8 @@ class HandSubscription:
         """callback(msg) returns why the message was refused (None if it was not); a
         reason starting with 'late' counts against the connection. p: the node's params
         (HAND_SUBSCRIPTION_PARAMS: queue size, when to re-subscribe). on_new_connection()
-        is called after each re-subscription: the consumer judges the new connection's
-        lateness afresh."""
+        is called after each re-subscription, and to judge a late stream afresh on its
+        connection: the consumer forgets the stream's latency baseline."""
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
         self.on_new_connection = on_new_connection
         self.node, self.queue_size = node, int(p['hand_queue_size'])
@@ -47,9 +48,11 @@ class HandSubscription:
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
         why = self.callback(msg)
+        now = rospy.get_time()
         with self._lock:                 # one hold per message: this is every hand message
             self.gaps.add(caller, msg.header.seq)
-            self.health.on_message(rospy.get_time(), bool(why) and why.startswith('late'))
+            self.health.on_message(now, bool(why) and why.startswith('late'),
+                                   now - msg.header.stamp.to_sec())
 
     def _check(self, _event=None):
         # An exception would end the timer's thread, and every later check with it.
@@ -84,7 +87,18 @@ class HandSubscription:
             why = self.health.due(now, publishers, listed)
             if why is None:
                 return
-            self.health.resubscribed(now)
+            in_place = self.health.judge_in_place()
+            if in_place:
+                self.health.judged_afresh(now)
+            else:
+                self.health.resubscribed(now)
+        if in_place:
+            # Nothing dropped: a baseline taken while this node's clock lagged is healed;
+            # a delay that still grows is late again, and the connection is re-made then.
+            self.on_new_connection()
+            rospy.logwarn('%s: judging the input on %s afresh on its connection (%s)', self.node,
+                          rospy.resolve_name(self.topic), why)
+            return
         # Unregister first: a second Subscriber on the same topic would share the old
         # connections instead of making new ones.
         old, self.sub = self.sub, None
@@ -114,4 +128,6 @@ class HandSubscription:
                        ('hand messages missed from %s' % caller, str(missed.get(caller, 0))),
                        ('hand messages missed from %s across re-subscriptions' % caller,
                         str(across.get(caller, 0)))]
-        return values + [('hand re-subscriptions', str(self.health.resubscriptions))]
+        return values + [('hand re-subscriptions', str(self.health.resubscriptions)),
+                         ('hand input judged afresh on its connection',
+                          str(self.health.rejudgements))]
