@@ -159,6 +159,7 @@ class SoakMonitor:
         from diagnostic_msgs.msg import DiagnosticArray
         self.diag_rejected = {}
         self.consumer_received, self.resubscriptions = {}, {}   # per consumer, their own count
+        self.judged_afresh = {}             # ... of their input, on its connection
         self.consumer_missed = {}           # ... of the player's messages that never came
         self.consumer_missed_reconnect = {}  # ... of them, across the consumer's re-subscriptions
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
@@ -177,6 +178,8 @@ class SoakMonitor:
                         self.consumer_missed_reconnect[st.name] = int(kv.value)
                     elif kv.key == 'hand re-subscriptions':
                         self.resubscriptions[st.name] = int(kv.value)
+                    elif kv.key == 'hand input judged afresh on its connection':
+                        self.judged_afresh[st.name] = int(kv.value)
 
     def _seq(self, topic, msg):
         seq = msg.header.seq
@@ -495,6 +498,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         rejected.update({n: v for n, v in mon.diag_rejected.items() if 'pilot' in n})
         got = dict(mon.consumer_received)
         resubscribed = dict(mon.resubscriptions)
+        judged_afresh = dict(mon.judged_afresh)
     # What each consumer itself received from the player, against what the player sent on
     # its topic (a consumer that never reported counts as having received nothing).
     got = _per_consumer(got)
@@ -536,8 +540,9 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
     log('[soak] hand -> cmd_vel latency p50: first %.2f ms, last %.2f ms (drift %+.2f ms)'
         % (dr_first, dr_last, dr_drift))
     log('[soak] lost inputs (the monitor) %s, lost per consumer (their own counts) %s, '
-        'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s'
-        % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed))
+        'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s, input judged '
+        'afresh on its connection %s'
+        % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed, judged_afresh))
     log('[soak] missed per consumer (gaps in the player\'s numbering, their own counts) %s; '
         'of them across their re-subscriptions %s; after the load burst %s'
         % (missed_msgs, missed_reconnect, missed_after))
@@ -562,6 +567,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                                                   else float('nan')),
         'soak.consumer_missed_across_resubscriptions_msgs': sum(missed_reconnect.values()),
         'soak.resubscriptions': sum(resubscribed.values()),
+        'soak.judged_afresh': sum(judged_afresh.values()),
         'soak.rejected_inputs': sum(rejected.values()),
         'soak.sim_minutes': sim / 60.0,
         'soak.sim_wall_ratio': sim / wall,
@@ -600,6 +606,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                                                             % missed_reconnect,
         'soak.resubscriptions': 'hand connections the consumers re-established %s'
                                 % resubscribed,
+        'soak.judged_afresh': 'times the consumers judged their late input afresh on its '
+                              'connection %s' % judged_afresh,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'
                                 % rejected,
         'soak.sim_minutes': '/clock of the UR10 simulator',
