@@ -94,7 +94,7 @@ class HandSubscription:
                 self.health.resubscribed(now)
         if in_place:
             # Nothing dropped: a baseline taken while this node's clock lagged is healed;
-            # a delay that still grows is late again, and the connection is re-made then.
+            # late again on this connection, it is re-made.
             self.on_new_connection()
             rospy.logwarn('%s: judging the input on %s afresh on its connection (%s)', self.node,
                           rospy.resolve_name(self.topic), why)
