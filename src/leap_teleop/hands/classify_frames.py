@@ -59,8 +59,6 @@ snapshot data whose frames are unrelated. Otherwise frames are a stream: a gestu
 turns on after 3 consistent frames and off after 3, per hand side.
 """
 import argparse
-import gzip
-import io
 import json
 import math
 import sys
@@ -158,15 +156,6 @@ def iter_json_lines(stream):
         yield d
 
 
-def _open_lines(path):
-    """A text stream of a JSON Lines file, gzipped or not."""
-    with open(path, 'rb') as f:
-        gzipped = f.read(2) == b'\x1f\x8b'
-    if gzipped:
-        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8', errors='replace')
-    return open(path, encoding='utf-8', errors='replace')
-
-
 HEAD_BYTES = 1 << 16     # far more than a frame or pose record's line
 
 
@@ -229,7 +218,7 @@ def frames_of(path):
     if looks_like_recording(path):
         _, dicts = leapjs.load(path)
         return iter(dicts)
-    return iter_json_lines(_open_lines(path))
+    return iter_json_lines(gesture_data.open_text(path, errors='replace'))
 
 
 def main(argv=None):

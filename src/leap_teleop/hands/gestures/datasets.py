@@ -69,12 +69,14 @@ class DataError(ValueError):
     """A data file that cannot be read as its format."""
 
 
-def _open_text(path):
+def open_text(path, errors='strict'):
+    """A UTF-8 text stream of a file, gzipped or not (told by its magic bytes, not its
+    name); errors as for open()."""
     with open(path, 'rb') as f:
         head = f.read(2)
     if head == b'\x1f\x8b':
-        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8')
-    return open(path, encoding='utf-8')
+        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8', errors=errors)
+    return open(path, encoding='utf-8', errors=errors)
 
 
 @contextlib.contextmanager
@@ -112,7 +114,7 @@ def read_pose_lines(path):
 
 def _read_pose_lines(path):
     rows = []
-    with _open_text(path) as f:
+    with open_text(path) as f:
         for n, line in enumerate(f, 1):
             line = line.strip()
             if not line:
@@ -139,7 +141,7 @@ def first_hand(frame_dict):
 
 def read_take(path):
     """The LeapJS frame dicts of a dynamic take."""
-    with _open_text(path) as f, paused_gc():
+    with open_text(path) as f, paused_gc():
         try:
             d = _loads(f.read())
         except ValueError as e:
