@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from leap_teleop.control.sequence_gaps import SequenceGaps
-from leap_teleop.control.stream_health import StreamHealth
+from leap_teleop.control.stream_health import RENEW_IN_PLACE_S, StreamHealth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -65,6 +65,37 @@ def test_late_input_is_judged_afresh_in_place_first_then_its_connection_is_remad
     feed(h, 2.01, 2.6, late=True)           # a new connection: in place first again
     assert h.due(2.6, 1) and h.judge_in_place()
     assert (h.rejudgements, h.resubscriptions) == (1, 1)
+
+
+def test_input_on_time_for_a_while_allows_another_judgement_in_place():
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 1.0, late=False)
+    feed(h, 1.0, 1.5, late=True)
+    assert h.due(1.5, 1) and h.judge_in_place()
+    h.judged_afresh(1.5)
+    # on time, but not for RENEW_IN_PLACE_S: a second steady lateness re-makes it
+    feed(h, 1.5, 1.5 + RENEW_IN_PLACE_S - 1.0, late=False)
+    t = 1.5 + RENEW_IN_PLACE_S - 1.0
+    feed(h, t, t + 0.5, late=True)
+    assert h.due(t + 0.5, 1) and not h.judge_in_place()
+    # on time for RENEW_IN_PLACE_S (one late message restarts the count): in place again
+    h = StreamHealth(0.5, 2.0)
+    feed(h, 0.0, 0.5, late=True)
+    assert h.due(0.5, 1) and h.judge_in_place()
+    h.judged_afresh(0.5)
+    feed(h, 0.5, 5.0, late=False)
+    h.on_message(5.0, True, 0.6)
+    feed(h, 5.01, 5.01 + RENEW_IN_PLACE_S - 0.1, late=False)
+    t = 5.01 + RENEW_IN_PLACE_S - 0.1
+    h.on_message(t, True, 0.6)
+    assert h.rejudged
+    feed(h, t + 0.01, t + 0.01 + RENEW_IN_PLACE_S + 0.02, late=False)
+    t += 0.01 + RENEW_IN_PLACE_S + 0.02
+    assert not h.rejudged
+    feed(h, t, t + 0.5, late=True)
+    assert h.due(t + 0.5, 1) and h.judge_in_place()
+    h.judged_afresh(t + 0.5)
+    assert (h.rejudgements, h.resubscriptions) == (2, 0)
 
 
 def test_a_delay_that_is_not_steady_remakes_the_connection_at_once():

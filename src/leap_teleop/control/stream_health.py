@@ -36,6 +36,10 @@ from leap_teleop.params import Param
 # count as steady (a constant offset, not a backlog): s.
 STEADY_LAG_SPREAD_S = 0.1
 
+# On-time input for this long after a judgement in place allows another one on the same
+# connection (a load that comes back minutes later): s.
+RENEW_IN_PLACE_S = 10.0
+
 # A consumer node's ~params for its hand subscription (the arm nodes, the pilots).
 HAND_SUBSCRIPTION_PARAMS = {
     # rospy keeps only the newest queue_size messages of each socket read (up to 64 KiB:
@@ -67,6 +71,7 @@ class StreamHealth:
                                     # or the last re-subscription)
         self.last_rx = None         # last message of any kind
         self.late_since = None      # first late message since the last one on time
+        self.on_time_since = None   # first message on time since the last late one
         self.unconnected_since = None   # first check that found no connected publisher
         self.ask_at = None          # when to ask the master whether one is listed
         self.heard = False          # a message came since the connection was made
@@ -93,8 +98,13 @@ class StreamHealth:
             if lag is not None and math.isfinite(lag):
                 lo, hi = self._lags or (lag, lag)
                 self._lags = (min(lo, lag), max(hi, lag))
+            self.on_time_since = None
         else:
             self.late_since = None
+            if self.on_time_since is None or now < self.on_time_since:
+                self.on_time_since = now
+            if self.rejudged and now - self.on_time_since >= RENEW_IN_PLACE_S:
+                self.rejudged = False
 
     def stalled(self, now):
         """The consumer itself stood still (its checks stopped coming): the messages that
@@ -161,7 +171,7 @@ class StreamHealth:
     def judge_in_place(self):
         """Whether the reason due() gave is met by judging the input's lateness afresh on
         the same connection: every message late by a steady delay, and not judged afresh
-        on it yet."""
+        on it since it was made or last on time for RENEW_IN_PLACE_S."""
         return (self._late_messages and not self.rejudged and self._lags is not None
                 and self._lags[1] - self._lags[0] <= STEADY_LAG_SPREAD_S)
 
