@@ -44,9 +44,11 @@ class OneEuroFilter:
         d = self.derivative
         if d is None:
             return 0.0
+        # A plain sum of squares, as _update3 takes it: not np.linalg.norm or d.dot(d),
+        # whose BLAS kernels round differently on CPUs that fuse multiply-adds.
         if d.ndim == 1:
-            return math.sqrt(d.dot(d))     # np.linalg.norm's value, without its overhead
-        return float(np.linalg.norm(d))
+            return math.sqrt(sum([v * v for v in d.tolist()]))
+        return math.sqrt(float(np.sum(d * d)))
 
     def reset(self, value=None, t=None):
         """Start over from value (None: from the next sample), at rest."""
