@@ -71,6 +71,8 @@ def test_to_bag_writes_a_scripted_session(tmp_path):
     (['--start', 'nan'], "argument --start: 'nan': seconds since 1970, 0 or more"),
     (['--start', '-5'], "argument --start: '-5': seconds since 1970, 0 or more"),
     (['--start', 'inf'], "argument --start: 'inf': seconds since 1970, 0 or more"),
+    (['--right-topic='], "--right-topic '': not a legal ROS topic name"),
+    (['--left-topic=a b'], "--left-topic 'a b': not a legal ROS topic name"),
 ])
 def test_recording_to_bag_refuses_bad_arguments(tmp_path, leapjs_data, capsys, args, message):
     from leap_teleop.ros import recording_to_bag

@@ -256,3 +256,82 @@ def test_a_recording_is_told_from_json_lines_by_its_shape(tmp_path, capsys, layo
         f.write(text)
     out = run_main(['--stateless', str(path)], capsys)
     assert [o['hands'][0]['open'] for o in out] == [False] * 3 + [True] * 3
+
+
+def _model_arrays():
+    import numpy as np
+
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS
+    with np.load(DEFAULT_MODELS['leap']) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.mark.parametrize('spoil, message', [
+    ('empty', 'cannot read a pose model'),
+    ('one array', 'one array, not a .npz'),
+    ('card a list', 'its card is not a JSON object'),
+    ('106 features', 'a leap model takes 107 features, not 106'),
+    ('a class named type', "class 'type': the name of a built-in"),
+    ('a class named twice', 'a class named twice'),
+    ('scalar mean', 'inconsistent model arrays'),
+])
+def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
+    import numpy as np
+    bad = tmp_path / 'bad.npz'
+    arrays = _model_arrays()
+    if spoil == 'empty':
+        bad.write_bytes(b'')
+    elif spoil == 'one array':
+        with open(bad, 'wb') as f:
+            np.save(f, arrays['w0'])
+    else:
+        if spoil == 'card a list':
+            arrays['card'] = np.array('[1, 2]')
+        elif spoil == '106 features':
+            arrays.update(mean=arrays['mean'][:106], scale=arrays['scale'][:106],
+                          w0=arrays['w0'][:106])
+        elif spoil == 'a class named type':
+            arrays['classes'] = np.array(['type' if c == 'rock' else c for c in arrays['classes']])
+        elif spoil == 'a class named twice':
+            arrays['classes'] = np.array(['fist' if c == 'rock' else c for c in arrays['classes']])
+        elif spoil == 'scalar mean':
+            arrays['mean'] = np.array(0.0)
+        np.savez(bad, **arrays)
+    frames = tmp_path / 'f.jsonl'
+    frames.write_text(''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3)))
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(frames),
+                        '--model', str(bad)], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and p.stdout == '' and 'Traceback' not in p.stderr, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('classify_frames: %s: ' % bad), p.stderr
+    assert message in lines[0]
+
+
+def test_the_output_never_overwrites_the_input_and_a_full_disk_is_a_write_error(tmp_path):
+    frames = tmp_path / 'f.jsonl'
+    text = ''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3))
+    frames.write_text(text)
+    cmd = [sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(frames), '--out']
+    p = subprocess.run(cmd + [str(frames)], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and 'it would be overwritten' in p.stderr
+    assert frames.read_text() == text
+    for out, why in (('', 'name a file'), (str(tmp_path), 'a folder'),
+                     (str(tmp_path / 'no' / 'x.jsonl'), 'no folder')):
+        p = subprocess.run(cmd + [out], capture_output=True, text=True, timeout=60)
+        assert p.returncode == 2 and why in p.stderr and 'Traceback' not in p.stderr
+    if os.path.exists('/dev/full'):
+        p = subprocess.run(cmd + ['/dev/full'], capture_output=True, text=True, timeout=60)
+        assert p.returncode == 1 and 'cannot write /dev/full' in p.stderr, p.stderr
+        assert 'cannot read' not in p.stderr
+
+
+def test_unhashable_ids_and_a_recording_on_stdin_are_no_crash(tmp_path):
+    d = _dicts(['fist'])[0]
+    d['hands'][0]['id'] = [1]
+    d['pointables'][0]['handId'] = {'a': 1}
+    line = run_cli(['--stateless'], stdin=json.dumps(d) + '\n')
+    assert len(line) == 1 and line[0]['hands'][0]['type'] == 'right'
+    recording = json.dumps({'metadata': {'formatVersion': 1}, 'frames': _dicts(['fist'] * 3)})
+    line = run_cli([], stdin=recording + '\n')
+    assert line == [{'id': None, 'timestamp': None, 'hands': [],
+                     'error': 'a whole recording on one line: give its file as INPUT'}]

@@ -167,8 +167,8 @@ def test_a_joint_that_is_missing_or_not_finite_leaves_no_joints(real_hands):
         assert g.extended[2] is True                    # the tracker's flag, without joints
 
 
-def test_huge_but_finite_joints_are_still_joints():
-    # the quick finite test (a sum of squares) overflows here: the exact one must decide
+def test_joints_beyond_any_trackers_range_are_no_joints():
+    # finite, but 1e200 mm from anything: no tracker reports that (once read as a fist)
     side = 1e200
     fingers = tuple(Finger(np.array([x, 0.0, -side]), np.array([0.0, 0.0, -1.0]), None,
                            np.array([x, 0.0, 0.0]), np.array([x, 0.0, -side / 3]),
@@ -177,5 +177,6 @@ def test_huge_but_finite_joints_are_still_joints():
     hand = TrackedHand('right', fingers=fingers)
     with np.errstate(over='ignore'):
         g = hand_geometry(hand)
-    assert g is not None and g.joints is not None
-    assert geometry.NOMINAL_PALM_WIDTH_MM == g.palm_width      # knuckles out of range
+    assert g is None or g.joints is None
+    assert leap_features(hand, g) is None
+    assert geometry.MAX_COORD_MM == 1e5

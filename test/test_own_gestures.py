@@ -330,6 +330,13 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--family', 'keypoints', '--out', '{tmp}/m.npz'],
      '--family keypoints: the --add files are Leap poses'),
     (['--family', 'all'], '--family all: the --add files are Leap poses'),
+    # an empty --out once meant "the shipped model", refitted over without a word
+    (['--out', ''], "--out '': name the model file"),
+    (['--out', '{tmp}/m.md'], "--out {tmp}/m.md: a model file ends in .npz"),
+    (['--out', '/dev/null.npz'], None),
+    (['--label', 'type', '--out', '{tmp}/m.npz'], "--label 'type': the name of a built-in"),
+    (['--label', 'thumb_up', '--out', '{tmp}/m.npz'], "--label 'thumb_up': the name of a built-in"),
+    (['--label', 'caf\u00e9', '--out', '{tmp}/m.npz'], "letters, digits and _ only"),
 ])
 def test_train_gestures_refuses_bad_arguments_before_the_fit(tmp_path, monkeypatch, capsys,
                                                              args, message):
@@ -339,12 +346,58 @@ def test_train_gestures_refuses_bad_arguments_before_the_fit(tmp_path, monkeypat
                         lambda *a, **k: pytest.fail('fitted before checking the arguments'))
     samples = tmp_path / 'wave.jsonl'
     samples.write_text('{}\n')
+    if message is None:     # a path that exists and is no regular file: the card's is one
+        card = tmp_path / 'dev.md'
+        card.mkdir()
+        args, message = ['--out', str(tmp_path / 'dev.npz')], "is no regular file"
+    label = ['--label', 'fist'] if '--label' not in args else []
     with pytest.raises(SystemExit) as stop:
-        train_gestures.main(['--add', str(samples), '--label', 'fist', '--no-report']
+        train_gestures.main(['--add', str(samples)] + label + ['--no-report']
                             + [a.format(tmp=tmp_path) for a in args])
     assert stop.value.code == 2
     err = capsys.readouterr().err
-    assert ': error: ' + message.format(tmp=tmp_path) in err.splitlines()[-1], err
+    assert ': error: ' + message.format(tmp=tmp_path) in err.splitlines()[-1] or (
+        message in err.splitlines()[-1] and '--out' in args and 'Traceback' not in err), err
+
+
+def test_train_gestures_never_writes_over_its_own_input(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(train_gestures, 'train',
+                        lambda *a, **k: pytest.fail('fitted before checking the arguments'))
+    samples = tmp_path / 'two.npz'          # a user's file, whatever its name
+    samples.write_text('{}\n')
+    with pytest.raises(SystemExit):
+        train_gestures.main(['--add', str(samples), '--label', 'two', '--out', str(samples)])
+    assert 'would overwrite the --add file' in capsys.readouterr().err
+    assert samples.read_text() == '{}\n'
+
+
+def test_train_gestures_refuses_a_file_with_no_hand_and_keeps_same_named_files_apart(
+        tmp_path, capsys):
+    empty = tmp_path / 'wave.jsonl'
+    empty.write_text('')
+    assert train_gestures.main(['--data', str(tmp_path), '--add', str(empty), '--label', 'wave',
+                                '--out', str(tmp_path / 'm.npz'), '--no-report']) == 2
+    assert '--add %s: no hand in it' % empty in capsys.readouterr().err
+    assert not (tmp_path / 'm.npz').exists()
+    assert train_gestures.user_people(['a/two.jsonl', 'b/two.jsonl', 'c/peace.csv']) == [
+        'user:two#1', 'user:two#2', 'user:peace']
+
+
+@pytest.mark.parametrize('content, message', [
+    (b'\xff\xfe not text\n', 'cannot read on after 0 pose records'),
+    (gzip.compress(b'{"person": "a", "label": "b", "frame": {}}\n' * 2000)[:300],
+     'cannot read on after'),
+    (b'{"person": "a", "label": "b", "frame": {"hands": [{"type": "right", "id": [1], '
+     b'"grabStrength": 1' + b'0' * 400 + b'}], "pointables": [{"handId": {"a": 1}}]}}\n',
+     'no hand in it'),
+])
+def test_train_gestures_names_an_unreadable_file_in_one_line(tmp_path, capsys, content, message):
+    bad = tmp_path / 'bad.jsonl'
+    bad.write_bytes(content)
+    assert train_gestures.main(['--data', str(tmp_path), '--add', str(bad), '--label', 'wave',
+                                '--out', str(tmp_path / 'm.npz'), '--no-report']) == 2
+    err = capsys.readouterr().err
+    assert message in err and 'Traceback' not in err and len(err.strip().splitlines()) == 1, err
 
 
 @pytest.mark.parametrize('tool, sentence_end', [
@@ -425,3 +478,17 @@ def test_the_nodes_fly_a_drone_on_bound_gestures(trained, tmp_path):
                              'ardrone/takeoff]',
                              'gesture_model:=%s' % model, 'gesture_bindings:=%s' % bindings]],
                  ['--drone'], 100)
+
+
+def test_keypoint_files_gzipped_or_with_a_bom_read_and_absurd_values_are_refused(tmp_path):
+    row = '3,' + ','.join('%.3f' % (0.01 * i) for i in range(42)) + '\n'
+    (tmp_path / 'bom.csv').write_bytes(b'\xef\xbb\xbf' + row.encode())
+    (tmp_path / 'gz.csv').write_bytes(gzip.compress(row.encode() * 2))
+    assert len(gesture_data.read_keypoints(str(tmp_path / 'bom.csv'))[2]) == 1
+    assert len(gesture_data.read_keypoints(str(tmp_path / 'gz.csv'))[2]) == 2
+    (tmp_path / 'huge.csv').write_text(row.replace('0.010', '1e300'))
+    with pytest.raises(gesture_data.DataError, match='row 1: a keypoint beyond'):
+        gesture_data.read_keypoints(str(tmp_path / 'huge.csv'))
+    (tmp_path / 'latin1.csv').write_bytes(row.encode() + b'3,\xe9\n')
+    with pytest.raises(gesture_data.DataError, match=r'cannot read on after \d+ keypoint rows .*decode'):
+        gesture_data.read_keypoints(str(tmp_path / 'latin1.csv'))

@@ -31,6 +31,22 @@ def test_a_missing_joint_judges_nothing(figures):
     assert figures['dropout_draws'] == 40 and figures['dropout_wrong'] == 0
 
 
+@pytest.mark.parametrize('where', ['a fingertip', 'every joint', 'the palm'])
+def test_a_hand_at_absurd_coordinates_judges_nothing(where):
+    # 1e308 is finite, but no tracker reports it: once read as a fist
+    hand = render_hand('right', 'fist', (0.0, 200.0, 0.0))
+    assert classify_pose(hand, hand_geometry(hand), load_model())['fist']
+    if where == 'the palm':
+        hand.palm_position = np.array([1e308, 0.0, 0.0])
+    for f in hand.fingers if where != 'the palm' else ():
+        for joint in ('tip',) if where == 'a fingertip' else ('mcp', 'pip', 'dip', 'tip'):
+            setattr(f, joint, np.array([1e308, 1e308, 1e308]))
+    g = hand_geometry(hand)
+    decision = classify_pose(hand, g, load_model())
+    assert not any(decision[k] for k in ('fist', 'open', 'pinch', 'rock', 'thumb_up',
+                                         'thumb_down'))
+
+
 def _turned(pose, normal, direction, side='right'):
     return render_hand(side, pose, (0.0, 200.0, 0.0), np.array(normal, float),
                        np.array(direction, float))

@@ -95,6 +95,18 @@ def test_loop_restarts_and_stop_ends_it():
     ({'hands': {'right': [{'pose': 'pinch', 'value': 3}]}}, 'pinch value'),
     ({'hands': {'right': [{'pose': 'open', 'speed': 3}]}}, 'unknown keys'),
     ({'rate_hz': 0, 'hands': {}}, 'rate_hz'),
+    # values of the wrong type or out of range: one line naming them, never a traceback
+    ({'rate_hz': 'abc', 'hands': {}}, r'rate_hz must be a number in \[0.001, 10000\]'),
+    ({'noise_mm': float('nan'), 'hands': {}}, 'noise_mm must be a number'),
+    ({'seed': -1, 'hands': {}}, 'seed must be an integer'),
+    ({'seed': 'abc', 'hands': {}}, 'seed must be an integer'),
+    ({'hands': {'right': [{'pose': ['fist']}]}}, 'unknown pose'),
+    ({'hands': {'right': [{'pose': 'open', 'confidence': 'abc'}]}}, 'confidence must be'),
+    ({'hands': {'right': [{'pose': 'open', 'confidence': -5}]}}, 'confidence must be'),
+    ({'hands': {'right': [{'pose': 'open', 'circle': {'radius': 'abc'}}]}}, 'circle.radius'),
+    ({'hands': {'right': [{'pose': 'open', 'circle': {'radius': 5, 'turns': float('inf')}}]}},
+     'circle.turns'),
+    ({'hands': {'right': [{'pose': 'open', 'palm': [1e308, 0, 0]}]}}, 'within'),
 ])
 def test_invalid_scripts_are_rejected_with_a_clear_message(bad, message):
     with pytest.raises(SourceError, match=message):
@@ -108,6 +120,9 @@ def test_unreadable_files_and_unknown_sources_fail_clearly(tmp_path):
         GestureScript.load(bad)
     with pytest.raises(SourceError, match='cannot read'):
         GestureScript.load(tmp_path / 'missing.yaml')
+    bad.write_bytes(b'\xff\xfe hands: {}')
+    with pytest.raises(SourceError, match='not UTF-8'):
+        GestureScript.load(bad)
     with pytest.raises(SourceError, match='unknown hand source'):
         make_source('kinect')
 

@@ -61,6 +61,7 @@ turns on after 3 consistent frames and off after 3, per hand side.
 import argparse
 import json
 import math
+import os
 import sys
 import zlib
 
@@ -141,6 +142,10 @@ def keypoint_lines(path, classifier):
                'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
 
 
+class NotAFrame(ValueError):
+    """A line of valid JSON that is no frame."""
+
+
 def iter_json_lines(stream):
     for line in stream:
         line = line.strip()
@@ -153,6 +158,9 @@ def iter_json_lines(stream):
             continue
         if isinstance(d, dict) and 'hands' not in d and isinstance(d.get('frame'), dict):
             d = d['frame']          # a pose record: person, label and the frame
+        elif isinstance(d, dict) and 'hands' not in d and (
+                isinstance(d.get('frames'), list) or isinstance(d.get('data'), list)):
+            d = NotAFrame('a whole recording on one line: give its file as INPUT')
         yield d
 
 
@@ -247,8 +255,18 @@ def main(argv=None):
     except (SourceError, OSError, ModelError, gesture_data.DataError) as e:
         print('classify_frames: %s' % e, file=sys.stderr)
         return 2
-    out = sys.stdout if args.out == '-' else open(args.out, 'w')
-    n = 0
+    if args.out != '-':
+        problem = out_problem(args.out, [args.keypoints or args.input, args.model,
+                                         args.keypoint_model])
+        if problem:
+            print('classify_frames: --out %r: %s' % (args.out, problem), file=sys.stderr)
+            return 2
+    try:
+        out = sys.stdout if args.out == '-' else open(args.out, 'w')
+    except OSError as e:
+        print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
+        return 2
+    n, status = 0, 0
     try:
         for d in frames:
             if args.keypoints:
@@ -257,22 +275,56 @@ def main(argv=None):
                 ts = round(d.timestamp * 1e6) if math.isfinite(d.timestamp) else None
                 result = classifier.classify_frame(d, d.id, ts)
             elif isinstance(d, Exception) or not isinstance(d, dict):
-                why = 'not JSON: %s' % d if isinstance(d, Exception) else 'not a frame object'
+                why = ('not a frame object' if not isinstance(d, Exception) else str(d)
+                       if isinstance(d, NotAFrame) else 'not JSON: %s' % d)
                 result = {'id': None, 'timestamp': None, 'hands': [], 'error': why}
             else:
                 result = classifier.classify(d)
-            out.write(json.dumps(result) + '\n')
+            try:
+                out.write(json.dumps(result) + '\n')
+            except BrokenPipeError:
+                raise
+            except OSError as e:
+                raise _WriteError(e) from None
             n += 1
     except BrokenPipeError:
         return 0
+    except _WriteError as e:
+        print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
+        status = 1
     except (OSError, EOFError) as e:    # a truncated or corrupt gzip stream, a read error
         print('classify_frames: %s: cannot read on after %d frames (%s)' % (args.input, n, e),
               file=sys.stderr)
-        return 2
+        status = 2
     finally:
         if out is not sys.stdout:
-            out.close()
-    return 0
+            try:
+                out.close()
+            except OSError as e:        # what was still buffered: the disk is full
+                print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
+                status = status or 1
+    return status
+
+
+class _WriteError(Exception):
+    """Writing the output failed (not reading the input)."""
+
+
+def out_problem(out, inputs):
+    """Why the output cannot go to `out`, or None: empty, a folder, no such folder, or one
+    of the `inputs` (paths; None and '-' are skipped) that it would overwrite."""
+    if not out.strip():
+        return 'name a file (or - for stdout)'
+    if os.path.isdir(out):
+        return 'a folder: name a file'
+    folder = os.path.dirname(os.path.abspath(out))
+    if not os.path.isdir(folder):
+        return 'no folder %s' % folder
+    for path in inputs:
+        if path not in (None, '-') and os.path.exists(out) and os.path.exists(path) \
+                and os.path.samefile(out, path):
+            return 'it is the input %s: it would be overwritten' % path
+    return None
 
 
 if __name__ == '__main__':

@@ -17,6 +17,7 @@ import sys
 import time
 
 import rosbag
+import rosgraph.names
 import rospy
 
 from leap_teleop.hands.frame import SIDES
@@ -111,6 +112,11 @@ def main(argv=None):
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
     if sum(bool(x) for x in (args.script, args.recording, args.video)) != 1:
         ap.error('give one of: a recording, --script, --video')
+    if not args.out.strip():
+        ap.error('name the bag file')
+    for option, topic in (('--right-topic', args.right_topic), ('--left-topic', args.left_topic)):
+        if not rosgraph.names.is_legal_name(topic) or not topic.strip('/'):
+            ap.error('%s %r: not a legal ROS topic name' % (option, topic))
     folder = os.path.dirname(os.path.abspath(args.out))
     if os.path.isdir(args.out):
         ap.error('%s: a folder: name the bag file' % args.out)

@@ -9,14 +9,36 @@ The model file is a .npz of arrays (loaded with allow_pickle=False): `classes` (
 import json
 import math
 import os
+import re
+import zipfile
 
 import numpy as np
+
+from leap_teleop.hands.gestures.features import KEYPOINT_FEATURES, LEAP_FEATURES
 
 MODEL_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'models')
 DEFAULT_MODELS = {'leap': os.path.join(MODEL_DIR, 'leap_poses.npz'),
                   'keypoints': os.path.join(MODEL_DIR, 'keypoint_poses.npz')}
 _exp = math.exp
 _KEYS = ('classes', 'family', 'mean', 'scale', 'w0', 'b0', 'w1', 'b1')
+FEATURES_OF = {'leap': LEAP_FEATURES, 'keypoints': KEYPOINT_FEATURES}
+# Names no class may take: the recognizer's other gestures and events, and the keys beside
+# the gestures in its output (fist, open, pinch, rock, thumb and none are the built-in
+# classes: a user's samples may add to them).
+CLASHING_NAMES = frozenset(('thumb_up', 'thumb_down', 'unfold', 'fold', 'circle', 'circle_cw',
+                            'circle_ccw', 'hand_lost', 'hand_found', 'type', 'events',
+                            'pinch_value', 'extended', 'label', 'probability', 'id',
+                            'timestamp', 'hands'))
+
+
+def class_name_problem(name):
+    """Why `name` cannot name a class of a pose model, or None."""
+    if not re.fullmatch(r'[A-Za-z0-9_]+', name or ''):
+        return 'letters, digits and _ only'
+    if name in CLASHING_NAMES:
+        return ('the name of a built-in gesture, event or output key; choose another (thumb, '
+                'fist, open, pinch, rock or none add samples to the built-in classes)')
+    return None
 
 
 class ModelError(ValueError):
@@ -34,6 +56,13 @@ class PoseClassifier:
         self.w0, self.b0 = np.asarray(w0, dtype=float), np.asarray(b0, dtype=float)
         self.w1, self.b1 = np.asarray(w1, dtype=float), np.asarray(b1, dtype=float)
         self.card = dict(card or {})
+        if self.mean.ndim != 1 or self.w0.ndim != 2 or self.w1.ndim != 2 or not self.classes:
+            raise ModelError('inconsistent model arrays')
+        if len(set(self.classes)) != len(self.classes):
+            raise ModelError('a class named twice')
+        for c in self.classes:
+            if class_name_problem(c):
+                raise ModelError('class %r: %s' % (c, class_name_problem(c)))
         n = self.mean.shape[0]
         if (self.inv_scale.shape != (n,) or self.w0.shape[0] != n
                 or self.b0.shape != (self.w0.shape[1],) or self.w1.shape[0] != self.w0.shape[1]
@@ -82,19 +111,31 @@ class PoseClassifier:
     @classmethod
     def load(cls, path, family=None):
         try:
-            with np.load(path, allow_pickle=False) as z:
+            z = np.load(path, allow_pickle=False)
+            if not isinstance(z, np.lib.npyio.NpzFile):
+                raise ModelError('%s: not a pose model (one array, not a .npz of them)' % path)
+            with z:
                 missing = [k for k in _KEYS if k not in z.files]
                 if missing:
                     raise ModelError('%s: not a pose model (missing %s)' % (path, ', '.join(missing)))
                 card = json.loads(str(z['card'])) if 'card' in z.files else {}
-                model = cls(z['classes'].tolist(), str(z['family']), z['mean'], z['scale'],
-                            z['w0'], z['b0'], z['w1'], z['b1'], card)
-        except (OSError, ValueError, KeyError) as e:
+                if not isinstance(card, dict):
+                    raise ModelError('%s: its card is not a JSON object' % path)
+                model = cls(np.atleast_1d(z['classes']).tolist(), str(z['family']), z['mean'],
+                            z['scale'], z['w0'], z['b0'], z['w1'], z['b1'], card)
+        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as e:
             if isinstance(e, ModelError):
-                raise
-            raise ModelError('%s: cannot read a pose model (%s)' % (path, e)) from None
+                if str(e).startswith(str(path)):
+                    raise
+                raise ModelError('%s: %s' % (path, e)) from None
+            raise ModelError('%s: cannot read a pose model (%s)' % (path, e or type(e).__name__)) from None
+        if model.family not in FEATURES_OF:
+            raise ModelError('%s: unknown model family %r (leap or keypoints)' % (path, model.family))
         if family is not None and model.family != family:
             raise ModelError('%s: a %s model, not a %s one' % (path, model.family, family))
+        if model.n_features != FEATURES_OF[model.family]:
+            raise ModelError('%s: a %s model takes %d features, not %d' % (
+                path, model.family, FEATURES_OF[model.family], model.n_features))
         return model
 
 

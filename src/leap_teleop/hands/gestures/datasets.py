@@ -17,6 +17,7 @@ import io
 import json
 import math
 import os
+import zlib
 
 import numpy as np
 
@@ -69,14 +70,22 @@ class DataError(ValueError):
     """A data file that cannot be read as its format."""
 
 
-def open_text(path, errors='strict'):
+def open_text(path, errors='strict', newline=None):
     """A UTF-8 text stream of a file, gzipped or not (told by its magic bytes, not its
-    name); errors as for open()."""
+    name); errors and newline as for open()."""
     with open(path, 'rb') as f:
         head = f.read(2)
     if head == b'\x1f\x8b':
-        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8', errors=errors)
-    return open(path, encoding='utf-8', errors=errors)
+        return io.TextIOWrapper(gzip.open(path, 'rb'), encoding='utf-8-sig', errors=errors,
+                                newline=newline)
+    return open(path, encoding='utf-8-sig', errors=errors, newline=newline)
+
+
+# Keypoints are pixels or the community's normalised values: anything larger is no hand.
+MAX_KEYPOINT = 1e6
+# What reading a text file can raise besides its format's own errors: not UTF-8, a gzip
+# stream cut short or with junk after it, a CSV field past the csv module's limit.
+UNREADABLE = (UnicodeDecodeError, EOFError, gzip.BadGzipFile, zlib.error, csv.Error)
 
 
 @contextlib.contextmanager
@@ -114,20 +123,28 @@ def read_pose_lines(path):
 
 def _read_pose_lines(path):
     rows = []
-    with open_text(path) as f:
-        for n, line in enumerate(f, 1):
-            line = line.strip()
-            if not line:
-                continue
-            try:
-                d = _loads(line)
-                person, label, frame = str(d['person']), str(d['label']), d['frame']
-                if not isinstance(frame, dict):
-                    raise TypeError('frame is not an object')
-            except (ValueError, KeyError, TypeError) as e:
-                raise DataError('%s line %d: not a pose record (%s)' % (path, n, e)) from None
-            rows.append((person, label, frame))
+    try:
+        with open_text(path) as f:
+            _pose_rows(path, f, rows)
+    except UNREADABLE as e:
+        raise DataError('%s: cannot read on after %d pose records (%s)'
+                        % (path, len(rows), e)) from None
     return rows
+
+
+def _pose_rows(path, f, rows):
+    for n, line in enumerate(f, 1):
+        line = line.strip()
+        if not line:
+            continue
+        try:
+            d = _loads(line)
+            person, label, frame = str(d['person']), str(d['label']), d['frame']
+            if not isinstance(frame, dict):
+                raise TypeError('frame is not an object')
+        except (ValueError, KeyError, TypeError) as e:
+            raise DataError('%s line %d: not a pose record (%s)' % (path, n, e)) from None
+        rows.append((person, label, frame))
 
 
 def first_hand(frame_dict):
@@ -174,36 +191,47 @@ def read_keypoints(path, label=None, person=None, sources=None):
     `sources`, a list, receives each row's source label (the id in the headerless form)."""
     persons, labels, rows = [], [], []
     default_person = person or os.path.splitext(os.path.basename(path))[0]
-    with open(path, newline='', encoding='utf-8') as f:
-        reader = csv.reader(f)
-        header = None
-        for n, row in enumerate(reader, 1):
-            if not row or not ''.join(row).strip():
-                continue
-            if n == 1 and row[0].strip() == 'person':
-                header = row
-                continue
-            try:
-                if header is not None:
-                    if len(row) != 45:
-                        raise ValueError('%d columns, not 45' % len(row))
-                    p, lab, src, values = row[0], row[1], row[2], row[3:]
-                else:
-                    if len(row) != 43:
-                        raise ValueError('%d columns, not 43' % len(row))
-                    p, lab, values = default_person, row[0].strip(), row[1:]
-                    src = lab
-                xy = np.array([float(v) for v in values]).reshape(21, 2)
-            except ValueError as e:
-                raise DataError('%s row %d: not a keypoint row (%s)' % (path, n, e)) from None
-            if not np.isfinite(xy).all():
-                raise DataError('%s row %d: a keypoint is not finite' % (path, n))
-            persons.append(person or p)
-            labels.append(label if label is not None else lab)
-            rows.append(xy)
-            if sources is not None:
-                sources.append(src)
+    try:
+        with open_text(path, newline='') as f:
+            _keypoint_rows(path, f, label, person, default_person, sources, persons, labels, rows)
+    except UNREADABLE as e:
+        raise DataError('%s: cannot read on after %d keypoint rows (%s)'
+                        % (path, len(rows), e)) from None
     return persons, labels, np.array(rows).reshape(-1, 21, 2)
+
+
+def _keypoint_rows(path, f, label, person, default_person, sources, persons, labels, rows):
+    reader = csv.reader(f)
+    header = None
+    for n, row in enumerate(reader, 1):
+        if not row or not ''.join(row).strip():
+            continue
+        if n == 1 and row[0].strip() == 'person':
+            header = row
+            continue
+        try:
+            if header is not None:
+                if len(row) != 45:
+                    raise ValueError('%d columns, not 45' % len(row))
+                p, lab, src, values = row[0], row[1], row[2], row[3:]
+            else:
+                if len(row) != 43:
+                    raise ValueError('%d columns, not 43' % len(row))
+                p, lab, values = default_person, row[0].strip(), row[1:]
+                src = lab
+            xy = np.array([float(v) for v in values]).reshape(21, 2)
+        except ValueError as e:
+            raise DataError('%s row %d: not a keypoint row (%s)' % (path, n, e)) from None
+        if not np.isfinite(xy).all():
+            raise DataError('%s row %d: a keypoint is not finite' % (path, n))
+        if np.abs(xy).max() > MAX_KEYPOINT:
+            raise DataError('%s row %d: a keypoint beyond %g (neither pixels nor normalised)'
+                            % (path, n, MAX_KEYPOINT))
+        persons.append(person or p)
+        labels.append(label if label is not None else lab)
+        rows.append(xy)
+        if sources is not None:
+            sources.append(src)
 
 
 def mislabelled_keypoints(person, source_label):

@@ -16,6 +16,9 @@ import numpy as np
 # Index-to-pinky knuckle distance used when a frame has no knuckle positions (mm; adult
 # hands span ~45..65 mm between the joint centres).
 NOMINAL_PALM_WIDTH_MM = 55.0
+# No tracker reports a hand this far out (100 m): a coordinate beyond it is garbage, and
+# its squares would overflow.
+MAX_COORD_MM = 1e5
 PALM_WIDTH_RANGE_MM = (25.0, 120.0)      # outside: the knuckles are mis-tracked
 # Where the index knuckle sits thumbward of the palm centre, in palm widths (when the
 # frame has no knuckles the thumb is measured from there).
@@ -106,7 +109,7 @@ def _vec(v):
             x, y, z = (float(c) for c in v)
     except (TypeError, ValueError):
         return None
-    return [x, y, z] if _isfinite(x + y + z) else None
+    return [x, y, z] if abs(x) + abs(y) + abs(z) < MAX_COORD_MM else None
 
 
 def hand_geometry(hand):
@@ -136,9 +139,9 @@ def hand_geometry(hand):
                 j = np.concatenate(parts).astype(float, copy=False).reshape(-1)
             except (TypeError, ValueError):
                 j = None                            # a joint missing or malformed
-        # a finite sum of squares: every joint is finite (else the exact test: the sum
-        # may have overflowed)
-        if j is not None and j.shape == (60,) and (_isfinite(j.dot(j)) or np.isfinite(j).all()):
+        # a sum of squares under MAX_COORD_MM squared: every joint finite and in range
+        # (NaN compares false)
+        if j is not None and j.shape == (60,) and j.dot(j) < MAX_COORD_MM * MAX_COORD_MM:
             joints = j.reshape(20, 3)
         if joints is not None:
             jl = j.tolist()                         # joint i at jl[3 * i:3 * i + 3]

@@ -24,19 +24,14 @@ import gzip
 import json
 import math
 import os
-import re
 import sys
 
 from leap_teleop.hands.frame import Frame
+from leap_teleop.hands.gestures.classifier import class_name_problem
 from leap_teleop.hands.gestures.features import normalize_keypoints
 from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
 
-# Built-in gesture and event names that are no class of the pose models: a user class so
-# named would clash with them (fist, open, pinch, rock, thumb, none add samples to the
-# built-in classes and are allowed).
-CLASHING_LABELS = ('thumb_up', 'thumb_down', 'unfold', 'fold', 'circle', 'circle_cw',
-                   'circle_ccw', 'hand_lost', 'hand_found')
 KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
     '%s%d' % (axis, i) for i in range(21) for axis in 'xy']
 
@@ -46,12 +41,9 @@ class RecordError(ValueError):
 
 
 def check_label(label):
-    if not re.fullmatch(r'[A-Za-z0-9_]+', label or ''):
-        raise RecordError('--label %r: letters, digits and _ only' % label)
-    if label in CLASHING_LABELS:
-        raise RecordError('--label %s: the name of a built-in gesture or event; choose '
-                          'another (thumb, fist, open, pinch, rock or none add samples to '
-                          'the built-in classes)' % label)
+    problem = class_name_problem(label)
+    if problem:
+        raise RecordError('--label %r: %s' % (label, problem))
     return label
 
 

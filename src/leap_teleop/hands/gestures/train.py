@@ -29,7 +29,7 @@ import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import datasets as gd
-from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier, class_name_problem
 from leap_teleop.hands.gestures.features import (
     hand_landmarks,
     keypoint_features_rows,
@@ -493,13 +493,27 @@ def _build(family, data_dir, adds):
         for i, lab in enumerate(ds.label):
             if lab == label:
                 ds.y[i] = label
-    for path, label in adds:
-        person = 'user:' + os.path.splitext(os.path.basename(path))[0]
+    for (path, label), person in zip(adds, user_people([p for p, _ in adds])):
+        before = len(ds.y)
         if file_family(path) == 'keypoints':
             add_keypoints(ds, path, label=label, person=person)
         else:
             add_leap_poses(ds, path, label=label, person=person)
+        if len(ds.y) == before:
+            raise gd.DataError('--add %s: no hand in it' % path)
     return ds
+
+
+def user_people(paths):
+    """The person each of a user's files stands for: 'user:' and its name without the
+    extension, numbered when two files share a name (they are recorded apart)."""
+    names = ['user:' + os.path.splitext(os.path.basename(p))[0] for p in paths]
+    seen = collections.Counter()
+    out = []
+    for name in names:
+        seen[name] += 1
+        out.append(name if names.count(name) == 1 else '%s#%d' % (name, seen[name]))
+    return out
 
 
 def file_family(path):
@@ -507,6 +521,25 @@ def file_family(path):
 
 
 FAMILY_FILES = {'leap': 'Leap poses (.jsonl)', 'keypoints': 'keypoints (.csv)'}
+
+
+def out_problem(out, adds):
+    """Why a model cannot be written at `out` (its card goes beside it, NAME.md) without
+    harm to the user's --add files or to anything that is no model, or None."""
+    if not out.strip():
+        return 'name the model file (left out, the shipped model is refitted)'
+    if os.path.isdir(out):
+        return 'a folder: name the model file'
+    if not out.lower().endswith('.npz'):
+        return 'a model file ends in .npz'
+    card = os.path.splitext(out)[0] + '.md'
+    for path in (out, card):
+        if os.path.exists(path) and not os.path.isfile(path):
+            return '%s is no regular file' % path
+        for add in adds:
+            if os.path.exists(path) and os.path.samefile(path, add):
+                return 'it would overwrite the --add file %s' % add
+    return None
 
 
 def unwritable(path):
@@ -592,10 +625,15 @@ def main(argv=None):
         ap.error('every --add FILE needs its --label NAME')
     for path in args.add:
         if not os.path.isfile(path):
-            ap.error('--add %s: no such file' % path)
+            ap.error('--add %s: %s' % (path, 'a folder: name a file' if os.path.isdir(path)
+                                       else 'no such file'))
     for label in args.label:
-        if not label.replace('_', '').isalnum():
-            ap.error('--label %r: letters, digits and _ only' % label)
+        if class_name_problem(label):
+            ap.error('--label %r: %s' % (label, class_name_problem(label)))
+    if args.out is not None:
+        problem = out_problem(args.out, args.add)
+        if problem:
+            ap.error('--out %s: %s' % (args.out or "''", problem))
     adds = list(zip(args.add, args.label))
     families = {file_family(p) for p in args.add}
     if len(families) > 1:

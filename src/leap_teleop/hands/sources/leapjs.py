@@ -288,7 +288,7 @@ def _load_frames_simdjson(text):
             return None                  # not a frame list, or packed (format 2)
         dicts = (f.as_dict() if isinstance(f, Object) else None for f in frames)
         return _convert(metadata, dicts)
-    except ValueError:
+    except (ValueError, RuntimeError):  # simdjson's own errors: an integer beyond 64 bits
         return None
 
 
@@ -309,9 +309,14 @@ def _v3(value):
 def _num(value, default):
     try:
         x = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):     # an integer beyond any float
         return default
     return x
+
+
+def _is_id(value):
+    """Whether a hand id or a finger's handId can be one (a list or an object cannot)."""
+    return value is None or isinstance(value, (int, float, str))
 
 
 def frame_from_dict(d, timestamp=None):
@@ -331,7 +336,7 @@ def frame_from_dict(d, timestamp=None):
         raise FrameError('frame "hands" / "pointables" must be lists')
     by_hand = {}
     for p in pointables:
-        if isinstance(p, dict) and not p.get('tool', False):
+        if isinstance(p, dict) and not p.get('tool', False) and _is_id(p.get('handId')):
             by_hand.setdefault(p.get('handId'), []).append(p)
     hands = []
     for h in hands_raw:
@@ -340,7 +345,8 @@ def frame_from_dict(d, timestamp=None):
         side = h.get('type')
         if side not in ('right', 'left'):
             continue
-        hands.append(_hand_from_dict(h, side, by_hand.get(h.get('id'), ())))
+        hand_id = h.get('id')
+        hands.append(_hand_from_dict(h, side, by_hand.get(hand_id, ()) if _is_id(hand_id) else ()))
     gestures = [g for g in (d.get('gestures') or []) if isinstance(g, dict)] \
         if isinstance(d.get('gestures'), list) else []
     return Frame(id=frame_id, timestamp=timestamp, hands=hands, gestures=gestures)

@@ -40,9 +40,20 @@ def _vector(value, what, n=3):
         arr = np.asarray(value, dtype=float).reshape(n)
     except (TypeError, ValueError):
         raise SourceError('%s must be a list of %d numbers, got %r' % (what, n, value))
-    if not np.all(np.isfinite(arr)):
-        raise SourceError('%s must be finite, got %r' % (what, value))
+    if not np.all(np.abs(arr) <= 1e5):          # NaN compares false
+        raise SourceError('%s must be finite, within +-1e5, got %r' % (what, value))
     return arr
+
+
+def _number(value, what, lo, hi):
+    """value as a float in [lo, hi], else SourceError naming `what` and the range."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError, OverflowError):
+        x = math.nan
+    if not lo <= x <= hi:
+        raise SourceError('%s must be a number in [%g, %g], got %r' % (what, lo, hi, value))
+    return x
 
 
 class _Segment:
@@ -58,13 +69,12 @@ class GestureScript:
             raise SourceError('%s: a gesture script is a mapping with a "hands" mapping '
                               '(right: [...], left: [...])' % name)
         self.name = name
-        self.rate_hz = float(data.get('rate_hz', 120.0))
-        self.noise_mm = float(data.get('noise_mm', 0.0))
-        self.seed = int(data.get('seed', 0))
-        if not (0 < self.rate_hz <= 10000):
-            raise SourceError('%s: rate_hz must be in (0, 10000], got %r' % (name, self.rate_hz))
-        if not (0 <= self.noise_mm < 1000):
-            raise SourceError('%s: noise_mm must be in [0, 1000), got %r' % (name, self.noise_mm))
+        self.rate_hz = _number(data.get('rate_hz', 120.0), name + ': rate_hz', 1e-3, 10000)
+        self.noise_mm = _number(data.get('noise_mm', 0.0), name + ': noise_mm', 0.0, 999.0)
+        seed = data.get('seed', 0)
+        if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2 ** 32:
+            raise SourceError('%s: seed must be an integer in [0, 2^32), got %r' % (name, seed))
+        self.seed = seed
         self.segments = {}
         for side, segs in data['hands'].items():
             if side not in SIDES:
@@ -90,7 +100,7 @@ class GestureScript:
                                   % (here, sorted(unknown), sorted(_SEGMENT_KEYS)))
             seg = _Segment()
             seg.pose = raw.get('pose', 'open')
-            if seg.pose != 'absent' and seg.pose not in POSES:
+            if not isinstance(seg.pose, str) or (seg.pose != 'absent' and seg.pose not in POSES):
                 raise SourceError('%s: unknown pose %r; known: absent, %s'
                                   % (here, seg.pose, ', '.join(sorted(POSES))))
             try:
@@ -106,20 +116,19 @@ class GestureScript:
             appears = not out or out[-1].pose == 'absent'
             seg.palm0 = seg.palm1 if appears else palm
             seg.rpy0 = seg.rpy1 if appears else rpy
-            seg.value = float(raw.get('value', 0.5))
-            if not (0.0 <= seg.value <= 0.8):
-                raise SourceError('%s: pinch value must be in [0, 0.8], got %r' % (here, seg.value))
-            seg.confidence = float(raw.get('confidence', 1.0))
+            seg.value = _number(raw.get('value', 0.5), here + ': pinch value', 0.0, 0.8)
+            seg.confidence = _number(raw.get('confidence', 1.0), here + ': confidence', 0.0, 1.0)
             seg.circle = None
             if 'circle' in raw:
                 c = raw['circle']
-                if not isinstance(c, dict) or float(c.get('radius', 0)) <= 0:
+                if not isinstance(c, dict):
                     raise SourceError('%s.circle needs a positive radius (mm)' % here)
+                radius = _number(c.get('radius', 0), here + '.circle.radius (mm)', 1e-3, 1e4)
+                turns = _number(c.get('turns', 1.0), here + '.circle.turns', 0.0, 1e3)
                 direction = c.get('direction', 'cw')
                 if direction not in ('cw', 'ccw'):
                     raise SourceError('%s.circle.direction must be cw or ccw' % here)
-                seg.circle = (float(c['radius']), float(c.get('turns', 1.0)),
-                              1.0 if direction == 'cw' else -1.0)
+                seg.circle = (radius, turns, 1.0 if direction == 'cw' else -1.0)
             out.append(seg)
             t += seg.duration
             palm, rpy = seg.palm1, seg.rpy1
@@ -132,6 +141,8 @@ class GestureScript:
                 data = yaml.safe_load(f)
         except OSError as e:
             raise SourceError('cannot read gesture script %s: %s' % (path, e.strerror))
+        except UnicodeDecodeError as e:
+            raise SourceError('gesture script %s is not UTF-8 text: %s' % (path, e))
         except yaml.YAMLError as e:
             raise SourceError('gesture script %s is not valid YAML: %s' % (path, e))
         return cls(data, name=str(path))
