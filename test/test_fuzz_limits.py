@@ -45,6 +45,21 @@ def test_stream_drops_out_of_order_and_late_messages_but_not_a_constant_offset()
     assert s.check(1.0, 102.0) is None
 
 
+def test_found_one_future_stamp_blocks_the_stream_for_a_gap_only():
+    # Before: after one message stamped 1e6 s ahead, every later one was refused as out of
+    # order (the arm disarmed, the drone landed) while valid input kept coming.
+    s = InputStream(max_age=0.25, gap=0.2)
+    for k in range(50):
+        assert s.check(10.0 + 0.01 * k, 10.005 + 0.01 * k) is None
+    assert s.check(1e6, 10.5) is None
+    verdicts = [s.check(10.5 + 0.01 * k, 10.505 + 0.01 * k) for k in range(50)]
+    refused = [v for v in verdicts if v is not None]
+    assert 19 <= len(refused) <= 21 and verdicts[21:] == [None] * 29
+    assert all(v.startswith('out of order') for v in refused)
+    # one message out of order among ones in order is refused alone, as before
+    assert 'out of order' in s.check(10.0, 11.0) and s.check(11.0, 11.005) is None
+
+
 def test_found_backlog_burst_after_a_stall_passes_only_its_last_max_age():
     # Before: the silence of the stall reset the stream, so a 2 s old backlog was accepted.
     s = InputStream(max_age=0.25, gap=0.2)

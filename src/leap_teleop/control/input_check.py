@@ -12,6 +12,10 @@ while a stream that stays delayed keeps being refused (the consumers' watchdogs 
 the robots) - also across a silence: a source that stalled and then bursts its backlog
 (stamps continue, but late) is not a new stream, so only its last max_age s pass. Unstamped
 messages (stamp <= 0, as the original sender sent them) are only checked for order.
+
+Stamped messages refused as out of order for ``gap`` seconds on end, while they keep
+coming, start a new stream: one message stamped far ahead (a bogus stamp) would otherwise
+make every later one look out of order for as long as its lead.
 """
 
 
@@ -25,6 +29,8 @@ class InputStream:
         self.last_stamp = None
         self.last_rx = None
         self.best_lag = None
+        self.misordered_since = None   # first of the stamped messages refused on end as
+                                       # out of order
 
     def check(self, stamp, now):
         """None if the message is in order and on time (it is then recorded), else why not."""
@@ -37,7 +43,16 @@ class InputStream:
                 self.reset()
         self.last_rx = now
         if self.last_stamp is not None and stamp < self.last_stamp:
-            return 'out of order: %.3f s older than the last message' % (self.last_stamp - stamp)
+            if stamp <= 0:
+                return 'out of order: unstamped after stamped messages'
+            if self.misordered_since is None:
+                self.misordered_since = now
+            if now - self.misordered_since < self.gap:
+                return 'out of order: %.3f s older than the last message' % (
+                    self.last_stamp - stamp)
+            self.reset()                # the last stamp was bogus, or the sender's clock
+            self.last_rx = now          # went back for good: a new stream
+        self.misordered_since = None
         if stamp > 0 and self.max_age > 0:
             lag = now - stamp
             if self.best_lag is None or lag < self.best_lag:
