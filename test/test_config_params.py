@@ -98,3 +98,16 @@ def test_the_config_classes_are_generated_from_the_declarations(cls, table):
             assert getattr(a, name) is not getattr(b, name) is not p.default, name
     a.validate()
     assert vars(a) == vars(b)
+
+
+@pytest.mark.parametrize('table, name', [(TELEOP_PARAMS, 'hand_topic'),
+                                         (PILOT_PARAMS, 'hand_topic'),
+                                         (PILOT_PARAMS, 'gesture_topic')])
+def test_a_topic_parameter_wants_a_legal_ros_name(table, name):
+    # before, rospy logged FATAL on subscribing and the node ran on with no input
+    p = table[name]
+    for good in ('leapmotion/data_right', '/ns/hand', '~hands'):
+        assert p.check(name, good) == good
+    for bad in ('bad topic!', 'a//b', 'hand/', '1hand', '/'):
+        with pytest.raises(ParamError, match='not a legal ROS name; allowed: a ROS name'):
+            p.check(name, bad)

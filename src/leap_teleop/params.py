@@ -10,6 +10,10 @@ import difflib
 import functools
 import math
 import numbers
+import re
+
+# A legal ROS graph name (the ROS 1 naming rules), not ending in '/'.
+ROS_NAME = re.compile(r'[~/A-Za-z][A-Za-z0-9_/]*(?<!/)')
 
 
 class ParamError(ValueError):
@@ -22,14 +26,16 @@ class Param:
     Numbers (and list items) must be finite and within `gt` / `ge` / `lt` / `le`; `choices`
     lists the allowed values; `length` fixes a list's length (`min_length` bounds it);
     `item` is a list's item kind ('float', 'int', 'str') or a Param (a list of lists:
-    each item is checked against it); `empty_ok=False` refuses ''. A single string given
-    for a list of strings is a list of one (`_sides:=right` means ['right']).
+    each item is checked against it); `empty_ok=False` refuses ''; `ros_name` wants a
+    legal ROS graph name (a topic: letters, digits, _, / and a leading ~, no //). A single
+    string given for a list of strings is a list of one (`_sides:=right` means ['right']).
     """
 
     KINDS = ('bool', 'int', 'float', 'str', 'list')
 
     def __init__(self, default, doc, unit='', kind=None, gt=None, ge=None, lt=None, le=None,
-                 choices=None, length=None, min_length=None, item=None, empty_ok=True):
+                 choices=None, length=None, min_length=None, item=None, empty_ok=True,
+                 ros_name=False):
         self.default = default
         self.doc = doc
         self.unit = unit
@@ -44,6 +50,7 @@ class Param:
         if isinstance(self.item, Param):
             self.item.unit = self.item.unit or unit
         self.empty_ok = empty_ok
+        self.ros_name = ros_name
 
     # -- checking -------------------------------------------------------------------------
     def check(self, name, value):
@@ -81,6 +88,8 @@ class Param:
                 raise ParamError('not a string')
             if not value and not self.empty_ok:
                 raise ParamError('empty')
+            if value and self.ros_name and (not ROS_NAME.fullmatch(value) or '//' in value):
+                raise ParamError('not a legal ROS name')
         elif kind == 'int':
             if isinstance(value, bool) or not isinstance(value, numbers.Integral):
                 raise ParamError('not an integer')
@@ -116,7 +125,9 @@ class Param:
     def _scalar_text(self, kind, plural=False):
         if self.choices is not None:
             return 'one of: ' + ', '.join(str(c) if c != '' else "''" for c in self.choices)
-        words = {'bool': 'true or false', 'str': 'strings' if plural else 'a string',
+        words = {'bool': 'true or false',
+                 'str': ('ROS names' if plural else 'a ROS name') if self.ros_name else
+                 'strings' if plural else 'a string',
                  'int': 'integers' if plural else 'an integer',
                  'float': 'finite numbers' if plural else 'a finite number'}[kind]
         if kind == 'str' and not self.empty_ok:

@@ -57,8 +57,8 @@ PILOT_PARAMS = {
 # drone_pilot's own ~params (its wiring), then every pilot one.
 PILOT_NODE_PARAMS = {
     'side': Param('right', 'hand to follow', choices=('right', 'left')),
-    'hand_topic': Param('', 'Hand topic (default leapmotion/hand_<side>)'),
-    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False),
+    'hand_topic': Param('', 'Hand topic (default leapmotion/hand_<side>)', ros_name=True),
+    'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic', empty_ok=False, ros_name=True),
     'service_timeout': Param(0.5, 'a flight animation call (its own thread) is abandoned '
                                   'after this long', unit='s', gt=0.0, le=10.0),
     'takeoff_hold': Param(1.0, 'a takeoff sent before the driver listens on ardrone/takeoff '

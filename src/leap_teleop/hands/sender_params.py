@@ -24,14 +24,14 @@ SENDER_PARAMS = {
     'sides': Param(['right', 'left'], 'hands to publish (one side: right, or [right])',
                    min_length=1, choices=('right', 'left')),
     'leapcobot_topic_right': Param('leapmotion/data_right', 'leapcobotright topic',
-                                   empty_ok=False),
+                                   empty_ok=False, ros_name=True),
     'leapcobot_topic_left': Param('leapmotion/data_left', 'leapcobotleft topic',
-                                  empty_ok=False),
+                                  empty_ok=False, ros_name=True),
     'hand_topic_right': Param('leapmotion/hand_right', 'rich Hand topic, right',
-                              empty_ok=False),
-    'hand_topic_left': Param('leapmotion/hand_left', 'rich Hand topic, left', empty_ok=False),
+                              empty_ok=False, ros_name=True),
+    'hand_topic_left': Param('leapmotion/hand_left', 'rich Hand topic, left', empty_ok=False, ros_name=True),
     'gesture_topic': Param('leapmotion/gestures', 'GestureEvent topic (both hands)',
-                           empty_ok=False),
+                           empty_ok=False, ros_name=True),
     'frame_id': Param('leap_hands', 'frame of the hand messages', empty_ok=False),
     'world_frame': Param('world', 'parent frame of the static TF to frame_id', empty_ok=False),
     'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame', unit='m',
@@ -41,23 +41,23 @@ SENDER_PARAMS = {
     'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)',
                         ge=1, le=1000),
     'leapros_topic': Param('', 'topic for the classic leap_motion/leapros message (as that '
-                               'driver: leapmotion/data); empty = not published'),
+                               'driver: leapmotion/data); empty = not published', ros_name=True),
     'leapros_side': Param('right', 'hand the leapros and leap messages carry (one of ~sides)',
                           choices=('right', 'left')),
     'leap_topic': Param('', 'topic for the old sender\'s leap_motion/leap message (that sender: '
-                            'leapmotion/raw); empty = not published'),
+                            'leapmotion/raw); empty = not published', ros_name=True),
     'human_topic': Param('', 'topic for the leap_motion driver\'s Human (DriverHuman; the '
-                             'driver: leap_motion/leap_device); empty = not published'),
+                             'driver: leap_motion/leap_device); empty = not published', ros_name=True),
     'filtered_human_topic': Param('', 'topic for the low-pass filtered DriverHuman (the '
                                       'driver\'s filter node: leap_motion/filtered_values); '
-                                      'empty = not published'),
+                                      'empty = not published', ros_name=True),
     'filter_cutoff': Param(DEFAULT_CUTOFF, 'the driver\'s filter_cutoff c = cot(pi f_c / '
                                            'f_frames): 1 = a quarter of the frame rate, '
                                            'larger smooths more', gt=0.0, le=1000.0),
     'driver_marker_topic': Param('', 'topic for the driver visualizer\'s MarkerArray (the '
                                      'driver: leap_motion/visualization_marker_array), drawn '
                                      'from the filtered Human when that is published; empty = '
-                                     'not published'),
+                                     'not published', ros_name=True),
     'publish_tf': Param(True, 'publish the static TF world_frame -> frame_id (one sender per '
                               'graph should)'),
     'wait_for_subscribers': Param(False, 'start the source only once every ~wait_topics topic '
@@ -65,7 +65,7 @@ SENDER_PARAMS = {
                                          'its consumers start)'),
     'wait_topics': Param([], 'topics the consumers read, to wait for; any topic of the graph '
                              '(e.g. the drone\'s ardrone/takeoff); empty = every published '
-                             'leapcobot topic', kind='list', item='str'),
+                             'leapcobot topic', kind='list', item='str', ros_name=True),
     'rotation_dead_bands': Param(True, 'rotate / turn / swing with the original dead bands '
                                        '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
                                        'the raw rotation since the origin'),

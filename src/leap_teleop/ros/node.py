@@ -36,7 +36,12 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     parameter (build raising one of `errors`) ends the node with one fatal log line (plus
     `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
     handle_help(script, doc, params, argv)
-    init_node(name)
+    try:
+        init_node(name)
+    except OverflowError as e:      # rospy sends _name:=value params over XML-RPC first
+        sys.stderr.write('%s: bad parameter: %s (an integer beyond 32 bits given as '
+                         '_name:=value)\n' % (name, e))
+        raise SystemExit(1)
     warn_unknown_params(name, params)
     try:
         p = read_params(params)

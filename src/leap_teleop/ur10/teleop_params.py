@@ -114,7 +114,7 @@ TELEOP_PARAMS = {
 # load config/ur10_teleop.yaml into the node's namespace.
 ARM_NODE_PARAMS = {
     'hand': Param('right', 'which hand drives this arm', choices=('right', 'left')),
-    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>'),
+    'hand_topic': Param('', 'leapcobot topic; default leapmotion/data_<hand>', ros_name=True),
     # The loop is also the watchdog's clock: at least 10 Hz.
     'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
                   unit='Hz', ge=10.0, le=1000.0),

@@ -23,7 +23,7 @@ CAMERA_PARAMS = {
                       le=179.0),
     'camera_info_topic': Param('', 'camera sources: sensor_msgs/CameraInfo topic with the '
                                    'intrinsics (one message is read at start-up); empty = '
-                                   '~hfov_deg'),
+                                   '~hfov_deg', ros_name=True),
     'palm_length_mm': Param(DEFAULT_PALM_LENGTH_MM, 'camera sources: the user\'s palm length '
                                                     '(wrist crease to middle-finger knuckle); '
                                                     'depth scales with it',
@@ -48,7 +48,7 @@ CAMERA_PARAMS = {
                                    'replaces it) instead of processing every frame'),
     'annotated_image_topic': Param('', 'camera sources: publish the annotated camera view '
                                        '(sensor_msgs/Image: landmarks, side, gestures, fps) '
-                                       'on this topic; empty = off'),
+                                       'on this topic; empty = off', ros_name=True),
 }
 
 

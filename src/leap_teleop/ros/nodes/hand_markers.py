@@ -21,9 +21,9 @@ from leap_teleop.ros.signals import closed_at_shutdown
 
 PARAMS = {
     'hand_topics': Param(['leapmotion/hand_right', 'leapmotion/hand_left'],
-                         'leap_teleop/Hand topics to draw', min_length=1, empty_ok=False),
+                         'leap_teleop/Hand topics to draw', min_length=1, empty_ok=False, ros_name=True),
     'marker_topic': Param('leapmotion/hand_markers', 'MarkerArray output topic',
-                          empty_ok=False),
+                          empty_ok=False, ros_name=True),
     'max_rate': Param(30.0, 'max marker updates per hand (state changes and deletes always '
                             'go out); 0 = every message', unit='Hz', ge=0.0, le=1000.0),
     'lifetime': Param(0.5, 'marker lifetime, so markers vanish when input stops; 0 = forever',
