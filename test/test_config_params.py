@@ -8,10 +8,10 @@ import os
 import pytest
 import yaml
 
-from leap_teleop.drone.pilot_params import PILOT_PARAMS, PilotConfig
+from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_PARAMS, PilotConfig
 from leap_teleop.params import ParamError
 from leap_teleop.ros.nodes import ardrone_sim, drone_pilot, ur10_arm
-from leap_teleop.ur10.teleop_params import TELEOP_PARAMS, ArmTeleopParams
+from leap_teleop.ur10.teleop_params import ARM_NODE_PARAMS, TELEOP_PARAMS, ArmTeleopParams
 
 CONFIG = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'config')
 
@@ -100,9 +100,9 @@ def test_the_config_classes_are_generated_from_the_declarations(cls, table):
     assert vars(a) == vars(b)
 
 
-@pytest.mark.parametrize('table, name', [(TELEOP_PARAMS, 'hand_topic'),
-                                         (PILOT_PARAMS, 'hand_topic'),
-                                         (PILOT_PARAMS, 'gesture_topic')])
+@pytest.mark.parametrize('table, name', [(ARM_NODE_PARAMS, 'hand_topic'),
+                                         (PILOT_NODE_PARAMS, 'hand_topic'),
+                                         (PILOT_NODE_PARAMS, 'gesture_topic')])
 def test_a_topic_parameter_wants_a_legal_ros_name(table, name):
     # before, rospy logged FATAL on subscribing and the node ran on with no input
     p = table[name]
