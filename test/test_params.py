@@ -210,3 +210,30 @@ def test_cell_config_scalars_are_checked(key, value):
     with pytest.raises(ValueError) as e:
         parse_config(data, 'cell.yaml')
     assert ('%s = ' % key) in str(e.value) and 'allowed' in str(e.value)
+
+
+@pytest.mark.parametrize('spoil, message', [
+    (lambda d: d['arms'][0].update(name='bad arm!'), "arms[0].name must be a ROS name"),
+    (lambda d: d['arms'][0].update(home=[100] * 6), 'ur10_1 home (rad) must be 6 numbers'),
+    (lambda d: d['arms'][0]['tray'].update(inner=['abc', 0.2]), 'ur10_1 tray inner must be'),
+    (lambda d: d['arms'][0]['tray'].update(wall=[-0.01, -0.04]), 'ur10_1 tray wall must be'),
+    (lambda d: d['table'].update(size=[math.nan, 1.4]), 'table size must be 2 numbers'),
+    (lambda d: d['table'].update(center=[0.45]), 'table center must be 2 numbers'),
+    (lambda d: d['cubes'][0].update(yaw=math.nan), 'cubes[0].yaw must be'),
+    (lambda d: d['cubes'][0].update(rgba=[0.85]), 'cubes[0].rgba must be 4 numbers'),
+    (lambda d: d['cubes'][0].update(arm='nosucharm'), "cubes[0].arm: no arm 'nosucharm'"),
+    (lambda d: d['camera'].update(fov=math.nan), 'camera.fov must be'),
+    (lambda d: d['arms'].append(5), 'cell config cell.yaml: malformed'),
+])
+def test_cell_config_fields_are_checked_and_named(spoil, message):
+    # Each of these was taken silently (NaN cube poses, a home of 95.8 rad, a cube for no
+    # arm) or ended in a message that named no field.
+    import yaml
+
+    from leap_teleop.ur10.config import config_path, parse_config
+    with open(config_path('ur10_cell.yaml')) as f:
+        data = yaml.safe_load(f)
+    spoil(data)
+    with pytest.raises(ValueError) as e:
+        parse_config(data, 'cell.yaml')
+    assert str(e.value).startswith('cell config cell.yaml: ') and message in str(e.value), e.value

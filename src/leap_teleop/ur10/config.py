@@ -7,13 +7,14 @@ base_link frame; ArmConfig.to_base / to_world convert 4x4 world <-> base poses.
 import functools
 import math
 import os
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 import yaml
 
 from leap_teleop.params import Param, ParamError, check_params
-from leap_teleop.ur10.kinematics import HOME_Q
+from leap_teleop.ur10.kinematics import HOME_Q, JOINT_LOWER, JOINT_UPPER
 
 
 def _rpy_matrix(rpy):
@@ -145,11 +146,21 @@ class CellConfig:
         raise KeyError('no cube %r' % name)
 
 
-def _vec(v, n, what):
-    a = np.asarray(v, dtype=float)
-    if a.shape != (n,) or not np.all(np.isfinite(a)):
-        raise ValueError('%s must be %d numbers, got %r' % (what, n, v))
+def _vec(v, n, what, lo=-1e3, hi=1e3):
+    """v as n numbers within [lo, hi] (metres or radians: a cell is a few metres)."""
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (n,) or not np.all((a >= lo) & (a <= hi)):   # NaN fails
+        raise ValueError('%s must be %d numbers in [%s, %s], got %r' % (
+            what, n, np.round(lo, 4).tolist() if np.ndim(lo) else '%g' % lo,
+            np.round(hi, 4).tolist() if np.ndim(hi) else '%g' % hi, v))
     return a
+
+
+# An arm's name is its ROS namespace and its joints' name prefix.
+ARM_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 
 
 # The cell file's scalars (a physics rate of 0 or NaN would stop or corrupt the simulation).
@@ -163,9 +174,20 @@ CELL_PARAMS = {
 
 
 def parse_config(data, path=''):
-    """CellConfig from the YAML's dict; ValueError on a malformed file."""
-    if not isinstance(data, dict) or not data.get('arms'):
+    """CellConfig from the YAML's dict; ValueError, naming the field, on a malformed file."""
+    if not isinstance(data, dict) or not isinstance(data.get('arms'), list) or not data['arms']:
         raise ValueError('cell config %s: needs a non-empty "arms" list' % path)
+    try:
+        return _parse(data, path)
+    except (KeyError, TypeError, AttributeError) as e:
+        raise ValueError('cell config %s: malformed (%s: %s)' % (path, type(e).__name__, e))
+    except ValueError as e:
+        if str(e).startswith('cell config'):
+            raise
+        raise ValueError('cell config %s: %s' % (path, e))
+
+
+def _parse(data, path):
     table = data.get('table', {})
     try:
         scalars = check_params(CELL_PARAMS, {k: v for k, v in dict(
@@ -174,33 +196,52 @@ def parse_config(data, path=''):
         raise ValueError('cell config %s: %s' % (path, str(e).lstrip('~')))
     height, size = scalars['table_height'], scalars['cube_size']
     arms = []
-    for a in data['arms']:
+    for i, a in enumerate(data['arms']):
+        name = a.get('name')
+        if not isinstance(name, str) or not ARM_NAME.fullmatch(name):
+            raise ValueError('arms[%d].name must be a ROS name (a letter, then letters, digits '
+                             'or _), got %r' % (i, name))
         tray = a.get('tray', {})
         arms.append(ArmConfig(
-            name=str(a['name']),
-            base_xyz=_vec(a.get('base_xyz', [0, 0, height]), 3, 'base_xyz'),
-            base_rpy=_vec(a.get('base_rpy', [0, 0, 0]), 3, 'base_rpy'),
-            home=_vec(a.get('home', HOME_Q), 6, 'home'),
-            tray=TrayConfig(xyz=_vec(tray.get('xyz', [0.45, 0.5, height]), 3, 'tray xyz'),
-                            inner=tuple(tray.get('inner', (0.2, 0.2))),
-                            wall=tuple(tray.get('wall', (0.01, 0.04))))))
+            name=name,
+            base_xyz=_vec(a.get('base_xyz', [0, 0, height]), 3, name + ' base_xyz'),
+            base_rpy=_vec(a.get('base_rpy', [0, 0, 0]), 3, name + ' base_rpy', -7.0, 7.0),
+            home=_vec(a.get('home', HOME_Q), 6, name + ' home (rad)', JOINT_LOWER, JOINT_UPPER),
+            tray=TrayConfig(xyz=_vec(tray.get('xyz', [0.45, 0.5, height]), 3, name + ' tray xyz'),
+                            inner=tuple(_vec(tray.get('inner', (0.2, 0.2)), 2,
+                                             name + ' tray inner', 1e-3, 5.0).tolist()),
+                            wall=tuple(_vec(tray.get('wall', (0.01, 0.04)), 2,
+                                            name + ' tray wall', 1e-3, 1.0).tolist()))))
     names = [a.name for a in arms]
     if len(set(names)) != len(names):
         raise ValueError('cell config %s: arm names must be unique' % path)
     cubes = []
-    for c in data.get('cubes', []):
+    for i, c in enumerate(data.get('cubes') or []):
+        what = 'cubes[%d]' % i
         xyz = list(c['xyz'])
         if len(xyz) == 2:
             xyz.append(height + size / 2)
-        cubes.append(CubeConfig(name=str(c['name']), xyz=_vec(xyz, 3, 'cube xyz'),
-                                rgba=tuple(c.get('rgba', (0.8, 0.2, 0.2, 1))),
-                                arm=str(c.get('arm', '')), yaw=float(c.get('yaw', 0.0))))
+        arm = str(c.get('arm', ''))
+        if arm and arm not in names:
+            raise ValueError('%s.arm: no arm %r (arms: %s)' % (what, arm, ', '.join(names)))
+        rgba = _vec(c.get('rgba', (0.8, 0.2, 0.2, 1)), 4, what + '.rgba', 0.0, 1.0)
+        cubes.append(CubeConfig(name=str(c['name']), xyz=_vec(xyz, 3, what + '.xyz'),
+                                rgba=tuple(rgba.tolist()), arm=arm,
+                                yaw=float(_vec([c.get('yaw', 0.0)], 1, what + '.yaw', -7.0,
+                                               7.0)[0])))
+    camera = dict(data.get('camera') or {})
+    for key, n, lo, hi in (('eye', 3, -1e3, 1e3), ('target', 3, -1e3, 1e3), ('fov', 1, 1.0, 179.0)):
+        if key in camera:
+            v = _vec(np.atleast_1d(camera[key]), n, 'camera.' + key, lo, hi)
+            camera[key] = v.tolist() if n > 1 else float(v[0])
     return CellConfig(arms=arms, cubes=cubes,
-                      table_center=tuple(table.get('center', (0.45, 0.0))),
-                      table_size=tuple(table.get('size', (1.4, 1.4))),
+                      table_center=tuple(_vec(table.get('center', (0.45, 0.0)), 2,
+                                              'table center').tolist()),
+                      table_size=tuple(_vec(table.get('size', (1.4, 1.4)), 2, 'table size',
+                                            1e-2, 100.0).tolist()),
                       table_height=height, cube_size=size,
                       cube_mass=scalars['cube_mass'], physics_hz=scalars['physics_hz'],
-                      camera=dict(data.get('camera', {})), path=path)
+                      camera=camera, path=path)
 
 
 def load_config(name='ur10_cell.yaml'):
