@@ -240,6 +240,10 @@ def test_driver_commands_flat_trim_leds_record_camera(drone, warnings):
     drone.advance(4.1)
     assert not drone.led_active
     assert not drone.set_led_animation(14, 2.0, 1)              # no such animation
+    drone.advance(2.1)                                          # past the warning's limit
+    for freq in (-1.0, 0.0, 1e38, float('nan'), float('inf')):   # no such blinking
+        assert not drone.set_led_animation(3, freq, 1)
+    assert warnings[-1] == ('led', 'LED animation ignored: frequency -1.0 Hz is not in (0, 100]')
     assert drone.set_record(True) and drone.recording
     assert drone.set_record(False) and not drone.recording
     assert drone.camera_channel == ds.CAMERA_FRONT

@@ -1,4 +1,6 @@
 """DroneSimRunner and its helpers: what the ardrone_sim node runs, without a master."""
+import math
+
 import numpy as np
 import pybullet as pb
 import pytest
@@ -71,6 +73,14 @@ def test_sensor_readings_turn_with_the_heading_and_fall_with_altitude():
 def test_calibration_must_have_the_cameras_size():
     assert calibration_error('front', 640, 360) == ''
     assert calibration_error('bottom', 640, 360) == 'bottom camera is 320x240, got 640x360'
+    K, R, P = [500.0, 0, 320, 0, 500.0, 180, 0, 0, 1], [1.0, 0, 0, 0, 1, 0, 0, 0, 1], [0.0] * 12
+    assert calibration_error('front', 640, 360, K, [0.0] * 5, R, P, 'plumb_bob') == ''
+    # garbage was taken and published again on camera_info
+    assert calibration_error('front', 640, 360, [math.nan] * 9) == 'K must be 9 finite numbers'
+    assert calibration_error('front', 640, 360, [0.0] * 9).startswith('K: the focal lengths')
+    assert calibration_error('front', 640, 360, K, [0.0] * 1000).startswith('D must be at most')
+    assert calibration_error('front', 640, 360, K, (), R, P, 'x' * 100000).startswith(
+        'distortion_model is 100000 characters')
 
 
 def test_readings_say_each_state_change_once(runner):

@@ -333,6 +333,9 @@ def test_trajectory_points_reorders_and_accepts_both_name_forms():
     (ARM_JOINTS, [(1.0, [0.0] * 6, []), (0.5, [0.0] * 6, [])], 'not after'),
     (ARM_JOINTS, [(1.0, [0.0] * 6, []), (1.0, [0.0] * 6, [])], 'not after'),
     (ARM_JOINTS, [(-1.0, [0.0] * 6, [])], 'negative'),
+    # 100,000 points stopped the simulator's joint states for over a second
+    (ARM_JOINTS, [(0.01 * (k + 1), [0.0] * 6, []) for k in range(10001)],
+     '10001 points: at most 10000'),
 ])
 def test_trajectory_points_rejects_malformed_commands(names, points, reason):
     with pytest.raises(CommandError, match=reason):

@@ -70,6 +70,10 @@ LED_ANIMATION_NAMES = (
 CAMERA_FRONT, CAMERA_BOTTOM = 0, 1    # AR.Drone 2.0 video channels
 
 
+# The LEDs blink at a few Hz; far faster is no animation the firmware shows.
+MAX_LED_HZ = 100.0
+
+
 @dataclass
 class DroneParams:
     """Driver / firmware parameters in the driver's units, plus the model's constants."""
@@ -335,13 +339,18 @@ class ArDroneSim:
         return True
 
     def set_led_animation(self, anim_type, freq, duration_s):
-        """ardrone/setledanimation. True when the type is one of the firmware's 0..13."""
+        """ardrone/setledanimation. True when the type is one of the firmware's 0..13 and
+        the frequency a positive number of Hz (up to MAX_LED_HZ)."""
         try:
             anim_type, freq, duration_s = int(anim_type), float(freq), int(duration_s)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             anim_type = -1
-        if not 0 <= anim_type < len(LED_ANIMATION_NAMES) or not math.isfinite(freq):
+        if not 0 <= anim_type < len(LED_ANIMATION_NAMES):
             self._warn('led', 'LED animation ignored: type %r is not in 0..13', anim_type)
+            return False
+        if not 0.0 < freq <= MAX_LED_HZ:                  # NaN fails too
+            self._warn('led', 'LED animation ignored: frequency %r Hz is not in (0, %g]',
+                       freq, MAX_LED_HZ)
             return False
         self.led_animation = (LED_ANIMATION_NAMES[anim_type], freq, self.time + max(0, duration_s))
         return True

@@ -118,12 +118,23 @@ def sensor_readings(nav, altitude):
             'magZ': -400, 'pressure': int(101325 - 12.0 * altitude), 'temp': 25}
 
 
-def calibration_error(name, width, height):
+def calibration_error(name, width, height, K=None, D=(), R=None, P=None, model=''):
     """'' when a calibration of width x height fits camera `name`, else why not (like
-    camera_info_manager, any calibration of the camera's size is taken)."""
+    camera_info_manager, any calibration of the camera's size is taken, if its numbers are
+    finite, its focal lengths positive and its distortion one of a known model's length)."""
     spec = cameras.CAMERAS[name]
     if (width, height) != (spec.width, spec.height):
         return '%s camera is %dx%d, got %dx%d' % (name, spec.width, spec.height, width, height)
+    for field, values, n in (('K', K, 9), ('R', R, 9), ('P', P, 12)):
+        if values is not None and (len(values) != n
+                                   or not all(math.isfinite(v) for v in values)):
+            return '%s must be %d finite numbers' % (field, n)
+    if K is not None and not (K[0] > 0 and K[4] > 0):
+        return 'K: the focal lengths fx, fy must be > 0'
+    if len(D) > 14 or not all(math.isfinite(v) for v in D):
+        return 'D must be at most 14 finite numbers, got %d' % len(D)
+    if len(model) > 64:
+        return 'distortion_model is %d characters: no model is named so' % len(model)
     return ''
 
 

@@ -476,6 +476,11 @@ def joint_order(names, expected, prefix):
     return [index[n] for n in expected]
 
 
+# Reading and checking a trajectory's points holds the simulator's physics loop: 100,000
+# stopped its joint states for over a second. 10,000 is a minute and a half at 100 Hz.
+MAX_TRAJECTORY_POINTS = 10000
+
+
 def trajectory_points(msg, expected, prefix):
     """(points, stamp_s) from a JointTrajectory for joints `expected`: points are
     [(time_from_start s, positions in expected order, velocities or None[,
@@ -486,6 +491,8 @@ def trajectory_points(msg, expected, prefix):
     order = joint_order(list(msg.joint_names), expected, prefix)
     if not msg.points:
         raise CommandError('empty trajectory (no points)')
+    if len(msg.points) > MAX_TRAJECTORY_POINTS:
+        raise CommandError('%d points: at most %d' % (len(msg.points), MAX_TRAJECTORY_POINTS))
     n = len(msg.joint_names)
     points, last = [], -math.inf
     for k, pt in enumerate(msg.points):

@@ -32,7 +32,8 @@ class DroneCameraTopics:
     def on_set_camera_info(self, name, req):
         """Any calibration of the camera's size is kept for this run (the lens stays ideal)."""
         info = req.camera_info
-        error = calibration_error(name, info.width, info.height)
+        error = calibration_error(name, info.width, info.height, info.K, info.D, info.R, info.P,
+                                  info.distortion_model)
         if not error:
             info.header.frame_id = self.frames[name]
             self.info[name] = info
