@@ -12,6 +12,7 @@ from leap_teleop.drone.sim_runner import (
     DroneFrames,
     DroneSimRunner,
     calibration_error,
+    check_combinations,
     sensor_readings,
     static_frames,
 )
@@ -136,3 +137,16 @@ def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
             assert f.read(8) == b'\x89PNG\r\n\x1a\n'
     finally:
         r.close()
+
+
+@pytest.mark.parametrize('values, message', [
+    ({'takeoff_altitude': 9.0, 'altitude_max': 1000.0}, '~takeoff_altitude 9 m must be within'),
+    ({'altitude_min': 2000.0, 'altitude_max': 1000.0}, '~altitude_min 2000 mm must be below'),
+    ({'base_frame': 'odom'}, "~base_frame and ~odom_frame are both 'odom'"),
+    ({'world_frame': 'odom'}, "~odom_frame and ~world_frame are both 'odom'"),
+])
+def test_parameters_that_cannot_go_together_are_refused(values, message):
+    # each was taken: a takeoff above the ceiling, a transform from a frame to itself
+    check_combinations(params())
+    with pytest.raises(ValueError, match=message):
+        check_combinations(params(**values))

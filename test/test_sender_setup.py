@@ -8,7 +8,7 @@ from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
 from leap_teleop.hands.sender_setup import (
     PeriodThrottle,
     build_source,
-    check_leapros,
+    check_outputs,
     recognizer_factory,
     retune_recognizers,
     retune_sender,
@@ -44,9 +44,21 @@ def test_a_source_missing_its_file_says_which_parameter(values, says):
 
 
 def test_leapros_must_carry_a_published_side():
-    check_leapros(params(leapros_topic='leapmotion/data', sides=['right']))
+    check_outputs(params(leapros_topic='leapmotion/data', sides=['right']))
     with pytest.raises(ValueError, match='leapros_side'):
-        check_leapros(params(leap_topic='leapmotion/raw', sides=['left']))
+        check_outputs(params(leap_topic='leapmotion/raw', sides=['left']))
+
+
+def test_a_side_twice_or_two_outputs_on_one_topic_are_refused():
+    # both were taken: two message types on one topic, or one hand published twice
+    with pytest.raises(ValueError, match=r"~sides \['right', 'right'\]: each side once"):
+        check_outputs(params(sides=['right', 'right']))
+    with pytest.raises(ValueError, match="~leapcobot_topic_right and ~hand_topic_right are both"):
+        check_outputs(params(leapcobot_topic_right='samepub', hand_topic_right='samepub'))
+    with pytest.raises(ValueError, match='~hand_topic_left and ~leapros_topic are both'):
+        check_outputs(params(leapros_topic='/leapmotion/hand_left'))
+    # a side not published may share its topic name: nothing goes out on it
+    check_outputs(params(sides=['right'], hand_topic_left='leapmotion/hand_right'))
 
 
 def test_recognizers_are_built_and_retuned_from_the_params():

@@ -150,11 +150,31 @@ class DroneReading:
     new_state: str          # the state's name when it changed since the last reading, else ''
 
 
+def check_combinations(p):
+    """ValueError for ~params each allowed alone but not together."""
+    if p['altitude_min'] >= p['altitude_max']:
+        raise ValueError('~altitude_min %g mm must be below ~altitude_max %g mm'
+                         % (p['altitude_min'], p['altitude_max']))
+    if not p['altitude_min'] <= 1000.0 * p['takeoff_altitude'] <= p['altitude_max']:
+        raise ValueError('~takeoff_altitude %g m must be within ~altitude_min .. ~altitude_max '
+                         '(%g .. %g mm)' % (p['takeoff_altitude'], p['altitude_min'],
+                                            p['altitude_max']))
+    frames = [('base_frame', p['base_frame']), ('odom_frame', p['odom_frame'])]
+    if p['world_frame']:
+        frames.append(('world_frame', p['world_frame']))
+    for i, (a, fa) in enumerate(frames):
+        for b, fb in frames[i + 1:]:
+            if fa.lstrip('/') == fb.lstrip('/'):
+                raise ValueError('~%s and ~%s are both %r: a transform needs two frames'
+                                 % (a, b, fa))
+
+
 class DroneSimRunner:
     """ArDroneSim behind one lock (service threads, the camera thread and the loop share
     it), stepped in blocks of physics steps per ~looprate tick."""
 
     def __init__(self, p, use_sim_time, warn=None):
+        check_combinations(p)
         self.p = p
         self.sim = ArDroneSim({k: p[k] for k in SIM_KEYS}, gui=bool(p['gui']), warn=warn,
                               start_xyz=tuple(p['start_xy']))

@@ -4,11 +4,31 @@ from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.sources import SourceError, make_source
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs
 
+# The sender's output topic parameters; a side's own ones end in _<side>.
+OUTPUT_TOPICS = ('leapcobot_topic_right', 'leapcobot_topic_left', 'hand_topic_right',
+                 'hand_topic_left', 'gesture_topic', 'leapros_topic', 'leap_topic', 'human_topic',
+                 'filtered_human_topic', 'driver_marker_topic', 'annotated_image_topic')
 
-def check_leapros(p):
-    """ValueError when leapros / leap would carry a hand the sender does not publish."""
+
+def check_outputs(p):
+    """ValueError when the ~params ask for outputs that cannot be: a side twice, leapros /
+    leap carrying a hand the sender does not publish, two outputs on one topic (two
+    message types on a topic, or two streams mixed in one)."""
+    if len(set(p['sides'])) != len(p['sides']):
+        raise ValueError('~sides %r: each side once' % (p['sides'],))
     if (p['leapros_topic'] or p['leap_topic']) and p['leapros_side'] not in p['sides']:
         raise ValueError('~leapros_side %r is not in ~sides %r' % (p['leapros_side'], p['sides']))
+    used = {}
+    for name in OUTPUT_TOPICS:
+        side = name.rsplit('_', 1)[-1]
+        topic = p.get(name, '')
+        if not topic or (side in ('right', 'left') and side not in p['sides']):
+            continue
+        key = topic.lstrip('/')
+        if key in used:
+            raise ValueError('~%s and ~%s are both %r: one topic per output' % (
+                used[key], name, topic))
+        used[key] = name
 
 
 def build_source(p, clock, default_script, camera_model=lambda: None, on_image=None):

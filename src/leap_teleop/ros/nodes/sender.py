@@ -12,7 +12,7 @@ import tf2_ros
 from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
-from leap_teleop.hands.sender_setup import build_source, check_leapros, recognizer_factory, retune_sender
+from leap_teleop.hands.sender_setup import build_source, check_outputs, recognizer_factory, retune_sender
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.ros.camera_topics import camera_model, camera_view
@@ -32,7 +32,7 @@ LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 def build(p):
     """What the checked ~params make before any topic exists (a bad one ends the node)."""
-    check_leapros(p)
+    check_outputs(p)
     factory = recognizer_factory(p)
     bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
     view = camera_view(p)
