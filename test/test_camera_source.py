@@ -328,6 +328,8 @@ def test_camera_sources_refuse_bad_input_with_the_fix(tmp_path):
         make_source('video', path=str(tmp_path / 'nothing*.jpg'))
     with pytest.raises(SourceError, match='names no video file'):
         make_source('video', path=str(tmp_path / 'absent.mp4'))
+    with pytest.raises(SourceError, match='names no video file'):      # was: no frame, exit 0
+        make_source('video', path=str(tmp_path / 'absent.jpg'))
     bad = tmp_path / 'bad.mp4'
     bad.write_bytes(b'not a video')
     with pytest.raises(SourceError, match='cannot open video'):

@@ -267,8 +267,8 @@ class VideoSource(CameraSource):
                  width=0, height=0, drop_late=False, **kwargs):
         self.path = str(path)
         stills = capture.resolve_stills(self.path)
-        if not stills and (any(c in self.path for c in '*?[')
-                           or not os.path.isfile(self.path)):
+        if (not stills and (any(c in self.path for c in '*?[') or not os.path.isfile(self.path))
+                or stills == [self.path] and not os.path.isfile(self.path)):
             raise SourceError('video source: %s names no video file, image, folder of '
                               'images or glob that matches images' % self.path)
         self.still = bool(stills)
