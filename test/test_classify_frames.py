@@ -335,3 +335,21 @@ def test_unhashable_ids_and_a_recording_on_stdin_are_no_crash(tmp_path):
     line = run_cli([], stdin=recording + '\n')
     assert line == [{'id': None, 'timestamp': None, 'hands': [],
                      'error': 'a whole recording on one line: give its file as INPUT'}]
+
+
+@pytest.mark.parametrize('where', ['in its first 64 KiB', 'past them'])
+def test_a_corrupt_gzip_is_one_clear_error(tmp_path, where):
+    import gzip
+    text = ''.join(json.dumps({'id': i, 'hands': [], 'n': i * 7919 % 10007}) + '\n'
+                   for i in range(20000)).encode()
+    data = bytearray(gzip.compress(text, mtime=0))
+    start = 200 if where == 'in its first 64 KiB' else len(data) // 2
+    for k in range(start, start + 50):
+        data[k] ^= 0x55
+    bad = tmp_path / 'bad.jsonl.gz'
+    bad.write_bytes(bytes(data))
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', '--stateless',
+                        str(bad), '--out', str(tmp_path / 'o.jsonl')],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and 'Traceback' not in p.stderr, p.stderr
+    assert p.stderr.strip().splitlines()[-1].startswith('classify_frames: %s: ' % bad)

@@ -140,13 +140,19 @@ def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
 
 
 @pytest.mark.parametrize('values, message', [
-    ({'takeoff_altitude': 9.0, 'altitude_max': 1000.0}, '~takeoff_altitude 9 m must be within'),
     ({'altitude_min': 2000.0, 'altitude_max': 1000.0}, '~altitude_min 2000 mm must be below'),
     ({'base_frame': 'odom'}, "~base_frame and ~odom_frame are both 'odom'"),
-    ({'world_frame': 'odom'}, "~odom_frame and ~world_frame are both 'odom'"),
+    ({'world_frame': 'odom'}, "~world_frame 'odom' is the drone's own frame"),
+    ({'world_frame': 'uav/odom', 'tf_prefix': 'uav'}, "~world_frame 'uav/odom' is the drone's"),
 ])
 def test_parameters_that_cannot_go_together_are_refused(values, message):
-    # each was taken: a takeoff above the ceiling, a transform from a frame to itself
-    check_combinations(params())
+    # each was taken: an empty flight band, a transform from a frame to itself
     with pytest.raises(ValueError, match=message):
         check_combinations(params(**values))
+
+
+def test_parameters_that_go_together_are_taken():
+    check_combinations(params())
+    # the sim levels off at the ceiling; drones behind prefixes share one world frame
+    check_combinations(params(takeoff_altitude=1.0, altitude_max=800.0))
+    check_combinations(params(world_frame='odom', tf_prefix='drone1'))

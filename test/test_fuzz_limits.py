@@ -58,6 +58,13 @@ def test_found_one_future_stamp_blocks_the_stream_for_a_gap_only():
     assert all(v.startswith('out of order') for v in refused)
     # one message out of order among ones in order is refused alone, as before
     assert 'out of order' in s.check(10.0, 11.0) and s.check(11.0, 11.005) is None
+    # A stale second publisher (5 s behind) stays refused, while the live one publishes
+    # and after it stops: no stamp leapt ahead, so its stream never takes over.
+    now = 11.005
+    for k in range(100):
+        now += 0.005
+        live = s.check(now - 0.005, now) if k < 50 else None
+        assert live is None and 'out of order' in s.check(now - 5.0, now)
 
 
 def test_found_backlog_burst_after_a_stall_passes_only_its_last_max_age():

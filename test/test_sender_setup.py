@@ -56,7 +56,7 @@ def test_a_side_twice_or_two_outputs_on_one_topic_are_refused():
     with pytest.raises(ValueError, match="~leapcobot_topic_right and ~hand_topic_right are both"):
         check_outputs(params(leapcobot_topic_right='samepub', hand_topic_right='samepub'))
     with pytest.raises(ValueError, match='~hand_topic_left and ~leapros_topic are both'):
-        check_outputs(params(leapros_topic='/leapmotion/hand_left'))
+        check_outputs(params(leapros_topic='leapmotion/hand_left'))
     # a side not published may share its topic name: nothing goes out on it
     check_outputs(params(sides=['right'], hand_topic_left='leapmotion/hand_right'))
 

@@ -13,9 +13,11 @@ the robots) - also across a silence: a source that stalled and then bursts its b
 (stamps continue, but late) is not a new stream, so only its last max_age s pass. Unstamped
 messages (stamp <= 0, as the original sender sent them) are only checked for order.
 
-Stamped messages refused as out of order for ``gap`` seconds on end, while they keep
-coming, start a new stream: one message stamped far ahead (a bogus stamp) would otherwise
-make every later one look out of order for as long as its lead.
+One message stamped far ahead (a bogus stamp: its latency below the stream's best by more
+than ``max_age``) would make every later one look out of order for as long as its lead.
+So when the last message taken was such a one, stamped messages refused as out of order
+for ``gap`` seconds on end, while they keep coming, start a new stream. After a message
+taken normally they never do: an older stream (a second, stale publisher) stays refused.
 """
 
 
@@ -31,6 +33,7 @@ class InputStream:
         self.best_lag = None
         self.misordered_since = None   # first of the stamped messages refused on end as
                                        # out of order
+        self.leapt = False             # the last message taken was stamped far ahead
 
     def check(self, stamp, now):
         """None if the message is in order and on time (it is then recorded), else why not."""
@@ -47,18 +50,21 @@ class InputStream:
                 return 'out of order: unstamped after stamped messages'
             if self.misordered_since is None:
                 self.misordered_since = now
-            if now - self.misordered_since < self.gap:
+            if not self.leapt or now - self.misordered_since < self.gap:
                 return 'out of order: %.3f s older than the last message' % (
                     self.last_stamp - stamp)
-            self.reset()                # the last stamp was bogus, or the sender's clock
-            self.last_rx = now          # went back for good: a new stream
+            self.reset()                # the stamp that leapt ahead was bogus: a new stream
+            self.last_rx = now
         self.misordered_since = None
+        leapt = False
         if stamp > 0 and self.max_age > 0:
             lag = now - stamp
             if self.best_lag is None or lag < self.best_lag:
+                leapt = self.best_lag is not None and self.best_lag - lag > self.max_age
                 self.best_lag = lag
             elif lag - self.best_lag > self.max_age:
                 return 'late: arrived %.3f s after the stream\'s usual latency (max %.3f s)' % (
                     lag - self.best_lag, self.max_age)
         self.last_stamp = stamp
+        self.leapt = leapt
         return None

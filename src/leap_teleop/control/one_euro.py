@@ -46,8 +46,11 @@ class OneEuroFilter:
             return 0.0
         # A plain sum of squares, as _update3 takes it: not np.linalg.norm or d.dot(d),
         # whose BLAS kernels round differently on CPUs that fuse multiply-adds.
+        if d.shape == (3,):
+            d0, d1, d2 = d.tolist()
+            return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if d.ndim == 1:
-            return math.sqrt(sum([v * v for v in d.tolist()]))
+            return math.sqrt(float(np.sum(d * d)))
         return math.sqrt(float(np.sum(d * d)))
 
     def reset(self, value=None, t=None):

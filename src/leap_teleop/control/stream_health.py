@@ -112,6 +112,7 @@ class StreamHealth:
         from `now`."""
         self.since = now
         self.late_since = None
+        self.on_time_since = None       # a stall is no input on time
         if self.last_rx is not None:
             self.last_rx = now
         if self.unconnected_since is not None:

@@ -344,7 +344,9 @@ class ArDroneSim:
         try:
             anim_type, freq, duration_s = int(anim_type), float(freq), int(duration_s)
         except (TypeError, ValueError, OverflowError):
-            anim_type = -1
+            self._warn('led', 'LED animation ignored: type %r, frequency %r, duration %r are '
+                       'not an integer, a number and an integer', anim_type, freq, duration_s)
+            return False
         if not 0 <= anim_type < len(LED_ANIMATION_NAMES):
             self._warn('led', 'LED animation ignored: type %r is not in 0..13', anim_type)
             return False

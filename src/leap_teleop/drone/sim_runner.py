@@ -131,8 +131,10 @@ def calibration_error(name, width, height, K=None, D=(), R=None, P=None, model='
             return '%s must be %d finite numbers' % (field, n)
     if K is not None and not (K[0] > 0 and K[4] > 0):
         return 'K: the focal lengths fx, fy must be > 0'
-    if len(D) > 14 or not all(math.isfinite(v) for v in D):
-        return 'D must be at most 14 finite numbers, got %d' % len(D)
+    if len(D) > 14:
+        return 'D must be at most 14 numbers, got %d' % len(D)
+    if not all(math.isfinite(v) for v in D):
+        return 'D must be finite numbers'
     if len(model) > 64:
         return 'distortion_model is %d characters: no model is named so' % len(model)
     return ''
@@ -151,22 +153,19 @@ class DroneReading:
 
 
 def check_combinations(p):
-    """ValueError for ~params each allowed alone but not together."""
+    """ValueError for ~params each allowed alone but not together. (A takeoff above the
+    ceiling is no error: the sim levels off at the ceiling.)"""
     if p['altitude_min'] >= p['altitude_max']:
         raise ValueError('~altitude_min %g mm must be below ~altitude_max %g mm'
                          % (p['altitude_min'], p['altitude_max']))
-    if not p['altitude_min'] <= 1000.0 * p['takeoff_altitude'] <= p['altitude_max']:
-        raise ValueError('~takeoff_altitude %g m must be within ~altitude_min .. ~altitude_max '
-                         '(%g .. %g mm)' % (p['takeoff_altitude'], p['altitude_min'],
-                                            p['altitude_max']))
-    frames = [('base_frame', p['base_frame']), ('odom_frame', p['odom_frame'])]
-    if p['world_frame']:
-        frames.append(('world_frame', p['world_frame']))
-    for i, (a, fa) in enumerate(frames):
-        for b, fb in frames[i + 1:]:
-            if fa.lstrip('/') == fb.lstrip('/'):
-                raise ValueError('~%s and ~%s are both %r: a transform needs two frames'
-                                 % (a, b, fa))
+    frames = DroneFrames(p['tf_prefix'], p['base_frame'], p['odom_frame'])
+    if frames.base == frames.odom:
+        raise ValueError('~base_frame and ~odom_frame are both %r: odometry needs two frames'
+                         % frames.odom)
+    if p['world_frame'] and p['world_frame'].lstrip('/') in (frames.odom.lstrip('/'),
+                                                             frames.base.lstrip('/')):
+        raise ValueError('~world_frame %r is the drone\'s own frame: a transform needs two'
+                         % p['world_frame'])
 
 
 class DroneSimRunner:

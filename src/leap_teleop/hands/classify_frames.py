@@ -252,8 +252,10 @@ def main(argv=None):
             frames = list(keypoint_lines(args.keypoints, classifier))
         else:
             frames = frames_of(args.input)
-    except (SourceError, OSError, ModelError, gesture_data.DataError) as e:
-        print('classify_frames: %s' % e, file=sys.stderr)
+    except (SourceError, OSError, ModelError, gesture_data.DataError) + gesture_data.UNREADABLE as e:
+        print('classify_frames: %s: %s' % (args.keypoints or args.input, e)
+              if isinstance(e, gesture_data.UNREADABLE) else 'classify_frames: %s' % e,
+              file=sys.stderr)
         return 2
     if args.out != '-':
         problem = out_problem(args.out, [args.keypoints or args.input, args.model,
@@ -292,7 +294,7 @@ def main(argv=None):
     except _WriteError as e:
         print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         status = 1
-    except (OSError, EOFError) as e:    # a truncated or corrupt gzip stream, a read error
+    except (OSError,) + gesture_data.UNREADABLE as e:   # a cut or corrupt gzip, a read error
         print('classify_frames: %s: cannot read on after %d frames (%s)' % (args.input, n, e),
               file=sys.stderr)
         status = 2

@@ -24,7 +24,7 @@ def check_outputs(p):
         topic = p.get(name, '')
         if not topic or (side in ('right', 'left') and side not in p['sides']):
             continue
-        key = topic.lstrip('/')
+        key = topic              # as given: 'x' and '/x' differ inside a namespace
         if key in used:
             raise ValueError('~%s and ~%s are both %r: one topic per output' % (
                 used[key], name, topic))

@@ -477,7 +477,7 @@ def joint_order(names, expected, prefix):
 
 
 # Reading and checking a trajectory's points holds the simulator's physics loop: 100,000
-# stopped its joint states for over a second. 10,000 is a minute and a half at 100 Hz.
+# stopped its joint states for over a second. 10,000 is 100 s of points at 100 Hz.
 MAX_TRAJECTORY_POINTS = 10000
 
 

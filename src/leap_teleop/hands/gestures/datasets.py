@@ -161,6 +161,8 @@ def read_take(path):
     with open_text(path) as f, paused_gc():
         try:
             d = _loads(f.read())
+        except UNREADABLE as e:
+            raise DataError('%s: cannot read it (%s)' % (path, e)) from None
         except ValueError as e:
             raise DataError('%s: not JSON (%s)' % (path, e)) from None
     data = d.get('data') if isinstance(d, dict) else None

@@ -109,7 +109,8 @@ def _vec(v):
             x, y, z = (float(c) for c in v)
     except (TypeError, ValueError):
         return None
-    return [x, y, z] if abs(x) + abs(y) + abs(z) < MAX_COORD_MM else None
+    return [x, y, z] if abs(x) < MAX_COORD_MM and abs(y) < MAX_COORD_MM and abs(z) < MAX_COORD_MM \
+        else None
 
 
 def hand_geometry(hand):

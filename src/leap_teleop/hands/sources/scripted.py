@@ -35,13 +35,13 @@ DEFAULT_PALM = (0.0, 200.0, 0.0)
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
 
 
-def _vector(value, what, n=3):
+def _vector(value, what, n=3, bound=1e5):
     try:
         arr = np.asarray(value, dtype=float).reshape(n)
     except (TypeError, ValueError):
         raise SourceError('%s must be a list of %d numbers, got %r' % (what, n, value))
-    if not np.all(np.abs(arr) <= 1e5):          # NaN compares false
-        raise SourceError('%s must be finite, within +-1e5, got %r' % (what, value))
+    if not np.all(np.abs(arr) <= bound):         # NaN compares false
+        raise SourceError('%s must be finite, within +-%g, got %r' % (what, bound, value))
     return arr
 
 
@@ -110,7 +110,8 @@ class GestureScript:
             if not (0 < seg.duration < 1e6):
                 raise SourceError('%s: duration must be > 0 s, got %r' % (here, raw.get('duration')))
             seg.start = t
-            seg.palm1 = _vector(raw['palm'], here + '.palm') if 'palm' in raw else palm
+            # mm: a Leap sees under a metre; 10 m keeps every joint in the recognizer's range
+            seg.palm1 = _vector(raw['palm'], here + '.palm', bound=1e4) if 'palm' in raw else palm
             seg.rpy1 = np.radians(_vector(raw['rpy'], here + '.rpy')) if 'rpy' in raw else rpy
             # A hand that (re)appears does so at its waypoint; otherwise it moves there.
             appears = not out or out[-1].pose == 'absent'
