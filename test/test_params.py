@@ -223,7 +223,7 @@ def test_cell_config_scalars_are_checked(key, value):
     (lambda d: d['cubes'][0].update(rgba=[0.85]), 'cubes[0].rgba must be 4 numbers'),
     (lambda d: d['cubes'][0].update(arm='nosucharm'), "cubes[0].arm: no arm 'nosucharm'"),
     (lambda d: d['camera'].update(fov=math.nan), 'camera.fov must be'),
-    (lambda d: d['arms'].append(5), 'cell config cell.yaml: malformed'),
+    (lambda d: d['arms'].append(5), 'cell config cell.yaml: an entry of the wrong shape'),
 ])
 def test_cell_config_fields_are_checked_and_named(spoil, message):
     # Each of these was taken silently (NaN cube poses, a home of 95.8 rad, a cube for no

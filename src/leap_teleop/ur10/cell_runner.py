@@ -75,10 +75,6 @@ def read_cell_config(name):
         why = str(e)
         if why.startswith('cell config'):
             raise CellConfigError(why) from None
-    except KeyError as e:           # parse_config's entry['name'] and the like
-        why = 'an entry lacks %r' % e.args[0]
-    except (TypeError, AttributeError) as e:
-        why = 'an entry of the wrong shape (%s)' % e
     raise CellConfigError('cell config %s: %s' % (path, why)) from None
 
 

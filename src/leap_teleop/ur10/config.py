@@ -179,8 +179,10 @@ def parse_config(data, path=''):
         raise ValueError('cell config %s: needs a non-empty "arms" list' % path)
     try:
         return _parse(data, path)
-    except (KeyError, TypeError, AttributeError) as e:
-        raise ValueError('cell config %s: malformed (%s: %s)' % (path, type(e).__name__, e))
+    except KeyError as e:           # an entry's ['name'], ['xyz'] and the like
+        raise ValueError('cell config %s: an entry lacks %r' % (path, e.args[0]))
+    except (TypeError, AttributeError) as e:
+        raise ValueError('cell config %s: an entry of the wrong shape (%s)' % (path, e))
     except ValueError as e:
         if str(e).startswith('cell config'):
             raise
@@ -197,7 +199,7 @@ def _parse(data, path):
     height, size = scalars['table_height'], scalars['cube_size']
     arms = []
     for i, a in enumerate(data['arms']):
-        name = a.get('name')
+        name = a['name']
         if not isinstance(name, str) or not ARM_NAME.fullmatch(name):
             raise ValueError('arms[%d].name must be a ROS name (a letter, then letters, digits '
                              'or _), got %r' % (i, name))
