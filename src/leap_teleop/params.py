@@ -13,7 +13,12 @@ import numbers
 import re
 
 # A legal ROS graph name (the ROS 1 naming rules), not ending in '/'.
-ROS_NAME = re.compile(r'[~/A-Za-z][A-Za-z0-9_/]*(?<!/)')
+_ROS_NAME = re.compile(r'[~/A-Za-z][A-Za-z0-9_/]*(?<!/)')
+
+
+def is_ros_name(value):
+    """Whether `value` can name a topic: ROS 1's naming rules, no '//', no trailing '/'."""
+    return bool(_ROS_NAME.fullmatch(value)) and '//' not in value
 
 
 class ParamError(ValueError):
@@ -88,7 +93,7 @@ class Param:
                 raise ParamError('not a string')
             if not value and not self.empty_ok:
                 raise ParamError('empty')
-            if value and self.ros_name and (not ROS_NAME.fullmatch(value) or '//' in value):
+            if value and self.ros_name and not is_ros_name(value):
                 raise ParamError('not a legal ROS name')
         elif kind == 'int':
             if isinstance(value, bool) or not isinstance(value, numbers.Integral):

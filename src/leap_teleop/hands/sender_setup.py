@@ -24,11 +24,11 @@ def check_outputs(p):
         topic = p.get(name, '')
         if not topic or (side in ('right', 'left') and side not in p['sides']):
             continue
-        key = topic              # as given: 'x' and '/x' differ inside a namespace
-        if key in used:
+        # as given: 'x' and '/x' differ inside a namespace
+        if topic in used:
             raise ValueError('~%s and ~%s are both %r: one topic per output' % (
-                used[key], name, topic))
-        used[key] = name
+                used[topic], name, topic))
+        used[topic] = name
 
 
 def build_source(p, clock, default_script, camera_model=lambda: None, on_image=None):

@@ -17,12 +17,12 @@ import sys
 import time
 
 import rosbag
-import rosgraph.names
 import rospy
 
 from leap_teleop.hands.frame import SIDES
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.params import is_ros_name
 from leap_teleop.ros import conversions
 
 KINDS = ('leapcobot', 'hand', 'gesture')
@@ -115,7 +115,7 @@ def main(argv=None):
     if not args.out.strip():
         ap.error('name the bag file')
     for option, topic in (('--right-topic', args.right_topic), ('--left-topic', args.left_topic)):
-        if not rosgraph.names.is_legal_name(topic) or not topic.strip('/'):
+        if not is_ros_name(topic):
             ap.error('%s %r: not a legal ROS topic name' % (option, topic))
     folder = os.path.dirname(os.path.abspath(args.out))
     if os.path.isdir(args.out):
