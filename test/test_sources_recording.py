@@ -32,6 +32,31 @@ def test_lz_decoder_matches_the_reference_package():
         leapjs.lz_decompress_base64('!!!not base64!!!')
 
 
+def test_found_a_small_compressed_recording_cannot_expand_to_gigabytes(tmp_path, monkeypatch):
+    # Before: 32 KB of LZString expanded to 370 MB (gzip: up to ~1000 times its size) with
+    # no limit; now at most MAX_EXPANSION times the file, or MIN_EXPANDED.
+    import gzip
+
+    import lzstring
+    text = '{"frames": [' + 'a' * 100000 + ']}'
+    lz = lzstring.LZString().compressToBase64(text)
+    assert len(text) > 100 * len(lz)                 # expands like a bomb
+    with pytest.raises(ValueError, match='expands beyond 5000'):
+        leapjs.lz_decompress_base64(lz, max_chars=5000)
+    assert leapjs.lz_decompress_base64(lz, max_chars=len(text)) == text
+    monkeypatch.setattr(leapjs, 'MIN_EXPANDED', 10000)
+    monkeypatch.setattr(leapjs, 'MAX_EXPANSION', 20)
+    (tmp_path / 'bomb.json.lz').write_text(lz)
+    (tmp_path / 'bomb.json.gz').write_bytes(gzip.compress(text.encode()))
+    for name in ('bomb.json.lz', 'bomb.json.gz'):
+        with pytest.raises(SourceError, match='expands beyond'):
+            leapjs.read_text(str(tmp_path / name))
+    # a real take's expansion (about 3 times) passes the same limits
+    small = json.dumps({'frames': [[k, 0.5 * k] for k in range(300)]})
+    (tmp_path / 'ok.json.gz').write_bytes(gzip.compress(small.encode()))
+    assert leapjs.read_text(str(tmp_path / 'ok.json.gz')) == small.encode()
+
+
 @need_data
 def test_every_shared_recording_reads_in_every_encoding():
     takes = sorted(f[:-len('.json.lz')] for f in os.listdir(DATA) if f.endswith('.json.lz'))

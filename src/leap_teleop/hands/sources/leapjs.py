@@ -10,6 +10,7 @@ Leap timestamps are microseconds; Frame.timestamp is seconds.
 import base64
 import gc
 import gzip
+import io
 import itertools
 import json
 import math
@@ -41,15 +42,27 @@ class FrameError(ValueError):
 # per-bit `lzstring` package).
 _REVERSE = bytes(int('{:08b}'.format(i)[::-1], 2) for i in range(256))
 _B64_ALPHABET = set('ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=')
+# A compressed recording may expand to at most this many times its size, and always to
+# MIN_EXPANDED: real takes expand about 3 times, while a few crafted kilobytes of
+# LZString (whose entries grow by a character each use) or gzip expand to gigabytes.
+MAX_EXPANSION = 200
+MIN_EXPANDED = 256 << 20
 
 
-def lz_decompress_base64(text):
-    """LZString.decompressFromBase64; ValueError when the text is not such a stream."""
+def expansion_limit(compressed_size):
+    """Characters (bytes) a compressed recording of `compressed_size` may expand to."""
+    return max(MIN_EXPANDED, MAX_EXPANSION * compressed_size)
+
+
+def lz_decompress_base64(text, max_chars=None):
+    """LZString.decompressFromBase64; ValueError when the text is not such a stream or
+    expands beyond `max_chars` (default expansion_limit of the text's length)."""
     text = ''.join(text.split())
     if not text:
         raise ValueError('empty LZString text')
     if not set(text) <= _B64_ALPHABET:
         raise ValueError('not LZString base64 (characters outside the base64 alphabet)')
+    limit = expansion_limit(len(text)) if max_chars is None else max_chars
     text = text.rstrip('=')
     text += 'A' * (-len(text) % 4)                     # 'A' = six zero bits, as '=' is
     stream = base64.b64decode(text).translate(_REVERSE) + bytes(8)
@@ -76,6 +89,7 @@ def lz_decompress_base64(text):
     dictionary = ['', '', '', c]
     w = c
     out = [c]
+    size = 1
     enlarge_in, num_bits = 4, 3
     append = out.append
     add = dictionary.append
@@ -107,6 +121,9 @@ def lz_decompress_base64(text):
         else:
             raise ValueError('corrupt LZString stream (code %d beyond dictionary)' % code)
         append(entry)
+        size += len(entry)
+        if size > limit:
+            raise ValueError('LZString data expands beyond %d characters' % limit)
         add(w + entry[0])
         enlarge_in -= 1
         w = entry
@@ -134,10 +151,15 @@ def read_text(path):
     except OSError as e:
         raise SourceError('cannot read recording %s: %s' % (path, e.strerror or e))
     if raw[:2] == b'\x1f\x8b':
+        limit = expansion_limit(len(raw))
         try:
-            raw = gzip.decompress(raw)
+            with gzip.GzipFile(fileobj=io.BytesIO(raw)) as g:
+                raw = g.read(limit + 1)
         except (OSError, EOFError, ValueError) as e:
             raise SourceError('recording %s: corrupt gzip data (%s)' % (path, e))
+        if len(raw) > limit:
+            raise SourceError('recording %s: gzip data expands beyond %d bytes (at most %d times '
+                              'its size, or %d MiB)' % (path, limit, MAX_EXPANSION, MIN_EXPANDED >> 20))
     head = raw[:64].lstrip()
     if head[:1] in (b'{', b'['):
         return raw                      # JSON; both parsers take UTF-8 bytes
