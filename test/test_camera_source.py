@@ -522,3 +522,22 @@ def test_a_frame_the_detector_fails_on_is_skipped_and_a_broken_detector_ends_the
         for k in range(MAX_DETECTOR_FAILURES):
             source.process(bgr, 1.0 + k, 2 + k)
     source.detector.close()
+
+
+def test_found_an_unreadable_image_keeps_its_line_and_the_others_their_ids(tmp_path):
+    # Before: an unreadable image was skipped with no line, so every later image's id and
+    # line moved up by one.
+    import shutil
+    for name, src in (('a.jpg', 'fist__htj__22.jpg'), ('c.jpg', 'thumbs_up__mps__hand_thumb_up.jpg')):
+        shutil.copy(data(src), tmp_path / name)
+    (tmp_path / 'b.jpg').write_bytes(b'not a picture')
+    (tmp_path / 'd.png').write_bytes(b'')
+    env = dict(os.environ, PYTHONWARNINGS='ignore')
+    out = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(tmp_path)],
+                         capture_output=True, text=True, env=env, timeout=120)
+    assert out.returncode == 0, out.stderr
+    lines = [json.loads(line) for line in out.stdout.splitlines()]
+    assert [line['id'] for line in lines] == [1, 2, 3, 4]
+    assert lines[0]['hands'][0]['fist'] and lines[2]['hands'][0]['thumb_up']
+    for k, name in ((1, 'b.jpg'), (3, 'd.png')):
+        assert lines[k]['hands'] == [] and lines[k]['error'] == 'cannot read image %s' % (tmp_path / name)

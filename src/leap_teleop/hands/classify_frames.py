@@ -14,7 +14,9 @@ one line per row, {"id": ROW, "timestamp": null, "hands": [{"type": null, "fist"
 INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
 .mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
 images (.jpg, .jpeg, .png, ...: a file, a folder or a quoted glob; one line per image,
-each classified on its own as with --stateless). Hands come from the camera source's
+in name order, id = its place from 1, each classified on its own as with --stateless; an
+image that cannot be read gives {"id": ID, "timestamp": null, "hands": [], "error":
+"cannot read image PATH"}). Hands come from the camera source's
 pipeline (MediaPipe Hands, then the landmark conversion) with its defaults: frames
 letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does not
 mirror.
@@ -146,6 +148,13 @@ class NotAFrame(ValueError):
     """A line of valid JSON that is no frame."""
 
 
+class UnreadableImage:
+    """An image of the input that the camera source could not read (`id`: its place)."""
+
+    def __init__(self, fid, path):
+        self.id, self.path = fid, path
+
+
 def iter_json_lines(stream):
     for line in stream:
         line = line.strip()
@@ -218,6 +227,21 @@ def camera_frames(path):
     return source.frames()
 
 
+def with_unreadable_images(frames, paths):
+    """The frames of still images (ids: each image's place in `paths`, from 1) with an
+    error line in place of each image the camera source could not read, so that the
+    output keeps one line per image, in order."""
+    expected = 1
+    for frame in frames:
+        while expected < frame.id <= len(paths):
+            yield UnreadableImage(expected, paths[expected - 1])
+            expected += 1
+        expected = frame.id + 1
+        yield frame
+    for k in range(expected, len(paths) + 1):
+        yield UnreadableImage(k, paths[k - 1])
+
+
 def frames_of(path):
     if camera_input(path):
         return camera_frames(path)
@@ -269,6 +293,9 @@ def main(argv=None):
         print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         return 2
     n, status = 0, 0
+    if not args.keypoints and camera_input(args.input) == 'stills':
+        from leap_teleop.hands.sources import capture
+        frames = with_unreadable_images(frames, capture.resolve_stills(args.input))
     try:
         for d in frames:
             if args.keypoints:
@@ -276,6 +303,9 @@ def main(argv=None):
             elif isinstance(d, Frame):
                 ts = round(d.timestamp * 1e6) if math.isfinite(d.timestamp) else None
                 result = classifier.classify_frame(d, d.id, ts)
+            elif isinstance(d, UnreadableImage):
+                result = {'id': d.id, 'timestamp': None, 'hands': [],
+                          'error': 'cannot read image %s' % d.path}
             elif isinstance(d, Exception) or not isinstance(d, dict):
                 why = ('not a frame object' if not isinstance(d, Exception) else str(d)
                        if isinstance(d, NotAFrame) else 'not JSON: %s' % d)

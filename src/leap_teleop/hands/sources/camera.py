@@ -201,6 +201,9 @@ class CameraSource(HandSource):
                 pace = (self.pace_hz if self.realtime else None)
                 reader = capture.CaptureThread(media, clock=self._clock,
                                                latest_only=self.latest_only, pace_hz=pace)
+                # footage numbers its frames by their place in it (an unreadable image or
+                # a dropped frame leaves its number unused); a live camera counts them
+                fps, first_id = getattr(media, 'fps', None), frame_id + 1
                 last_media = 0.0
                 try:
                     while not self.stopped:
@@ -210,7 +213,10 @@ class CameraSource(HandSource):
                             break
                         if item is None:
                             continue
-                        frame_id += 1
+                        if item.media_time is not None and fps:
+                            frame_id = first_id + int(round(item.media_time * fps))
+                        else:
+                            frame_id += 1
                         if self.realtime or item.media_time is None:
                             stamp = item.stamp
                         else:
