@@ -110,6 +110,17 @@ def test_bad_input_is_a_clear_value_error():
     msg.palm_position.x = float('nan')
     with pytest.raises(ValueError, match='palm_position'):
         viz.hand_markers(msg)
+    # Found: finite but huge coordinates (1e308 m) went to RViz, whose renderer fails
+    # its bounding-box checks on them.
+    for field, axis in (('palm_position', 'y'), ('palm_normal', 'z')):
+        msg = hand_msg('right', 'open')
+        setattr(getattr(msg, field), axis, 1e308)
+        with pytest.raises(ValueError, match='%s is not finite or beyond 1000 m' % field):
+            viz.hand_markers(msg)
+    msg = hand_msg('right', 'open')
+    msg.finger_tips[3].x = -2e3
+    with pytest.raises(ValueError, match=r'finger_tips\[3\]'):
+        viz.hand_markers(msg)
     msg = hand_msg('right', 'open')
     msg.side = 5
     with pytest.raises(ValueError, match='side'):

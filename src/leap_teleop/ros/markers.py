@@ -51,9 +51,15 @@ def _colour(rgb, alpha=1.0):
     return ColorRGBA(rgb[0], rgb[1], rgb[2], alpha)
 
 
+# Farther than this (m) from the frame's origin is no hand: huge finite coordinates make
+# RViz's renderer fail its bounding-box assertions.
+MAX_MARKER_COORD_M = 1000.0
+
+
 def _finite_point(p, what):
-    if not all(math.isfinite(v) for v in (p.x, p.y, p.z)):
-        raise ValueError('%s is not finite: (%r, %r, %r)' % (what, p.x, p.y, p.z))
+    if not all(math.isfinite(v) and abs(v) <= MAX_MARKER_COORD_M for v in (p.x, p.y, p.z)):
+        raise ValueError('%s is not finite or beyond %g m: (%r, %r, %r)'
+                         % (what, MAX_MARKER_COORD_M, p.x, p.y, p.z))
     return Point(p.x, p.y, p.z)
 
 
@@ -74,7 +80,8 @@ def hand_markers(hand, frame_id='', lifetime=0.5, scale=1.0):
     an arrow along the palm normal and a text label, all coloured by the recognised
     state (STATE_COLOURS). Absent hand: DELETE for each of those markers. frame_id ''
     keeps the message's frame; lifetime (s) makes markers vanish if the input stops.
-    Raises ValueError for a bad side or non-finite coordinates.
+    Raises ValueError for a bad side or coordinates that are not finite or beyond
+    MAX_MARKER_COORD_M.
     """
     ns = hand_namespace(hand)
     frame_id = frame_id or hand.header.frame_id
