@@ -223,9 +223,19 @@ def test_default_retrain_includes_the_leave_one_person_out_report(tmp_path, trai
     card = open(os.path.splitext(model)[0] + '.md').read()
     assert '## Leave-one-person-out' in card
     assert re.search(r'^\| two \| \d\.\d{3} \| \d\.\d{3} \(.*\) \| \d\.\d{4} \| \d\.\d{4} \|$', card, re.M)
+    # Found: the card named the terms of every shared source, used or not.
+    assert [t.split(' ')[0] for t in PoseClassifier.load(model, 'leap').card['data_terms']] \
+        == ['GTI-UPM']
     two = PoseClassifier.load(model, 'leap').card['leave_one_person_out']['two']
     # the user's file and the three shared people (their V signs are the class too)
     assert two['people'] == 4 and two['fpr_mean'] is not None
+
+
+def test_a_card_names_the_terms_of_the_shared_sources_it_used_only():
+    assert train_gestures.data_terms('leap', {'user:two', 'user:wave'}) == []
+    assert len(train_gestures.data_terms('leap', {'user_03', 'guinevere_01', 'leapjs_takes'})) == 3
+    terms = train_gestures.data_terms('keypoints', {'kinivi', 'photo:mps', 'user:ok'})
+    assert [t.split(' ')[0] for t in terms] == ['hand', 'the']
 
 
 @pytest.mark.parametrize('shared, held', [

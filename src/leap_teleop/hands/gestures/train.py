@@ -63,22 +63,36 @@ TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'op
                'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
 
 
-# Where the fitted data comes from and under what terms (the data folders' READMEs).
+# Where the fitted data comes from and under what terms (the data folders' READMEs), by
+# the prefix of the people each source adds ('' for the webcam keypoint files' people).
 DATA_TERMS = {
-    'leap': ['GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
-             'de Madrid, Grupo de Tratamiento de Imagenes; Mantecon et al.), users 01-12, as '
-             'redistributed in sluyters/QuantumLeap: published by its authors for research, '
-             'no licence file',
-             'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
-             'research, no licence file',
-             'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0'],
-    'keypoints': ['hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
-                  'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
-                  '(their hand-gesture-recognition repositories): Apache-2.0',
-                  'GTI-UPM Leap captures seen as a camera would (see the Leap model)',
-                  'the labelled hand photos of ../shared/data/hands (each under its source '
-                  "repository's licence; see that README)"],
+    'leap': [('user_', 'GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
+                       'de Madrid, Grupo de Tratamiento de Imagenes; Mantecon et al.), users 01-12, as '
+                       'redistributed in sluyters/QuantumLeap: published by its authors for research, '
+                       'no licence file'),
+             ('guinevere_', 'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
+                            'research, no licence file'),
+             ('leapjs_takes', 'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0')],
+    'keypoints': [('', 'hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
+                       'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
+                       '(their hand-gesture-recognition repositories): Apache-2.0'),
+                  ('leap:', 'GTI-UPM Leap captures seen as a camera would (see the Leap model)'),
+                  ('photo:', 'the labelled hand photos of ../shared/data/hands (each under its source '
+                             "repository's licence; see that README)")],
 }
+_OTHER_SOURCES = ('user:', 'leap:', 'photo:')
+
+
+def data_terms(family, persons):
+    """The terms of the shared data sources that people of `persons` come from (a user's
+    own files, 'user:...', carry none)."""
+    def source(person):
+        if family == 'keypoints' and not person.startswith(_OTHER_SOURCES):
+            return ''
+        return next((prefix for prefix, _ in DATA_TERMS[family]
+                     if prefix and person.startswith(prefix)), None)
+    used = {source(p) for p in persons}
+    return [text for prefix, text in DATA_TERMS[family] if prefix in used]
 
 
 class Dataset:
@@ -562,7 +576,8 @@ def train(family, data_dir, adds=(), report=True, log=print):
     if len(set(y)) < 2:
         raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '
                          'data at %s?)' % (family, data_dir))
-    card = {'family': family, 'fitted_on': ds.sources, 'data_terms': DATA_TERMS[family],
+    card = {'family': family, 'fitted_on': ds.sources,
+            'data_terms': data_terms(family, set(persons.tolist())),
             'people': sorted(set(persons.tolist())),
             'rows': int(len(y)), 'classes': sorted(set(y.tolist())),
             'model': 'standardised features, %d ReLU units, softmax (scikit-learn '
