@@ -51,10 +51,28 @@ def test_found_a_small_compressed_recording_cannot_expand_to_gigabytes(tmp_path,
     for name in ('bomb.json.lz', 'bomb.json.gz'):
         with pytest.raises(SourceError, match='expands beyond'):
             leapjs.read_text(str(tmp_path / name))
+    # LZString inside gzip: the limit is the file's as stored, not the gunzipped text's
+    (tmp_path / 'bomb2.json.lz').write_bytes(gzip.compress(lz.encode()))
+    with pytest.raises(SourceError, match='expands beyond'):
+        leapjs.read_text(str(tmp_path / 'bomb2.json.lz'))
     # a real take's expansion (about 3 times) passes the same limits
     small = json.dumps({'frames': [[k, 0.5 * k] for k in range(300)]})
     (tmp_path / 'ok.json.gz').write_bytes(gzip.compress(small.encode()))
     assert leapjs.read_text(str(tmp_path / 'ok.json.gz')) == small.encode()
+
+
+def test_a_small_gzip_recording_reads_without_allocating_the_whole_limit(tmp_path):
+    import gzip
+    import tracemalloc
+    text = json.dumps({'frames': [[k, 0.5 * k] for k in range(300)]})
+    (tmp_path / 'ok.json.gz').write_bytes(gzip.compress(text.encode()))
+    tracemalloc.start()
+    try:
+        assert leapjs.read_text(str(tmp_path / 'ok.json.gz')) == text.encode()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 32 << 20, peak        # MIN_EXPANDED is 256 MiB
 
 
 @need_data

@@ -15,9 +15,10 @@ messages (stamp <= 0, as the original sender sent them) are only checked for ord
 
 One message stamped far ahead (a bogus stamp: its latency below the stream's best by more
 than ``max_age``) would make every later one look out of order for as long as its lead.
-So when the last message taken was such a one, or the first of its stream (nothing yet to
-judge its stamp by), stamped messages refused as out of order for ``gap`` seconds on end,
-while they keep coming, start a new stream. After a message taken normally they never do:
+So when the last message taken was such a one, or the first of its stream stamped more than
+``max_age`` ahead of this clock (nothing else yet to judge its stamp by), stamped messages
+refused as out of order for ``gap`` seconds on end, while they keep coming, start a new
+stream. After a message taken normally they never do:
 an older stream (a second, stale publisher) stays refused.
 """
 
@@ -34,8 +35,7 @@ class InputStream:
         self.best_lag = None
         self.misordered_since = None   # first of the stamped messages refused on end as
                                        # out of order
-        self.leapt = False             # the last message taken was stamped far ahead, or
-                                       # was its stream's first
+        self.leapt = False             # the last message taken was stamped far ahead
 
     def check(self, stamp, now):
         """None if the message is in order and on time (it is then recorded), else why not."""
@@ -58,11 +58,13 @@ class InputStream:
             self.reset()                # the stamp that leapt ahead was bogus: a new stream
             self.last_rx = now
         self.misordered_since = None
-        leapt = self.last_stamp is None
+        # a first message is judged by this clock: a sender's clock may differ a little,
+        # and one live message before a stale publisher must still keep that one out
+        leapt = self.last_stamp is None and stamp - now > self.max_age
         if stamp > 0 and self.max_age > 0:
             lag = now - stamp
             if self.best_lag is None or lag < self.best_lag:
-                leapt = self.best_lag is None or self.best_lag - lag > self.max_age
+                leapt = leapt or (self.best_lag is not None and self.best_lag - lag > self.max_age)
                 self.best_lag = lag
             elif lag - self.best_lag > self.max_age:
                 return 'late: arrived %.3f s after the stream\'s usual latency (max %.3f s)' % (

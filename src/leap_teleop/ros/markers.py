@@ -149,7 +149,8 @@ def driver_markers(human, lifetime=0.1):
     """MarkerArray for one DriverHuman, as the driver's visualizer draws it: a palm sphere,
     lines across the knuckles, and per finger its bones as lines and its joints (and tip) as
     spheres; metres, the message's frame. Absent hands get no markers: the short lifetime
-    (s) clears them. Raises ValueError for non-finite coordinates."""
+    (s) clears them. Raises ValueError for coordinates that are not finite or beyond
+    MAX_MARKER_COORD_M."""
     out = MarkerArray()
     for side, hand in (('Right', human.right_hand), ('Left', human.left_hand)):
         if not hand.is_present:

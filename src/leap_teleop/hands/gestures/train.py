@@ -694,7 +694,8 @@ def write_card(model_path, card):
              '- family: %s' % card['family'],
              '- classes: %s' % ', '.join(card['classes']),
              '- fitted on: %s' % '; '.join(card['fitted_on']),
-             '- data and terms: %s' % '; '.join(card.get('data_terms', [])),
+             '- data and terms: %s' % ('; '.join(card.get('data_terms', []))
+                                       or 'none of the shared data (your own files only)'),
              '- people: %d (%s)' % (len(card['people']), ', '.join(card['people'])),
              '- rows: %d' % card['rows'], '- model: %s' % card['model'],
              '- made by: `%s` (%s, %s s)' % (card['command'], card['date'], card['seconds']), '']

@@ -194,6 +194,7 @@ class CameraSource(HandSource):
         start_stamp = self._clock()
         offset = 0.0                    # media seconds of the passes already played
         frame_id = 0
+        next_first_id = 1               # a pass of footage numbers from here (its place + this)
         try:
             while not self.stopped:
                 if media is None:
@@ -203,7 +204,9 @@ class CameraSource(HandSource):
                                                latest_only=self.latest_only, pace_hz=pace)
                 # footage numbers its frames by their place in it (an unreadable image or
                 # a dropped frame leaves its number unused); a live camera counts them
-                fps, first_id = getattr(media, 'fps', None), frame_id + 1
+                fps = getattr(media, 'fps', None)
+                first_id = max(next_first_id, frame_id + 1)
+                next_first_id = first_id + (getattr(media, 'frame_count', 0) or 0)
                 last_media = 0.0
                 try:
                     while not self.stopped:

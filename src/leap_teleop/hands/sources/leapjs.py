@@ -150,16 +150,9 @@ def read_text(path):
             raw = f.read()
     except OSError as e:
         raise SourceError('cannot read recording %s: %s' % (path, e.strerror or e))
+    limit = expansion_limit(len(raw))       # of the file as stored, whatever it holds
     if raw[:2] == b'\x1f\x8b':
-        limit = expansion_limit(len(raw))
-        try:
-            with gzip.GzipFile(fileobj=io.BytesIO(raw)) as g:
-                raw = g.read(limit + 1)
-        except (OSError, EOFError, ValueError) as e:
-            raise SourceError('recording %s: corrupt gzip data (%s)' % (path, e))
-        if len(raw) > limit:
-            raise SourceError('recording %s: gzip data expands beyond %d bytes (at most %d times '
-                              'its size, or %d MiB)' % (path, limit, MAX_EXPANSION, MIN_EXPANDED >> 20))
+        raw = _gunzip(raw, limit, path)
     head = raw[:64].lstrip()
     if head[:1] in (b'{', b'['):
         return raw                      # JSON; both parsers take UTF-8 bytes
@@ -170,13 +163,31 @@ def read_text(path):
     if not text.strip():
         raise SourceError('recording %s is empty' % path)
     try:
-        out = lz_decompress_base64(text)
+        out = lz_decompress_base64(text, max_chars=limit)
     except ValueError as e:
         raise SourceError('recording %s: not JSON and not valid LZString base64: %s'
                           % (path, e))
     if not out:
         raise SourceError('recording %s: LZString data decodes to nothing' % path)
     return out
+
+
+def _gunzip(raw, limit, path):
+    """The gzip data `raw` decompressed, read in chunks (a read of the whole limit at once
+    would allocate it); SourceError when corrupt or beyond `limit` bytes."""
+    chunks, size = [], 0
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(raw)) as g:
+            while size <= limit:
+                chunk = g.read(1 << 22)
+                if not chunk:
+                    return b''.join(chunks)
+                chunks.append(chunk)
+                size += len(chunk)
+    except (OSError, EOFError, ValueError) as e:
+        raise SourceError('recording %s: corrupt gzip data (%s)' % (path, e))
+    raise SourceError('recording %s: gzip data expands beyond %d bytes (at most %d times its '
+                      'size, or %d MiB)' % (path, limit, MAX_EXPANSION, MIN_EXPANDED >> 20))
 
 
 def parse_json(text):
