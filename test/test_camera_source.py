@@ -541,3 +541,19 @@ def test_found_an_unreadable_image_keeps_its_line_and_the_others_their_ids(tmp_p
     assert lines[0]['hands'][0]['fist'] and lines[2]['hands'][0]['thumb_up']
     for k, name in ((1, 'b.jpg'), (3, 'd.png')):
         assert lines[k]['hands'] == [] and lines[k]['error'] == 'cannot read image %s' % (tmp_path / name)
+
+
+def test_looped_images_number_each_pass_after_the_whole_previous_one(tmp_path):
+    # A pass ends on an unreadable image: the next pass still starts after its number, so
+    # (id - 1) % images is each frame's place.
+    import shutil
+    for name in ('a.jpg', 'b.jpg'):
+        shutil.copy(data('fist__htj__22.jpg'), tmp_path / name)
+    (tmp_path / 'c.jpg').write_bytes(b'not a picture')
+    source = make_source('video', path=str(tmp_path), realtime=False, loop=True, clock=lambda: 0.0)
+    ids = []
+    for frame in source.frames():
+        ids.append(frame.id)
+        if len(ids) == 6:
+            source.stop()
+    assert ids == [1, 2, 4, 5, 7, 8]
