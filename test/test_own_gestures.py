@@ -236,6 +236,8 @@ def test_a_card_names_the_terms_of_the_shared_sources_it_used_only():
     assert len(train_gestures.data_terms('leap', {'user_03', 'guinevere_01', 'leapjs_takes'})) == 3
     terms = train_gestures.data_terms('keypoints', {'kinivi', 'photo:mps', 'user:ok'})
     assert [t.split(' ')[0] for t in terms] == ['hand', 'the']
+    with pytest.raises(ValueError, match="no data terms for the leap data of 'someone'"):
+        train_gestures.data_terms('leap', {'user_01', 'someone'})
 
 
 @pytest.mark.parametrize('shared, held', [

@@ -85,12 +85,18 @@ _OTHER_SOURCES = ('user:', 'leap:', 'photo:')
 
 def data_terms(family, persons):
     """The terms of the shared data sources that people of `persons` come from (a user's
-    own files, 'user:...', carry none)."""
+    own files, 'user:...', carry none); ValueError for a person of no known source (a
+    source added without its terms)."""
     def source(person):
+        if person.startswith('user:'):
+            return None
         if family == 'keypoints' and not person.startswith(_OTHER_SOURCES):
             return ''
-        return next((prefix for prefix, _ in DATA_TERMS[family]
-                     if prefix and person.startswith(prefix)), None)
+        prefix = next((prefix for prefix, _ in DATA_TERMS[family]
+                       if prefix and person.startswith(prefix)), None)
+        if prefix is None:
+            raise ValueError('no data terms for the %s data of %r' % (family, person))
+        return prefix
     used = {source(p) for p in persons}
     return [text for prefix, text in DATA_TERMS[family] if prefix in used]
 
