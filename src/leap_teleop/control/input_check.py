@@ -18,8 +18,8 @@ than ``max_age``) would make every later one look out of order for as long as it
 So when the last message taken was such a one, or the first of its stream stamped more than
 ``max_age`` ahead of this clock (nothing else yet to judge its stamp by), stamped messages
 refused as out of order for ``gap`` seconds on end, while they keep coming, start a new
-stream. After a message taken normally they never do:
-an older stream (a second, stale publisher) stays refused.
+stream. After a message taken normally they never do: an older stream (a second, stale
+publisher) stays refused.
 """
 
 
