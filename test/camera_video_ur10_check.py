@@ -47,7 +47,8 @@ class CameraDrivesUr10(unittest.TestCase):
                 grips.append(rospy.get_time())
 
         rospy.Subscriber('/ur10_1/ur10_arm/status', ArmStatus, on_status, queue_size=100)
-        rospy.Subscriber('/ur10_1/gripper/command', JointTrajectory, on_grip, queue_size=100)
+        grip_sub = rospy.Subscriber('/ur10_1/gripper/command', JointTrajectory, on_grip,
+                                    queue_size=100)
         hand_sub = rospy.Subscriber('/leapmotion/data_right', leapcobotright,
                                     lambda m: hands.append((rospy.get_time(), m)),
                                     queue_size=1000)
@@ -55,7 +56,9 @@ class CameraDrivesUr10(unittest.TestCase):
         # The sender starts the clip once the annotated view has a subscriber (the .test
         # sets its wait_topics): subscribe to that only once the hand stream is
         # connected, so a slow start cannot miss the clip's first frames (the fist).
-        while hand_sub.get_num_connections() == 0 and rospy.get_time() < deadline:
+        # The gripper command goes out once, on arming, unlatched: connected first too.
+        while ((hand_sub.get_num_connections() == 0 or grip_sub.get_num_connections() == 0)
+               and rospy.get_time() < deadline):
             rospy.sleep(0.05)
         rospy.Subscriber('/camera/annotated', Image, images.append, queue_size=5)
         # The clip lasts 7.8 s (longer under load): done once its messages have stopped

@@ -50,13 +50,15 @@ LIMITS = {
 MISSED = 'hand messages missed (sequence gaps)'
 
 
-def fresh_tracking(statuses, max_age):
-    """The latest ArmStatus (ROS receipt time, msg) is tracking and its command follows a
-    hand captured at most max_age before it was received."""
+def fresh_tracking(statuses, max_age, after):
+    """The latest ArmStatus (ROS receipt time, msg), received at or after `after`, is
+    tracking and its command follows a hand captured at most max_age before it was
+    received."""
     if not statuses:
         return False
     t, st = statuses[-1]
-    return st.state == 'tracking' and 0.0 <= t - st.input_stamp.to_sec() <= max_age
+    return (t >= after and st.state == 'tracking'
+            and 0.0 <= t - st.input_stamp.to_sec() <= max_age)
 
 
 def steering(twists, after, least):
@@ -94,17 +96,29 @@ class ConsumerStop(unittest.TestCase):
             try:
                 time.sleep(lim.stop_s)
             finally:
+                # Taken before the resume: what the arm says after it is heard later.
+                t_cont, t_cont_ros = time.monotonic(), rospy.get_time()
                 for pid in pids:
                     os.kill(pid, signal.SIGCONT)
-            t_cont = time.monotonic()
             time.sleep(lim.settle_s)
             hold = rospy.get_param('/%s/ur10_arm/arm_hold_s' % ARM)
             # The arm either kept tracking on the newest hands or its watchdog disarmed it
             # (which of its threads ran first after the resume); disarmed, it re-arms on a
             # fresh thumbs-up and rock. Either way its commands must follow fresh hands.
-            t_fresh = time.monotonic()
+            # Which one is known from what it says after the resume, however late that is
+            # heard: the status it had before the stop says nothing.
+
+            def outcome():
+                if w.first_status('disarmed', t_cont)[0] is not None:
+                    return 'disarmed'
+                if fresh_tracking(statuses, lim.max_fresh_age_s, t_cont_ros):
+                    return 'tracking'
+                return None
+            self.assertTrue(wait_for(lambda: outcome() is not None, lim.fresh_within_s),
+                            'no status after the resume: %s' % statuses[-3:])
+            t_fresh, t_fresh_ros = time.monotonic(), rospy.get_time()
             deadline = lim.fresh_within_s
-            if w.first_status('disarmed', t_cont)[0] is not None:
+            if outcome() == 'disarmed':
                 rospy.loginfo('FAULT consumers stopped: the arm disarmed on the stall')
                 pose['now'] = dict(NEUTRAL, thumb_up=True)
                 self.assertTrue(wait_for(lambda: w.first_status('armed', t_fresh)[0] is not None,
@@ -113,7 +127,8 @@ class ConsumerStop(unittest.TestCase):
                                  for t, st in w.status[-8:]])
                 pose['now'] = dict(NEUTRAL, rock=True)
                 deadline += hold + lim.fresh_within_s
-            self.assertTrue(wait_for(lambda: fresh_tracking(statuses, lim.max_fresh_age_s),
+            self.assertTrue(wait_for(lambda: fresh_tracking(statuses, lim.max_fresh_age_s,
+                                                            t_fresh_ros),
                                      deadline), statuses[-3:])
             t_arm = time.monotonic() - t_fresh
             # The pilot: a fresh unfold and a palm 80 mm to the side steer it.
