@@ -98,8 +98,17 @@ class ArmDriver:
                 return True
         return False
 
-    def grip(self, knuckle, seconds=0.8):
+    def grip(self, knuckle, seconds=0.8, start_timeout=5.0):
+        g0 = self.state()[2]
         self.send(self.grip_pub, ['finger_joint'], [knuckle], 0.3)
+        # The command may reach the simulator late on a loaded machine: the fingers' time
+        # counts from when they start to move (or are there already), not from sending.
+        deadline = rospy.get_time() + start_timeout
+        while not rospy.is_shutdown() and rospy.get_time() < deadline:
+            g = self.state()[2]
+            if abs(g - knuckle) < 0.01 or abs(g - g0) > 0.02:
+                break
+            rospy.sleep(0.01)
         rospy.sleep(seconds)
 
 
