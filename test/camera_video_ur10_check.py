@@ -76,12 +76,13 @@ class CameraDrivesUr10(unittest.TestCase):
         self.assertTrue(fist, 'no fist in the hand messages')
         self.assertGreater(armed[-1], fist[0], 'no thumbs-up after the fist:\n' + timeline)
         self.assertIn('watchdog', status[-1][2], 'the clip\'s end did not disarm:\n' + timeline)
-        # Armed, the arm drives the gripper (sent once: open, no pinch in the clip). Only an
-        # armed arm commands it, and the node publishes that command just before the status
-        # that says armed, on another connection: it can be heard first, so its time is
-        # compared with the fist's, not the arming's.
+        # Armed, the arm drives the gripper (sent once: open, no pinch in the clip), from
+        # the step after the one that armed it. Command and status come on two
+        # connections, so under load the command can be heard first: 0.2 s allowed, less
+        # than the thumbs-up's hold (arm_hold_s 0.3 s) during which nothing may be sent.
         self.assertTrue(grips, 'no gripper command once armed:\n' + timeline)
-        self.assertGreater(grips[0], fist[0], 'a gripper command before the fist')
+        self.assertGreater(grips[0], armed[0] - 0.2, 'a gripper command before arming:\n'
+                           + timeline)
         present = [m for _, m in hands if m.is_right_hand]
         self.assertGreater(len(present), lim.min_hand_frames)
         self.assertTrue(any(m.right_hand_thumb_up for m in present))

@@ -139,8 +139,8 @@ class FaultSender(unittest.TestCase):
                    and g.side == g.SIDE_LEFT]
         # The unfold, the takeoff the pilot sent on it and the navdata it caused arrive here
         # over separate connections: under load the later ones may be delivered a little
-        # before the unfold itself (0.1 s allowed; a takeoff without the unfold comes
-        # seconds apart from the script's).
+        # before the unfold itself (0.1 s allowed; a takeoff without the unfold would
+        # come 1 s or more before the script's, when the left hand appears).
         self.assertTrue(unfolds and unfolds[0] < t_up + 0.1, 'took off before the new unfold')
         takeoffs = [t for t, _ in w.takeoffs if t > t_kill]
         self.assertTrue(takeoffs and takeoffs[0] >= unfolds[0] - 0.1, (takeoffs[:1], unfolds[:1]))
