@@ -290,8 +290,9 @@ class Ur10Teleop(unittest.TestCase):
         late_grip = [t for t, _ in self.rec.gripper_cmds[arm] if t > t_fist]
         self.assertEqual(late_grip, [], 'the gripper was commanded after the fist')
         # The stop goes out in the step that disarms, as its status does but on another
-        # connection, behind commands sent at 120 Hz: under load it is heard well after the
-        # status (0.5 s allowed). The pinch comes 1.5 s after the fist, so a command it caused is caught.
+        # connection, behind commands sent at 120 Hz: under load it is heard well after
+        # the status (0.5 s allowed). The pinch comes 1.5 s after the fist, so a command
+        # it caused is still caught.
         holds = [q for t, q in self.rec.arm_cmds[arm] if t > t_fist + 0.5]
         self.assertEqual(holds, [], 'arm commands after the fist')
         self.assertNotIn('armed', [s for t, s, _ in self.rec.status[arm] if t > t_fist])
