@@ -5,6 +5,10 @@ webcam.fps: frames per second through the whole video source (decode, letterbox 
 as fast as possible, both clips (searching for hands in the call: offline processing does
 not use the search thread); next to it, alternating rounds, the plain legacy graph
 (max_num_hands=2, palm detector on every frame with fewer than two hands).
+webcam.recognition_us_per_hand: what recognizing a camera hand adds to MediaPipe: the
+gesture recognizer's update (keypoint model as seen and mirrored, thumb guard, temporal
+filter, circles) per hand the source found in both clips, one recognizer per side, in
+stream order; this process's CPU time, best of RECOGNITION_PASSES passes.
 webcam.latency_p99_ms: frame captured -> leapcobot message received, the sender running
 as a node on the clips paced at 30 frames/s and behaving like a webcam (a frame that
 arrives while the previous one is processed replaces it: ~video_drop_late), probed on
@@ -27,6 +31,7 @@ from tools.bench import ros_processes
 CLIPS = ('clip_fist_then_thumbs_up__mps__gr_test_video.mp4',
          'clip_palm_motion__mps__hl_test_video.mp4')
 ROUNDS = 3
+RECOGNITION_PASSES = 5
 PACE_HZ = 30
 WINDOW_S = 10.0
 
@@ -38,8 +43,9 @@ def _clip(name):
     return path
 
 
-def _throughput(strategy):
-    """(frames/s, CPU ms per frame, hands found) over both clips, as fast as possible."""
+def _throughput(strategy, found=None):
+    """(frames/s, CPU ms per frame, hands found) over both clips, as fast as possible;
+    `found`, a list, gets each (hand, timestamp) found."""
     from leap_teleop.hands.sources import make_source
     frames = hands = 0
     wall = cpu = 0.0
@@ -50,9 +56,25 @@ def _throughput(strategy):
         for frame in source.frames():
             frames += 1
             hands += len(frame.hands)
+            if found is not None:
+                found.extend((h, frame.timestamp) for h in frame.hands)
         wall += time.perf_counter() - t0
         cpu += time.process_time() - c0
     return frames / wall, cpu / frames * 1e3, hands
+
+
+def _recognition_us(hands):
+    """Best per-hand CPU time of GestureRecognizer.update over `hands`, microseconds."""
+    from leap_teleop.hands.gestures import GestureRecognizer
+    best = None
+    for _ in range(RECOGNITION_PASSES):
+        rec = {'right': GestureRecognizer(), 'left': GestureRecognizer()}
+        t0 = time.process_time()
+        for hand, ts in hands:
+            rec[hand.side].update(hand, ts)
+        us = (time.process_time() - t0) * 1e6 / len(hands)
+        best = us if best is None else min(best, us)
+    return best
 
 
 def _sender_cmd(video, search_thread):
@@ -66,9 +88,10 @@ def run():
     strategies = ('paired', 'single')
     fps = {k: [] for k in strategies}
     cpu = {k: [] for k in strategies}
+    found = []
     for _ in range(ROUNDS):
         for name in strategies:
-            f, c, hands = _throughput(name)
+            f, c, hands = _throughput(name, found if not found and name == 'paired' else None)
             fps[name].append(f)
             cpu[name].append(c)
             print('  %s: %.1f frames/s, %.1f ms CPU per frame, %d hands'
@@ -76,6 +99,12 @@ def run():
     results['webcam.fps'] = float(np.median(fps['paired']))
     results['webcam.fps_single_graph'] = float(np.median(fps['single']))
     results['webcam.cpu_ms_per_frame'] = float(np.median(cpu['paired']))
+    if not found:
+        raise RuntimeError('MediaPipe found no hand in the shared clips')
+    results['webcam.recognition_us_per_hand'] = _recognition_us(found)
+    print('  recognition: %.1f us per camera hand (%d hands, best of %d)'
+          % (results['webcam.recognition_us_per_hand'], len(found), RECOGNITION_PASSES))
+    del found
 
     variants = {'thread': True, 'inline': False}
     latencies = {v: [] for v in variants}
