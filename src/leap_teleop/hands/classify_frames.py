@@ -63,7 +63,6 @@ turns on after 3 consistent frames and off after 3, per hand side.
 import argparse
 import json
 import math
-import os
 import sys
 import zlib
 
@@ -73,6 +72,7 @@ from leap_teleop.hands.frame import Frame, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer, ModelError
 from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.sources import SourceError, leapjs
+from leap_teleop.output_file import output_problem
 
 HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 
@@ -267,6 +267,12 @@ def main(argv=None):
     if argv is None:   # drop ROS remappings that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
+    if args.keypoints is not None and args.input != '-':
+        ap.error('give INPUT or --keypoints, not both')
+    for option, value in (('--keypoints', args.keypoints), ('--model', args.model),
+                          ('--keypoint-model', args.keypoint_model)):
+        if value is not None and not value.strip():
+            ap.error('%s: name a file' % option)
     try:
         # Still images are unrelated pictures: each is judged on its own.
         classifier = Classifier(args.stateless or (not args.keypoints and
@@ -282,8 +288,11 @@ def main(argv=None):
               file=sys.stderr)
         return 2
     if args.out != '-':
-        problem = out_problem(args.out, [args.keypoints or args.input, args.model,
-                                         args.keypoint_model])
+        inputs = [args.keypoints or args.input, args.model, args.keypoint_model]
+        if not args.keypoints and camera_input(args.input) == 'stills':
+            from leap_teleop.hands.sources import capture
+            inputs += capture.resolve_stills(args.input)
+        problem = output_problem(args.out, inputs)
         if problem:
             print('classify_frames: --out %r: %s' % (args.out, problem), file=sys.stderr)
             return 2
@@ -340,23 +349,6 @@ def main(argv=None):
 
 class _WriteError(Exception):
     """Writing the output failed (not reading the input)."""
-
-
-def out_problem(out, inputs):
-    """Why the output cannot go to `out`, or None: empty, a folder, no such folder, or one
-    of the `inputs` (paths; None and '-' are skipped) that it would overwrite."""
-    if not out.strip():
-        return 'name a file (or - for stdout)'
-    if os.path.isdir(out):
-        return 'a folder: name a file'
-    folder = os.path.dirname(os.path.abspath(out))
-    if not os.path.isdir(folder):
-        return 'no folder %s' % folder
-    for path in inputs:
-        if path not in (None, '-') and os.path.exists(out) and os.path.exists(path) \
-                and os.path.samefile(out, path):
-            return 'it is the input %s: it would be overwritten' % path
-    return None
 
 
 if __name__ == '__main__':

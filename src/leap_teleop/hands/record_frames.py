@@ -12,11 +12,11 @@ of a finite source, or Ctrl-C; the file is written on every way out.
 """
 import argparse
 import math
-import os
 import sys
 import time
 
 from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
+from leap_teleop.output_file import output_problem
 
 
 def record(source, out, duration=None, max_frames=None, metadata=None):
@@ -51,11 +51,9 @@ def argument_problem(args):
     """What is wrong with the output file or the limits, in one line, or None."""
     if not args.out.endswith(OUT_ENDINGS):
         return 'output %s: name it .json, .json.gz or .json.lz' % args.out
-    folder = os.path.dirname(os.path.abspath(args.out))
-    if os.path.isdir(args.out):
-        return 'output %s: a folder: name the file' % args.out
-    if not os.path.isdir(folder):
-        return 'output %s: no folder %s' % (args.out, folder)
+    problem = output_problem(args.out, [args.recording, args.script, args.video])
+    if problem:
+        return 'output %s: %s' % (args.out, problem)
     if not (math.isfinite(args.duration) and args.duration >= 0.0):
         return '--duration %g: 0 (no limit) or more seconds' % args.duration
     if args.frames < 0:

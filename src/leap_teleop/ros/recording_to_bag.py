@@ -21,7 +21,8 @@ import rospy
 
 from leap_teleop.hands.frame import SIDES
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.hands.sources import SourceError, capture, make_source
+from leap_teleop.output_file import output_problem
 from leap_teleop.params import is_ros_name
 from leap_teleop.ros import conversions
 
@@ -95,7 +96,7 @@ def main(argv=None):
                                  epilog=__doc__.split('\n\n', 2)[-1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('recording', nargs='?', help='LeapJS recording (.json, .json.lz, .json.gz)')
-    ap.add_argument('out', help='output bag')
+    ap.add_argument('out', help='output bag (NAME.bag)')
     ap.add_argument('--script', help='a gesture script instead of a recording')
     ap.add_argument('--video', help='camera footage instead of a recording: a video, an image, '
                                     'a folder or a glob of images (the video source)')
@@ -112,16 +113,17 @@ def main(argv=None):
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
     if sum(bool(x) for x in (args.script, args.recording, args.video)) != 1:
         ap.error('give one of: a recording, --script, --video')
-    if not args.out.strip():
-        ap.error('name the bag file')
+    if not args.out.endswith('.bag'):
+        ap.error('%r: name the bag file NAME.bag' % args.out)
     for option, topic in (('--right-topic', args.right_topic), ('--left-topic', args.left_topic)):
         if not is_ros_name(topic):
             ap.error('%s %r: not a legal ROS topic name' % (option, topic))
-    folder = os.path.dirname(os.path.abspath(args.out))
-    if os.path.isdir(args.out):
-        ap.error('%s: a folder: name the bag file' % args.out)
-    if not os.path.isdir(folder):
-        ap.error('%s: no folder %s' % (args.out, folder))
+    inputs = [args.recording, args.script, args.video]
+    if args.video:
+        inputs += capture.resolve_stills(args.video)
+    problem = output_problem(args.out, inputs)
+    if problem:
+        ap.error('%s: %s' % (args.out, problem))
     try:
         if args.video:
             source = make_source('video', path=args.video, realtime=False)

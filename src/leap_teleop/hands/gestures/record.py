@@ -25,12 +25,14 @@ import json
 import math
 import os
 import sys
+import tempfile
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.classifier import class_name_problem
 from leap_teleop.hands.gestures.features import normalize_keypoints
 from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
+from leap_teleop.output_file import output_problem
 
 KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
     '%s%d' % (axis, i) for i in range(21) for axis in 'xy']
@@ -108,19 +110,33 @@ def collect(source, family, label, person, seconds, side='any'):
 
 
 def write(path, family, rows):
-    """Write `rows` to `path` (whole, through a temporary file)."""
-    tmp = path + '.part'
-    if family == 'keypoints':
-        with open(tmp, 'w', newline='', encoding='utf-8') as f:
-            w = csv.writer(f)
-            w.writerow(KEYPOINT_HEADER)
-            w.writerows(rows)
-    else:
-        opener = gzip.open if path.lower().endswith('.gz') else open
-        with opener(tmp, 'wt', encoding='utf-8') as f:
-            for r in rows:
-                f.write(json.dumps(r, separators=(',', ':')) + '\n')
-    os.replace(tmp, path)
+    """Write `rows` to `path` whole, through a temporary file beside it (removed if that
+    fails: no part of a take is left under another name)."""
+    fd, tmp = tempfile.mkstemp(prefix='.record_gestures-', suffix='.part',
+                               dir=os.path.dirname(os.path.abspath(path)))
+    os.close(fd)
+    try:
+        if family == 'keypoints':
+            with open(tmp, 'w', newline='', encoding='utf-8') as f:
+                w = csv.writer(f)
+                w.writerow(KEYPOINT_HEADER)
+                w.writerows(rows)
+        else:
+            opener = gzip.open if path.lower().endswith('.gz') else open
+            with opener(tmp, 'wt', encoding='utf-8') as f:
+                for r in rows:
+                    f.write(json.dumps(r, separators=(',', ':')) + '\n')
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        os.remove(tmp)
+        raise
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def main(argv=None):
@@ -144,9 +160,10 @@ def main(argv=None):
         if not args.person.strip() or ',' in args.person or '\n' in args.person:
             raise RecordError('--person %r: a name without commas' % args.person)
         out = output_path(args.out, args.label, family)
-        folder = os.path.dirname(os.path.abspath(out))
-        if not os.path.isdir(folder):
-            raise RecordError('--out %s: no folder %s' % (out, folder))
+        # before the source starts: a take is not lost at the end
+        problem = output_problem(out, [args.script, args.recording, args.video])
+        if problem:
+            raise RecordError('--out %s: %s' % (out, problem))
         source = source_from_args(args)
     except (RecordError, SourceError) as e:
         print('record_gestures: %s' % e, file=sys.stderr)

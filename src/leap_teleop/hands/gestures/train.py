@@ -29,7 +29,7 @@ import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import datasets as gd
-from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier, class_name_problem
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, ModelError, PoseClassifier, class_name_problem
 from leap_teleop.hands.gestures.features import (
     hand_landmarks,
     keypoint_features_rows,
@@ -37,6 +37,7 @@ from leap_teleop.hands.gestures.features import (
     rotate_keypoints,
 )
 from leap_teleop.hands.sources import leapjs
+from leap_teleop.output_file import output_problem
 
 SEED = 0
 HIDDEN_UNITS = 64
@@ -50,6 +51,7 @@ MAX_ITER = 80
 # Consecutive frames of one pose are nearly the same: fitting on every other one halves the
 # time and loses nothing measurable.
 FIT_STRIDE = 2
+CARD_TITLE = '# Pose model card'    # a card's first line: only such a file is rewritten
 JOINT_NOISE_MM = 3.0
 FOLD_WORKERS = 2        # leave-one-person-out folds fitted at once (this machine: 2 cores)
 MIN_SCALE = 0.05        # features are unit vectors, cosines and palm widths
@@ -543,9 +545,9 @@ def file_family(path):
 FAMILY_FILES = {'leap': 'Leap poses (.jsonl)', 'keypoints': 'keypoints (.csv)'}
 
 
-def out_problem(out, adds):
+def model_out_problem(out, adds):
     """Why a model cannot be written at `out` (its card goes beside it, NAME.md) without
-    harm to the user's --add files or to anything that is no model, or None."""
+    harm to the user's --add files or to anything that is no model or model card, or None."""
     if not out.strip():
         return 'name the model file (left out, the shipped model is refitted)'
     if os.path.isdir(out):
@@ -559,18 +561,18 @@ def out_problem(out, adds):
         for add in adds:
             if os.path.exists(path) and os.path.samefile(path, add):
                 return 'it would overwrite the --add file %s' % add
-    return None
-
-
-def unwritable(path):
-    """Why the model (and its card beside it) cannot be written at `path`, or None."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if os.path.isdir(path):
-        return 'a folder: name the model file'
-    if not os.path.isdir(folder):
-        return 'no folder %s' % folder
-    if not os.access(folder, os.W_OK):
-        return 'cannot write in %s' % folder
+        problem = output_problem(path)
+        if problem:
+            return problem if path == out else '%s: %s' % (card, problem)
+    if os.path.exists(out):
+        try:
+            PoseClassifier.load(out)
+        except ModelError:
+            return 'a file that is no pose model: it would be overwritten'
+    if os.path.exists(card):
+        with open(card, encoding='utf-8', errors='replace') as f:
+            if not f.readline().startswith(CARD_TITLE):
+                return '%s is no model card: it would be overwritten' % card
     return None
 
 
@@ -652,7 +654,7 @@ def main(argv=None):
         if class_name_problem(label):
             ap.error('--label %r: %s' % (label, class_name_problem(label)))
     if args.out is not None:
-        problem = out_problem(args.out, args.add)
+        problem = model_out_problem(args.out, args.add)
         if problem:
             ap.error('--out %s: %s' % (args.out or "''", problem))
     adds = list(zip(args.add, args.label))
@@ -670,7 +672,7 @@ def main(argv=None):
         ap.error('--out names one model: give --family')
     # checked before the fit, which takes minutes
     for fam in todo:
-        problem = unwritable(args.out or DEFAULT_MODELS[fam])
+        problem = model_out_problem(args.out or DEFAULT_MODELS[fam], args.add)
         if problem:
             ap.error('--out %s: %s' % (args.out or DEFAULT_MODELS[fam], problem))
     for fam in todo:
@@ -696,7 +698,7 @@ def main(argv=None):
 
 def write_card(model_path, card):
     """The model card beside the model, as Markdown."""
-    lines = ['# Pose model card: %s' % os.path.basename(model_path), '',
+    lines = [CARD_TITLE + ': %s' % os.path.basename(model_path), '',
              '- family: %s' % card['family'],
              '- classes: %s' % ', '.join(card['classes']),
              '- fitted on: %s' % '; '.join(card['fitted_on']),
