@@ -121,6 +121,21 @@ def test_a_model_file_of_the_wrong_family_or_malformed_is_refused(tmp_path):
     with pytest.raises(ModelError, match='inconsistent'):
         PoseClassifier(m.classes, 'leap', m.mean * math.nan, 1.0 / m.inv_scale, m.w0, m.b0,
                        m.w1, m.b1)
+    # finite, but the first product overflows to NaN: every frame read as the first class
+    with pytest.raises(ModelError, match='weights beyond'):
+        PoseClassifier(m.classes, 'leap', m.mean, 1.0 / m.inv_scale, m.w0, m.b0, m.w1 * 1e300,
+                       m.b1)
+
+
+def test_a_model_that_says_nan_holds_no_gesture(monkeypatch):
+    model = load_model(None, 'leap')
+    hand = render_hand('right', 'fist', (0, 200, 0))
+    g = hand_geometry(hand)
+    assert classify_pose(hand, g, model)['fist']
+    monkeypatch.setattr(model, 'proba', lambda x: np.full(len(model.classes), math.nan))
+    out = classify_pose(hand, g, model)
+    assert not any(out[k] for k in ('fist', 'open', 'pinch', 'rock', 'thumb_up', 'thumb_down'))
+    assert out['label'] == '' and out['probability'] == 0.0
 
 
 def test_the_shipped_models_are_arrays_with_a_card():

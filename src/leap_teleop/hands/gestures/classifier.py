@@ -22,6 +22,7 @@ DEFAULT_MODELS = {'leap': os.path.join(MODEL_DIR, 'leap_poses.npz'),
 _exp = math.exp
 _KEYS = ('classes', 'family', 'mean', 'scale', 'w0', 'b0', 'w1', 'b1')
 FEATURES_OF = {'leap': LEAP_FEATURES, 'keypoints': KEYPOINT_FEATURES}
+MAX_WEIGHT = 1e6
 # Names no class may take: the recognizer's other gestures and events, and the keys beside
 # the gestures in its output (fist, open, pinch, rock, thumb and none are the built-in
 # classes: a user's samples may add to them).
@@ -74,6 +75,10 @@ class PoseClassifier:
         # the standardisation folded into the first layer: one product per call
         self._w0 = self.w0 * self.inv_scale[:, None]
         self._b0 = self.b0 - (self.mean * self.inv_scale) @ self.w0
+        # Fitted weights stay within tens; numbers near the float limit pass the finiteness
+        # test above but overflow to NaN in the first product.
+        if max(float(np.abs(a).max()) for a in (self._w0, self._b0, self.w1, self.b1)) > MAX_WEIGHT:
+            raise ModelError('weights beyond %g: not a fitted model' % MAX_WEIGHT)
         # the ReLU's floor as an array: numpy would convert a Python float on every call
         self._zeros = np.zeros_like(self._b0)
 

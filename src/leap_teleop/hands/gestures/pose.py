@@ -136,6 +136,8 @@ def classify_pose(hand, g, model):
         out[c] = False
     i = int(p.argmax())
     best, prob = classes[i], float(p[i])
+    if not prob >= 0.0:     # NaN (argmax picks it): a model that says nothing here
+        return out
     out['label'], out['probability'] = best, prob
     if prob < MIN_P or best == 'none':
         return out
