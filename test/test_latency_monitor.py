@@ -135,7 +135,7 @@ def no_init_node(monkeypatch):
     monkeypatch.setattr(rospy, 'init_node', refuse)
 
 
-@pytest.mark.parametrize('value', ['nan', '-1', '0', 'inf'])
+@pytest.mark.parametrize('value', ['nan', '-1', '0', 'inf', '1e10'])
 def test_a_timeout_that_is_not_a_positive_number_is_refused(value, capsys, no_init_node):
     from leap_teleop.ros.latency_monitor import main
     with pytest.raises(SystemExit) as e:

@@ -497,6 +497,9 @@ def test_keypoint_files_gzipped_or_with_a_bom_read_and_absurd_values_are_refused
     (tmp_path / 'huge.csv').write_text(row.replace('0.010', '1e300'))
     with pytest.raises(gesture_data.DataError, match='row 1: a keypoint beyond'):
         gesture_data.read_keypoints(str(tmp_path / 'huge.csv'))
+    (tmp_path / 'underscore.csv').write_text(row.replace('0.010', '1_0'))   # float(): 10.0
+    with pytest.raises(gesture_data.DataError, match='row 1: not a keypoint row'):
+        gesture_data.read_keypoints(str(tmp_path / 'underscore.csv'))
     (tmp_path / 'latin1.csv').write_bytes(row.encode() + b'3,\xe9\n')
     with pytest.raises(gesture_data.DataError, match=r'cannot read on after \d+ keypoint rows .*decode'):
         gesture_data.read_keypoints(str(tmp_path / 'latin1.csv'))

@@ -44,6 +44,9 @@ class LatencyMonitor:
         return self.board.table()
 
 
+MAX_TIMEOUT_S = 86400.0
+
+
 def master_problem(timeout):
     """(master URI, why it does not answer or None). rospy.init_node would retry forever."""
     try:
@@ -69,8 +72,10 @@ def main(argv=None):
     ap.add_argument('--timeout', type=float, default=30.0,
                     help='seconds to wait for the master and a first report (default 30)')
     args = ap.parse_args(rospy.myargv(sys.argv)[1:] if argv is None else argv)
-    if not (math.isfinite(args.timeout) and args.timeout > 0):   # nan: Event.wait returns at once
-        ap.error('--timeout must be a number of seconds > 0, got %s' % args.timeout)
+    # nan: Event.wait returns at once; beyond a day the socket timeout overflows
+    if not (math.isfinite(args.timeout) and 0 < args.timeout <= MAX_TIMEOUT_S):
+        ap.error('--timeout must be a number of seconds > 0 and <= %g, got %s'
+                 % (MAX_TIMEOUT_S, args.timeout))
     deadline = time.monotonic() + args.timeout
     uri, why = master_problem(args.timeout)
     if why:

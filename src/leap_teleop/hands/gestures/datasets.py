@@ -221,6 +221,8 @@ def _keypoint_rows(path, f, label, person, default_person, sources, persons, lab
                     raise ValueError('%d columns, not 43' % len(row))
                 p, lab, values = default_person, row[0].strip(), row[1:]
                 src = lab
+            if any('_' in v for v in values):    # float() would read 1_0 as 10
+                raise ValueError('a number with _')
             xy = np.array([float(v) for v in values]).reshape(21, 2)
         except ValueError as e:
             raise DataError('%s row %d: not a keypoint row (%s)' % (path, n, e)) from None
