@@ -557,3 +557,26 @@ def test_looped_images_number_each_pass_after_the_whole_previous_one(tmp_path):
         if len(ids) == 6:
             source.stop()
     assert ids == [1, 2, 4, 5, 7, 8]
+
+
+def test_a_cut_video_says_so_and_a_whole_one_does_not(tmp_path, caplog):
+    from leap_teleop.hands.sources.capture import VideoFile
+    whole = data('clip_palm_motion__mps__hl_test_video.mp4')
+    cut = tmp_path / 'cut.mp4'
+    with open(whole, 'rb') as f:
+        cut.write_bytes(f.read(20000))
+    counts = {}
+    for path in (whole, str(cut)):
+        caplog.clear()
+        video = VideoFile(path)
+        n = 0
+        while video.read() is not None:
+            n += 1
+        video.close()
+        counts[path] = (n, video.frame_count,
+                        [r.getMessage() for r in caplog.records if 'ended after' in r.getMessage()])
+    n, listed, said = counts[whole]
+    assert n >= 0.9 * listed and said == []
+    n, listed, said = counts[str(cut)]
+    assert n < listed and said == ['camera source: video %s ended after %d of the %d frames its '
+                                   'container lists: a cut or damaged file?' % (cut, n, listed)]
