@@ -472,3 +472,17 @@ def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast
         assert meta == meta2 and [k for k, _ in errors] == idx
         _same_frames(got, want)
     assert len(leapjs.load_frames(paths[0])[2]) == 2       # 'garbage' and pointables=5
+
+
+def test_a_hand_of_an_unknown_type_is_skipped_with_one_warning_per_type(caplog):
+    from leap_teleop.hands.sources import leapjs
+    hand = render_hand('right', 'fist', (0, 200, 0))
+    d = leapjs.frame_to_dict(Frame(1, 1.0, [hand]))
+    d['hands'][0]['type'] = 'Right (typed by hand)'
+    for _ in range(3):
+        assert leapjs.frame_from_dict(d).hands == []
+    said = [r.getMessage() for r in caplog.records if 'is skipped' in r.getMessage()]
+    assert said == ["LeapJS frame: a hand of type 'Right (typed by hand)' (not \"right\" or "
+                    "\"left\") is skipped"]
+    d['hands'][0]['type'] = 'right'
+    assert [h.side for h in leapjs.frame_from_dict(d).hands] == ['right']

@@ -13,6 +13,7 @@ import gzip
 import io
 import itertools
 import json
+import logging
 import math
 import os
 
@@ -29,6 +30,8 @@ except ImportError:        # pragma: no cover
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
 from leap_teleop.hands.sources.source import SourceError
+
+log = logging.getLogger(__name__)
 
 
 class FrameError(ValueError):
@@ -377,6 +380,7 @@ def frame_from_dict(d, timestamp=None):
             continue
         side = h.get('type')
         if side not in ('right', 'left'):
+            _say_unknown_side(side)
             continue
         hand_id = h.get('id')
         hands.append(_hand_from_dict(h, side, by_hand.get(hand_id, ()) if _is_id(hand_id) else ()))
@@ -385,6 +389,15 @@ def frame_from_dict(d, timestamp=None):
     return Frame(id=frame_id, timestamp=timestamp, hands=hands, gestures=gestures)
 
 
+def _say_unknown_side(side):
+    """Warn once per value (a recording repeats it in every frame) that a hand is skipped."""
+    key = repr(side)[:40]
+    if key not in _SAID_SIDES and len(_SAID_SIDES) < 20:
+        _SAID_SIDES.add(key)
+        log.warning('LeapJS frame: a hand of type %s (not "right" or "left") is skipped', key)
+
+
+_SAID_SIDES = set()
 _LEN3, _LIST = {3}, {list}
 _chain = itertools.chain.from_iterable
 _FINGER_KEYS = ('tipPosition', 'direction', 'mcpPosition', 'pipPosition', 'dipPosition')
