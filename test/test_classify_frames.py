@@ -353,3 +353,26 @@ def test_a_corrupt_gzip_is_one_clear_error(tmp_path, where):
                        capture_output=True, text=True, timeout=60)
     assert p.returncode == 2 and 'Traceback' not in p.stderr, p.stderr
     assert p.stderr.strip().splitlines()[-1].startswith('classify_frames: %s: ' % bad)
+
+
+@pytest.mark.parametrize('args, message', [
+    (['frames.jsonl', '--keypoints', 'k.csv'], 'give INPUT or --keypoints, not both'),
+    (['--keypoints', ''], '--keypoints: name a file'),
+    (['--model', ' ', 'frames.jsonl'], '--model: name a file'),
+    (['--keypoint-model', '', 'frames.jsonl'], '--keypoint-model: name a file'),
+])
+def test_classify_frames_refuses_inputs_it_would_ignore_or_guess(args, message, capsys):
+    with pytest.raises(SystemExit) as stop:
+        classify_frames.main(args)
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err.splitlines()[-1]
+
+
+@pytest.mark.parametrize('content', [b'', b'person,label,source_label\n', b'\xef\xbb\xbf'])
+def test_classify_frames_says_when_a_keypoint_file_holds_no_row(tmp_path, capsys, content):
+    empty = tmp_path / 'empty.csv'
+    empty.write_bytes(content)
+    assert classify_frames.main(['--keypoints', str(empty)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ''
+    assert captured.err == 'classify_frames: %s: no keypoint row in it\n' % empty

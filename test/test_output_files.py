@@ -90,19 +90,6 @@ def test_classify_frames_never_writes_over_an_image_it_reads(tmp_path, capsys):
     assert image.read_bytes() == before
 
 
-@pytest.mark.parametrize('args, message', [
-    (['frames.jsonl', '--keypoints', 'k.csv'], 'give INPUT or --keypoints, not both'),
-    (['--keypoints', ''], '--keypoints: name a file'),
-    (['--model', ' ', 'frames.jsonl'], '--model: name a file'),
-    (['--keypoint-model', '', 'frames.jsonl'], '--keypoint-model: name a file'),
-])
-def test_classify_frames_refuses_inputs_it_would_ignore_or_guess(args, message, capsys):
-    with pytest.raises(SystemExit) as stop:
-        classify_frames.main(args)
-    assert stop.value.code == 2
-    assert message in capsys.readouterr().err.splitlines()[-1]
-
-
 @pytest.mark.parametrize('out, message', [
     (os.path.join(UNWRITABLE_DIR, 'two.jsonl'), 'cannot write it'),
     ('{tmp}/' + 'x' * 300 + '.jsonl', 'cannot write it'),
@@ -169,3 +156,4 @@ def test_a_model_and_its_card_may_be_written_over_by_a_retrain(tmp_path):
     load_model(None, 'leap').save(str(model))
     (tmp_path / 'mine.md').write_text(train_gestures.CARD_TITLE + ': mine.npz\n')
     assert train_gestures.model_out_problem(str(model), []) is None
+

@@ -280,6 +280,8 @@ def main(argv=None):
                                 args.model, args.keypoint_model)
         if args.keypoints:
             frames = list(keypoint_lines(args.keypoints, classifier))
+            if not frames:
+                raise gesture_data.DataError('%s: no keypoint row in it' % args.keypoints)
         else:
             frames = frames_of(args.input)
     except (SourceError, OSError, ModelError, gesture_data.DataError) + gesture_data.UNREADABLE as e:
