@@ -110,6 +110,22 @@ def test_record_gestures_checks_its_output_before_recording(tmp_path, monkeypatc
     assert script.read_text().startswith('rate_hz: 30')
 
 
+@pytest.mark.parametrize('name, suggestion', [('peace.csv', 'peace_2.csv'),
+                                               ('two.jsonl.gz', 'two_2.jsonl.gz')])
+def test_record_gestures_keeps_an_earlier_take(tmp_path, monkeypatch, capsys, name, suggestion):
+    monkeypatch.setattr(record_gestures, 'collect',
+                        lambda *a, **k: pytest.fail('recorded over an earlier take'))
+    earlier = tmp_path / name
+    earlier.write_text('a first session\n')
+    source = (['--source', 'video', '--video', 'x.mp4'] if name.endswith('.csv')
+              else ['--source', 'scripted', '--script', 'x.yaml'])
+    assert record_gestures.main(source + ['--label', 'two', '--out', str(earlier)]) == 2
+    err = capsys.readouterr().err
+    assert err == ('record_gestures: --out %s: holds an earlier take; record to another file '
+                   '(e.g. --out %s) or remove it\n' % (earlier, tmp_path / suggestion))
+    assert earlier.read_text() == 'a first session\n'
+
+
 def test_record_gestures_leaves_no_part_file_when_writing_fails(tmp_path, monkeypatch):
     def full_disk(*_a, **_k):
         raise OSError(28, 'No space left on device')

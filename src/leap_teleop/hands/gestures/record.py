@@ -109,6 +109,13 @@ def collect(source, family, label, person, seconds, side='any'):
     return rows, seen, missing
 
 
+def split_ending(path):
+    """(path without its ending, the ending), with .jsonl.gz as one ending."""
+    if path.lower().endswith('.jsonl.gz'):
+        return path[:-len('.jsonl.gz')], path[-len('.jsonl.gz'):]
+    return os.path.splitext(path)
+
+
 def write(path, family, rows):
     """Write `rows` to `path` whole, through a temporary file beside it (removed if that
     fails: no part of a take is left under another name)."""
@@ -164,6 +171,10 @@ def main(argv=None):
         problem = output_problem(out, [args.script, args.recording, args.video])
         if problem:
             raise RecordError('--out %s: %s' % (out, problem))
+        if os.path.exists(out):     # an earlier session: it stays, the next goes beside it
+            stem, ext = split_ending(out)
+            raise RecordError('--out %s: holds an earlier take; record to another file (e.g. '
+                              '--out %s_2%s) or remove it' % (out, stem, ext))
         source = source_from_args(args)
     except (RecordError, SourceError) as e:
         print('record_gestures: %s' % e, file=sys.stderr)
