@@ -376,3 +376,23 @@ def test_classify_frames_says_when_a_keypoint_file_holds_no_row(tmp_path, capsys
     captured = capsys.readouterr()
     assert captured.out == ''
     assert captured.err == 'classify_frames: %s: no keypoint row in it\n' % empty
+
+
+def test_a_cut_keypoint_file_keeps_the_rows_before_the_cut(tmp_path, capsys):
+    import gzip
+    rows = ''.join('%d,' % (i % 3) + ','.join('%.3f' % (0.01 * ((i * 7 + k) % 50)) for k in range(42))
+                   + '\n' for i in range(400))
+    packed = gzip.compress(rows.encode())
+    cut = tmp_path / 'cut.csv'
+    cut.write_bytes(packed[:len(packed) // 2])
+    bad_row = tmp_path / 'bad_row.csv'
+    bad_row.write_text(rows[:rows.index('\n', 1000) + 1] + '1,0.0\n')
+    for path in (cut, bad_row):
+        assert classify_frames.main(['--keypoints', str(path)]) == 2
+        captured = capsys.readouterr()
+        lines = [json.loads(line) for line in captured.out.splitlines()]
+        assert lines and [d['id'] for d in lines] == list(range(len(lines)))
+        err = captured.err.splitlines()
+        assert len(err) == 1 and err[0].startswith('classify_frames: %s' % path), err
+        if path == cut:
+            assert 'cannot read on after %d keypoint rows' % len(lines) in err[0]

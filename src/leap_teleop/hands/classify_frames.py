@@ -61,12 +61,11 @@ snapshot data whose frames are unrelated. Otherwise frames are a stream: a gestu
 turns on after 3 consistent frames and off after 3, per hand side.
 """
 import argparse
+import itertools
 import json
 import math
 import sys
 import zlib
-
-import numpy as np
 
 from leap_teleop.hands.frame import Frame, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer, ModelError
@@ -135,11 +134,10 @@ def hand_output(side, state, user_gestures=()):
 
 
 def keypoint_lines(path, classifier):
-    """Output dicts of a keypoint CSV, one per row."""
-    _, _, xy = gesture_data.read_keypoints(path)
+    """Output dicts of a keypoint CSV, one per row, as the rows are read."""
     rec = classifier._recognizer(True)
-    for i, pts in enumerate(xy):
-        hand = TrackedHand(side='right', image_landmarks=np.asarray(pts, dtype=float))
+    for i, (_, _, _, pts) in enumerate(gesture_data.iter_keypoints(path)):
+        hand = TrackedHand(side='right', image_landmarks=pts)
         yield {'id': i, 'timestamp': None,
                'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
 
@@ -279,9 +277,11 @@ def main(argv=None):
                                                    camera_input(args.input) == 'stills'),
                                 args.model, args.keypoint_model)
         if args.keypoints:
-            frames = list(keypoint_lines(args.keypoints, classifier))
-            if not frames:
+            frames = keypoint_lines(args.keypoints, classifier)
+            first = next(frames, None)      # a file that cannot be opened: before any output
+            if first is None:
                 raise gesture_data.DataError('%s: no keypoint row in it' % args.keypoints)
+            frames = itertools.chain([first], frames)
         else:
             frames = frames_of(args.input)
     except (SourceError, OSError, ModelError, gesture_data.DataError) + gesture_data.UNREADABLE as e:
@@ -335,6 +335,9 @@ def main(argv=None):
     except _WriteError as e:
         print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         status = 1
+    except gesture_data.DataError as e:     # a keypoint file cut or bad after its first rows
+        print('classify_frames: %s' % e, file=sys.stderr)
+        status = 2
     except (OSError,) + gesture_data.UNREADABLE as e:   # a cut or corrupt gzip, a read error
         print('classify_frames: %s: cannot read on after %d frames (%s)' % (args.input, n, e),
               file=sys.stderr)

@@ -187,55 +187,66 @@ def guinevere_takes(root=None):
 
 
 def read_keypoints(path, label=None, person=None, sources=None):
-    """(persons, labels, xy (n, 21, 2)) of a keypoint CSV in either form. The community's
-    headerless form has a class id per row: its label is `label` when given (the whole file
-    is that gesture), else the id as text; its person is `person` or the file's name.
+    """(persons, labels, xy (n, 21, 2)) of a keypoint CSV in either form (iter_keypoints).
     `sources`, a list, receives each row's source label (the id in the headerless form)."""
     persons, labels, rows = [], [], []
-    default_person = person or os.path.splitext(os.path.basename(path))[0]
-    try:
-        with open_text(path, newline='') as f:
-            _keypoint_rows(path, f, label, person, default_person, sources, persons, labels, rows)
-    except UNREADABLE as e:
-        raise DataError('%s: cannot read on after %d keypoint rows (%s)'
-                        % (path, len(rows), e)) from None
-    return persons, labels, np.array(rows).reshape(-1, 21, 2)
-
-
-def _keypoint_rows(path, f, label, person, default_person, sources, persons, labels, rows):
-    reader = csv.reader(f)
-    header = None
-    for n, row in enumerate(reader, 1):
-        if not row or not ''.join(row).strip():
-            continue
-        if n == 1 and row[0].strip() == 'person':
-            header = row
-            continue
-        try:
-            if header is not None:
-                if len(row) != 45:
-                    raise ValueError('%d columns, not 45' % len(row))
-                p, lab, src, values = row[0], row[1], row[2], row[3:]
-            else:
-                if len(row) != 43:
-                    raise ValueError('%d columns, not 43' % len(row))
-                p, lab, values = default_person, row[0].strip(), row[1:]
-                src = lab
-            if any('_' in v for v in values):    # float() would read 1_0 as 10
-                raise ValueError('a number with _')
-            xy = np.array([float(v) for v in values]).reshape(21, 2)
-        except ValueError as e:
-            raise DataError('%s row %d: not a keypoint row (%s)' % (path, n, e)) from None
-        if not np.isfinite(xy).all():
-            raise DataError('%s row %d: a keypoint is not finite' % (path, n))
-        if np.abs(xy).max() > MAX_KEYPOINT:
-            raise DataError('%s row %d: a keypoint beyond %g (neither pixels nor normalised)'
-                            % (path, n, MAX_KEYPOINT))
-        persons.append(person or p)
-        labels.append(label if label is not None else lab)
+    for p, lab, src, xy in iter_keypoints(path, label, person):
+        persons.append(p)
+        labels.append(lab)
         rows.append(xy)
         if sources is not None:
             sources.append(src)
+    return persons, labels, np.array(rows).reshape(-1, 21, 2)
+
+
+def iter_keypoints(path, label=None, person=None):
+    """(person, label, source label, xy (21, 2)) per row of a keypoint CSV in either form,
+    read as it goes (the rows before a cut or a bad row are yielded; then DataError). The
+    community's headerless form has a class id per row: its label is `label` when given
+    (the whole file is that gesture), else the id as text; its person is `person` or the
+    file's name."""
+    default_person = person or os.path.splitext(os.path.basename(path))[0]
+    n_rows = 0
+    try:
+        with open_text(path, newline='') as f:
+            header = None
+            for n, row in enumerate(csv.reader(f), 1):
+                if not row or not ''.join(row).strip():
+                    continue
+                if n == 1 and row[0].strip() == 'person':
+                    header = row
+                    continue
+                p, lab, src, xy = _keypoint_row(path, n, row, header is not None, default_person)
+                n_rows += 1
+                yield person or p, label if label is not None else lab, src, xy
+    except UNREADABLE as e:
+        raise DataError('%s: cannot read on after %d keypoint rows (%s)'
+                        % (path, n_rows, e)) from None
+
+
+def _keypoint_row(path, n, row, with_header, default_person):
+    """(person, label, source label, xy) of row `n`, or DataError."""
+    try:
+        if with_header:
+            if len(row) != 45:
+                raise ValueError('%d columns, not 45' % len(row))
+            p, lab, src, values = row[0], row[1], row[2], row[3:]
+        else:
+            if len(row) != 43:
+                raise ValueError('%d columns, not 43' % len(row))
+            p, lab, values = default_person, row[0].strip(), row[1:]
+            src = lab
+        if any('_' in v for v in values):    # float() would read 1_0 as 10
+            raise ValueError('a number with _')
+        xy = np.array([float(v) for v in values]).reshape(21, 2)
+    except ValueError as e:
+        raise DataError('%s row %d: not a keypoint row (%s)' % (path, n, e)) from None
+    if not np.isfinite(xy).all():
+        raise DataError('%s row %d: a keypoint is not finite' % (path, n))
+    if np.abs(xy).max() > MAX_KEYPOINT:
+        raise DataError('%s row %d: a keypoint beyond %g (neither pixels nor normalised)'
+                        % (path, n, MAX_KEYPOINT))
+    return p, lab, src, xy
 
 
 def mislabelled_keypoints(person, source_label):
