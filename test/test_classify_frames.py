@@ -274,6 +274,7 @@ def _model_arrays():
     ('a class named type', "class 'type': the name of a built-in"),
     ('a class named twice', 'a class named twice'),
     ('scalar mean', 'inconsistent model arrays'),
+    ('a zero scale', 'inconsistent model arrays'),     # numpy's warnings were two more lines
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -296,6 +297,8 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
             arrays['classes'] = np.array(['fist' if c == 'rock' else c for c in arrays['classes']])
         elif spoil == 'scalar mean':
             arrays['mean'] = np.array(0.0)
+        elif spoil == 'a zero scale':
+            arrays['scale'] = arrays['scale'] * 0.0
         np.savez(bad, **arrays)
     frames = tmp_path / 'f.jsonl'
     frames.write_text(''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3)))

@@ -349,6 +349,7 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--label', 'type', '--out', '{tmp}/m.npz'], "--label 'type': the name of a built-in"),
     (['--label', 'thumb_up', '--out', '{tmp}/m.npz'], "--label 'thumb_up': the name of a built-in"),
     (['--label', 'caf\u00e9', '--out', '{tmp}/m.npz'], "--label 'caf\u00e9': letters, digits and _ only"),
+    (['--label', 'a' * 65, '--out', '{tmp}/m.npz'], "--label '%s': at most 64 characters" % ('a' * 65)),
 ])
 def test_train_gestures_refuses_bad_arguments_before_the_fit(tmp_path, monkeypatch, capsys,
                                                              args, message):

@@ -23,6 +23,7 @@ _exp = math.exp
 _KEYS = ('classes', 'family', 'mean', 'scale', 'w0', 'b0', 'w1', 'b1')
 FEATURES_OF = {'leap': LEAP_FEATURES, 'keypoints': KEYPOINT_FEATURES}
 MAX_WEIGHT = 1e6
+MAX_CLASS_NAME = 64        # a name in JSON keys, YAML bindings and the camera overlay
 # Names no class may take: the recognizer's other gestures and events, and the keys beside
 # the gestures in its output (fist, open, pinch, rock, thumb and none are the built-in
 # classes: a user's samples may add to them).
@@ -36,6 +37,8 @@ def class_name_problem(name):
     """Why `name` cannot name a class of a pose model, or None."""
     if not re.fullmatch(r'[A-Za-z0-9_]+', name or ''):
         return 'letters, digits and _ only'
+    if len(name) > MAX_CLASS_NAME:
+        return 'at most %d characters' % MAX_CLASS_NAME
     if name in CLASHING_NAMES:
         return ('the name of a built-in gesture, event or output key; choose another (thumb, '
                 'fist, open, pinch, rock or none add samples to the built-in classes)')
@@ -53,7 +56,8 @@ class PoseClassifier:
         self.classes = tuple(str(c) for c in classes)
         self.family = str(family)
         self.mean = np.asarray(mean, dtype=float)
-        self.inv_scale = 1.0 / np.asarray(scale, dtype=float)
+        with np.errstate(divide='ignore', invalid='ignore'):   # a 0 scale is refused below
+            self.inv_scale = 1.0 / np.asarray(scale, dtype=float)
         self.w0, self.b0 = np.asarray(w0, dtype=float), np.asarray(b0, dtype=float)
         self.w1, self.b1 = np.asarray(w1, dtype=float), np.asarray(b1, dtype=float)
         self.card = dict(card or {})
