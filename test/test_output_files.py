@@ -33,8 +33,22 @@ def test_output_problem_names_each_case_and_changes_nothing(tmp_path):
     assert 'it is the input %s' % kept in output_problem(str(link), [None, '-', str(kept)])
     assert output_problem(str(tmp_path / ('x' * 300))).startswith('cannot write it')
     assert output_problem(os.path.join(UNWRITABLE_DIR, 'x.bag')).startswith('cannot write it')
+    dangling = tmp_path / 'dangling.txt'
+    dangling.symlink_to(tmp_path / 'made_later.txt')
+    assert output_problem(str(dangling)) is None
+    assert not (tmp_path / 'made_later.txt').exists()
+    loop = tmp_path / 'loop.txt'
+    loop.symlink_to(loop)
+    assert output_problem(str(loop)).startswith('cannot write it')
     os.mkfifo(tmp_path / 'pipe')
-    assert output_problem(str(tmp_path / 'pipe')) == 'no regular file'
+    assert output_problem(str(tmp_path / 'pipe')) == 'a pipe that nothing reads'
+    reader = os.open(tmp_path / 'pipe', os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        assert output_problem(str(tmp_path / 'pipe')) is None     # e.g. >(gzip > f)
+    finally:
+        os.close(reader)
+    if os.path.exists('/dev/null'):
+        assert output_problem('/dev/null') is None
 
 
 def test_recording_to_bag_never_writes_over_its_input_or_a_file_not_a_bag(
@@ -126,22 +140,32 @@ def test_record_gestures_keeps_an_earlier_take(tmp_path, monkeypatch, capsys, na
     assert earlier.read_text() == 'a first session\n'
 
 
-def test_record_gestures_leaves_no_part_file_when_writing_fails(tmp_path, monkeypatch):
-    def full_disk(*_a, **_k):
-        raise OSError(28, 'No space left on device')
-    monkeypatch.setattr(record_gestures.json, 'dumps', full_disk)
+def test_record_gestures_leaves_no_part_file_when_writing_fails(tmp_path):
+    class Unwritable:
+        def __iter__(self):
+            raise OSError(28, 'No space left on device')
     with pytest.raises(OSError):
-        record_gestures.write(str(tmp_path / 'two.jsonl'), 'leap', [{'label': 'two'}])
+        record_gestures.write(str(tmp_path / 'two.jsonl'), 'leap', Unwritable())
     assert os.listdir(tmp_path) == []
-    record_gestures.write(str(tmp_path / 'two.csv'), 'keypoints', [['me', 'two', 'two'] + [0] * 42])
+    mask = os.umask(0o027)
+    try:
+        assert record_gestures.write(str(tmp_path / 'two.csv'), 'keypoints',
+                                     [['me', 'two', 'two'] + [0] * 42]) == str(tmp_path / 'two.csv')
+    finally:
+        os.umask(mask)
     assert os.listdir(tmp_path) == ['two.csv']
-    assert oct((tmp_path / 'two.csv').stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+    assert (tmp_path / 'two.csv').stat().st_mode & 0o777 == 0o640     # as any new file
 
 
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+def test_a_take_goes_beside_a_file_that_appeared_while_recording(tmp_path):
+    first = tmp_path / 'two.jsonl.gz'
+    first.write_text('another session, saved meanwhile\n')
+    (tmp_path / 'two_2.jsonl.gz').write_text('and another\n')
+    got = record_gestures.write(str(first), 'leap', [{'label': 'two'}])
+    assert got == str(tmp_path / 'two_3.jsonl.gz')
+    assert first.read_text() == 'another session, saved meanwhile\n'
+    assert sorted(os.listdir(tmp_path)) == ['two.jsonl.gz', 'two_2.jsonl.gz', 'two_3.jsonl.gz']
+    assert record_gestures.free_session_name(str(first)) == str(tmp_path / 'two_4.jsonl.gz')
 
 
 def test_train_gestures_never_writes_over_a_file_that_is_no_model_or_card(
@@ -167,9 +191,17 @@ def test_train_gestures_never_writes_over_a_file_that_is_no_model_or_card(
 
 
 def test_a_model_and_its_card_may_be_written_over_by_a_retrain(tmp_path):
-    from leap_teleop.hands.gestures.classifier import load_model
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, load_model
     model = tmp_path / 'mine.npz'
     load_model(None, 'leap').save(str(model))
     (tmp_path / 'mine.md').write_text(train_gestures.CARD_TITLE + ': mine.npz\n')
+    assert train_gestures.model_out_problem(str(model), []) is None
+    # `make train` refits the shipped models, also when the features changed since
+    for path in DEFAULT_MODELS.values():
+        assert train_gestures.model_out_problem(path, []) is None
+    with np.load(str(model)) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays.update(mean=arrays['mean'][:-1], scale=arrays['scale'][:-1], w0=arrays['w0'][:-1])
+    np.savez(str(model), **arrays)
     assert train_gestures.model_out_problem(str(model), []) is None
 

@@ -271,11 +271,14 @@ def main(argv=None):
                           ('--keypoint-model', args.keypoint_model)):
         if value is not None and not value.strip():
             ap.error('%s: name a file' % option)
+    stills = None
+    if not args.keypoints and camera_input(args.input) == 'stills':
+        from leap_teleop.hands.sources import capture
+        stills = capture.resolve_stills(args.input)
     try:
         # Still images are unrelated pictures: each is judged on its own.
-        classifier = Classifier(args.stateless or (not args.keypoints and
-                                                   camera_input(args.input) == 'stills'),
-                                args.model, args.keypoint_model)
+        classifier = Classifier(args.stateless or stills is not None, args.model,
+                                args.keypoint_model)
         if args.keypoints:
             frames = keypoint_lines(args.keypoints, classifier)
             first = next(frames, None)      # a file that cannot be opened: before any output
@@ -290,11 +293,8 @@ def main(argv=None):
               file=sys.stderr)
         return 2
     if args.out != '-':
-        inputs = [args.keypoints or args.input, args.model, args.keypoint_model]
-        if not args.keypoints and camera_input(args.input) == 'stills':
-            from leap_teleop.hands.sources import capture
-            inputs += capture.resolve_stills(args.input)
-        problem = output_problem(args.out, inputs)
+        problem = output_problem(args.out, [args.keypoints or args.input, args.model,
+                                            args.keypoint_model] + (stills or []))
         if problem:
             print('classify_frames: --out %r: %s' % (args.out, problem), file=sys.stderr)
             return 2
@@ -304,9 +304,8 @@ def main(argv=None):
         print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         return 2
     n, status = 0, 0
-    if not args.keypoints and camera_input(args.input) == 'stills':
-        from leap_teleop.hands.sources import capture
-        frames = with_unreadable_images(frames, capture.resolve_stills(args.input))
+    if stills is not None:
+        frames = with_unreadable_images(frames, stills)
     try:
         for d in frames:
             if args.keypoints:
@@ -339,7 +338,8 @@ def main(argv=None):
         print('classify_frames: %s' % e, file=sys.stderr)
         status = 2
     except (OSError,) + gesture_data.UNREADABLE as e:   # a cut or corrupt gzip, a read error
-        print('classify_frames: %s: cannot read on after %d frames (%s)' % (args.input, n, e),
+        print('classify_frames: %s: cannot read on after %d frames (%s)'
+              % (args.keypoints or args.input, n, e),
               file=sys.stderr)
         status = 2
     finally:

@@ -49,6 +49,17 @@ class ModelError(ValueError):
     """A model file that is missing, malformed or of the wrong family."""
 
 
+def is_model_file(path):
+    """Whether `path` holds a pose model's arrays, whether or not this code can use them (a
+    model of older features is still a model: a refit may write over it)."""
+    try:
+        with zipfile.ZipFile(path) as z:
+            names = {os.path.splitext(n)[0] for n in z.namelist()}
+    except (OSError, zipfile.BadZipFile):
+        return False
+    return set(_KEYS) <= names
+
+
 class PoseClassifier:
     """Feature vector -> probability per class."""
 

@@ -24,8 +24,8 @@ import gzip
 import json
 import math
 import os
+import secrets
 import sys
-import tempfile
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.classifier import class_name_problem
@@ -34,6 +34,7 @@ from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs,
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
 from leap_teleop.output_file import output_problem
 
+MAX_SESSIONS = 99      # NAME.csv, NAME_2.csv, ... NAME_99.csv
 KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
     '%s%d' % (axis, i) for i in range(21) for axis in 'xy']
 
@@ -109,19 +110,29 @@ def collect(source, family, label, person, seconds, side='any'):
     return rows, seen, missing
 
 
-def split_ending(path):
-    """(path without its ending, the ending), with .jsonl.gz as one ending."""
-    if path.lower().endswith('.jsonl.gz'):
-        return path[:-len('.jsonl.gz')], path[-len('.jsonl.gz'):]
-    return os.path.splitext(path)
+def session_names(path):
+    """`path`, then the names of further sessions beside it: NAME_2.csv, NAME_3.csv, ..."""
+    low = path.lower()
+    ending = '.jsonl.gz' if low.endswith('.jsonl.gz') else os.path.splitext(path)[1]
+    stem = path[:len(path) - len(ending)]
+    yield path
+    for k in range(2, MAX_SESSIONS + 1):
+        yield '%s_%d%s' % (stem, k, ending)
+
+
+def free_session_name(path):
+    """The first of session_names(path) that names no file, or None."""
+    return next((p for p in session_names(path) if not os.path.lexists(p)), None)
 
 
 def write(path, family, rows):
-    """Write `rows` to `path` whole, through a temporary file beside it (removed if that
-    fails: no part of a take is left under another name)."""
-    fd, tmp = tempfile.mkstemp(prefix='.record_gestures-', suffix='.part',
-                               dir=os.path.dirname(os.path.abspath(path)))
-    os.close(fd)
+    """Write `rows` whole under `path`, or under the next free session name if a file
+    came to be at `path` meanwhile (a take is never written over); the name used. Goes
+    through a temporary file beside it, removed if writing fails."""
+    tmp = os.path.join(os.path.dirname(os.path.abspath(path)),
+                       '.record_gestures-%d-%s.part' % (os.getpid(), secrets.token_hex(4)))
+    # made as any new file is (the umask applies), never over another
+    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
         if family == 'keypoints':
             with open(tmp, 'w', newline='', encoding='utf-8') as f:
@@ -133,17 +144,28 @@ def write(path, family, rows):
             with opener(tmp, 'wt', encoding='utf-8') as f:
                 for r in rows:
                     f.write(json.dumps(r, separators=(',', ':')) + '\n')
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        os.remove(tmp)
-        raise
+        for name in session_names(path):
+            if _move_unless_taken(tmp, name):
+                return name
+        raise OSError('%s and its next %d session names are all taken' % (path, MAX_SESSIONS - 1))
+    finally:
+        if os.path.lexists(tmp):
+            os.remove(tmp)
 
 
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+def _move_unless_taken(tmp, name):
+    """Move `tmp` to `name` unless a file is there; whether it moved."""
+    try:
+        os.link(tmp, name)      # fails where a file is, unlike a rename
+    except FileExistsError:
+        return False
+    except OSError:             # a file system without hard links: check, then rename
+        if os.path.lexists(name):
+            return False
+        os.replace(tmp, name)
+        return True
+    os.remove(tmp)
+    return True
 
 
 def main(argv=None):
@@ -171,10 +193,10 @@ def main(argv=None):
         problem = output_problem(out, [args.script, args.recording, args.video])
         if problem:
             raise RecordError('--out %s: %s' % (out, problem))
-        if os.path.exists(out):     # an earlier session: it stays, the next goes beside it
-            stem, ext = split_ending(out)
-            raise RecordError('--out %s: holds an earlier take; record to another file (e.g. '
-                              '--out %s_2%s) or remove it' % (out, stem, ext))
+        if os.path.lexists(out):    # an earlier session: it stays, the next goes beside it
+            free = free_session_name(out)
+            raise RecordError('--out %s: holds an earlier take; record to another file%s or '
+                              'remove it' % (out, ' (e.g. --out %s)' % free if free else ''))
         source = source_from_args(args)
     except (RecordError, SourceError) as e:
         print('record_gestures: %s' % e, file=sys.stderr)
@@ -194,10 +216,14 @@ def main(argv=None):
             file=sys.stderr)
         return 1
     try:
-        write(out, family, rows)
+        written = write(out, family, rows)
     except OSError as e:
         print('record_gestures: cannot write %s: %s' % (out, e), file=sys.stderr)
         return 1
+    if written != out:
+        print('record_gestures: %s appeared while recording: the take went to %s'
+              % (out, written), file=sys.stderr)
+        out = written
     print('record_gestures: wrote %d %s of %r to %s (%d frames, hands missing in %d)'
           % (len(rows), 'keypoint rows' if family == 'keypoints' else 'hand poses',
              args.label, out, seen, missing))

@@ -29,7 +29,7 @@ import numpy as np
 
 from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import datasets as gd
-from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, ModelError, PoseClassifier, class_name_problem
+from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier, class_name_problem, is_model_file
 from leap_teleop.hands.gestures.features import (
     hand_landmarks,
     keypoint_features_rows,
@@ -564,11 +564,8 @@ def model_out_problem(out, adds):
         problem = output_problem(path)
         if problem:
             return problem if path == out else '%s: %s' % (card, problem)
-    if os.path.exists(out):
-        try:
-            PoseClassifier.load(out)
-        except ModelError:
-            return 'a file that is no pose model: it would be overwritten'
+    if os.path.exists(out) and not is_model_file(out):
+        return 'a file that is no pose model: it would be overwritten'
     if os.path.exists(card):
         with open(card, encoding='utf-8', errors='replace') as f:
             if not f.readline().startswith(CARD_TITLE):
@@ -671,10 +668,10 @@ def main(argv=None):
     if args.out and len(todo) > 1:
         ap.error('--out names one model: give --family')
     # checked before the fit, which takes minutes
-    for fam in todo:
-        problem = model_out_problem(args.out or DEFAULT_MODELS[fam], args.add)
+    for fam in todo if args.out is None else ():     # --out was checked above
+        problem = model_out_problem(DEFAULT_MODELS[fam], args.add)
         if problem:
-            ap.error('--out %s: %s' % (args.out or DEFAULT_MODELS[fam], problem))
+            ap.error('--out %s: %s' % (DEFAULT_MODELS[fam], problem))
     for fam in todo:
         try:
             model, card = train(fam, args.data, adds, report=not args.no_report)

@@ -23,6 +23,7 @@ IMAGE_EXTENSIONS = ('.jpg', '.jpeg', '.png', '.bmp', '.webp', '.tif', '.tiff')
 VIDEO_EXTENSIONS = ('.mp4', '.avi', '.mov', '.mkv', '.webm', '.m4v', '.mpg', '.mpeg', '.ogv')
 DEFAULT_STILL_RATE_HZ = 30.0        # still images are frames of a sequence at this rate
 SHORT_VIDEO_SHARE = 0.9             # a video that ends before this share of its frames is cut
+_SAID_SHORT = set()
 
 
 def import_cv2():
@@ -80,15 +81,14 @@ class VideoFile:
         self.width = int(self._cap.get(cv2.CAP_PROP_FRAME_WIDTH))
         self.height = int(self._cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
         self._k = 0
-        self._said_short = False
 
     def read(self):
         ok, bgr = self._cap.read()
         if not ok:
             # The container's count is an estimate for some formats: only a clear shortfall
             # says the file is cut or damaged.
-            if self._k < SHORT_VIDEO_SHARE * self.frame_count - 1 and not self._said_short:
-                self._said_short = True
+            if self._k < SHORT_VIDEO_SHARE * self.frame_count - 1 and self.path not in _SAID_SHORT:
+                _SAID_SHORT.add(self.path)      # once: a looped video is opened on every pass
                 log.warning('camera source: video %s ended after %d of the %d frames its '
                             'container lists: a cut or damaged file?', self.path, self._k,
                             self.frame_count)
