@@ -275,6 +275,7 @@ def _model_arrays():
     ('a class named twice', 'a class named twice'),
     ('scalar mean', 'inconsistent model arrays'),
     ('a zero scale', 'inconsistent model arrays'),     # numpy's warnings were two more lines
+    ('weights near the float limit', 'weights beyond 1e+06: not a fitted model'),
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -299,6 +300,8 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
             arrays['mean'] = np.array(0.0)
         elif spoil == 'a zero scale':
             arrays['scale'] = arrays['scale'] * 0.0
+        elif spoil == 'weights near the float limit':
+            arrays['w0'] = arrays['w0'] * 1e307      # finite, but the folding overflows
         np.savez(bad, **arrays)
     frames = tmp_path / 'f.jsonl'
     frames.write_text(''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3)))

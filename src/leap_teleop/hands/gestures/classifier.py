@@ -88,11 +88,12 @@ class PoseClassifier:
             raise ModelError('inconsistent model arrays')
         self.index = {c: i for i, c in enumerate(self.classes)}
         # the standardisation folded into the first layer: one product per call
-        self._w0 = self.w0 * self.inv_scale[:, None]
-        self._b0 = self.b0 - (self.mean * self.inv_scale) @ self.w0
+        with np.errstate(all='ignore'):     # an overflow here is refused just below
+            self._w0 = self.w0 * self.inv_scale[:, None]
+            self._b0 = self.b0 - (self.mean * self.inv_scale) @ self.w0
         # Fitted weights stay within tens; numbers near the float limit pass the finiteness
         # test above but overflow to NaN in the first product.
-        if max(float(np.abs(a).max()) for a in (self._w0, self._b0, self.w1, self.b1)) > MAX_WEIGHT:
+        if not max(float(np.abs(a).max()) for a in (self._w0, self._b0, self.w1, self.b1)) <= MAX_WEIGHT:
             raise ModelError('weights beyond %g: not a fitted model' % MAX_WEIGHT)
         # the ReLU's floor as an array: numpy would convert a Python float on every call
         self._zeros = np.zeros_like(self._b0)
