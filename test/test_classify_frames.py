@@ -301,7 +301,8 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
         elif spoil == 'a zero scale':
             arrays['scale'] = arrays['scale'] * 0.0
         elif spoil == 'weights near the float limit':
-            arrays['w0'] = arrays['w0'] * 1e307      # finite, but the folding overflows
+            arrays['w0'] = arrays['w0'] * 1e200      # finite, but the folding overflows
+            arrays['scale'] = arrays['scale'] * 1e-120
         np.savez(bad, **arrays)
     frames = tmp_path / 'f.jsonl'
     frames.write_text(''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3)))
