@@ -284,6 +284,25 @@ def test_record_gestures_without_a_hand_writes_nothing(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_record_gestures_says_when_the_source_ends_before_the_time_asked(tmp_path, capsys):
+    """A short take is written, and said to be short (it was silent before)."""
+    script = tmp_path / 'two.yaml'
+    script.write_text(yaml.safe_dump({'rate_hz': 30, 'hands': {
+        'right': [{'pose': 'open', 'duration': 1.0}]}}))
+    out = tmp_path / 'two.jsonl'
+    assert record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
+                                 'two', '--realtime', '0', '--out', str(out)]) == 0
+    captured = capsys.readouterr()
+    assert 'the source ended after 1.0 of the 10 s asked' in captured.err, captured.err
+    assert 'wrote 30 hand poses' in captured.out and out.exists()
+    # the whole time asked: no such line
+    out2 = tmp_path / 'two_b.jsonl'
+    assert record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
+                                 'two', '--realtime', '0', '--seconds', '0.5',
+                                 '--out', str(out2)]) == 0
+    assert 'ended' not in capsys.readouterr().err
+
+
 class CameraHands(HandSource):
     """Hands as a camera source gives them: with image landmarks (pixels)."""
 
@@ -303,10 +322,13 @@ class CameraHands(HandSource):
 def test_camera_hands_become_community_normalised_keypoint_rows(tmp_path):
     rng = np.random.default_rng(0)
     pts = [rng.uniform(100, 400, (21, 2)) for _ in range(4)]
-    rows, seen, missing = record_gestures.collect(
+    take = record_gestures.collect(
         CameraHands([pts[0], None, pts[1], pts[2], np.full((21, 2), 50.0), pts[3]]),
         'keypoints', 'peace', 'ann', 10.0)
-    assert (len(rows), seen, missing) == (4, 6, 2)    # no hand; a degenerate one
+    assert (len(take.rows), take.seen, take.missing) == (4, 6, 2)  # no hand; a degenerate one
+    # six frames of a 30 Hz source: it ended long before the 10 s asked
+    assert take.ended == 'source ended' and take.seconds == pytest.approx(5 / 30.0)
+    rows = take.rows
     path = str(tmp_path / 'peace.csv')
     record_gestures.write(path, 'keypoints', rows)
     with open(path) as f:
@@ -318,9 +340,9 @@ def test_camera_hands_become_community_normalised_keypoint_rows(tmp_path):
         np.testing.assert_allclose(got, want, atol=5e-5)
         assert got[0].tolist() == [0.0, 0.0] and np.abs(got).max() == pytest.approx(1.0)
     # and seconds of source time end it
-    rows, seen, _ = record_gestures.collect(CameraHands(pts * 10), 'keypoints', 'peace',
-                                            'ann', 0.5)
-    assert seen == 15 and len(rows) == 15
+    take = record_gestures.collect(CameraHands(pts * 10), 'keypoints', 'peace', 'ann', 0.5)
+    assert take.seen == 15 and len(take.rows) == 15
+    assert take.ended == 'time' and take.seconds == 0.5
 
 
 def test_train_gestures_names_a_malformed_file(tmp_path, capsys):

@@ -19,6 +19,7 @@ the shared header (person,label,source_label,x0,y0,...,x20,y20; default NAME.csv
 the community's keypoint.csv. Frames without a (matching) hand are counted as missing.
 """
 import argparse
+import collections
 import csv
 import gzip
 import json
@@ -37,6 +38,11 @@ from leap_teleop.output_file import output_problem
 MAX_SESSIONS = 99      # NAME.csv, NAME_2.csv, ... NAME_99.csv
 KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
     '%s%d' % (axis, i) for i in range(21) for axis in 'xy']
+
+
+# what a recording session gave: its rows, frames seen, frames without a usable hand, the
+# source time it covered and why it ended ('time', 'source ended' or 'interrupted')
+Take = collections.namedtuple('Take', 'rows seen missing seconds ended')
 
 
 class RecordError(ValueError):
@@ -80,16 +86,20 @@ def pose_record(frame, hand, person, label):
 
 
 def collect(source, family, label, person, seconds, side='any'):
-    """(rows, frames seen, frames without a usable hand) of `seconds` of source time."""
+    """The Take of `seconds` of source time (or less, if the source ends first)."""
     rows, seen, missing = [], 0, 0
-    t0 = None
+    t0 = t_last = None
+    ended = 'source ended'
     try:
         for frame in source.frames():
             t = frame.timestamp
             if t0 is None and math.isfinite(t):
                 t0 = t
-            if t0 is not None and math.isfinite(t) and t - t0 >= seconds:
-                break
+            if t0 is not None and math.isfinite(t):
+                if t - t0 >= seconds:
+                    ended = 'time'
+                    break
+                t_last = t
             seen += 1
             got = 0
             for hand in frame.hands:
@@ -104,10 +114,11 @@ def collect(source, family, label, person, seconds, side='any'):
                     got += 1
             missing += got == 0
     except KeyboardInterrupt:
-        pass
+        ended = 'interrupted'
     finally:
         source.stop()
-    return rows, seen, missing
+    covered = seconds if ended == 'time' else (t_last - t0 if t0 is not None else 0.0)
+    return Take(rows, seen, missing, covered, ended)
 
 
 def session_names(path):
@@ -205,11 +216,16 @@ def main(argv=None):
           'moving and turning the hand a little' % (args.label, args.seconds, args.source),
           file=sys.stderr)
     try:
-        rows, seen, missing = collect(source, family, args.label, args.person.strip(),
-                                      args.seconds, args.side)
+        take = collect(source, family, args.label, args.person.strip(), args.seconds,
+                       args.side)
     except (OSError, SourceError) as e:
         print('record_gestures: the %s source failed: %s' % (args.source, e), file=sys.stderr)
         return 1
+    rows, seen, missing = take.rows, take.seen, take.missing
+    if take.ended != 'time':    # a short take is kept, but not passed off as a whole one
+        print('record_gestures: %s after %.1f of the %g s asked' % (
+            'the source ended' if take.ended == 'source ended' else 'interrupted',
+            take.seconds, args.seconds), file=sys.stderr)
     if not rows:
         print('record_gestures: no hand in %d frames: nothing written%s' % (
             seen, ' (a camera hand needs its image landmarks)' if family == 'keypoints' else ''),
