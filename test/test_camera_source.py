@@ -532,15 +532,36 @@ def test_found_an_unreadable_image_keeps_its_line_and_the_others_their_ids(tmp_p
         shutil.copy(data(src), tmp_path / name)
     (tmp_path / 'b.jpg').write_bytes(b'not a picture')
     (tmp_path / 'd.png').write_bytes(b'')
+    # the first 60 % of a photo: OpenCV decodes it without an error, the rest grey
+    whole = open(data('thumbs_up__mps__hand_thumb_up.jpg'), 'rb').read()
+    (tmp_path / 'e.jpg').write_bytes(whole[:len(whole) * 6 // 10])
     env = dict(os.environ, PYTHONWARNINGS='ignore')
     out = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(tmp_path)],
                          capture_output=True, text=True, env=env, timeout=120)
     assert out.returncode == 0, out.stderr
     lines = [json.loads(line) for line in out.stdout.splitlines()]
-    assert [line['id'] for line in lines] == [1, 2, 3, 4]
+    assert [line['id'] for line in lines] == [1, 2, 3, 4, 5]
     assert lines[0]['hands'][0]['fist'] and lines[2]['hands'][0]['thumb_up']
-    for k, name in ((1, 'b.jpg'), (3, 'd.png')):
+    for k, name in ((1, 'b.jpg'), (3, 'd.png'), (4, 'e.jpg')):
         assert lines[k]['hands'] == [] and lines[k]['error'] == 'cannot read image %s' % (tmp_path / name)
+    assert 'image %s is cut short' % (tmp_path / 'e.jpg') in out.stderr, out.stderr
+    assert 'Premature end of JPEG' not in out.stderr
+
+
+def test_a_jpeg_is_cut_only_without_an_end_marker_after_its_last_scan(tmp_path):
+    from leap_teleop.hands.sources.capture import jpeg_is_cut
+    for name in ('fist__htj__22.jpg', 'thumbs_up__gestia__thumbs_up.jpg'):  # baseline, progressive
+        whole = open(data(name), 'rb').read()
+        assert not jpeg_is_cut(data(name))
+        for share in (0.3, 0.9, 0.999):
+            cut = tmp_path / ('cut_%s' % name)
+            cut.write_bytes(whole[:int(len(whole) * share)])
+            assert jpeg_is_cut(str(cut)), (name, share)
+        padded = tmp_path / 'padded.jpg'      # bytes after the marker are not a cut
+        padded.write_bytes(whole + b'\x00' * 100)
+        assert not jpeg_is_cut(str(padded))
+    assert not jpeg_is_cut(data('thumbs_up__mps__thumbs-up.png'))
+    assert not jpeg_is_cut(str(tmp_path / 'absent.jpg'))
 
 
 def test_looped_images_number_each_pass_after_the_whole_previous_one(tmp_path):

@@ -15,8 +15,8 @@ INPUT may also be camera footage, told by its file extension: a video (.mp4, .av
 .mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
 images (.jpg, .jpeg, .png, ...: a file, a folder or a quoted glob; one line per image,
 in name order, id = its place from 1, each classified on its own as with --stateless; an
-image that cannot be read gives {"id": ID, "timestamp": null, "hands": [], "error":
-"cannot read image PATH"}). Hands come from the camera source's
+image that cannot be read, or a JPEG cut short, gives {"id": ID, "timestamp": null,
+"hands": [], "error": "cannot read image PATH"}, the reason on stderr). Hands come from the camera source's
 pipeline (MediaPipe Hands, then the landmark conversion) with its defaults: frames
 letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does not
 mirror.

@@ -101,6 +101,21 @@ class VideoFile:
         self._cap.release()
 
 
+def jpeg_is_cut(path):
+    """Whether `path` is a JPEG whose data ends before its end-of-image marker. OpenCV
+    decodes such a file without an error, its missing part grey. Entropy-coded data
+    escapes every 0xFF, so the marker cannot hide inside a scan: a whole file has one after
+    its last start-of-scan."""
+    try:
+        with open(path, 'rb') as f:
+            data = f.read()
+    except OSError:
+        return False            # imread's problem, reported there
+    if not data.startswith(b'\xff\xd8\xff'):
+        return False
+    return data.rfind(b'\xff\xd9') < data.rfind(b'\xff\xda')
+
+
 class StillImages:
     """Image files as the frames of a sequence at `rate_hz`; unreadable files are skipped
     with a warning."""
@@ -119,6 +134,10 @@ class StillImages:
             path = self.paths[self._k]
             k = self._k
             self._k += 1
+            if jpeg_is_cut(path):      # before decoding it: libjpeg's own line would come first
+                log.warning('camera source: image %s is cut short (its JPEG data ends before '
+                            'the end-of-image marker), skipped', path)
+                continue
             # IMREAD_COLOR applies EXIF orientation and drops alpha.
             bgr = self.cv2.imread(path, self.cv2.IMREAD_COLOR)
             if bgr is None:
