@@ -107,7 +107,7 @@ def test_recording_to_bag_reports_the_frames_it_wrote(tmp_path, leapjs_data, cap
     empty = tmp_path / 'empty.bag'
     assert recording_to_bag.main([take, str(empty), '--sides', 'left', '--kinds', 'gesture']) == 1
     assert capsys.readouterr().err.endswith(
-        'error: no gesture message for the left hand: nothing written to %s\n' % empty)
+        'recording_to_bag: no gesture message for the left hand: nothing written to %s\n' % empty)
     assert not empty.exists()
     late = tmp_path / 'late.bag'    # the take's 3.4 s pass the end of ROS time
     assert recording_to_bag.main([take, str(late), '--start', str(2 ** 32 - 2)]) == 1

@@ -132,7 +132,7 @@ def main(argv=None):
         else:
             source = make_source('recording', path=args.recording, realtime=False)
     except SourceError as e:
-        print('error: %s' % e, file=sys.stderr)
+        print('recording_to_bag: %s' % e, file=sys.stderr)
         return 2
     topics = {side: conversions.default_topics(side) for side in args.sides}
     if 'right' in topics:
@@ -142,15 +142,15 @@ def main(argv=None):
     try:
         n = write_bag(source, args.out, args.sides, topics, tuple(args.kinds), args.start)
     except (OSError, rosbag.ROSBagException) as e:
-        print('error: cannot write %s: %s' % (args.out, e), file=sys.stderr)
+        print('recording_to_bag: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         return 1
     except (PastRosTimeError, SourceError) as e:
         os.remove(args.out)     # the bag was open: what it holds is a part of the take
-        print('error: %s: nothing written to %s' % (e, args.out), file=sys.stderr)
+        print('recording_to_bag: %s: nothing written to %s' % (e, args.out), file=sys.stderr)
         return 1
     if not n:
         os.remove(args.out)     # an empty bag replays nothing: no file rather than a silent one
-        print('error: no %s message for the %s hand: nothing written to %s' % (
+        print('recording_to_bag: no %s message for the %s hand: nothing written to %s' % (
             ' or '.join(args.kinds), ' or '.join(args.sides), args.out), file=sys.stderr)
         return 1
     print('wrote %s: %d frames' % (args.out, n))
