@@ -245,7 +245,7 @@ def judge(msg):
 pub = rospy.Publisher('hands', Hand, queue_size=100, tcp_nodelay=True)
 sub = HandSubscription('hands', Hand, judge, 'client',
                        {'resubscribe_after': 0.5, 'resubscribe_silent_after': 0.5,
-                        'hand_queue_size': 5}, stream.reset)
+                        'hand_queue_size': 5, 'hand_frame': 'leap_hands'}, stream.reset)
 deadline = time.monotonic() + 20
 while sub.sub.get_num_connections() == 0 and time.monotonic() < deadline:
     time.sleep(0.05)
@@ -347,6 +347,47 @@ def test_a_subscription_reestablishes_late_or_silent_input_and_counts_what_it_go
     assert 'client: re-subscribed to /hands (every message late for' in proc.stderr, proc.stderr[-3000:]
     assert ('client: re-subscribed to /hands (connected to none of the 1 publisher the master '
             'lists for') in proc.stderr, proc.stderr[-3000:]
+
+
+def test_hand_messages_in_another_frame_are_refused_with_a_throttled_warning(monkeypatch):
+    # Positions in another frame would be read as Leap coordinates: the arm would jump.
+    import collections
+    import threading
+
+    import rospy
+
+    from leap_teleop.msg import Hand
+    from leap_teleop.ros import hand_subscription as hs
+
+    taken, logs = [], []
+    sub = hs.HandSubscription.__new__(hs.HandSubscription)
+    sub.topic, sub.node, sub._lock = 'hands', 'ur10_arm', threading.Lock()
+    sub.health = StreamHealth(0.5, 2.0)
+    sub.gaps = SequenceGaps()
+    sub.received = collections.Counter()
+    sub.callback = lambda msg: taken.append(msg.header.frame_id)
+    sub.frame, sub.wrong_frame = 'leap_hands', 0
+    monkeypatch.setattr(rospy, 'get_time', lambda: 10.0)
+    monkeypatch.setattr(rospy, 'resolve_name', lambda name: '/' + name)
+    monkeypatch.setattr(rospy, 'logwarn_throttle', lambda period, text: logs.append((period, text)))
+    for seq, frame in enumerate(['leap_hands', '', '/leap_hands', 'world', 'world', 'base_link']):
+        msg = Hand()
+        msg.header.seq, msg.header.frame_id = seq, frame
+        msg.header.stamp = rospy.Time.from_sec(10.0)
+        sub._on_message(msg)
+    assert taken == ['leap_hands', '', '/leap_hands'] and sub.wrong_frame == 3
+    assert sum(sub.received.values()) == 6          # refused ones were received all the same
+    assert all(period >= 1.0 for period, _ in logs) and len(logs) == 3   # rospy throttles them
+    assert logs[0][1] == ("ur10_arm: refused hand messages on /hands in frame 'world': this "
+                          "node reads frame 'leap_hands' (set ~hand_frame to the sender's "
+                          "~frame_id, or '' for any)")
+    values = dict(sub.diagnostic_values())
+    assert values['hand messages refused for their frame'] == '3'
+    sub.frame = ''                                   # '' takes any frame
+    msg = Hand()
+    msg.header.frame_id = 'world'
+    sub._on_message(msg)
+    assert taken[-1] == 'world'
 
 
 def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscription(monkeypatch):

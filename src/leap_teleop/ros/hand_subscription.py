@@ -27,6 +27,8 @@ class HandSubscription:
         self.topic, self.msg_type, self.callback = topic, msg_type, callback
         self.on_new_connection = on_new_connection
         self.node, self.queue_size = node, int(p['hand_queue_size'])
+        self.frame = p['hand_frame'].lstrip('/')     # tf1 names may start with '/'
+        self.wrong_frame = 0                           # messages refused for their frame
         self.health = StreamHealth(p['resubscribe_after'], p['resubscribe_silent_after'])
         self.received = collections.Counter()          # per publisher (caller id)
         self.gaps = SequenceGaps()                     # what each publisher sent that never came
@@ -47,7 +49,17 @@ class HandSubscription:
     def _on_message(self, msg):
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
-        why = self.callback(msg)
+        frame = msg.header.frame_id.lstrip('/')
+        if self.frame and frame and frame != self.frame:
+            # positions in another frame would be read as Leap coordinates: a jump
+            self.wrong_frame += 1
+            why = 'frame %r, not %r' % (msg.header.frame_id, self.frame)
+            rospy.logwarn_throttle(5.0, '%s: refused hand messages on %s in frame %r: this node '
+                                   'reads frame %r (set ~hand_frame to the sender\'s ~frame_id, '
+                                   'or \'\' for any)' % (self.node, rospy.resolve_name(self.topic),
+                                                        msg.header.frame_id, self.frame))
+        else:
+            why = self.callback(msg)
         now = rospy.get_time()
         with self._lock:                 # one hold per message: this is every hand message
             self.gaps.add(caller, msg.header.seq)
@@ -128,6 +140,7 @@ class HandSubscription:
                        ('hand messages missed from %s' % caller, str(missed.get(caller, 0))),
                        ('hand messages missed from %s across re-subscriptions' % caller,
                         str(across.get(caller, 0)))]
-        return values + [('hand re-subscriptions', str(self.health.resubscriptions)),
+        return values + [('hand messages refused for their frame', str(self.wrong_frame)),
+                         ('hand re-subscriptions', str(self.health.resubscriptions)),
                          ('hand input judged afresh on its connection',
                           str(self.health.rejudgements))]
