@@ -273,33 +273,32 @@ def test_record_gestures_bad_arguments(args, message, capsys):
     assert message in err and err.count('\n') == 1, err
 
 
-def test_record_gestures_without_a_hand_writes_nothing(tmp_path, capsys):
-    script = tmp_path / 'absent.yaml'
+def record_one_second_of(pose, tmp_path, out, *more):
+    """record_gestures' exit code for a 30 Hz scripted right hand held in `pose` for 1 s."""
+    script = tmp_path / ('%s.yaml' % pose)
     script.write_text(yaml.safe_dump({'rate_hz': 30, 'hands': {
-        'right': [{'pose': 'absent', 'duration': 1.0}]}}))
+        'right': [{'pose': pose, 'duration': 1.0}]}}))
+    return record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
+                                 'two', '--realtime', '0', '--out', str(out)] + list(more))
+
+
+def test_record_gestures_without_a_hand_writes_nothing(tmp_path, capsys):
     out = tmp_path / 'x.jsonl'
-    assert record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
-                                 'two', '--realtime', '0', '--out', str(out)]) == 1
+    assert record_one_second_of('absent', tmp_path, out) == 1
     assert 'no hand in 30 frames: nothing written' in capsys.readouterr().err
     assert not out.exists()
 
 
 def test_record_gestures_says_when_the_source_ends_before_the_time_asked(tmp_path, capsys):
     """A short take is written, and said to be short (it was silent before)."""
-    script = tmp_path / 'two.yaml'
-    script.write_text(yaml.safe_dump({'rate_hz': 30, 'hands': {
-        'right': [{'pose': 'open', 'duration': 1.0}]}}))
     out = tmp_path / 'two.jsonl'
-    assert record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
-                                 'two', '--realtime', '0', '--out', str(out)]) == 0
+    assert record_one_second_of('open', tmp_path, out) == 0
     captured = capsys.readouterr()
     assert 'the source ended after 1.0 of the 10 s asked' in captured.err, captured.err
     assert 'wrote 30 hand poses' in captured.out and out.exists()
     # the whole time asked: no such line
     out2 = tmp_path / 'two_b.jsonl'
-    assert record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
-                                 'two', '--realtime', '0', '--seconds', '0.5',
-                                 '--out', str(out2)]) == 0
+    assert record_one_second_of('open', tmp_path, out2, '--seconds', '0.5') == 0
     assert 'ended' not in capsys.readouterr().err
 
 
