@@ -61,11 +61,12 @@ class TopicTypeWatch:
         try:
             published = dict(rospy.get_published_topics())
         except Exception as e:      # the master gone or busy: try again next period
-            self.log.warn('type_check', '%s: cannot ask the master for %s: %s', self.who,
-                          self.topic, e)
+            self.log.warn('type_check:' + self.topic, '%s: cannot ask the master for %s: %s',
+                          self.who, self.topic, e)
             return None
         got = published.get(self.topic)
         if got is not None and got != self.want:
-            self.log.warn('type_check', '%s: %s carries %s, but %s reads %s: %s', self.who,
-                          self.topic, got, self.reader, self.want, self.hint)
+            # keyed by topic: watches of one node's several inputs share its log
+            self.log.warn('type_check:' + self.topic, '%s: %s carries %s, but %s reads %s: %s',
+                          self.who, self.topic, got, self.reader, self.want, self.hint)
         return got
