@@ -42,6 +42,16 @@ def test_a_bad_hand_is_refused_with_a_reason_and_retune_reaches_the_teleop():
     assert runner.teleop.p.max_joint_speed == 0.02
 
 
+def test_a_corrupt_joint_state_is_refused_so_that_the_node_can_say_so():
+    runner = ArmTeleopRunner(ArmTeleopParams(), rate=100.0)
+    assert runner.on_joints(HOME_Q, 1.0)
+    bad = list(HOME_Q)
+    bad[2] = float('nan')
+    assert not runner.on_joints(bad, 1.1)
+    bad[2] = 1e6
+    assert not runner.on_joints(bad, 1.2)
+
+
 def test_the_status_goes_out_on_a_change_or_at_its_rate():
     said = []
     r = StatusReporter(2.0, lambda t: said.append(('info', t)), lambda t: said.append(('warn', t)))

@@ -106,3 +106,16 @@ def test_joint_states_are_found_by_name_prefix_and_order():
     velocities = [0.5] + [0.1 * i for i in range(6)]
     assert index.velocities(names, velocities) == pytest.approx([0.5, 0.4, 0.3, 0.2, 0.1, 0.0])
     assert index.velocities(names, []) is None
+    # a list as long as the last one with other names is looked up afresh (it was taken
+    # for the last one's order)
+    other = ['ur10_1_' + n for n in JOINT_NAMES] + ['ur10_1_gripper_joint']
+    assert index.positions(other, [float(i) for i in range(7)]) == [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
+    # fewer positions than names: an error that says so (it was an IndexError, or the
+    # wrong joints when the missing ones came last)
+    with pytest.raises(ValueError, match='7 names but 3 positions'):
+        index.positions(other, [0.0, 1.0, 2.0])
+    # one error for all that is wrong with a message, as the arm node logs it
+    with pytest.raises(ValueError, match='^it lacks shoulder_pan_joint$'):
+        index.state(['gripper'], [0.0], [])
+    assert index.state(other, [float(i) for i in range(7)], []) == ([0.0, 1.0, 2.0, 3.0, 4.0,
+                                                                     5.0], None)

@@ -25,8 +25,9 @@ class ArmTeleopRunner:
         return why
 
     def on_joints(self, q, now, qd=None):
+        """Whether the state was taken (False: non-finite or impossible positions)."""
         with self.lock:
-            self.teleop.on_joints(q, now, qd)
+            return self.teleop.on_joints(q, now, qd)
 
     def new_input_connection(self):
         with self.lock:

@@ -63,12 +63,12 @@ class ArmNode:
 
     def on_joints(self, msg):
         try:
-            q = self.joint_index.positions(msg.name, msg.position)
-            qd = self.joint_index.velocities(msg.name, msg.velocity)
-        except KeyError as e:
-            self.log.warn('joints', 'ur10_arm: joint_states lacks %s', e.args[0])
+            q, qd = self.joint_index.state(msg.name, msg.position, msg.velocity)
+            if not self.runner.on_joints(q, rospy.get_time(), qd):
+                raise ValueError('non-finite or impossible positions %s' % q)
+        except ValueError as e:
+            self.log.warn('joints', 'ur10_arm: ignored a joint_states message: %s', e)
             return
-        self.runner.on_joints(q, rospy.get_time(), qd)
         self.joints_seen.set()
 
     def wait_for_robot(self):
