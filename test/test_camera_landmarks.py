@@ -269,6 +269,10 @@ def test_bad_landmarks_give_no_hand(hands_json):
         CameraModel.from_hfov(640, 480, 0.0)
     with pytest.raises(ValueError):
         CameraModel.from_matrix(640, 480, [0, 0, 320, 0, 0, 240, 0, 0, 1])
+    # a CameraInfo of size 0 (its K fine) gave a division by zero once frames came
+    for width, height in ((0, 480), (640, 0), (100000, 480)):
+        with pytest.raises(ValueError, match='image size needs 1..16384 pixels a side'):
+            CameraModel.from_matrix(width, height, [500.0, 0, 320.0, 0, 500.0, 240.0, 0, 0, 1])
 
 
 def test_camera_matrix_and_letterbox():

@@ -58,6 +58,7 @@ DEFAULT_PALM_LENGTH_MM = 95.0
 # the Leap's interaction box.
 DEFAULT_CAMERA_POSITION_MM = (0.0, 200.0, -500.0)
 DEFAULT_HFOV_DEG = 60.0            # a typical laptop webcam
+MAX_IMAGE_SIDE = 16384             # pixels: beyond any camera's frames
 
 # Extended: a finger whose tip points along the hand (angle between the hand direction
 # and knuckle -> tip) under this and whose joints are nearly straight.
@@ -114,6 +115,10 @@ class CameraModel:
         k = np.asarray(k, dtype=float).reshape(9)
         if not (np.all(np.isfinite(k)) and k[0] > 0 and k[4] > 0):
             raise ValueError('camera matrix needs positive finite fx, fy, got %r' % (list(k),))
+        if not (0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE):
+            # the lens is rescaled to each frame's size by these
+            raise ValueError('image size needs 1..%d pixels a side, got %r x %r'
+                             % (MAX_IMAGE_SIDE, width, height))
         return cls(int(width), int(height), float(k[0]), float(k[4]), float(k[2]), float(k[5]))
 
     def scaled_to(self, width, height):
