@@ -61,6 +61,15 @@ def test_a_side_twice_or_two_outputs_on_one_topic_are_refused():
     check_outputs(params(sides=['right'], hand_topic_left='leapmotion/hand_right'))
 
 
+def test_a_static_tf_from_a_frame_to_itself_is_refused():
+    # it was taken, and tf2 listeners then complained of TF_SELF_TRANSFORM
+    with pytest.raises(ValueError, match="~world_frame and ~frame_id are both 'world'"):
+        check_outputs(params(frame_id='world', world_frame='world'))
+    with pytest.raises(ValueError, match='both'):
+        check_outputs(params(frame_id='/world', world_frame='world'))
+    check_outputs(params(frame_id='world', world_frame='world', publish_tf=False))
+
+
 def test_recognizers_are_built_and_retuned_from_the_params():
     make = recognizer_factory(params(recognizer_on_frames=5, recognizer_min_confidence=0.2))
     a, b = make(), make()

@@ -13,7 +13,11 @@ OUTPUT_TOPICS = ('leapcobot_topic_right', 'leapcobot_topic_left', 'hand_topic_ri
 def check_outputs(p):
     """ValueError when the ~params ask for outputs that cannot be: a side twice, leapros /
     leap carrying a hand the sender does not publish, two outputs on one topic (two
-    message types on a topic, or two streams mixed in one)."""
+    message types on a topic, or two streams mixed in one), a static TF from a frame to
+    itself (tf2 drops it)."""
+    if p['publish_tf'] and p['world_frame'].lstrip('/') == p['frame_id'].lstrip('/'):
+        raise ValueError('~world_frame and ~frame_id are both %r: the static TF needs two '
+                         'frames (or ~publish_tf false)' % p['frame_id'])
     if len(set(p['sides'])) != len(p['sides']):
         raise ValueError('~sides %r: each side once' % (p['sides'],))
     if (p['leapros_topic'] or p['leap_topic']) and p['leapros_side'] not in p['sides']:
