@@ -79,6 +79,26 @@ def test_arming_needs_the_thumbs_up_held():
         ArmTeleopParams.from_dict({'arm_hold_s': -1.0})
 
 
+def test_the_thumbs_up_hold_counts_on_the_clock_that_says_less():
+    # Unstamped input (the original sender's) arms on its receipt times; it never armed.
+    t = ArmTeleop()
+    t.on_joints(HOME)
+    for k in range(HOLD_PERIODS):
+        now = 100.0 + 0.008 * k
+        t.on_hand(hand(thumb_up=True, stamp=0.0), now)
+        t.step(now)
+    assert t.status.state == ARMED
+    # Two messages 20 ms apart whose stamps leap 10 s: no hold (it armed at once).
+    for leap in (0.35, 10.0):
+        t = ArmTeleop()
+        t.on_joints(HOME)
+        t.on_hand(hand(thumb_up=True, stamp=100.0), 100.0)
+        t.step(100.0)
+        t.on_hand(hand(thumb_up=True, stamp=100.0 + leap), 100.02)
+        t.step(100.02)
+        assert t.status.state == DISARMED, leap
+
+
 def test_imitation_maps_palm_offset_through_axis_map_and_scale():
     t, c = armed_with_origin(scale=2.0)
     tcp_ref = kin.fk(HOME)[:3, 3]

@@ -159,7 +159,7 @@ class ArmTeleop:
         self._goal = None              # (time, joint goal) of the last tracked target
         self._last_step = None
         self._gripper_sent = None
-        self._thumb_up_since = None       # capture time the current thumbs-up began
+        self._thumb_up_since = None       # (capture stamp, receipt) of the current thumbs-up's start
         self._stalled = None              # holding: (what stalled, when it last came)
         self._resume_box = None           # joint stall: (lo, hi) joints it may resume in
 
@@ -213,7 +213,7 @@ class ArmTeleop:
         if not (hand.present and hand.thumb_up):
             self._thumb_up_since = None
         elif self._thumb_up_since is None:
-            self._thumb_up_since = hand.stamp
+            self._thumb_up_since = (hand.stamp, now)
         return None
 
     def on_joints(self, q, now=None, qd=None):
@@ -353,9 +353,14 @@ class ArmTeleop:
             return cmd
         if self.status.state == DISARMED:
             # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
-            # be held arm_hold_s by the hand's own capture times.
+            # be held arm_hold_s by the hand's own capture times and by their receipt (a
+            # stamp that leaps ahead is no hold; unstamped input has only its receipt).
             if hand.thumb_up and self._thumb_up_since is not None:
-                if hand.stamp - self._thumb_up_since >= self.p.arm_hold_s - 1e-9:
+                since_stamp, since_rx = self._thumb_up_since
+                held = self._hand_rx - since_rx
+                if hand.stamp > 0 and since_stamp > 0:
+                    held = min(held, hand.stamp - since_stamp)
+                if held >= self.p.arm_hold_s - 1e-9:
                     self._set(ARMED, 'thumbs-up; show rock to set the origin')
                 else:
                     self._set(DISARMED, 'hold the thumbs-up')
