@@ -106,7 +106,8 @@ TELEOP_PARAMS = {
     'joint_loss_after': Param(3.0, 'no joint states this long -> disarm and forget the robot '
                                    '(gone or restarted); at least joint_timeout', unit='s',
                               gt=0.0, le=30.0),
-    'arm_hold_s': Param(0.3, 'a thumbs-up must be held this long before it arms', unit='s',
+    'arm_hold_s': Param(0.3, 'a thumbs-up must be held this long before it arms (by its '
+                             'messages\' stamps and by their receipt)', unit='s',
                         ge=0.0, le=5.0),
 }
 
