@@ -149,6 +149,7 @@ def test_only_a_hand_sized_circle_flips():
 def test_gestures_respect_the_drone_state():
     pilot = DronePilot(PilotConfig(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
     pilot.on_navdata(4, 1000, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)            # a takeoff needs the hand in view
     pilot.on_gesture('unfold', True, 0.0)                 # flying: no takeoff
     pilot.on_gesture('circle_cw', True, 0.0, HAND_CIRCLE)
     assert [(c.kind, c.anim) for c in drain(pilot)] == [('flip', (18, 0))]

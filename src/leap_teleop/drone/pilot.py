@@ -6,9 +6,15 @@ the command queue with ``pop`` and runs ``watchdog``.
 
 Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
 ``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
-``flip_min_altitude`` and the circle's radius is at least ``flip_min_radius``: a
-hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
-recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included).
+``flip_min_altitude`` and the circle's radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
+a hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
+recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included). Gesture
+events act only when on time: a stamped event arriving more than ``max_input_age`` later
+(or earlier) than the Hand stream's best-case latency (the same sender stamps both with
+the frame's capture time), or, with no stamped Hand to judge by, stamped more than
+``max_input_age`` off this clock, is refused; an unfold takes off only with a fresh
+present hand (it still engages in a short gap, see below). hand_lost always acts (it
+hovers); unknown names are warned about.
 
 Modes:
 
@@ -28,7 +34,8 @@ Modes:
   linear.z = palm normal y (about -1 for a flat palm: the paper's drone sinks unless
   the palm is tilted), angular.x = init_x, angular.y = init_y (raw mm: any non-zero
   value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
-  Nothing is sent before the first capture.
+  Nothing is sent before the first capture. The linear ones are clamped to [-1, 1] here,
+  as the driver would.
 
 Safety added in both modes: hand twists are only sent while fresh navdata (no older
 than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
@@ -63,6 +70,16 @@ AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
 ZERO_TWIST = (0.0,) * 6
 HOVER_REPEAT = 1.0                   # s between hover commands while navdata is stale
+# The recognizer reports circles up to 0.3 m (CircleRules.r_max; people's fitted 0.2 m) in
+# a tracking volume under a metre: beyond 0.5 m no hand drew it.
+FLIP_MAX_RADIUS_M = 0.5
+# Trackers send unit normals / directions (recordings: within 1e-6); a vector off by more
+# is no tracked hand, and near zero length its angles (yaw) are noise.
+UNIT_TOLERANCE = 0.01
+# Every name a sender's GestureEvent may carry (msg/GestureEvent.msg); the pilot acts on
+# unfold, fold, circle_* and hand_lost, and ignores the held ones quietly.
+KNOWN_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down', 'unfold', 'fold',
+                  'circle_cw', 'circle_ccw', 'hand_lost', 'hand_found')
 
 
 @dataclass
@@ -183,7 +200,7 @@ class DronePilot:
         self._last_twist_out = None      # monotonic time of the last twist published
         self._zero_sent = False
         self._stream = InputStream(self.cfg.max_input_age, self.cfg.hand_timeout)
-        self.rejected_inputs = 0         # non-finite, out-of-order or late Hand messages
+        self.rejected_inputs = 0         # bad or late Hand messages and gesture events
 
     # -- inputs (callbacks: quick, never block) --------------------------------------
     def on_navdata(self, state, altd_mm, now):
@@ -232,9 +249,10 @@ class DronePilot:
                 # Leap range is well under a metre: beyond that it is a tracking error,
                 # and the paper mode's raw arithmetic would overflow on it.
                 why = 'palm %s m from the device' % (tuple(hand.palm),)
-            elif hand.present and any(abs(v) > 1.5 for v in tuple(hand.normal)
-                                      + tuple(hand.direction)):
-                why = 'palm normal / direction are not unit vectors'
+            elif hand.present and not all(abs(math.hypot(*v) - 1.0) <= UNIT_TOLERANCE
+                                          for v in (hand.normal, hand.direction)):
+                why = 'palm normal / direction are not unit vectors (lengths %.3g, %.3g)' % (
+                    math.hypot(*hand.normal), math.hypot(*hand.direction))
             else:
                 why = self._stream.check(hand.stamp, now)
             if why:
@@ -267,6 +285,15 @@ class DronePilot:
         its radius in m) and capture stamp."""
         with self._lock:
             state = self.drone_state if self._navdata_ok(now) else None
+            if name not in KNOWN_GESTURES:
+                self._warn('gesture_name', 'ignored gesture %r: not one a sender sends (the '
+                           'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost)' % name)
+                return
+            why = None if name == 'hand_lost' else self._event_refused(name, stamp, now)
+            if why:
+                self.rejected_inputs += 1
+                self._warn('gesture_' + name, 'ignored %s: %s' % (name, why))
+                return
             if name == 'hand_lost':
                 self._lose(now)
             elif name == 'unfold':
@@ -274,7 +301,11 @@ class DronePilot:
                     self.engaged = True
                     if self._last_hand is not None and self.hand_present:
                         self._capture(self._last_hand)
-                if state == LANDED:
+                if state == LANDED and not self._hand_fresh(now):
+                    # engaged as before (a hand back soon steers), but nothing takes off
+                    # that no hand in view asks for
+                    self._warn('unfold', 'unfold: no takeoff, no fresh Hand input')
+                elif state == LANDED:
                     self._takeoff_asked = True
                     self._takeoff_at = now
                     self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
@@ -299,14 +330,37 @@ class DronePilot:
                     self._warn('circle', '%s: no flip (state %s, altitude %.2f m < %.2f m or '
                                'not flying)' % (name, state, self.altitude,
                                                 self.cfg.flip_min_altitude))
-                elif not self.cfg.flip_min_radius <= radius < math.inf:     # NaN too
+                elif not self.cfg.flip_min_radius <= radius <= FLIP_MAX_RADIUS_M:   # NaN too
                     self._warn('circle_radius', '%s: no flip, radius %r m is not a hand-sized '
-                               'circle (flip_min_radius %g m)'
-                               % (name, value, self.cfg.flip_min_radius))
+                               'circle (flip_min_radius %g m .. %g m)'
+                               % (name, value, self.cfg.flip_min_radius, FLIP_MAX_RADIUS_M))
                 else:
                     self.queue.push(Command('flip', anim=(self.cfg.flip_type,
                                                           self.cfg.flip_duration), stamp=now,
                                             input_stamp=stamp))
+
+    def _event_refused(self, name, stamp, now):
+        """Why a gesture event must not act (None: it may). Its stamp is judged against the
+        Hand stream's best-case latency, as the hands are (replayed bags, unsynchronised
+        clocks), else against this clock (nothing else to judge a first one by); unstamped
+        events are not judged."""
+        max_age = self.cfg.max_input_age
+        if stamp > 0:
+            lag, best = now - stamp, self._stream.best_lag
+            if best is None and abs(lag) > max_age:
+                return 'stamped %.3f s %s this clock, and no stamped Hand to judge it by' % (
+                    abs(lag), 'before' if lag > 0 else 'ahead of')
+            if best is not None and lag - best > max_age:
+                return 'late: arrived %.3f s after the Hand stream\'s usual latency (max %.3f s)' % (
+                    lag - best, max_age)
+            if best is not None and best - lag > max_age:
+                return 'stamped %.3f s ahead of the Hand stream (max %.3f s)' % (best - lag, max_age)
+        return None
+
+    def _hand_fresh(self, now):
+        """A present hand arrived within hand_timeout (the watchdog may not have run yet)."""
+        return (self.hand_present and self.last_hand_time is not None
+                and now - self.last_hand_time <= self.cfg.hand_timeout)
 
     # -- mapping ---------------------------------------------------------------------
     def _moved_since_loss(self, hand):
@@ -329,8 +383,11 @@ class DronePilot:
                 self.paper_ref = (palm_mm[2], palm_mm[0])
             if self.paper_ref is None:
                 return None
-            return paper_twist(palm_mm, hand.normal, self.paper_ref[0], self.paper_ref[1],
-                               cfg.paper_scale)
+            t = paper_twist(palm_mm, hand.normal, self.paper_ref[0], self.paper_ref[1],
+                            cfg.paper_scale)
+            # linear clamped as the driver clamps it anyway: out of range, a driver (or
+            # the sim) would warn; angular x / y only switch the auto-hover off
+            return tuple(max(-1.0, min(1.0, v)) for v in t[:3]) + t[3:]
         if not self.engaged or self.reference is None:
             return None
         ref, yaw_ref = self.reference

@@ -50,8 +50,9 @@ PILOT_PARAMS = {
                          unit='deg', ge=0.0, lt=90.0),
     'paper_scale': Param(3000.0, 'paper: palm mm per unit command', unit='mm',
                          ge=100.0, le=100000.0),
-    'max_input_age': Param(0.25, 'drop a Hand arriving this much later than the stream\'s '
-                                 'best latency', unit='s', gt=0.0, le=10.0),
+    'max_input_age': Param(0.25, 'drop a Hand (or gesture event) arriving this much later '
+                                 'than the Hand stream\'s best latency', unit='s', gt=0.0,
+                           le=10.0),
 }
 
 # drone_pilot's own ~params (its wiring), then every pilot one.

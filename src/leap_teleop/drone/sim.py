@@ -4,7 +4,8 @@ A rigid body with the indoor-hull mass and inertia receives, each physics step, 
 thrust and torques of four motors (X layout, thrust clamped to [0, max]) computed by an
 emulated onboard controller:
 
-- cmd_vel (as the driver receives it, every component clamped to [-1, 1]):
+- cmd_vel (as the driver receives it, every component clamped to [-1, 1]; a warning says
+  so when linear.x / y / z or angular.z was beyond it):
   linear.x / linear.y = pitch / roll set points as fractions of ``euler_angle_max``
   (+x forward, +y left), linear.z = climb rate fraction of ``control_vz_max``,
   angular.z = yaw rate fraction of ``control_yaw`` (+ = left, counter-clockwise).
@@ -19,7 +20,7 @@ emulated onboard controller:
   axis with the thrust cut, catch, climb back, hover). 0..15 are approximated by set-
   point sequences (tilts, yaw turns, dances) over the SDK's default durations. Types
   > 19 are refused. A flip's ``duration`` is ignored (the SDK's 15 ms is not the spin
-  time either).
+  time either); ardrone_sim refuses durations beyond MAX_ANIMATION_MS (its runner).
 - the driver's other commands: flat trim (on the ground only), LED animations 0..13,
   video recording on / off and the video channel (front / bottom camera).
 - altitude limits (``altitude_min`` .. ``altitude_max`` while flying), a battery that
@@ -61,6 +62,11 @@ DEFAULT_DURATION_MS = (1000, 1000, 1000, 1000, 1000, 1000, 5000, 5000, 2000, 500
 FLIP_AXES = {FLIP_AHEAD: (1, 1.0), FLIP_BEHIND: (1, -1.0), FLIP_LEFT: (0, -1.0),
              FLIP_RIGHT: (0, 1.0)}
 HOVER_EPS = 1e-4        # a command component below this counts as zero
+# Longest flight animation ardrone_sim takes, ms: twice the SDK's longest default (5 s), the
+# pilot's own flip_duration bound; steering waits out an animation: longer is a lockout.
+MAX_ANIMATION_MS = 10000
+# cmd_vel beyond [-1, 1] by more than this is clamped with a warning (rounding is not).
+CMD_RANGE_TOLERANCE = 0.01
 EVENTS_KEPT = 1000      # state changes remembered in ArDroneSim.events (oldest dropped)
 # The firmware's LED animations (ardrone/setledanimation types 0..13).
 LED_ANIMATION_NAMES = (
@@ -226,6 +232,10 @@ class ArDroneSim:
         self._read()
 
     # -- warnings -------------------------------------------------------------------
+    def warn(self, key, msg, *args):
+        """A command refused by the sim's owner, warned about as the sim's own are."""
+        self._warn(key, msg, *args)
+
     def _warn(self, key, msg, *args):
         last = self._last_warn.get(key)
         if last is not None and 0 <= self.time - last < 2.0:
@@ -293,6 +303,10 @@ class ArDroneSim:
                        (lx, ly, lz, ax, ay, az))
             return False
         self.last_input_time = self.time
+        # angular.x / y only switch the auto-hover off (any size): no warning for them
+        if any(abs(values[i]) > 1.0 + CMD_RANGE_TOLERANCE for i in (0, 1, 2, 5)):
+            self._warn('cmd_vel_range', 'cmd_vel %r: a component beyond [-1, 1], clamped '
+                       '(as the driver does)', (lx, ly, lz, ax, ay, az))
         self.cmd = tuple(_clamp(v, -1.0, 1.0) for v in values)
         if self.state in (LANDED, UNKNOWN) and any(abs(v) > HOVER_EPS for v in self.cmd):
             self._warn('cmd_vel_landed', 'cmd_vel ignored: drone is %s', STATE_NAMES[self.state])
@@ -309,8 +323,9 @@ class ArDroneSim:
         try:
             anim_type = int(anim_type)
             duration_ms = int(duration_ms)
-        except (TypeError, ValueError):
-            self._warn('anim', 'flight animation refused: bad type %r', anim_type)
+        except (TypeError, ValueError, OverflowError):
+            self._warn('anim', 'flight animation refused: bad type %r or duration %r',
+                       anim_type, duration_ms)
             return False
         if not 0 <= anim_type < len(ANIMATION_NAMES):
             self._warn('anim', 'flight animation refused: type %d is not in 0..19', anim_type)
@@ -648,6 +663,16 @@ class ArDroneSim:
             from PIL import Image
             Image.fromarray(img).save(path)
         return img
+
+
+def animation_duration_error(duration_ms):
+    """'' when a flight animation may last duration_ms, else why not."""
+    try:
+        ok = 0 <= int(duration_ms) <= MAX_ANIMATION_MS
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    return '' if ok else ('duration %r ms is not in 0..%d ms (0 = the animation\'s default)'
+                          % (duration_ms, MAX_ANIMATION_MS))
 
 
 def _animation_setpoints(kind, u, duration):

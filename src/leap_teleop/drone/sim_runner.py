@@ -9,7 +9,13 @@ from dataclasses import dataclass
 import pybullet as pb
 
 from leap_teleop.drone import cameras
-from leap_teleop.drone.sim import CAMERA_FRONT, STATE_NAMES, ArDroneSim, DroneParams
+from leap_teleop.drone.sim import (
+    CAMERA_FRONT,
+    STATE_NAMES,
+    ArDroneSim,
+    DroneParams,
+    animation_duration_error,
+)
 from leap_teleop.params import Param
 from leap_teleop.sim_runtime import MAX_LAG_S, RealtimePacer, SendGate, pace_factor, snapshot_path
 
@@ -206,8 +212,13 @@ class DroneSimRunner:
         return reading
 
     # The driver's commands (services): the simulated firmware logs why it ignores one;
-    # each returns a line for the node's log ('' when there is nothing to say).
+    # each returns a line for the node's log ('' when there is nothing to say), or False:
+    # a request refused, to be answered false.
     def flight_animation(self, kind, duration):
+        why = animation_duration_error(duration)
+        if why:     # steering would wait it out: refused, not passed on as the driver would
+            self.call(self.sim.warn, 'anim_duration', 'flight animation refused: %s', why)
+            return False
         self.call(self.sim.flight_animation, kind, duration)
         return ''
 

@@ -10,11 +10,12 @@ own at ~front_rate / ~bottom_rate) and the active camera again on ardrone/image_
 ardrone/camera_info; serves ardrone/setflightanimation, ardrone/flattrim,
 ardrone/togglecam, ardrone/setcamchannel, ardrone/setledanimation, ardrone/setrecord and
 ardrone/front|bottom/set_camera_info. Like the driver, the services answer true (the
-firmware ignores what it cannot do; the reason is logged). With ~enable_navdata_altitude
-it also publishes ardrone/navdata_altitude. Extras: the flown path (nav_msgs/Path,
-ardrone/path, bounded) at ~path_rate, a latched drone body of markers (ardrone/markers)
-and ardrone/snapshot (std_srvs/Trigger: writes a chase-view PNG, returns its path). With
-/use_sim_time true it publishes /clock and can run faster than real time.
+firmware ignores what it cannot do; the reason is logged), but setflightanimation refuses
+(false) a duration beyond 10 s. Inputs of another type are warned about. With
+~enable_navdata_altitude it also publishes ardrone/navdata_altitude. Extras: the flown path
+(nav_msgs/Path, ardrone/path, bounded) at ~path_rate, a latched drone body of markers
+(ardrone/markers) and ardrone/snapshot (std_srvs/Trigger: writes a chase-view PNG, returns
+its path). With /use_sim_time true it publishes /clock and can run faster than real time.
 Everything is relative to the node's namespace, so drones run side by side in their own
 namespaces (~tf_prefix keeps their TF frames apart, as with the driver).
 """
@@ -28,12 +29,13 @@ from leap_teleop import srv
 from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner
 from leap_teleop.ros.drone_camera_topics import DroneCameraTopics
 from leap_teleop.ros.drone_state_topics import DroneStateTopics
+from leap_teleop.ros.drone_type_watches import ardrone_sim_type_watches
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 
 PARAMS = RUNNER_PARAMS      # declared beside the simulation; --help and docs/nodes.md read it
 # Service: (type, answer, DroneSimRunner's command, the request's fields it takes). Like the
-# driver, every answer is true: the simulated firmware logs why it ignored a command.
+# driver, answers are true (the sim logs what it ignored) unless the command says False.
 SERVICES = {
     'setflightanimation': (srv.FlightAnim, srv.FlightAnimResponse(result=True), 'flight_animation',
                            ('type', 'duration')),
@@ -51,23 +53,24 @@ class ArDroneSimNode:
     def __init__(self, p):
         self.log = RateLimitedLog()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
-        self.runner = DroneSimRunner(p, self.use_sim_time, warn=lambda key, text:
-                                     rospy.logwarn('ardrone_sim: %s', text))
+        self.runner = DroneSimRunner(p, self.use_sim_time, warn=lambda _, text: rospy.logwarn('ardrone_sim: %s', text))
         self.state = DroneStateTopics(p, self.runner.frames, self.runner.path_gate, self.use_sim_time)
         self.cameras = DroneCameraTopics(self.runner.frames.cameras)
         sim, call = self.runner.sim, self.runner.call
-        rospy.Subscriber('cmd_vel', Twist, lambda m: call(
-            sim.set_cmd_vel, m.linear.x, m.linear.y, m.linear.z, m.angular.x, m.angular.y,
-            m.angular.z), queue_size=10)
+        rospy.Subscriber('cmd_vel', Twist, lambda m: call(sim.set_cmd_vel, m.linear.x, m.linear.y, m.linear.z,
+                                                          m.angular.x, m.angular.y, m.angular.z), queue_size=10)
         for topic, command in (('takeoff', sim.takeoff), ('land', sim.land), ('reset', sim.reset)):
             rospy.Subscriber('ardrone/' + topic, Empty, lambda _, c=command: call(c))
         for name, (kind, response, command, fields) in SERVICES.items():
             rospy.Service('ardrone/' + name, kind, lambda req, c=getattr(self.runner, command),
                           f=fields, r=response: self.on_command(req, c, f, r))
         rospy.Service('ardrone/snapshot', Trigger, self.on_snapshot)
+        self.type_watches = ardrone_sim_type_watches(self.log)
 
     def on_command(self, req, command, fields, response):
         said = command(*(getattr(req, f) for f in fields))
+        if said is False:               # refused (the runner warned)
+            return type(response)(result=False)
         if said:
             rospy.loginfo('ardrone_sim: %s', said)
         return response

@@ -8,9 +8,9 @@ thread runs the watchdog and publishes them (a takeoff or land waits for the dri
 listen, a takeoff at most ~takeoff_hold); the flip call runs on its own thread, abandoned
 after ~service_timeout. Without navdata for ~navdata_timeout the drone state is unknown: no
 takeoff, hover, land after ~land_after (see leap_teleop.drone.pilot). Rejected Hand
-messages, worker faults and flip call outcomes are counted on /diagnostics. RECONFIGURABLE
-parameters (dead zones, scales, the command cap, the flip's thresholds) change live with
-dynamic_reconfigure; modes, rates, watchdog times and topics do not.
+messages and gesture events, worker faults and flip call outcomes are counted on /diagnostics.
+RECONFIGURABLE parameters (dead zones, scales, the command cap, the flip's thresholds) change
+live with dynamic_reconfigure; modes, rates, watchdog times and topics do not.
 """
 import threading
 
@@ -23,6 +23,7 @@ from leap_teleop.msg import GestureEvent, Hand, Navdata
 from leap_teleop.ros import conversions
 from leap_teleop.ros.ardrone_commands import ArdroneCommands
 from leap_teleop.ros.diagnostics import diagnostics_updater
+from leap_teleop.ros.drone_type_watches import pilot_type_watches
 from leap_teleop.ros.hand_subscription import HandSubscription
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
@@ -43,13 +44,13 @@ class DronePilotNode:
                                          self.pilot.new_input_connection)
         rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
         rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
+        self.type_watches = pilot_type_watches(hand_topic, p['gesture_topic'], p['side'], self.log)
         self.diagnostics = diagnostics_updater('drone_pilot_%s' % p['side'], 'pilot', self.report,
                                                self.commands.input_age)
         self.worker = PilotWorker(self.pilot, self.commands.send,
                                   ServiceCall(self.commands.flip, p['service_timeout'], 'flip'),
-                                  rospy.get_time, warn=self.warn,
+                                  rospy.get_time, warn=self.warn, extra=self.diagnostics.update,
                                   info=lambda text: rospy.loginfo('pilot: %s', text),
-                                  extra=self.diagnostics.update,
                                   send_held=self.commands.send_held)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)
@@ -67,7 +68,10 @@ class DronePilotNode:
         return self.pilot.on_hand(conversions.pilot_input(msg), rospy.get_time())
 
     def on_gesture(self, msg):
-        if msg.side == self.side:
+        if msg.side not in conversions.SIDE_CODES.values():
+            self.log.warn('gesture_side', 'pilot: ignored GestureEvent %r of side %d (0 right, 1 left)',
+                          msg.gesture, msg.side)
+        elif msg.side == self.side:     # the other hand's events share the topic
             self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time(), msg.value,
                                   msg.header.stamp.to_sec())
 
@@ -82,8 +86,7 @@ class DronePilotNode:
     def report(self):
         """The diagnostics (on the worker's thread, through its `extra`)."""
         level, summary, values = self.worker.diagnostics(rospy.get_time())
-        return level, summary, (values + self.commands.diagnostic_values()
-                                + self.hand_sub.diagnostic_values())
+        return level, summary, values + self.commands.diagnostic_values() + self.hand_sub.diagnostic_values()
 
     def retune(self, changes):
         for name, value in changes.items():
@@ -99,8 +102,7 @@ def main(argv=None):
     rospy.on_shutdown(node.stop)
     try:
         if not rospy.core.is_shutdown_requested():
-            node.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE, vars(node.pilot.cfg),
-                                           node.retune)
+            node.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE, vars(node.pilot.cfg), node.retune)
             node.thread.start()
             rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
             rospy.spin()
