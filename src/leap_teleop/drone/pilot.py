@@ -13,8 +13,9 @@ events act only when on time: a stamped event arriving more than ``max_input_age
 (or earlier) than the Hand stream's best-case latency (the same sender stamps both with
 the frame's capture time), or, with no stamped Hand to judge by, stamped more than
 ``max_input_age`` off this clock, is refused; an unfold takes off only with a fresh
-present hand (it still engages in a short gap, see below). hand_lost always acts (it
-hovers); unknown names are warned about.
+present hand (it still engages in a short gap, see below). hand_lost and fold always act
+(they hover / land: a late one still asks for the safe thing); unknown names are warned
+about.
 
 Modes:
 
@@ -76,6 +77,8 @@ FLIP_MAX_RADIUS_M = 0.5
 # Trackers send unit normals / directions (recordings: within 1e-6); a vector off by more
 # is no tracked hand, and near zero length its angles (yaw) are noise.
 UNIT_TOLERANCE = 0.01
+# Events that move the drone toward safety (hover, land): they act however late they come.
+SAFE_EVENTS = ('hand_lost', 'fold')
 # Every name a sender's GestureEvent may carry (msg/GestureEvent.msg); the pilot acts on
 # unfold, fold, circle_* and hand_lost, and ignores the held ones quietly.
 KNOWN_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down', 'unfold', 'fold',
@@ -289,7 +292,7 @@ class DronePilot:
                 self._warn('gesture_name', 'ignored gesture %r: not one a sender sends (the '
                            'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost)' % name)
                 return
-            why = None if name == 'hand_lost' else self._event_refused(name, stamp, now)
+            why = None if name in SAFE_EVENTS else self._event_refused(name, stamp, now)
             if why:
                 self.rejected_inputs += 1
                 self._warn('gesture_' + name, 'ignored %s: %s' % (name, why))
