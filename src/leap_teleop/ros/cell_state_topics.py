@@ -1,11 +1,26 @@
 """The simulated UR10 cell's state, each tick it is due: every arm's joint_states (in the
-arm's namespace), the cubes on ~object_poses and /clock in sim time."""
+arm's namespace), the cubes on ~object_poses and /clock in sim time; and the watches on
+its command topics' types."""
 import rospy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
 from leap_teleop.ros.conversions import joint_state_msg, object_poses_msg
+from leap_teleop.ros.graph import TopicTypeWatch
+from leap_teleop.ur10.cell_runner import KINDS
+
+
+def command_type_watches(config, log):
+    """A TopicTypeWatch (warning through `log`) on each command topic of `config`'s arms:
+    rospy drops a publisher of another type with no word to the sim."""
+    return [TopicTypeWatch('%s/%s' % (arm.name, topic), JointTrajectory, 'ur10_sim',
+                           'the simulated %s' % arm.name,
+                           'nothing published there moves the %s; publish '
+                           'trajectory_msgs/JointTrajectory for %s' % (kind, ', '.join(joints)),
+                           log)
+            for arm in config.arms for kind, (topic, joints) in KINDS.items()]
 
 
 class CellStateTopics:

@@ -25,6 +25,10 @@ GRIPPER_MAX_SPEED = 1.6        # knuckle rad/s: about 0.5 s from open to closed 
 GRIPPER_FORCE = 60.0           # N per finger
 ARM_FORCE = np.array([330.0, 330.0, 150.0, 54.0, 54.0, 54.0])   # URDF efforts
 ARM_POSITION_GAIN = 0.5        # share of the joint's position error removed per physics step
+# A trajectory point whose acceleration would take its joint from rest past the speed limit
+# sooner than this is refused as a mistake (units, a broken planner): 31-47 rad/s^2 for the
+# arm, 10-15x the pi rad/s^2 MoveIt's UR10 configurations and this package plan with.
+POINT_ACCEL_RAMP_S = 1.0 / 15.0
 # The constraint solver's default residual (1e-7) stops early, leaving joint velocities
 # ~5e-4 rad/s off their motor targets: 2 % spurious acceleration. At 1e-14 a free arm
 # converges in at most ~40 iterations; an arm squeezing a cube never does (its contacts and
@@ -74,9 +78,12 @@ class _Arm:
         self.gripper_joints = self.fingers + [self.knuckle]
         self.finger_links = [links['left_finger_link'], links['right_finger_link']]
         self.tcp_link = links['tcp_link']
-        self.arm_follower = TrajectoryFollower(cfg.home, kin.MAX_JOINT_SPEED,
-                                               kin.JOINT_LOWER, kin.JOINT_UPPER)
-        self.gripper_follower = TrajectoryFollower([0.0], GRIPPER_MAX_SPEED, [0.0], [GRIPPER_CLOSED])
+        self.arm_follower = TrajectoryFollower(
+            cfg.home, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER,
+            kin.MAX_JOINT_SPEED / POINT_ACCEL_RAMP_S, kin.JOINT_NAMES)
+        self.gripper_follower = TrajectoryFollower(
+            [0.0], GRIPPER_MAX_SPEED, [0.0], [GRIPPER_CLOSED],
+            GRIPPER_MAX_SPEED / POINT_ACCEL_RAMP_S, [GRIPPER_JOINT])
         self.grasp = None              # (constraint id, cube name, knuckle at grasp)
         self.lost_checks = 0
         self.touching = ([], [])       # cube names touched by left, right finger
@@ -214,9 +221,10 @@ class UR10Cell:
         return list(self.arms)
 
     def command_arm(self, name, points, start_time=None):
-        """Follow joint points [(time_from_start, q[6] in JOINT_NAMES order, qd[6]|None)],
-        replacing the current trajectory. Raises TrajectoryError on a bad command (the arm
-        keeps what it was doing). Returns the sim time the last point will be reached."""
+        """Follow joint points [(time_from_start, q[6] in JOINT_NAMES order, qd[6]|None
+        [, qdd[6]])] from start_time (sim time; None: now), replacing the current trajectory
+        from then on. Raises TrajectoryError on a bad command (the arm keeps what it was
+        doing). Returns the sim time the last point will be reached."""
         return self.arm(name).arm_follower.command(self.time, points, start_time)
 
     def command_gripper(self, name, points, start_time=None):

@@ -44,6 +44,9 @@ RUNNER_PARAMS = {
 MAX_PENDING = 100               # commands queued for the physics loop (bounded)
 TROUBLE_S = 10.0                # wall s the cell's status stays WARN after a dropped or refused command
 SNAPSHOT_TIMEOUT = 30.0         # s for one picture (the first one starts the renderer)
+# A command stamped to start further ahead than this is most likely a wrong stamp (a stale
+# or foreign clock): it is followed as the JTC would, from then on, but said so.
+FAR_START_S = 5.0
 # Command kind: (topic in the arm's namespace, the joints a command names).
 KINDS = {'arm': ('arm_controller/command', tuple(JOINT_NAMES)),
          'gripper': ('gripper/command', (GRIPPER_JOINT,))}
@@ -114,13 +117,15 @@ class CellTick:
 class CellRunner:
     """UR10Cell behind one lock. Callbacks `queue` commands (bounded: when the loop stalls,
     the oldest are dropped); each `step` applies them, steps the physics and says what is
-    due. `reject(arm, kind, why)` hears of a command the cell refused; `ros_time()` is the
+    due. `reject(arm, kind, why)` hears of a command the cell refused, `warn(arm, kind,
+    what)` of one it takes but that starts over FAR_START_S ahead; `ros_time()` is the
     clock command stamps are in. command_waits keeps, per arm, how long its commands
     waited between queue() and the step that applied them (wall time)."""
 
-    def __init__(self, p, use_sim_time, ros_time, reject):
+    def __init__(self, p, use_sim_time, ros_time, reject, warn=None):
         from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
         self.p, self.ros_time, self.reject = p, ros_time, reject
+        self.warn = warn or (lambda arm, kind, what: None)
         # Pictures come from the renderer process's own cell: this one, stepped, needs the
         # arms' visual meshes only for a GUI (they take ~0.5 s per arm to load).
         self.cell = UR10Cell(read_cell_config(p['config']), gui=bool(p['gui']),
@@ -151,9 +156,13 @@ class CellRunner:
         return dropped
 
     def _apply_pending(self):
-        """Hand queued commands to the cell (lock held)."""
+        """Hand the commands queued before this step to the cell (lock held); those arriving
+        meanwhile wait for the next step, so a burst of long commands cannot hold the
+        physics (and joint_states) until it ends."""
         cell = self.cell
-        while self.pending:
+        for _ in range(len(self.pending)):
+            if not self.pending:           # queue() dropped the oldest meanwhile
+                break
             arm, kind, points, stamp, received = self.pending.popleft()
             # A stamped start in ROS time -> cell time; 0 = now.
             start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
@@ -163,6 +172,11 @@ class CellRunner:
                 self.command_waits.add(arm, received, self.command_waits.clock())
             except TrajectoryError as e:
                 self.reject(arm, kind, e)
+                continue
+            if start is not None and start - cell.time > FAR_START_S:
+                self.warn(arm, kind, 'starts in %.0f s (header.stamp %.3f, the clock %.3f); '
+                          'until then the arm goes on with what it was doing, then holds'
+                          % (start - cell.time, stamp, self.ros_time()))
 
     def step(self):
         """Apply the queued commands, step the physics once; a CellTick of what is due."""

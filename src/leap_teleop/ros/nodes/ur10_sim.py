@@ -21,7 +21,7 @@ import rospy
 from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
-from leap_teleop.ros.cell_state_topics import CellStateTopics
+from leap_teleop.ros.cell_state_topics import CellStateTopics, command_type_watches
 from leap_teleop.ros.conversions import CommandError, trajectory_points
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
@@ -37,10 +37,11 @@ class UR10SimNode:
         self.rejected = 0                  # counted on the subscribers' threads
         self._rejected_lock = threading.Lock()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
-        self.runner = CellRunner(p, self.use_sim_time, rospy.get_time, self._reject)
+        self.runner = CellRunner(p, self.use_sim_time, rospy.get_time, self._reject, self._warn)
         self.cell = self.runner.cell
         self.topics = CellStateTopics(self.cell.config, p['joint_states_queue_size'],
                                       self.use_sim_time)
+        self.type_watches = command_type_watches(self.cell.config, self.log)
         for arm, ns in ((a, a.name) for a in self.cell.config.arms):
             if not rospy.has_param(ns + '/robot_description'):
                 rospy.set_param(ns + '/robot_description', arm_urdf(arm))
@@ -70,6 +71,9 @@ class UR10SimNode:
             self.rejected += 1
         self.log.warn((arm, kind), 'ur10_sim: %s/%s rejected: %s; the arm keeps its '
                       'current trajectory', arm, KINDS[kind][0], why)
+
+    def _warn(self, arm, kind, what):
+        self.log.warn(('far', arm, kind), 'ur10_sim: %s/%s: a command %s', arm, KINDS[kind][0], what)
 
     def on_reset(self, _req):
         self.runner.reset()
