@@ -111,3 +111,29 @@ def test_a_topic_parameter_wants_a_legal_ros_name(table, name):
     for bad in ('bad topic!', 'a//b', 'hand/', '1hand', '/'):
         with pytest.raises(ParamError, match='not a legal ROS name; allowed: a ROS name'):
             p.check(name, bad)
+
+
+def test_the_library_warnings_reach_rospy_once(monkeypatch):
+    """A source's warning about bad frames went to the node's log file only: never on the
+    console or /rosout."""
+    import logging
+
+    import rospy
+
+    from leap_teleop.ros import node
+
+    said = []
+    for level in ('logerr', 'logwarn', 'loginfo', 'logdebug'):
+        monkeypatch.setattr(rospy, level, lambda text, level=level: said.append((level, text)))
+    logger = logging.getLogger('leap_teleop')
+    monkeypatch.setattr(logger, 'handlers', [])
+    monkeypatch.setattr(logger, 'propagate', True)
+    monkeypatch.setattr(logger, 'level', logger.level)
+    node.forward_library_logs()
+    node.forward_library_logs()                       # twice: still one handler
+    logging.getLogger('leap_teleop.hands.sources.recording').warning(
+        'recording %s: skipped %d bad frame(s)', 'x.json', 100)
+    logging.getLogger('leap_teleop.drone.sim').error('100% sure')
+    assert said == [('logwarn', 'recording x.json: skipped 100 bad frame(s)'),
+                    ('logerr', '100% sure')]
+    assert logger.propagate is False and len(logger.handlers) == 1

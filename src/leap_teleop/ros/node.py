@@ -1,4 +1,6 @@
-"""What every node shares: a parameter table that is both read and shown by --help."""
+"""What every node shares: a parameter table that is both read and shown by --help, and
+the library's log records on the node's console and /rosout."""
+import logging
 import sys
 import textwrap
 
@@ -42,6 +44,7 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
         sys.stderr.write('%s: bad parameter: %s (an integer beyond 32 bits given as '
                          '_name:=value)\n' % (name, e))
         raise SystemExit(1)
+    forward_library_logs()
     warn_unknown_params(name, params)
     try:
         p = read_params(params)
@@ -49,6 +52,33 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     except (ParamError,) + tuple(errors) as e:
         rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
         raise SystemExit(1)
+
+
+class _RospyHandler(logging.Handler):
+    """Passes a log record on to rospy's function of its level."""
+
+    def emit(self, record):
+        try:
+            text = self.format(record)
+            level = record.levelno
+            log = (rospy.logerr if level >= logging.ERROR else rospy.logwarn
+                   if level >= logging.WARNING else rospy.loginfo if level >= logging.INFO
+                   else rospy.logdebug)
+            log(text)
+        except Exception:   # noqa: BLE001 - logging must never end the caller
+            self.handleError(record)
+
+
+def forward_library_logs():
+    """The library logs through Python's `leap_teleop` loggers (the sources' warnings about
+    bad frames, for one); rospy sends those to the node's log file only. Passed on to rospy,
+    they reach the console and /rosout like the node's own lines (once: not also to the
+    file directly)."""
+    logger = logging.getLogger('leap_teleop')
+    if not any(isinstance(h, _RospyHandler) for h in logger.handlers):
+        logger.addHandler(_RospyHandler())
+    logger.setLevel(logging.INFO)
+    logger.propagate = False
 
 
 def read_params(params):
