@@ -177,6 +177,14 @@ BAD_CELLS = [
     ('arms:\n  - {name: ur10_1, base_xyz: [1, 2]}\n', 'base_xyz must be 3 numbers'),
     ('arms: []\n', 'needs a non-empty "arms" list'),
     ('arms:\n  - {name: ur10_1}\n', "no arm 'ur10_9' in the cell"),
+    # cubes the physics cannot start from: one was dropped from the poses, or fell through
+    # the table, or both were thrown apart
+    ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0]}\n  - {name: a, xyz: [0.7, 0.3]}\n',
+     "cube names must be unique, 'a' twice"),
+    ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0, 0.74]}\n',
+     "cube 'a' at z 0.740 m is inside the table top (0.750 m)"),
+    ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0]}\n  - {name: b, xyz: [0.72, 0.01]}\n',
+     "cubes 'a' and 'b' are inside each other"),
 ]
 
 
@@ -198,6 +206,15 @@ def test_the_node_reports_a_cell_that_is_not_yaml_as_a_bad_parameter(tmp_path):
     path = tmp_path / 'cell.yaml'
     path.write_text('arms: [\n')
     with pytest.raises(ValueError, match='not valid YAML'):
+        make([], config=str(path))
+
+
+def test_two_arms_on_one_base_are_refused_before_the_physics_throws_them_apart(tmp_path):
+    # Accepted before: within seconds the joints read 8.7 rad and the cubes flew 50 m.
+    path = tmp_path / 'cell.yaml'
+    path.write_text('arms:\n  - {name: ur10_1, base_xyz: [0, 0, 0.75]}\n'
+                    '  - {name: ur10_2, base_xyz: [0, 0.1, 0.75]}\n')
+    with pytest.raises(ValueError, match='arms ur10_1 and ur10_2 touch at their home poses'):
         make([], config=str(path))
 
 

@@ -131,6 +131,23 @@ class UR10Cell:
                                  physicsClientId=c)
         self._arm_bodies = {a.body for a in self.arms.values()}
         self.reset()
+        try:
+            self._check_arms_apart()
+        except ValueError:
+            self.close()
+            raise
+
+    def _check_arms_apart(self):
+        """ValueError when two arms touch at their home poses (bases placed too close):
+        the solver would throw them apart at the first step."""
+        arms = list(self.arms.values())
+        for i, a in enumerate(arms):
+            for b in arms[i + 1:]:
+                if p.getClosestPoints(a.body, b.body, 0.0, physicsClientId=self.client):
+                    raise ValueError('cell config %s: arms %s and %s touch at their home poses '
+                                     '(bases at %s and %s): place them further apart'
+                                     % (self.config.path, a.cfg.name, b.cfg.name,
+                                        a.cfg.base_xyz.tolist(), b.cfg.base_xyz.tolist()))
 
     def _cap_arm_speed(self, arm):
         """Cap each arm motor at the joint's speed limit. PyBullet keeps a motor's

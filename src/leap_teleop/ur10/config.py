@@ -231,6 +231,9 @@ def _parse(data, path):
                                 rgba=tuple(rgba.tolist()), arm=arm,
                                 yaw=float(_vec([c.get('yaw', 0.0)], 1, what + '.yaw', -7.0,
                                                7.0)[0])))
+    _check_cubes(cubes, height, size,
+                 _vec(table.get('center', (0.45, 0.0)), 2, 'table center'),
+                 _vec(table.get('size', (1.4, 1.4)), 2, 'table size', 1e-2, 100.0))
     camera = dict(data.get('camera') or {})
     for key, n, lo, hi in (('eye', 3, -1e3, 1e3), ('target', 3, -1e3, 1e3), ('fov', 1, 1.0, 179.0)):
         if key in camera:
@@ -244,6 +247,30 @@ def _parse(data, path):
                       table_height=height, cube_size=size,
                       cube_mass=scalars['cube_mass'], physics_hz=scalars['physics_hz'],
                       camera=camera, path=path)
+
+
+def _check_cubes(cubes, table_height, size, table_center, table_size):
+    """ValueError for cubes the physics cannot start from: two of one name (the cell's
+    poses would report one), one inside the table top, two inside each other (both thrown
+    apart at the first step)."""
+    names = [c.name for c in cubes]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError('cube names must be unique, %s twice' % ', '.join(map(repr, twice)))
+    tolerance = 1e-3 * size
+    for c in cubes:
+        over_table = bool((np.abs(c.xyz[:2] - table_center) < table_size / 2 + size / 2).all())
+        if over_table and table_height - size / 2 < c.xyz[2] < table_height + size / 2 - tolerance:
+            raise ValueError('cube %r at z %.3f m is inside the table top (%.3f m): rest it at '
+                             '%.3f m or give xyz as [x, y]' % (c.name, c.xyz[2], table_height,
+                                                               table_height + size / 2))
+    for i, a in enumerate(cubes):
+        for b in cubes[i + 1:]:
+            # closer than a cube's inscribed spheres allow, whatever their yaws
+            if np.linalg.norm(a.xyz - b.xyz) < size - tolerance:
+                raise ValueError('cubes %r and %r are inside each other (centres %s and %s, '
+                                 'size %.3f m)' % (a.name, b.name, a.xyz.tolist(), b.xyz.tolist(),
+                                                   size))
 
 
 def load_config(name='ur10_cell.yaml'):
