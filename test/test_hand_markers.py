@@ -302,3 +302,14 @@ def test_node_shows_the_reported_input_ages_as_a_text_marker_then_clears_it():
     assert markers[0][2].splitlines() == ['capture -> stage, p50 / p99:',
                                           'ur10_1/ur10_arm command: 9.0 / 12.5 ms']
     assert markers[-1][1] == Marker.DELETE and [m[1] for m in markers].count(Marker.DELETE) == 1
+
+
+def test_a_marker_topic_that_is_a_hand_topic_is_refused_at_start_up():
+    # Taken before: MarkerArray went out on a Hand topic, and the only sign was rospy's
+    # 3,856-character type-mismatch dump.
+    from leap_teleop.params import check_params
+    from leap_teleop.ros.nodes.hand_markers import PARAMS, HandMarkersNode
+    p = check_params(PARAMS, {'marker_topic': '/leapmotion/hand_right', 'latency_text': False})
+    with pytest.raises(ValueError, match="~marker_topic '/leapmotion/hand_right' is one of "
+                                         '~hand_topics'):
+        HandMarkersNode(p)

@@ -14,6 +14,7 @@ import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.msg import Hand
+from leap_teleop.ros.graph import TopicTypeWatch
 from leap_teleop.ros.latency_monitor import LatencyMonitor
 from leap_teleop.ros.markers import HandMarkerThrottle, latency_marker
 from leap_teleop.ros.node import Param, RateLimitedLog, start_node
@@ -41,12 +42,18 @@ PARAMS = {
 
 class HandMarkersNode:
     def __init__(self, p):
+        if rospy.resolve_name(p['marker_topic']) in map(rospy.resolve_name, p['hand_topics']):
+            raise ValueError('~marker_topic %r is one of ~hand_topics: markers and hands need '
+                             'topics of their own' % p['marker_topic'])
         self.throttle = HandMarkerThrottle(float(p['max_rate']), str(p['frame_id']),
                                            float(p['lifetime']), float(p['scale']))
         self.pub = rospy.Publisher(p['marker_topic'], MarkerArray, queue_size=10)
         self.log = RateLimitedLog()
         topics = p['hand_topics']
         self.subs = [rospy.Subscriber(t, Hand, self.on_hand, queue_size=5) for t in topics]
+        self.type_watches = [TopicTypeWatch(t, Hand, 'hand_markers', 'hand_markers', 'no hand is '
+                                            'drawn; give ~hand_topics the sender\'s Hand topics',
+                                            self.log) for t in topics]
         self.p = p
         self.latency_shown = False
         if p['latency_text']:
