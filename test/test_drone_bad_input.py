@@ -72,6 +72,13 @@ def test_an_unfold_with_no_fresh_hand_does_not_take_off():
     assert drain(pilot) == [] and 'no fresh Hand input' in warnings[-1]
 
 
+def test_a_circle_with_no_fresh_hand_does_not_flip():
+    pilot, warnings = pilot_with_hands(4)                     # hovering at 1 m
+    pilot.on_navdata(4, 1000, T + 1.0)
+    pilot.on_gesture('circle_cw', True, T + 1.0, 0.05)        # the hand silent for 1 s
+    assert drain(pilot) == [] and 'circle_cw: no flip, no fresh Hand input' in warnings[-1]
+
+
 def test_a_replayed_bag_with_old_stamps_still_flies():
     # Hands and gestures both stamped an hour back: judged against the stream, on time.
     pilot, _ = pilot_with_hands(2, stamp_offset=-3600.0)

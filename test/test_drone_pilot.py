@@ -132,6 +132,7 @@ def test_only_a_hand_sized_circle_flips():
     pilot = DronePilot(PilotConfig(flip_min_radius=0.025),
                        warn=lambda key, text: warnings.append(text))
     pilot.on_navdata(4, 1000, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)            # a flip needs the hand in view
     for radius in (0.004, 0.0199, -0.05, math.nan, math.inf, None, 'wide', True):
         pilot.on_gesture('circle_cw', True, 0.0, radius)
     assert drain(pilot) == []
@@ -464,6 +465,7 @@ def test_fingertip_sized_circles_never_flip_a_flying_drone():
     def flips(config):
         pilot = DronePilot(config)
         pilot.on_navdata(4, 1500, 0.0)
+        pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
         for gesture, radius in circles:
             pilot.on_gesture(gesture, True, 0.0, radius)
             pilot.on_navdata(4, 1500, 0.0)       # the flip is over before the next circle

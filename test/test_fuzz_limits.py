@@ -709,8 +709,10 @@ def test_found_hung_flip_call_never_blocks_the_watchdog():
         assert zero and zero[0] <= 0.17
         land = [t for t, c in sent if c.kind == 'land']
         assert land and 3.1 <= land[0] <= 3.2
-        # A second circle while the first call hangs: refused, nothing piles up.
+        # A second circle while the first call hangs (the hand back): refused, nothing
+        # piles up.
         pilot.on_navdata(4, 1500, clock.t)
+        pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=clock.t), clock.t)
         pilot.on_gesture('circle_cw', True, clock.t, 0.035)
         w.step()
         assert w.flip_call.counts['refused'] == 1 and any('not returned' in x for x in warnings)

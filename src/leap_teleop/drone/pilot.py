@@ -12,10 +12,10 @@ recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included). Gest
 events act only when on time: a stamped event arriving more than ``max_input_age`` later
 (or earlier) than the Hand stream's best-case latency (the same sender stamps both with
 the frame's capture time), or, with no stamped Hand to judge by, stamped more than
-``max_input_age`` off this clock, is refused; an unfold takes off only with a fresh
-present hand (it still engages in a short gap, see below). hand_lost and fold always act
-(they hover / land: a late one still asks for the safe thing); unknown names are warned
-about.
+``max_input_age`` off this clock, is refused; an unfold takes off, and a circle flips,
+only with a fresh present hand (an unfold still engages in a short gap, see below).
+hand_lost and fold always act (they hover / land: a late one still asks for the safe
+thing); unknown names are warned about.
 
 Modes:
 
@@ -333,6 +333,9 @@ class DronePilot:
                     self._warn('circle', '%s: no flip (state %s, altitude %.2f m < %.2f m or '
                                'not flying)' % (name, state, self.altitude,
                                                 self.cfg.flip_min_altitude))
+                elif not self._hand_fresh(now):
+                    # as for a takeoff: no flip that no hand in view asks for
+                    self._warn('circle', '%s: no flip, no fresh Hand input' % name)
                 elif not self.cfg.flip_min_radius <= radius <= FLIP_MAX_RADIUS_M:   # NaN too
                     self._warn('circle_radius', '%s: no flip, radius %r m is not a hand-sized '
                                'circle (flip_min_radius %g m .. %g m)'
