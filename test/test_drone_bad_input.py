@@ -136,11 +136,13 @@ def test_paper_mode_never_commands_beyond_the_drivers_range():
 
 def test_unknown_gesture_names_and_sides_are_warned_about(monkeypatch):
     pilot, warnings = pilot_with_hands(2)
-    for name in ('fist', 'open', 'hand_found', 'thumb_down'):      # known, not acted on
+    # built-in ones not acted on, and a user model's class (a sender publishes it too)
+    for name in ('fist', 'open', 'hand_found', 'thumb_down', 'two'):
         pilot.on_gesture(name, True, T)
     assert warnings == []
-    pilot.on_gesture('bogus', True, T)
-    assert len(warnings) == 1 and "'bogus'" in warnings[0]
+    for name in ('', 'no such gesture!', 'x' * 65):
+        pilot.on_gesture(name, True, T)
+    assert len(warnings) == 3 and "'no such gesture!'" in warnings[1]
 
     from leap_teleop.msg import GestureEvent
     from leap_teleop.ros.nodes.drone_pilot import DronePilotNode

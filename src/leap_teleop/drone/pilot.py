@@ -58,6 +58,7 @@ once.
 import collections
 import math
 import numbers
+import re
 import threading
 import time
 from dataclasses import dataclass
@@ -79,10 +80,10 @@ FLIP_MAX_RADIUS_M = 0.5
 UNIT_TOLERANCE = 0.01
 # Events that move the drone toward safety (hover, land): they act however late they come.
 SAFE_EVENTS = ('hand_lost', 'fold')
-# Every name a sender's GestureEvent may carry (msg/GestureEvent.msg); the pilot acts on
-# unfold, fold, circle_* and hand_lost, and ignores the held ones quietly.
-KNOWN_GESTURES = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down', 'unfold', 'fold',
-                  'circle_cw', 'circle_ccw', 'hand_lost', 'hand_found')
+# What a sender's GestureEvent may name: a built-in gesture or event, or a class of a user's
+# pose model (letters, digits, _; at most 64). The pilot acts on unfold, fold, circle_* and
+# hand_lost and passes over the others quietly; a name no sender sends is warned about.
+GESTURE_NAME = re.compile(r'[A-Za-z0-9_]{1,64}')
 
 
 @dataclass
@@ -288,7 +289,7 @@ class DronePilot:
         its radius in m) and capture stamp."""
         with self._lock:
             state = self.drone_state if self._navdata_ok(now) else None
-            if name not in KNOWN_GESTURES:
+            if not isinstance(name, str) or not GESTURE_NAME.fullmatch(name):
                 self._warn('gesture_name', 'ignored gesture %r: not one a sender sends (the '
                            'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost)' % name)
                 return
