@@ -183,6 +183,8 @@ BAD_CELLS = [
      "cube names must be unique, 'a' twice"),
     ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0, 0.74]}\n',
      "cube 'a' at z 0.740 m is inside the table top (0.750 m)"),
+    ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0, 0.72]}\n',    # wholly in it
+     "cube 'a' at z 0.720 m is inside the table top (0.750 m)"),
     ('arms:\n  - {name: ur10_9}\ncubes:\n  - {name: a, xyz: [0.7, 0]}\n  - {name: b, xyz: [0.72, 0.01]}\n',
      "cubes 'a' and 'b' are inside each other"),
 ]

@@ -17,7 +17,7 @@ import numpy as np
 import pybullet as p
 
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.config import CellConfig, load_config
+from leap_teleop.ur10.config import TABLE_THICKNESS, CellConfig, load_config
 from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_CLOSED, GRIPPER_JOINT, urdf_file
 from leap_teleop.ur10.trajectory import TrajectoryFollower
 
@@ -197,7 +197,8 @@ class UR10Cell:
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c)
         self.floor = p.createMultiBody(0, plane, physicsClientId=c)
         (tx, ty), (sx, sy), h = cfg.table_center, cfg.table_size, cfg.table_height
-        self.table = self._box([sx / 2, sy / 2, 0.025], [tx, ty, h - 0.025], [0.6, 0.45, 0.3, 1])
+        half = TABLE_THICKNESS / 2
+        self.table = self._box([sx / 2, sy / 2, half], [tx, ty, h - half], [0.6, 0.45, 0.3, 1])
         self.trays = {}
         for a in cfg.arms:
             t = a.tray

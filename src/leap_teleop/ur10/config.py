@@ -249,6 +249,10 @@ def _parse(data, path):
                       camera=camera, path=path)
 
 
+# The table top is a slab this thick (m) whose top is at the table height.
+TABLE_THICKNESS = 0.05
+
+
 def _check_cubes(cubes, table_height, size, table_center, table_size):
     """ValueError for cubes the physics cannot start from: two of one name (the cell's
     poses would report one), one inside the table top, two inside each other (both thrown
@@ -260,7 +264,8 @@ def _check_cubes(cubes, table_height, size, table_center, table_size):
     tolerance = 1e-3 * size
     for c in cubes:
         over_table = bool((np.abs(c.xyz[:2] - table_center) < table_size / 2 + size / 2).all())
-        if over_table and table_height - size / 2 < c.xyz[2] < table_height + size / 2 - tolerance:
+        if over_table and (table_height - TABLE_THICKNESS - size / 2 < c.xyz[2]
+                           < table_height + size / 2 - tolerance):
             raise ValueError('cube %r at z %.3f m is inside the table top (%.3f m): rest it at '
                              '%.3f m or give xyz as [x, y]' % (c.name, c.xyz[2], table_height,
                                                                table_height + size / 2))
