@@ -560,6 +560,12 @@ def test_a_jpeg_is_cut_only_without_an_end_marker_after_its_last_scan(tmp_path):
         padded = tmp_path / 'padded.jpg'      # bytes after the marker are not a cut
         padded.write_bytes(whole + b'\x00' * 100)
         assert not jpeg_is_cut(str(padded))
+        # nor a trailer with markers of its own (a phone's appended video)
+        padded.write_bytes(whole + b'\xff\xda\x00\x08' + b'\x12' * 50)
+        assert not jpeg_is_cut(str(padded))
+        cut_header = tmp_path / 'cut_header.jpg'
+        cut_header.write_bytes(whole[:20])
+        assert jpeg_is_cut(str(cut_header))
     assert not jpeg_is_cut(data('thumbs_up__mps__thumbs-up.png'))
     assert not jpeg_is_cut(str(tmp_path / 'absent.jpg'))
 

@@ -103,9 +103,10 @@ class VideoFile:
 
 def jpeg_is_cut(path):
     """Whether `path` is a JPEG whose data ends before its end-of-image marker. OpenCV
-    decodes such a file without an error, its missing part grey. Entropy-coded data
-    escapes every 0xFF, so the marker cannot hide inside a scan: a whole file has one after
-    its last start-of-scan."""
+    decodes such a file without an error, its missing part grey. The header's segments are
+    walked by their lengths to the main image's first scan (an EXIF thumbnail lies inside
+    one of them); entropy-coded data escapes every 0xFF, so from there the first end marker
+    is the image's: a whole file has one, whatever follows it (phones append videos)."""
     try:
         with open(path, 'rb') as f:
             data = f.read()
@@ -113,7 +114,18 @@ def jpeg_is_cut(path):
         return False            # imread's problem, reported there
     if not data.startswith(b'\xff\xd8\xff'):
         return False
-    return data.rfind(b'\xff\xd9') < data.rfind(b'\xff\xda')
+    k = 2
+    while k + 4 <= len(data):
+        if data[k] != 0xFF:
+            return False        # not a header imread can read either: its problem
+        marker = data[k + 1]
+        if marker == 0xFF:      # fill byte
+            k += 1
+            continue
+        if marker == 0xDA:      # the main image's first scan
+            return data.find(b'\xff\xd9', k) < 0
+        k += 2 + int.from_bytes(data[k + 2:k + 4], 'big')
+    return True                 # the header itself is cut
 
 
 class StillImages:
