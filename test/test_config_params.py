@@ -137,3 +137,12 @@ def test_the_library_warnings_reach_rospy_once(monkeypatch):
     assert said == [('logwarn', 'recording x.json: skipped 100 bad frame(s)'),
                     ('logerr', '100% sure')]
     assert logger.propagate is False and len(logger.handlers) == 1
+    # a warning that comes once a frame reaches rospy once per 2 s, with a count
+    source = logging.getLogger('leap_teleop.hands.sources.device_queue')
+    for k in range(120):
+        source.warning('frame %d could not be converted', k)
+    assert said[2:] == [('logwarn', 'frame 0 could not be converted')]
+    handler = logger.handlers[0]
+    handler._last = {key: t - 10.0 for key, t in handler._last.items()}     # 10 s later
+    source.warning('frame %d could not be converted', 999)
+    assert said[-1] == ('logwarn', 'frame 999 could not be converted (119 similar suppressed)')

@@ -3,6 +3,7 @@ the library's log records on the node's console and /rosout."""
 import logging
 import sys
 import textwrap
+import time
 
 import rospkg
 import rospy
@@ -55,12 +56,29 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
 
 
 class _RospyHandler(logging.Handler):
-    """Passes a log record on to rospy's function of its level."""
+    """Passes a log record on to rospy's function of its level; a warning or error at most
+    once per `period` s per call site and message (some come once a frame), with a count
+    of those left out."""
+
+    def __init__(self, period=2.0):
+        super().__init__()
+        self.period = period
+        self._last = {}             # (logger, message template) -> monotonic time
+        self._left_out = {}
 
     def emit(self, record):
         try:
-            text = self.format(record)
             level = record.levelno
+            if level >= logging.WARNING:
+                key, now = (record.name, record.msg), time.monotonic()
+                last = self._last.get(key)
+                if last is not None and now - last < self.period:
+                    self._left_out[key] = self._left_out.get(key, 0) + 1
+                    return
+                self._last[key] = now
+                n = self._left_out.pop(key, 0)
+            text = self.format(record) + (' (%d similar suppressed)' % n
+                                          if level >= logging.WARNING and n else '')
             log = (rospy.logerr if level >= logging.ERROR else rospy.logwarn
                    if level >= logging.WARNING else rospy.loginfo if level >= logging.INFO
                    else rospy.logdebug)
