@@ -324,7 +324,7 @@ class TrajectoryFollower:
                 ratio = 0.0
             else:
                 ratio = _peak_ratio(seg, self.vmax)
-            if ratio > 1.0 and acc is not None:
+            if ratio > 1.0 + 1e-9 and acc is not None:   # float noise of a plan at the limits
                 # Accelerations the speed limits cannot follow in this time (stretching it
                 # only widens their swing): the cubic through the same points instead.
                 acc = None
