@@ -296,10 +296,10 @@ def test_record_gestures_says_when_the_source_ends_before_the_time_asked(tmp_pat
     captured = capsys.readouterr()
     assert 'the source ended after 1.0 of the 10 s asked' in captured.err, captured.err
     assert 'wrote 30 hand poses' in captured.out and out.exists()
-    # the whole time asked: no such line
-    out2 = tmp_path / 'two_b.jsonl'
-    assert record_one_second_of('open', tmp_path, out2, '--seconds', '0.5') == 0
-    assert 'ended' not in capsys.readouterr().err
+    # the whole time asked (0.5 s, or the script's whole 1 s): no such line
+    for seconds, name in (('0.5', 'two_b.jsonl'), ('1', 'two_c.jsonl')):
+        assert record_one_second_of('open', tmp_path, tmp_path / name, '--seconds', seconds) == 0
+        assert 'ended' not in capsys.readouterr().err
 
 
 class CameraHands(HandSource):
@@ -326,7 +326,11 @@ def test_camera_hands_become_community_normalised_keypoint_rows(tmp_path):
         'keypoints', 'peace', 'ann', 10.0)
     assert (len(take.rows), take.seen, take.missing) == (4, 6, 2)  # no hand; a degenerate one
     # six frames of a 30 Hz source: it ended long before the 10 s asked
-    assert take.ended == 'source ended' and take.seconds == pytest.approx(5 / 30.0)
+    assert take.ended == 'source ended' and take.seconds == pytest.approx(6 / 30.0)
+    # six frames are a whole 0.2 s take, the last one standing for its period
+    whole = record_gestures.collect(CameraHands(pts + pts[:2]), 'keypoints', 'peace', 'ann',
+                                    0.2)
+    assert whole.ended == 'time' and whole.seconds == 0.2 and whole.seen == 6
     rows = take.rows
     path = str(tmp_path / 'peace.csv')
     record_gestures.write(path, 'keypoints', rows)

@@ -52,7 +52,8 @@ class HandSubscription:
         frame = msg.header.frame_id.lstrip('/')
         if self.frame and frame and frame != self.frame:
             # positions in another frame would be read as Leap coordinates: a jump
-            self.wrong_frame += 1
+            with self._lock:            # one callback thread per publisher's connection
+                self.wrong_frame += 1
             why = 'frame %r, not %r' % (msg.header.frame_id, self.frame)
             rospy.logwarn_throttle(5.0, '%s: refused hand messages on %s in frame %r: this node '
                                    'reads frame %r (set ~hand_frame to the sender\'s ~frame_id, '

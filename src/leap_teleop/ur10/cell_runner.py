@@ -150,8 +150,11 @@ class CellRunner:
         one had to be dropped for it (the loop is behind)."""
         dropped = len(self.pending) >= MAX_PENDING
         if dropped:                                # the loop stalled: newer commands win
-            self.pending.popleft()
-            self.dropped_commands += 1
+            try:
+                self.pending.popleft()
+                self.dropped_commands += 1
+            except IndexError:                     # the loop took them all meanwhile
+                dropped = False
         self.pending.append((arm, kind, points, stamp, self.command_waits.clock()))
         return dropped
 

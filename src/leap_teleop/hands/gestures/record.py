@@ -89,6 +89,7 @@ def collect(source, family, label, person, seconds, side='any'):
     """The Take of `seconds` of source time (or less, if the source ends first)."""
     rows, seen, missing = [], 0, 0
     t0 = t_last = None
+    period = 0.0                # between the last two frames: what the last one stands for
     ended = 'source ended'
     try:
         for frame in source.frames():
@@ -99,6 +100,7 @@ def collect(source, family, label, person, seconds, side='any'):
                 if t - t0 >= seconds:
                     ended = 'time'
                     break
+                period = t - t_last if t_last is not None else 0.0
                 t_last = t
             seen += 1
             got = 0
@@ -117,7 +119,9 @@ def collect(source, family, label, person, seconds, side='any'):
         ended = 'interrupted'
     finally:
         source.stop()
-    covered = seconds if ended == 'time' else (t_last - t0 if t0 is not None else 0.0)
+    covered = seconds if ended == 'time' else (t_last - t0 + period if t0 is not None else 0.0)
+    if ended == 'source ended' and covered >= seconds - 1e-6:
+        ended, covered = 'time', seconds    # its last frame ended the time asked: a whole take
     return Take(rows, seen, missing, covered, ended)
 
 
