@@ -54,13 +54,13 @@ HAND_SUBSCRIPTION_PARAMS = {
                                     'lasts); also re-establish it after this long connected to '
                                     'no publisher while the master lists one; 0 = never',
                                unit='s', ge=0.0, le=60.0),
-    'hand_frame': Param('leap_hands', 'frame the hand messages must be in (the sender\'s '
-                                      '~frame_id); others are refused with a warning, messages '
-                                      'with no frame (the original sender\'s) are taken; '
-                                      '\'\' takes any frame'),
     'resubscribe_silent_after': Param(2.0, 're-establish it, once, after this long without any '
                                            'message while a publisher is connected; 0 = never',
                                       unit='s', ge=0.0, le=60.0),
+    'hand_frame': Param('leap_hands', 'frame the hand messages must be in (the sender\'s '
+                                      '~frame_id); others are refused with a warning, messages '
+                                      'with no frame (the original sender\'s) are taken; '
+                                      '\'\' takes any frame', ros_name=True),
 }
 
 
