@@ -133,3 +133,16 @@ def test_a_full_window_keeps_its_newest_samples():
     ages = w.ages(20.0)
     assert len(ages) == 64 and np.all(ages == pytest.approx(0.002))
     assert w.summary(20.0)[2] == 64
+
+
+def test_an_event_beside_the_stream_is_judged_by_its_latency_and_not_taken():
+    from leap_teleop.control.input_check import InputStream
+    s = InputStream(max_age=0.25, gap=1.0)
+    assert 'no stamped Hand' in s.judge_beside(50.0, 100.0)       # no baseline: this clock
+    assert s.judge_beside(99.9, 100.0) is None and s.judge_beside(0.0, 100.0) is None
+    assert s.check(40.0, 100.0) is None                            # a bag's hands: 60 s back
+    assert s.judge_beside(40.01, 100.02) is None                   # its events with them
+    assert s.judge_beside(39.5, 100.02).startswith('late: arrived 0.520 s')
+    assert s.judge_beside(41.0, 100.02).startswith('stamped 0.980 s ahead')
+    assert s.last_stamp == 40.0                                    # nothing was taken
+    assert InputStream(max_age=0.0, gap=1.0).judge_beside(1.0, 100.0) is None

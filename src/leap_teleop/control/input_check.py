@@ -72,3 +72,24 @@ class InputStream:
         self.last_stamp = stamp
         self.leapt = leapt
         return None
+
+    def judge_beside(self, stamp, now):
+        """Why an event stamped by the same sender as this stream (a gesture beside its
+        hands) is late or stamped ahead of it, judged against the stream's best-case latency
+        and not recorded; None when on time or unstamped. With no baseline yet it is judged
+        against this clock (nothing else to judge a first one by)."""
+        if stamp <= 0 or self.max_age <= 0:
+            return None
+        lag, best = now - stamp, self.best_lag
+        if best is None:
+            if abs(lag) > self.max_age:
+                return 'stamped %.3f s %s this clock, and no stamped Hand to judge it by' % (
+                    abs(lag), 'before' if lag > 0 else 'ahead of')
+            return None
+        if lag - best > self.max_age:
+            return 'late: arrived %.3f s after the Hand stream\'s usual latency (max %.3f s)' % (
+                lag - best, self.max_age)
+        if best - lag > self.max_age:
+            return 'stamped %.3f s ahead of the Hand stream (max %.3f s)' % (best - lag,
+                                                                            self.max_age)
+        return None

@@ -293,7 +293,7 @@ class DronePilot:
                 self._warn('gesture_name', 'ignored gesture %r: not one a sender sends (the '
                            'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost)' % name)
                 return
-            why = None if name in SAFE_EVENTS else self._event_refused(name, stamp, now)
+            why = None if name in SAFE_EVENTS else self._stream.judge_beside(stamp, now)
             if why:
                 self.rejected_inputs += 1
                 self._warn('gesture_' + name, 'ignored %s: %s' % (name, why))
@@ -345,24 +345,6 @@ class DronePilot:
                     self.queue.push(Command('flip', anim=(self.cfg.flip_type,
                                                           self.cfg.flip_duration), stamp=now,
                                             input_stamp=stamp))
-
-    def _event_refused(self, name, stamp, now):
-        """Why a gesture event must not act (None: it may). Its stamp is judged against the
-        Hand stream's best-case latency, as the hands are (replayed bags, unsynchronised
-        clocks), else against this clock (nothing else to judge a first one by); unstamped
-        events are not judged."""
-        max_age = self.cfg.max_input_age
-        if stamp > 0:
-            lag, best = now - stamp, self._stream.best_lag
-            if best is None and abs(lag) > max_age:
-                return 'stamped %.3f s %s this clock, and no stamped Hand to judge it by' % (
-                    abs(lag), 'before' if lag > 0 else 'ahead of')
-            if best is not None and lag - best > max_age:
-                return 'late: arrived %.3f s after the Hand stream\'s usual latency (max %.3f s)' % (
-                    lag - best, max_age)
-            if best is not None and best - lag > max_age:
-                return 'stamped %.3f s ahead of the Hand stream (max %.3f s)' % (best - lag, max_age)
-        return None
 
     def _hand_fresh(self, now):
         """A present hand arrived within hand_timeout (the watchdog may not have run yet)."""
