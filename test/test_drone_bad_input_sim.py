@@ -1,5 +1,7 @@
 """ardrone_sim against bad input: absurd animation durations, out-of-range cmd_vel, and
 the type watches on both drone nodes' inputs (no ROS master)."""
+import types
+
 import pytest
 
 from leap_teleop.drone import sim as ds
@@ -81,24 +83,33 @@ def test_cmd_vel_beyond_its_range_is_clamped_with_a_warning_the_pilots_never_giv
 def test_the_drone_nodes_watch_the_types_on_their_inputs(monkeypatch):
     import rospy
 
-    from leap_teleop.ros.drone_type_watches import ardrone_sim_type_watches, pilot_type_watches
+    from leap_teleop.ros.drone_inputs import subscribe_ardrone_sim_inputs, subscribe_pilot_inputs
     monkeypatch.setattr(rospy, 'Timer', lambda *a, **k: None)
+    subscribed = []
+    monkeypatch.setattr(rospy, 'Subscriber', lambda topic, kind, *a, **k: subscribed.append(
+        (rospy.resolve_name(topic), kind._type)))
     said = []
     log = type('Log', (), {'warn': lambda self, key, fmt, *a: said.append((key, fmt % a))})()
-    watches = pilot_type_watches('leapmotion/hand_right', 'leapmotion/gestures', 'right', log)
-    watches += ardrone_sim_type_watches(log)
-    assert [(w.topic, w.want) for w in watches] == [
+    pilot = subscribe_pilot_inputs('leapmotion/hand_right', 'leapmotion/gestures', 'right',
+                                   None, None, log)
+    drone = types.SimpleNamespace(takeoff=None, land=None, reset=None, set_cmd_vel=None)
+    sim = subscribe_ardrone_sim_inputs(drone, None, log)
+    watched = [(w.topic, w.want) for w in pilot.topics + sim.topics]
+    assert watched == [
         ('/leapmotion/hand_right', 'leap_teleop/Hand'),
         ('/leapmotion/gestures', 'leap_teleop/GestureEvent'),
         ('/ardrone/navdata', 'leap_teleop/Navdata'),
         ('/cmd_vel', 'geometry_msgs/Twist'),
         ('/ardrone/takeoff', 'std_msgs/Empty'), ('/ardrone/land', 'std_msgs/Empty'),
         ('/ardrone/reset', 'std_msgs/Empty')]
-    published = [(w.topic, 'std_msgs/String') for w in watches[:2]] + [
+    # every subscription is watched; the hand's is the HandSubscription's own
+    assert subscribed == watched[1:]
+    published = [(t, 'std_msgs/String') for t, _ in watched[:2]] + [
         ('/cmd_vel', 'geometry_msgs/Twist')]
     monkeypatch.setattr(rospy, 'get_published_topics', lambda: published)
-    for w in watches:
-        w.check()
+    assert pilot.check() == {'/leapmotion/hand_right': 'std_msgs/String',
+                             '/leapmotion/gestures': 'std_msgs/String', '/ardrone/navdata': None}
+    sim.check()
     assert [key for key, _ in said] == ['type_check:/leapmotion/hand_right',
                                         'type_check:/leapmotion/gestures']
     assert ('carries std_msgs/String, but the pilot reads leap_teleop/GestureEvent' in said[1][1]

@@ -145,6 +145,17 @@ def test_an_arm_fed_the_other_hands_type_says_so(tmp_path):
 
 
 @pytest.mark.rostest
+def test_an_arm_whose_joint_states_carry_another_type_says_so(tmp_path):
+    # It waits for its joints before it listens to the hand: without the watch, a robot
+    # publishing another type there left it waiting with only "waiting for joint_states".
+    run_launches(tmp_path, [['ur10_arm.launch']],
+                 ['--rosout', 'ur10_arm: /ur10_1/joint_states carries std_msgs/String, but this '
+                  'arm reads sensor_msgs/JointState'], 60,
+                 others=[['rostopic', 'pub', '-r', '10', '/ur10_1/joint_states',
+                          'std_msgs/String', '{}']])
+
+
+@pytest.mark.rostest
 def test_sender_launch_plays_a_recording(tmp_path):
     recording = os.path.join(data_dir(), 'grab.json.lz')
     assert os.path.isfile(recording), recording

@@ -239,15 +239,14 @@ def test_each_command_topic_says_what_to_publish_when_it_carries_another_type(mo
     from leap_teleop.ros import cell_state_topics
     monkeypatch.setattr(rospy, 'Timer', lambda *args, **kwargs: None)   # no master: no timer
     log = WarnLog()
-    watches = cell_state_topics.command_type_watches(load_config('ur10_dual_cell.yaml'), log)
-    assert sorted(w.topic for w in watches) == [
+    watch = cell_state_topics.command_type_watch(load_config('ur10_dual_cell.yaml'), log)
+    assert sorted(w.topic for w in watch.topics) == [
         '/ur10_%d/%s' % (i, t) for i in (1, 2) for t in ('arm_controller/command',
                                                           'gripper/command')]
     monkeypatch.setattr(rospy, 'get_published_topics', lambda: [
         ['/ur10_1/arm_controller/command', 'std_msgs/String'],
         ['/ur10_2/gripper/command', 'trajectory_msgs/JointTrajectory']])
-    for w in watches:
-        w.check()
+    watch.check()
     (key, line), = log.lines
     assert line.startswith('ur10_sim: /ur10_1/arm_controller/command carries std_msgs/String')
     assert 'trajectory_msgs/JointTrajectory' in line and 'wrist_3_joint' in line

@@ -12,15 +12,16 @@ from leap_teleop.ros.graph import TopicTypeWatch
 from leap_teleop.ur10.cell_runner import KINDS
 
 
-def command_type_watches(config, log):
+def command_type_watch(config, log):
     """A TopicTypeWatch (warning through `log`) on each command topic of `config`'s arms:
     rospy drops a publisher of another type with no word to the sim."""
-    return [TopicTypeWatch('%s/%s' % (arm.name, topic), JointTrajectory, 'ur10_sim',
-                           'the simulated %s' % arm.name,
-                           'nothing published there moves the %s; publish '
-                           'trajectory_msgs/JointTrajectory for %s' % (kind, ', '.join(joints)),
-                           log)
-            for arm in config.arms for kind, (topic, joints) in KINDS.items()]
+    watch = TopicTypeWatch('ur10_sim', log)
+    for arm in config.arms:
+        for kind, (topic, joints) in KINDS.items():
+            watch.add('%s/%s' % (arm.name, topic), JointTrajectory, 'the simulated %s' % arm.name,
+                      'nothing published there moves the %s; publish trajectory_msgs/JointTrajectory '
+                      'for %s' % (kind, ', '.join(joints)))
+    return watch
 
 
 class CellStateTopics:

@@ -1,4 +1,5 @@
 """Questions a node asks about the ROS graph."""
+import collections
 import time
 
 import rosgraph
@@ -45,28 +46,44 @@ def wait_for_first_message(seen, topic, who, log_every=5.0):
     return True
 
 
-class TopicTypeWatch:
-    """Says so when `topic` carries another type than `msg_type`: rospy drops such a
-    connection with no word to the subscriber. Asks the master every `period` s on a
-    rospy.Timer thread of its own (the lookup blocks); warns through `log` (a
-    RateLimitedLog) 'WHO: TOPIC carries GOT, but READER reads WANT: HINT'."""
+WatchedTopic = collections.namedtuple('WatchedTopic', 'topic want reader hint')
 
-    def __init__(self, topic, msg_type, who, reader, hint, log, period=5.0):
-        self.topic, self.want = rospy.resolve_name(topic), msg_type._type
-        self.who, self.reader, self.hint, self.log = who, reader, hint, log
+
+class TopicTypeWatch:
+    """Says so when a topic a node reads carries another type than it reads: rospy drops
+    such a connection with no word to the subscriber. One per node: it asks the master
+    every `period` s, once for all its topics, on a rospy.Timer thread of its own (the
+    lookup blocks); warns through `log` (a RateLimitedLog, keyed per topic)
+    'WHO: TOPIC carries GOT, but READER reads WANT: HINT'."""
+
+    def __init__(self, who, log, period=5.0):
+        self.who, self.log = who, log
+        self.topics = ()        # WatchedTopic; replaced whole, never changed in place
         self.timer = rospy.Timer(rospy.Duration(period), self.check)
 
+    def add(self, topic, msg_type, reader, hint):
+        """Watch `topic`, read as `msg_type` by `reader` (words for the warning)."""
+        self.topics += (WatchedTopic(rospy.resolve_name(topic), msg_type._type, reader, hint),)
+        return self
+
+    def subscribe(self, topic, msg_type, callback, reader, hint, **kwargs):
+        """A rospy.Subscriber of `topic`, watched."""
+        self.add(topic, msg_type, reader, hint)
+        return rospy.Subscriber(topic, msg_type, callback, **kwargs)
+
     def check(self, _event=None):
-        """The type the master lists for the topic (None: no publisher, or no answer)."""
+        """{topic: the type the master lists for it, None without a publisher}; {} when the
+        master does not answer."""
+        topics = self.topics
         try:
             published = dict(rospy.get_published_topics())
         except Exception as e:      # the master gone or busy: try again next period
-            self.log.warn('type_check:' + self.topic, '%s: cannot ask the master for %s: %s',
-                          self.who, self.topic, e)
-            return None
-        got = published.get(self.topic)
-        if got is not None and got != self.want:
-            # keyed by topic: watches of one node's several inputs share its log
-            self.log.warn('type_check:' + self.topic, '%s: %s carries %s, but %s reads %s: %s',
-                          self.who, self.topic, got, self.reader, self.want, self.hint)
-        return got
+            self.log.warn('type_check', '%s: cannot ask the master for the types of %s: %s',
+                          self.who, ', '.join(w.topic for w in topics), e)
+            return {}
+        for w in topics:
+            got = published.get(w.topic)
+            if got is not None and got != w.want:
+                self.log.warn('type_check:' + w.topic, '%s: %s carries %s, but %s reads %s: %s',
+                              self.who, w.topic, got, w.reader, w.want, w.hint)
+        return {w.topic: published.get(w.topic) for w in topics}

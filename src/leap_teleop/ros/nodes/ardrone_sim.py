@@ -20,16 +20,14 @@ Everything is relative to the node's namespace, so drones run side by side in th
 namespaces (~tf_prefix keeps their TF frames apart, as with the driver).
 """
 import rospy
-from geometry_msgs.msg import Twist
-from std_msgs.msg import Empty
 from std_srvs.srv import Empty as EmptySrv
 from std_srvs.srv import EmptyResponse, Trigger, TriggerResponse
 
 from leap_teleop import srv
 from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner
 from leap_teleop.ros.drone_camera_topics import DroneCameraTopics
+from leap_teleop.ros.drone_inputs import subscribe_ardrone_sim_inputs
 from leap_teleop.ros.drone_state_topics import DroneStateTopics
-from leap_teleop.ros.drone_type_watches import ardrone_sim_type_watches
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 
@@ -45,7 +43,8 @@ SERVICES = {
                       ('channel',)),
     'setledanimation': (srv.LedAnim, srv.LedAnimResponse(result=True), 'set_led_animation',
                         ('type', 'freq', 'duration')),
-    'setrecord': (srv.RecordEnable, srv.RecordEnableResponse(result=True), 'set_record', ('enable',)),
+    'setrecord': (srv.RecordEnable, srv.RecordEnableResponse(result=True), 'set_record',
+                  ('enable',)),
 }
 
 
@@ -53,19 +52,16 @@ class ArDroneSimNode:
     def __init__(self, p):
         self.log = RateLimitedLog()
         self.use_sim_time = bool(rospy.get_param('/use_sim_time', False))
-        self.runner = DroneSimRunner(p, self.use_sim_time, warn=lambda _, text: rospy.logwarn('ardrone_sim: %s', text))
-        self.state = DroneStateTopics(p, self.runner.frames, self.runner.path_gate, self.use_sim_time)
+        self.runner = DroneSimRunner(p, self.use_sim_time,
+                                     warn=lambda _, text: rospy.logwarn('ardrone_sim: %s', text))
+        self.state = DroneStateTopics(p, self.runner.frames, self.runner.path_gate,
+                                      self.use_sim_time)
         self.cameras = DroneCameraTopics(self.runner.frames.cameras)
-        sim, call = self.runner.sim, self.runner.call
-        rospy.Subscriber('cmd_vel', Twist, lambda m: call(sim.set_cmd_vel, m.linear.x, m.linear.y, m.linear.z,
-                                                          m.angular.x, m.angular.y, m.angular.z), queue_size=10)
-        for topic, command in (('takeoff', sim.takeoff), ('land', sim.land), ('reset', sim.reset)):
-            rospy.Subscriber('ardrone/' + topic, Empty, lambda _, c=command: call(c))
+        self.type_watch = subscribe_ardrone_sim_inputs(self.runner.sim, self.runner.call, self.log)
         for name, (kind, response, command, fields) in SERVICES.items():
             rospy.Service('ardrone/' + name, kind, lambda req, c=getattr(self.runner, command),
                           f=fields, r=response: self.on_command(req, c, f, r))
         rospy.Service('ardrone/snapshot', Trigger, self.on_snapshot)
-        self.type_watches = ardrone_sim_type_watches(self.log)
 
     def on_command(self, req, command, fields, response):
         said = command(*(getattr(req, f) for f in fields))

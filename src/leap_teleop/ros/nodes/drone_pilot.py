@@ -19,11 +19,11 @@ import rospy
 from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotWorker
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
 from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
-from leap_teleop.msg import GestureEvent, Hand, Navdata
+from leap_teleop.msg import Hand
 from leap_teleop.ros import conversions
 from leap_teleop.ros.ardrone_commands import ArdroneCommands
 from leap_teleop.ros.diagnostics import diagnostics_updater
-from leap_teleop.ros.drone_type_watches import pilot_type_watches
+from leap_teleop.ros.drone_inputs import subscribe_pilot_inputs
 from leap_teleop.ros.hand_subscription import HandSubscription
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
@@ -42,9 +42,8 @@ class DronePilotNode:
         self.hand_topic = rospy.resolve_name(hand_topic)
         self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
                                          self.pilot.new_input_connection)
-        rospy.Subscriber(p['gesture_topic'], GestureEvent, self.on_gesture, queue_size=50)
-        rospy.Subscriber('ardrone/navdata', Navdata, self.on_navdata, queue_size=5)
-        self.type_watches = pilot_type_watches(hand_topic, p['gesture_topic'], p['side'], self.log)
+        self.type_watch = subscribe_pilot_inputs(hand_topic, p['gesture_topic'], p['side'],
+                                                 self.on_gesture, self.on_navdata, self.log)
         self.diagnostics = diagnostics_updater('drone_pilot_%s' % p['side'], 'pilot', self.report,
                                                self.commands.input_age)
         self.worker = PilotWorker(self.pilot, self.commands.send,
@@ -102,7 +101,8 @@ def main(argv=None):
     rospy.on_shutdown(node.stop)
     try:
         if not rospy.core.is_shutdown_requested():
-            node.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE, vars(node.pilot.cfg), node.retune)
+            node.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE, vars(node.pilot.cfg),
+                                           node.retune)
             node.thread.start()
             rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
             rospy.spin()

@@ -49,11 +49,10 @@ class HandMarkersNode:
                                            float(p['lifetime']), float(p['scale']))
         self.pub = rospy.Publisher(p['marker_topic'], MarkerArray, queue_size=10)
         self.log = RateLimitedLog()
-        topics = p['hand_topics']
-        self.subs = [rospy.Subscriber(t, Hand, self.on_hand, queue_size=5) for t in topics]
-        self.type_watches = [TopicTypeWatch(t, Hand, 'hand_markers', 'hand_markers', 'no hand is '
-                                            'drawn; give ~hand_topics the sender\'s Hand topics',
-                                            self.log) for t in topics]
+        self.type_watch = TopicTypeWatch('hand_markers', self.log)
+        self.subs = [self.type_watch.subscribe(t, Hand, self.on_hand, 'hand_markers', 'no hand is drawn; '
+                                               'give ~hand_topics the sender\'s Hand topics', queue_size=5)
+                     for t in p['hand_topics']]
         self.p = p
         self.latency_shown = False
         if p['latency_text']:

@@ -43,7 +43,10 @@ class ArmNode:
         self.hand_type = conversions.LEAPCOBOT_TYPES[p['hand']]
         self.topics = ArmCommandTopics(p['joint_prefix'], p['command_queue_size'])
         self.joints_seen = threading.Event()
-        rospy.Subscriber('joint_states', JointState, self.on_joints, queue_size=10)
+        self.type_watch = TopicTypeWatch('ur10_arm', self.log)
+        self.type_watch.subscribe('joint_states', JointState, self.on_joints, 'this arm',
+                                  'the arm waits for its joints; publish sensor_msgs/JointState '
+                                  'there', queue_size=10)
         self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('ur10_arm: %s', text),
                                        lambda text: rospy.logwarn('ur10_arm: %s', text))
         self.hand_sub = None            # from wait_for_robot on
@@ -79,11 +82,9 @@ class ArmNode:
             return False
         self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
                                          self.p, self.runner.new_input_connection)
-        side = self.p['hand']
-        self.type_watch = TopicTypeWatch(
-            self.hand_topic, self.hand_type, 'ur10_arm', 'this arm (hand %s)' % side,
-            "no hand input arrives; publish the %s hand there or set ~hand_topic / the launch "
-            "file's topic" % side, self.log)
+        self.type_watch.add(self.hand_topic, self.hand_type, 'this arm (hand %s)' % self.p['hand'],
+                            "no hand input arrives; publish the %s hand there or set ~hand_topic / "
+                            "the launch file's topic" % self.p['hand'])
         return True
 
     def report(self):

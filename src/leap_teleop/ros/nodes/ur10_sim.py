@@ -21,7 +21,7 @@ import rospy
 from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
-from leap_teleop.ros.cell_state_topics import CellStateTopics, command_type_watches
+from leap_teleop.ros.cell_state_topics import CellStateTopics, command_type_watch
 from leap_teleop.ros.conversions import CommandError, trajectory_points
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
@@ -41,7 +41,7 @@ class UR10SimNode:
         self.cell = self.runner.cell
         self.topics = CellStateTopics(self.cell.config, p['joint_states_queue_size'],
                                       self.use_sim_time)
-        self.type_watches = command_type_watches(self.cell.config, self.log)
+        self.type_watch = command_type_watch(self.cell.config, self.log)
         for arm, ns in ((a, a.name) for a in self.cell.config.arms):
             if not rospy.has_param(ns + '/robot_description'):
                 rospy.set_param(ns + '/robot_description', arm_urdf(arm))
