@@ -160,7 +160,6 @@ class SoakMonitor:
         self.diag_rejected = {}
         self.consumer_received, self.resubscriptions = {}, {}   # per consumer, their own count
         self.judged_afresh = {}             # ... of their input, on its connection
-        self.drains = {}                    # ... late backlogs they left to drain
         self.consumer_missed = {}           # ... of the player's messages that never came
         self.consumer_missed_reconnect = {}  # ... of them, across the consumer's re-subscriptions
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diag, queue_size=50)
@@ -181,8 +180,6 @@ class SoakMonitor:
                         self.resubscriptions[st.name] = int(kv.value)
                     elif kv.key == 'hand input judged afresh on its connection':
                         self.judged_afresh[st.name] = int(kv.value)
-                    elif kv.key == 'hand backlogs left to drain':
-                        self.drains[st.name] = int(kv.value)
 
     def _seq(self, topic, msg):
         seq = msg.header.seq
@@ -502,7 +499,6 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         got = dict(mon.consumer_received)
         resubscribed = dict(mon.resubscriptions)
         judged_afresh = dict(mon.judged_afresh)
-        drains = dict(mon.drains)
     # What each consumer itself received from the player, against what the player sent on
     # its topic (a consumer that never reported counts as having received nothing).
     got = _per_consumer(got)
@@ -545,8 +541,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         % (dr_first, dr_last, dr_drift))
     log('[soak] lost inputs (the monitor) %s, lost per consumer (their own counts) %s, '
         'sequence gaps %s, rejected by the nodes %s, re-subscriptions %s, input judged '
-        'afresh on its connection %s, backlogs left to drain %s'
-        % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed, judged_afresh, drains))
+        'afresh on its connection %s'
+        % (lost_inputs, lost_by_consumer, gaps, rejected, resubscribed, judged_afresh))
     log('[soak] missed per consumer (gaps in the player\'s numbering, their own counts) %s; '
         'of them across their re-subscriptions %s; after the load burst %s'
         % (missed_msgs, missed_reconnect, missed_after))
@@ -572,7 +568,6 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         'soak.consumer_missed_across_resubscriptions_msgs': sum(missed_reconnect.values()),
         'soak.resubscriptions': sum(resubscribed.values()),
         'soak.judged_afresh': sum(judged_afresh.values()),
-        'soak.backlogs_drained': sum(drains.values()),
         'soak.rejected_inputs': sum(rejected.values()),
         'soak.sim_minutes': sim / 60.0,
         'soak.sim_wall_ratio': sim / wall,
@@ -613,8 +608,6 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
                                 % resubscribed,
         'soak.judged_afresh': 'times the consumers judged their late input afresh on its '
                               'connection %s' % judged_afresh,
-        'soak.backlogs_drained': 'late backlogs the consumers left to drain instead of '
-                                 're-subscribing %s' % drains,
         'soak.rejected_inputs': 'ArmStatus.rejected_inputs and the pilots\' diagnostics %s'
                                 % rejected,
         'soak.sim_minutes': '/clock of the UR10 simulator',

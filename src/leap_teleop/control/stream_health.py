@@ -8,13 +8,10 @@ both socket buffers) would look the same. Input refused as late for `after` seco
 without one message on time, its delay steady meanwhile (within STEADY_LAG_SPREAD_S), is
 first judged afresh on the same connection: that delay becomes the baseline, nothing is
 dropped, and a lagged baseline (the case seen in soaks) is healed. A delay that is not
-steady (a backlog still building, or delivered too slowly), or late again on that
-connection for `after` seconds, has the connection dropped and made anew, which clears a
-backlog but loses what it held; again every `after` seconds while that lasts (late input
-is refused anyway, and the backlog may clear at any moment). A backlog being delivered
-fast enough to be gone within DRAIN_WAIT_S (its delay falling from its peak, projected to
-reach zero by then) is left to drain instead, for at most DRAIN_WAIT_S: a new connection
-takes about as long to bring fresh input, and loses the messages the old one held.
+steady (a backlog being delivered, or still building), or late again on that connection
+for `after` seconds, has the connection dropped and made anew, which clears a backlog;
+again every `after` seconds while that lasts (late input is refused anyway, and the
+backlog may clear at any moment).
 
 A connection can also fall silent while its publisher lives on and serves others; that
 does not heal by itself either. On a connection that delivered since it was made, no
@@ -38,10 +35,6 @@ from leap_teleop.params import Param
 # How much the delay of late input may vary over a streak of `after` seconds and still
 # count as steady (a constant offset, not a backlog): s.
 STEADY_LAG_SPREAD_S = 0.1
-
-# A late stream whose delay falls fast enough to be gone within this is left to drain
-# rather than re-made (at most this long past `after`): s.
-DRAIN_WAIT_S = 0.5
 
 # On-time input for this long after a judgement in place allows another one on the same
 # connection (a load that comes back minutes later): s.
@@ -93,10 +86,6 @@ class StreamHealth:
         self._late_messages = False  # ... and it was every message refused as late
         self.rejudged = False       # lateness judged afresh on this connection already
         self._lags = None           # (lowest, highest) delay of the current late streak
-        self._peak = None           # (time, delay) of its most delayed message
-        self._latest = None         # (time, delay) of its newest message
-        self.drains = 0             # late streaks left to drain instead of re-made
-        self._draining = False      # ... the current one is one of them
         self.rejudgements = 0
 
     def on_message(self, now, late, lag=None):
@@ -109,14 +98,10 @@ class StreamHealth:
         if late:
             if self.late_since is None:
                 self.late_since = now
-                self._lags = self._peak = self._latest = None
-                self._draining = False
+                self._lags = None
             if lag is not None and math.isfinite(lag):
                 lo, hi = self._lags or (lag, lag)
                 self._lags = (min(lo, lag), max(hi, lag))
-                if self._peak is None or lag >= self._peak[1]:
-                    self._peak = (now, lag)
-                self._latest = (now, lag)
             self.on_time_since = None
         else:
             self.late_since = None
@@ -164,11 +149,6 @@ class StreamHealth:
         if self.late_since is not None and self.after > 0:
             late_for = now - max(self.late_since, self.since)
             if late_for >= self.after:
-                if late_for < self.after + DRAIN_WAIT_S and self.drains_soon(now):
-                    if not self._draining:
-                        self._draining = True
-                        self.drains += 1
-                    return None
                 self._why, self._late_messages = 'late', True
                 return 'every message late for %.1f s' % late_for
         self._late_messages = False
@@ -192,18 +172,6 @@ class StreamHealth:
             return 'no message %.1f s after re-subscribing (%d publisher%s connected)' % (
                 now - self.since, publishers, '' if publishers == 1 else 's')
         return None
-
-    def drains_soon(self, now):
-        """Whether the late streak is a backlog being delivered that will be gone within
-        DRAIN_WAIT_S: still arriving, its delay clearly fallen from its peak (by more than
-        a steady delay varies) and falling fast enough to reach zero by then."""
-        if self._peak is None or self._latest is None or now - self._latest[0] > DRAIN_WAIT_S:
-            return False
-        (t_peak, peak), (t_last, last) = self._peak, self._latest
-        fallen = peak - last
-        if t_last <= t_peak or fallen <= STEADY_LAG_SPREAD_S:
-            return False
-        return last * (t_last - t_peak) / fallen <= DRAIN_WAIT_S
 
     def judge_in_place(self):
         """Whether the reason due() gave is met by judging the input's lateness afresh on

@@ -1,7 +1,6 @@
 """A consumer's hand-input subscription: counts what arrives and what went missing (header
-sequence gaps) per publisher; when its input stays late, leaves a backlog that drains fast
-to drain, judges a steady delay afresh on the same connection, then re-establishes the
-connection if it stays late; re-establishes it too when
+sequence gaps) per publisher; when its input stays late, judges it afresh on the same
+connection, then re-establishes the connection if it stays late; re-establishes it too when
 it falls silent while a publisher is connected, or loses every publisher the master still
 lists (control.stream_health says when)."""
 import collections
@@ -98,19 +97,14 @@ class HandSubscription:
         # Outside the lock: the master may be slow, the message callback must not wait.
         listed = self._listed_publishers() if ask else None
         with self._lock:
-            drains = self.health.drains
             why = self.health.due(now, publishers, listed)
-            draining = self.health.drains > drains
-            in_place = why is not None and self.health.judge_in_place()
+            if why is None:
+                return
+            in_place = self.health.judge_in_place()
             if in_place:
                 self.health.judged_afresh(now)
-            elif why is not None:
+            else:
                 self.health.resubscribed(now)
-        if draining:             # logged outside the lock: the message callback takes it
-            rospy.logwarn('%s: the input on %s is late, but its backlog is draining fast: left to '
-                          'drain', self.node, rospy.resolve_name(self.topic))
-        if why is None:
-            return
         if in_place:
             # Nothing dropped: a baseline taken while this node's clock lagged is healed;
             # late again on this connection, it is re-made.
@@ -150,5 +144,4 @@ class HandSubscription:
         return values + [('hand messages refused for their frame', str(self.wrong_frame)),
                          ('hand re-subscriptions', str(self.health.resubscriptions)),
                          ('hand input judged afresh on its connection',
-                          str(self.health.rejudgements)),
-                         ('hand backlogs left to drain', str(self.health.drains))]
+                          str(self.health.rejudgements))]
