@@ -7,7 +7,7 @@
                       reach the robot)
   --drone             every --navdata drone took off, flew and is landed again
   --topic T:PKG/MSG  (repeatable) at least --count messages arrive on T
-  --rosout TEXT       a node logs a line containing TEXT
+  --rosout TEXT       (repeatable) a node logs a line containing TEXT
   --advertised T      (repeatable) some node advertises topic T (the master's graph)
   --subscribed T      (repeatable) some node subscribes to topic T
   --driver            stand in for the AR.Drone driver: navdata at 50 Hz, landed until a
@@ -45,7 +45,7 @@ class LaunchProgress:
         self.joint_ranges = {}         # arm -> (lowest, highest) position of each joint
         self.states = {topic: [] for topic in args.navdata}
         self.counts = {spec.rsplit(':', 1)[0]: 0 for spec in args.topic}
-        self.logged = []
+        self.logged = {}     # TEXT: the first line that held it
         self.graph = ({}, {})          # topic -> nodes: published, subscribed
         self.master = rosgraph.Master('/launch_check')
         if args.rosout:
@@ -105,9 +105,10 @@ class LaunchProgress:
         self.driver_state = state
 
     def _log(self, msg):
-        if self.args.rosout in msg.msg:
-            with self.lock:
-                self.logged.append('%s: %s' % (msg.name, msg.msg))
+        for text in self.args.rosout:
+            if text in msg.msg:
+                with self.lock:
+                    self.logged.setdefault(text, '%s: %s' % (msg.name, msg.msg))
 
     def _msg(self, _msg, topic):
         with self.lock:
@@ -156,7 +157,7 @@ class LaunchProgress:
             for s in (self.states.values() if self.args.drone else ()):
                 if TAKING_OFF not in s or s[-1] != LANDED or s.index(TAKING_OFF) == len(s) - 1:
                     return False
-            if self.args.rosout and not self.logged:
+            if len(self.logged) < len(self.args.rosout):
                 return False
             return all(n >= self.args.count for n in self.counts.values())
 
@@ -167,7 +168,7 @@ class LaunchProgress:
                     'not in the graph: %s'
                     % (self.cube_errors() if self.args.cube else '-', self.arm_states,
                        {arm: self.moved(arm) for arm in self.args.moved}, self.states,
-                       self.counts, self.logged[:1], self.graph_missing()))
+                       self.counts, self.logged, self.graph_missing()))
 
 
 def main():
@@ -182,7 +183,7 @@ def main():
                     help='navdata topic (repeatable; default ardrone/navdata)')
     ap.add_argument('--topic', action='append', default=[])
     ap.add_argument('--count', type=int, default=1)
-    ap.add_argument('--rosout', default='')
+    ap.add_argument('--rosout', action='append', default=[])
     ap.add_argument('--driver', action='store_true')
     ap.add_argument('--advertised', action='append', default=[])
     ap.add_argument('--subscribed', action='append', default=[])

@@ -145,14 +145,19 @@ def test_an_arm_fed_the_other_hands_type_says_so(tmp_path):
 
 
 @pytest.mark.rostest
-def test_an_arm_whose_joint_states_carry_another_type_says_so(tmp_path):
-    # It waits for its joints before it listens to the hand: without the watch, a robot
-    # publishing another type there left it waiting with only "waiting for joint_states".
+def test_an_arm_waiting_for_its_joints_names_wrong_types_on_both_inputs(tmp_path):
+    # It waits for its joints before it listens to the hand: without the watches, a robot
+    # publishing another type there left it waiting with only "waiting for joint_states",
+    # and a hand topic of the other side's type went unnamed until the joints came.
     run_launches(tmp_path, [['ur10_arm.launch']],
                  ['--rosout', 'ur10_arm: /ur10_1/joint_states carries std_msgs/String, but this '
-                  'arm reads sensor_msgs/JointState'], 60,
+                  'arm reads sensor_msgs/JointState',
+                  '--rosout', 'ur10_arm: /leapmotion/data_right carries leap_teleop/leapcobotleft, '
+                  'but this arm (hand right) reads leap_teleop/leapcobotright'], 60,
                  others=[['rostopic', 'pub', '-r', '10', '/ur10_1/joint_states',
-                          'std_msgs/String', '{}']])
+                          'std_msgs/String', '{}'],
+                         ['rostopic', 'pub', '-r', '10', '/leapmotion/data_right',
+                          'leap_teleop/leapcobotleft', '{}']])
 
 
 @pytest.mark.rostest

@@ -47,6 +47,10 @@ class ArmNode:
         self.type_watch.subscribe('joint_states', JointState, self.on_joints, 'this arm',
                                   'the arm waits for its joints; publish sensor_msgs/JointState '
                                   'there', queue_size=10)
+        # watched from the start: a wrong hand type is named while the arm still waits
+        self.type_watch.add(self.hand_topic, self.hand_type, 'this arm (hand %s)' % p['hand'],
+                            "no hand input arrives; publish the %s hand there or set ~hand_topic / "
+                            "the launch file's topic" % p['hand'])
         self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('ur10_arm: %s', text),
                                        lambda text: rospy.logwarn('ur10_arm: %s', text))
         self.hand_sub = None            # from wait_for_robot on
@@ -82,9 +86,6 @@ class ArmNode:
             return False
         self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
                                          self.p, self.runner.new_input_connection)
-        self.type_watch.add(self.hand_topic, self.hand_type, 'this arm (hand %s)' % self.p['hand'],
-                            "no hand input arrives; publish the %s hand there or set ~hand_topic / "
-                            "the launch file's topic" % self.p['hand'])
         return True
 
     def report(self):
