@@ -6,7 +6,7 @@ from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
 from leap_teleop.drone.sim import ArDroneSim
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
 pytestmark = pytest.mark.integration

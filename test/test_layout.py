@@ -9,7 +9,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = os.path.join(ROOT, 'src', 'leap_teleop')
 # What only leap_teleop.ros may import: rospy and the message / service packages.
-ROS_ONLY = ('rospy', 'rosbag', 'rostest', 'roslib', 'genpy', 'dynamic_reconfigure',
+ROS_ONLY = ('rospy', 'rosgraph', 'rosbag', 'rostest', 'roslib', 'genpy', 'dynamic_reconfigure',
             'diagnostic_updater', 'tf', 'tf2_ros', 'leap_teleop.msg', 'leap_teleop.srv')
 
 

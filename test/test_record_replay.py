@@ -9,7 +9,7 @@ import time
 import pytest
 from test_rostests import check_every_test_passed
 
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check

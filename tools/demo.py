@@ -19,7 +19,7 @@ import numpy as np
 
 from leap_teleop.drone.sim import STATE_NAMES
 from leap_teleop.hands.sources.scripted import GestureScript
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench.ros_processes import free_port
 
 UR10_SCRIPT = 'ur10_pick_place_dual.yaml'

@@ -22,7 +22,7 @@ import numpy as np
 
 from leap_teleop.hands.camera_view import SIDE_COLOURS
 from leap_teleop.hands.gestures.datasets import HANDS_DATA
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 CLIP = 'clip_fist_then_thumbs_up__mps__gr_test_video.mp4'

@@ -22,9 +22,10 @@ import numpy as np
 import yaml
 
 from leap_teleop.hands.tracker import DEAD_BANDS
+from leap_teleop.package_files import package_path
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
-from leap_teleop.ur10.config import config_dir, load_config
+from leap_teleop.ur10.config import load_config
 
 APPROACH_M = 0.15          # above the cube / drop point before descending
 DROP_CLEARANCE_M = 0.03    # cube bottom above the tray floor at release
@@ -132,7 +133,7 @@ SESSIONS = {
 
 
 def render_sessions():
-    with open(os.path.join(config_dir(), 'ur10_teleop.yaml')) as f:
+    with open(package_path('config', 'ur10_teleop.yaml')) as f:
         teleop = yaml.safe_load(f)
     out = {}
     for name, (cell_file, arms) in SESSIONS.items():
@@ -151,7 +152,7 @@ def main(argv=None):
     ap.add_argument('--check', action='store_true',
                     help='exit 1 if the committed sessions differ from what would be generated')
     args = ap.parse_args(argv)
-    folder = os.path.join(config_dir(), 'gestures')
+    folder = package_path('config', 'gestures')
     stale = []
     for name, text in render_sessions().items():
         path = os.path.join(folder, name)

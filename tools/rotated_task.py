@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.closed_loop import run_session, sim_params
 
 SCRIPT = 'ur10_pick_place_rotated.yaml'

@@ -343,7 +343,7 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500
     ~command_queue_size (arm nodes), ~joint_states_queue_size (simulator) and the
     consumers' ~resubscribe_after (wall seconds); a load burst (LoadBurst) of
     burst_minutes with burst_hogs."""
-    from leap_teleop.ros.node import package_path
+    from leap_teleop.package_files import package_path
     from tools.bench.ros_processes import ros_master
     with ros_master() as env:
         os.environ.update({k: env[k] for k in ('ROS_MASTER_URI', 'ROS_IP', 'ROS_HOSTNAME')})

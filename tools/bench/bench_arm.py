@@ -9,7 +9,7 @@ import tempfile
 
 import numpy as np
 
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 

@@ -47,7 +47,7 @@ import numpy as np
 
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.cell import UR10Cell

@@ -32,7 +32,7 @@ import tempfile
 import numpy as np
 
 from leap_teleop.hands.gestures.datasets import HANDS_DATA, data_dir
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 RECORDING = 'rollAndPitchCropped.json.lz'

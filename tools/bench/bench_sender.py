@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 RATES_HZ = (120, 200, 295, 400)

@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 from leap_teleop.hands.gestures.datasets import HANDS_DATA
-from leap_teleop.ros.node import package_path
+from leap_teleop.package_files import package_path
 from tools.bench import ros_processes
 
 CLIPS = ('clip_fist_then_thumbs_up__mps__gr_test_video.mp4',

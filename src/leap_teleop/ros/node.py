@@ -5,7 +5,6 @@ import sys
 import textwrap
 import time
 
-import rospkg
 import rospy
 
 from leap_teleop.params import (  # noqa: F401 (Param, ParamError re-exported)
@@ -114,12 +113,6 @@ def warn_unknown_params(node, params):
              if name.startswith(prefix)}
     for text in unknown_param_warnings(node, list(params) + list(LIBRARY_PARAMS), found):
         rospy.logwarn(text)
-
-
-def package_path(*parts):
-    """A path inside this package (config files, scripts)."""
-    import os
-    return os.path.join(rospkg.RosPack().get_path('leap_teleop'), *parts)
 
 
 class RateLimitedLog:

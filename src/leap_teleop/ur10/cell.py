@@ -548,11 +548,3 @@ class UR10Cell:
 
     def __exit__(self, *exc):
         self.close()
-
-
-def tray_drop_pose(cfg, arm_name, height_above=0.03):
-    """World TCP position above the arm's tray to release a cube (centre + clearance)."""
-    a = cfg.arm(arm_name)
-    t = a.tray
-    return np.array([t.xyz[0], t.xyz[1], t.floor_z + cfg.cube_size / 2 + height_above])
-

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import yaml
 
+from leap_teleop.package_files import package_path
 from leap_teleop.params import Param, ParamError, check_params
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_LOWER, JOINT_UPPER
 
@@ -26,20 +27,11 @@ def _rpy_matrix(rpy):
                      [-sp, cp * sr, cp * cr]])
 
 
-def config_dir():
-    """The package's config/ folder (source tree first, then the ROS package path)."""
-    here = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', '..', 'config'))
-    if os.path.isdir(here):
-        return here
-    import rospkg
-    return os.path.join(rospkg.RosPack().get_path('leap_teleop'), 'config')
-
-
 def config_path(name):
     """A config path: absolute / existing paths as is, else a file name in config/."""
     if os.path.exists(name):
         return name
-    cand = os.path.join(config_dir(), name)
+    cand = package_path('config', name)
     if not cand.endswith('.yaml'):
         cand += '.yaml'
     return cand

@@ -165,16 +165,6 @@ def fk(q, tcp=True):
     return T
 
 
-def fk_all(q):
-    """Poses of DH frames 1..6 in base_link (for tests and visual checks)."""
-    T = _BASE_FROM_DH.copy()
-    out = []
-    for i in range(6):
-        T = T @ _dh(i, float(q[i]))
-        out.append(T.copy())
-    return out
-
-
 _TWO_PI = 2 * math.pi
 _LOWER_LIST = JOINT_LOWER.tolist()
 _UPPER_LIST = JOINT_UPPER.tolist()

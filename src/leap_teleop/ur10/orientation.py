@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 
-from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.vectors import cross3, norm3
 
 # A flat hand pointing away from the user: palm normal down, direction -z (Leap axes).
@@ -83,7 +82,3 @@ def _rank(data, shape):
 def map_rotation(R_leap, A):
     """A hand rotation (Leap axes) as a rotation about the arm base's axes."""
     return A @ R_leap @ A.T
-
-
-def scale_rotation(R, scale):
-    return kin.rotation_from_vector(kin.rotation_vector(R) * scale)

@@ -37,8 +37,6 @@ LEAP_PEOPLE = os.path.join(SHARED_DATA, 'leap_people')
 DEFAULT_LEAPJS_DATA = os.environ.get('LEAPJS_DATA') or os.path.join(SHARED_DATA, 'leapjs')
 HANDS_DATA = os.environ.get('HANDS_DATA') or os.path.join(SHARED_DATA, 'hands')
 KEYPOINTS = os.path.join(SHARED_DATA, 'keypoints')
-STROKES = os.path.join(SHARED_DATA, 'strokes')
-HANDS = os.path.join(SHARED_DATA, 'hands')
 # The labelled photos (../hands: label__source__name): what each label is to the model.
 PHOTO_LABELS = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist', 'thumbs_up': 'thumb',
                 'thumbs_down': 'thumb', 'ok': 'pinch', 'pinch_o': 'pinch', 'pointing': 'none',
@@ -257,7 +255,7 @@ def mislabelled_keypoints(person, source_label):
 def photo_hands(folder=None):
     """[(source, label, (21, 2) pixel landmarks)] of the labelled photos' hands, from the
     folder's hands.json (what MediaPipe found in each photo)."""
-    folder = folder or HANDS
+    folder = folder or HANDS_DATA
     with open(os.path.join(folder, 'hands.json'), encoding='utf-8') as f:
         images = json.load(f)['images']
     out = []

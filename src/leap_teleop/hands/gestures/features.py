@@ -37,11 +37,6 @@ _MP_TIPS = np.array([4, 8, 12, 16, 20])
 _isfinite = math.isfinite
 
 
-def _unit_rows(v):
-    n = np.sqrt((v * v).sum(axis=-1, keepdims=True))
-    return v / np.maximum(n, 1e-9)
-
-
 def leap_features(hand, geometry=None):
     """Feature vector (LEAP_FEATURES,) of a Hand with 3-D joints, or None."""
     g = geometry if geometry is not None else hand_geometry(hand)

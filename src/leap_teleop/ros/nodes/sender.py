@@ -15,11 +15,12 @@ from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
 from leap_teleop.hands.sender_setup import build_source, check_outputs, recognizer_factory, retune_sender
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
+from leap_teleop.package_files import package_path
 from leap_teleop.ros.camera_topics import camera_model, camera_view
 from leap_teleop.ros.conversions import transform_msg
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.hand_topics import HandTopics
-from leap_teleop.ros.node import package_path, start_node
+from leap_teleop.ros.node import start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 
 # The declarations live beside the hand source and recognizer; re-exported for --help and

@@ -14,12 +14,13 @@ import threading
 import rospy
 from sensor_msgs.msg import JointState
 
+from leap_teleop.package_files import package_path
 from leap_teleop.ros import conversions
 from leap_teleop.ros.arm_topics import ArmCommandTopics
 from leap_teleop.ros.diagnostics import diagnostics_updater
 from leap_teleop.ros.graph import TopicTypeWatch, wait_for_first_message
 from leap_teleop.ros.hand_subscription import HandSubscription
-from leap_teleop.ros.node import RateLimitedLog, package_path, start_node
+from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ur10.joint_states import JointStateIndex
@@ -47,7 +48,6 @@ class ArmNode:
         self.type_watch.subscribe('joint_states', JointState, self.on_joints, 'this arm',
                                   'the arm waits for its joints; publish sensor_msgs/JointState '
                                   'there', queue_size=10)
-        # watched from the start: a wrong hand type is named while the arm still waits
         self.type_watch.add(self.hand_topic, self.hand_type, 'this arm (hand %s)' % p['hand'],
                             "no hand input arrives; publish the %s hand there or set ~hand_topic / "
                             "the launch file's topic" % p['hand'])
