@@ -27,12 +27,13 @@ Modes:
   (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
   left -> yaw left (angular.z). Clamped to ``max_cmd``; angular.x / y are zero, so a
   centred hand is the driver's auto-hover.
-- ``paper``: the paper's Algorithm 1, quirks included. With the Leap SDK's angles
+- ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
+  README), quirks included. With the Leap SDK's angles
   (pitch = atan2(dir_y, -dir_z), roll = atan2(normal_x, -normal_y)), a frame whose
   pitch AND roll both exceed +25 degrees (signed, as written) captures init_x = palm z,
   init_y = palm x (mm); it re-captures on every such frame. Once captured, every frame
   sends linear.x = -(palm_z - init_x) / 3000, linear.y = -(palm_x - init_y) / 3000,
-  linear.z = palm normal y (about -1 for a flat palm: the paper's drone sinks unless
+  linear.z = palm normal y (about -1 for a flat palm: that drone sinks unless
   the palm is tilted), angular.x = init_x, angular.y = init_y (raw mm: any non-zero
   value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
   Nothing is sent before the first capture. The linear ones are clamped to [-1, 1] here,
@@ -114,7 +115,7 @@ def leap_angles(normal, direction):
 
 
 def paper_twist(palm_mm, normal, init_x, init_y, scale=3000.0):
-    """Algorithm 1's twist from a palm (mm) and the captured reference."""
+    """paper mode's twist (the original drone paper's mapping) from a palm (mm) and the captured reference."""
     return (-(palm_mm[2] - init_x) / scale, -(palm_mm[0] - init_y) / scale, normal[1],
             init_x, init_y, 0.0)
 

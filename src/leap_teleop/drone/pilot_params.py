@@ -11,7 +11,7 @@ from leap_teleop.params import Param, check_params, declared_fields
 # disabled watchdog.
 PILOT_PARAMS = {
     'mode': Param('tilt', 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
-                          '(Algorithm 1 exactly)', choices=('tilt', 'paper')),
+                          '(the original drone paper\'s mapping, exactly)', choices=('tilt', 'paper')),
     'rate': Param(200.0, 'max twist publishing rate (queue drain rate)', unit='Hz',
                   ge=1.0, le=1000.0),
     'queue_size': Param(10, 'command FIFO bound (oldest twist dropped when full)',

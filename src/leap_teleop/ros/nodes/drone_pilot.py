@@ -3,9 +3,9 @@
 Reads leap_teleop/Hand (~hand_topic), leap_teleop/GestureEvent (~gesture_topic, events of
 ~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardrone/land and calls
 ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip; ~mode tilt (palm
-offset -> tilt) or paper (the paper's Algorithm 1). Callbacks only queue commands; a worker
-thread runs the watchdog and publishes them (a takeoff or land waits for the driver to
-listen, a takeoff at most ~takeoff_hold); the flip call runs on its own thread, abandoned
+offset -> tilt) or paper (the original drone paper's, see the README). Callbacks only queue
+commands; a worker thread runs the watchdog and publishes them (a takeoff or land waits for
+the driver to listen, a takeoff at most ~takeoff_hold); the flip call runs on its own thread, abandoned
 after ~service_timeout. Without navdata for ~navdata_timeout the drone state is unknown: no
 takeoff, hover, land after ~land_after (see leap_teleop.drone.pilot). Rejected Hand
 messages and gesture events, worker faults and flip call outcomes are counted on /diagnostics.
