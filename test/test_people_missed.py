@@ -1,10 +1,11 @@
 """Why the leave-one-person-out evaluation missed a gesture: the model chose another
 class, its class fell below MIN_P, or a guard said no (tools/evaluation/people.py)."""
+from leap_teleop.hands.gestures import HELD_GESTURES
 from tools.evaluation import people as ep
 
 
 def decision(label, probability, **on):
-    d = dict.fromkeys(ep.HELD, False)
+    d = dict.fromkeys(HELD_GESTURES, False)
     d.update(on, label=label, probability=probability)
     return d
 

@@ -39,7 +39,8 @@ from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
-from leap_teleop.hands.gestures.pose import HELD, MIN_P, classify_pose
+from leap_teleop.hands.gestures.pose import MIN_P, classify_pose
+from leap_teleop.hands.gestures.temporal import HELD_GESTURES
 from tools.evaluation.results_file import write_results
 
 ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
@@ -57,7 +58,7 @@ MODEL_CLASS = {'thumb_up': 'thumb', 'thumb_down': 'thumb'}   # else the gesture'
 
 def _read(s):
     """What a decision dict says: the one gesture on, or 'nothing'."""
-    on = [g for g in HELD if s.get(g)]
+    on = [g for g in HELD_GESTURES if s.get(g)]
     return on[0] if on else 'nothing'
 
 

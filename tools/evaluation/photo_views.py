@@ -28,9 +28,9 @@ import sys
 
 import numpy as np
 
-from leap_teleop.hands.classify_frames import HELD, Classifier
+from leap_teleop.hands.classify_frames import Classifier
 from leap_teleop.hands.frame import Frame
-from leap_teleop.hands.gestures import datasets
+from leap_teleop.hands.gestures import HELD_GESTURES, datasets
 from tools.evaluation.results_file import write_results
 
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
@@ -156,7 +156,7 @@ def judge(hands, want):
     if not hands:
         return False, false_up
     for h in hands:
-        got = {g for g in HELD if h[g]}
+        got = {g for g in HELD_GESTURES if h[g]}
         if want is None:
             if got:
                 return False, false_up
@@ -230,7 +230,7 @@ def run(data_dir=datasets.HANDS_DATA, names=None, make_views=views, log=None):
                     r['false_thumb_up'] += false_up
                     r['no_hand'] += not hands
                     if not right or false_up:
-                        got = [sorted(g for g in HELD if h[g]) for h in hands]
+                        got = [sorted(g for g in HELD_GESTURES if h[g]) for h in hands]
                         r['failures'].append([name, view, how, got])
                         if log:
                             log('%s %s (%s): %s' % (name, view, how, got or 'no hand'))

@@ -7,14 +7,13 @@ import time
 
 import numpy as np
 
+from leap_teleop.hands.gestures.temporal import HELD_GESTURES
 from leap_teleop.hands.sources.landmarks import person_side
 
 # MediaPipe's hand skeleton: landmark index pairs.
 HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
                     (5, 9), (9, 10), (10, 11), (11, 12), (9, 13), (13, 14), (14, 15),
                     (15, 16), (13, 17), (17, 18), (18, 19), (19, 20), (0, 17))
-# Held gestures shown, when the recognizer's state has them.
-GESTURES = ('fist', 'thumb_up', 'thumb_down', 'pinch', 'rock', 'open')
 SIDE_COLOURS = {'right': (60, 180, 255), 'left': (255, 160, 60)}      # BGR
 FPS_SMOOTHING = 0.1
 
@@ -23,7 +22,7 @@ def held_gestures(state):
     """Names of the held gestures of a HandState (or GestureState) that are on."""
     if state is None:
         return []
-    return [g for g in GESTURES if getattr(state, g, False) is True]
+    return [g for g in HELD_GESTURES if getattr(state, g, False) is True]
 
 
 def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=()):

@@ -73,8 +73,6 @@ from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.sources import SourceError, leapjs
 from leap_teleop.output_file import output_problem
 
-HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
-
 
 class Classifier:
     """Frames -> output dicts, keeping one recognizer per hand side. model /

@@ -27,6 +27,7 @@ import numpy as np
 
 from leap_teleop.hands.gestures.features import keypoint_features, leap_features, mirror_keypoints
 from leap_teleop.hands.gestures.geometry import num
+from leap_teleop.hands.gestures.temporal import HELD_GESTURES
 
 PINCH_THRESHOLD = 0.2   # original: pinch when strength > 0.2; pinch_value = strength - 0.2
 # Geometric pinch strength from the thumb-index tip gap (palm widths): 1 at 0.35, 0 at 1.1.
@@ -49,7 +50,6 @@ THUMB_SIDE_MIN = 0.15
 CAMERA_THUMB_RISE = 0.05
 CAMERA_THUMB_MAX_DEG = 60.0
 _CAMERA_THUMB_COS = math.cos(math.radians(CAMERA_THUMB_MAX_DEG))
-HELD = ('fist', 'thumb_up', 'pinch', 'rock', 'open', 'thumb_down')
 _EXTRA = {}                 # a model's classes -> its user classes (a key each in the decisions)
 _isfinite = math.isfinite
 
@@ -120,7 +120,7 @@ def classify_pose(hand, g, model):
     'extended' (5 bools), 'label' (the winning class or '') and 'probability'; user
     classes appear under their own names. `g` (the HandGeometry) may be None for a hand
     known only by its image landmarks."""
-    out = dict.fromkeys(HELD, False)
+    out = dict.fromkeys(HELD_GESTURES, False)
     out['extended'] = g.extended if g is not None else (False,) * 5
     out['pinch_value'] = 0.0
     out['label'], out['probability'] = '', 0.0
