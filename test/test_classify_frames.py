@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from leap_teleop.hands import classify_frames
-from leap_teleop.hands.classify_frames import Classifier
+from leap_teleop.hands.classify_frames import FrameClassifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.hand_model import render_hand
@@ -122,7 +122,7 @@ frame = st.fixed_dictionaries({}, optional={'id': json_values, 'timestamp': json
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.one_of(frame, json_values), min_size=1, max_size=6), st.booleans())
 def test_frame_parsing_never_raises(frames, stateless):
-    c = Classifier(stateless=stateless)
+    c = FrameClassifier(stateless=stateless)
     for d in frames:
         if not isinstance(d, dict):
             continue

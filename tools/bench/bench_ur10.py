@@ -155,7 +155,7 @@ def raw_replay(cell, targets):
     per arm and per gripper with the recorded targets, then stepSimulation; no trajectory
     following, grasp checks or state reads. Returns the wall time."""
     from leap_teleop.ur10.cell import ARM_FORCE, ARM_POSITION_GAIN, GRIPPER_FORCE
-    from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_CLOSED
+    from leap_teleop.ur10.model import FINGER_TRAVEL, KNUCKLE_CLOSED_RAD
     c, arms = cell.client, list(cell.arms.values())
     forces, kp, kd = ARM_FORCE.tolist(), [ARM_POSITION_GAIN] * 6, [1.0] * 6
     t0 = time.perf_counter()
@@ -165,7 +165,7 @@ def raw_replay(cell, targets):
                                         targetPositions=q, targetVelocities=qd,
                                         forces=forces, positionGains=kp,
                                         velocityGains=kd, physicsClientId=c)
-            f = g * FINGER_TRAVEL / GRIPPER_CLOSED
+            f = g * FINGER_TRAVEL / KNUCKLE_CLOSED_RAD
             p.setJointMotorControlArray(arm.body, arm.fingers + [arm.knuckle],
                                         p.POSITION_CONTROL, targetPositions=[f, f, g],
                                         forces=[GRIPPER_FORCE, GRIPPER_FORCE, 1.0],

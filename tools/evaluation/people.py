@@ -22,9 +22,9 @@ tracker): their labelled frames (hands.gestures.datasets.LEAPJS_LABELS; a thumb 
 is a thumbs-up where the SDK's thumb points up, nothing where it points sideways). Webcam
 keypoints: open, fist, thumb_up, thumb_down, ok -> pinch; pointing, peace, other ->
 nothing (classes whose rows show another pose, hands.gestures.datasets.MISLABELLED_KEYPOINTS,
-are left out and reported apart); the Leap people seen as a camera would (hands.gestures.train.camera_view) score
-horns (heavy -> rock) and are reported apart, and so are the labelled photos, one photo
-source held out at a time.
+are left out and reported apart); the Leap people seen as a camera would
+(hands.gestures.train.projected_landmarks) score horns (heavy -> rock) and are reported
+apart, and so are the labelled photos, one photo source held out at a time.
 """
 import argparse
 import collections

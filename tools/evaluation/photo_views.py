@@ -28,7 +28,7 @@ import sys
 
 import numpy as np
 
-from leap_teleop.hands.classify_frames import Classifier
+from leap_teleop.hands.classify_frames import FrameClassifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import HELD_GESTURES, datasets
 from tools.evaluation.results_file import write_results
@@ -174,7 +174,7 @@ def _box(landmarks, width, height):
 
 class PhotoPipeline:
     """classify_frames' image path on in-memory images: the video source's preparation
-    and detector, its hands_of conversion, the stateless Classifier."""
+    and detector, its hands_of conversion, the stateless FrameClassifier."""
 
     def __init__(self, any_image_path):
         from leap_teleop.hands.sources import make_source
@@ -191,7 +191,7 @@ class PhotoPipeline:
         """The classify_frames output hands for these detections."""
         self.source.forget_hands()         # unrelated pictures: no velocity between them
         frame = Frame(id=1, timestamp=0.0, hands=self.source.hands_of(landmarks, cam, 0.0))
-        return Classifier(stateless=True).classify_frame(frame, 1, 0)['hands']
+        return FrameClassifier(stateless=True).classify_frame(frame, 1, 0)['hands']
 
     def close(self):
         self.source.detector.close()

@@ -74,7 +74,7 @@ from leap_teleop.hands.sources import SourceError, leapjs
 from leap_teleop.output_file import output_problem
 
 
-class Classifier:
+class FrameClassifier:
     """Frames -> output dicts, keeping one recognizer per hand side. model /
     keypoint_model: pose model paths (None: the shipped ones); their own classes show as
     one more key each, true while held."""
@@ -275,7 +275,7 @@ def main(argv=None):
         stills = capture.resolve_stills(args.input)
     try:
         # Still images are unrelated pictures: each is judged on its own.
-        classifier = Classifier(args.stateless or stills is not None, args.model,
+        classifier = FrameClassifier(args.stateless or stills is not None, args.model,
                                 args.keypoint_model)
         if args.keypoints:
             frames = keypoint_lines(args.keypoints, classifier)

@@ -9,7 +9,7 @@ thumb metacarpal has length 0 too). Units follow the input (frames: millimetres)
 import numpy as np
 
 BONE_NAMES = ('metacarpal', 'proximal', 'intermediate', 'distal')
-JOINT_NAMES = ('mcp', 'pip', 'dip', 'tip')
+FINGER_JOINT_NAMES = ('mcp', 'pip', 'dip', 'tip')
 
 
 def hand_joints(hand):
@@ -18,7 +18,7 @@ def hand_joints(hand):
     if len(hand.fingers) < 5:
         return None
     try:
-        joints = np.array([[getattr(f, name) for name in JOINT_NAMES] for f in hand.fingers[:5]],
+        joints = np.array([[getattr(f, name) for name in FINGER_JOINT_NAMES] for f in hand.fingers[:5]],
                           dtype=float)
     except (TypeError, ValueError):     # a joint is None or not a 3-vector
         return None

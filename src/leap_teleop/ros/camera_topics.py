@@ -25,8 +25,7 @@ def camera_model(p, timeout=10.0):
         raise SourceError('~camera_info_topic %s: %s' % (p['camera_info_topic'], e))
 
 
-
-def camera_view(p):
+def camera_view_publisher(p):
     """The annotated camera view (CameraView publishing on ~annotated_image_topic) when
     that is set and the source is a camera; else None. Its notes are the input ages heard
     on /diagnostics: this sender's capture -> published and each consumer's capture ->

@@ -18,7 +18,7 @@ import pybullet as p
 
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import TABLE_THICKNESS, CellConfig, load_config
-from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_CLOSED, GRIPPER_JOINT, urdf_file
+from leap_teleop.ur10.model import FINGER_TRAVEL, GRIPPER_JOINT, KNUCKLE_CLOSED_RAD, urdf_file
 from leap_teleop.ur10.trajectory import TrajectoryFollower
 
 GRIPPER_MAX_SPEED = 1.6        # knuckle rad/s: about 0.5 s from open to closed (2F-85-like)
@@ -82,7 +82,7 @@ class _Arm:
             cfg.home, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER,
             kin.MAX_JOINT_SPEED / POINT_ACCEL_RAMP_S, kin.JOINT_NAMES)
         self.gripper_follower = TrajectoryFollower(
-            [0.0], GRIPPER_MAX_SPEED, [0.0], [GRIPPER_CLOSED],
+            [0.0], GRIPPER_MAX_SPEED, [0.0], [KNUCKLE_CLOSED_RAD],
             GRIPPER_MAX_SPEED / POINT_ACCEL_RAMP_S, [GRIPPER_JOINT])
         self.grasp = None              # (constraint id, cube name, knuckle at grasp)
         self.lost_checks = 0
@@ -127,7 +127,7 @@ class UR10Cell:
             self._skip_untouchable_pairs(arm)
             for j in arm.fingers + [arm.knuckle]:
                 p.changeDynamics(body, j, jointLowerLimit=0.0,
-                                 jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else GRIPPER_CLOSED,
+                                 jointUpperLimit=FINGER_TRAVEL if j != arm.knuckle else KNUCKLE_CLOSED_RAD,
                                  physicsClientId=c)
         self._arm_bodies = {a.body for a in self.arms.values()}
         self.reset()
@@ -266,7 +266,7 @@ class UR10Cell:
                 gripper = arm.gripper_follower
                 g = float((gripper.sample(t)[0] if gripper.segments else gripper.q)[0])
                 if g != arm.gripper_sent:     # PyBullet's motors keep their targets
-                    f = g * FINGER_TRAVEL / GRIPPER_CLOSED
+                    f = g * FINGER_TRAVEL / KNUCKLE_CLOSED_RAD
                     p.setJointMotorControlArray(arm.body, arm.gripper_joints,
                                                 p.POSITION_CONTROL, targetPositions=[f, f, g],
                                                 forces=_GRIPPER_FORCES, positionGains=_GRIPPER_KP,
@@ -386,7 +386,7 @@ class UR10Cell:
             return
         # Only a closing gripper squeezing the cube grasps it.
         g_now = self._knuckle(arm)[0]
-        if g_des > g_now + 0.01 or g_des >= GRIPPER_CLOSED - 1e-6:
+        if g_des > g_now + 0.01 or g_des >= KNUCKLE_CLOSED_RAD - 1e-6:
             cube = both[0]
             body = self.cubes[cube]
             ls = p.getLinkState(arm.body, arm.tcp_link, computeForwardKinematics=True,
@@ -404,7 +404,7 @@ class UR10Cell:
     # ---- state -------------------------------------------------------------------------
     def _knuckle(self, arm):
         st = p.getJointStates(arm.body, arm.fingers, physicsClientId=self.client)
-        k = GRIPPER_CLOSED / FINGER_TRAVEL
+        k = KNUCKLE_CLOSED_RAD / FINGER_TRAVEL
         return (0.5 * (st[0][0] + st[1][0]) * k, 0.5 * (st[0][1] + st[1][1]) * k)
 
     def joint_state(self, name):

@@ -22,7 +22,7 @@ import tempfile
 from leap_teleop.ur10.kinematics import TCP_OFFSET
 
 GRIPPER_JOINT = 'finger_joint'
-GRIPPER_CLOSED = 0.8          # knuckle angle, rad, fully closed (2F-85)
+KNUCKLE_CLOSED_RAD = 0.8          # knuckle angle, rad, fully closed (2F-85)
 FINGER_TRAVEL = 0.0425        # m per finger from open to closed (85 mm stroke)
 PALM_HEIGHT = 0.04            # m from the flange to the finger roots
 FINGER_LENGTH = 0.08          # m, so fingertips are 0.12 m from the flange
@@ -67,7 +67,7 @@ def _box_link(name, size, z, mass, inertia, material, contact=''):
 
 
 def _gripper_xml():
-    mult = FINGER_TRAVEL / GRIPPER_CLOSED
+    mult = FINGER_TRAVEL / KNUCKLE_CLOSED_RAD
     x0 = PAD_HALF_GAP_OPEN + FINGER_THICK / 2
     pad_friction = ('\n    <contact><lateral_friction value="1.5"/>'
                     '<spinning_friction value="0.01"/></contact>')
@@ -99,7 +99,7 @@ def _gripper_xml():
     <child link="gripper_knuckle_link"/>
     <origin xyz="0 0 {PALM_HEIGHT / 2}" rpy="0 0 0"/>
     <axis xyz="0 1 0"/>
-    <limit lower="0" upper="{GRIPPER_CLOSED}" effort="10" velocity="2.0"/>
+    <limit lower="0" upper="{KNUCKLE_CLOSED_RAD}" effort="10" velocity="2.0"/>
   </joint>
   <link name="gripper_knuckle_link">
     <inertial>

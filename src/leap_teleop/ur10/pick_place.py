@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.model import GRIPPER_CLOSED
+from leap_teleop.ur10.model import KNUCKLE_CLOSED_RAD
 
 APPROACH_HEIGHT = 0.15      # m above the grasp / drop point for the vertical moves
 DROP_CLEARANCE = 0.03       # m between the cube's bottom and the tray floor at release
@@ -46,7 +46,7 @@ def pick_place_plan(cfg, arm_name, cube_name, q_start=None, cube_xyz=None):
 
     move(cube + up, 'above cube')
     move(cube, 'at cube')
-    steps.append(Step('gripper', np.array([GRIPPER_CLOSED]), 'close'))
+    steps.append(Step('gripper', np.array([KNUCKLE_CLOSED_RAD]), 'close'))
     move(cube + up, 'lift')
     move(drop + up, 'above tray')
     move(drop, 'at tray')

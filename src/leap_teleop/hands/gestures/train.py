@@ -294,7 +294,7 @@ KEYPOINT_NOISE = 0.015
 PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
 
 
-def camera_view(landmarks, yaw, pitch):
+def projected_landmarks(landmarks, yaw, pitch):
     """(21, 2) image positions (y down) of hand-frame landmarks seen palm-on after
     turning them by yaw (about the hand direction) and pitch (about thumbward)."""
     cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
@@ -318,7 +318,7 @@ def add_leap_views(ds, path, seed=SEED):
         if lm is None:
             continue
         yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
-        xy = rotate_keypoints(camera_view(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
+        xy = rotate_keypoints(projected_landmarks(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
         rows.append((xy, cls, 'leap:' + p, lab, False))
         n += 1
     add_keypoint_rows(ds, rows)

@@ -16,7 +16,7 @@ from leap_teleop.hands.sender_setup import build_source, check_outputs, recogniz
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.package_files import package_path
-from leap_teleop.ros.camera_topics import camera_model, camera_view
+from leap_teleop.ros.camera_topics import camera_model, camera_view_publisher
 from leap_teleop.ros.conversions import transform_msg
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.hand_topics import HandTopics
@@ -36,7 +36,7 @@ def build(p):
     check_outputs(p)
     factory = recognizer_factory(p)
     bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
-    view = camera_view(p)
+    view = camera_view_publisher(p)
     source = build_source(p, rospy.get_time, package_path('config', 'gestures', 'wave_hello.yaml'),
                           lambda: camera_model(p), view.on_image if view is not None else None)
     return source, view, factory, bindings
