@@ -182,3 +182,24 @@ def test_every_module_the_architecture_page_names_exists():
         if full not in MODULES:
             missing.append(name)
     assert not missing, missing
+
+
+def test_the_architecture_page_names_every_module():
+    # The reverse of the test above: a newcomer finds each module's job on one page. A
+    # module may be named in full or, after its folder has been named, as `.name`.
+    text = open(os.path.join(ROOT, 'docs', 'architecture.md')).read()
+    unnamed = []
+    for full in sorted(MODULES):
+        if not full.startswith('leap_teleop.') or full.count('.') < 1:
+            continue
+        name = full[len('leap_teleop.'):]
+        folder, _, last = name.rpartition('.')
+        if name in ('ros', 'hands', 'control', 'ur10', 'drone', 'ros.nodes', 'hands.sources',
+                    'hands.gestures'):
+            continue
+        if re.search(r'(?<![\w.])%s(?!\w)' % re.escape(name), text):
+            continue
+        if folder and folder in text and re.search(r'`\.%s`' % re.escape(last), text):
+            continue
+        unnamed.append(name)
+    assert not unnamed, unnamed
