@@ -16,7 +16,7 @@ import yaml
 
 from leap_teleop.hands import classify_frames
 from leap_teleop.hands.frame import Frame
-from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures import GestureRecognizer, training_set
 from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.gestures import record as record_gestures
 from leap_teleop.hands.gestures import train as train_gestures
@@ -232,12 +232,12 @@ def test_default_retrain_includes_the_leave_one_person_out_report(tmp_path, trai
 
 
 def test_a_card_names_the_terms_of_the_shared_sources_it_used_only():
-    assert train_gestures.data_terms('leap', {'user:two', 'user:wave'}) == []
-    assert len(train_gestures.data_terms('leap', {'user_03', 'guinevere_01', 'leapjs_takes'})) == 3
-    terms = train_gestures.data_terms('keypoints', {'kinivi', 'photo:mps', 'user:ok'})
+    assert training_set.data_terms('leap', {'user:two', 'user:wave'}) == []
+    assert len(training_set.data_terms('leap', {'user_03', 'guinevere_01', 'leapjs_takes'})) == 3
+    terms = training_set.data_terms('keypoints', {'kinivi', 'photo:mps', 'user:ok'})
     assert [t.split(' ')[0] for t in terms] == ['hand', 'the']
     with pytest.raises(ValueError, match="no data terms for the leap data of 'someone'"):
-        train_gestures.data_terms('leap', {'user_01', 'someone'})
+        training_set.data_terms('leap', {'user_01', 'someone'})
 
 
 @pytest.mark.parametrize('shared, held', [

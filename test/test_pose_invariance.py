@@ -185,16 +185,16 @@ def test_keypoint_features_ignore_the_cameras_roll_and_scale_but_not_the_mirror(
 
 def test_keypoint_classes_that_show_another_pose_are_left_out_of_the_fit():
     from leap_teleop.hands.gestures import datasets as gesture_data
-    from leap_teleop.hands.gestures import train
-    ds = train.Dataset('keypoints')
-    train.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'))
+    from leap_teleop.hands.gestures import training_set
+    ds = training_set.Dataset('keypoints')
+    training_set.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'))
     labels = set(ds.label)
     # Close (four fingers up) and Ok (a side-view thumbs-up) are out; the rest are in
     assert 'fist' not in labels and 'ok' not in labels
     assert {'open', 'pointing', 'other'} <= labels
     assert ds.sources == ['ASHISH74888.csv (678 rows, 234 mislabelled left out)']
     # a user's file is never second-guessed
-    ds = train.Dataset('keypoints')
-    train.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'),
+    ds = training_set.Dataset('keypoints')
+    training_set.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'),
                         label='mine', person='user:me')
     assert set(ds.y) == {'mine'} and len(ds.y) == 2 * 2 * 912

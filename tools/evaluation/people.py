@@ -23,7 +23,7 @@ is a thumbs-up where the SDK's thumb points up, nothing where it points sideways
 keypoints: open, fist, thumb_up, thumb_down, ok -> pinch; pointing, peace, other ->
 nothing (classes whose rows show another pose, hands.gestures.datasets.MISLABELLED_KEYPOINTS,
 are left out and reported apart); the Leap people seen as a camera would
-(hands.gestures.train.projected_landmarks) score horns (heavy -> rock) and are reported
+(hands.gestures.training_set.projected_landmarks) score horns (heavy -> rock) and are reported
 apart, and so are the labelled photos, one photo source held out at a time.
 """
 import argparse
@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 from leap_teleop.hands.frame import TrackedHand
-from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures import GestureRecognizer, training_set
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
@@ -186,7 +186,7 @@ def leap_people(data_dir, log=print):
         elif person == 'leapjs_takes':
             from leap_teleop.hands.gestures.datasets import UP, expected
             folder = os.path.join(data_dir, 'leapjs')
-            for take, hand, cls, want in tg.leapjs_take_hands(folder):
+            for take, hand, cls, want in training_set.leapjs_take_hands(folder):
                 if cls == 'thumb':
                     up = expected(UP, hand)
                     if up is None:

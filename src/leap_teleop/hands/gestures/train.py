@@ -19,7 +19,6 @@ the figures, with the worst person, into the model's card.
 """
 import argparse
 import collections
-import dataclasses
 import datetime
 import os
 import sys
@@ -27,19 +26,23 @@ import time
 
 import numpy as np
 
-from leap_teleop.hands.frame import Finger
 from leap_teleop.hands.gestures import datasets as gd
 from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier, class_name_problem, is_model_file
-from leap_teleop.hands.gestures.features import (
-    hand_landmarks,
-    keypoint_features_rows,
-    leap_features,
-    rotate_keypoints,
+from leap_teleop.hands.gestures.training_set import (
+    JOINT_NOISE_MM,
+    KEYPOINT_NOISE,
+    SEED,
+    Dataset,
+    add_guinevere,
+    add_keypoints,
+    add_leap_poses,
+    add_leap_views,
+    add_leapjs_takes,
+    add_photos,
+    data_terms,
 )
-from leap_teleop.hands.sources import leapjs
 from leap_teleop.output_file import output_problem
 
-SEED = 0
 HIDDEN_UNITS = 64
 L2 = 1e-3
 # The keypoint model learns from few people (one to three a class): ten times the weight
@@ -52,277 +55,12 @@ MAX_ITER = 80
 # time and loses nothing measurable.
 FIT_STRIDE = 2
 CARD_TITLE = '# Pose model card'    # a card's first line: only such a file is rewritten
-JOINT_NOISE_MM = 3.0
 FOLD_WORKERS = 2        # leave-one-person-out folds fitted at once (this machine: 2 cores)
 MIN_SCALE = 0.05        # features are unit vectors, cosines and palm widths
-# Guinevere takes whose every frame shows one pose: the thumbs takes (a fist with the thumb
-# out, judged up or down apart from the model) and the open-hand moves.
-# Their thumbs are the only real thumbs-up / down there are (two people, four takes each
-# way, against thousands of frames of each static pose): each such frame counts
-# THUMB_TAKE_REPEAT times in the fit.
+# The Guinevere thumbs takes' thumbs are the only real thumbs-up / down there are (two
+# people, four takes each way, against thousands of frames of each static pose): each
+# such frame counts THUMB_TAKE_REPEAT times in the fit.
 THUMB_TAKE_REPEAT = 10
-TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'open',
-               'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
-
-
-# Where the fitted data comes from and under what terms (the data folders' READMEs), by
-# the prefix of the people each source adds ('' for the webcam keypoint files' people).
-DATA_TERMS = {
-    'leap': [('user_', 'GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
-                       'de Madrid, Grupo de Tratamiento de Imagenes; Mantecon et al.), users 01-12, as '
-                       'redistributed in sluyters/QuantumLeap: published by its authors for research, '
-                       'no licence file'),
-             ('guinevere_', 'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
-                            'research, no licence file'),
-             ('leapjs_takes', 'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0')],
-    'keypoints': [('', 'hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
-                       'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
-                       '(their hand-gesture-recognition repositories): Apache-2.0'),
-                  ('leap:', 'GTI-UPM Leap captures seen as a camera would (see the Leap model)'),
-                  ('photo:', 'the labelled hand photos of ../shared/data/hands (each under its source '
-                             "repository's licence; see that README)")],
-}
-_OTHER_SOURCES = ('user:', 'leap:', 'photo:')
-
-
-def data_terms(family, persons):
-    """The terms of the shared data sources that people of `persons` come from (a user's
-    own files, 'user:...', carry none); ValueError for a person of no known source (a
-    source added without its terms)."""
-    def source(person):
-        if person.startswith('user:'):
-            return None
-        if family == 'keypoints' and not person.startswith(_OTHER_SOURCES):
-            return ''
-        prefix = next((prefix for prefix, _ in DATA_TERMS[family]
-                       if prefix and person.startswith(prefix)), None)
-        if prefix is None:
-            raise ValueError('no data terms for the %s data of %r' % (family, person))
-        return prefix
-    used = {source(p) for p in persons}
-    return [text for prefix, text in DATA_TERMS[family] if prefix in used]
-
-
-class Dataset:
-    """Feature rows with their class, person and source label; `augmented` marks the
-    noisy copies (fitted on, never scored)."""
-
-    def __init__(self, family, seed=SEED):
-        self.family = family
-        self.x, self.y, self.person, self.label, self.augmented = [], [], [], [], []
-        self.sources = []
-        self.rng = np.random.default_rng(seed)
-
-    def add(self, x, cls, person, label, augmented=False):
-        if x is not None:
-            self.x.append(x)
-            self.y.append(cls)
-            self.person.append(person)
-            self.label.append(label)
-            self.augmented.append(augmented)
-
-    def add_hand(self, hand, cls, person, label):
-        """A Leap-family hand, and a copy with JOINT_NOISE_MM of tracker noise on every
-        joint (a model fitted on one tracker's exact proportions reads a fist as
-        something else once its joints move by a millimetre)."""
-        x = leap_features(hand)
-        if x is None:
-            return
-        self.add(x, cls, person, label)
-        self.add(leap_features(noisy_hand(hand, JOINT_NOISE_MM, self.rng)), cls, person, label,
-                 augmented=True)
-
-    def arrays(self):
-        return (np.array(self.x), np.array(self.y), np.array(self.person),
-                np.array(self.label))
-
-    def clean(self):
-        return ~np.array(self.augmented, dtype=bool)
-
-
-def noisy_hand(hand, sigma, rng):
-    """A copy of a Hand with Gaussian noise (mm) on every joint."""
-    jointed = [f.mcp is not None and f.pip is not None and f.dip is not None
-               for f in hand.fingers]
-    # one draw for the whole hand: the same numbers, in the same order (tip, mcp, pip,
-    # dip of each jointed finger), as one draw per joint
-    noise = iter(rng.normal(0.0, sigma, (sum(jointed), 4, 3)))
-    fingers = []
-    for f, j in zip(hand.fingers, jointed):
-        if j:
-            n = next(noise)
-            f = Finger(f.tip + n[0], f.direction, f.extended, f.mcp + n[1], f.pip + n[2],
-                       f.dip + n[3])
-        fingers.append(f)
-    return dataclasses.replace(hand, fingers=tuple(fingers))
-
-
-def add_leap_poses(ds, path, label_map=None, label=None, person=None):
-    """Rows of a Leap pose file; `label` overrides every row's (a user's file)."""
-    n = 0
-    for p, lab, frame in gd.read_pose_lines(path):
-        hand = gd.first_hand(frame)
-        cls = label if label is not None else (label_map or gd.LEAP_LABELS).get(lab)
-        if hand is None or cls is None:
-            continue
-        ds.add_hand(hand, cls, person or p, lab)
-        n += 1
-    ds.sources.append('%s (%d hands)' % (os.path.basename(path), n))
-
-
-def take_class(want, hand):
-    """The pose class of a labelled frame of the shared LeapJS takes, or None."""
-    if want.get('fist') is True:
-        return 'fist'
-    if want.get('open') is True:
-        return 'open'
-    if want.get('pinch') is True:
-        return 'pinch'
-    if want.get('thumb_up') == gd.UP:
-        return 'thumb'          # a thumb out of a fist, up or sideways: the guard decides
-    if all(v is False for v in want.values()) and len(want) == 4:
-        return 'none'           # the gun (thumb and index out)
-    return None
-
-
-def leapjs_take_hands(folder):
-    """(take, hand, pose class, labels) of every labelled hand of the shared LeapJS takes
-    (labels: datasets.LEAPJS_LABELS)."""
-    for take, spans in sorted(gd.LEAPJS_LABELS.items()):
-        path = gd.find_take(folder, take)
-        if path is None:
-            continue
-        dicts = gd.take_frames(path)
-        for side, frames, want in spans:
-            for k in frames if frames is not gd.ALL else range(len(dicts)):
-                if k >= len(dicts) or dicts[k] is None:
-                    continue
-                try:
-                    frame = leapjs.frame_from_dict(dicts[k])
-                except leapjs.FrameError:
-                    continue
-                hand = frame.hand(side)
-                cls = take_class(want, hand) if hand is not None else None
-                if cls is not None:
-                    yield take, hand, cls, want
-
-
-def add_leapjs_takes(ds, folder):
-    """The labelled frames of the shared LeapJS takes (an older tracker's hand model:
-    fists curled at the middle joints, knuckles straight) as one more person."""
-    n = 0
-    for take, hand, cls, _ in leapjs_take_hands(folder):
-        ds.add_hand(hand, cls, 'leapjs_takes', take)
-        n += 1
-    ds.sources.append('the LeapJS takes of ../leapjs (%d labelled hands)' % n)
-
-
-def add_guinevere(ds, root):
-    n = 0
-    for person, gesture, path in gd.guinevere_takes(root):
-        cls = TAKE_LABELS.get(gesture)
-        if cls is None:
-            continue
-        for frame in gd.read_take(path):
-            hand = gd.first_hand(frame)
-            if hand is not None:
-                ds.add_hand(hand, cls, 'guinevere_' + person, gesture)
-                n += 1
-    ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
-
-
-def keypoint_copies(ds, pts, cls, person, label, copies=1):
-    """A keypoint row's copies for add_keypoint_rows: the first as recorded, further
-    copies turned in the picture by up to TURN_RAD with KEYPOINT_NOISE on every landmark."""
-    out = []
-    for k in range(copies):
-        q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
-        if k:
-            q = q + ds.rng.normal(0.0, KEYPOINT_NOISE, q.shape)
-        out.append((q, cls, person, label, k > 0))
-    return out
-
-
-def add_keypoint_rows(ds, rows):
-    """Keypoint rows [(landmarks, class, person, label, augmented)], each followed by its
-    mirror image (a left hand is a mirrored right one); their features computed at once."""
-    if not rows:
-        return
-    xy = np.repeat(np.array([np.reshape(q, (21, 2)) for q, *_ in rows], dtype=float), 2, axis=0)
-    xy[1::2, :, 0] = -xy[1::2, :, 0]
-    x, ok = keypoint_features_rows(xy)
-    for i, (_, cls, person, label, augmented) in enumerate(rows):
-        for j in (2 * i, 2 * i + 1):
-            ds.add(x[j] if ok[j] else None, cls, person, label, augmented=augmented)
-
-
-def add_keypoints(ds, path, label=None, person=None):
-    sources = []
-    persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
-    n = skipped = 0
-    rows = []
-    for p, lab, src, pts in zip(persons, labels, sources, xy):
-        cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
-        if cls is None:
-            continue
-        if label is None and gd.mislabelled_keypoints(p, src):
-            skipped += 1
-            continue
-        # the rarer gestures (few people recorded a thumb or an OK sign) count more
-        rows += keypoint_copies(ds, pts, cls, p, lab,
-                                RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
-        n += 1
-    add_keypoint_rows(ds, rows)
-    ds.sources.append('%s (%d rows%s)' % (os.path.basename(path), n, ', %d mislabelled left out'
-                                          % skipped if skipped else ''))
-
-
-# The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
-# 3-D landmarks turned palm to the camera, then about the fingers' axis by up to
-# VIEW_YAW_DEG (side views: a thumbs-up shows the side of the fist) and about the
-# thumbward axis by up to VIEW_PITCH_DEG, and flattened. They bring the poses the
-# keypoint files lack (horns, and OK signs and thumbs of more people).
-VIEW_YAW_DEG = 80.0
-VIEW_PITCH_DEG = 35.0
-VIEW_STRIDE = 2
-# Keypoint rows are also fitted turned in the picture by up to this (rad, ~26 deg), and
-# the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
-TURN_RAD = 0.45
-RARE_KEYPOINT_COPIES = 4
-# Landmark noise on those copies, in the keypoint files' units (the largest coordinate is 1)
-KEYPOINT_NOISE = 0.015
-PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
-
-
-def projected_landmarks(landmarks, yaw, pitch):
-    """(21, 2) image positions (y down) of hand-frame landmarks seen palm-on after
-    turning them by yaw (about the hand direction) and pitch (about thumbward)."""
-    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]])
-    q = landmarks @ (rx @ rz).T
-    return np.stack((q[:, 0], -q[:, 2]), axis=1)
-
-
-def add_leap_views(ds, path, seed=SEED):
-    rng = np.random.default_rng(seed)
-    n = 0
-    rows = []
-    for i, (p, lab, frame) in enumerate(gd.read_pose_lines(path)):
-        cls = gd.LEAP_LABELS.get(lab)
-        # their thumbs point ahead along the fingers, unlike a webcam's thumbs-up
-        if i % VIEW_STRIDE or cls is None or cls == 'thumb':
-            continue
-        hand = gd.first_hand(frame)
-        lm = hand_landmarks(hand) if hand is not None else None
-        if lm is None:
-            continue
-        yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
-        xy = rotate_keypoints(projected_landmarks(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
-        rows.append((xy, cls, 'leap:' + p, lab, False))
-        n += 1
-    add_keypoint_rows(ds, rows)
-    ds.sources.append('%s seen as a webcam would (%d views)' % (os.path.basename(path), n))
 
 
 def strided(rows, stride=FIT_STRIDE):
@@ -330,20 +68,6 @@ def strided(rows, stride=FIT_STRIDE):
     keypoint row and its mirror image), kept together."""
     rows = np.asarray(rows)
     return rows[(rows // 2) % stride == 0]
-
-
-def add_photos(ds, folder):
-    """The labelled photos' hands, one person per photo source (a few photos each, from
-    other people than the keypoint files): PHOTO_COPIES turned copies each."""
-    n = 0
-    rows = []
-    for source, label, xy in gd.photo_hands(folder):
-        cls = gd.PHOTO_LABELS.get(label)
-        if cls is not None:
-            rows += keypoint_copies(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
-            n += 1
-    add_keypoint_rows(ds, rows)
-    ds.sources.append('the labelled photos of ../hands (%d hands)' % n)
 
 
 def fit_rows(labels, persons, rows):
