@@ -8,7 +8,7 @@ import os
 import pytest
 import yaml
 
-from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_PARAMS, PilotConfig
+from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS, PILOT_PARAMS, PilotParams
 from leap_teleop.params import ParamError
 from leap_teleop.ros.nodes import ardrone_sim, drone_pilot, ur10_arm
 from leap_teleop.ur10.teleop_params import ARM_NODE_PARAMS, TELEOP_PARAMS, ArmTeleopParams
@@ -88,7 +88,7 @@ def test_ur10_teleop_yaml_sets_every_teleop_parameter_but_the_expert_ones():
 
 
 @pytest.mark.parametrize('cls, table', [(ArmTeleopParams, TELEOP_PARAMS),
-                                        (PilotConfig, PILOT_PARAMS)])
+                                        (PilotParams, PILOT_PARAMS)])
 def test_the_config_classes_are_generated_from_the_declarations(cls, table):
     a, b = cls(), cls()
     assert list(vars(a)) == list(table)

@@ -4,7 +4,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
+from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 
 T = 1.7e9           # the pilot's clock (s): ROS time, as a live sender stamps
 
@@ -23,7 +23,7 @@ def pilot_with_hands(state, lag=0.01, stamp_offset=0.0, **cfg):
     """A pilot seeing navdata `state` at 1 m and a centred hand stream (stamps `lag` s
     before arrival, plus stamp_offset: a replayed bag's old stamps), up to time T."""
     warnings = []
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0, **cfg),
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0, **cfg),
                        warn=lambda key, text: warnings.append(text))
     pilot.on_navdata(state, 1000, T)
     for k in range(5):
@@ -57,7 +57,7 @@ def test_stale_or_far_future_gesture_events_never_fly_the_drone():
 
 def test_a_first_event_with_no_hand_stream_is_judged_by_this_clock():
     warnings = []
-    pilot = DronePilot(PilotConfig(), warn=lambda key, text: warnings.append(text))
+    pilot = DronePilot(PilotParams(), warn=lambda key, text: warnings.append(text))
     pilot.on_navdata(2, 0, T)
     pilot.on_gesture('unfold', True, T, stamp=T - 3600.0)
     pilot.on_navdata(4, 1000, T)
@@ -124,7 +124,7 @@ def test_a_hand_whose_direction_or_normal_is_no_unit_vector_is_refused(field, ve
 
 
 def test_paper_mode_never_commands_beyond_the_drivers_range():
-    pilot = DronePilot(PilotConfig(mode='paper', paper_scale=100.0, navdata_timeout=10.0))
+    pilot = DronePilot(PilotParams(mode='paper', paper_scale=100.0, navdata_timeout=10.0))
     pilot.on_navdata(4, 1000, T)
     capture = dict(normal=(0.6, -0.8, 0.0), direction=(0.0, 0.6, -0.8))     # pitch, roll 37
     pilot.on_hand(PilotInput(True, (0.9, 0.2, 0.9), **capture), T)

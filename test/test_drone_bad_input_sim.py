@@ -5,7 +5,7 @@ import types
 import pytest
 
 from leap_teleop.drone import sim as ds
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
+from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 from leap_teleop.drone.sim_runner import RUNNER_PARAMS, DroneSimRunner
 from leap_teleop.params import check_params
 
@@ -56,8 +56,8 @@ def test_cmd_vel_beyond_its_range_is_clamped_with_a_warning_the_pilots_never_giv
         warnings.clear()
         # The pilot's own commands, both modes, the hand at the limits of what it takes:
         # tilt is capped at max_cmd; paper's angular x / y are raw mm (auto-hover switch).
-        for cfg in (PilotConfig(navdata_timeout=10.0),
-                    PilotConfig(mode='paper', paper_scale=100.0, navdata_timeout=10.0)):
+        for cfg in (PilotParams(navdata_timeout=10.0),
+                    PilotParams(mode='paper', paper_scale=100.0, navdata_timeout=10.0)):
             pilot = DronePilot(cfg)
             pilot.on_navdata(4, 1000, 0.0)
             pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), (0.6, -0.8, 0.0), (0.0, 0.6, -0.8)), 0.0)

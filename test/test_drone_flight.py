@@ -2,7 +2,7 @@
 import pytest
 
 from leap_teleop.drone import sim as ds
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
+from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 from leap_teleop.drone.sim import ArDroneSim
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources.scripted import ScriptedSource
@@ -18,7 +18,7 @@ def fly_script(path, mode='tilt'):
     source = ScriptedSource(path, realtime=False)
     li = LeapInterface(sides=('right',))
     drone = ArDroneSim()
-    pilot = DronePilot(PilotConfig(mode=mode))
+    pilot = DronePilot(PilotParams(mode=mode))
     events, t0, mono = [], None, 0.0
     for frame in source.frames():
         t0 = frame.timestamp if t0 is None else t0

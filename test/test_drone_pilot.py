@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop.drone.pilot import Command, CommandQueue, DronePilot, PilotConfig, PilotInput, leap_angles, shaped
+from leap_teleop.drone.pilot import Command, CommandQueue, DronePilot, PilotInput, PilotParams, leap_angles, shaped
 
 FLAT = dict(normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0))
 
@@ -54,7 +54,7 @@ def test_leap_angles_match_the_sdk_definitions():
 
 
 def test_paper_mode_reproduces_algorithm_1():
-    pilot = DronePilot(PilotConfig(mode='paper'))
+    pilot = DronePilot(PilotParams(mode='paper'))
     pilot.on_navdata(4, 1000, 0.0)
     tilted_n = (0.5, -math.sqrt(3) / 2, 0.0)                            # roll 30 deg
     tilted_d = (0.0, math.sin(math.radians(40)), -math.cos(math.radians(40)))   # pitch 40
@@ -90,7 +90,7 @@ def test_shaped_dead_zone_and_full_scale():
 
 
 def test_tilt_mode_maps_offsets_from_the_reference():
-    pilot = DronePilot(PilotConfig())
+    pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     assert drain(pilot) == []                       # not engaged: nothing
@@ -113,7 +113,7 @@ def test_tilt_mode_maps_offsets_from_the_reference():
 
 
 def test_no_hand_twists_while_landed_or_taking_off():
-    pilot = DronePilot(PilotConfig())
+    pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
@@ -129,7 +129,7 @@ HAND_CIRCLE = 0.035        # m, the radius of drone_flight.yaml's palm circle
 
 def test_only_a_hand_sized_circle_flips():
     warnings = []
-    pilot = DronePilot(PilotConfig(flip_min_radius=0.025),
+    pilot = DronePilot(PilotParams(flip_min_radius=0.025),
                        warn=lambda key, text: warnings.append(text))
     pilot.on_navdata(4, 1000, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)            # a flip needs the hand in view
@@ -144,11 +144,11 @@ def test_only_a_hand_sized_circle_flips():
     pilot.on_gesture('circle_ccw', True, 0.0, 0.004)
     assert 'not flying' in warnings[-1]
     with pytest.raises(ValueError):
-        PilotConfig().update({'flip_min_radius': -0.01})
+        PilotParams().update({'flip_min_radius': -0.01})
 
 
 def test_gestures_respect_the_drone_state():
-    pilot = DronePilot(PilotConfig(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
+    pilot = DronePilot(PilotParams(flip_min_altitude=0.6, flip_type=18, flip_duration=0))
     pilot.on_navdata(4, 1000, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)            # a takeoff needs the hand in view
     pilot.on_gesture('unfold', True, 0.0)                 # flying: no takeoff
@@ -173,7 +173,7 @@ def test_gestures_respect_the_drone_state():
 
 # -- watchdog ---------------------------------------------------------------------------
 def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
-    pilot = airborne(PilotConfig(land_after=3.0, navdata_timeout=10.0))   # navdata fresh
+    pilot = airborne(PilotParams(land_after=3.0, navdata_timeout=10.0))   # navdata fresh
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     assert twists(drain(pilot))[-1][0] == 1.0
     pilot.on_hand(hand((0, 0, 0), present=False), 0.2)
@@ -188,7 +188,7 @@ def test_hand_absent_gives_one_zero_twist_then_land_after_timeout():
 
 
 def test_a_landed_drone_gets_no_land_when_its_navdata_pauses_while_the_hand_is_gone():
-    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=0.5))
+    pilot = DronePilot(PilotParams(land_after=3.0, navdata_timeout=0.5))
     pilot.on_navdata(2, 0, 0.0)                            # landed
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.1)
     pilot.on_hand(hand((0, 0, 0), present=False), 0.2)    # the hand goes
@@ -200,7 +200,7 @@ def test_a_landed_drone_gets_no_land_when_its_navdata_pauses_while_the_hand_is_g
 
 def test_a_takeoff_then_lost_navdata_and_hand_still_lands():
     # the takeoff went out after the last navdata (which said landed): it may be flying
-    pilot = DronePilot(PilotConfig(land_after=3.0, navdata_timeout=0.5))
+    pilot = DronePilot(PilotParams(land_after=3.0, navdata_timeout=0.5))
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.1)
     pilot.on_gesture('unfold', True, 0.2)
@@ -214,7 +214,7 @@ def test_a_takeoff_then_lost_navdata_and_hand_still_lands():
 
 
 def test_silence_counts_as_a_lost_hand():
-    pilot = airborne(PilotConfig(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
+    pilot = airborne(PilotParams(hand_timeout=0.15, land_after=3.0, navdata_timeout=10.0))
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 0.1)
     drain(pilot)
     pilot.watchdog(0.2)
@@ -231,7 +231,7 @@ def test_a_hand_read_before_navdata_went_stale_flies_nothing_after_the_hover():
     # A Hand callback reads the clock while navdata is still fresh, the worker's watchdog
     # then finds it stale and hovers, and only then does the callback take the lock: its
     # forward twist must not follow (nor replace, still queued) the hover.
-    pilot = airborne(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15, land_after=3.0),
+    pilot = airborne(PilotParams(navdata_timeout=0.5, hand_timeout=0.15, land_after=3.0),
                      t_flying=1.0)
     pilot.on_hand(hand((0.0, 0.2, -0.2)), 1.45)
     assert twists(drain(pilot))[-1][0] == 1.0
@@ -246,7 +246,7 @@ def test_a_hand_read_before_navdata_went_stale_flies_nothing_after_the_hover():
 
 
 def test_reference_recaptured_when_the_hand_comes_back():
-    pilot = airborne(PilotConfig(navdata_timeout=10.0), state=4)
+    pilot = airborne(PilotParams(navdata_timeout=10.0), state=4)
     pilot.on_hand(hand((0, 0, 0), present=False), 0.1)
     t = twists(drain(pilot))
     pilot.on_hand(hand((0.15, 0.25, 0.1)), 0.5)           # back somewhere else: no jump
@@ -280,7 +280,7 @@ def flying_forward(config):
 
 
 def test_a_stall_shorter_than_disarm_after_hovers_then_steers_on_without_a_jump():
-    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0))
     out = silence(pilot, t, t + 0.6)                        # the sender stalls 0.6 s
     assert out and all(c.kind == 'twist' and c.twist == (0.0,) * 6 for c in out)
     t += 0.6
@@ -297,7 +297,7 @@ def test_a_hand_held_through_a_stall_keeps_its_reference():
     # Held 100 mm forward through a 0.6 s stall and back where it was lost: the forward
     # command resumes, and the unfold's neutral still hovers. Re-captured there, the old
     # neutral would have flown the drone backwards.
-    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0))
     t += 0.01
     pilot.on_hand(stamped((0.0, 0.2, -0.1), t), t)
     before = twists(drain(pilot))[-1]
@@ -309,7 +309,7 @@ def test_a_hand_held_through_a_stall_keeps_its_reference():
     pilot.on_hand(stamped((0.0, 0.2, 0.0), t + 0.01), t + 0.01)        # the unfold's neutral
     assert twists(drain(pilot)) == [(0.0,) * 6]
     # recapture_beyond 0 re-captures on every return: the old behaviour
-    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, recapture_beyond=0.0))
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, recapture_beyond=0.0))
     silence(pilot, t, t + 0.6)
     pilot.on_hand(stamped((0.0, 0.2, -0.1), t + 0.6), t + 0.6)
     assert twists(drain(pilot)) == [(0.0,) * 6]
@@ -319,7 +319,7 @@ def test_an_unfold_that_came_while_the_hand_was_away_captures_when_it_comes_back
     # Not engaged, the hand drops out briefly and the unfold arrives in the gap (its own
     # topic): there is no reference to keep, so the hand's return captures one, even
     # where the hand was lost.
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0))
     pilot.on_navdata(3, 1000, 0.0)
     pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.0), 0.0)
     pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.01, present=False), 0.01)
@@ -334,7 +334,7 @@ def test_an_unfold_that_came_while_the_hand_was_away_captures_when_it_comes_back
 @pytest.mark.parametrize('gone', ['silent', 'absent'])
 def test_a_loss_longer_than_disarm_after_needs_a_new_unfold_then_lands_after_land_after(gone):
     warnings = []
-    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0,
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0,
                                           land_after=3.0))
     pilot._warn = lambda key, text: warnings.append(text)
     if gone == 'absent':
@@ -362,7 +362,7 @@ def test_a_loss_longer_than_disarm_after_needs_a_new_unfold_then_lands_after_lan
 def test_stale_input_never_flies_the_drone():
     # A stream that stalls and then bursts its backlog (stamps continue, late): the
     # backlog is refused; the pilot keeps hovering and steers on only with fresh input.
-    pilot, t = flying_forward(PilotConfig(navdata_timeout=10.0, disarm_after=1.0))
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0))
     silence(pilot, t, t + 0.6)
     rejected = pilot.rejected_inputs
     for k in range(30):                          # captured in the stall's first 0.3 s
@@ -373,7 +373,7 @@ def test_stale_input_never_flies_the_drone():
 
 
 def test_a_new_input_connection_judges_lateness_afresh():
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0))
     pilot.on_navdata(3, 1000, 0.0)
     pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.6), 0.0)        # the clock lagged: a low baseline
     assert all(pilot.on_hand(stamped((0.0, 0.2, 0.0), 0.01 * k), 0.01 * k + 0.01)
@@ -386,7 +386,7 @@ def test_a_new_input_connection_judges_lateness_afresh():
 
 
 def test_paper_mode_loss_longer_than_disarm_after_needs_the_capture_pose_again():
-    pilot = DronePilot(PilotConfig(mode='paper', navdata_timeout=10.0, disarm_after=1.0))
+    pilot = DronePilot(PilotParams(mode='paper', navdata_timeout=10.0, disarm_after=1.0))
     pilot.on_navdata(3, 1000, 0.0)
     tilted = dict(normal=(0.6, -0.8, 0.0), direction=(0.0, 0.6, -0.8))
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), **tilted), 0.0)     # captures
@@ -415,7 +415,7 @@ def test_queue_is_bounded_and_keeps_discrete_commands():
 
 
 def test_twists_are_paced_at_the_rate():
-    pilot = DronePilot(PilotConfig(rate=50.0))
+    pilot = DronePilot(PilotParams(rate=50.0))
     pilot.queue.push(Command('twist'))
     pilot.queue.push(Command('flip'))
     pilot.queue.push(Command('twist'))
@@ -434,15 +434,15 @@ def test_twists_are_paced_at_the_rate():
 
 def test_bad_config_rejected():
     with pytest.raises(ValueError):
-        PilotConfig().update({'mode': 'joystick'})
+        PilotParams().update({'mode': 'joystick'})
     with pytest.raises(ValueError):
-        PilotConfig().update({'flip_type': 25})
+        PilotParams().update({'flip_type': 25})
 
 
 @pytest.mark.parametrize('mode', ['tilt', 'paper'])
 def test_absurd_palm_positions_are_rejected_not_flown(mode):
     # Found by fuzzing: a finite but absurd palm (1.8e305 m) made paper mode's twist infinite.
-    pilot = DronePilot(PilotConfig(mode=mode))
+    pilot = DronePilot(PilotParams(mode=mode))
     pilot.on_navdata(4, 1000, 0.0)
     pilot.on_hand(PilotInput(False), 0.0)
     pilot.on_hand(PilotInput(True, palm=(1.797693134862316e+305, 0.0, 0.0)), 0.01)
@@ -470,15 +470,15 @@ def test_fingertip_sized_circles_never_flip_a_flying_drone():
             pilot.on_gesture(gesture, True, 0.0, radius)
             pilot.on_navdata(4, 1500, 0.0)       # the flip is over before the next circle
         return kinds(drain(pilot)).count('flip')
-    assert flips(PilotConfig()) == 3
-    assert flips(PilotConfig(flip_min_radius=0.0)) == len(circles)     # what the gate stops
+    assert flips(PilotParams()) == 3
+    assert flips(PilotParams(flip_min_radius=0.0)) == len(circles)     # what the gate stops
 
 
 def test_the_diagnostics_report_says_what_the_worker_and_pilot_see():
     from leap_teleop.drone.pilot import PilotWorker
     from leap_teleop.ros.service_call import ServiceCall
     now = [0.0]
-    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, hand_timeout=0.15))
+    pilot = DronePilot(PilotParams(navdata_timeout=0.5, hand_timeout=0.15))
     worker = PilotWorker(pilot, lambda cmd: None, ServiceCall(lambda *a: True, 0.5, 'flip'),
                          lambda: now[0], mono=lambda: 1e6 + now[0])
     level, summary, values = worker.diagnostics(0.0)
@@ -512,7 +512,7 @@ def test_a_hand_arriving_while_the_worker_reads_its_clock_is_not_a_clock_jump():
     from leap_teleop.drone.pilot import PilotWorker
     from leap_teleop.ros.service_call import ServiceCall
     warned = []
-    pilot = DronePilot(PilotConfig(), warn=lambda key, text: warned.append(key))
+    pilot = DronePilot(PilotParams(), warn=lambda key, text: warned.append(key))
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
@@ -535,7 +535,7 @@ def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
 
     from leap_teleop.drone.pilot import PilotWorker
     from leap_teleop.ros.service_call import ServiceCall
-    pilot = airborne(PilotConfig(rate=20.0))
+    pilot = airborne(PilotParams(rate=20.0))
     sent = []
 
     def send(cmd):

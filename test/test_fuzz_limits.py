@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from leap_teleop.control.input_check import InputStream
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
+from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.ros import conversions
@@ -455,7 +455,7 @@ def pilot_events(draw, max_size=10):
 @given(seq=pilot_events(),
        mode=st.sampled_from(['tilt', 'paper']), max_cmd=st.sampled_from([1.0, 0.5, 0.25]))
 def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
-    pilot = DronePilot(PilotConfig(mode=mode, max_cmd=max_cmd))
+    pilot = DronePilot(PilotParams(mode=mode, max_cmd=max_cmd))
     now, mono = 0.0, 0.0
     for ev in seq:
         if ev[0] == 'hand':
@@ -487,7 +487,7 @@ def test_fuzz_pilot_commands_stay_within_the_tilt_limits(seq, mode, max_cmd):
 
 def _engaged_pilot(t0):
     """A pilot flying at 1 m, engaged at t0 and steered by one hand sample 10 ms later."""
-    pilot = DronePilot(PilotConfig())
+    pilot = DronePilot(PilotParams())
     pilot.on_navdata(4, 1000, t0)
     pilot.on_gesture('unfold', True, t0)
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=t0), t0)
@@ -596,7 +596,7 @@ def _pilot_run(pilot, t0, until, dt=0.01, hand=False, navdata=True):
        lose=st.sampled_from(['hand', 'navdata']))
 def test_fuzz_any_accepted_pilot_timeouts_still_hover_then_land(hand_timeout, land_after,
                                                                 navdata_timeout, lose):
-    cfg = PilotConfig().update(dict(hand_timeout=hand_timeout, land_after=land_after,
+    cfg = PilotParams().update(dict(hand_timeout=hand_timeout, land_after=land_after,
                                     navdata_timeout=navdata_timeout))
     pilot = DronePilot(cfg)
     pilot.on_navdata(4, 1000, 0.0)
@@ -637,7 +637,7 @@ def test_fuzz_any_accepted_input_timeout_still_holds_then_disarms_the_arm(input_
 def test_found_no_navdata_no_takeoff_and_no_twist_beyond_hover():
     # Before: with no navdata at all an unfold took off and hand twists were sent.
     warnings = []
-    pilot = DronePilot(PilotConfig(), warn=lambda key, text: warnings.append(text))
+    pilot = DronePilot(PilotParams(), warn=lambda key, text: warnings.append(text))
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
     pilot.on_gesture('unfold', True, 0.0)
     out = _pilot_run(pilot, 0.0, 2.0, hand=True, navdata=False)
@@ -652,7 +652,7 @@ def test_found_no_navdata_no_takeoff_and_no_twist_beyond_hover():
 
 def test_found_navdata_stopping_mid_flight_hovers_then_lands():
     # Before: the pilot kept believing the last navdata and kept sending hand twists.
-    pilot = DronePilot(PilotConfig(navdata_timeout=0.5, land_after=3.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=0.5, land_after=3.0))
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
@@ -691,7 +691,7 @@ def test_found_hung_flip_call_never_blocks_the_watchdog():
     import threading
     release = threading.Event()
     clock = FakeClock()
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0, land_after=3.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0, land_after=3.0))
     w, sent, warnings = _worker(pilot, lambda *anim: release.wait(30.0), clock)
     pilot.on_navdata(4, 1500, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
@@ -724,7 +724,7 @@ def test_found_any_worker_exception_is_answered_with_hover_then_land():
     # Before: any exception other than ROSException killed the worker while the node
     # looked alive.
     clock = FakeClock()
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0, land_after=1.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0, land_after=1.0))
     w, sent, warnings = _worker(pilot, lambda *anim: True, clock)
 
     def broken(now):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.control.input_age import InputAgeWindow
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotInput
+from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
 
@@ -68,7 +68,7 @@ def test_arm_commands_and_status_carry_the_capture_stamp_of_their_hand():
 
 
 def test_pilot_twists_and_gesture_commands_carry_the_capture_stamp():
-    pilot = DronePilot(PilotConfig(navdata_timeout=10.0))
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0))
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.05), 0.06)
     pilot.on_gesture('unfold', True, 0.07, stamp=0.055)

@@ -159,18 +159,18 @@ def test_every_bad_value_of_every_parameter_is_refused():
 
 
 # -- the library configurations share the declarations ------------------------------------
-from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotConfig  # noqa: E402
+from leap_teleop.drone.pilot import PILOT_PARAMS, DronePilot, PilotParams  # noqa: E402
 from leap_teleop.ur10.teleop import TELEOP_PARAMS, ArmTeleop, ArmTeleopParams  # noqa: E402
 
 
 def test_every_config_field_is_declared():
     from dataclasses import fields
-    assert {f.name for f in fields(PilotConfig)} == set(PILOT_PARAMS)
+    assert {f.name for f in fields(PilotParams)} == set(PILOT_PARAMS)
     assert {f.name for f in fields(ArmTeleopParams)} == set(TELEOP_PARAMS)
 
 
 @pytest.mark.parametrize('table, build', [
-    (PILOT_PARAMS, lambda values: PilotConfig().update(values)),
+    (PILOT_PARAMS, lambda values: PilotParams().update(values)),
     (TELEOP_PARAMS, lambda values: ArmTeleopParams.from_dict(values)),
 ])
 def test_library_configs_refuse_every_bad_value(table, build):
@@ -181,14 +181,14 @@ def test_library_configs_refuse_every_bad_value(table, build):
 
 
 def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():
-    # Before: PilotConfig.update turned 'nan' into float('nan') and the watchdog compared
+    # Before: PilotParams.update turned 'nan' into float('nan') and the watchdog compared
     # with NaN (never lost, never landed); the dataclasses built directly took anything.
     for key in ('hand_timeout', 'land_after', 'navdata_timeout'):
         for value in ('nan', math.nan, math.inf, 0.0, -1.0, 1e6):
             with pytest.raises(ValueError):
-                PilotConfig().update({key: value})
+                PilotParams().update({key: value})
             with pytest.raises(ValueError):
-                DronePilot(PilotConfig(**{key: value}))
+                DronePilot(PilotParams(**{key: value}))
     for key in ('input_timeout', 'joint_timeout', 'max_input_age', 'dead_zone'):
         for value in (math.nan, math.inf, 0.0, -5.0):
             with pytest.raises(ValueError):

@@ -10,7 +10,7 @@ import pytest
 from pilot_client import PILOT_FEED
 
 from leap_teleop.drone.one_shot import HeldOneShot
-from leap_teleop.drone.pilot import Command, DronePilot, PilotConfig, PilotInput, PilotWorker
+from leap_teleop.drone.pilot import Command, DronePilot, PilotInput, PilotParams, PilotWorker
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCRIPTS = os.path.join(HERE, '..', 'scripts')
@@ -121,7 +121,7 @@ def test_a_land_waits_as_long_as_it_takes():
 
 def test_the_pilot_wants_a_held_takeoff_only_until_a_fold_a_lost_hand_or_stale_navdata():
     def landed_after_unfold():
-        pilot = DronePilot(PilotConfig())
+        pilot = DronePilot(PilotParams())
         pilot.on_navdata(2, 0, 10.0)
         pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, -1.0)),
                       10.0)
@@ -147,7 +147,7 @@ def test_the_worker_sends_a_held_land_even_when_its_watchdog_fails():
         def watchdog(self, now):
             raise RuntimeError('broken watchdog')
     calls = []
-    worker = PilotWorker(WatchdogFails(PilotConfig()), lambda cmd: None, flip_call=None,
+    worker = PilotWorker(WatchdogFails(PilotParams()), lambda cmd: None, flip_call=None,
                          clock=lambda: 1.0, send_held=lambda: calls.append('held'))
     worker.step()
     worker.step()

@@ -1,4 +1,5 @@
-"""Small numeric helpers every level shares: angle wrapping and unit vectors (numpy only).
+"""Small numeric helpers every level shares: angle wrapping, unit vectors and URDF
+rotations (numpy only).
 
 The 3-vector helpers do plain float arithmetic, in the order numpy does it, so they give
 the same floats as np.cross / np.linalg.norm at a fraction of their per-call cost (which
@@ -36,3 +37,14 @@ def unit(v, fallback=None):
     if n > 1e-9:
         return v / n
     return np.full(np.shape(v), np.nan) if fallback is None else fallback
+
+
+def rpy_matrix(roll, pitch, yaw):
+    """The rotation of URDF / ROS roll, pitch, yaw, Rz(yaw) Ry(pitch) Rx(roll), as a
+    row-major 9-tuple of floats (cheap in a physics loop; np.reshape(.., (3, 3)) for a
+    matrix)."""
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch),
+                              math.sin(pitch), math.cos(yaw), math.sin(yaw))
+    return (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+            sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+            -sp, cp * sr, cp * cr)

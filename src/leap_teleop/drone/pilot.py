@@ -65,7 +65,7 @@ import time
 from dataclasses import dataclass
 
 from leap_teleop.control.input_check import InputStream
-from leap_teleop.drone.pilot_params import PILOT_PARAMS, PilotConfig  # noqa: F401 (re-exported)
+from leap_teleop.drone.pilot_params import PILOT_PARAMS, PilotParams  # noqa: F401 (re-exported)
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
@@ -181,7 +181,7 @@ class CommandQueue:
 
 class DronePilot:
     def __init__(self, config=None, warn=None):
-        self.cfg = (config or PilotConfig()).validate()
+        self.cfg = (config or PilotParams()).validate()
         self._warn = warn or (lambda key, text: None)
         self.queue = CommandQueue(self.cfg.queue_size)
         self._lock = threading.RLock()     # watchdog_at re-enters it in watchdog

@@ -1,5 +1,5 @@
 """The gesture pilot's parameters, declared once: the `Param` tables are the single source of
-PilotConfig (its fields and defaults are generated from PILOT_PARAMS), of drone_pilot's
+PilotParams (its fields and defaults are generated from PILOT_PARAMS), of drone_pilot's
 ~params and --help, of its dynamic_reconfigure server and of the docs' parameter table.
 The drone_pilot block of config/ardrone.yaml sets the same names (a test keeps it inside
 these declarations).
@@ -7,7 +7,7 @@ these declarations).
 from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
 from leap_teleop.params import Param, check_params, declared_fields
 
-# Every PilotConfig field. Watchdog times have upper bounds too: a huge timeout is a
+# Every PilotParams field. Watchdog times have upper bounds too: a huge timeout is a
 # disabled watchdog.
 PILOT_PARAMS = {
     'mode': Param('tilt', 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
@@ -77,7 +77,7 @@ PILOT_RECONFIGURABLE = ('dead_zone', 'full_scale', 'z_dead_zone', 'z_full_scale'
 
 
 @declared_fields(PILOT_PARAMS)
-class PilotConfig:
+class PilotParams:
     """The pilot's configuration: one field per PILOT_PARAMS entry, its default."""
 
     def update(self, values):

@@ -41,7 +41,7 @@ from dataclasses import dataclass, fields
 import pybullet as pb
 
 from leap_teleop.drone import scene
-from leap_teleop.vectors import wrap_angle
+from leap_teleop.vectors import rpy_matrix, wrap_angle
 
 log = logging.getLogger(__name__)
 
@@ -128,15 +128,6 @@ def _finite(x):
     except (TypeError, ValueError):
         return None
     return x if math.isfinite(x) else None
-
-
-def _rpy_matrix(roll, pitch, yaw):
-    """Rz(yaw) Ry(pitch) Rx(roll), row-major 9-tuple."""
-    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch),
-                              math.sin(pitch), math.cos(yaw), math.sin(yaw))
-    return (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
-            sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
-            -sp, cp * sr, cp * cr)
 
 
 def _attitude_error(rd, r):
@@ -482,7 +473,7 @@ class ArDroneSim:
         err = wrap_angle(self._yaw_d - self.yaw)
         if abs(err) > 0.5:
             self._yaw_d = wrap_angle(self.yaw + math.copysign(0.5, err))
-        e = _attitude_error(_rpy_matrix(roll_d, pitch_d, self._yaw_d), self.R)
+        e = _attitude_error(rpy_matrix(roll_d, pitch_d, self._yaw_d), self.R)
         w = self.omega
         kr, kw = 625.0, 45.0
         wd = (0.0, 0.0, yaw_rate_d)

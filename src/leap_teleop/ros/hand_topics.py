@@ -1,6 +1,6 @@
 """The sender's hand topics: per side leapcobot (what the arms read), Hand and the shared
 GestureEvent topic (what the pilot reads); on request the old leapros and leap messages of
-one side and the leap_motion driver's topics (DriverInterface)."""
+one side and the leap_motion driver's topics (LeapMotionTopics)."""
 import time
 
 import rospy
@@ -9,8 +9,8 @@ from leap_teleop.control.input_age import StageAges
 from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import GestureEvent, Hand, leap, leapros
 from leap_teleop.ros import conversions
-from leap_teleop.ros.driver_topics import DriverInterface
 from leap_teleop.ros.graph import wait_for_subscribers
+from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
 
 
 def stage_clock():
@@ -48,7 +48,7 @@ class HandTopics:
         self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
                      if p['leap_topic'] else None)
         interface.add_hand_listener(self.on_hand)
-        self.driver = DriverInterface(p, q)
+        self.driver = LeapMotionTopics(p, q)
         if self.driver.pubs:
             interface.add_listener(self.driver.on_frame)
 

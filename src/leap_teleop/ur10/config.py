@@ -16,15 +16,7 @@ import yaml
 from leap_teleop.package_files import package_path
 from leap_teleop.params import Param, ParamError, check_params
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_LOWER, JOINT_UPPER
-
-
-def _rpy_matrix(rpy):
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    # URDF convention: R = Rz(yaw) Ry(pitch) Rx(roll)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
+from leap_teleop.vectors import rpy_matrix
 
 
 def config_path(name):
@@ -83,7 +75,7 @@ class ArmConfig:
 def _placement(xyz, rpy):
     """world_T_base of an arm whose base is at xyz, turned by rpy."""
     T = np.eye(4)
-    T[:3, :3] = _rpy_matrix(rpy)
+    T[:3, :3] = np.reshape(rpy_matrix(*rpy), (3, 3))
     T[:3, 3] = xyz
     return T
 

@@ -16,7 +16,7 @@ import threading
 
 import rospy
 
-from leap_teleop.drone.pilot import DronePilot, PilotConfig, PilotWorker
+from leap_teleop.drone.pilot import DronePilot, PilotParams, PilotWorker
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
 from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
 from leap_teleop.msg import Hand
@@ -35,7 +35,7 @@ class DronePilotNode:
     def __init__(self, p):
         self.side = conversions.SIDE_CODES[p['side']]
         self.log = RateLimitedLog(2.0)
-        self.pilot = DronePilot(PilotConfig().update(p), warn=self.warn)
+        self.pilot = DronePilot(PilotParams().update(p), warn=self.warn)
         self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], lambda: (
             self.pilot.takeoff_still_wanted(rospy.get_time())), self.warn)
         hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']

@@ -11,7 +11,7 @@ from leap_teleop.ros.markers import driver_markers
 from leap_teleop.ros.node import RateLimitedLog
 
 
-class DriverInterface:
+class LeapMotionTopics:
     """The leap_motion driver's topics: DriverHuman raw and filtered, and its visualizer's
     markers. Each is built only while it has subscribers; the filter forgets its history
     while nobody reads the filtered Human (it restarts from the next frame)."""
