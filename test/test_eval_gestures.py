@@ -1,11 +1,11 @@
-"""The evaluation on the real recordings meets the issue's targets (fails without data)."""
+"""The evaluation on the real recordings meets its targets (fails without data)."""
 
 import os
 
 import pytest
 
 from leap_teleop.hands.gestures import datasets
-from tools.evaluation import evaluate
+from tools.evaluation import evaluate, take_stream
 
 
 @pytest.fixture(scope='module')
@@ -65,7 +65,7 @@ def test_no_circle_event_on_any_shared_take(results):
     # mm). A circle is a pointing index or the whole hand going round, so none fires.
     every, two = results['circle_all_takes'], results['circle_events']
     per_take = every['per_take']
-    assert sorted(per_take) == sorted(datasets.EVERY_TAKE)
+    assert sorted(per_take) == sorted(take_stream.EVERY_TAKE)
     assert {t: v['agreeing_events'] for t, v in per_take.items() if v['agreeing_events']} == {}
     assert every['events'] == 0 and two['events'] == 0, (every, two)
 
@@ -158,6 +158,6 @@ def test_no_hand_sized_circle_on_takes_without_circles(run_take):
 def test_no_take_shows_rock_or_a_thumbs_down(run_take):
     # No one makes horns or a thumbs-down in the shared takes; Waiting's finger taps (the
     # SDK's flags read them as rock) bend the fingers at the knuckle only.
-    for take in datasets.EVERY_TAKE:
+    for take in take_stream.EVERY_TAKE:
         rows, _ = run_take(take)
         assert not any(r[2].rock or r[2].thumb_down for r in rows), take

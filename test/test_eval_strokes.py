@@ -1,5 +1,5 @@
 """Circles drawn in the air by real people (the drone's flip): the strokes evaluation meets
-the issue's goals with the shipped rules, loop-free strokes never fire, a drawn circle
+the recognition goals with the shipped rules, loop-free strokes never fire, a drawn circle
 fires once, and no shared take fires one. Needs ../shared/data (fails without it)."""
 import math
 import os
@@ -162,7 +162,7 @@ def test_missing_data_is_a_clear_error(tmp_path):
 
 
 def test_loso_command_meets_the_goals(loso_command):
-    # The goals as the issue measures them: the rules refitted on 6 people, scored on
+    # The goals as they are measured: the rules refitted on 6 people, scored on
     # the 7th, for each person.
     rc, text, written, _ = loso_command
     assert rc == 0

@@ -33,7 +33,7 @@ from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
 pytestmark = pytest.mark.integration
 
-RETRAIN_CPU_S = 60.0        # the bound for retraining with a user's samples
+RETRAIN_CPU_S = 60.0        # the bound for retraining with a user's samples
 
 
 def gti_path():

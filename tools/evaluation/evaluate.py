@@ -48,7 +48,6 @@ import sys
 from leap_teleop.hands.gestures import FINGER_NAMES
 from leap_teleop.hands.gestures.datasets import (
     DEFAULT_LEAPJS_DATA,
-    EVERY_TAKE,
     HANDS_DATA,
     LEAPJS_LABELS,
     data_dir,
@@ -57,13 +56,13 @@ from leap_teleop.hands.gestures.datasets import (
     take_frames,
 )
 from tools.evaluation.original_rules import OriginalRules
-from tools.evaluation.results_file import write_results
-from tools.evaluation.take_stream import recognize_take
+from tools.evaluation.results_file import write_json
+from tools.evaluation.take_stream import EVERY_TAKE, recognize_take
 
 GESTURES = ('fist', 'thumb_up', 'pinch', 'open')
 
-
-# Takes whose frames must show neither pinch nor fist (the hard requirement).
+# Takes whose frames must show neither pinch nor fist (none of them holds one: a hard
+# requirement, not a rate).
 NO_PINCH_NO_FIST = ('gun', 'HandSplay-110fps', 'three-claps')
 CIRCLE_TAKES = ('Waiting-110fps', 'flapping')
 # An event matches an SDK circle of the same hand and the same sense when it falls within
@@ -333,7 +332,7 @@ def main(argv=None):
             return 2
         results['photo_views'] = evaluate_photo_views.run(args.hands_data)
         evaluate_photo_views.print_table(results['photo_views'])
-    write_results(args.out, results)
+    write_json(args.out, results)
     return 0
 
 

@@ -41,7 +41,7 @@ from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
 from leap_teleop.hands.gestures.pose import MIN_P, classify_pose
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES
-from tools.evaluation.results_file import write_results
+from tools.evaluation.results_file import write_json
 
 ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
 LEAP_EXPECT = {'fist_moved': 'fist', 'five': 'open', 'palm': 'open', 'palm_m': 'open',
@@ -365,7 +365,7 @@ def main(argv=None):
     fams = ('leap', 'keypoints') if args.family == 'all' else (args.family,)
     results = run(args.data, fams)
     print_tables(results)
-    write_results(args.out, results)
+    write_json(args.out, results)
     return 0
 
 

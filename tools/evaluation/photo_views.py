@@ -31,7 +31,7 @@ import numpy as np
 from leap_teleop.hands.classify_frames import FrameClassifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import HELD_GESTURES, datasets
-from tools.evaluation.results_file import write_results
+from tools.evaluation.results_file import write_json
 
 # Photo label (file name before "__") -> the held gesture it must give (None: none).
 EXPECTED = {'open_palm': 'open', 'flat_hand': 'open', 'fist': 'fist',
@@ -278,7 +278,7 @@ def main(argv=None):
     res = run(args.data, names)
     print_table(res)
     if args.out:
-        write_results(args.out, res, announce=False)
+        write_json(args.out, res, announce=False)
     return 0
 
 

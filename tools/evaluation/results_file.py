@@ -2,7 +2,7 @@
 import json
 
 
-def write_results(path, results, announce=True):
+def write_json(path, results, announce=True):
     """Write `results` to `path` (indented, keys sorted, numpy numbers as floats); say so on
     stdout when `announce`."""
     with open(path, 'w') as f:

@@ -58,8 +58,8 @@ from leap_teleop.hands.gestures.circles import (
 from leap_teleop.hands.gestures.datasets import SHARED_DATA, DataError
 from leap_teleop.hands.gestures.temporal import HandEvent
 from leap_teleop.hands.sources import leapjs
-from tools.evaluation.results_file import write_results
-from tools.evaluation.take_stream import recognize_take
+from tools.evaluation.results_file import write_json
+from tools.evaluation.take_stream import EVERY_TAKE, recognize_take
 
 STROKES_DATA = os.environ.get('STROKES_DATA') or os.path.join(SHARED_DATA, 'strokes')
 LEAP_PEOPLE_DATA = os.environ.get('LEAP_PEOPLE_DATA') or os.path.join(SHARED_DATA, 'leap_people')
@@ -237,7 +237,7 @@ def take_circles(dicts, make_recognizer=GestureRecognizer):
 def leapjs_takes(folder=None):
     folder = folder or datasets.data_dir()
     out = {}
-    for take in datasets.EVERY_TAKE:
+    for take in EVERY_TAKE:
         path = datasets.find_take(folder, take)
         if path is None:
             raise DataError('LeapJS take %s not found in %s (set $LEAPJS_DATA)' % (take, folder))
@@ -952,7 +952,7 @@ def main(argv=None):
         return 2
     print_table(results)
     if args.json:
-        write_results(args.json, results, announce=False)
+        write_json(args.json, results, announce=False)
     return 0
 
 

@@ -1,8 +1,15 @@
 """A LeapJS take streamed through the gesture recognizer, as the live sender runs it: one
 recognizer per hand side, fed every frame in order (the evaluations of the shared takes
-all walk them this way)."""
+all walk them this way), and the list of every shared take."""
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.sources import leapjs
+
+# Every shared take. The SDK reported circles on six of them; the same circle matching run
+# over all of them shows what a user sees on hands that are not asked to circle (clapping,
+# grabbing, splaying): no circle event is the target.
+EVERY_TAKE = ('grab', 'pinch', 'gun', 'wave', 'three-claps', 'confidence2',
+              'test-paddle-rightwards', 'Waiting-110fps', 'HandSplay-110fps', 'brian',
+              'flapping', 'rollAndPitchCropped', 'finger-tap-54fps')
 
 
 def recognize_take(dicts, make_recognizer=GestureRecognizer):

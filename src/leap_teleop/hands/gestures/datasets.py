@@ -379,11 +379,3 @@ def data_dir():
     """The folder of the shared LeapJS recordings: $LEAPJS_DATA when set (read now), else
     the repository's sibling shared/data/leapjs."""
     return os.environ.get('LEAPJS_DATA') or DEFAULT_LEAPJS_DATA
-
-
-# Every shared take. The SDK reported circles on six of them; the same circle matching run
-# over all of them shows what a user sees on hands that are not asked to circle (clapping,
-# grabbing, splaying): no circle event is the target.
-EVERY_TAKE = ('grab', 'pinch', 'gun', 'wave', 'three-claps', 'confidence2',
-              'test-paddle-rightwards', 'Waiting-110fps', 'HandSplay-110fps', 'brian',
-              'flapping', 'rollAndPitchCropped', 'finger-tap-54fps')
