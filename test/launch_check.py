@@ -28,7 +28,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Empty
 
 from leap_teleop.msg import ArmStatus, Navdata
-from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 from leap_teleop.ur10.config import load_config
 
 LANDED, HOVERING, TAKING_OFF = 2, 4, 6

@@ -38,10 +38,10 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
     # The gesture events are the ones the sender's logic finds in the take, in order.
     from leap_teleop.hands.leap_interface import LeapInterface
     from leap_teleop.hands.sources import make_source
-    from leap_teleop.ros import conversions
+    from leap_teleop.ros import hand_conversions
     li, want = LeapInterface(sides=['right', 'left']), []
     li.add_hand_listener(lambda frame, state: want.extend(
-        (m.side, m.gesture, m.active) for m in conversions.to_gesture_events(state)))
+        (m.side, m.gesture, m.active) for m in hand_conversions.to_gesture_events(state)))
     for frame in make_source('recording', path=os.path.join(leapjs_data, 'grab.json.lz'),
                              realtime=False).frames():
         li.on_frame(frame)

@@ -16,7 +16,7 @@ from leap_teleop.hands.gestures.datasets import HANDS_DATA
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
-from leap_teleop.ros.conversions import image_message
+from leap_teleop.ros.sensor_conversions import bgr_image_msg
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
 pytestmark = pytest.mark.integration
@@ -276,7 +276,7 @@ def test_annotated_view(detections):
     ink = img.any(axis=2)
     box = ink[int(ys.min()):int(ys.max()) + 1, int(xs.min()):int(xs.max()) + 1].sum()
     assert box > 0.5 * ink.sum()
-    msg = image_message(draw(bgr, found, False, states, 30.0), F.timestamp, 'leap_hands')
+    msg = bgr_image_msg(draw(bgr, found, False, states, 30.0), F.timestamp, 'leap_hands')
     assert (msg.width, msg.height, msg.encoding, msg.step) == (width, height, 'bgr8', width * 3)
     assert len(msg.data) == width * height * 3 and msg.header.stamp.to_sec() == 12.5
 

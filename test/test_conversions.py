@@ -6,7 +6,7 @@ from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
-from leap_teleop.ros import conversions
+from leap_teleop.ros import drone_conversions, hand_conversions
 
 
 def per_frame():
@@ -22,7 +22,7 @@ def states(*hands, ts=1234.5):
 @pytest.mark.parametrize('side, msg_type', [('right', leapcobotright), ('left', leapcobotleft)])
 def test_leapcobot_keeps_original_semantics(side, msg_type):
     s = states(render_hand(side, 'pinch', [12.5, 210.0, -30.0], pinch_value=0.45))[side]
-    msg = conversions.to_leapcobot(s)
+    msg = hand_conversions.to_leapcobot(s)
     assert isinstance(msg, msg_type)
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
     assert msg.header.frame_id == 'leap_hands'
@@ -31,7 +31,7 @@ def test_leapcobot_keeps_original_semantics(side, msg_type):
     assert (palm.x, palm.y, palm.z) == (12.5, 210.0, -30.0)          # Leap mm, as the original
     assert getattr(msg, '%s_hand_pinch' % side)
     assert getattr(msg, '%s_hand_pinch_value' % side) == pytest.approx(0.45)
-    back = conversions.from_leapcobot(msg)
+    back = hand_conversions.from_leapcobot(msg)
     assert back['side'] == side and back['present'] and back['palmpos'] == (12.5, 210.0, -30.0)
     assert back['pinch_value'] == pytest.approx(0.45)
 
@@ -44,24 +44,24 @@ def test_a_refilled_leapcobot_serializes_like_a_new_one(side):
         buf = BytesIO()
         msg.serialize(buf)
         return buf.getvalue()
-    reused = conversions.LEAPCOBOT_TYPES[side]()
+    reused = hand_conversions.LEAPCOBOT_TYPES[side]()
     poses = [('pinch', [12.5, 210.0, -30.0]), ('fist', [-80.0, 150.0, 40.0]), (None, None),
              ('open', [0.0, 300.0, 0.0])]
     for k, (pose, palm) in enumerate(poses):
         hands = [render_hand(side, pose, palm, pinch_value=0.3)] if pose else []
         s = states(*hands, ts=100.0 + k)[side]
-        assert conversions.to_leapcobot(s, msg=reused) is reused
-        assert wire(reused) == wire(conversions.to_leapcobot(s))     # nothing left over
+        assert hand_conversions.to_leapcobot(s, msg=reused) is reused
+        assert wire(reused) == wire(hand_conversions.to_leapcobot(s))     # nothing left over
 
 
 def test_absent_hand_gives_an_all_clear_leapcobot():
-    msg = conversions.to_leapcobot(states()['left'])
+    msg = hand_conversions.to_leapcobot(states()['left'])
     assert not msg.is_left_hand and not msg.left_hand_fist and msg.left_hand_pinch_value == 0.0
 
 
 def test_rich_hand_is_in_metres_with_side_and_frame_id():
     s = states(render_hand('left', 'fist', [100.0, 200.0, 50.0]))['left']
-    msg = conversions.to_hand(s)
+    msg = hand_conversions.to_hand(s)
     assert msg.side == Hand.SIDE_LEFT and msg.present and msg.leap_frame_id == 42
     assert (msg.palm_position.x, msg.palm_position.y, msg.palm_position.z) == pytest.approx(
         (0.1, 0.2, 0.05))
@@ -74,7 +74,7 @@ def test_gesture_events_carry_name_side_and_stamp():
     events = []
     for i in range(10):
         st = li.on_frame(Frame(id=i, timestamp=5.0 + i, hands=[render_hand('right', 'fist', [0, 200, 0])]))
-        events += conversions.to_gesture_events(st['right'])
+        events += hand_conversions.to_gesture_events(st['right'])
     names = [e.gesture for e in events]
     assert names[0] == 'hand_found' and 'fist' in names
     assert all(e.side == Hand.SIDE_RIGHT for e in events)
@@ -86,7 +86,7 @@ def test_leapros_has_the_classic_drivers_units_and_angles():
     hand.direction = direction = [0.0, 0.5, -0.5 * 3 ** 0.5]     # pitched 30 deg up
     hand.palm_normal = [-0.5, -0.5 * 3 ** 0.5, 0.0]             # roll atan2(x, -y) = -30 deg
     s = states(hand)['right']
-    msg = conversions.to_leapros(s, hand)
+    msg = hand_conversions.to_leapros(s, hand)
     assert msg._type == 'leap_teleop/leapros'
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
     assert (msg.palmpos.x, msg.palmpos.y, msg.palmpos.z) == (12.5, 210.0, -30.0)    # mm
@@ -103,7 +103,7 @@ def test_leapros_has_the_classic_drivers_units_and_angles():
 
 
 def test_leapros_of_an_absent_hand_is_all_zero_but_the_header():
-    msg = conversions.to_leapros(states()['right'])
+    msg = hand_conversions.to_leapros(states()['right'])
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)
     assert (msg.palmpos.x, msg.ypr.y, msg.thumb_tip.z, msg.direction.z) == (0, 0, 0, 0)
 
@@ -114,8 +114,8 @@ def test_a_hand_message_becomes_the_pilots_input_and_a_twist_its_cmd_vel():
     msg.header.stamp = rospy.Time(12, 500000000)
     msg.palm_position.x, msg.palm_position.y, msg.palm_position.z = 0.01, 0.2, -0.03
     msg.palm_normal.y, msg.direction.z = -1.0, -1.0
-    got = conversions.pilot_input(msg)
+    got = drone_conversions.pilot_input(msg)
     assert got.present and got.palm == (0.01, 0.2, -0.03) and got.stamp == 12.5
     assert got.normal == (0.0, -1.0, 0.0) and got.direction == (0.0, 0.0, -1.0)
-    t = conversions.twist_msg((0.1, 0.2, 0.3, 0.0, 0.0, -0.5))
+    t = drone_conversions.twist_msg((0.1, 0.2, 0.3, 0.0, 0.0, -0.5))
     assert (t.linear.x, t.linear.y, t.linear.z, t.angular.z) == (0.1, 0.2, 0.3, -0.5)

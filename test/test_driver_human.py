@@ -13,7 +13,7 @@ from leap_teleop.hands.gestures import HandEvent
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.tracker import HandState
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers
 
 
@@ -89,7 +89,7 @@ def test_lowpass_refuses_a_cutoff_that_is_not_a_positive_number(bad):
 # --- DriverHuman -------------------------------------------------------------------------
 def run(frames, builder=None, lowpass=None):
     """[(raw, filtered)] per frame through a LeapInterface and the builder."""
-    builder = builder or conversions.DriverHumanBuilder()
+    builder = builder or hand_conversions.DriverHumanBuilder()
     out = []
     li = LeapInterface()
     li.add_listener(lambda f, s: out.append(builder.build(f, s, lowpass=lowpass)))
@@ -159,7 +159,7 @@ def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
 
 
 def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture():
-    builder = conversions.DriverHumanBuilder()
+    builder = hand_conversions.DriverHumanBuilder()
     hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)
     frame = Frame(id=1, timestamp=1.0, hands=[hand])
     events = tuple(HandEvent(g) for g in ('circle_cw', 'fold', 'hand_found', 'circle_ccw'))
@@ -179,7 +179,7 @@ def test_a_side_that_is_not_published_or_not_placeable_is_absent():
     bad.palm_position = np.array([math.nan, 0.0, 0.0])
     out = []
     li = LeapInterface(sides=['left'])
-    builder = conversions.DriverHumanBuilder()
+    builder = hand_conversions.DriverHumanBuilder()
     li.add_listener(lambda f, s: out.append(builder.build(f, s)[0]))
     li.on_frame(Frame(id=1, timestamp=1.0, hands=[right, bad]))
     assert not out[0].right_hand.is_present and not out[0].left_hand.is_present
@@ -216,15 +216,15 @@ def test_leap_message_is_leap_mm_and_degrees_as_the_leapros():
     s = LeapInterface().on_frame(Frame(id=1, timestamp=2.0, hands=[
         render_hand('right', 'open', [10.0, 220.0, -5.0], normal=[0.3, -0.9, 0.1],
                     direction=[0.2, 0.3, -0.9])]))['right']
-    msg = conversions.to_leap(s)
+    msg = hand_conversions.to_leap(s)
     assert list(msg.hand_palm_pos) == [10.0, 220.0, -5.0]
     n, d = s.palm_normal, s.direction
     assert (msg.hand_roll, msg.hand_pitch, msg.hand_yaw) == pytest.approx(tuple(
         math.degrees(a) for a in (math.atan2(n[0], -n[1]), math.atan2(d[1], -d[2]),
                                   math.atan2(d[0], -d[2]))))
-    ypr = conversions.to_leapros(s).ypr
+    ypr = hand_conversions.to_leapros(s).ypr
     assert (msg.hand_yaw, msg.hand_pitch, msg.hand_roll) == pytest.approx((ypr.x, ypr.y, ypr.z))
-    absent = conversions.to_leap(HandState('right', timestamp=3.0))
+    absent = hand_conversions.to_leap(HandState('right', timestamp=3.0))
     assert list(absent.hand_palm_pos) == [0.0, 0.0, 0.0] and absent.header.stamp.to_sec() == 3.0
 
 

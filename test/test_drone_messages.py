@@ -7,12 +7,8 @@ import rospy
 from leap_teleop.drone import cameras
 from leap_teleop.drone.sim_runner import DroneReading, sensor_readings
 from leap_teleop.ros.ardrone_interface import NAVDATA_ALTITUDE_TAG
-from leap_teleop.ros.conversions import (
-    DroneMessages,
-    camera_info_msg,
-    rgb_image_msg,
-    transform_msg,
-)
+from leap_teleop.ros.drone_conversions import DroneMessages
+from leap_teleop.ros.sensor_conversions import camera_info_msg, rgb_image_msg, transform_msg
 
 NAV = {'state': 3, 'batteryPercent': 80.0, 'rotX': 1.0, 'rotY': -2.0, 'rotZ': 90.0,
        'altd': 1500, 'vx': 500.0, 'vy': -250.0, 'vz': 100.0, 'ax': 0.1, 'ay': 0.0, 'az': 1.0,

@@ -22,7 +22,7 @@ from leap_teleop.control.input_check import InputStream
 from leap_teleop.drone.pilot import DronePilot, PilotInput, PilotParams
 from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.tracker import HandTracker
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
@@ -339,10 +339,10 @@ def test_fuzz_recognizer_to_messages_stays_in_range(frames, side):
             for flag in ('fist', 'thumb_up', 'pinch'):
                 assert isinstance(getattr(state, flag), bool)
             kinds = []
-            for kind, msg in conversions.hand_messages(state):
+            for kind, msg in hand_conversions.hand_messages(state):
                 kinds.append(kind)
                 if kind == 'leapcobot':       # the message carries the state's values
-                    d = conversions.from_leapcobot(msg)
+                    d = hand_conversions.from_leapcobot(msg)
                     assert d['pinch_value'] == pytest.approx(state.pinch_value, abs=1e-6)
                     assert d['present'] == state.present and d['side'] == side
             assert kinds[:2] == ['leapcobot', 'hand']

@@ -9,7 +9,7 @@ from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros import markers as viz
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
@@ -22,7 +22,7 @@ def hand_msg(side, pose=None, palm=PALM_MM, **kw):
     """The Hand message the sender would publish for one rendered pose (None = absent)."""
     li = LeapInterface(recognizer_factory=lambda: GestureRecognizer(stateless=True))
     hands = [render_hand(side, pose, list(palm), **kw)] if pose else []
-    return conversions.to_hand(li.on_frame(Frame(id=7, timestamp=50.0, hands=hands))[side])
+    return hand_conversions.to_hand(li.on_frame(Frame(id=7, timestamp=50.0, hands=hands))[side])
 
 
 def by_id(array):

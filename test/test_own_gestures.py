@@ -26,7 +26,7 @@ from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.source import HandSource
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
 
@@ -132,8 +132,8 @@ def drive_arm(li, frames):
     out = []
     for frame in frames:
         state = li.on_frame(frame)['right']
-        msg = conversions.to_leapcobot(state)
-        hand = ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        msg = hand_conversions.to_leapcobot(state)
+        hand = ArmInput.from_leapcobot_dict(hand_conversions.from_leapcobot(msg))
         arm.on_hand(hand, frame.timestamp)
         arm.on_joints(arm._q, frame.timestamp)
         arm.step(frame.timestamp)

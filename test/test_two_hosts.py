@@ -143,7 +143,7 @@ def check():
     import rospy
     from sensor_msgs.msg import JointState
 
-    from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+    from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
     from leap_teleop.ur10.config import load_config
     rospy.init_node('two_hosts_check')
     rospy.wait_for_message('/ur10_1/joint_states', JointState, timeout=90)

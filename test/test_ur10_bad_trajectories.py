@@ -11,7 +11,7 @@ import rospy
 from test_ur10_cell_runner import RosTimeStub
 
 from leap_teleop.params import check_params
-from leap_teleop.ros.conversions import MAX_TRAJECTORY_POINTS
+from leap_teleop.ros.ur10_conversions import MAX_TRAJECTORY_POINTS
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import POINT_ACCEL_RAMP_S, UR10Cell
 from leap_teleop.ur10.cell_runner import RUNNER_PARAMS, CellRunner

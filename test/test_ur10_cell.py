@@ -8,7 +8,7 @@ import pytest
 import rospy
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from leap_teleop.ros.conversions import (
+from leap_teleop.ros.ur10_conversions import (
     ARM_JOINTS,
     GRIPPER_JOINTS,
     CommandError,

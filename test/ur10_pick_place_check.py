@@ -19,7 +19,7 @@ import tf2_ros
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.pick_place import pick_place_plan

@@ -30,9 +30,9 @@ from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.hands.sources.scripted import ScriptedSource
 from leap_teleop.msg import ArmStatus
-from leap_teleop.ros import conversions
-from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.recording_to_bag import write_bag
+from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, object_positions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.config import load_config
 
@@ -112,7 +112,7 @@ class Recorder:
                              (arm, self.gripper_cmds), queue_size=100)
         rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._objects, queue_size=5)
         for side, topic in hand_topics.items():
-            rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self._hand, queue_size=50)
+            rospy.Subscriber(topic, hand_conversions.LEAPCOBOT_TYPES[side], self._hand, queue_size=50)
 
     def _joints(self, msg, arm):
         idx = [next(i for i, n in enumerate(msg.name) if n.endswith(j)) for j in ARM_JOINTS]

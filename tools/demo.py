@@ -88,7 +88,7 @@ class DemoMonitor:
             rospy.Subscriber('/leapmotion/gestures', GestureEvent, self._on_arm_gesture,
                              queue_size=50)
         if 'ur10' in tasks:
-            from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
+            from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
             rospy.Subscriber(OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE, self._on_objects,
                              queue_size=5)
             for arm in UR10_TASKS:
@@ -139,7 +139,7 @@ class DemoMonitor:
             self.arm_states[arm].append(msg.state)
 
     def _on_objects(self, msg):
-        from leap_teleop.ros.conversions import object_positions
+        from leap_teleop.ros.ur10_conversions import object_positions
         self.cubes = object_positions(msg)
 
     def snapshot(self, service):

@@ -105,13 +105,13 @@ def render(script, kinds, topics, rate_hz=None):
     """[(t, topic, msg)] of one gesture session through the sender's code, t from 0."""
     from leap_teleop.hands.leap_interface import LeapInterface
     from leap_teleop.hands.sources.scripted import ScriptedSource
-    from leap_teleop.ros import conversions
+    from leap_teleop.ros import hand_conversions
     out = []
     interface = LeapInterface(sides=list(topics))
     t0 = [None]
 
     def on_hand(frame, state):
-        for kind, msg in conversions.hand_messages(state):
+        for kind, msg in hand_conversions.hand_messages(state):
             if kind in kinds:
                 out.append((frame.timestamp - t0[0], topics[state.side][kind], msg))
     interface.add_hand_listener(on_hand)
@@ -132,8 +132,8 @@ class SoakMonitor:
         from trajectory_msgs.msg import JointTrajectory
 
         from leap_teleop.msg import ArmStatus, Hand, Navdata
-        from leap_teleop.ros import conversions
-        from leap_teleop.ros.conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
+        from leap_teleop.ros import hand_conversions
+        from leap_teleop.ros.ur10_conversions import OBJECT_POSES_TOPIC, OBJECT_POSES_TYPE
         self.lock = threading.Lock()
         self.received, self.last_seq, self.gaps = {}, {}, {}
         self.last_rx = {}
@@ -144,7 +144,7 @@ class SoakMonitor:
         self.nav_states = []
         big = dict(queue_size=2000, buff_size=2 ** 24, tcp_nodelay=True)
         for side, topic in hand_topics['arms'].items():
-            rospy.Subscriber(topic, conversions.LEAPCOBOT_TYPES[side], self.on_input, topic, **big)
+            rospy.Subscriber(topic, hand_conversions.LEAPCOBOT_TYPES[side], self.on_input, topic, **big)
         rospy.Subscriber(hand_topics['drone'], Hand, self.on_input, hand_topics['drone'], **big)
         for arm, (side, _) in ARMS.items():
             rospy.Subscriber('/%s/joint_states' % arm, JointState, self.on_seq,
@@ -226,7 +226,7 @@ class SoakMonitor:
                 self.nav_states.append((self.cycle, msg.state))
 
     def on_objects(self, msg):
-        from leap_teleop.ros.conversions import object_positions
+        from leap_teleop.ros.ur10_conversions import object_positions
         with self.lock:
             self.cubes = object_positions(msg)
 
@@ -390,7 +390,7 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
     from std_srvs.srv import Trigger
 
     from leap_teleop.msg import GestureEvent, Hand
-    from leap_teleop.ros import conversions
+    from leap_teleop.ros import hand_conversions
     from leap_teleop.ur10.config import load_config
 
     arm_topics = {side: {'leapcobot': '/leapmotion/data_%s' % side} for side in ('right', 'left')}
@@ -407,8 +407,8 @@ def _soak(env, minutes, rtf, rate_hz, log, package_path, graph, player_queue, bu
         % (cycle_len, len(session), cycles, cycles * cycle_len / 60.0, rtf))
 
     rospy.init_node(PLAYER.lstrip('/'), disable_signals=True)
-    types = {'/leapmotion/data_right': conversions.LEAPCOBOT_TYPES['right'],
-             '/leapmotion/data_left': conversions.LEAPCOBOT_TYPES['left'],
+    types = {'/leapmotion/data_right': hand_conversions.LEAPCOBOT_TYPES['right'],
+             '/leapmotion/data_left': hand_conversions.LEAPCOBOT_TYPES['left'],
              '/drone/leapmotion/hand_right': Hand, '/drone/leapmotion/gestures': GestureEvent}
     pubs = {t: rospy.Publisher(t, ty, queue_size=player_queue, tcp_nodelay=True)
             for t, ty in types.items()}

@@ -1,7 +1,7 @@
 """The annotated camera view: what the camera source sees, with each hand's landmarks,
 its side, the gestures the recognizer holds for it, the processed frame rate and, when
 given, the pipeline's latency lines (capture -> published, capture -> command) drawn on
-the image (ros.conversions.image_message makes it a message).
+the image (ros.sensor_conversions.bgr_image_msg makes it a message).
 """
 import time
 

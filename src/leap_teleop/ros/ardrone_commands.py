@@ -6,7 +6,7 @@ from std_msgs.msg import Empty
 
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.drone.one_shot import HeldOneShot
-from leap_teleop.ros import conversions
+from leap_teleop.ros import drone_conversions
 from leap_teleop.srv import FlightAnim
 
 
@@ -32,7 +32,7 @@ class ArdroneCommands:
     def send(self, cmd):
         """Publish one Command: a twist, takeoff or land."""
         if cmd.kind == 'twist':
-            self.cmd_vel.publish(conversions.twist_msg(cmd.twist))
+            self.cmd_vel.publish(drone_conversions.twist_msg(cmd.twist))
             self.twists += 1
             self.input_age.add(rospy.get_time(), cmd.input_stamp)
         elif cmd.kind in self.one_shot_pubs:

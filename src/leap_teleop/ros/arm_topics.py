@@ -5,7 +5,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.msg import ArmStatus
-from leap_teleop.ros import conversions
+from leap_teleop.ros import ur10_conversions
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
@@ -29,13 +29,13 @@ class ArmCommandTopics:
         if cmd.points:
             # Stamp 0 (start on receipt): a command delayed in transport still starts
             # from the controller's current state instead of partly in the past.
-            self.arm.publish(conversions.joint_trajectory(self.arm_joints, cmd.points))
+            self.arm.publish(ur10_conversions.joint_trajectory_msg(self.arm_joints, cmd.points))
         if cmd.gripper is not None:
-            self.gripper.publish(conversions.joint_trajectory(
+            self.gripper.publish(ur10_conversions.joint_trajectory_msg(
                 [self.gripper_joint], [(0.1, [cmd.gripper], None)]))
         if cmd.points or cmd.gripper is not None:
             self.input_age.add(rospy.get_time(), cmd.input_stamp)
 
     def send_status(self, status):
         """Publish the teleop's ArmTeleopStatus as an ArmStatus."""
-        self.status.publish(conversions.arm_status_message(status))
+        self.status.publish(ur10_conversions.arm_status_msg(status))

@@ -4,7 +4,7 @@ import rospy
 
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
-from leap_teleop.ros import conversions
+from leap_teleop.ros import sensor_conversions
 
 
 def camera_model(p, timeout=10.0):
@@ -40,7 +40,7 @@ def camera_view_publisher(p):
     pub = rospy.Publisher(p['annotated_image_topic'], Image, queue_size=2)
     monitor = LatencyMonitor()
     view = CameraView(p['mirror'] != p['input_mirrored'],
-                      lambda frame, img: pub.publish(conversions.image_message(img, frame.timestamp,
+                      lambda frame, img: pub.publish(sensor_conversions.bgr_image_msg(img, frame.timestamp,
                                                                    p['frame_id'])),
                       wanted=lambda: pub.get_num_connections() > 0,
                       notes=lambda: monitor.board.notes(rospy.get_time()))

@@ -7,8 +7,8 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.msg import ObjectPoses
-from leap_teleop.ros.conversions import joint_state_msg, object_poses_msg
 from leap_teleop.ros.graph import TopicTypeWatch
+from leap_teleop.ros.ur10_conversions import joint_state_msg, object_poses_msg
 from leap_teleop.ur10.cell_runner import KINDS
 
 

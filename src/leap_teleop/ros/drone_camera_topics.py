@@ -8,7 +8,7 @@ from sensor_msgs.srv import SetCameraInfo, SetCameraInfoResponse
 
 from leap_teleop.drone.cameras import CAMERAS
 from leap_teleop.drone.sim_runner import calibration_error
-from leap_teleop.ros.conversions import camera_info_msg, rgb_image_msg
+from leap_teleop.ros.sensor_conversions import camera_info_msg, rgb_image_msg
 from leap_teleop.ros.signals import closed_at_shutdown
 
 

@@ -12,8 +12,9 @@ from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim_runner import static_frames
 from leap_teleop.msg import Navdata, navdata_altitude
-from leap_teleop.ros.conversions import DroneMessages, transform_msg
+from leap_teleop.ros.drone_conversions import DroneMessages
 from leap_teleop.ros.markers import PathTrail, drone_markers
+from leap_teleop.ros.sensor_conversions import transform_msg
 
 # Published in this order each tick (DroneMessages' names).
 STATE_TOPICS = (('navdata', Navdata), ('mag', Vector3Stamped), ('navdata_altitude', navdata_altitude),

@@ -8,7 +8,7 @@ import rospy
 from leap_teleop.control.input_age import StageAges
 from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import GestureEvent, Hand, leap, leapros
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.graph import wait_for_subscribers
 from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
 
@@ -33,13 +33,13 @@ class HandTopics:
         q = int(p['queue_size'])
         gestures = rospy.Publisher(p['gesture_topic'], GestureEvent, queue_size=q)
         self.pubs = {side: {'leapcobot': rospy.Publisher(p['leapcobot_topic_' + side],
-                                                         conversions.LEAPCOBOT_TYPES[side],
+                                                         hand_conversions.LEAPCOBOT_TYPES[side],
                                                          queue_size=q),
                             'hand': rospy.Publisher(p['hand_topic_' + side], Hand, queue_size=q),
                             'gesture': gestures}
                      for side in self.sides}
-        # One leapcobot message per side, refilled every frame (conversions.to_leapcobot).
-        self._leapcobot = {side: conversions.LEAPCOBOT_TYPES[side]() for side in self.sides}
+        # One leapcobot message per side, refilled every frame (hand_conversions.to_leapcobot).
+        self._leapcobot = {side: hand_conversions.LEAPCOBOT_TYPES[side]() for side in self.sides}
         self.throttle = PeriodThrottle(p['freq'])
         self.published = 0
         self.leapros_side = p['leapros_side']
@@ -79,14 +79,14 @@ class HandTopics:
         self.ages.add('recognized', self.clock(), frame.timestamp)
         if not self.throttle.due(side, frame.timestamp):
             return
-        for kind, msg in conversions.hand_messages(state, self.p['frame_id'],
+        for kind, msg in hand_conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
         if side == self.leapros_side:
             if self.leapros is not None:
-                self.leapros.publish(conversions.to_leapros(state, frame.hand(side),
+                self.leapros.publish(hand_conversions.to_leapros(state, frame.hand(side),
                                                             self.p['frame_id']))
             if self.leap is not None:
-                self.leap.publish(conversions.to_leap(state, self.p['frame_id']))
+                self.leap.publish(hand_conversions.to_leap(state, self.p['frame_id']))
         self.ages.add('published', self.clock(), frame.timestamp)
         self.published += 1

@@ -6,7 +6,7 @@ from visualization_msgs.msg import MarkerArray
 from leap_teleop.control.lowpass import LowPass
 from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import DriverHuman
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers
 from leap_teleop.ros.node import RateLimitedLog
 
@@ -17,7 +17,7 @@ class LeapMotionTopics:
     while nobody reads the filtered Human (it restarts from the next frame)."""
 
     def __init__(self, p, queue_size):
-        self.builder = conversions.DriverHumanBuilder(p['frame_id'])
+        self.builder = hand_conversions.DriverHumanBuilder(p['frame_id'])
         self.lowpass = LowPass(p['filter_cutoff'])
         self.throttle = PeriodThrottle(p['freq'])
         self.pubs = {}

@@ -24,7 +24,7 @@ from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, capture, make_source
 from leap_teleop.output_file import output_problem
 from leap_teleop.params import is_ros_name
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 
 KINDS = ('leapcobot', 'hand', 'gesture')
 ROS_TIME_END = 2 ** 32      # ROS time counts seconds in 32 unsigned bits
@@ -40,7 +40,7 @@ def write_bag(source, out_path, sides=SIDES, topics=None, kinds=KINDS, start=Non
     that put at least one message into the bag (a frame without a valid capture time, or
     with none of `kinds` to write, puts none). topics: {side: {kind: topic}}, default the
     sender's. PastRosTimeError when a frame's time passes ROS time's end."""
-    topics = topics or {side: conversions.default_topics(side) for side in sides}
+    topics = topics or {side: hand_conversions.default_topics(side) for side in sides}
     interface = LeapInterface(sides=list(sides))
     first_stamp = [None]
     offset = [0.0]
@@ -48,7 +48,7 @@ def write_bag(source, out_path, sides=SIDES, topics=None, kinds=KINDS, start=Non
     count = 0
     with rosbag.Bag(out_path, 'w', compression=compression) as bag:
         def on_hand(frame, state):
-            for kind, msg in conversions.hand_messages(state):
+            for kind, msg in hand_conversions.hand_messages(state):
                 if kind in kinds:
                     bag.write(topics[state.side][kind], msg, msg.header.stamp)
                     wrote[0] = True
@@ -134,7 +134,7 @@ def main(argv=None):
     except SourceError as e:
         print('recording_to_bag: %s' % e, file=sys.stderr)
         return 2
-    topics = {side: conversions.default_topics(side) for side in args.sides}
+    topics = {side: hand_conversions.default_topics(side) for side in args.sides}
     if 'right' in topics:
         topics['right']['leapcobot'] = args.right_topic
     if 'left' in topics:

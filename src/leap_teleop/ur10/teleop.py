@@ -67,7 +67,7 @@ def _joints_plausible(q):
 
 @dataclass
 class ArmInput:
-    """One hand message, side-free (see conversions.from_leapcobot)."""
+    """One hand message, side-free (see hand_conversions.from_leapcobot)."""
     present: bool
     palm_mm: tuple = (0.0, 0.0, 0.0)
     fist: bool = False

@@ -20,7 +20,7 @@ from leap_teleop.drone.pilot import DronePilot, PilotParams, PilotWorker
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
 from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
 from leap_teleop.msg import Hand
-from leap_teleop.ros import conversions
+from leap_teleop.ros import drone_conversions, hand_conversions
 from leap_teleop.ros.ardrone_commands import ArdroneCommands
 from leap_teleop.ros.diagnostics import diagnostics_updater
 from leap_teleop.ros.drone_inputs import subscribe_pilot_inputs
@@ -33,12 +33,12 @@ from leap_teleop.ros.signals import closed_at_shutdown
 
 class DronePilotNode:
     def __init__(self, p):
-        self.side = conversions.SIDE_CODES[p['side']]
+        self.side = hand_conversions.SIDE_CODES[p['side']]
         self.log = RateLimitedLog(2.0)
         self.pilot = DronePilot(PilotParams().update(p), warn=self.warn)
         self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], lambda: (
             self.pilot.takeoff_still_wanted(rospy.get_time())), self.warn)
-        hand_topic = p['hand_topic'] or conversions.default_topics(p['side'])['hand']
+        hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
         self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
                                          self.pilot.new_input_connection)
@@ -64,10 +64,10 @@ class DronePilotNode:
             self.log.warn('side', 'pilot: ignored a Hand of side %d on %s (following side %d)',
                           msg.side, self.hand_topic, self.side)
             return 'side %d' % msg.side
-        return self.pilot.on_hand(conversions.pilot_input(msg), rospy.get_time())
+        return self.pilot.on_hand(drone_conversions.pilot_input(msg), rospy.get_time())
 
     def on_gesture(self, msg):
-        if msg.side not in conversions.SIDE_CODES.values():
+        if msg.side not in hand_conversions.SIDE_CODES.values():
             self.log.warn('gesture_side', 'pilot: ignored GestureEvent %r of side %d (0 right, 1 left)',
                           msg.gesture, msg.side)
         elif msg.side == self.side:     # the other hand's events share the topic

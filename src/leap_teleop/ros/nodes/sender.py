@@ -17,11 +17,11 @@ from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.package_files import package_path
 from leap_teleop.ros.camera_topics import camera_model, camera_view_publisher
-from leap_teleop.ros.conversions import transform_msg
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.hand_topics import HandTopics
 from leap_teleop.ros.node import start_node
 from leap_teleop.ros.reconfigure import Reconfigure
+from leap_teleop.ros.sensor_conversions import transform_msg
 
 # The declarations live beside the hand source and recognizer; re-exported for --help and
 # the docs.

@@ -15,7 +15,7 @@ import rospy
 from sensor_msgs.msg import JointState
 
 from leap_teleop.package_files import package_path
-from leap_teleop.ros import conversions
+from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.arm_topics import ArmCommandTopics
 from leap_teleop.ros.diagnostics import diagnostics_updater
 from leap_teleop.ros.graph import TopicTypeWatch, wait_for_first_message
@@ -40,8 +40,8 @@ class ArmNode:
         self.runner = ArmTeleopRunner(params, p['rate'])
         self.log = RateLimitedLog(2.0)
         self.joint_index = JointStateIndex()
-        self.hand_topic = p['hand_topic'] or conversions.default_topics(p['hand'])['leapcobot']
-        self.hand_type = conversions.LEAPCOBOT_TYPES[p['hand']]
+        self.hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['hand'])['leapcobot']
+        self.hand_type = hand_conversions.LEAPCOBOT_TYPES[p['hand']]
         self.topics = ArmCommandTopics(p['joint_prefix'], p['command_queue_size'])
         self.joints_seen = threading.Event()
         self.type_watch = TopicTypeWatch('ur10_arm', self.log)
@@ -62,7 +62,7 @@ class ArmNode:
 
     # Callbacks: store and wake, nothing else.
     def on_hand(self, msg):
-        hand = ArmInput.from_leapcobot_dict(conversions.from_leapcobot(msg))
+        hand = ArmInput.from_leapcobot_dict(hand_conversions.from_leapcobot(msg))
         why = self.runner.on_hand(hand, rospy.get_time())
         if why:
             self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)

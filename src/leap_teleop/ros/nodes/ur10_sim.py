@@ -22,10 +22,10 @@ from std_srvs.srv import Trigger, TriggerResponse
 from trajectory_msgs.msg import JointTrajectory
 
 from leap_teleop.ros.cell_state_topics import CellStateTopics, command_type_watch
-from leap_teleop.ros.conversions import CommandError, trajectory_points
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
+from leap_teleop.ros.ur10_conversions import CommandError, trajectory_points
 from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, arm_urdf, print_urdf
 
 PARAMS = RUNNER_PARAMS      # declared beside the cell; --help and docs/nodes.md read it

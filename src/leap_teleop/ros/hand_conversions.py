@@ -1,57 +1,37 @@
-"""Messages <-> the library's data, without a ROS master (so it is unit-testable).
-
-Hands: HandState -> ROS messages, one function per message type, both hands alike; the
-leap_motion driver's Human from whole frames (DriverHumanBuilder).
-
-UR10 cell: Object poses: leap_teleop/ObjectPoses on OBJECT_POSES_TOPIC (the sim node's private
-~object_poses): header (frame "world", sim time), names[], poses[] (world, m) and
-grasped_by[] (arm holding each object, "" when none).
-
-Commands: trajectory_msgs/JointTrajectory as ros_control's JointTrajectoryController takes
-them. Joint names may carry the arm's prefix ("ur10_1_shoulder_pan_joint") or not, in any
-order, but every joint of the controller exactly once. Anything malformed raises
-CommandError with a reason the node logs; the arm then keeps its current trajectory.
-
-AR.Drone: the driver's navdata, imu, mag, odometry, TF and camera messages that ardrone_sim
-publishes (DroneMessages, camera_info_msg, rgb_image_msg); the pilot's input from a Hand
-(pilot_input) and its cmd_vel (twist_msg).
-"""
+"""Hand messages <-> the library's data, without a ROS master (so it is unit-testable):
+HandState -> leapcobot, leapros, Hand, GestureEvent, one function per message type, both
+hands alike, and the leap_motion driver's Human from whole frames (DriverHumanBuilder)."""
 import math
 
 import numpy as np
 import rospy
-from geometry_msgs.msg import Point, Pose, TransformStamped, Twist, Vector3, Vector3Stamped
-from nav_msgs.msg import Odometry
-from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from geometry_msgs.msg import Point, Vector3
 
-from leap_teleop.drone.pilot import PilotInput
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.msg import (
-    ArmStatus,
     DriverBone,
     DriverFinger,
     DriverGesture,
     DriverHuman,
     GestureEvent,
     Hand,
-    Navdata,
-    ObjectPoses,
     leap,
     leapcobotleft,
     leapcobotright,
     leapros,
-    navdata_altitude,
 )
-from leap_teleop.ros.ardrone_interface import NAVDATA_ALTITUDE_SIZE, NAVDATA_ALTITUDE_TAG
-from leap_teleop.ur10.kinematics import JOINT_NAMES
-from leap_teleop.ur10.model import GRIPPER_JOINT
 
 LEAP_FRAME = 'leap_hands'
+
+
 LEAPCOBOT_TYPES = {'right': leapcobotright, 'left': leapcobotleft}
+
+
 SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
+
+
 MM = 0.001
 
 
@@ -70,6 +50,8 @@ _LEAPCOBOT_FIELDS = {
         ('%s_hand_rotate_value', 'rotate'), ('%s_hand_turn_value', 'turn'),
         ('%s_hand_swing_value', 'swing'))]
     for side in ('right', 'left')}
+
+
 _PALMPOS = {side: '%s_hand_palmpos' % side for side in ('right', 'left')}
 
 
@@ -189,10 +171,13 @@ def default_topics(side):
             'gesture': 'leapmotion/gestures'}
 
 
-# --- the leap_motion driver's interface (DriverHuman and friends, leap) ------------------
 # Gesture codes of the driver's Gesture message (the Leap SDK's enums).
 GESTURE_TYPES = {'swipe': 1, 'circle': 4, 'screenTap': 5, 'keyTap': 6}
+
+
 GESTURE_STATES = {'start': 1, 'update': 2, 'stop': 3}
+
+
 # Recognizer events with a driver counterpart: both circle directions are its circle.
 # fold / unfold, hand_found / hand_lost and the held poses have none.
 EVENT_GESTURE_TYPES = {'circle_cw': GESTURE_TYPES['circle'],
@@ -391,281 +376,4 @@ def to_leap(state, frame_id=LEAP_FRAME):
     roll, yaw, pitch = hand_angles(state.palm_normal, state.direction)
     msg.hand_roll, msg.hand_yaw, msg.hand_pitch = (math.degrees(roll), math.degrees(yaw),
                                                    math.degrees(pitch))
-    return msg
-
-
-# -- UR10 cell: object poses, joint states, trajectory commands -----------------------
-
-OBJECT_POSES_TOPIC = '/ur10_sim/object_poses'
-OBJECT_POSES_TYPE = ObjectPoses
-WORLD_FRAME = 'world'
-ARM_JOINTS = tuple(JOINT_NAMES)
-GRIPPER_JOINTS = (GRIPPER_JOINT,)
-
-
-class CommandError(ValueError):
-    """A trajectory command the sim refuses; str() says why."""
-
-
-def object_positions(msg):
-    """{name: (x, y, z)} in world metres from an ObjectPoses message."""
-    return {name: (pose.position.x, pose.position.y, pose.position.z)
-            for name, pose in zip(msg.names, msg.poses)}
-
-
-def object_poses_msg(poses, grasped_by=None, stamp=None):
-    """ObjectPoses from UR10Cell.object_poses() ({name: (xyz, quat xyzw)}) and
-    {object: arm} of the grasped ones."""
-    grasped_by = grasped_by or {}
-    msg = ObjectPoses()
-    msg.header.frame_id = WORLD_FRAME
-    if stamp is not None:
-        msg.header.stamp = stamp
-    for name, (xyz, quat) in poses.items():
-        pose = Pose()
-        pose.position.x, pose.position.y, pose.position.z = (float(v) for v in xyz)
-        o = pose.orientation
-        o.x, o.y, o.z, o.w = (float(v) for v in quat)
-        msg.names.append(name)
-        msg.poses.append(pose)
-        msg.grasped_by.append(grasped_by.get(name, ''))
-    return msg
-
-
-def joint_state_msg(prefix, q, qd, gripper, gripper_velocity, stamp=None):
-    """sensor_msgs/JointState of one arm: the six arm joints then the gripper knuckle,
-    names prefixed (ur10_1_shoulder_pan_joint, ..., ur10_1_finger_joint)."""
-    msg = JointState()
-    if stamp is not None:
-        msg.header.stamp = stamp
-    msg.name = [prefix + n for n in ARM_JOINTS + GRIPPER_JOINTS]
-    msg.position = [float(v) for v in q] + [float(gripper)]
-    msg.velocity = [float(v) for v in qd] + [float(gripper_velocity)]
-    msg.effort = []
-    return msg
-
-
-def _finite(values, what):
-    try:
-        a = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise CommandError('%s are not numbers' % what) from None
-    if not np.all(np.isfinite(a)):
-        raise CommandError('%s contain NaN or inf' % what)
-    return a
-
-
-def joint_order(names, expected, prefix):
-    """Index into `names` for each expected joint; CommandError on unknown, duplicate or
-    missing names. A name matches with or without the arm's prefix."""
-    if not names:
-        raise CommandError('no joint_names')
-    index = {}
-    for i, name in enumerate(names):
-        bare = name[len(prefix):] if prefix and name.startswith(prefix) else name
-        if bare not in expected:
-            raise CommandError('unknown joint %r (expected %s, optionally prefixed %r)'
-                               % (name, ', '.join(expected), prefix))
-        if bare in index:
-            raise CommandError('joint %r given twice' % name)
-        index[bare] = i
-    missing = [n for n in expected if n not in index]
-    if missing:
-        raise CommandError('missing joints %s (partial trajectories are not supported)'
-                           % ', '.join(missing))
-    return [index[n] for n in expected]
-
-
-# Reading and checking a trajectory's points holds the simulator's physics loop: 100,000
-# stopped its joint states for over a second. 10,000 is 100 s of points at 100 Hz.
-MAX_TRAJECTORY_POINTS = 10000
-
-
-def trajectory_points(msg, expected, prefix):
-    """(points, stamp_s) from a JointTrajectory for joints `expected`: points are
-    [(time_from_start s, positions in expected order, velocities or None[,
-    accelerations])] (accelerations only where velocities are given, as the JTC reads them);
-    stamp_s is
-    header.stamp in seconds (0 = start now). CommandError when malformed: bad names,
-    no points, NaN / inf, wrong lengths, times not strictly increasing or negative."""
-    order = joint_order(list(msg.joint_names), expected, prefix)
-    if not msg.points:
-        raise CommandError('empty trajectory (no points)')
-    if len(msg.points) > MAX_TRAJECTORY_POINTS:
-        raise CommandError('%d points: at most %d' % (len(msg.points), MAX_TRAJECTORY_POINTS))
-    n = len(msg.joint_names)
-    points, last = [], -math.inf
-    for k, pt in enumerate(msg.points):
-        t = pt.time_from_start.to_sec()
-        if not math.isfinite(t) or t < 0:
-            raise CommandError('point %d: negative time_from_start %.6g' % (k, t))
-        if t <= last:
-            raise CommandError('point %d: time_from_start %.6g not after the previous %.6g'
-                               % (k, t, last))
-        last = t
-        if len(pt.positions) != n:
-            raise CommandError('point %d: %d positions for %d joints' % (k, len(pt.positions), n))
-        pos = _finite(pt.positions, 'point %d positions' % k)[order]
-        vel = None
-        if len(pt.velocities):
-            if len(pt.velocities) != n:
-                raise CommandError('point %d: %d velocities for %d joints'
-                                   % (k, len(pt.velocities), n))
-            vel = _finite(pt.velocities, 'point %d velocities' % k)[order]
-        if vel is not None and len(pt.accelerations):
-            if len(pt.accelerations) != n:
-                raise CommandError('point %d: %d accelerations for %d joints'
-                                   % (k, len(pt.accelerations), n))
-            points.append((t, pos, vel, _finite(pt.accelerations,
-                                                'point %d accelerations' % k)[order]))
-            continue
-        points.append((t, pos, vel))
-    return points, msg.header.stamp.to_sec()
-
-
-# -- AR.Drone: the driver's messages from a DroneReading ---------------------------------
-
-G_NAVDATA = 9.8                 # m/s^2 per g of navdata's ax / ay / az on ardrone/imu
-
-
-class DroneMessages:
-    """What ardrone_sim publishes each tick, from one drone.sim_runner.DroneReading:
-    navdata (with the sensors), mag, imu, odometry, the TF odom -> body and the
-    navdata_altitude option (built only when asked for)."""
-
-    def __init__(self, reading, stamp, base_frame, odom_frame, with_altitude=False):
-        r, nav = reading, reading.nav
-        self.navdata = Navdata()
-        self.navdata.header.stamp, self.navdata.header.frame_id = stamp, base_frame
-        for key, value in nav.items():
-            setattr(self.navdata, key, value)
-        self.mag = Vector3Stamped(header=self.navdata.header,
-                                  vector=Vector3(nav['magX'], nav['magY'], nav['magZ']))
-        self.imu = Imu()
-        self.imu.header.stamp, self.imu.header.frame_id = stamp, base_frame
-        o = self.imu.orientation
-        o.x, o.y, o.z, o.w = r.quat
-        self.imu.angular_velocity = Vector3(*r.omega)
-        self.imu.linear_acceleration = Vector3(nav['ax'] * G_NAVDATA, nav['ay'] * G_NAVDATA,
-                                               nav['az'] * G_NAVDATA)
-        self.odometry = Odometry()
-        self.odometry.header.stamp, self.odometry.header.frame_id = stamp, odom_frame
-        self.odometry.child_frame_id = base_frame
-        pp = self.odometry.pose.pose
-        pp.position = Point(r.pos[0], r.pos[1], r.altitude)
-        pp.orientation = o
-        self.odometry.twist.twist.linear = Vector3(nav['vx'] / 1000, nav['vy'] / 1000,
-                                                   nav['vz'] / 1000)
-        self.odometry.twist.twist.angular = Vector3(*r.omega)
-        self.transform = transform_msg(odom_frame, base_frame,
-                                       (r.pos[0], r.pos[1], r.altitude), r.quat, stamp)
-        self.navdata_altitude = (navdata_altitude_msg(self.navdata.header, nav, r.altitude)
-                                 if with_altitude else None)
-
-
-def navdata_altitude_msg(header, nav, altitude):
-    """The driver's altitude option: vision / raw / reference altitude (mm) are the sim's
-    true one, the observer's state its altitude (m) and climb rate (m/s)."""
-    out = navdata_altitude()
-    out.header = header
-    out.drone_time = nav['tm'] / 1e6
-    out.tag, out.size = NAVDATA_ALTITUDE_TAG, NAVDATA_ALTITUDE_SIZE
-    out.altitude_vision = out.altitude_raw = out.altitude_ref = nav['altd']
-    out.altitude_vz = nav['vz']
-    out.obs_accZ = nav['az'] * 9.81
-    out.obs_alt = max(altitude, 0.0)
-    out.obs_x.x, out.obs_x.y = max(altitude, 0.0), nav['vz'] / 1000.0
-    out.est_vb.x = nav['vz'] / 1000.0
-    return out
-
-
-def transform_msg(parent, child, xyz, quat_xyzw, stamp):
-    t = TransformStamped()
-    t.header.stamp, t.header.frame_id, t.child_frame_id = stamp, parent, child
-    t.transform.translation = Vector3(*xyz)
-    r = t.transform.rotation
-    r.x, r.y, r.z, r.w = quat_xyzw
-    return t
-
-
-def camera_info_msg(spec, frame_id):
-    """The ideal (undistorted) calibration of a drone.cameras.CameraSpec."""
-    info = CameraInfo()
-    info.header.frame_id = frame_id
-    info.width, info.height = spec.width, spec.height
-    info.distortion_model = 'plumb_bob'
-    info.D = [0.0] * 5
-    info.K, info.P = spec.intrinsics()
-    info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-    return info
-
-
-def rgb_image_msg(rgb, stamp, frame_id):
-    """sensor_msgs/Image (rgb8) of a (H, W, 3) uint8 picture; stamp a rospy.Time."""
-    msg = Image()
-    msg.header.stamp, msg.header.frame_id = stamp, frame_id
-    msg.height, msg.width = rgb.shape[:2]
-    msg.encoding, msg.step = 'rgb8', rgb.shape[1] * 3
-    msg.data = rgb.tobytes()
-    return msg
-
-
-# -- AR.Drone: the pilot's input and commands --------------------------------------------
-
-def pilot_input(msg):
-    """The drone pilot's PilotInput from a leap_teleop/Hand (metres, unit vectors, the
-    capture stamp in s)."""
-    p, n, d = msg.palm_position, msg.palm_normal, msg.direction
-    return PilotInput(msg.present, (p.x, p.y, p.z), (n.x, n.y, n.z), (d.x, d.y, d.z),
-                      msg.header.stamp.to_sec())
-
-
-def twist_msg(twist):
-    """A geometry_msgs/Twist from (linear x, y, z, angular x, y, z)."""
-    t = Twist()
-    t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z = twist
-    return t
-
-
-# -- UR10 arm: trajectory commands and status -------------------------------------------
-
-def joint_trajectory(names, points, stamp=0.0):
-    """A JointTrajectory for joints `names` from points [(time_from_start s, positions,
-    velocities or None)], starting at `stamp` (s; 0 = on receipt, the ros_control
-    convention)."""
-    msg = JointTrajectory()
-    msg.header.stamp = rospy.Time.from_sec(stamp) if stamp > 0 else rospy.Time(0)
-    msg.joint_names = list(names)
-    msg.points = [JointTrajectoryPoint(
-        positions=[float(x) for x in q],
-        velocities=[] if v is None else [float(x) for x in v],
-        time_from_start=rospy.Duration.from_sec(t)) for t, q, v in points]
-    return msg
-
-
-def arm_status_message(status):
-    """An ArmStatus from the arm teleop's ArmTeleopStatus, stamped now."""
-    msg = ArmStatus(state=status.state, reason=status.reason, origin_set=status.origin_set,
-                    rejected_inputs=status.rejected_inputs, ik_failures=status.ik_failures)
-    msg.header.stamp = rospy.Time.now()
-    if len(status.target) == 3:
-        msg.target = Point(*status.target)
-    if status.input_stamp > 0:
-        msg.input_stamp = rospy.Time.from_sec(status.input_stamp)
-    return msg
-
-
-# -- camera view -----------------------------------------------------------------------
-
-def image_message(bgr, stamp, frame_id):
-    """sensor_msgs/Image (encoding bgr8) of a (H, W, 3) uint8 image (no cv_bridge needed)."""
-    img = np.ascontiguousarray(bgr, dtype=np.uint8)
-    msg = Image()
-    msg.header.stamp = rospy.Time.from_sec(stamp)
-    msg.header.frame_id = frame_id
-    msg.height, msg.width = img.shape[:2]
-    msg.encoding = 'bgr8'
-    msg.is_bigendian = 0
-    msg.step = msg.width * 3
-    msg.data = img.tobytes()
     return msg
