@@ -4,17 +4,10 @@ import pytest
 
 from leap_teleop.params import check_params
 from leap_teleop.ur10 import cell_runner
-from leap_teleop.ur10.cell_runner import (
-    KINDS,
-    RUNNER_PARAMS,
-    CellConfigError,
-    CellRunner,
-    print_urdf,
-    urdf_from_args,
-)
-from leap_teleop.ur10.config import load_config
+from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner
+from leap_teleop.ur10.config import CellConfigError, load_config
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
-from leap_teleop.ur10.model import build_urdf
+from leap_teleop.ur10.model import build_urdf, print_urdf, urdf_from_args
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check
 pytestmark = pytest.mark.integration

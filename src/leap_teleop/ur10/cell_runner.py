@@ -1,27 +1,23 @@
 """The UR10 work cell as the ur10_sim node runs it, without ROS: its ~parameters, the queue
 of validated commands the physics loop applies, the lock around the physics, what is due
 each step (joint states, object poses, /clock, in sim time), pacing to the wall clock,
-snapshots drawn from copied poses, and the arms' descriptions (--urdf)."""
-import argparse
+snapshots drawn from copied poses."""
 import collections
 import math
-import sys
 import threading
 from dataclasses import dataclass
-
-import yaml
 
 from leap_teleop.control.input_age import CommandWaits
 from leap_teleop.params import Param
 from leap_teleop.sim_runtime import MAX_LAG_S, Every, RealtimePacer, pace_factor, snapshot_path
-from leap_teleop.ur10.config import config_path, load_config
+from leap_teleop.ur10.config import DEFAULT_CELL_CONFIG, read_cell_config
 from leap_teleop.ur10.kinematics import JOINT_NAMES
-from leap_teleop.ur10.model import GRIPPER_JOINT, build_urdf
+from leap_teleop.ur10.model import GRIPPER_JOINT
 from leap_teleop.ur10.snapshot import SnapshotRenderer
 from leap_teleop.ur10.trajectory import TrajectoryError
 
 RUNNER_PARAMS = {
-    'config': Param('ur10_cell.yaml', 'cell YAML: a path or a file name in config/',
+    'config': Param(DEFAULT_CELL_CONFIG, 'cell YAML: a path or a file name in config/',
                     empty_ok=False),
     'gui': Param(False, 'open the PyBullet GUI window (needs a display)'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
@@ -50,59 +46,6 @@ FAR_START_S = 5.0
 # Command kind: (topic in the arm's namespace, the joints a command names).
 KINDS = {'arm': ('arm_controller/command', tuple(JOINT_NAMES)),
          'gripper': ('gripper/command', (GRIPPER_JOINT,))}
-
-
-def arm_urdf(arm):
-    """The URDF of one ArmConfig (its joints prefixed, its base where the cell puts it)."""
-    return build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
-
-
-class CellConfigError(ValueError):
-    """A cell config that cannot be read or does not describe a cell, or an arm it lacks:
-    one line naming the file."""
-
-
-def read_cell_config(name):
-    """load_config, each way a file can be bad (missing, not YAML, entries of the wrong
-    shape) as one CellConfigError line instead of the error of whichever step tripped."""
-    path = config_path(name)
-    try:
-        return load_config(name)
-    except OSError as e:
-        why = e.strerror or e
-    except yaml.YAMLError as e:     # its text spans lines and points into the file
-        mark = getattr(e, 'problem_mark', None)
-        why = 'not valid YAML (%s%s)' % ('line %d: ' % (mark.line + 1) if mark else '',
-                                         getattr(e, 'problem', None) or ' '.join(str(e).split()))
-    except ValueError as e:
-        why = str(e)
-        if why.startswith('cell config'):
-            raise CellConfigError(why) from None
-    raise CellConfigError('cell config %s: %s' % (path, why)) from None
-
-
-def urdf_from_args(argv):
-    """--urdf ARM [--config FILE]: ARM's description (for <param command=>);
-    CellConfigError for a bad config or an arm it lacks."""
-    ap = argparse.ArgumentParser(prog='ur10_sim.py --urdf')
-    ap.add_argument('--urdf', required=True, metavar='ARM')
-    ap.add_argument('--config', default=RUNNER_PARAMS['config'].default)
-    args, _ = ap.parse_known_args(argv)
-    config = read_cell_config(args.config)
-    try:
-        return arm_urdf(config.arm(args.urdf))
-    except KeyError as e:
-        raise CellConfigError('cell config %s: %s' % (config.path, e.args[0])) from None
-
-
-def print_urdf(argv):
-    """ur10_sim.py --urdf: the description on stdout. Launch files run it for every sim, so
-    a bad config or arm is one line on stderr and status 1 (roslaunch shows it), no traceback."""
-    try:
-        text = urdf_from_args(argv)
-    except CellConfigError as e:
-        raise SystemExit('ur10_sim.py --urdf: %s' % e) from None
-    sys.stdout.write(text)
 
 
 @dataclass

@@ -29,6 +29,33 @@ def config_path(name):
     return cand
 
 
+DEFAULT_CELL_CONFIG = 'ur10_cell.yaml'
+
+
+class CellConfigError(ValueError):
+    """A cell config that cannot be read or does not describe a cell, or an arm it lacks:
+    one line naming the file."""
+
+
+def read_cell_config(name):
+    """load_config, each way a file can be bad (missing, not YAML, entries of the wrong
+    shape) as one CellConfigError line instead of the error of whichever step tripped."""
+    path = config_path(name)
+    try:
+        return load_config(name)
+    except OSError as e:
+        why = e.strerror or e
+    except yaml.YAMLError as e:     # its text spans lines and points into the file
+        mark = getattr(e, 'problem_mark', None)
+        why = 'not valid YAML (%s%s)' % ('line %d: ' % (mark.line + 1) if mark else '',
+                                         getattr(e, 'problem', None) or ' '.join(str(e).split()))
+    except ValueError as e:
+        why = str(e)
+        if why.startswith('cell config'):
+            raise CellConfigError(why) from None
+    raise CellConfigError('cell config %s: %s' % (path, why)) from None
+
+
 @dataclass
 class TrayConfig:
     xyz: np.ndarray            # centre of the tray's underside, world

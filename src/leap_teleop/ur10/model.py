@@ -11,14 +11,18 @@ and RViz all resolve those). A parallel gripper is added on ``tool0``:
 
 Every link and joint name except ``world`` gets the arm's prefix (e.g. ``ur10_1_``), and
 the fixed ``world_joint`` carries the arm's base pose, so several arms' descriptions
-share one TF tree without tf_prefix.
+share one TF tree without tf_prefix. `ur10_sim.py --urdf ARM` prints one arm's description
+(print_urdf) for the launch files' robot_description.
 """
+import argparse
 import hashlib
 import importlib.metadata
 import os
 import re
+import sys
 import tempfile
 
+from leap_teleop.ur10.config import DEFAULT_CELL_CONFIG, CellConfigError, read_cell_config
 from leap_teleop.ur10.kinematics import TCP_OFFSET
 
 GRIPPER_JOINT = 'finger_joint'
@@ -165,3 +169,32 @@ def urdf_file(prefix='', base_xyz=(0.0, 0.0, 0.0), base_rpy=(0.0, 0.0, 0.0), dir
             f.write(xml)
         os.replace(tmp, path)   # atomic: parallel tests may write the same file
     return path
+
+
+def arm_urdf(arm):
+    """The URDF of one ArmConfig (its joints prefixed, its base where the cell puts it)."""
+    return build_urdf(arm.prefix, arm.base_xyz, arm.base_rpy)
+
+
+def urdf_from_args(argv):
+    """--urdf ARM [--config FILE]: ARM's description (for <param command=>);
+    CellConfigError for a bad config or an arm it lacks."""
+    ap = argparse.ArgumentParser(prog='ur10_sim.py --urdf')
+    ap.add_argument('--urdf', required=True, metavar='ARM')
+    ap.add_argument('--config', default=DEFAULT_CELL_CONFIG)
+    args, _ = ap.parse_known_args(argv)
+    config = read_cell_config(args.config)
+    try:
+        return arm_urdf(config.arm(args.urdf))
+    except KeyError as e:
+        raise CellConfigError('cell config %s: %s' % (config.path, e.args[0])) from None
+
+
+def print_urdf(argv):
+    """ur10_sim.py --urdf: the description on stdout. Launch files run it for every sim, so
+    a bad config or arm is one line on stderr and status 1 (roslaunch shows it), no traceback."""
+    try:
+        text = urdf_from_args(argv)
+    except CellConfigError as e:
+        raise SystemExit('ur10_sim.py --urdf: %s' % e) from None
+    sys.stdout.write(text)

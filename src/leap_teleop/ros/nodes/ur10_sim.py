@@ -9,10 +9,9 @@ yet (launch files set it first, for robot_state_publisher). Private: ~object_pos
 the PNG's path). A malformed command is rejected with a rate-limited warning and the arm keeps its
 current trajectory (as ros_control's JointTrajectoryController). /diagnostics: per arm, how long
 commands wait for the physics step that applies them; commands rejected or dropped (WARN for
-10 wall s after one). With
-/use_sim_time true it publishes /clock and can run faster than real time (~realtime_factor,
-0 = as fast as possible). Extra mode: `ur10_sim.py --urdf ARM [--config FILE]` prints ARM's
-description and exits.
+10 wall s after one). With /use_sim_time true it publishes /clock and can run faster than real
+time (~realtime_factor, 0 = as fast as possible). Extra mode: `ur10_sim.py --urdf ARM
+[--config FILE]` prints ARM's description and exits.
 """
 import sys
 import threading
@@ -26,7 +25,8 @@ from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 from leap_teleop.ros.ur10_conversions import CommandError, trajectory_points
-from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner, arm_urdf, print_urdf
+from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner
+from leap_teleop.ur10.model import arm_urdf, print_urdf
 
 PARAMS = RUNNER_PARAMS      # declared beside the cell; --help and docs/nodes.md read it
 
