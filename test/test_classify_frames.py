@@ -12,7 +12,7 @@ from leap_teleop.hands import classify_frames
 from leap_teleop.hands.classify_frames import FrameClassifier
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.datasets import data_dir
-from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.sources import leapjs
 
 # needs a ROS master, a simulator, a subprocess or a build: not in make check

@@ -3,8 +3,8 @@ import pytest
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.msg import Hand, leapcobotleft, leapcobotright
 from leap_teleop.ros import drone_conversions, hand_conversions
 

@@ -10,8 +10,8 @@ from leap_teleop.control.lowpass import LowPass
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import Finger, Frame
 from leap_teleop.hands.gestures import HandEvent
-from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.tracker import HandState
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers

@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.config import load_config

@@ -13,8 +13,8 @@ from leap_teleop.hands.gestures.bindings import (
     Bindings,
     load_bindings,
 )
-from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.tracker import HandTracker
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

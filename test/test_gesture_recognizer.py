@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from leap_teleop.hands.frame import Finger, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.hand_model import POSES, render_hand
+from leap_teleop.hands.rendered_hand import POSES, render_hand
 from leap_teleop.hands.sources.scripted import GestureScript, ScriptedSource
 from leap_teleop.hands.tracker import HandTracker
 from tools.evaluation.original_rules import OriginalRules
@@ -39,13 +39,13 @@ def test_every_synthetic_pose_is_recognized(side, pose):
 
 
 @pytest.mark.parametrize('value', [0.0, 0.25, 0.5, 0.8])
-def test_pinch_value_round_trips_through_the_hand_model(value):
+def test_pinch_value_round_trips_through_the_rendered_hand(value):
     state = feed(GestureRecognizer(), [render_hand('right', 'pinch', (0, 200, 0), pinch_value=value)] * 10)[-1]
     assert state.pinch and state.pinch_value == pytest.approx(value, abs=1e-6)
 
 
 def test_rotated_poses_still_recognized():
-    from leap_teleop.hands.hand_model import rpy_to_basis
+    from leap_teleop.hands.rendered_hand import rpy_to_basis
     for rpy in [(0.3, 0.0, 0.0), (0.0, 0.4, 0.0), (0.0, 0.0, 0.5), (-0.4, 0.3, -0.3)]:
         n, d = rpy_to_basis(*rpy, 'right')
         for pose in ('fist', 'open', 'rock', 'pinch'):
@@ -388,7 +388,7 @@ def test_random_hands_never_raise_and_stay_in_range(hs, times):
 @given(st.lists(st.tuples(st.sampled_from(sorted(POSES)), st.floats(-0.6, 0.6),
                           st.floats(-0.6, 0.6), st.floats(0, 0.8)), min_size=1, max_size=20))
 def test_pose_sequences_keep_exclusive_gestures(seq):
-    from leap_teleop.hands.hand_model import rpy_to_basis
+    from leap_teleop.hands.rendered_hand import rpy_to_basis
     rec = GestureRecognizer()
     for i, (pose, roll, pitch, value) in enumerate(seq):
         n, d = rpy_to_basis(roll, pitch, 0.0, 'right')

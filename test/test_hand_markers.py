@@ -7,8 +7,8 @@ from visualization_msgs.msg import Marker
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros import markers as viz
 

@@ -8,8 +8,8 @@ import pytest
 
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures import GestureRecognizer
-from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand, rpy_to_basis
 from leap_teleop.hands.sources.source import HandSource
 from leap_teleop.hands.tracker import DEAD_BANDS, dead_band, hand_angles
 

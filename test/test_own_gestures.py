@@ -22,8 +22,8 @@ from leap_teleop.hands.gestures import record as record_gestures
 from leap_teleop.hands.gestures import train as train_gestures
 from leap_teleop.hands.gestures.bindings import Bindings
 from leap_teleop.hands.gestures.classifier import PoseClassifier
-from leap_teleop.hands.hand_model import render_hand
 from leap_teleop.hands.leap_interface import LeapInterface
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.sources import make_source
 from leap_teleop.hands.sources.source import HandSource
 from leap_teleop.ros import hand_conversions

@@ -9,7 +9,7 @@ import pytest
 
 from leap_teleop.hands.gestures import GestureRecognizer, hand_geometry, load_model
 from leap_teleop.hands.gestures.pose import classify_pose, thumb_points
-from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, ArmInput, ArmTeleop
 from tools.evaluation import invariance as evaluate_invariance

@@ -13,7 +13,7 @@ import pytest
 from leap_teleop.hands import record_frames
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.datasets import data_dir
-from leap_teleop.hands.hand_model import render_hand
+from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.sources import SourceError, leapjs, make_source
 
 DATA = data_dir()

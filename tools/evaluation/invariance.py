@@ -2,7 +2,7 @@
 
 usage: python -m tools.evaluation.invariance [--draws N] [--seed S]
 
-The scripted hand (hand_model: each pose as people's median hand) is changed in ways that
+The scripted hand (rendered_hand: each pose as people's median hand) is changed in ways that
 must not change what the model reads: hand size (0.7x .. 1.35x), side (a left hand is
 the mirrored right one), orientation (roll, pitch, yaw within +-40 deg), tracker noise
 on every joint (1, 3, 5 mm), and a missing joint (the model then judges nothing: no
@@ -18,7 +18,7 @@ import numpy as np
 
 from leap_teleop.hands.gestures import hand_geometry, load_model
 from leap_teleop.hands.gestures.pose import classify_pose
-from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
+from leap_teleop.hands.rendered_hand import POSES, render_hand, rpy_to_basis
 
 CHANGES = ('size', 'side', 'orientation', 'noise_1mm', 'noise_3mm', 'noise_5mm')
 PALM = (20.0, 200.0, -10.0)

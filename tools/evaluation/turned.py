@@ -18,7 +18,7 @@ import numpy as np
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures.datasets import DEFAULT_LEAPJS_DATA, LEAPJS_LABELS, find_take
 from leap_teleop.hands.gestures.datasets import expected as label_value
-from leap_teleop.hands.hand_model import render_hand, rpy_to_basis
+from leap_teleop.hands.rendered_hand import render_hand, rpy_to_basis
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.ur10 import kinematics as kin

@@ -7,12 +7,7 @@ import time
 
 import rospy
 
-from leap_teleop.params import (  # noqa: F401 (Param, ParamError re-exported)
-    Param,
-    ParamError,
-    check_params,
-    unknown_param_warnings,
-)
+from leap_teleop.params import ParamError, check_params, unknown_param_warnings
 from leap_teleop.ros.signals import init_node
 
 # Private parameters a library the nodes use reads itself (diagnostic_updater's period).

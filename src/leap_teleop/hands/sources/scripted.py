@@ -19,7 +19,7 @@ A segment holds `pose` for `duration` seconds while the palm moves from where th
 previous segment ended to `palm` (mm, Leap axes) and the orientation to `rpy`; a hand
 that appears (first segment, or after `absent`) appears at its `palm` and `rpy`.
 `circle` moves the palm once round a horizontal circle of `radius` mm instead.
-A hand whose segments are over is absent. Poses: absent and hand_model.POSES.
+A hand whose segments are over is absent. Poses: absent and rendered_hand.POSES.
 """
 import math
 import time
@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 
 from leap_teleop.hands.frame import SIDES, Frame
-from leap_teleop.hands.hand_model import POSES, render_hand, rpy_to_basis
+from leap_teleop.hands.rendered_hand import POSES, render_hand, rpy_to_basis
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
 DEFAULT_PALM = (0.0, 200.0, 0.0)

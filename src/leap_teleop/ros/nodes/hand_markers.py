@@ -14,10 +14,11 @@ import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.msg import Hand
+from leap_teleop.params import Param
 from leap_teleop.ros.graph import TopicTypeWatch
 from leap_teleop.ros.latency_monitor import LatencyMonitor
 from leap_teleop.ros.markers import HandMarkerThrottle, latency_marker
-from leap_teleop.ros.node import Param, RateLimitedLog, start_node
+from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.signals import closed_at_shutdown
 
 PARAMS = {
