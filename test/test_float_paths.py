@@ -11,7 +11,7 @@ from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10 import orientation as ori
 from leap_teleop.ur10.config import load_config
 from leap_teleop.ur10.model import build_urdf
-from leap_teleop.vectors import cross3, norm3, unit
+from leap_teleop.vectors import cross3, norm3, rpy_matrix, unit
 
 
 def _norm(a):
@@ -53,6 +53,15 @@ def test_rotations_match_their_numpy_forms_bit_for_bit():
         axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
         if angle >= 1e-9:
             assert v.tobytes() == (axis * (angle / (2.0 * math.sin(angle)))).tobytes()
+
+
+def test_rpy_matrix_is_yaw_after_pitch_after_roll():
+    rng = np.random.default_rng(5)
+    for r, p, y in rng.uniform(-math.pi, math.pi, (50, 3)):
+        rx = np.array([[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]])
+        ry = np.array([[math.cos(p), 0, math.sin(p)], [0, 1, 0], [-math.sin(p), 0, math.cos(p)]])
+        rz = np.array([[math.cos(y), -math.sin(y), 0], [math.sin(y), math.cos(y), 0], [0, 0, 1]])
+        assert np.allclose(np.reshape(rpy_matrix(r, p, y), (3, 3)), rz @ ry @ rx, atol=1e-12)
 
 
 @pytest.mark.parametrize('rotate, turn, swing', [(0.0, 0.0, 0.0), (0.3, -0.4, 0.2),
