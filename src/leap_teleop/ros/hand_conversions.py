@@ -24,14 +24,8 @@ from leap_teleop.msg import (
 )
 
 LEAP_FRAME = 'leap_hands'
-
-
 LEAPCOBOT_TYPES = {'right': leapcobotright, 'left': leapcobotleft}
-
-
 SIDE_CODES = {'right': Hand.SIDE_RIGHT, 'left': Hand.SIDE_LEFT}
-
-
 MM = 0.001
 
 
@@ -50,8 +44,6 @@ _LEAPCOBOT_FIELDS = {
         ('%s_hand_rotate_value', 'rotate'), ('%s_hand_turn_value', 'turn'),
         ('%s_hand_swing_value', 'swing'))]
     for side in ('right', 'left')}
-
-
 _PALMPOS = {side: '%s_hand_palmpos' % side for side in ('right', 'left')}
 
 
@@ -173,10 +165,7 @@ def default_topics(side):
 
 # Gesture codes of the driver's Gesture message (the Leap SDK's enums).
 GESTURE_TYPES = {'swipe': 1, 'circle': 4, 'screenTap': 5, 'keyTap': 6}
-
-
 GESTURE_STATES = {'start': 1, 'update': 2, 'stop': 3}
-
 
 # Recognizer events with a driver counterpart: both circle directions are its circle.
 # fold / unfold, hand_found / hand_lost and the held poses have none.

@@ -22,17 +22,9 @@ from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
 
 OBJECT_POSES_TOPIC = '/ur10_sim/object_poses'
-
-
 OBJECT_POSES_TYPE = ObjectPoses
-
-
 WORLD_FRAME = 'world'
-
-
 ARM_JOINTS = tuple(JOINT_NAMES)
-
-
 GRIPPER_JOINTS = (GRIPPER_JOINT,)
 
 

@@ -21,12 +21,10 @@ from leap_teleop.hands.sources import leapjs
 SEED = 0                # the noisy copies' draws, and the fit's (train)
 JOINT_NOISE_MM = 3.0    # tracker noise on the Leap hands' noisy copies
 
-
 # Guinevere takes whose every frame shows one pose: the thumbs takes (a fist with the thumb
 # out, judged up or down apart from the model) and the open-hand moves.
 TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'open',
                'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
-
 
 # Where the fitted data comes from and under what terms (the data folders' READMEs), by
 # the prefix of the people each source adds ('' for the webcam keypoint files' people).
@@ -246,26 +244,16 @@ def add_keypoints(ds, path, label=None, person=None):
 # thumbward axis by up to VIEW_PITCH_DEG, and flattened. They bring the poses the
 # keypoint files lack (horns, and OK signs and thumbs of more people).
 VIEW_YAW_DEG = 80.0
-
-
 VIEW_PITCH_DEG = 35.0
-
-
 VIEW_STRIDE = 2
-
 
 # Keypoint rows are also fitted turned in the picture by up to this (rad, ~26 deg), and
 # the thumbs and OK signs (three and two people of eight) in RARE_KEYPOINT_COPIES copies.
 TURN_RAD = 0.45
-
-
 RARE_KEYPOINT_COPIES = 4
-
 
 # Landmark noise on those copies, in the keypoint files' units (the largest coordinate is 1)
 KEYPOINT_NOISE = 0.015
-
-
 PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
 
 
