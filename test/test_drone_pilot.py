@@ -475,8 +475,8 @@ def test_fingertip_sized_circles_never_flip_a_flying_drone():
 
 
 def test_the_diagnostics_report_says_what_the_worker_and_pilot_see():
+    from leap_teleop.control.service_call import ServiceCall
     from leap_teleop.drone.pilot import PilotWorker
-    from leap_teleop.ros.service_call import ServiceCall
     now = [0.0]
     pilot = DronePilot(PilotParams(navdata_timeout=0.5, hand_timeout=0.15))
     worker = PilotWorker(pilot, lambda cmd: None, ServiceCall(lambda *a: True, 0.5, 'flip'),
@@ -509,8 +509,8 @@ def test_a_hand_arriving_while_the_worker_reads_its_clock_is_not_a_clock_jump():
     # that reading looked like the clock going back: hover, hand lost, reference moved.
     import threading
 
+    from leap_teleop.control.service_call import ServiceCall
     from leap_teleop.drone.pilot import PilotWorker
-    from leap_teleop.ros.service_call import ServiceCall
     warned = []
     pilot = DronePilot(PilotParams(), warn=lambda key, text: warned.append(key))
     pilot.on_navdata(2, 0, 0.0)
@@ -533,8 +533,8 @@ def test_a_hand_arriving_while_the_worker_reads_its_clock_is_not_a_clock_jump():
 def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
     import time
 
+    from leap_teleop.control.service_call import ServiceCall
     from leap_teleop.drone.pilot import PilotWorker
-    from leap_teleop.ros.service_call import ServiceCall
     pilot = airborne(PilotParams(rate=20.0))
     sent = []
 

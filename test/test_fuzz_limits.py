@@ -557,8 +557,8 @@ def test_flight_animation_type_200_refused_and_duration_overflow_harmless():
 
 
 # -- no parameter disables a watchdog: any accepted value keeps it working ------------------
+from leap_teleop.control.service_call import ServiceCall  # noqa: E402
 from leap_teleop.drone.pilot import PILOT_PARAMS, PilotWorker  # noqa: E402
-from leap_teleop.ros.service_call import ServiceCall  # noqa: E402
 from leap_teleop.ur10.teleop import TELEOP_PARAMS  # noqa: E402
 
 # fits models or fuzzes for minutes: not in make check

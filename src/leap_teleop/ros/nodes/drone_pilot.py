@@ -16,6 +16,7 @@ import threading
 
 import rospy
 
+from leap_teleop.control.service_call import ServiceCall
 from leap_teleop.drone.pilot import DronePilot, PilotParams, PilotWorker
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
 from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
@@ -27,7 +28,6 @@ from leap_teleop.ros.drone_inputs import subscribe_pilot_inputs
 from leap_teleop.ros.hand_subscription import HandSubscription
 from leap_teleop.ros.node import RateLimitedLog, start_node
 from leap_teleop.ros.reconfigure import Reconfigure
-from leap_teleop.ros.service_call import ServiceCall
 from leap_teleop.ros.signals import closed_at_shutdown
 
 

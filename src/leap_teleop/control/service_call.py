@@ -1,7 +1,7 @@
 """A call to a peer's service that never blocks its caller: it runs on its own thread and
 the caller polls it; a call that does not answer within `timeout` is reported and
 abandoned. At most one call runs at a time, so a peer that hangs costs one thread, not
-one per request. Pure Python (the callable does the ROS part)."""
+one per request. No ROS here: the callable does the ROS part."""
 import threading
 import time
 
