@@ -92,7 +92,7 @@ def run(frames, builder=None, lowpass=None):
     builder = builder or hand_conversions.DriverHumanBuilder()
     out = []
     li = LeapInterface()
-    li.add_listener(lambda f, s: out.append(builder.build(f, s, lowpass=lowpass)))
+    li.add_listener(lambda f, s: out.append(builder.human_msgs(f, s, lowpass=lowpass)))
     for f in frames:
         li.on_frame(f)
     return out
@@ -166,7 +166,7 @@ def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture()
     state = HandState('right', present=True, timestamp=1.0, frame_id=1,
                       palm_position=(0.0, 200.0, 0.0), palm_normal=(0.0, -1.0, 0.0),
                       direction=(0.0, 0.0, -1.0), events=events)
-    human, _ = builder.build(frame, {'right': state})
+    human, _ = builder.human_msgs(frame, {'right': state})
     got = human.right_hand.gesture_list
     assert [(g.gesture_type, g.gesture_state) for g in got] == [(4, 3), (4, 3)]
     assert got[0].lmc_gesture_id != got[1].lmc_gesture_id
@@ -180,7 +180,7 @@ def test_a_side_that_is_not_published_or_not_placeable_is_absent():
     out = []
     li = LeapInterface(sides=['left'])
     builder = hand_conversions.DriverHumanBuilder()
-    li.add_listener(lambda f, s: out.append(builder.build(f, s)[0]))
+    li.add_listener(lambda f, s: out.append(builder.human_msgs(f, s)[0]))
     li.on_frame(Frame(id=1, timestamp=1.0, hands=[right, bad]))
     assert not out[0].right_hand.is_present and not out[0].left_hand.is_present
     assert out[0].nr_of_hands == 0

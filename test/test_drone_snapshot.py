@@ -72,7 +72,7 @@ def test_renderer_draws_what_the_simulator_draws(flying):
         # The drone is in it: the same view of the scene alone differs where it is drawn.
         client = pb.connect(pb.DIRECT)
         try:
-            scene.build(client)
+            scene.add_bodies(client)
             empty = chase_view(client, sim.pos, sim.yaw, 160, 120)
         finally:
             pb.disconnect(client)

@@ -40,7 +40,7 @@ def folds():
     for sub in ('leap_people', 'leapjs'):
         if not os.path.isdir(os.path.join(gd.SHARED_DATA, sub)):
             pytest.fail('the shared data is not at %s' % gd.SHARED_DATA)
-    ds = tg.build('leap', gd.SHARED_DATA, [])
+    ds = tg.training_dataset('leap', gd.SHARED_DATA, [])
     x, y, persons, labels = ds.arrays()
     models = tg.models_without(x, y, persons, labels, HELD, log=lambda s: None)
     for m in models.values():
@@ -64,13 +64,13 @@ def fits_once():
     Harikumar4: a fold fitted on the same rows is fitted once for both, and the data set
     they fit is built once (each gets its own copy)."""
     real, memo = tg.models_without, {}
-    real_build, built = tg.build, {}
+    real_dataset, datasets = tg.training_dataset, {}
 
-    def build(family, data_dir, adds, log=print):
+    def training_dataset(family, data_dir, adds):
         key = family, data_dir, tuple(map(tuple, adds))
-        if key not in built:
-            built[key] = real_build(family, data_dir, adds, log)
-        return copy.deepcopy(built[key])
+        if key not in datasets:
+            datasets[key] = real_dataset(family, data_dir, adds)
+        return copy.deepcopy(datasets[key])
 
     def models_without(x, y, persons, labels, held, stride=tg.FIT_STRIDE, log=print,
                        alpha=tg.L2):
@@ -82,7 +82,7 @@ def fits_once():
         return {p: copy.deepcopy(memo[key, p]) for p in sorted(held)}
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(tg, 'models_without', models_without)
-        mp.setattr(tg, 'build', build)
+        mp.setattr(tg, 'training_dataset', training_dataset)
         yield memo
 
 

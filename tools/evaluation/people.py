@@ -148,7 +148,7 @@ def take_outcome(frames, model):
 
 
 def leap_people(data_dir, log=print):
-    ds = tg.build('leap', data_dir, [])
+    ds = tg.training_dataset('leap', data_dir, [])
     x, y, persons, labels = ds.arrays()
     gti = gd.read_pose_lines(os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz'))
     takes = gd.guinevere_takes(os.path.join(data_dir, 'leap_people', 'guinevere'))
@@ -236,7 +236,7 @@ def take_summary(rows):
 
 
 def keypoint_people(data_dir, log=print):
-    ds = tg.build('keypoints', data_dir, [])
+    ds = tg.training_dataset('keypoints', data_dir, [])
     x, y, persons, labels = ds.arrays()
     folder = os.path.join(data_dir, 'keypoints')
     real = {}

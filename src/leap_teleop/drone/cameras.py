@@ -3,7 +3,7 @@
 Front camera 640x360 with a ~92 degree (diagonal) field of view looking forward, bottom
 camera 320x240 with ~64 degrees looking down, image top toward the nose. A camera is
 rendered from a drone pose (position, quaternion) in a PyBullet client that holds only
-the scene (`scene.build`), so rendering never touches the physics client.
+the scene (`scene.add_bodies`), so rendering never touches the physics client.
 `RendererProcess` runs that client in a process of its own: PyBullet holds the GIL while
 it renders, so a renderer thread would stall the physics loop for tens of milliseconds.
 
@@ -122,7 +122,7 @@ class SceneRenderer:
 
     def __init__(self):
         self.client = pb.connect(pb.DIRECT)
-        scene.build(self.client)
+        scene.add_bodies(self.client)
         self._drone, self._drone_arm = None, None
 
     def render(self, name, pos, quat):

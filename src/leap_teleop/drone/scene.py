@@ -101,7 +101,7 @@ def _solid_texture_path():
     return _solid_file
 
 
-def build(client):
+def add_bodies(client):
     """Add the scene's visual bodies to a PyBullet client; returns their ids."""
     ids = []
 

@@ -640,7 +640,7 @@ class ArDroneSim:
     def show_scene(self):
         """Add the gridded ground and landmarks (visual only) for pictures."""
         if self._scene is None:
-            self._scene = scene.build(self.client)
+            self._scene = scene.add_bodies(self.client)
 
     def snapshot(self, path=None, width=640, height=480):
         """Render the chase view (behind and above the drone); write a PNG when `path` is

@@ -310,7 +310,7 @@ class DriverHumanBuilder:
         msg.right_hand.header = msg.left_hand.header = msg.header
         return msg
 
-    def build(self, frame, states, raw=True, lowpass=None):
+    def human_msgs(self, frame, states, raw=True, lowpass=None):
         """(raw, filtered) DriverHumans of one frame; states: side -> HandState (a
         LeapInterface listener's). raw=False leaves the raw one out (None); `lowpass`
         (lowpass.LowPass, one key per side) makes the filtered one, as the driver's filter

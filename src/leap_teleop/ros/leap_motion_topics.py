@@ -43,7 +43,7 @@ class LeapMotionTopics:
             return
         if not filtered:
             self.lowpass.reset()
-        human, smooth = self.builder.build(frame, states, raw=raw,
+        human, smooth = self.builder.human_msgs(frame, states, raw=raw,
                                            lowpass=self.lowpass if filtered else None)
         if human is not None and 'raw' in self.pubs:
             self.pubs['raw'].publish(human)

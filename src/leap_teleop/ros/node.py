@@ -27,11 +27,11 @@ def handle_help(node_name, description, params, argv=None):
     sys.exit(0)
 
 
-def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, TypeError),
+def start_node(script, name, doc, params, make, argv=None, errors=(ValueError, TypeError),
                hint=''):
-    """The start every node shares: --help, init_node, the ~params, then build(p). A bad
-    parameter (build raising one of `errors`) ends the node with one fatal log line (plus
-    `hint`) and exit status 1, not a traceback. Returns (p, what build returned)."""
+    """The start every node shares: --help, init_node, the ~params, then make(p). A bad
+    parameter (make raising one of `errors`) ends the node with one fatal log line (plus
+    `hint`) and exit status 1, not a traceback. Returns (p, what make returned)."""
     handle_help(script, doc, params, argv)
     try:
         init_node(name)
@@ -43,7 +43,7 @@ def start_node(script, name, doc, params, build, argv=None, errors=(ValueError, 
     warn_unknown_params(name, params)
     try:
         p = read_params(params)
-        return p, build(p)
+        return p, make(p)
     except (ParamError,) + tuple(errors) as e:
         rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
         raise SystemExit(1)

@@ -205,13 +205,13 @@ def report_people(shared):
     return [shared[i * len(shared) // n] for i in range(n)] if n else []
 
 
-def build(family, data_dir, adds, log=print):
+def training_dataset(family, data_dir, adds):
     """The Dataset of `family` from the shared data (when there) plus the user's files."""
     with gd.paused_gc():
-        return _build(family, data_dir, adds)
+        return _read_dataset(family, data_dir, adds)
 
 
-def _build(family, data_dir, adds):
+def _read_dataset(family, data_dir, adds):
     ds = Dataset(family)
     if family == 'leap':
         gti = os.path.join(data_dir, 'leap_people', 'gti_dev.jsonl.gz')
@@ -300,7 +300,7 @@ def model_out_problem(out, adds):
 def train(family, data_dir, adds=(), report=True, log=print):
     """(model, card) fitted on every person, the card holding the LOPO figures."""
     t0 = time.time()
-    ds = build(family, data_dir, adds, log)
+    ds = training_dataset(family, data_dir, adds)
     x, y, persons, labels = ds.arrays()
     if len(set(y)) < 2:
         raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '

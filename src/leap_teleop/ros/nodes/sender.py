@@ -31,7 +31,7 @@ RECONFIGURABLE = SENDER_RECONFIGURABLE
 LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 
-def build(p):
+def sender_parts(p):
     """What the checked ~params make before any topic exists (a bad one ends the node)."""
     check_outputs(p)
     factory = recognizer_factory(p)
@@ -44,7 +44,7 @@ def build(p):
 
 def main(argv=None):
     p, (source, view, factory, bindings) = start_node(
-        'sender.py', 'leap_sender', __doc__, PARAMS, build, argv, errors=(SourceError, ValueError))
+        'sender.py', 'leap_sender', __doc__, PARAMS, sender_parts, argv, errors=(SourceError, ValueError))
     interface = LeapInterface(source, recognizer_factory=factory, sides=list(p['sides']),
                               dead_bands=DEAD_BANDS if p['rotation_dead_bands'] else None,
                               bindings=bindings)
