@@ -464,7 +464,10 @@ def test_a_grasp_waits_no_longer_than_gripper_wait_s(wait_s):
 def test_bad_parameters_are_refused(bad):
     with pytest.raises(ValueError):
         ArmTeleopParams(**bad).validate()
-    with pytest.raises(ValueError, match='unknown'):
+
+
+def test_an_unknown_parameter_is_refused_by_name():
+    with pytest.raises(ValueError, match='unknown arm teleop parameters: speed'):
         ArmTeleopParams.from_dict({'speed': 1})
 
 

@@ -145,13 +145,15 @@ def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path, capsys):
     community.write_text(''.join('7,' + ','.join('%.4f' % v for v in row.ravel()) + '\n'
                                  for row in xy[:20]))
     a = run_main(['--keypoints', str(community)], capsys)
-    b = run_main(['--keypoints', path], capsys)[:20]
+    b_all = run_main(['--keypoints', path], capsys)
+    assert len(b_all) == len(xy) and [o['id'] for o in b_all] == list(range(len(xy)))
+    b = b_all[:20]
     assert len(a) == 20 and [o['id'] for o in a] == list(range(20))
     for line in a:
         h, = line['hands']
         assert h['type'] is None and set(h) == set(KEYS)
     # the class id is ignored: both forms judge the same rows alike (4-decimal rounding)
-    assert [o['hands'][0]['thumb_up'] for o in a] == [o['hands'][0]['thumb_up'] for o in b]
+    assert [o['hands'] for o in a] == [o['hands'] for o in b]
 
 
 def test_keypoints_mirror_image_reads_the_same(tmp_path, capsys):
@@ -167,6 +169,8 @@ def test_keypoints_mirror_image_reads_the_same(tmp_path, capsys):
         paths.append(str(p))
     a, b = (run_main(['--keypoints', p], capsys) for p in paths)
     assert [o['hands'] for o in a] == [o['hands'] for o in b]
+    # and they are judged, not all false: Kazuhito00 shows open hands and fists
+    assert sum(o['hands'][0]['open'] for o in a) >= 3 and sum(o['hands'][0]['fist'] for o in a) >= 3
 
 
 def test_malformed_keypoint_file_is_one_clear_error(tmp_path):
@@ -399,6 +403,8 @@ def test_a_cut_keypoint_file_keeps_the_rows_before_the_cut(tmp_path, capsys):
         captured = capsys.readouterr()
         lines = [json.loads(line) for line in captured.out.splitlines()]
         assert lines and [d['id'] for d in lines] == list(range(len(lines)))
+        if path == bad_row:                            # every row before the bad one
+            assert len(lines) == rows[:rows.index('\n', 1000) + 1].count('\n')
         err = captured.err.splitlines()
         assert len(err) == 1 and err[0].startswith('classify_frames: %s' % path), err
         if path == cut:

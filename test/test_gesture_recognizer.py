@@ -299,7 +299,7 @@ def test_a_whole_pointing_hand_going_round_fires_once():
 
 @pytest.mark.parametrize('radius,duration,fires', [(40.0, 0.5, True), (100.0, 0.45, True),
                                                    (100.0, 0.18, False)])
-def test_index_loop_at_swipe_speed_is_not_a_circle(radius, duration, fires):
+def test_index_loop_is_a_circle_at_drawing_speed_not_at_flick_speed(radius, duration, fires):
     # 0.5 m/s (40 mm in 0.5 s) and 1.4 m/s (100 mm in 0.45 s) are how fast people draw
     # circles (the shared strokes peak at 1.1..1.9 m/s); 3.5 m/s (100 mm in 0.18 s) is
     # faster than the index tip's tip_v_max (2 m/s): a flick, not a circle.

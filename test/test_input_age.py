@@ -106,6 +106,7 @@ def test_stage_ages_keep_one_window_per_stage_with_its_own_keys():
 
 def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
     import threading
+    import time
 
     from leap_teleop.control.input_age import StageAges
     ages = StageAges(('published',), window_s=1000.0)
@@ -116,6 +117,10 @@ def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
     def writer():
         for k in range(n):
             ages.add('published', 1.0 + k * 1e-4 + 0.005, 1.0 + k * 1e-4)
+            if k % 500 == 0:                  # wait for a read mid-stream, not only after
+                seen = len(reads)
+                while len(reads) == seen:
+                    time.sleep(0.0005)
         done.set()
     t = threading.Thread(target=writer)
     t.start()
@@ -124,6 +129,7 @@ def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
     t.join()
     assert ages.summary(10.0)['published'][2] == n         # nothing lost, nothing twice
     assert reads == sorted(reads)
+    assert len({r for r in reads if 0 < r < n}) >= 4       # it did read while they wrote
 
 
 def test_a_full_window_keeps_its_newest_samples():

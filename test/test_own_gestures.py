@@ -106,7 +106,7 @@ def test_recorded_samples_are_the_shared_pose_format(trained):
     assert len({tuple(np.round(h.palm_position, 1)) for h in hands}) > 250    # it moved
 
 
-def test_retrain_is_quick_and_learns_the_new_gesture(trained):
+def test_retrain_is_quick_and_adds_the_new_gesture_as_a_class(trained):
     _, model, cpu = trained
     assert cpu <= RETRAIN_CPU_S, 'retraining took %.1f CPU s' % cpu
     m = PoseClassifier.load(model, 'leap')
@@ -445,8 +445,12 @@ def test_help_gives_the_whole_first_paragraph(tool, sentence_end, capsys):
     assert sentence_end in ' '.join(capsys.readouterr().out.split())
 
 
-def test_record_gestures_usage_shows_seconds_as_optional():
+def test_record_gestures_usage_shows_seconds_as_optional(capsys):
     assert '--label NAME [--seconds N]' in record_gestures.__doc__
+    with pytest.raises(SystemExit):
+        record_gestures.main(['--help'])
+    usage = ' '.join(capsys.readouterr().out.split())
+    assert '--label NAME' in usage and '[--seconds N]' in usage
 
 
 @pytest.mark.rostest

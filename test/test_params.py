@@ -55,8 +55,6 @@ def test_allowed_text():
 
 
 # -- every node's table: declarations, bad values, bounds of the safety functions ----------
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
 
 from tools.param_table import node_tables  # noqa: E402
 
@@ -72,7 +70,7 @@ def test_every_node_declares_its_parameters():
         # the defaults pass, unchanged
         assert check_params(params, {}) == {n: p.default for n, p in params.items()}, module
         for name, p in params.items():
-            assert p.doc and p.allowed(), (module, name)
+            assert p.doc.strip(), (module, name)
             if p.kind in ('int', 'float') or (p.kind == 'list' and p.item in ('int', 'float')):
                 # Every number has a finite range on both sides (or a fixed set of choices).
                 assert p.choices or ((p.gt is not None or p.ge is not None)
@@ -130,30 +128,16 @@ def bad_values(p):
     return out
 
 
-@st.composite
-def bad_assignments(draw):
-    module, name = draw(st.sampled_from(EVERY_PARAM))
-    p = TABLES[module][name]
-    return module, name, draw(st.sampled_from(bad_values(p)))
-
-
-@settings(max_examples=1500, deadline=None, suppress_health_check=list(HealthCheck))
-@given(case=bad_assignments())
-def test_fuzz_every_bad_parameter_value_is_refused(case):
-    module, name, value = case
-    with pytest.raises(ParamError) as e:
-        check_params(TABLES[module], {name: value})
-    msg = str(e.value)
-    assert msg.startswith('~%s = ' % name) and 'allowed: ' in msg and '\n' not in msg
-
-
-def test_every_bad_value_of_every_parameter_is_refused():
-    """The exhaustive companion of the fuzz test: each listed bad value, each parameter."""
+def test_every_bad_value_of_every_parameter_is_refused_in_one_line():
+    """Each listed bad value of each parameter: refused, in one line naming the parameter
+    and what it allows."""
     n = 0
     for module, name in EVERY_PARAM:
         for value in bad_values(TABLES[module][name]):
-            with pytest.raises(ParamError):
+            with pytest.raises(ParamError) as e:
                 check_params(TABLES[module], {name: value})
+            msg = str(e.value)
+            assert msg.startswith('~%s = ' % name) and 'allowed: ' in msg and '\n' not in msg
             n += 1
     assert n > 1000
 
@@ -169,15 +153,15 @@ def test_every_config_field_is_declared():
     assert {f.name for f in fields(ArmTeleopParams)} == set(TELEOP_PARAMS)
 
 
-@pytest.mark.parametrize('table, build', [
+@pytest.mark.parametrize('table, make', [
     (PILOT_PARAMS, lambda values: PilotParams().update(values)),
     (TELEOP_PARAMS, lambda values: ArmTeleopParams.from_dict(values)),
 ])
-def test_library_configs_refuse_every_bad_value(table, build):
+def test_library_configs_refuse_every_bad_value(table, make):
     for name, p in table.items():
         for value in bad_values(p):
             with pytest.raises(ValueError):
-                build({name: value})
+                make({name: value})
 
 
 def test_found_nan_timeouts_no_longer_disable_the_pilot_or_arm_watchdogs():

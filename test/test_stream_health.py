@@ -24,8 +24,10 @@ def feed(health, t0, t1, late, step=0.01, lag=0.6, growth=0.0):
 
 def test_on_time_input_never_asks():
     h = StreamHealth(0.5, 2.0)
-    feed(h, 0.0, 10.0, late=False)
-    assert all(h.due(t / 10.0, 1) is None for t in range(100))
+    for k in range(1000):                     # asked after each message, as a node's timer does
+        t = k * 0.01
+        h.on_message(t, False, 0.6)
+        assert h.due(t + 0.005, 1) is None
 
 
 def test_late_input_asks_after_its_time_and_again_while_it_lasts():

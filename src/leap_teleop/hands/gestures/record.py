@@ -186,8 +186,8 @@ def _move_unless_taken(tmp, name):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()))
     add_source_arguments(ap)
-    ap.add_argument('--label', required=True, help='the gesture\'s name (the class to train)')
-    ap.add_argument('--seconds', type=float, default=10.0,
+    ap.add_argument('--label', required=True, metavar='NAME', help='the gesture\'s name (the class to train)')
+    ap.add_argument('--seconds', type=float, default=10.0, metavar='N',
                     help='how long to record, in the source\'s time (default %(default)s)')
     ap.add_argument('--out', default='', help='output file (default NAME.jsonl or NAME.csv)')
     ap.add_argument('--person', default='user', help='who is recorded (default %(default)s)')
