@@ -33,8 +33,8 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
     frames = int(said.split(':')[-1].split()[0])
     assert frames == 374, said                      # grab.json.lz: 374 frames
     got = topics(out)
-    assert got['leapmotion/data_right'] == ('leap_teleop/leapcobotright', frames)
-    assert got['leapmotion/hand_right'] == ('leap_teleop/Hand', frames)
+    assert got['/leapmotion/data_right'] == ('leap_teleop/leapcobotright', frames)
+    assert got['/leapmotion/hand_right'] == ('leap_teleop/Hand', frames)
     # The gesture events are the ones the sender's logic finds in the take, in order.
     from leap_teleop.hands.leap_interface import LeapInterface
     from leap_teleop.hands.sources import make_source
@@ -47,7 +47,7 @@ def test_recording_to_bag_writes_the_take(tmp_path, leapjs_data):
         li.on_frame(frame)
     with rosbag.Bag(out) as b:
         events = [(m.side, m.gesture, m.active)
-                  for _, m, _ in b.read_messages(topics=['leapmotion/gestures'])]
+                  for _, m, _ in b.read_messages(topics=['/leapmotion/gestures'])]
     assert events == want and ('fist' in [g for _, g, _ in events]), events
 
 
@@ -59,8 +59,8 @@ def test_to_bag_writes_a_scripted_session(tmp_path):
     assert frames == 2424, said                     # 20.2 s at 120 Hz
     got = topics(out)
     for side in ('right', 'left'):
-        assert got['leapmotion/data_' + side] == ('leap_teleop/leapcobot' + side, frames)
-        assert got['leapmotion/hand_' + side] == ('leap_teleop/Hand', frames)
+        assert got['/leapmotion/data_' + side] == ('leap_teleop/leapcobot' + side, frames)
+        assert got['/leapmotion/hand_' + side] == ('leap_teleop/Hand', frames)
 
 
 # -- bad input ------------------------------------------------------------------------
@@ -73,6 +73,7 @@ def test_to_bag_writes_a_scripted_session(tmp_path):
     (['--start', 'inf'], "argument --start: 'inf': seconds since 1970, 0 or more"),
     (['--right-topic='], "--right-topic '': not a legal ROS topic name"),
     (['--left-topic=a b'], "--left-topic 'a b': not a legal ROS topic name"),
+    (['--left-topic=~data'], "--left-topic '~data': a bag has no node to be private to"),
 ])
 def test_recording_to_bag_refuses_bad_arguments(tmp_path, leapjs_data, capsys, args, message):
     from leap_teleop.ros import recording_to_bag

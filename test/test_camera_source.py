@@ -316,7 +316,7 @@ def test_record_frames_and_bag_from_camera_footage(tmp_path):
     bag = tmp_path / 'palm.bag'
     assert to_bag.main(['--video', data(CLIP_PALM), str(bag)]) == 0
     with rosbag.Bag(str(bag)) as b:
-        msgs = [m for _, m, _ in b.read_messages(topics=['leapmotion/data_right'])]
+        msgs = [m for _, m, _ in b.read_messages(topics=['/leapmotion/data_right'])]
     assert len(msgs) == 202 and sum(m.is_right_hand for m in msgs) > 190
 
 

@@ -39,8 +39,12 @@ def write_bag(source, out_path, sides=SIDES, topics=None, kinds=KINDS, start=Non
     """Run `source` through the sender logic into `out_path`; returns the number of frames
     that put at least one message into the bag (a frame without a valid capture time, or
     with none of `kinds` to write, puts none). topics: {side: {kind: topic}}, default the
-    sender's. PastRosTimeError when a frame's time passes ROS time's end."""
+    sender's, stored as global names as `rosbag record` stores them (so `rosbag play
+    --topics /leapmotion/...` finds them). PastRosTimeError when a frame's time passes ROS
+    time's end."""
     topics = topics or {side: hand_conversions.default_topics(side) for side in sides}
+    topics = {side: {kind: '/' + t.lstrip('/') for kind, t in by_kind.items()}
+              for side, by_kind in topics.items()}
     interface = LeapInterface(sides=list(sides))
     first_stamp = [None]
     offset = [0.0]
@@ -104,9 +108,9 @@ def main(argv=None):
                     help='which hands to write, comma-separated (default: right,left)')
     ap.add_argument('--kinds', default=list(KINDS), type=comma_list(KINDS),
                     help='which messages to write, comma-separated (default: %s)' % ','.join(KINDS))
-    ap.add_argument('--right-topic', default='leapmotion/data_right',
+    ap.add_argument('--right-topic', default='/leapmotion/data_right',
                     help="the right hand's leapcobot topic (default %(default)s)")
-    ap.add_argument('--left-topic', default='leapmotion/data_left',
+    ap.add_argument('--left-topic', default='/leapmotion/data_left',
                     help="the left hand's leapcobot topic (default %(default)s)")
     ap.add_argument('--start', type=start_time, default=None,
                     help='time of the first frame, s (epoch; default: now)')
@@ -118,6 +122,8 @@ def main(argv=None):
     for option, topic in (('--right-topic', args.right_topic), ('--left-topic', args.left_topic)):
         if not is_ros_name(topic):
             ap.error('%s %r: not a legal ROS topic name' % (option, topic))
+        if topic.startswith('~'):
+            ap.error('%s %r: a bag has no node to be private to: give a global name' % (option, topic))
     inputs = [args.recording, args.script, args.video]
     if args.video:
         inputs += capture.resolve_stills(args.video)
