@@ -1,5 +1,6 @@
 """Launch files read as XML (no master, no process): every launch file with a `source` arg
-takes the hand source args sender.launch has, with its defaults, and hands them to it."""
+takes the hand source and recognition args sender.launch has, with its defaults, and hands
+them to it."""
 import os
 import re
 import xml.etree.ElementTree as ET
@@ -14,6 +15,8 @@ LAUNCH = os.path.join(ROOT, 'launch')
 SOURCE_ARGS = ('source', 'script', 'recording', 'video', 'device', 'mirror',
                'annotated_image_topic', 'camera_config', 'loop')
 OWN_DEFAULT = {'script'}        # each launch file plays its own gesture script
+# The recognition args: a user's model and bindings reach the sender from any of them.
+RECOGNITION_ARGS = ('gesture_model', 'keypoint_model', 'gesture_bindings')
 
 
 def launch_args(name):
@@ -52,8 +55,8 @@ def test_the_source_args_are_the_senders_source_args():
 @pytest.mark.parametrize('name', SOURCE_LAUNCHES)
 def test_every_launch_file_with_a_source_takes_the_same_source_args(name):
     sender, args, passed = launch_args('sender.launch'), launch_args(name), sender_include_args(name)
-    assert [a for a in SOURCE_ARGS if a not in args] == [], name
-    for arg in SOURCE_ARGS:
+    assert [a for a in SOURCE_ARGS + RECOGNITION_ARGS if a not in args] == [], name
+    for arg in SOURCE_ARGS + RECOGNITION_ARGS:
         if arg not in OWN_DEFAULT:
             assert args[arg].get('default') == sender[arg].get('default'), (name, arg)
         assert passed.get(arg) == '$(arg %s)' % arg, (name, arg)
@@ -65,7 +68,7 @@ CAMERA_ARGS = ['source:=webcam', 'mirror:=true', 'annotated_image_topic:=/camera
 @pytest.mark.parametrize('name', [
     pytest.param(f, marks=pytest.mark.integration) if runs_commands(f) else f
     for f in ['sender.launch'] + SOURCE_LAUNCHES])
-def test_the_camera_args_reach_the_senders_parameters(name, tmp_path):
+def test_the_camera_and_recognition_args_reach_the_senders_parameters(name, tmp_path):
     # roslaunch's own loader, as --dump-params runs it
     import roslaunch.config
     import roslaunch.xmlloader
@@ -75,9 +78,12 @@ def test_the_camera_args_reach_the_senders_parameters(name, tmp_path):
     loader = roslaunch.xmlloader.XmlLoader(resolve_anon=False)
     loader.ignore_unset_args = False
     loader.load(os.path.join(LAUNCH, name), config, verbose=False,
-                argv=['roslaunch'] + CAMERA_ARGS + ['camera_config:=%s' % camera])
+                argv=['roslaunch'] + CAMERA_ARGS + ['camera_config:=%s' % camera]
+                + ['%s:=/tmp/mine_%s' % (a, a) for a in RECOGNITION_ARGS])
     params = {k: v.value for k, v in config.params.items()}
     assert params['/leap_sender/source'] == 'webcam'
     assert params['/leap_sender/mirror'] is True
     assert params['/leap_sender/annotated_image_topic'] == '/camera/annotated'
     assert params['/leap_sender/width'] == 320
+    for a in RECOGNITION_ARGS:                     # a user's model and bindings, from any of them
+        assert params['/leap_sender/' + a] == '/tmp/mine_' + a
