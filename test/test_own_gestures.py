@@ -112,7 +112,7 @@ def test_retrain_is_quick_and_adds_the_new_gesture_as_a_class(trained):
     m = PoseClassifier.load(model, 'leap')
     assert 'two' in m.classes and {'fist', 'open', 'pinch', 'rock', 'none'} <= set(m.classes)
     card = open(os.path.splitext(model)[0] + '.md').read()
-    assert 'two.jsonl (300 hands)' in card and '--add' in card
+    assert 'two.jsonl (300 hands)' in card and '--out %s --no-report`' % model in card
 
 
 def session(path, rate=60):
@@ -189,6 +189,11 @@ def test_classify_frames_reports_the_new_gesture(trained, tmp_path, capsys):
                for x in capsys.readouterr().out.splitlines())
     assert classify_frames.main([str(path), '--model', str(tmp_path / 'none.npz')]) == 2
     assert 'cannot read a pose model' in capsys.readouterr().err
+    # the recorder's own file, as the docs show it: pose records, each judged alone
+    samples, _, _ = trained
+    assert classify_frames.main([samples, '--stateless', '--model', model]) == 0
+    two = [json.loads(x)['hands'][0]['two'] for x in capsys.readouterr().out.splitlines()]
+    assert len(two) == 300 and sum(two) >= 270, sum(two)
 
 
 def leapjs_dict(i, pose):
@@ -220,8 +225,12 @@ def test_default_retrain_includes_the_leave_one_person_out_report(tmp_path, trai
     out = capsys.readouterr().out
     assert 'leave-one-person-out' in out and 'user:two' in out
     assert re.search(r'^  two +\d\.\d{3} / \d\.\d{3} .* \d\.\d{4} / \d\.\d{4}$', out, re.M), out
+    # the confusion is printed under its heading (it was a heading alone)
+    assert re.search(r'^  confusion .*\n    \S+ +\w+ \d\.\d\d', out, re.M), out
+    assert re.search(r'^    two +two \d\.\d\d', out, re.M), out
     card = open(os.path.splitext(model)[0] + '.md').read()
     assert '## Leave-one-person-out' in card
+    assert '--label two --out %s` (' % model in card       # the command remakes this file
     assert re.search(r'^\| two \| \d\.\d{3} \| \d\.\d{3} \(.*\) \| \d\.\d{4} \| \d\.\d{4} \|$', card, re.M)
     # Found: the card named the terms of every shared source, used or not.
     assert [t.split(' ')[0] for t in PoseClassifier.load(model, 'leap').card['data_terms']] \

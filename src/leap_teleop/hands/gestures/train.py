@@ -188,7 +188,8 @@ def print_lopo(title, report):
         fpr = ('%.4f / %.4f' % (s['fpr_mean'], s['fpr_worst']) if s['fpr_mean'] is not None
                else '- (no held-out person shows another pose)')
         print('  %-11s %s %s' % (c, rec, fpr))
-    print('  confusion (source label -> share read as each class):')
+    if report['confusion']:
+        print('  confusion (source label -> share read as each class):')
     for lab, row in report['confusion'].items():
         tot = sum(row.values())
         print('    %-22s %s' % (lab, ', '.join('%s %.2f' % (k, v / tot) for k, v in
@@ -338,8 +339,9 @@ def train(family, data_dir, adds=(), report=True, log=print):
             log('  (one file of your own: while it is held out, the fit knows its gesture '
                 'only where shared people show it; record a second session to judge it on '
                 'data the fit never saw)')
-        card['leave_one_person_out'] = lopo(x, y, persons, labels, family, log=log,
-                                            clean=ds.clean(), held=held)['per_class']
+        report = lopo(x, y, persons, labels, family, log=log, clean=ds.clean(), held=held)
+        card['leave_one_person_out'] = report['per_class']
+        card['confusion'] = report['confusion']
     mine = np.char.startswith(persons.astype(str), 'user:')
     rows = np.union1d(strided(np.where(~mine)[0]), np.where(mine)[0])
     rows = fit_rows(labels, persons, rows)
@@ -403,6 +405,10 @@ def main(argv=None):
             print('train_gestures: %s' % e, file=sys.stderr)
             return 2
         out = args.out or DEFAULT_MODELS[fam]
+        # the card's command remakes this very file: copied without --out it would refit
+        # the shipped model in place
+        card['command'] += (' --out %s' % args.out if args.out else '') + (
+            ' --no-report' if args.no_report else '')
         try:
             model.save(out)
             write_card(out, card)
@@ -411,7 +417,8 @@ def main(argv=None):
             return 1
         if 'leave_one_person_out' in card:
             print_lopo('%s model, leave-one-person-out:' % fam,
-                       {'per_class': card['leave_one_person_out'], 'confusion': {}})
+                       {'per_class': card['leave_one_person_out'],
+                        'confusion': card.get('confusion', {})})
         print('wrote %s (%d classes: %s) in %.0f s'
               % (out, len(model.classes), ', '.join(model.classes), card['seconds']))
     return 0
