@@ -39,6 +39,7 @@ COVERED = {
     'catkin build': WORKSPACE,
     'catkin_lint -W2 --strict': WORKSPACE,
     'catkin_make': WORKSPACE,
+    'catkin_make -DPYTHON_EXECUTABLE=$(which python)': WORKSPACE,     # the venv's, as it does
     'catkin_make install': WORKSPACE,
     'catkin_make run_tests': WORKSPACE,
     'git clone <this repository> leap_teleop': WORKSPACE,     # a copy of the tracked files
@@ -66,7 +67,7 @@ COVERED = {
         'test_people_eval.py::test_evaluate_people_command_writes_its_figures',
     'roslaunch leap_teleop sender.launch source:=leap gesture_model:=$HOME/two.npz '
     'gesture_bindings:=$HOME/mine.yaml': 'test_own_gestures.py::test_the_nodes_arm_on_a_bound_new_gesture',
-    'rosrun leap_teleop classify_frames take.json --model ~/two.npz':
+    'rosrun leap_teleop classify_frames two.jsonl --stateless --model ~/two.npz':
         'test_own_gestures.py::test_classify_frames_reports_the_new_gesture',
     'rosrun leap_teleop record_gestures --source leap --label two --seconds 10':
         'test_own_gestures.py::test_record_gestures_from_a_leap_recording',
@@ -109,6 +110,7 @@ COVERED = {
 # Run by CI itself (.ci/run: make test = make setup, then pytest test/), not by a test.
 BY_CI = {'make test', 'make setup',
          'pip install -r leap_teleop/tools/requirements.txt',
+         'pip install --no-deps -r leap_teleop/tools/requirements-camera.txt',
          "sudo apt-get install $(grep -vE '^\\s*(#|$)' leap_teleop/tools/debian-packages.txt)"}
 # Not run by any test, and why.
 NOT_RUN = {
