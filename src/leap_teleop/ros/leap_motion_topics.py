@@ -44,7 +44,7 @@ class LeapMotionTopics:
         if not filtered:
             self.lowpass.reset()
         human, smooth = self.builder.human_msgs(frame, states, raw=raw,
-                                           lowpass=self.lowpass if filtered else None)
+                                                lowpass=self.lowpass if filtered else None)
         if human is not None and 'raw' in self.pubs:
             self.pubs['raw'].publish(human)
         if smooth is not None and 'filtered' in self.pubs:
