@@ -161,3 +161,17 @@ def test_no_take_shows_rock_or_a_thumbs_down(run_take):
     for take in take_stream.EVERY_TAKE:
         rows, _ = run_take(take)
         assert not any(r[2].rock or r[2].thumb_down for r in rows), take
+
+
+def test_a_folder_without_the_takes_is_no_score(tmp_path, capsys):
+    # Before: every gesture scored precision and recall 1.0 on no frame, and main wrote it.
+    empty = tmp_path / 'leapjs'
+    empty.mkdir()
+    res = evaluate.evaluate(str(empty), verbose=False)
+    assert set(evaluate.LEAPJS_LABELS) <= set(res['missing_takes'])
+    for who in ('recognizer', 'original'):
+        for g in evaluate.GESTURES + ('circle',):
+            assert res[who][g]['precision'] is None and res[who][g]['recall'] is None, (who, g)
+    out = tmp_path / 'eval_results.json'
+    assert evaluate.main(['--data', str(empty), '--out', str(out), '--no-people', '--no-photos']) == 2
+    assert 'takes missing from' in capsys.readouterr().err and not out.exists()

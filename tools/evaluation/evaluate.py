@@ -140,10 +140,14 @@ def _sdk_clockwise(g, pointables):
         return None
 
 
+def _ratio(num, den):
+    """num / den to 4 places; None when there is nothing to divide (no frame to score is
+    not a perfect score)."""
+    return round(num / den, 4) if den else None
+
+
 def _score(tp, fp, fn, n):
-    precision = tp / (tp + fp) if tp + fp else 1.0
-    recall = tp / (tp + fn) if tp + fn else 1.0
-    return {'precision': round(precision, 4), 'recall': round(recall, 4), 'n': n}
+    return {'precision': _ratio(tp, tp + fp), 'recall': _ratio(tp, tp + fn), 'n': n}
 
 
 def circle_agreement(rows, sdk_circles):
@@ -250,14 +254,12 @@ def evaluate(data_dir=DEFAULT_LEAPJS_DATA, verbose=True, runs=None):
             if take in CIRCLE_TAKES:
                 agg[i] += v
     results['recognizer']['circle'] = {
-        'precision': round(agg[2] / agg[3], 4) if agg[3] else 1.0,
-        'recall': round(agg[0] / agg[1], 4) if agg[1] else 1.0, 'n': agg[1]}
+        'precision': _ratio(agg[2], agg[3]), 'recall': _ratio(agg[0], agg[1]), 'n': agg[1]}
     results['circle_events'] = {'events': agg[3], 'agreeing_events': agg[2],
                                 'sdk_circles_in_recording': agg[1], 'matched': agg[0]}
-    results['original']['circle'] = {'precision': 0.0, 'recall': 0.0, 'n': agg[1]}
+    results['original']['circle'] = {'precision': None, 'recall': None, 'n': agg[1]}
     results['circle_all_takes'] = {
-        'precision': round(agg_all[2] / agg_all[3], 4) if agg_all[3] else 1.0,
-        'recall': round(agg_all[0] / agg_all[1], 4) if agg_all[1] else 1.0,
+        'precision': _ratio(agg_all[2], agg_all[3]), 'recall': _ratio(agg_all[0], agg_all[1]),
         'events': agg_all[3], 'agreeing_events': agg_all[2],
         'sdk_circles_in_recording': agg_all[1], 'matched': agg_all[0],
         'per_take': {take: dict(zip(('matched', 'sdk_circles_in_recording', 'agreeing_events',
@@ -268,12 +270,17 @@ def evaluate(data_dir=DEFAULT_LEAPJS_DATA, verbose=True, runs=None):
     return results
 
 
+def _fig(x):
+    return '    -' if x is None else '%5.3f' % x
+
+
 def print_table(results):
     print('%-10s %-24s %-24s' % ('gesture', 'recognizer P / R (n)', 'original P / R (n)'))
     for g in GESTURES + ('circle',):
         r, o = results['recognizer'][g], results['original'][g]
-        print('%-10s %5.3f / %5.3f (%4d)      %5.3f / %5.3f (%4d)'
-              % (g, r['precision'], r['recall'], r['n'], o['precision'], o['recall'], o['n']))
+        print('%-10s %s / %s (%4d)      %s / %s (%4d)'
+              % (g, _fig(r['precision']), _fig(r['recall']), r['n'], _fig(o['precision']),
+                 _fig(o['recall']), o['n']))
     print('pinch or fist frames on gun / HandSplay / three-claps: recognizer %d, original %d'
           % (results['recognizer']['no_pinch_no_fist_violations'],
              results['original']['no_pinch_no_fist_violations']))
@@ -285,10 +292,10 @@ def print_table(results):
     c = results.get('circle_all_takes')
     if c:
         print('circle events on all %d takes (none draws a circle: the target is 0): %d, %d '
-              'on an SDK circle (precision %.3f); SDK circles drawn inside them: %d, %d found '
-              '(recall %.3f)'
-              % (len(c['per_take']), c['events'], c['agreeing_events'], c['precision'],
-                 c['sdk_circles_in_recording'], c['matched'], c['recall']))
+              'on an SDK circle (precision %s); SDK circles drawn inside them: %d, %d found '
+              '(recall %s)'
+              % (len(c['per_take']), c['events'], c['agreeing_events'], _fig(c['precision']).strip(),
+                 c['sdk_circles_in_recording'], c['matched'], _fig(c['recall']).strip()))
         print('  per take (events / agreeing; SDK circles / found): ' + ', '.join(
             '%s %d/%d; %d/%d' % (take, v['events'], v['agreeing_events'],
                                  v['sdk_circles_in_recording'], v['matched'])
@@ -318,6 +325,10 @@ def main(argv=None):
         results['people'] = evaluate_people.run(os.path.dirname(os.path.abspath(args.data)))
         evaluate_people.print_tables(results['people'])
     results.update(evaluate(args.data))
+    if results['missing_takes']:             # a partial table would read as a result
+        print('evaluate: takes missing from %s: %s' % (args.data, ', '.join(results['missing_takes'])),
+              file=sys.stderr)
+        return 2
     if not args.no_people:
         from tools.evaluation import strokes as evaluate_strokes
         results['strokes'] = evaluate_strokes.run(leapjs_dir=args.data, loso=True)
