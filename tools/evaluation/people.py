@@ -183,7 +183,7 @@ def leap_people(data_dir, log=print):
                                   'thumb_down_held': armed['thumb_down'],
                                   'thumb_up_frames': thumb_up_frames,
                                   'events': dict(events)})
-        elif person == 'leapjs_takes':
+        elif person == training_set.LEAPJS_PERSON:
             from leap_teleop.hands.gestures.datasets import UP, expected
             folder = os.path.join(data_dir, 'leapjs')
             for take, hand, cls, want in training_set.leapjs_take_hands(folder):

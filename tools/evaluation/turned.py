@@ -4,20 +4,25 @@ modes ask the user to turn the hand while gesturing).
 Real data: every labelled frame of the LeapJS recordings (hands.gestures.datasets.LEAPJS_LABELS),
 binned by how far the palm is turned from flat and pointing away (the angle of the
 rotation hand_rotation() rebuilds from the frame's roll, yaw and pitch); per bin, the
-fraction of labelled gesture values the recognizer gets right. Synthetic: each pose of the
-scripted hand model at turns up to 70 deg, both hands; fraction of frames recognised.
+fraction of labelled gesture values the recognizer gets right, with a pose model fitted
+on every person but the LeapJS takes' (the shipped one is fitted on them too). Synthetic:
+each pose of the scripted hand model at turns up to 70 deg, both hands; fraction of frames
+recognised (shipped model).
 
 usage: python -m tools.evaluation.turned [--data DIR]
 """
 import argparse
 import math
+import os
 import sys
 
 import numpy as np
 
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.datasets import DEFAULT_LEAPJS_DATA, LEAPJS_LABELS, find_take
 from leap_teleop.hands.gestures.datasets import expected as label_value
+from leap_teleop.hands.gestures.training_set import LEAPJS_PERSON
 from leap_teleop.hands.rendered_hand import render_hand, rpy_to_basis
 from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.tracker import hand_angles
@@ -29,15 +34,27 @@ from tools.evaluation.take_stream import recognize_take
 BINS_DEG = (0, 20, 40, 60, 90, 180)
 
 
-def real(data_dir):
-    """{bin label: (right, total)} over every labelled gesture value."""
+def model_without_the_takes(data_dir):
+    """The Leap pose model fitted as the shipped one, without the LeapJS takes' person."""
+    x, y, persons, labels = tg.training_dataset('leap', os.path.dirname(os.path.abspath(data_dir)),
+                                                []).arrays()
+    if LEAPJS_PERSON not in set(persons.tolist()):
+        raise FileNotFoundError('no LeapJS take in the training data beside %s' % data_dir)
+    model = tg.models_without(x, y, persons, labels, [LEAPJS_PERSON], log=lambda *a: None)[LEAPJS_PERSON]
+    model.family = 'leap'
+    return model
+
+
+def real(data_dir, model=None):
+    """{bin label: (right, total)} over every labelled gesture value; `model`: the Leap pose
+    model (default the shipped one)."""
     out = {}
     for take, labels in LEAPJS_LABELS.items():
         path = find_take(data_dir, take)
         if path is None:
             raise FileNotFoundError('recording %s not found in %s' % (take, data_dir))
         _, dicts = leapjs.load(path)
-        for k, _, judged in recognize_take(dicts):
+        for k, _, judged in recognize_take(dicts, lambda: GestureRecognizer(model=model)):
             for hand, state in judged:
                 want = {}
                 for side, frames, expected in labels:
@@ -106,8 +123,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('--data', default=DEFAULT_LEAPJS_DATA)
     args = ap.parse_args(argv)
-    print('real recordings, labelled gesture values right / total by palm turn:')
-    results = real(args.data)
+    print('real recordings, labelled gesture values right / total by palm turn (a model '
+          'fitted without them):')
+    results = real(args.data, model_without_the_takes(args.data))
     for lo, hi in zip(BINS_DEG, BINS_DEG[1:]):
         key = '%d-%d deg' % (lo, hi)
         right, total = results.get(key, (0, 0))

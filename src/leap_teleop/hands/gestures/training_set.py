@@ -27,6 +27,7 @@ TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'op
                'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
 
 # Where the fitted data comes from and under what terms (the data folders' READMEs), by
+LEAPJS_PERSON = 'leapjs_takes'       # the person of the shared LeapJS takes (one tracker, one name)
 # the prefix of the people each source adds ('' for the webcam keypoint files' people).
 DATA_TERMS = {
     'leap': [('user_', 'GTI-UPM multi-modal Leap Motion hand-gesture dataset (Universidad Politecnica '
@@ -35,7 +36,7 @@ DATA_TERMS = {
                        'no licence file'),
              ('guinevere_', 'Guinevere dynamic gestures (QuantumLeap), subjects 01-02: published for '
                             'research, no licence file'),
-             ('leapjs_takes', 'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0')],
+             (LEAPJS_PERSON, 'LeapJS recordings (leapjs-playback / leapjs-plugins): Apache-2.0')],
     'keypoints': [('', 'hand keypoints (keypoint.csv) of Kazuhito00, kinivi, CharlesCai7, '
                        'ASHISH74888, 6kumaran, Alexamakans, Harikumar4, Completed-Spoon-6 '
                        '(their hand-gesture-recognition repositories): Apache-2.0'),
@@ -173,7 +174,7 @@ def add_leapjs_takes(ds, folder):
     fists curled at the middle joints, knuckles straight) as one more person."""
     n = 0
     for take, hand, cls, _ in leapjs_take_hands(folder):
-        ds.add_hand(hand, cls, 'leapjs_takes', take)
+        ds.add_hand(hand, cls, LEAPJS_PERSON, take)
         n += 1
     ds.sources.append('the LeapJS takes of ../leapjs (%d labelled hands)' % n)
 
