@@ -4,17 +4,19 @@ them.
 usage: python -m tools.evaluation.photo_views [--data DIR] [--out FILE]
                                                       [--photos NAME,NAME,...]
 
-The photo rules were partly read off these photos, so the photos as they are say little
-about other people's. Here every labelled photo (shared/data/hands, label = the file name
-before "__") goes through the same pipeline classify_frames runs on images (the video
-source's image preparation and MediaPipe detector, the landmark conversion, the
-stateless classifier) under changes a different camera, pose of the hand or person would
-bring: a mirror image (MediaPipe's handedness flips), in-plane rotations (thumbs-up / down
-only to +-30 deg: a thumb turned further is on its way to sideways, and no thumbs-up),
-downscaling to sign-digit sizes, off-centre crops and padding, brightness and contrast,
-blur, noise, JPEG re-encoding. Each view is judged twice: with MediaPipe's handedness
-label as given and with it swapped (the label is unreliable on some photos; a held
-gesture must not depend on it).
+The keypoint pose model is fitted on these photos too (with mirror images, turns and
+landmark noise among its copies), so the figures are in-sample: a check that the camera
+pipeline keeps what the model knows under these changes, not a result on other people
+(those are tools.evaluation.people's, leave one person out). Every labelled photo
+(shared/data/hands, label = the file name before "__") goes through the same pipeline
+classify_frames runs on images (the video source's image preparation and MediaPipe
+detector, the landmark conversion, the stateless classifier) under changes a different
+camera, pose of the hand or person would bring: a mirror image (MediaPipe's handedness
+flips), in-plane rotations (thumbs-up / down only to +-30 deg: a thumb turned further is
+on its way to sideways, and no thumbs-up), downscaling to sign-digit sizes, off-centre
+crops and padding, brightness and contrast, blur, noise, JPEG re-encoding. Each view is
+judged twice: with MediaPipe's handedness label as given and with it swapped (the label is
+unreliable on some photos; a held gesture must not depend on it).
 
 A case is right when MediaPipe finds a hand and every hand found shows the photo's
 gesture (pointing and the other negatives: no held gesture); a false thumbs-up is any
@@ -241,12 +243,14 @@ def run(data_dir=datasets.HANDS_DATA, names=None, make_views=views, log=None):
     total = {k: sum(r[k] for r in per_label.values())
              for k in ('cases', 'right', 'false_thumb_up', 'no_hand')}
     total['fraction'] = round(total['right'] / total['cases'], 4) if total['cases'] else 0.0
-    return {'photos': len(names), 'labels': per_label, 'total': total}
+    return {'photos': len(names), 'labels': per_label, 'total': total,
+            'in_sample': 'the keypoint model is fitted on these photos: a check, not a result'}
 
 
 def print_table(res, failures=True):
     print('labelled photos under camera / person changes (%d photos; every view with '
-          "MediaPipe's handedness as given and swapped):" % res['photos'])
+          "MediaPipe's handedness as given and swapped; in-sample: the model is fitted on "
+          'them):' % res['photos'])
     print('%-14s %6s %6s %9s %14s %8s' % ('label', 'cases', 'right', 'fraction',
                                           'false thumb_up', 'no hand'))
     for label, r in sorted(res['labels'].items()):

@@ -877,7 +877,10 @@ def _run(strokes_dir, leap_people_dir, leapjs_dir, rules, loso):
     take_calls = record_takes(frames)
     takes = {name: sum(len(replay(calls, rules, fits)) for calls in sides)
              for name, sides in sorted(take_calls.items())}
+    # total, per person and per symbol: the shipped rules (DRAWN) were chosen on all these
+    # people, so those are in-sample; 'loso' holds the figures on people left out.
     out = {'rules': _rules_dict(rules), 'people': people, 'total': total,
+           'in_sample': rules is DRAWN,
            'per_person': per_person, 'per_symbol': per_symbol, 'fired': fired,
            'worst_person': min(people, key=lambda p: (_recall(per_person[p]),
                                                       -per_person[p]['loop_free_fired'])),
@@ -911,7 +914,9 @@ def _line(name, c):
 def print_table(results, out=None):
     w = (out or sys.stdout).write
     w('circle rules: %s\n' % ', '.join('%s %s' % kv for kv in results['rules'].items()))
-    w('strokes drawn with a pointing and an open hand (each person: one stroke a symbol)\n')
+    w('strokes drawn with a pointing and an open hand (each person: one stroke a symbol)%s\n'
+      % (results.get('in_sample') and '; in-sample: these rules were chosen on these people '
+         '(leave one person out below, with --loso)' or ''))
     for person in results['people']:
         w(_line(person, results['per_person'][person]) + '\n')
     w(_line('all people', results['total']) + '\n')
