@@ -34,7 +34,7 @@ def synthetic(overrides, seed):
     bench.tracking(r, sim_params(**overrides), seed=100 + seed)
     bench.jitter(r, 5.0 / 6.0, 'arm.jitter_at_rest_mm', sim_params(**overrides),
                  seed=200 + seed)
-    bench.onset(r, params=sim_params(**overrides), seed=300 + seed)
+    bench.onset(r, n=100, params=sim_params(**overrides), seed=300 + seed)   # as its table was run
     return r
 
 

@@ -346,7 +346,8 @@ def orientation(results):
     return loop
 
 
-def onset(results, n=100, params=None, seed=11):
+# 1000 steps (~1 min): a p99 of 100 would be their second largest.
+def onset(results, n=1000, params=None, seed=11):
     loop = Loop(params or sim_params())
     rng = np.random.default_rng(seed)
     palm = np.array([60.0, 300.0, 0.0])
