@@ -7,7 +7,8 @@ For every person of the shared, people-split data: fit the pose model on all the
 (hands/gestures/train.py, same settings as the shipped model), then run that person's hands
 through the recognizer's per-frame decisions (model + guards) and, for the dynamic takes,
 through the whole stream recognizer (temporal filter, events). Reported per gesture:
-recall and false-positive rate (mean over people and the worst person), a confusion
+recall (mean over people and the worst person), false-positive rate (pooled over every
+person's other poses, and the worst person's), a confusion
 table (which recorded pose reads as which gesture), and for the takes: thumbs-up takes
 that arm (thumbs-up held arm_hold_s), thumbs-down takes that arm, and takes with a false
 fold / unfold or circle (none of the takes draws a circle or folds a hand).
@@ -41,9 +42,10 @@ from leap_teleop.hands.gestures import train as tg
 from leap_teleop.hands.gestures.geometry import hand_geometry
 from leap_teleop.hands.gestures.pose import MIN_P, classify_pose
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES
+from leap_teleop.ur10.teleop_params import TELEOP_PARAMS
 from tools.evaluation.results_file import write_json
 
-ARM_HOLD_S = 0.3          # the arm's default arm_hold_s
+ARM_HOLD_S = TELEOP_PARAMS['arm_hold_s'].default     # the arm's own default
 LEAP_EXPECT = {'fist_moved': 'fist', 'five': 'open', 'palm': 'open', 'palm_m': 'open',
                'palm_u': 'open', 'ok': 'pinch', 'heavy': 'rock', 'thumbs_up': 'thumb_up',
                'thumbs_down': 'thumb_down', 'open_hand_up': 'open', 'open_hand_down': 'open',
