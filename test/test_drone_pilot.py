@@ -551,7 +551,7 @@ def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
     sent = []
 
     def send(cmd):
-        sent.append((time.monotonic(), cmd.kind))
+        sent.append((time.monotonic(), cmd.kind, cmd.twist))
         if len(sent) == 2:                          # the next hand, right after a twist
             pilot.on_hand(hand((0.0, 0.2, 0.1)), 0.03)
 
@@ -559,5 +559,7 @@ def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
     pilot.on_hand(hand((0.0, 0.2, -0.1)), 0.02)
     start = time.monotonic()
     worker.run(lambda: len(sent) >= 3 or time.monotonic() - start > 2.0)
-    assert [k for _, k in sent] == ['takeoff', 'twist', 'twist'], sent
+    assert [k for _, k, _ in sent] == ['takeoff', 'twist', 'twist', 'twist'], sent
     assert sent[2][0] - sent[1][0] >= 1 / 20.0 - 0.005        # the second twist waited its slot
+    # Stopped while flying backwards: the last word is a hover (the driver holds the last).
+    assert sent[2][2][0] < -0.5 and sent[3][2] == (0.0,) * 6, sent

@@ -559,13 +559,19 @@ class PilotWorker:
 
     def run(self, stopped):
         """Step until stopped(): between steps, a twist waiting for its slot sleeps out
-        the pacing; otherwise the wait ends early when a command is queued."""
+        the pacing; otherwise the wait ends early when a command is queued. Then one zero
+        twist: the driver holds the last command, and a pilot that ends must leave the drone
+        hovering, not flying its last tilt."""
         while not stopped():
             wait = self.step()
             if wait and len(self.pilot.queue):
                 time.sleep(wait)
             elif wait:
                 self.pilot.queue.wait(wait)
+        try:
+            self.send(Command('twist', ZERO_TWIST))
+        except Exception as e:          # a topic rospy has closed already: nothing to tell
+            self.warn('exit_hover', 'no hover sent on the way out: %s' % e)
 
     def diagnostics(self, now):
         """(level 'ok' | 'warn' | 'error', summary, [(key, value)]) of the pilot and this

@@ -1,18 +1,17 @@
 """drone_pilot: flies an AR.Drone (ardrone_autonomy interface) from Leap hand gestures.
 
-Reads leap_teleop/Hand (~hand_topic), leap_teleop/GestureEvent (~gesture_topic, events of
-~side) and ardrone/navdata; publishes cmd_vel, ardrone/takeoff, ardrone/land and calls
-ardrone/setflightanimation. unfold = takeoff, fold = land, circle = flip; ~mode tilt (palm
-offset -> tilt) or paper (the original drone paper's, see the README). Callbacks only queue
-commands; a worker thread runs the watchdog and publishes them (a takeoff or land waits for
-the driver to listen, a takeoff at most ~takeoff_hold); the flip call runs on its own thread, abandoned
-after ~service_timeout. Without navdata for ~navdata_timeout the drone state is unknown: no
-takeoff, hover, land after ~land_after (see leap_teleop.drone.pilot). Rejected Hand
-messages and gesture events, worker faults and flip call outcomes are counted on /diagnostics.
-RECONFIGURABLE parameters (dead zones, scales, the command cap, the flip's thresholds) change
-live with dynamic_reconfigure; modes, rates, watchdog times and topics do not.
+Reads leap_teleop/Hand (~hand_topic), GestureEvent (~gesture_topic, of ~side) and
+ardrone/navdata; publishes cmd_vel, ardrone/takeoff and ardrone/land, and calls
+ardrone/setflightanimation: unfold = takeoff, fold = land, circle = flip; ~mode tilt (palm
+offset -> tilt) or paper (the original drone paper's, see the README). Callbacks only queue;
+a worker thread runs the watchdog and publishes (a takeoff or land waits for the driver, a
+takeoff at most ~takeoff_hold; the flip call has its own thread, abandoned after
+~service_timeout; an ending pilot sends a zero twist: the driver holds the last). No navdata
+for ~navdata_timeout: no takeoff, hover, land after ~land_after. Rejections, faults and flip
+outcomes go to /diagnostics; RECONFIGURABLE parameters change live, watchdog times do not.
 """
 import threading
+import time
 
 import rospy
 
@@ -82,18 +81,19 @@ class DronePilotNode:
         with closed_at_shutdown():
             self.worker.run(lambda: self._stop.is_set() or rospy.is_shutdown())
 
-    def report(self):
-        """The diagnostics (on the worker's thread, through its `extra`)."""
+    def report(self):     # the diagnostics, on the worker's thread (its `extra`)
         level, summary, values = self.worker.diagnostics(rospy.get_time())
         return level, summary, values + self.commands.diagnostic_values() + self.hand_sub.diagnostic_values()
 
     def retune(self, changes):
-        for name, value in changes.items():
-            setattr(self.pilot.cfg, name, value)
+        vars(self.pilot.cfg).update(changes)
 
-    def stop(self):
+    def stop(self):     # in rospy's shutdown hook, while the topics are open for the last hover
         self._stop.set()
         self.pilot.queue.wake()
+        if self.thread.ident is not None and self.thread.is_alive():
+            self.thread.join(1.0)
+            time.sleep(0.1)         # the hover leaves on the publisher's own thread
 
 
 def main(argv=None):
