@@ -3,9 +3,15 @@ import diagnostic_updater
 import rospy
 from diagnostic_msgs.msg import DiagnosticStatus
 
+from leap_teleop.params import Param
 from leap_teleop.ros.signals import closed_at_shutdown
 
-DEFAULT_PERIOD_S = 1.0     # diagnostic_updater's own default
+# diagnostic_updater's own parameter, declared and checked at start-up like the nodes'
+# (its default is the library's).
+DIAGNOSTIC_PARAMS = {
+    'diagnostic_period': Param(1.0, 'seconds between two /diagnostics reports (read at start-up)',
+                               unit='s', gt=0.0, le=60.0),
+}
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR}
 
 
@@ -24,14 +30,24 @@ def diagnostics_updater(hardware_id, task, report, input_age=None):
             stat.add(key, value)
         return stat
 
-    # The updater re-reads ~diagnostic_period four times a second through rospy's param
-    # cache, which keeps only parameters that exist: unset, each read is a master call.
-    if not rospy.has_param('~diagnostic_period'):
-        rospy.set_param('~diagnostic_period', DEFAULT_PERIOD_S)
-    updater = diagnostic_updater.Updater()
+    updater = FixedPeriodUpdater(rospy.get_param('~diagnostic_period',
+                                                 DIAGNOSTIC_PARAMS['diagnostic_period'].default))
     updater.setHardwareID(hardware_id)
     updater.add(task, run)
     return updater
+
+
+class FixedPeriodUpdater(diagnostic_updater.Updater):
+    """An Updater whose period is the one checked at start-up. The library's re-reads
+    ~diagnostic_period four times a second on the caller's thread (a control loop, the
+    pilot's watchdog): a master call there, and a bad value set later raised out of it."""
+
+    def __init__(self, period_s):
+        super().__init__()
+        self.period = float(period_s)
+
+    def _check_diagnostic_period(self):
+        pass
 
 
 def update_every(updater, period_s=0.25):

@@ -8,10 +8,11 @@ import time
 import rospy
 
 from leap_teleop.params import ParamError, check_params, unknown_param_warnings
+from leap_teleop.ros.diagnostics import DIAGNOSTIC_PARAMS
 from leap_teleop.ros.signals import init_node
 
-# Private parameters a library the nodes use reads itself (diagnostic_updater's period).
-LIBRARY_PARAMS = ('diagnostic_period',)
+# Private parameters of a library every node uses (diagnostic_updater's period).
+LIBRARY_PARAMS = DIAGNOSTIC_PARAMS
 
 
 def handle_help(node_name, description, params, argv=None):
@@ -22,7 +23,7 @@ def handle_help(node_name, description, params, argv=None):
     print('usage: rosrun leap_teleop %s [_param:=value ...] [topic:=remapped ...]\n' % node_name)
     print(textwrap.fill(description, 88) + '\n')
     print('private parameters (~name, default, allowed values):')
-    for name, p in params.items():
+    for name, p in list(params.items()) + list(LIBRARY_PARAMS.items()):
         print('  ~%-22s %-28r %s\n  %-51s allowed: %s' % (name, p.default, p.doc, '', p.allowed()))
     sys.exit(0)
 
@@ -43,6 +44,7 @@ def start_node(script, name, doc, params, make, argv=None, errors=(ValueError, T
     warn_unknown_params(name, params)
     try:
         p = read_params(params)
+        read_params(LIBRARY_PARAMS)         # checked, then read where they are used
         return p, make(p)
     except (ParamError,) + tuple(errors) as e:
         rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
