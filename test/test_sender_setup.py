@@ -128,3 +128,19 @@ def test_joint_states_are_found_by_name_prefix_and_order():
         index.state(['gripper'], [0.0], [])
     assert index.state(other, [float(i) for i in range(7)], []) == ([0.0, 1.0, 2.0, 3.0, 4.0,
                                                                      5.0], None)
+
+
+def test_an_arm_finds_its_own_joints_in_a_list_of_two_arms():
+    # joint_states remapped to a merged topic: ur10_2's arm took ur10_1's positions (the
+    # first name ending in the joint's), and planned from the other arm's pose.
+    names = ['ur10_1_' + n for n in JOINT_NAMES] + ['ur10_2_' + n for n in JOINT_NAMES]
+    positions = [float(i) for i in range(12)]
+    assert JointStateIndex('ur10_2_').positions(names, positions) == positions[6:]
+    assert JointStateIndex('ur10_1_').positions(names, positions) == positions[:6]
+    # without a prefix the list is refused, not read as the first arm's
+    with pytest.raises(ValueError, match='shoulder_pan_joint comes 2 times .*set ~joint_prefix'):
+        JointStateIndex().state(names, positions, [])
+    # a prefix and a driver that publishes bare names: still found
+    assert JointStateIndex('ur10_1_').positions(list(JOINT_NAMES), list(range(6))) == list(range(6))
+    with pytest.raises(ValueError, match='it lacks shoulder_pan_joint'):
+        JointStateIndex('ur10_3_').state(names, positions, [])

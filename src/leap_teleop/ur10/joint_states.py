@@ -4,11 +4,14 @@ from leap_teleop.ur10.kinematics import JOINT_NAMES
 
 class JointStateIndex:
     """The arm joints' positions (and velocities) in JOINT_NAMES order from a joint_states
-    message's names and values. A name matches a joint exactly or with a prefix ending in '_' or '/'
-    (ur10_1_shoulder_pan_joint); the first match wins. The lookup is kept while the names
-    stay the same."""
+    message's names and values. With a `prefix` (the arm's joint_prefix, ur10_1_) a joint
+    is prefix + its name, or its bare name (a driver that publishes those); without one, its
+    name exactly or after any prefix ending in '_' or '/', and a list holding the joint of
+    two arms is refused (which is this one's?). The lookup is kept while the names stay the
+    same."""
 
-    def __init__(self):
+    def __init__(self, prefix=''):
+        self.prefix = prefix
         self._index = None
         self._names = None
 
@@ -39,10 +42,17 @@ class JointStateIndex:
         if self._index is None or names != self._names:
             index = []
             for joint in JOINT_NAMES:
-                match = [i for i, n in enumerate(names)
-                         if n == joint or n.endswith('_' + joint) or n.endswith('/' + joint)]
+                if self.prefix:
+                    match = ([i for i, n in enumerate(names) if n == self.prefix + joint]
+                             or [i for i, n in enumerate(names) if n == joint])
+                else:
+                    match = [i for i, n in enumerate(names)
+                             if n == joint or n.endswith('_' + joint) or n.endswith('/' + joint)]
                 if not match:
                     raise KeyError(joint)
+                if len(match) > 1:
+                    raise ValueError('%s comes %d times (%s): set ~joint_prefix'
+                                     % (joint, len(match), ', '.join(names[i] for i in match)))
                 index.append(match[0])
             self._index, self._names = index, list(names)
         return self._index

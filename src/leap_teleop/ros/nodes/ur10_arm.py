@@ -39,7 +39,7 @@ class ArmNode:
         params = ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
         self.runner = ArmTeleopRunner(params, p['rate'])
         self.log = RateLimitedLog(2.0)
-        self.joint_index = JointStateIndex()
+        self.joint_index = JointStateIndex(p['joint_prefix'])
         self.hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['hand'])['leapcobot']
         self.hand_type = hand_conversions.LEAPCOBOT_TYPES[p['hand']]
         self.topics = ArmCommandTopics(p['joint_prefix'], p['command_queue_size'])
