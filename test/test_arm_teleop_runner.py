@@ -64,6 +64,18 @@ def test_the_status_goes_out_on_a_change_or_at_its_rate():
     assert r.due((TRACKING, 'input back', True), 10.61) and said[-1][0] == 'info'
 
 
+def test_a_state_that_flips_many_times_a_second_is_logged_at_most_every_two_seconds():
+    # A target on the edge of reach: holding (no IK) and tracking, 5 changes a second for
+    # 10 s. Before: 51 log lines. The status still goes out on every change.
+    said = []
+    r = StatusReporter(2.0, lambda t: said.append(t), lambda t: said.append(t))
+    states = [(HOLDING, 'no IK solution', True), (TRACKING, 'target reachable again', True)]
+    assert all(r.due(states[k % 2], 20.0 + 0.2 * k) for k in range(50))
+    assert 8 <= len(said) <= 12, said
+    assert said[0] == 'holding (no IK solution)'
+    assert any(t.startswith('holding (no IK solution) (') and 'more times' in t for t in said), said
+
+
 def test_the_params_summary_names_what_an_operator_checks():
     assert ArmTeleopParams(max_joint_speed=0.05).summary() == (
         'mode imitation, orientation fixed, gripper binary, max joint speed 0.05 rad/s, '

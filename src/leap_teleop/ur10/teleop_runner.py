@@ -59,19 +59,35 @@ class ArmTeleopRunner:
 class StatusReporter:
     """When to publish the status: at once when the (state, reason, origin_set) snapshot
     changes, else at `rate` per second. Each change is told to info(text), or warn(text)
-    for a hold, as 'STATE (REASON)'."""
+    for a hold, as 'STATE (REASON)': the same text at most once per `log_period` s, with a
+    count of the repeats left out (a target on the edge of reach flips between holding and
+    tracking many times a second; the status itself still goes out on every change)."""
 
-    def __init__(self, rate, info, warn):
+    def __init__(self, rate, info, warn, log_period=2.0):
         self.period = 1.0 / float(rate)
         self.info, self.warn = info, warn
+        self.log_period = log_period
         self._last = None
         self._last_sent = 0.0
+        self._logged = {}           # text -> (time logged, repeats left out since)
+
+    def _tell(self, snapshot, now):
+        text = '%s (%s)' % snapshot[:2]
+        when, left_out = self._logged.get(text, (None, 0))
+        if when is not None and 0.0 <= now - when < self.log_period:
+            self._logged[text] = (when, left_out + 1)
+            return
+        self._logged[text] = (now, 0)
+        if len(self._logged) > 64:          # reasons carry numbers: keep the newest
+            self._logged = dict(list(self._logged.items())[-32:])
+        (self.warn if snapshot[0] == HOLDING else self.info)(
+            text + (' (%d more times in %.0f s)' % (left_out, now - when) if left_out else ''))
 
     def due(self, snapshot, now):
         """True when the status goes out now (time `now`, s)."""
         changed = snapshot != self._last
         if changed:
-            (self.warn if snapshot[0] == HOLDING else self.info)('%s (%s)' % snapshot[:2])
+            self._tell(snapshot, now)
         elif now - self._last_sent < self.period:
             return False
         self._last, self._last_sent = snapshot, now
