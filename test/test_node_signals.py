@@ -137,3 +137,20 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
     for status, text in runs:
         assert status == 0 and 'Traceback' not in text, (status, text[-2000:])
 
+
+
+def test_a_hand_source_publishing_into_a_shutdown_is_quiet(monkeypatch):
+    # The sender's source thread can outlive stop()'s join by a frame: its publish, refused
+    # because the node shuts down, ended the take as 'hand source failed' (exit status 2).
+    import rospy
+
+    from leap_teleop.ros.signals import quiet_at_shutdown
+
+    def publish(*_args):
+        raise rospy.ROSException('publish() to a closed topic')
+    call = quiet_at_shutdown(publish)
+    with pytest.raises(rospy.ROSException):          # not shutting down: a real error
+        call('frame', 'state')
+    monkeypatch.setattr(rospy.core, 'is_shutdown_requested', lambda: True)
+    assert call('frame', 'state') is None
+    assert quiet_at_shutdown(lambda a, b: a + b)(1, 2) == 3

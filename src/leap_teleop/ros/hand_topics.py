@@ -11,6 +11,7 @@ from leap_teleop.msg import GestureEvent, Hand, leap, leapros
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.graph import wait_for_subscribers
 from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
+from leap_teleop.ros.signals import quiet_at_shutdown
 
 
 def stage_clock():
@@ -47,10 +48,11 @@ class HandTopics:
                         if p['leapros_topic'] else None)
         self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
                      if p['leap_topic'] else None)
-        interface.add_hand_listener(self.on_hand)
+        # On the source's thread, which can outlive the node's shutdown by a frame.
+        interface.add_hand_listener(quiet_at_shutdown(self.on_hand))
         self.driver = LeapMotionTopics(p, q)
         if self.driver.pubs:
-            interface.add_listener(self.driver.on_frame)
+            interface.add_listener(quiet_at_shutdown(self.driver.on_frame))
 
     def wait_for_subscribers(self, topics=()):
         """Block until every topic in `topics` (default: every leapcobot topic) has a

@@ -60,3 +60,13 @@ def closed_at_shutdown():
     except rospy.ROSException:
         if not rospy.core.is_shutdown_requested():
             raise
+
+
+def quiet_at_shutdown(callback):
+    """`callback` (one that publishes, called by a thread rospy does not own: a hand
+    source's) as closed_at_shutdown treats a loop: its publish refused because the node is
+    shutting down returns None; any other error passes on."""
+    def call(*args):
+        with closed_at_shutdown():
+            return callback(*args)
+    return call

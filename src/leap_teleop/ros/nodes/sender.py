@@ -22,6 +22,7 @@ from leap_teleop.ros.hand_topics import HandTopics
 from leap_teleop.ros.node import start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.sensor_conversions import transform_msg
+from leap_teleop.ros.signals import quiet_at_shutdown
 
 # The declarations live beside the hand source and recognizer; re-exported for --help and
 # the docs.
@@ -56,7 +57,7 @@ def main(argv=None):
                               lambda changes: retune_sender(interface.recognizers().values(),
                                                             topics.driver.lowpass, changes))
     if view is not None:
-        interface.add_listener(view.on_frame)    # after the hand messages: adds no latency
+        interface.add_listener(quiet_at_shutdown(view.on_frame))    # after the hands: no latency
     if p['publish_tf']:     # a local of main: it lives, and its latched topic with it, as long as the node
         leap_tf = tf2_ros.StaticTransformBroadcaster()
         leap_tf.sendTransform(transform_msg(p['world_frame'], p['frame_id'], p['leap_xyz'],
