@@ -57,6 +57,7 @@ BAD_PARAMS = [
     ('ur10_sim.py', ['_snapshot_size:=[640]'], '~snapshot_size = [640]: 1 items'),
     ('ardrone_sim.py', ['_looprate:=0'], '~looprate = 0: out of range'),
     ('ardrone_sim.py', ['_realtime_factor:=.nan'], '~realtime_factor = nan: not finite'),
+    ('ardrone_sim.py', ['_path_length:=100000'], '~path_length = 100000: out of range'),
     # diagnostic_updater's own: once read on the control loop, where a bad one ended the node
     ('ur10_arm.py', ['_diagnostic_period:=abc'], "~diagnostic_period = 'abc': not a number"),
     ('drone_pilot.py', ['_diagnostic_period:=0'], '~diagnostic_period = 0: out of range'),

@@ -58,8 +58,9 @@ RUNNER_PARAMS = {
     'odom_frame': Param('odom', 'odometry frame', empty_ok=False),
     'start_xy': Param([0.0, 0.0], 'start position in odom', unit='m', length=2,
                       ge=-1000.0, le=1000.0),
-    'path_length': Param(2000, 'poses kept in ardrone/path (oldest dropped)', ge=1,
-                         le=100000),
+    # Each publish serialises the whole path on the physics loop: 3 ms per 2000 poses.
+    'path_length': Param(2000, 'poses kept in ardrone/path (oldest dropped)', ge=2,
+                         le=10000),
     'path_min_step': Param(0.02, 'moved this far before the path gets a new pose', unit='m',
                            ge=0.0, le=100.0),
     'path_rate': Param(5.0, 'ardrone/path publish rate (only when it changed); 0 = off',

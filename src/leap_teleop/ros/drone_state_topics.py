@@ -35,7 +35,7 @@ class DroneStateTopics:
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
         self.static_tf.sendTransform([transform_msg(*f, stamp=rospy.Time.now()) for f in
                                       static_frames(frames, p['world_frame'], p['odom_in_world'])])
-        self.trail = PathTrail(int(p['path_length']), float(p['path_min_step']))
+        self.trail = PathTrail(int(p['path_length']), float(p['path_min_step']), frames.odom)
         self.path = pub('ardrone/path', Path, queue_size=2, latch=True)
         if p['markers']:
             self.markers = pub('ardrone/markers', MarkerArray, queue_size=1, latch=True)
