@@ -499,3 +499,29 @@ def test_a_gap_across_a_reconnection_is_counted_apart_once():
     gaps.reconnected()
     assert gaps.add('/new', 10) == 0 and gaps.add('/new', 12) == 1   # unknown before it
     assert dict(gaps.missed_across_reconnect) == {'/player': 3}
+
+
+def test_diagnostics_list_the_newest_publishers_and_count_them_all():
+    # Each `rosbag play` is a new anonymous publisher: a node that outlives a hundred
+    # replays listed three lines for each in every report.
+    import collections
+    import threading
+
+    from leap_teleop.ros import hand_subscription as hs
+
+    sub = hs.HandSubscription.__new__(hs.HandSubscription)
+    sub._lock, sub.wrong_frame = threading.Lock(), 0
+    sub.health = StreamHealth(0.5, 2.0)
+    sub.gaps = SequenceGaps()
+    sub.received = collections.Counter()
+    for k in range(100):
+        caller = '/play_%03d' % k
+        sub.received[caller] += 10
+        for seq in (1, 2, 4):                   # one missed each
+            sub.gaps.add(caller, seq)
+    values = dict(sub.diagnostic_values())
+    assert values['hand messages received'] == '1000'
+    assert values['hand messages missed (sequence gaps)'] == '100'
+    listed = sorted(k[len('hand messages from '):] for k in values
+                    if k.startswith('hand messages from '))
+    assert listed == ['/play_%03d' % k for k in range(96, 100)]

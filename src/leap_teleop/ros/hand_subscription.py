@@ -14,6 +14,7 @@ from leap_teleop.control.stream_health import StreamHealth
 
 # Checks missed in a row that mean the node itself stalled, not its input.
 STALL_CHECKS = 4
+LISTED_PUBLISHERS = 4       # per-publisher counts on /diagnostics (the totals count every one)
 
 
 class HandSubscription:
@@ -136,7 +137,10 @@ class HandSubscription:
         values = [('hand messages received', str(sum(counts.values()))),
                   ('hand messages missed (sequence gaps)', str(sum(missed.values()))),
                   ('hand messages missed across re-subscriptions', str(sum(across.values())))]
-        for caller, n in sorted(counts.items()):
+        # The newest publishers only: each `rosbag play` is a new anonymous one, and a
+        # node that outlives many would carry them all in every report.
+        for caller in sorted(list(counts)[-LISTED_PUBLISHERS:]):
+            n = counts[caller]
             values += [('hand messages from %s' % caller, str(n)),
                        ('hand messages missed from %s' % caller, str(missed.get(caller, 0))),
                        ('hand messages missed from %s across re-subscriptions' % caller,
