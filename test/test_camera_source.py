@@ -535,16 +535,29 @@ def test_found_an_unreadable_image_keeps_its_line_and_the_others_their_ids(tmp_p
     # the first 60 % of a photo: OpenCV decodes it without an error, the rest grey
     whole = open(data('thumbs_up__mps__hand_thumb_up.jpg'), 'rb').read()
     (tmp_path / 'e.jpg').write_bytes(whole[:len(whole) * 6 // 10])
+    # a PNG whose header claims 60000 x 60000 pixels: OpenCV raises instead of returning
+    # None, and that ended the whole batch after the images before it
+    import struct
+    import zlib
+
+    def chunk(kind, body):
+        return struct.pack('>I', len(body)) + kind + body + struct.pack('>I', zlib.crc32(kind + body))
+    (tmp_path / 'f.png').write_bytes(b'\x89PNG\r\n\x1a\n' + chunk(
+        b'IHDR', struct.pack('>IIBBBBB', 60000, 60000, 8, 2, 0, 0, 0))
+        + chunk(b'IDAT', zlib.compress(b'\x00' * 100)) + chunk(b'IEND', b''))
+    shutil.copy(data('fist__htj__22.jpg'), tmp_path / 'g.jpg')
     env = dict(os.environ, PYTHONWARNINGS='ignore')
     out = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(tmp_path)],
                          capture_output=True, text=True, env=env, timeout=120)
     assert out.returncode == 0, out.stderr
     lines = [json.loads(line) for line in out.stdout.splitlines()]
-    assert [line['id'] for line in lines] == [1, 2, 3, 4, 5]
+    assert [line['id'] for line in lines] == [1, 2, 3, 4, 5, 6, 7]
     assert lines[0]['hands'][0]['fist'] and lines[2]['hands'][0]['thumb_up']
-    for k, name in ((1, 'b.jpg'), (3, 'd.png'), (4, 'e.jpg')):
+    assert lines[6]['hands'][0]['fist']
+    for k, name in ((1, 'b.jpg'), (3, 'd.png'), (4, 'e.jpg'), (5, 'f.png')):
         assert lines[k]['hands'] == [] and lines[k]['error'] == 'cannot read image %s' % (tmp_path / name)
     assert 'image %s is cut short' % (tmp_path / 'e.jpg') in out.stderr, out.stderr
+    assert 'Traceback' not in out.stderr
     assert 'Premature end of JPEG' not in out.stderr
 
 

@@ -151,7 +151,12 @@ class StillImages:
                             'the end-of-image marker), skipped', path)
                 continue
             # IMREAD_COLOR applies EXIF orientation and drops alpha.
-            bgr = self.cv2.imread(path, self.cv2.IMREAD_COLOR)
+            try:
+                bgr = self.cv2.imread(path, self.cv2.IMREAD_COLOR)
+            except self.cv2.error as e:      # a header claiming more pixels than OpenCV allows
+                log.warning('camera source: cannot read image %s (%s), skipped', path,
+                            ' '.join(str(e).split()))
+                continue
             if bgr is None:
                 log.warning('camera source: cannot read image %s, skipped', path)
                 continue
