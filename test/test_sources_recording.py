@@ -486,3 +486,20 @@ def test_a_hand_of_an_unknown_type_is_skipped_with_one_warning_per_type(caplog):
                     "\"left\") is skipped"]
     d['hands'][0]['type'] = 'right'
     assert [h.side for h in leapjs.frame_from_dict(d).hands] == ['right']
+
+
+@pytest.mark.parametrize('frame_id', [-1, 2 ** 64 + 5, 10 ** 30, 1e30, -2.5])
+def test_a_frame_id_outside_the_sdks_is_no_id(frame_id, tmp_path, capsys):
+    # A recording's id beyond 64 bits (or negative) reached the uint64 leap_frame_id:
+    # recording_to_bag died on a SerializationError, leaving half a bag behind.
+    from leap_teleop.ros import recording_to_bag
+    assert leapjs.frame_from_dict({'id': frame_id, 'timestamp': 1000, 'hands': []}).id == 0
+    assert leapjs.frame_from_dict({'id': 2 ** 63 - 1, 'timestamp': 1000, 'hands': []}).id == 2 ** 63 - 1
+    take = tmp_path / 'take.json'
+    hand = leapjs.frame_to_dict(Frame(1, 1.0, [render_hand('right', 'open', (0, 200, 0))]))
+    frames = [dict(hand, id=(frame_id if k >= 5 else k + 1), timestamp=1000000 + k * 10000)
+              for k in range(10)]
+    take.write_text(json.dumps({'metadata': {'formatVersion': 1}, 'frames': frames}))
+    bag = tmp_path / 'take.bag'
+    assert recording_to_bag.main([str(take), str(bag)]) == 0, capsys.readouterr().err
+    assert 'wrote %s: 10 frames' % bag in capsys.readouterr().out

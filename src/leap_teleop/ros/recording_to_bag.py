@@ -16,6 +16,7 @@ import os
 import sys
 import time
 
+import genpy
 import rosbag
 import rospy
 
@@ -150,7 +151,7 @@ def main(argv=None):
     except (OSError, rosbag.ROSBagException) as e:
         print('recording_to_bag: cannot write %s: %s' % (args.out, e), file=sys.stderr)
         return 1
-    except (PastRosTimeError, SourceError) as e:
+    except (PastRosTimeError, SourceError, genpy.SerializationError) as e:
         os.remove(args.out)     # the bag was open: what it holds is a part of the take
         print('recording_to_bag: %s: nothing written to %s' % (e, args.out), file=sys.stderr)
         return 1

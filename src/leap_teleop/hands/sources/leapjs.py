@@ -366,6 +366,8 @@ def frame_from_dict(d, timestamp=None):
     frame_id = d.get('id', 0)
     if not isinstance(frame_id, int) or isinstance(frame_id, bool):
         frame_id = int(_num(frame_id, 0.0)) if math.isfinite(_num(frame_id, math.nan)) else 0
+    if not 0 <= frame_id < 2 ** 63:     # the SDK's ids count up from 0 in 64 signed bits
+        frame_id = 0
     hands_raw = d.get('hands') or []
     pointables = d.get('pointables') or []
     if not isinstance(hands_raw, list) or not isinstance(pointables, list):
