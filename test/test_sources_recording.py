@@ -503,3 +503,18 @@ def test_a_frame_id_outside_the_sdks_is_no_id(frame_id, tmp_path, capsys):
     bag = tmp_path / 'take.bag'
     assert recording_to_bag.main([str(take), str(bag)]) == 0, capsys.readouterr().err
     assert 'wrote %s: 10 frames' % bag in capsys.readouterr().out
+
+
+def test_a_hand_without_a_palm_position_is_not_written_as_one_at_the_device():
+    # A recording's unreadable palm (strings) reads as NaN; written back it became
+    # [0, 0, 0]: record_frames and record_gestures kept it as a real hand at the device.
+    from leap_teleop.hands.gestures.record import pose_record
+    good = render_hand('right', 'open', (0, 200, 0))
+    d = leapjs.frame_to_dict(Frame(1, 1.0, [good]))
+    bad = leapjs.frame_from_dict(dict(d, hands=[dict(d['hands'][0], palmPosition=['a', 'b', 'c'])]))
+    assert not np.all(np.isfinite(bad.hands[0].palm_position))
+    out = leapjs.frame_to_dict(Frame(2, 1.0, [bad.hands[0], good]))
+    assert len(out['hands']) == 1 and out['hands'][0]['palmPosition'] == pytest.approx([0, 200, 0], abs=1e-3)
+    assert {p['handId'] for p in out['pointables']} == {out['hands'][0]['id']}
+    assert pose_record(bad, bad.hands[0], 'p', 'open') is None
+    assert pose_record(bad, good, 'p', 'open')['frame']['hands']

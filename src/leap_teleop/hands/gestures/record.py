@@ -80,9 +80,10 @@ def keypoint_row(hand, person, label):
 
 
 def pose_record(frame, hand, person, label):
-    """The JSON Lines record of one hand of a frame."""
-    one = Frame(id=frame.id, timestamp=frame.timestamp, hands=[hand])
-    return {'person': person, 'label': label, 'frame': leapjs.frame_to_dict(one)}
+    """The JSON Lines record of one hand of a frame; None for a hand without a palm
+    position or orientation (nothing to learn from)."""
+    one = leapjs.frame_to_dict(Frame(id=frame.id, timestamp=frame.timestamp, hands=[hand]))
+    return {'person': person, 'label': label, 'frame': one} if one['hands'] else None
 
 
 def collect(source, family, label, person, seconds, side='any'):

@@ -462,10 +462,20 @@ def _list(v, nd=5):
     return [round(float(x), nd) if math.isfinite(x) else 0.0 for x in a]
 
 
+def _whole(hand):
+    """The palm's position and orientation are numbers: a hand to write."""
+    return all(np.all(np.isfinite(np.asarray(v, dtype=float)))
+               for v in (hand.palm_position, hand.palm_normal, hand.direction))
+
+
 def frame_to_dict(frame):
-    """The LeapJS (formatVersion 1) dict of a Frame; what frame_from_dict reads back."""
+    """The LeapJS (formatVersion 1) dict of a Frame; what frame_from_dict reads back. A hand
+    without a palm position or orientation (a recording's unreadable values) is left out:
+    written as zeros it would read back as a hand at the device."""
     hands, pointables = [], []
     for k, hand in enumerate(frame.hands):
+        if not _whole(hand):
+            continue
         hid = hand.id if hand.id else k + 1
         hands.append({
             'id': hid, 'type': hand.side,
