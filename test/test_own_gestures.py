@@ -542,3 +542,41 @@ def test_keypoint_files_gzipped_or_with_a_bom_read_and_absurd_values_are_refused
     (tmp_path / 'latin1.csv').write_bytes(row.encode() + b'3,\xe9\n')
     with pytest.raises(gesture_data.DataError, match=r'cannot read on after \d+ keypoint rows .*decode'):
         gesture_data.read_keypoints(str(tmp_path / 'latin1.csv'))
+
+
+def test_the_card_counts_the_samples_fitted_and_a_file_of_no_hand_is_refused(tmp_path, capsys):
+    # Before: 30 hands without joints were counted in the card's '(60 hands)', and three
+    # keypoint rows with every landmark on one spot trained a class on their noisy copies.
+    from leap_teleop.hands.sources import leapjs
+    good = [leapjs_dict(i, 'two') for i in range(30)]
+    broken = []
+    for i in range(30):
+        d = leapjs_dict(100 + i, 'two')
+        d['pointables'] = [{k: v for k, v in p.items() if k not in ('mcpPosition', 'pipPosition',
+                                                                    'dipPosition')}
+                           for p in d['pointables']]
+        assert leapjs.frame_from_dict(d).hands       # a hand, without its joints
+        broken.append(d)
+    mixed = tmp_path / 'mixed.jsonl'
+    mixed.write_text(''.join(json.dumps({'person': 'me', 'label': 'two', 'frame': f}) + '\n'
+                             for f in good + broken))
+    nodata = tmp_path / 'nodata'
+    nodata.mkdir()
+    opens = tmp_path / 'opens.jsonl'
+    opens.write_text(''.join(json.dumps({'person': 'me', 'label': 'open', 'frame': leapjs_dict(i, 'open')})
+                             + '\n' for i in range(30)))
+    model = tmp_path / 'm.npz'
+    assert train_gestures.main(['--data', str(nodata), '--add', str(mixed), '--label', 'two',
+                                '--add', str(opens), '--label', 'wave', '--out', str(model),
+                                '--no-report']) == 0
+    assert 'mixed.jsonl (30 hands)' in open(tmp_path / 'm.md').read()
+    # keypoints: a file whose rows hold no hand is refused by name, not fitted on noise
+    rows = [','.join(['1'] + ['%.3f' % v for v in np.random.default_rng(k).uniform(0, 1, 42)])
+            for k in range(20)]
+    (tmp_path / 'some.csv').write_text('\n'.join(rows) + '\n')
+    (tmp_path / 'zeros.csv').write_text(('0,' + ','.join(['0.5'] * 42) + '\n') * 3)
+    capsys.readouterr()
+    assert train_gestures.main(['--data', str(nodata), '--add', str(tmp_path / 'some.csv'),
+                                '--label', 'foo', '--add', str(tmp_path / 'zeros.csv'), '--label',
+                                'bar', '--out', str(tmp_path / 'k.npz'), '--no-report']) == 2
+    assert '--add %s: no hand in it' % (tmp_path / 'zeros.csv') in capsys.readouterr().err

@@ -198,3 +198,15 @@ def test_keypoint_classes_that_show_another_pose_are_left_out_of_the_fit():
     training_set.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'ASHISH74888.csv'),
                         label='mine', person='user:me')
     assert set(ds.y) == {'mine'} and len(ds.y) == 2 * 2 * 912
+
+
+def test_keypoint_feature_rows_of_sets_with_no_hand_are_none():
+    # A batch in which no set has features (every landmark on one spot, or not finite)
+    # raised a ValueError from an empty reshape, not the mask it documents.
+    from leap_teleop.hands.gestures.features import KEYPOINT_FEATURES, keypoint_features_rows
+    xy = np.full((3, 21, 2), 0.5)
+    xy[2, 4] = np.nan
+    feats, ok = keypoint_features_rows(xy)
+    assert feats.shape == (3, KEYPOINT_FEATURES) and not feats.any() and not ok.any()
+    feats, ok = keypoint_features_rows(np.zeros((0, 21, 2)))
+    assert feats.shape == (0, KEYPOINT_FEATURES) and ok.shape == (0,)

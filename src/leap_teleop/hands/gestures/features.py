@@ -121,6 +121,9 @@ def keypoint_features_rows(xy):
     m = np.abs(p).max(axis=(1, 2))
     keep = m > 0.0
     idx, p = idx[keep], p[keep] / m[keep, None, None]
+    ok = np.zeros(len(feats), dtype=bool)
+    if not len(idx):                # no set has features: nothing to compute
+        return feats, ok
     # upright_keypoints: turned where the wrist -> middle knuckle axis has a length
     hyp = math.hypot
     ax, ay = p[:, 9, 0].tolist(), p[:, 9, 1].tolist()
@@ -151,7 +154,6 @@ def keypoint_features_rows(xy):
                           cos.reshape(k, -1), straight, reach, np.minimum(thumb, 10.0)), axis=1)
     finite = np.isfinite(out).all(axis=1)
     feats[idx[finite]] = out[finite]
-    ok = np.zeros(len(feats), dtype=bool)
     ok[idx[finite]] = True
     return feats, ok
 

@@ -86,13 +86,15 @@ class Dataset:
     def add_hand(self, hand, cls, person, label):
         """A Leap-family hand, and a copy with JOINT_NOISE_MM of tracker noise on every
         joint (a model fitted on one tracker's exact proportions reads a fist as
-        something else once its joints move by a millimetre)."""
+        something else once its joints move by a millimetre). False for a hand without
+        features (joints missing): nothing added."""
         x = leap_features(hand)
         if x is None:
-            return
+            return False
         self.add(x, cls, person, label)
         self.add(leap_features(noisy_hand(hand, JOINT_NOISE_MM, self.rng)), cls, person, label,
                  augmented=True)
+        return True
 
     def arrays(self):
         return (np.array(self.x), np.array(self.y), np.array(self.person),
@@ -127,8 +129,7 @@ def add_leap_poses(ds, path, label_map=None, label=None, person=None):
         cls = label if label is not None else (label_map or gd.LEAP_LABELS).get(lab)
         if hand is None or cls is None:
             continue
-        ds.add_hand(hand, cls, person or p, lab)
-        n += 1
+        n += ds.add_hand(hand, cls, person or p, lab)
     ds.sources.append('%s (%d hands)' % (os.path.basename(path), n))
 
 
@@ -221,11 +222,17 @@ def add_keypoint_rows(ds, rows):
 def add_keypoints(ds, path, label=None, person=None):
     sources = []
     persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
-    n = skipped = 0
+    # a row without features (all its landmarks on one spot) is no hand; its noisy copies
+    # would have features, of noise alone
+    _, whole = keypoint_features_rows(np.reshape(np.asarray(xy, dtype=float), (-1, 21, 2)))
+    n = skipped = no_hand = 0
     rows = []
-    for p, lab, src, pts in zip(persons, labels, sources, xy):
+    for p, lab, src, pts, ok in zip(persons, labels, sources, xy, whole):
         cls = label if label is not None else gd.KEYPOINT_LABELS.get(lab)
         if cls is None:
+            continue
+        if not ok:
+            no_hand += 1
             continue
         if label is None and gd.mislabelled_keypoints(p, src):
             skipped += 1
@@ -235,8 +242,9 @@ def add_keypoints(ds, path, label=None, person=None):
                                 RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2)
         n += 1
     add_keypoint_rows(ds, rows)
-    ds.sources.append('%s (%d rows%s)' % (os.path.basename(path), n, ', %d mislabelled left out'
-                                          % skipped if skipped else ''))
+    ds.sources.append('%s (%d rows%s%s)' % (
+        os.path.basename(path), n, ', %d mislabelled left out' % skipped if skipped else '',
+        ', %d without a hand left out' % no_hand if no_hand else ''))
 
 
 # The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
