@@ -102,7 +102,10 @@ class Param:
         else:  # float
             if isinstance(value, bool) or not isinstance(value, numbers.Real):
                 raise ParamError('not a number')
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:       # an integer of hundreds of digits
+                value = math.inf
             if not math.isfinite(value):
                 raise ParamError('not finite')
         if self.choices is not None and value not in self.choices:

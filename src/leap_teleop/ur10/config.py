@@ -161,7 +161,7 @@ def _vec(v, n, what, lo=-1e3, hi=1e3):
     """v as n numbers within [lo, hi] (metres or radians: a cell is a few metres)."""
     try:
         a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         a = None
     if a is None or a.shape != (n,) or not np.all((a >= lo) & (a <= hi)):   # NaN fails
         raise ValueError('%s must be %d numbers in [%s, %s], got %r' % (
@@ -293,4 +293,8 @@ def load_config(name='ur10_cell.yaml'):
     """Load a cell config by path or by file name in config/ (e.g. 'ur10_dual_cell')."""
     path = config_path(name)
     with open(path) as f:
-        return parse_config(yaml.safe_load(f), path)
+        try:
+            data = yaml.safe_load(f)
+        except RecursionError:          # the YAML composer recurses per nesting level
+            raise ValueError('cell config %s: nested too deeply' % path) from None
+    return parse_config(data, path)

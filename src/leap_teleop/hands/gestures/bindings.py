@@ -223,6 +223,8 @@ def load_bindings(path=None):
         where = ' line %d' % (mark.line + 1) if mark is not None else ''
         raise BindingError('gesture bindings %s:%s not YAML (%s)'
                            % (path, where, getattr(e, 'problem', None) or e))
+    except RecursionError:              # the YAML composer recurses per nesting level
+        raise BindingError('gesture bindings %s: nested too deeply' % path) from None
     return Bindings(data, 'gesture bindings %s' % path)
 
 

@@ -41,7 +41,7 @@ _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confiden
 def _vector(value, what, n=3, bound=1e5):
     try:
         arr = np.asarray(value, dtype=float).reshape(n)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise SourceError('%s must be a list of %d numbers, got %r' % (what, n, value))
     if not np.all(np.abs(arr) <= bound):         # NaN compares false
         raise SourceError('%s must be finite, within +-%g, got %r' % (what, bound, value))
@@ -150,6 +150,8 @@ class GestureScript:
             raise SourceError('gesture script %s is not UTF-8 text: %s' % (path, e))
         except yaml.YAMLError as e:
             raise SourceError('gesture script %s is not valid YAML: %s' % (path, e))
+        except RecursionError:          # the YAML composer recurses per nesting level
+            raise SourceError('gesture script %s is nested too deeply' % path) from None
         return cls(data, name=str(path))
 
     def _palm(self, seg, u):
