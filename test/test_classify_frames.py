@@ -280,6 +280,8 @@ def _model_arrays():
     ('scalar mean', 'inconsistent model arrays'),
     ('a zero scale', 'inconsistent model arrays'),     # numpy's warnings were two more lines
     ('weights near the float limit', 'weights beyond 1e+06: not a fitted model'),
+    # numpy allocated what the header said before reading: terabytes
+    ('a header declaring 10**12 numbers', 'mean.npy declares 8000000000000 bytes in'),
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -308,6 +310,18 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
             arrays['w0'] = arrays['w0'] * 1e200      # finite, but the folding overflows
             arrays['scale'] = arrays['scale'] * 1e-120
         np.savez(bad, **arrays)
+        if spoil == 'a header declaring 10**12 numbers':
+            import io
+            import zipfile
+            with zipfile.ZipFile(bad) as z:
+                members = {n: z.read(n) for n in z.namelist()}
+            head = io.BytesIO()
+            np.lib.format.write_array_header_1_0(head, {'descr': '<f8', 'fortran_order': False,
+                                                        'shape': (10 ** 12,)})
+            members['mean.npy'] = head.getvalue() + arrays['mean'].astype('<f8').tobytes()
+            with zipfile.ZipFile(bad, 'w') as z:
+                for n, data in members.items():
+                    z.writestr(n, data)
     frames = tmp_path / 'f.jsonl'
     frames.write_text(''.join(json.dumps(d) + '\n' for d in _dicts(['fist'] * 3)))
     p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', str(frames),

@@ -132,6 +132,7 @@ class PoseClassifier:
     @classmethod
     def load(cls, path, family=None):
         try:
+            _check_array_sizes(path)
             z = np.load(path, allow_pickle=False)
             if not isinstance(z, np.lib.npyio.NpzFile):
                 raise ModelError('%s: not a pose model (one array, not a .npz of them)' % path)
@@ -158,6 +159,29 @@ class PoseClassifier:
             raise ModelError('%s: a %s model takes %d features, not %d' % (
                 path, model.family, FEATURES_OF[model.family], model.n_features))
         return model
+
+
+def _check_array_sizes(path):
+    """ModelError when an array of the .npz declares more data than its file holds: numpy
+    allocates what the header says before it reads (a crafted header of 10**12 numbers
+    asked for terabytes). Not a zip: np.load says what it is."""
+    if not zipfile.is_zipfile(path):
+        return
+    with zipfile.ZipFile(path) as z:
+        for info in z.infolist():
+            if not info.filename.endswith('.npy'):
+                continue
+            with z.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                if version not in ((1, 0), (2, 0)):
+                    continue            # numpy's own reading will say what it makes of it
+                read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                        else np.lib.format.read_array_header_2_0)
+                shape, _, dtype = read(f)
+            declared = math.prod(shape) * dtype.itemsize
+            if declared > info.file_size:
+                raise ModelError('%s: not a pose model (%s declares %d bytes in %d)'
+                                 % (path, info.filename, declared, info.file_size))
 
 
 _cache = {}
