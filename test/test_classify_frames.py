@@ -423,3 +423,30 @@ def test_a_cut_keypoint_file_keeps_the_rows_before_the_cut(tmp_path, capsys):
         assert len(err) == 1 and err[0].startswith('classify_frames: %s' % path), err
         if path == cut:
             assert 'cannot read on after %d keypoint rows' % len(lines) in err[0]
+
+
+def test_a_line_too_long_to_be_a_frame_is_one_error_line_not_all_the_memory(tmp_path):
+    # A few MB of gzip can hold a line of gigabytes: read whole, it took the machine's memory.
+    import gzip
+    import io
+
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    lines = list(gesture_data.bounded_lines(io.StringIO('ab\n' + 'x' * 25 + '\ncd\n' + 'y' * 11), 10))
+    assert lines == ['ab\n', None, 'cd\n', None]
+    assert list(gesture_data.bounded_lines(io.StringIO('0123456789\n'), 10)) == ['0123456789\n']
+    frames = [json.dumps(d) for d in _dicts(['fist'] * 2)]
+    path = tmp_path / 'long.jsonl.gz'
+    with gzip.open(path, 'wt') as f:
+        f.write(frames[0] + '\n' + ' ' * (gesture_data.MAX_LINE_CHARS + 5) + 'x\n' + frames[1] + '\n')
+    p = subprocess.run([sys.executable, '-m', 'leap_teleop.hands.classify_frames', '--stateless',
+                        str(path)], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and 'Traceback' not in p.stderr, p.stderr
+    out = [json.loads(line) for line in p.stdout.splitlines()]
+    assert len(out) == 3 and out[0]['hands'][0]['fist'] and out[2]['hands'][0]['fist']
+    assert out[1]['error'] == 'a line longer than %d characters' % gesture_data.MAX_LINE_CHARS
+    poses = tmp_path / 'long_poses.jsonl.gz'
+    with gzip.open(poses, 'wt') as f:
+        f.write(json.dumps({'person': 'p', 'label': 'fist', 'frame': _dicts(['fist'])[0]}) + '\n'
+                + ' ' * (gesture_data.MAX_LINE_CHARS + 5) + 'x\n')
+    with pytest.raises(gesture_data.DataError, match='line 2: not a pose record .longer than'):
+        gesture_data.read_pose_lines(str(poses))

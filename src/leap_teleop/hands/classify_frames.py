@@ -152,7 +152,10 @@ class UnreadableImage:
 
 
 def iter_json_lines(stream):
-    for line in stream:
+    for line in gesture_data.bounded_lines(stream):
+        if line is None:
+            yield NotAFrame('a line longer than %d characters' % gesture_data.MAX_LINE_CHARS)
+            continue
         line = line.strip()
         if not line:
             continue

@@ -79,6 +79,28 @@ def open_text(path, errors='strict', newline=None):
     return open(path, encoding='utf-8-sig', errors=errors, newline=newline)
 
 
+# A frame or pose record takes a few kB on its line: a line beyond this is no frame, and
+# reading it whole could take the machine's memory (a few MB of gzip unpack to gigabytes).
+MAX_LINE_CHARS = 16 << 20
+
+
+def bounded_lines(stream, limit=MAX_LINE_CHARS):
+    """The lines of a text stream, each read at most `limit` characters at a time; a
+    longer line is skipped and given as None in its place."""
+    while True:
+        line = stream.readline(limit + 1)
+        if not line:
+            return
+        if len(line) > limit and not line.endswith('\n'):
+            while True:
+                rest = stream.readline(limit)
+                if not rest or rest.endswith('\n'):
+                    break
+            yield None
+            continue
+        yield line
+
+
 # Keypoints are pixels or the community's normalised values: anything larger is no hand.
 MAX_KEYPOINT = 1e6
 # What reading a text file can raise besides its format's own errors: not UTF-8, a gzip
@@ -131,7 +153,10 @@ def _read_pose_lines(path):
 
 
 def _pose_rows(path, f, rows):
-    for n, line in enumerate(f, 1):
+    for n, line in enumerate(bounded_lines(f), 1):
+        if line is None:
+            raise DataError('%s line %d: not a pose record (longer than %d characters)'
+                            % (path, n, MAX_LINE_CHARS))
         line = line.strip()
         if not line:
             continue
