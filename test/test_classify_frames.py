@@ -450,3 +450,12 @@ def test_a_line_too_long_to_be_a_frame_is_one_error_line_not_all_the_memory(tmp_
                 + ' ' * (gesture_data.MAX_LINE_CHARS + 5) + 'x\n')
     with pytest.raises(gesture_data.DataError, match='line 2: not a pose record .longer than'):
         gesture_data.read_pose_lines(str(poses))
+
+
+@pytest.mark.parametrize('content', ['', '  \n\n'])
+def test_a_file_with_no_frame_says_so(tmp_path, capsys, content):
+    # Before: status 0 and no output at all, as if every frame had been classified.
+    path = tmp_path / 'take.jsonl'
+    path.write_text(content)
+    assert classify_frames.main([str(path)]) == 2
+    assert capsys.readouterr().err == 'classify_frames: %s: no frame in it\n' % path

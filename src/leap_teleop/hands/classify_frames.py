@@ -350,6 +350,9 @@ def main(argv=None):
             except OSError as e:        # what was still buffered: the disk is full
                 print('classify_frames: cannot write %s: %s' % (args.out, e), file=sys.stderr)
                 status = status or 1
+    if n == 0 and status == 0 and args.input != '-':    # an empty pipe is fine; a file, no
+        print('classify_frames: %s: no frame in it' % args.input, file=sys.stderr)
+        status = 2
     return status
 
 
