@@ -518,3 +518,30 @@ def test_a_hand_without_a_palm_position_is_not_written_as_one_at_the_device():
     assert {p['handId'] for p in out['pointables']} == {out['hands'][0]['id']}
     assert pose_record(bad, bad.hands[0], 'p', 'open') is None
     assert pose_record(bad, good, 'p', 'open')['frame']['hands']
+
+
+def test_a_source_that_fails_mid_take_leaves_the_frames_before_it(tmp_path, capsys):
+    # Before: a camera failing after minutes of a take left no file at all.
+    from leap_teleop.hands.sources.source import HandSource
+
+    class Failing(HandSource):
+        def frames(self):
+            for i in range(5):
+                yield Frame(i + 1, 1.0 + i / 100.0, [render_hand('right', 'open', (0, 200, 0))])
+            raise SourceError('camera source: reading failed: gone')
+
+        def stop(self):
+            pass
+    out = tmp_path / 'take.json'
+    with pytest.raises(SourceError, match=r'gone \(the 5 frames before it are in .*take.json\)'):
+        record_frames.record(Failing(), str(out))
+    assert len(list(make_source('recording', path=str(out), realtime=False).frames())) == 5
+
+
+    class FailingAtOnce(Failing):
+        def frames(self):
+            raise SourceError('camera source: reading failed: gone')
+            yield
+    with pytest.raises(SourceError, match='gone$'):       # nothing taken: nothing written
+        record_frames.record(FailingAtOnce(), str(tmp_path / 'none.json'))
+    assert not (tmp_path / 'none.json').exists()

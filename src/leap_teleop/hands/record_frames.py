@@ -8,7 +8,7 @@ usage: rosrun leap_teleop record_frames OUT.json[.gz|.lz]
 
 Compression follows the file name: .json.gz (gzip), .json.lz (LZString base64, the
 LeapJS original) or plain .json. Stops at --duration seconds, --frames frames, the end
-of a finite source, or Ctrl-C; the file is written on every way out.
+of a finite source, Ctrl-C or a source that fails; the file holds every frame taken.
 """
 import argparse
 import math
@@ -20,8 +20,11 @@ from leap_teleop.output_file import output_problem
 
 
 def record(source, out, duration=None, max_frames=None, metadata=None):
-    """Pull frames from `source` into `out`; returns the number of frames written."""
+    """Pull frames from `source` into `out`; returns the number of frames written. A source
+    that fails mid-take still has the frames before it written, then its SourceError
+    (saying so) raised."""
     frames = []
+    failed = None
     t0 = time.monotonic()
     try:
         for frame in source.frames():
@@ -32,15 +35,26 @@ def record(source, out, duration=None, max_frames=None, metadata=None):
                 break
     except KeyboardInterrupt:
         pass
+    except SourceError as e:
+        failed = e
     finally:
         source.stop()
+    if failed is not None:
+        if not frames:
+            raise failed
+        _save(out, frames, metadata)
+        raise SourceError('%s (the %d frames before it are in %s)' % (failed, len(frames), out))
+    _save(out, frames, metadata)
+    return len(frames)
+
+
+def _save(out, frames, metadata):
     meta = dict(metadata or {})
     if len(frames) > 1:
         span = (frames[-1]['timestamp'] - frames[0]['timestamp']) * 1e-6
         if span > 0:
             meta.setdefault('frameRate', '%.3g' % ((len(frames) - 1) / span))
     leapjs.save(out, frames, meta)
-    return len(frames)
 
 
 # the endings leapjs.save picks its compression by
