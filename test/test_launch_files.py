@@ -87,3 +87,16 @@ def test_the_camera_and_recognition_args_reach_the_senders_parameters(name, tmp_
     assert params['/leap_sender/width'] == 320
     for a in RECOGNITION_ARGS:                     # a user's model and bindings, from any of them
         assert params['/leap_sender/' + a] == '/tmp/mine_' + a
+
+
+@pytest.mark.integration
+def test_every_ros_package_package_xml_names_is_there():
+    # diagnostic_updater's module came with Debian's python3 package, its package.xml with
+    # the -dev one that tools/debian-packages.txt lacked: rospack did not know it.
+    import subprocess
+    root = ET.parse(os.path.join(ROOT, 'package.xml')).getroot()
+    names = sorted({e.text.strip() for e in root if e.tag.endswith('depend')
+                    and not e.text.strip().startswith('python3-')})
+    missing = [n for n in names if subprocess.run(['rospack', 'find', n], capture_output=True,
+                                                  timeout=60).returncode != 0]
+    assert len(names) > 20 and missing == [], missing

@@ -16,13 +16,21 @@ for p in "${wanted[@]}"; do
 done
 if [ ${#missing[@]} -gt 0 ]; then
   say "installing ${#missing[@]} Debian packages: ${missing[*]}"
-  "${sudo_cmd[@]}" apt-get update -q
-  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+  # env: sudo drops DEBIAN_FRONTEND; the lock timeout waits out another set-up's apt-get
+  apt=("${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=600)
+  "${apt[@]}" update -q
+  "${apt[@]}" install -y -q --no-install-recommends "${missing[@]}"
 else
   say "Debian packages: all ${#wanted[@]} present"
 fi
 
-# 2. The venv: Debian's python (the one rospy is built for) with system site-packages.
+# 2. The venv: Debian's python (the one rospy is built for) with system site-packages; one
+#    made otherwise (another python on PATH, no system site-packages) has no rospy: remade.
+if [ -x .venv/bin/python ] && ! { grep -qx 'home = /usr/bin' .venv/pyvenv.cfg \
+    && grep -qx 'include-system-site-packages = true' .venv/pyvenv.cfg; } 2>/dev/null; then
+  say "remaking .venv: it was not made from /usr/bin/python3 with system site-packages"
+  rm -rf .venv
+fi
 if [ ! -x .venv/bin/python ]; then
   say "creating .venv from /usr/bin/python3"
   /usr/bin/python3 -m venv --system-site-packages .venv
@@ -33,15 +41,19 @@ fi
 req_hash=$(cat tools/requirements.txt tools/requirements-camera.txt | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.requirements.sha256 2>/dev/null)" != "$req_hash" ]; then
   say "installing pinned pip packages (tools/requirements.txt, tools/requirements-camera.txt) into .venv"
-  .venv/bin/python -m pip install -q --disable-pip-version-check -r tools/requirements.txt 2>&1 \
-    | grep -v "is ignored: it is neither a file nor a directory" || true
-  .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps \
-    -r tools/requirements-camera.txt 2>&1 \
-    | grep -v "is ignored: it is neither a file nor a directory" || true
-  .venv/bin/python -c "import pybullet, numpy, lzstring, yaml, hypothesis, pytest" >/dev/null 2>&1 \
-    || { echo "[setup] pip install failed (see above)" >&2; exit 1; }
-  .venv/bin/python -c "import mediapipe, cv2" >/dev/null 2>&1 \
+  # pip's own status decides (the grep only hides a harmless line): a pin that failed to
+  # install must not be marked as installed
+  pip_install() {
+    .venv/bin/python -m pip install -q --disable-pip-version-check "$@" 2>&1 \
+      | { grep -v "is ignored: it is neither a file nor a directory" || true; }
+    return "${PIPESTATUS[0]}"
+  }
+  pip_install -r tools/requirements.txt \
+    || { echo "[setup] pip install of tools/requirements.txt failed (see above)" >&2; exit 1; }
+  pip_install --no-deps -r tools/requirements-camera.txt \
     || { echo "[setup] pip install of tools/requirements-camera.txt failed (see above)" >&2; exit 1; }
+  .venv/bin/python -c "import pybullet, numpy, lzstring, yaml, hypothesis, pytest, sklearn, mediapipe, cv2" \
+    >/dev/null 2>&1 || { echo "[setup] the pip packages do not import (see above)" >&2; exit 1; }
   echo "$req_hash" > .venv/.requirements.sha256
 else
   say "pip packages: up to date"
