@@ -379,6 +379,30 @@ def test_unreachable_target_holds_then_recovers():
     assert t.status.state == TRACKING and cmd.q is not None
 
 
+def test_the_other_arm_configuration_is_refused_after_a_hold_too():
+    # The pan 0.05 rad from its +2pi limit: a target a few cm on needs the pan past the
+    # limit, so the nearest solution is another configuration. It was refused for one
+    # period only: after the hold there was no last goal to compare with, and the next
+    # period swung the joints 2.7 rad (and the TCP out of the workspace) to reach it.
+    q0 = HOME.copy()
+    q0[0] = 2 * math.pi - 0.05
+    t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, max_joint_speed=1.0))
+    c = Clock()
+    t.on_joints(q0)
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    drive(t, c, hand(rock=True))
+    q, reasons = q0.copy(), set()
+    for k in range(160):
+        cmd = drive(t, c, hand(palm_mm=(-min(40.0, 0.5 * k), 200.0, 0.0)), q=q)
+        if cmd.q is not None:
+            assert float(np.abs(cmd.q - q).max()) < 0.1, (k, cmd.q, q)
+            q = cmd.q.copy()
+        reasons.add(t.status.reason)
+    assert t.status.state == HOLDING and abs(q[0] - q0[0]) < 0.1
+    assert any(r.startswith('only another arm configuration reaches') for r in reasons)
+    assert 'target reachable again' not in reasons
+
+
 @pytest.mark.parametrize('bad, why', [
     (dict(palm_mm=(math.nan, 200.0, 0.0)), 'not a trackable hand'),
     (dict(palm_mm=(0.0, math.inf, 0.0)), 'not a trackable hand'),

@@ -408,8 +408,9 @@ class ArmTeleop:
         q = kin.ik_nearest(kin.pose(target, rotation), seed,
                            lower=self._ik_limits[0], upper=self._ik_limits[1])
         why = 'no IK solution within the joint limits for'
-        if (q is not None and self._goal is not None
-                and float(np.abs(q - self._goal[1]).max()) > MAX_GOAL_JUMP):
+        # Against the seed, whether it is the last goal or (after a hold) where the arm is:
+        # against the last goal alone, the period after a hold took the other configuration.
+        if q is not None and float(np.abs(q - seed).max()) > MAX_GOAL_JUMP:
             q, why = None, 'only another arm configuration reaches'
         if q is None:
             self.status.ik_failures += 1
