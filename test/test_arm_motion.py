@@ -96,6 +96,45 @@ def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps, r
     np.testing.assert_allclose(states[-1][0], goals[-1], atol=1e-3)     # gets there
 
 
+def _teleop_peak_accel(lead, delay, periods=250):
+    """Peak desired acceleration of a follower that gets each ArmTeleop command `delay` s
+    after it was planned, sampled every 0.5 ms, the palm swinging 100 mm."""
+    from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
+    t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, max_joint_speed=1.0,
+                                  max_joint_accel=math.pi, command_lead=lead))
+    follower = TrajectoryFollower(kin.HOME_Q.copy(), kin.MAX_JOINT_SPEED, kin.JOINT_LOWER,
+                                  kin.JOINT_UPPER)
+    now, pending, prev, peak = 100.0, [], None, 0.0
+    for k in range(periods + 50):
+        for _ in range(16):
+            now += 0.0005
+            while pending and pending[0][0] <= now + 1e-12:
+                _, points, stamp = pending.pop(0)
+                follower.command(now, points, stamp)
+            q, qd = follower.sample(now)
+            if prev is not None and k >= 50:
+                peak = max(peak, float(np.max(np.abs(qd - prev))) / 0.0005)
+            prev = qd.copy()
+        flags = {'thumb_up': True} if k < 45 else {'rock': True} if k == 45 else {}
+        palm = (100.0 * math.sin(max(0, k - 46) * 0.05), 200.0, 0.0)
+        t.on_hand(ArmInput(present=True, palm_mm=palm, stamp=now, **flags), now)
+        q, qd = follower.sample(now)
+        t.on_joints(q.copy(), now, qd.copy())
+        cmd = t.step(now)
+        if cmd.points:
+            assert cmd.stamp == pytest.approx(now + lead)
+            pending.append((now + delay, cmd.points, cmd.stamp))
+    return peak
+
+
+def test_a_command_lead_keeps_the_acceleration_bound_through_a_delay_as_long():
+    # A command reaching the controller after its stamp joins the last one from where the
+    # arm is by then, in less time than planned: faster than max_joint_accel.
+    assert _teleop_peak_accel(lead=0.0, delay=0.004) > 2.0 * math.pi
+    assert _teleop_peak_accel(lead=0.008, delay=0.004) <= math.pi + 1e-6
+    assert _teleop_peak_accel(lead=0.008, delay=0.008) <= math.pi + 1e-6
+
+
 def test_servo_reach_brackets_the_rest_of_its_plan_and_the_turn_back():
     import copy
     servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0)

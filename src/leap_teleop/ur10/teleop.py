@@ -241,8 +241,9 @@ class ArmTeleop:
         if self._q is None:
             return ArmCommand()
         # As fast as the robot may stop: a hold is not bound by the teleop's own pace.
-        points = self._servo.stop(now, self._q, self.p.min_duration, kin.MAX_JOINT_ACCEL)
-        return ArmCommand(q=points[-1][1].copy(), points=points, stamp=now)
+        start = now + self.p.command_lead
+        points = self._servo.stop(start, self._q, self.p.min_duration, kin.MAX_JOINT_ACCEL)
+        return ArmCommand(q=points[-1][1].copy(), points=points, stamp=start)
 
     def _lose_robot(self, reason):
         """The robot's state is unknown (simulator or driver gone / restarted): forget it
@@ -427,8 +428,8 @@ class ArmTeleop:
             goal_velocity = (q - self._goal[1]) / (now - self._goal[0])
         self._goal = (now, q)
         cmd.q = q
-        cmd.points = self._servo.track(now, self._q, q, goal_velocity)
-        cmd.stamp = now
+        cmd.stamp = now + self.p.command_lead
+        cmd.points = self._servo.track(cmd.stamp, self._q, q, goal_velocity)
         return cmd
 
     def _hand_rotation(self, hand):

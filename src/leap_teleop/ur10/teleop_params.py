@@ -77,6 +77,10 @@ TELEOP_PARAMS = {
     'command_horizon': Param(0.024, 'time of each trajectory\'s first point (with its '
                                     'velocity; the second is rest)', unit='s',
                              ge=0.004, le=0.5),
+    'command_lead': Param(0.0, 'each trajectory starts this far after it is planned (its '
+                               'header stamp): a command that reaches the controller within '
+                               'it continues the last one exactly, a later one joins it '
+                               'faster than max_joint_accel', unit='s', ge=0.0, le=0.05),
     'min_duration': Param(0.05, 'shortest hold trajectory sent', unit='s', gt=0.0, le=5.0),
     'input_timeout': Param(0.2, 'no hand input this long -> hold (watchdog); fresh input '
                                 'resumes from the current pose', unit='s', gt=0.0, le=10.0),
