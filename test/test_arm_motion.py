@@ -135,6 +135,36 @@ def test_a_command_lead_keeps_the_acceleration_bound_through_a_delay_as_long():
     assert _teleop_peak_accel(lead=0.008, delay=0.008) <= math.pi + 1e-6
 
 
+def test_joint_states_back_while_the_arm_still_brakes_plan_on_from_its_motion():
+    # Joint states stall 0.64 s while the arm cruises at 1 rad/s with 1 rad/s^2: it is
+    # still braking along its last trajectory when they return. The servo planned from
+    # rest there (its plan reset by the stall): 100 rad/s^2.
+    from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop, ArmTeleopParams
+    t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, max_joint_speed=1.0,
+                                  max_joint_accel=1.0))
+    follower = TrajectoryFollower(kin.HOME_Q.copy(), kin.MAX_JOINT_SPEED, kin.JOINT_LOWER,
+                                  kin.JOINT_UPPER)
+    now, prev, peak, held = 100.0, None, 0.0, False
+    for k in range(290):
+        for _ in range(8):
+            now += 0.001
+            q, qd = follower.sample(now)
+            if prev is not None and k > 46:
+                peak = max(peak, float(np.max(np.abs(qd - prev))) / 0.001)
+            prev = qd.copy()
+        flags = {'thumb_up': True} if k < 45 else {'rock': True} if k == 45 else {}
+        palm = (min(150.0, 5.0 * max(0, k - 46)) if k < 110 else 150.0 + 0.5 * (k - 110), 200.0, 0.0)
+        t.on_hand(ArmInput(present=True, palm_mm=palm, stamp=now, **flags), now)
+        if not 110 <= k < 190:                          # the joint states stall
+            q, qd = follower.sample(now)
+            t.on_joints(q.copy(), now, qd.copy())
+        cmd = t.step(now)
+        held = held or t.status.state == HOLDING
+        if cmd.points:
+            follower.command(now, cmd.points, cmd.stamp)
+    assert held and peak <= 1.0 + 1e-6, peak
+
+
 def test_servo_reach_brackets_the_rest_of_its_plan_and_the_turn_back():
     import copy
     servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0)

@@ -305,7 +305,8 @@ class ArmTeleop:
                                 np.maximum(np.maximum(self._q, hi), self._q + brake)
                                 + RESUME_TOLERANCE)
             self._target = self._goal = self._gripper_asked = None   # its wait starts again
-            self._servo.reset()
+            # The plan stays: a robot still braking along it when states return is planned
+            # on from there, not from rest (it drops the plan itself once that has ended).
             self._set(HOLDING, 'no joint states for %.2f s: holding, disarms after %.2f s'
                       % (self.p.joint_timeout, self.p.joint_loss_after))
         return ArmCommand()
