@@ -165,6 +165,34 @@ def test_joint_states_back_while_the_arm_still_brakes_plan_on_from_its_motion():
     assert held and peak <= 1.0 + 1e-6, peak
 
 
+def test_joystick_mode_moves_on_from_where_the_arm_is_after_a_joint_state_stall():
+    # The stall cleared the target and the joystick fell back to the origin: the arm drove
+    # 0.1 m back to where rock had been shown, the hand in the dead zone all along.
+    from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop, ArmTeleopParams
+    t = ArmTeleop(ArmTeleopParams(mode='joystick', filter_min_cutoff_hz=0.0, dead_zone=0.03,
+                                  max_tcp_speed=0.1, max_joint_speed=1.0,
+                                  max_joint_accel=math.pi))
+    follower = TrajectoryFollower(kin.HOME_Q.copy(), kin.MAX_JOINT_SPEED, kin.JOINT_LOWER,
+                                  kin.JOINT_UPPER)
+    now, held, origin = 100.0, False, kin.fk(kin.HOME_Q)[:3, 3]
+    for k in range(480):
+        now += 0.008
+        flags = {'thumb_up': True} if k < 45 else {'rock': True} if k == 45 else {}
+        palm_z = -300.0 if 46 <= k < 171 else 0.0           # 1 s forward, then the dead zone
+        t.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, palm_z), stamp=now, **flags), now)
+        if not 250 <= k < 325:                              # 0.6 s without joint states
+            q, qd = follower.sample(now)
+            t.on_joints(q.copy(), now, qd.copy())
+        cmd = t.step(now)
+        held = held or t.status.state == HOLDING
+        if k == 249:
+            where = kin.fk(follower.sample(now)[0])[:3, 3].copy()
+        if cmd.points:
+            follower.command(now, cmd.points, cmd.stamp)
+    assert held and np.linalg.norm(where - origin) > 0.08
+    assert np.linalg.norm(kin.fk(follower.sample(now)[0])[:3, 3] - where) < 0.002
+
+
 def test_servo_reach_brackets_the_rest_of_its_plan_and_the_turn_back():
     import copy
     servo = JointServo(np.full(6, 1.0), np.full(6, math.pi), horizon=0.032, gain=10.0)

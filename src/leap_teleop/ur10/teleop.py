@@ -399,7 +399,7 @@ class ArmTeleop:
         if self.p.mode == 'imitation':
             target = self._tcp_ref + self._axes @ offset * 0.001 * self.p.scale
         else:
-            target = self._joystick(offset, dt)
+            target = self._joystick(offset, dt, now)
         target = np.minimum(np.maximum(target, self._lo), self._hi)
         rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
         self._target = target
@@ -492,9 +492,12 @@ class ArmTeleop:
         return kin.limit_tool_rotation(R, self.p.max_tool_tilt, self._yaw_ref,
                                        self.p.max_tool_turn)
 
-    def _joystick(self, offset_mm, dt):
+    def _joystick(self, offset_mm, dt, now):
         n = float(np.linalg.norm(offset_mm))
-        base = self._target if self._target is not None else self._tcp_ref
+        # After a hold (a stall, a loss) there is no target: it moves on from where the arm
+        # is, not from the origin (that sent the arm back to where rock was shown).
+        base = (self._target if self._target is not None
+                else kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3])
         dead_zone_mm = 1000.0 * self.p.dead_zone
         if n <= dead_zone_mm:
             return base
