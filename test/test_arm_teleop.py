@@ -538,6 +538,22 @@ def test_yaw_mode_turns_the_tool_about_the_vertical_with_the_hand(side_sign):
     assert tilt == pytest.approx(0.0, abs=1e-9)      # roll and pitch ignored
 
 
+@pytest.mark.parametrize('turn, kept', [(1.5, False), (0.1, True)])
+def test_a_hand_back_from_a_stall_turned_far_re_anchors_the_origin(turn, kept):
+    # Only its position was weighed: a hand back turned 1.5 rad with the palm in place kept
+    # the origin, and the tool target turned 1.5 rad in one period.
+    t, c = armed_with_origin(orientation='yaw', orientation_scale=1.0)
+    drive(t, c, hand(), periods=5)
+    before = np.array(t.status.target_rotation)
+    stall(t, c, 0.48)
+    assert t.status.state == HOLDING
+    drive(t, c, hand(turn=turn))
+    assert t.status.reason.endswith('same origin, 0.000 m to catch up' if kept
+                                    else 'origin re-anchored'), t.status.reason
+    jump = kin.rotation_error(before, np.array(t.status.target_rotation))
+    assert jump == pytest.approx(turn if kept else 0.0, abs=1e-6)
+
+
 def test_full_mode_follows_the_palm_through_the_axis_map_and_scale():
     t, c = armed_with_origin(orientation='full', orientation_scale=0.5)
     cmd = _rotated(t, c, swing=0.4)                  # pitch up about Leap x

@@ -42,6 +42,9 @@ MAX_GOAL_JUMP = 1.0
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
+# After a hand-input stall, a hand turned further than this (rad) from where the old
+# mapping holds the tool re-anchors the origin, as reanchor_beyond does for its position.
+REANCHOR_TURN_RAD = 0.3
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -379,7 +382,9 @@ class ArmTeleop:
                 # After a joint-state stall the hand's input never stopped: the mapping
                 # the operator followed stays, and the servo catches up within its limits.
                 gap = self._resume_gap(palm, now)
-                if what == 'hand input' and gap > self.p.reanchor_beyond:
+                turn = self._resume_turn(hand_rot, now) if what == 'hand input' else 0.0
+                if what == 'hand input' and (gap > self.p.reanchor_beyond
+                                             or turn > REANCHOR_TURN_RAD):
                     # Re-anchor: the hand where it is now maps to the pose the arm holds.
                     self._set_origin(palm, hand_rot, now)
                     self._set(TRACKING, back + ': origin re-anchored')
@@ -460,6 +465,13 @@ class ArmTeleop:
             self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
             self._lo), self._hi)
         return float(np.linalg.norm(target - kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]))
+
+    def _resume_turn(self, hand_rot, now):
+        """How far (rad) the old origin would turn the tool from where the arm holds it."""
+        if self.p.orientation == 'fixed':
+            return 0.0
+        held = kin.fk(self._servo.state_at(now, self._q)[0])[:3, :3]
+        return float(kin.rotation_error(held, self._tool_rotation(hand_rot)))
 
     def _set_origin(self, palm, hand_rot, now):
         self._palm_ref = palm.copy()
