@@ -554,6 +554,33 @@ def test_a_hand_back_from_a_stall_turned_far_re_anchors_the_origin(turn, kept):
     assert jump == pytest.approx(turn if kept else 0.0, abs=1e-6)
 
 
+@pytest.mark.parametrize('older_by, disarmed', [(5.0, True), (0.5, True), (-0.3, False)])
+def test_a_stream_back_from_a_stall_at_older_stamps_disarms(older_by, disarmed):
+    # A bag played again after a 0.32 s silence: its hand was taken as the same session's,
+    # and the arm tracked on from the old origin without a thumbs-up.
+    from leap_teleop.control.input_check import InputStream
+    s = InputStream(max_age=0.25, gap=0.2)
+    assert s.check(10.0, 10.0) is None and not s.rewound
+    assert s.check(9.0, 10.5) is None and s.rewound                 # after a silence, older
+    assert s.check(9.01, 10.51) is None and not s.rewound
+    t, c = armed_with_origin()
+    drive(t, c, hand(palm_mm=(10.0, 200.0, 0.0)), periods=5)
+    last = c.t
+    for _ in range(40):                                   # 0.32 s of silence: a hold
+        t.on_joints(t._q, c.tick())
+        t.step(c.t)
+    assert t.status.state == HOLDING
+    now = c.tick()
+    h = hand(palm_mm=(10.0, 200.0, 0.0))
+    h.stamp = last - older_by if older_by > 0 else now
+    assert t.on_hand(h, now) is None
+    t.on_joints(t._q, now)
+    t.step(now)
+    assert (t.status.state == DISARMED) == disarmed, t.status.reason
+    if disarmed:
+        assert t.status.reason.startswith('the hand input began again at older stamps')
+
+
 def test_full_mode_follows_the_palm_through_the_axis_map_and_scale():
     t, c = armed_with_origin(orientation='full', orientation_scale=0.5)
     cmd = _rotated(t, c, swing=0.4)                  # pitch up about Leap x

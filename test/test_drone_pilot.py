@@ -299,6 +299,23 @@ def test_a_stall_shorter_than_disarm_after_hovers_then_steers_on_without_a_jump(
     assert set(kinds(out)) == {'twist'} and twists(out)[-1][0] == pytest.approx(0.7)
 
 
+def test_a_stream_back_from_a_stall_at_older_stamps_needs_a_new_unfold():
+    # A bag played again after a 0.6 s silence: its hand steered on from the old session's
+    # reference without an unfold.
+    warned = []
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0))
+    pilot._warn = lambda key, text: warned.append(key)
+    silence(pilot, t, t + 0.6)
+    t += 0.6
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.05), t)              # stamped before the stall
+    assert twists(drain(pilot)) in ([], [(0.0,) * 6]) and not pilot.engaged
+    assert 'disengaged' in warned
+    pilot.on_gesture('unfold', True, t + 0.01)
+    pilot.on_hand(stamped((0.0, 0.2, -0.1), 0.06), t + 0.02)       # steers again once unfolded
+    pilot.on_hand(stamped((0.0, 0.2, -0.2), 0.07), t + 0.03)
+    assert pilot.engaged and twists(drain(pilot))[-1][0] == pytest.approx(0.7)
+
+
 def test_a_hand_held_through_a_stall_keeps_its_reference():
     # Held 100 mm forward through a 0.6 s stall and back where it was lost: the forward
     # command resumes, and the unfold's neutral still hovers. Re-captured there, the old

@@ -7,7 +7,8 @@ the stream's own best case, not against the absolute clock, keeps replayed bags 
 stamps) and hosts with unsynchronised clocks working while still catching messages
 that were held up. A silence longer than ``gap`` (no message at all, accepted or not)
 or the clock jumping back (a simulator publishing /clock restarted) starts a new stream:
-a restarted sender (fresh stamps) or a replayed bag (stamps jump back) is judged afresh,
+a restarted sender (fresh stamps) or a replayed bag (stamps jump back; ``rewound`` says so,
+for the consumers to ask for a new arming gesture) is judged afresh,
 while a stream that stays delayed keeps being refused (the consumers' watchdogs then stop
 the robots) - also across a silence: a source that stalled and then bursts its backlog
 (stamps continue, but late) is not a new stream, so only its last max_age s pass. Unstamped
@@ -36,15 +37,19 @@ class InputStream:
         self.misordered_since = None   # first of the stamped messages refused on end as
                                        # out of order
         self.leapt = False             # the last message taken was stamped far ahead
+        self.rewound = False           # the last message taken began a new stream stamped
+                                       # before the old one's last (a bag played again)
 
     def check(self, stamp, now):
         """None if the message is in order and on time (it is then recorded), else why not."""
+        rewound = False
         if self.last_rx is not None and (now < self.last_rx or now - self.last_rx > self.gap):
             backlog = (now >= self.last_rx and stamp > 0 and self.max_age > 0
                        and self.last_stamp is not None and stamp >= self.last_stamp
                        and self.best_lag is not None
                        and now - stamp - self.best_lag > self.max_age)
             if not backlog:
+                rewound = self.last_stamp is not None and 0 < stamp < self.last_stamp
                 self.reset()
         self.last_rx = now
         if self.last_stamp is not None and stamp < self.last_stamp:
@@ -71,6 +76,7 @@ class InputStream:
                     lag - self.best_lag, self.max_age)
         self.last_stamp = stamp
         self.leapt = leapt
+        self.rewound = rewound
         return None
 
     def judge_beside(self, stamp, now):

@@ -270,7 +270,7 @@ class DronePilot:
                 self._lose(now)
                 return
             if not self.hand_present:
-                self._disengage_after_loss(now)
+                self._disengage_after_loss(now, self._stream.rewound)
                 self.hand_present = True
                 self.lost_since = None
                 self._landed_for_loss = False
@@ -448,19 +448,24 @@ class DronePilot:
                 self._warn('lost', 'hand lost for %.1f s: landing' % (now - self.lost_since))
                 self.queue.push(Command('land', stamp=now))
 
-    def _disengage_after_loss(self, now):
+    def _disengage_after_loss(self, now, rewound=False):
         """A hand lost for disarm_after steers only after a new unfold (tilt) or capture
-        pose (paper); a shorter loss (a stalled stream) steers on from where it is."""
-        if (self.lost_since is None or now - self.lost_since < self.cfg.disarm_after
-                or not (self.engaged or self.paper_ref is not None)):
+        pose (paper); a shorter loss (a stalled stream) steers on from where it is, unless
+        the stream came back `rewound` (stamped before it ended: a session played again)."""
+        if not (self.engaged or self.paper_ref is not None) or (not rewound and (
+                self.lost_since is None or now - self.lost_since < self.cfg.disarm_after)):
             return
         self.engaged = False
         self.reference = None
         self.paper_ref = None
         self._hand_at_loss = None
-        self._warn('disengaged', 'hand lost for %.2f s: steering off until %s'
-                   % (now - self.lost_since, 'a new unfold' if self.cfg.mode == 'tilt'
-                      else 'the capture pose'))
+        until = 'a new unfold' if self.cfg.mode == 'tilt' else 'the capture pose'
+        if rewound:
+            self._warn('disengaged', 'the hand input began again at older stamps (a session '
+                       'played again?): steering off until %s' % until)
+        else:
+            self._warn('disengaged', 'hand lost for %.2f s: steering off until %s'
+                       % (now - self.lost_since, until))
 
     def _known_landed(self):
         """The last navdata said landed and no takeoff was queued after it."""

@@ -150,6 +150,7 @@ class ArmTeleop:
         self._gripper_asked = None         # when the hand asked for a change not yet sent
         self._joints_rx = None
         self._stream = InputStream(self.p.max_input_age, self.p.input_timeout)
+        self._rewound = False           # the stream began again at older stamps
         self._palm_ref = None
         self._tcp_ref = None
         self._tool_ref = None          # tool rotation at the origin (base frame)
@@ -212,6 +213,7 @@ class ArmTeleop:
         if why:
             self.status.rejected_inputs += 1
             return why
+        self._rewound = self._rewound or self._stream.rewound
         self._hand, self._hand_rx = hand, now
         if not (hand.present and hand.thumb_up):
             self._thumb_up_since = None
@@ -356,6 +358,13 @@ class ArmTeleop:
                 cmd = self._disarm('fist' if hand.present else 'hand left the sensor', now)
             cmd.input_stamp = hand.stamp
             return cmd
+        if self._rewound:
+            # A new stream stamped before the old one ended (a bag played again): another
+            # session, whose hand the old origin does not belong to.
+            self._rewound = False
+            if self.status.state != DISARMED:
+                return self._disarm('the hand input began again at older stamps (a session '
+                                    'played again?): show thumbs-up', now)
         if self.status.state == DISARMED:
             # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
             # be held arm_hold_s by the hand's own capture times and by their receipt (a
