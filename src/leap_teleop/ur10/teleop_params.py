@@ -61,11 +61,13 @@ TELEOP_PARAMS = {
                            unit='Hz/(rad/s)', ge=0.0, le=1000.0),
     'rotation_d_cutoff_hz': Param(1.0, 'One Euro on the rotation: cutoff of the speed '
                                        'estimate', unit='Hz', gt=0.0, le=100.0),
-    'max_joint_speed': Param(0.05, 'every joint at most this fast', unit='rad/s', gt=0.0,
+    'max_joint_speed': Param(0.05, 'every joint at most this fast (lowered live, a faster '
+                                   'joint slows to it at max_joint_accel)', unit='rad/s', gt=0.0,
                              le=float(min(kin.MAX_JOINT_SPEED))),
-    'max_joint_accel': Param(0.5, 'every joint accelerates at most this much (the UR10 limit '
-                                  'at most)', unit='rad/s^2', gt=0.0,
-                             le=float(min(kin.MAX_JOINT_ACCEL))),
+    'max_joint_accel': Param(0.5, 'every joint accelerates at most this much while tracking; '
+                                  'a hold (stall, fist, lost hand, IK failure) brakes at the '
+                                  'UR10\'s own limit, to stop as soon as it can', unit='rad/s^2',
+                             gt=0.0, le=float(min(kin.MAX_JOINT_ACCEL))),
     'servo_gain': Param(10.0, 'joint error -> velocity correction on top of the goal\'s own '
                               'velocity', unit='1/s', gt=0.0, le=100.0),
     'servo_lead': Param(0.0, 'the servo aims at the joint goal extrapolated this far ahead '
