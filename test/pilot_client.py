@@ -1,6 +1,8 @@
 """Client code (for `python -c`) that plays the rest of the graph beside a drone_pilot
 node: after rospy.init_node, PILOT_FEED streams a right hand at state['palm'] (m) and
-navdata of state['nav'] at 50 Hz on a thread of its own, and offers gesture_pub."""
+navdata of state['nav'] at 50 Hz on a thread of its own, and offers gesture_pub.
+PILOT_FLYING then (with a `twist_sub` on cmd_vel defined first) waits until the pilot is
+connected both ways, unfolds and reports the drone flying; it offers wait_until."""
 
 PILOT_FEED = r'''
 import threading, time
@@ -21,4 +23,20 @@ def feed():
         time.sleep(0.02)
 
 threading.Thread(target=feed, daemon=True).start()
+'''
+
+PILOT_FLYING = r'''
+def wait_until(ok, what, timeout=30.0):
+    # conditions, not fixed sleeps: on a loaded machine connections form late
+    deadline = time.monotonic() + timeout
+    while not ok():
+        if time.monotonic() > deadline:
+            raise SystemExit('timed out waiting for ' + what)
+        time.sleep(0.02)
+
+wait_until(lambda: min(c.get_num_connections() for c in (hand_pub, nav_pub, gesture_pub, twist_sub))
+           > 0, 'the pilot connected both ways')
+gesture_pub.publish(GestureEvent(side=0, gesture='unfold', active=True))
+time.sleep(0.5)
+state['nav'] = 3
 '''

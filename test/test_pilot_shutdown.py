@@ -6,7 +6,7 @@ import subprocess
 import sys
 
 import pytest
-from pilot_client import PILOT_FEED
+from pilot_client import PILOT_FEED, PILOT_FLYING
 
 from tools.bench.ros_processes import ros_master, spawn_node, stop_spawned
 
@@ -23,20 +23,7 @@ rospy.init_node('pilot_client')
 twists = []
 twist_sub = rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append(
     (m.linear.x, m.linear.y, m.linear.z, m.angular.z)), queue_size=1000)
-''' + PILOT_FEED + r'''
-
-def wait_until(ok, what, timeout=30.0):
-    deadline = time.monotonic() + timeout
-    while not ok():
-        if time.monotonic() > deadline:
-            raise SystemExit('timed out waiting for ' + what)
-        time.sleep(0.02)
-
-wait_until(lambda: min(c.get_num_connections() for c in (hand_pub, nav_pub, gesture_pub, twist_sub))
-           > 0, 'the pilot connected both ways')
-gesture_pub.publish(GestureEvent(side=0, gesture='unfold', active=True))
-time.sleep(0.5)
-state['nav'] = 3
+''' + PILOT_FEED + PILOT_FLYING + r'''
 state['palm'] = (0.0, 0.2, -0.08)          # forward of the reference
 wait_until(lambda: twists and twists[-1][0] > 0.3, 'the pilot steering forward')
 print('steering', flush=True)

@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from pilot_client import PILOT_FEED
+from pilot_client import PILOT_FEED, PILOT_FLYING
 
 from leap_teleop.ros.nodes import drone_pilot, sender, ur10_arm
 from leap_teleop.ros.reconfigure import bounds, config_type
@@ -126,21 +126,7 @@ rospy.init_node('pilot_client')
 twists = []
 twist_sub = rospy.Subscriber('cmd_vel', Twist, lambda m: twists.append((time.monotonic(), m.linear.y)),
                  queue_size=1000)
-''' + PILOT_FEED + r'''
-
-def wait_until(ok, what, timeout=30.0):
-    # conditions, not fixed sleeps: on a loaded machine connections form late
-    deadline = time.monotonic() + timeout
-    while not ok():
-        if time.monotonic() > deadline:
-            raise SystemExit('timed out waiting for ' + what)
-        time.sleep(0.05)
-
-wait_until(lambda: min(c.get_num_connections() for c in (hand_pub, nav_pub, gesture_pub, twist_sub))
-           > 0, 'the pilot connected both ways')
-gesture_pub.publish(GestureEvent(side=0, gesture='unfold', active=True))
-time.sleep(0.5)
-state['nav'] = 3
+''' + PILOT_FEED + PILOT_FLYING + r'''
 state['palm'] = (0.05, 0.2, 0.0)           # 50 mm right of the reference
 wait_until(lambda: twists and twists[-1][1] != 0.0, 'the pilot steering')
 
