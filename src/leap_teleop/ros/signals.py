@@ -67,6 +67,10 @@ def quiet_at_shutdown(callback):
     source's) as closed_at_shutdown treats a loop: its publish refused because the node is
     shutting down returns None; any other error passes on."""
     def call(*args):
-        with closed_at_shutdown():
+        # closed_at_shutdown's test without its context manager: 1 us less per hand
+        try:
             return callback(*args)
+        except rospy.ROSException:
+            if not rospy.core.is_shutdown_requested():
+                raise
     return call
