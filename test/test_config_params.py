@@ -143,6 +143,7 @@ def test_the_library_warnings_reach_rospy_once(monkeypatch):
         source.warning('frame %d could not be converted', k)
     assert said[2:] == [('logwarn', 'frame 0 could not be converted')]
     handler = logger.handlers[0]
-    handler._last = {key: t - 10.0 for key, t in handler._last.items()}     # 10 s later
+    for entry in handler._limit._keys.values():                            # 10 s later
+        entry[0] -= 10.0
     source.warning('frame %d could not be converted', 999)
     assert said[-1] == ('logwarn', 'frame 999 could not be converted (119 similar suppressed)')

@@ -8,6 +8,7 @@ import time
 import rospy
 
 from leap_teleop.params import ParamError, check_params, unknown_param_warnings
+from leap_teleop.repeat_limit import RepeatLimit
 from leap_teleop.ros.diagnostics import DIAGNOSTIC_PARAMS
 from leap_teleop.ros.signals import init_node
 
@@ -58,23 +59,17 @@ class _RospyHandler(logging.Handler):
 
     def __init__(self, period=2.0):
         super().__init__()
-        self.period = period
-        self._last = {}             # (logger, message template) -> monotonic time
-        self._left_out = {}
+        self._limit = RepeatLimit(period)    # per (logger, message template), monotonic time
 
     def emit(self, record):
         try:
             level = record.levelno
+            n = 0
             if level >= logging.WARNING:
-                key, now = (record.name, record.msg), time.monotonic()
-                last = self._last.get(key)
-                if last is not None and now - last < self.period:
-                    self._left_out[key] = self._left_out.get(key, 0) + 1
+                n = self._limit.take((record.name, record.msg), time.monotonic())
+                if n is None:
                     return
-                self._last[key] = now
-                n = self._left_out.pop(key, 0)
-            text = self.format(record) + (' (%d similar suppressed)' % n
-                                          if level >= logging.WARNING and n else '')
+            text = self.format(record) + RepeatLimit.suffix(n)
             log = (rospy.logerr if level >= logging.ERROR else rospy.logwarn
                    if level >= logging.WARNING else rospy.loginfo if level >= logging.INFO
                    else rospy.logdebug)
@@ -116,16 +111,9 @@ class RateLimitedLog:
     """Warn at most once per period per key, with a count of what was suppressed."""
 
     def __init__(self, period=2.0):
-        self.period = period
-        self._last = {}
-        self._suppressed = {}
+        self._limit = RepeatLimit(period)
 
     def warn(self, key, fmt, *args):
-        now = rospy.get_time() if rospy.core.is_initialized() else 0.0
-        last = self._last.get(key)
-        if last is not None and 0.0 <= now - last < self.period:
-            self._suppressed[key] = self._suppressed.get(key, 0) + 1
-            return
-        n = self._suppressed.pop(key, 0)
-        self._last[key] = now
-        rospy.logwarn(fmt + (' (%d similar suppressed)' % n if n else ''), *args)
+        n = self._limit.take(key, rospy.get_time() if rospy.core.is_initialized() else 0.0)
+        if n is not None:
+            rospy.logwarn(fmt + RepeatLimit.suffix(n), *args)

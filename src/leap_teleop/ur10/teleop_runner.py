@@ -3,6 +3,7 @@
 right after each new hand, and when its status is reported."""
 import threading
 
+from leap_teleop.repeat_limit import RepeatLimit
 from leap_teleop.ur10.teleop import HOLDING, ArmTeleop
 
 HAND_SLACK = 1.5    # periods the timer waits after a step a hand woke
@@ -66,22 +67,15 @@ class StatusReporter:
     def __init__(self, rate, info, warn, log_period=2.0):
         self.period = 1.0 / float(rate)
         self.info, self.warn = info, warn
-        self.log_period = log_period
         self._last = None
         self._last_sent = 0.0
-        self._logged = {}           # text -> (time logged, repeats left out since)
+        self._logged = RepeatLimit(log_period)      # per text
 
     def _tell(self, snapshot, now):
         text = '%s (%s)' % snapshot[:2]
-        when, left_out = self._logged.get(text, (None, 0))
-        if when is not None and 0.0 <= now - when < self.log_period:
-            self._logged[text] = (when, left_out + 1)
-            return
-        self._logged[text] = (now, 0)
-        if len(self._logged) > 64:          # reasons carry numbers: keep the newest
-            self._logged = dict(list(self._logged.items())[-32:])
-        (self.warn if snapshot[0] == HOLDING else self.info)(
-            text + (' (%d more times in %.0f s)' % (left_out, now - when) if left_out else ''))
+        n = self._logged.take(text, now)
+        if n is not None:
+            (self.warn if snapshot[0] == HOLDING else self.info)(text + RepeatLimit.suffix(n))
 
     def due(self, snapshot, now):
         """True when the status goes out now (time `now`, s)."""
