@@ -1,5 +1,7 @@
 """The pilot's side of the ardrone_autonomy driver: the cmd_vel, ardrone/takeoff and
 ardrone/land publishers and the ardrone/setflightanimation client."""
+import time
+
 import rospy
 from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
@@ -37,6 +39,15 @@ class ArdroneCommands:
             self.input_age.add(rospy.get_time(), cmd.input_stamp)
         elif cmd.kind in self.one_shot_pubs:
             self.one_shot.send(cmd)
+
+    def flush(self, timeout):
+        """Wait (up to `timeout` s) until rospy's sender threads have written every queued
+        cmd_vel: an ending pilot's last hover must not be dropped with its connections."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and any(
+                getattr(c, '_queue', None) for c in self.cmd_vel.impl.connections):
+            time.sleep(0.005)
+        time.sleep(0.02)            # taken off the queue, then written
 
     def send_held(self):
         """A held takeoff or land, once its driver listens (call this often)."""

@@ -11,7 +11,6 @@ for ~navdata_timeout: no takeoff, hover, land after ~land_after. Rejections, fau
 outcomes go to /diagnostics; RECONFIGURABLE parameters change live, watchdog times do not.
 """
 import threading
-import time
 
 import rospy
 
@@ -93,7 +92,7 @@ class DronePilotNode:
         self.pilot.queue.wake()
         if self.thread.ident is not None and self.thread.is_alive():
             self.thread.join(1.0)
-            time.sleep(0.1)         # the hover leaves on the publisher's own thread
+            self.commands.flush(0.5)    # the hover leaves on rospy's sender thread
 
 
 def main(argv=None):
