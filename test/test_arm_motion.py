@@ -98,13 +98,14 @@ def test_servo_keeps_velocity_continuous_and_acceleration_bounded(delay_steps, r
 
 def _teleop_peak_accel(lead, delay, periods=250):
     """Peak desired acceleration of a follower that gets each ArmTeleop command `delay` s
-    after it was planned, sampled every 0.5 ms, the palm swinging 100 mm."""
+    after it was planned, sampled every 0.5 ms, the palm swinging 100 mm (the arm faster
+    than 0.5 rad/s on the way, or AssertionError)."""
     from leap_teleop.ur10.teleop import ArmInput, ArmTeleop, ArmTeleopParams
     t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, max_joint_speed=1.0,
                                   max_joint_accel=math.pi, command_lead=lead))
     follower = TrajectoryFollower(kin.HOME_Q.copy(), kin.MAX_JOINT_SPEED, kin.JOINT_LOWER,
                                   kin.JOINT_UPPER)
-    now, pending, prev, peak = 100.0, [], None, 0.0
+    now, pending, prev, peak, speed = 100.0, [], None, 0.0, 0.0
     for k in range(periods + 50):
         for _ in range(16):
             now += 0.0005
@@ -114,6 +115,7 @@ def _teleop_peak_accel(lead, delay, periods=250):
             q, qd = follower.sample(now)
             if prev is not None and k >= 50:
                 peak = max(peak, float(np.max(np.abs(qd - prev))) / 0.0005)
+                speed = max(speed, float(np.max(np.abs(qd))))
             prev = qd.copy()
         flags = {'thumb_up': True} if k < 45 else {'rock': True} if k == 45 else {}
         palm = (100.0 * math.sin(max(0, k - 46) * 0.05), 200.0, 0.0)
@@ -124,6 +126,7 @@ def _teleop_peak_accel(lead, delay, periods=250):
         if cmd.points:
             assert cmd.stamp == pytest.approx(now + lead)
             pending.append((now + delay, cmd.points, cmd.stamp))
+    assert speed > 0.5, speed                       # the arm did swing
     return peak
 
 
@@ -136,15 +139,15 @@ def test_a_command_lead_keeps_the_acceleration_bound_through_a_delay_as_long():
 
 
 def test_joint_states_back_while_the_arm_still_brakes_plan_on_from_its_motion():
-    # Joint states stall 0.64 s while the arm cruises at 1 rad/s with 1 rad/s^2: it is
-    # still braking along its last trajectory when they return. The servo planned from
+    # Joint states stall 0.64 s while the arm moves at 0.5 rad/s (1 rad/s and 1 rad/s^2
+    # allowed): it is still braking along its last trajectory when they return. The servo planned from
     # rest there (its plan reset by the stall): 100 rad/s^2.
     from leap_teleop.ur10.teleop import HOLDING, ArmInput, ArmTeleop, ArmTeleopParams
     t = ArmTeleop(ArmTeleopParams(filter_min_cutoff_hz=0.0, max_joint_speed=1.0,
                                   max_joint_accel=1.0))
     follower = TrajectoryFollower(kin.HOME_Q.copy(), kin.MAX_JOINT_SPEED, kin.JOINT_LOWER,
                                   kin.JOINT_UPPER)
-    now, prev, peak, held = 100.0, None, 0.0, False
+    now, prev, peak, held, speeds = 100.0, None, 0.0, False, {}
     for k in range(290):
         for _ in range(8):
             now += 0.001
@@ -160,8 +163,11 @@ def test_joint_states_back_while_the_arm_still_brakes_plan_on_from_its_motion():
             t.on_joints(q.copy(), now, qd.copy())
         cmd = t.step(now)
         held = held or t.status.state == HOLDING
+        speeds[k] = float(np.max(np.abs(follower.sample(now)[1])))
         if cmd.points:
             follower.command(now, cmd.points, cmd.stamp)
+    # cruising when the states stop, still moving (braking) when they return
+    assert speeds[109] >= 0.4 and speeds[190] > 0.05, (speeds[109], speeds[190])
     assert held and peak <= 1.0 + 1e-6, peak
 
 

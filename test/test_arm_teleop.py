@@ -379,6 +379,22 @@ def test_unreachable_target_holds_then_recovers():
     assert t.status.state == TRACKING and cmd.q is not None
 
 
+def test_a_hold_starts_a_command_lead_after_it_is_planned_too():
+    t, c = armed_with_origin(command_lead=0.01)
+    cmd = drive(t, c, hand(palm_mm=(30.0, 200.0, 0.0)))
+    assert cmd.stamp == pytest.approx(c.t + 0.01)
+    sent, held = [], False
+    for _ in range(40):                              # 0.32 s without hand input: a hold
+        now = c.tick()
+        t.on_joints(t._q)
+        cmd = t.step(now)
+        if cmd.points:
+            sent.append((now, cmd.stamp))
+            held = held or t.status.state == HOLDING
+    assert t.status.state == HOLDING and held
+    assert all(stamp == pytest.approx(now + 0.01) for now, stamp in sent)
+
+
 def test_the_other_arm_configuration_is_refused_after_a_hold_too():
     # The pan 0.05 rad from its +2pi limit: a target a few cm on needs the pan past the
     # limit, so the nearest solution is another configuration. It was refused for one
@@ -391,14 +407,17 @@ def test_the_other_arm_configuration_is_refused_after_a_hold_too():
     t.on_joints(q0)
     drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
     drive(t, c, hand(rock=True))
-    q, reasons = q0.copy(), set()
+    assert t.status.state == TRACKING
+    q, reasons, moves = q0.copy(), set(), 0
     for k in range(160):
         cmd = drive(t, c, hand(palm_mm=(-min(40.0, 0.5 * k), 200.0, 0.0)), q=q)
         if cmd.q is not None:
             assert float(np.abs(cmd.q - q).max()) < 0.1, (k, cmd.q, q)
+            moves += t.status.state == TRACKING
             q = cmd.q.copy()
         reasons.add(t.status.reason)
-    assert t.status.state == HOLDING and abs(q[0] - q0[0]) < 0.1
+    # it tracked toward the limit first, then held short of the other configuration
+    assert moves >= 5 and q[0] > q0[0] and t.status.state == HOLDING and abs(q[0] - q0[0]) < 0.1
     assert any(r.startswith('only another arm configuration reaches') for r in reasons)
     assert 'target reachable again' not in reasons
 

@@ -115,14 +115,16 @@ def test_stage_ages_are_written_and_read_on_two_threads_without_a_lock():
     reads = []
 
     def writer():
-        for k in range(n):
-            ages.add('published', 1.0 + k * 1e-4 + 0.005, 1.0 + k * 1e-4)
-            if k % 500 == 0:                  # wait for a read mid-stream, not only after
-                seen = len(reads)
-                while len(reads) == seen:
-                    time.sleep(0.0005)
-        done.set()
-    t = threading.Thread(target=writer)
+        try:
+            for k in range(n):
+                ages.add('published', 1.0 + k * 1e-4 + 0.005, 1.0 + k * 1e-4)
+                if k % 500 == 0:              # wait for a read mid-stream, not only after
+                    seen, deadline = len(reads), time.monotonic() + 10.0
+                    while len(reads) == seen and time.monotonic() < deadline:
+                        time.sleep(0.0005)
+        finally:
+            done.set()                        # a reader that failed must not hang the run
+    t = threading.Thread(target=writer, daemon=True)
     t.start()
     while not done.is_set():                  # the reader drains while the writer appends
         reads.append(ages.summary(10.0)['published'][2])

@@ -138,7 +138,6 @@ def test_publishing_nodes_end_cleanly_on_ctrl_c():
         assert status == 0 and 'Traceback' not in text, (status, text[-2000:])
 
 
-
 def test_a_hand_source_publishing_into_a_shutdown_is_quiet(monkeypatch):
     # The sender's source thread can outlive stop()'s join by a frame: its publish, refused
     # because the node shuts down, ended the take as 'hand source failed' (exit status 2).

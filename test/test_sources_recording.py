@@ -537,7 +537,6 @@ def test_a_source_that_fails_mid_take_leaves_the_frames_before_it(tmp_path, caps
         record_frames.record(Failing(), str(out))
     assert len(list(make_source('recording', path=str(out), realtime=False).frames())) == 5
 
-
     class FailingAtOnce(Failing):
         def frames(self):
             raise SourceError('camera source: reading failed: gone')
