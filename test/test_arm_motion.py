@@ -61,6 +61,21 @@ def test_hand_rotation_reproduces_the_angles_the_sender_measures():
                                    atol=1e-9)
 
 
+def test_hand_rotation_rebuilds_hands_turned_past_the_vertical():
+    # Any real hand, also one pointing up and back at the user, where the sender's yaw
+    # and pitch both pass pi/2 (and its roll jumps by pi): the same hand comes back.
+    rng = np.random.default_rng(2)
+    neutral_normal, neutral_direction = np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    back = 0
+    for w in rng.normal(size=(300, 3)):
+        w *= rng.uniform(0.0, math.pi) / np.linalg.norm(w)
+        R = kin.rotation_from_vector(w)
+        normal, direction = R @ neutral_normal, R @ neutral_direction
+        back += direction[2] > 0
+        np.testing.assert_allclose(hand_rotation(*hand_angles(normal, direction)), R, atol=1e-9)
+    assert back > 30
+
+
 # -- servo and follower ---------------------------------------------------------------------
 def _follow(servo, goals, dt=0.008, substeps=4, delay_steps=0):
     """Drive a follower with the servo's commands; returns desired (q, qd) per substep."""

@@ -6,6 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from leap_teleop.hands.tracker import hand_angles, wrap_angle
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
 
@@ -617,6 +618,37 @@ def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
     assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
     tilt, yaw = kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])
     assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+
+
+@pytest.mark.parametrize('axis', [(0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (1.0, 0.0, 1.0)],
+                         ids=['palm up', 'fingers up and back', 'turned back', 'rolled and pitched'])
+@pytest.mark.parametrize('scale', [1.0, 0.5])
+def test_full_mode_follows_a_hand_turned_past_half_a_turn_without_a_jump(axis, scale):
+    # The hand turns steadily from the rock to 3.4 rad about one axis, lingers around pi,
+    # and comes back, with the angles the sender measures (they jump where the palm turns
+    # up or the fingers pass the vertical). The filtered, clamped tool target moves on in
+    # small steps, on the side it went over, with no hold.
+    t = ArmTeleop(ArmTeleopParams(orientation='full', orientation_scale=scale,
+                                  filter_min_cutoff_hz=0.0, rotation_min_cutoff_hz=1.0))
+    c = Clock()
+    t.on_joints(HOME)
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    drive(t, c, hand(rock=True))
+    axis = np.asarray(axis) / np.linalg.norm(axis)
+    neutral = (np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, -1.0]))
+    angles = list(np.linspace(0.0, 3.4, 140)) + [3.05, 3.25] * 4 + list(np.linspace(3.4, 0.0, 140))
+    last, worst = None, 0.0
+    for angle in angles:
+        R = kin.rotation_from_vector(axis * angle)
+        rotate, turn, swing = (wrap_angle(a) for a in hand_angles(R @ neutral[0], R @ neutral[1]))
+        drive(t, c, hand(rotate=rotate, turn=turn, swing=swing), periods=3)
+        target = np.asarray(t.status.target_rotation)
+        if last is not None:
+            worst = max(worst, kin.rotation_error(last, target))
+        last = target
+        assert t.status.state == TRACKING, t.status.reason
+    assert worst < 0.06 and t.status.ik_failures == 0
+    np.testing.assert_allclose(last, kin.fk(HOME)[:3, :3], atol=0.05)
 
 
 def test_orientation_is_captured_at_the_rock():

@@ -189,3 +189,45 @@ def test_fuzzed_poses_never_raise():
             nearest += 1
     # Positions in a 4 m cube around a 1.3 m reach: some reachable, most not.
     assert 100 < solved < 1500 and nearest > 100, (solved, nearest)
+
+
+# -- rotations past pi ----------------------------------------------------------------------
+def test_rotation_vector_near_is_the_same_rotation_and_keeps_growing_past_pi():
+    axis = np.array([0.6, 0.0, 0.8])
+    near = None
+    for angle in np.linspace(0.0, 3 * math.pi, 400):
+        R = kin.rotation_from_vector(axis * angle)
+        w = kin.rotation_vector_near(R, near)
+        np.testing.assert_allclose(kin.rotation_from_vector(w), R, atol=1e-9)
+        if near is not None:             # no flip of the axis at pi, nor at 2 pi
+            assert np.linalg.norm(w - near) < 0.05
+        near = w
+    np.testing.assert_allclose(near, axis * 3 * math.pi, atol=1e-6)
+    # With nothing near it is the plain rotation vector, angle in [0, pi].
+    R = kin.rotation_from_vector(axis * 4.0)
+    np.testing.assert_allclose(kin.rotation_vector_near(R, None), kin.rotation_vector(R))
+
+
+def test_limited_tool_rotation_keeps_its_side_over_the_top_and_past_a_half_turn():
+    # The tool tilted about base x through straight up: unclamped, the clamp's side (the
+    # tilt axis) flips where the tool points up; with the last side handed back it stays.
+    down = kin.tool_down()
+    flips, near, last, last_plain = 0, None, None, None
+    for angle in np.linspace(0.0, 4.0, 200):
+        R = kin.rotation_from_vector([angle, 0.0, 0.0]) @ down
+        limited, near = kin.limit_tool_rotation(R, 0.5, 0.0, 1.0, near)
+        plain, _ = kin.limit_tool_rotation(R, 0.5, 0.0, 1.0)
+        if last is not None:
+            assert kin.rotation_error(last, limited) < 0.05
+            flips += kin.rotation_error(last_plain, plain) > 0.5
+        last, last_plain = limited, plain
+    assert flips == 1                    # what the side handed back prevents
+    np.testing.assert_allclose(last, kin.rotation_from_vector([0.5, 0.0, 0.0]) @ down, atol=1e-9)
+    # A turn about the vertical past pi keeps counting: clamped at +1, not flipped to -1.
+    near = None
+    for yaw in np.linspace(0.0, 4.0, 200):
+        limited, near = kin.limit_tool_rotation(kin.tool_down(yaw), 0.5, 0.0, 1.0, near)
+    assert near[1] == pytest.approx(4.0) and kin.tilt_and_yaw(limited)[1] == pytest.approx(1.0)
+    # Within the limits the rotation is returned as it is.
+    R = kin.rotation_from_vector([0.2, -0.1, 0.3]) @ down
+    assert np.array_equal(kin.limit_tool_rotation(R, 0.5, 0.0, 1.0)[0], R)

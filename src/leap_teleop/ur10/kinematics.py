@@ -97,6 +97,30 @@ def rotation_vector(R):
     return np.array([v[0] * f, v[1] * f, v[2] * f])
 
 
+def rotation_vector_near(R, near):
+    """The rotation vector of R nearest `near` (another rotation vector, any length):
+    (angle + 2 pi m) * axis. A rotation passing pi then keeps growing instead of
+    flipping its axis, so what filters or scales it sees no jump; near None: the
+    rotation_vector."""
+    w = rotation_vector(R)
+    if near is None:
+        return w
+    x, y, z = w.tolist()
+    nx, ny, nz = np.asarray(near, dtype=float).tolist()
+    angle = math.sqrt(x * x + y * y + z * z)
+    if angle < 1e-9:                    # the identity: 2 pi m about near's own axis
+        length = math.sqrt(nx * nx + ny * ny + nz * nz)
+        if length < math.pi:
+            return w
+        k = (nx / length, ny / length, nz / length)
+        angle = 0.0
+    else:
+        k = (x / angle, y / angle, z / angle)
+    along = k[0] * nx + k[1] * ny + k[2] * nz
+    angle += 2.0 * math.pi * round((along - angle) / (2.0 * math.pi))
+    return np.array([k[0] * angle, k[1] * angle, k[2] * angle])
+
+
 _DOWN = (0.0, 0.0, -1.0)
 
 
@@ -122,17 +146,42 @@ def tilt_and_yaw(R):
     return tilt, math.atan2(upright[1, 0], upright[0, 0])
 
 
-def limit_tool_rotation(R, max_tilt, yaw_center, max_turn):
+def limit_tool_rotation(R, max_tilt, yaw_center, max_turn, near=None):
     """R with its tilt from vertical limited to max_tilt and its yaw to
-    yaw_center +- max_turn (rad): the orientation counterpart of the workspace box."""
+    yaw_center +- max_turn (rad): the orientation counterpart of the workspace box.
+    Returns (limited R, (tilt axis, turn)). Hand that pair back as `near` on the next
+    call: a tool tilted past horizontal then keeps the side it went over on, and a turn
+    past +-pi keeps counting, so a clamped target does not jump to the other side where
+    the tool points straight up or turns half a circle (a palm turned up from the rock)."""
     R = np.asarray(R, dtype=float)
-    tilt, yaw = tilt_and_yaw(R)
-    turn = (yaw - yaw_center + math.pi) % (2 * math.pi) - math.pi
+    z = R[:, 2].tolist()
+    tilt = math.acos(max(-1.0, min(1.0, -z[2])))
+    near_axis, near_turn = near if near is not None else (None, None)
+    axis = cross3(_DOWN, z)
+    n = norm3(axis)
+    if n > 1e-12:
+        axis = (axis[0] / n, axis[1] / n, axis[2] / n)
+    elif tilt > math.pi / 2:            # straight up: the side it came from, else any
+        axis = near_axis if near_axis is not None else (1.0, 0.0, 0.0)
+    else:                               # straight down: no tilt to clamp
+        axis = near_axis if near_axis is not None else (1.0, 0.0, 0.0)
+        tilt = 0.0
+    side = 1.0
+    if (tilt > math.pi / 2 and near_axis is not None
+            and axis[0] * near_axis[0] + axis[1] * near_axis[1] + axis[2] * near_axis[2] < 0):
+        # Over the top from the other side: the same tilt, about the opposite axis.
+        axis, side = (-axis[0], -axis[1], -axis[2]), -1.0
+    swing = rotation_from_vector((axis[0] * side * tilt, axis[1] * side * tilt,
+                                  axis[2] * side * tilt))
+    upright = swing.T @ R @ TOOL_DOWN.T          # = rot_z(yaw)
+    turn = math.atan2(upright[1, 0], upright[0, 0]) - yaw_center
+    reference = 0.0 if near_turn is None else near_turn
+    turn += 2.0 * math.pi * round((reference - turn) / (2.0 * math.pi))
     if tilt <= max_tilt and abs(turn) <= max_turn:
-        return R
-    swing = _swing(R[:, 2].tolist(), min(tilt, max_tilt))
-    yaw = yaw_center + max(-max_turn, min(max_turn, turn))
-    return swing @ tool_down(yaw)
+        return R, (axis, turn)
+    limited = min(tilt, max_tilt)
+    swing = rotation_from_vector((axis[0] * limited, axis[1] * limited, axis[2] * limited))
+    return swing @ tool_down(yaw_center + max(-max_turn, min(max_turn, turn))), (axis, turn)
 
 
 def pose(position, rotation=TOOL_DOWN):

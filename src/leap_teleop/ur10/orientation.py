@@ -32,7 +32,9 @@ def hand_rotation(rotate, turn, swing):
     # Plain floats (the arm runs this every control period): numpy's arithmetic, in its
     # order, without its per-call cost on 3-vectors.
     cy, sy, cp, sp = math.cos(turn), math.sin(turn), math.cos(swing), math.sin(swing)
-    d = (sy * cp, sp * cy, -cy * cp)
+    # Yaw and pitch both measure from -z: past the vertical (the fingers pointing back at
+    # the user) both pass pi/2 and the direction's z changes sign with cos(pitch).
+    d = (sy * cp, sp * cy, -cy * cp) if cp >= 0.0 else (-sy * cp, -sp * cy, cy * cp)
     d_norm = norm3(d)
     d = (d[0] / d_norm, d[1] / d_norm, d[2] / d_norm)
     # The normal lies in the plane normal to d and in the vertical plane through the

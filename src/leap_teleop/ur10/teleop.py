@@ -159,6 +159,7 @@ class ArmTeleop:
         self._hand_ref_rotation_t = None   # its rotation matrix, transposed
         self._hand_rot_key = None      # (orientation mode, hand angles) of _hand_rot
         self._hand_rot = None
+        self._tool_near = (None, None)  # (relative rotation vector, (tilt axis, turn)) last aimed
         self._target = None
         self._goal = None              # (time, joint goal) of the last tracked target
         self._last_step = None
@@ -415,7 +416,7 @@ class ArmTeleop:
         else:
             target = self._joystick(offset, dt, now)
         target = np.minimum(np.maximum(target, self._lo), self._hi)
-        rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now))
+        rotation = self._tool_rotation(self._rotation_filter.update(hand_rot, now), aim=True)
         self._target = target
         cmd.gripper = self._gripper_command(hand, now)
         self.status.target = tuple(target.tolist())
@@ -455,12 +456,16 @@ class ArmTeleop:
         key = (mode, hand.rotate, hand.turn, hand.swing)
         if key == self._hand_rot_key:
             return self._hand_rot
+        # Nearest the last one: a palm turned up from the rock passes pi, where the plain
+        # rotation vector flips its axis and the filter would sweep the tool through it.
         if mode == 'fixed':
             hand_rot = np.zeros(3)
         elif mode == 'yaw':     # the turn about the vertical alone
-            hand_rot = kin.rotation_vector(ori.hand_rotation(0.0, hand.turn, 0.0))
+            hand_rot = kin.rotation_vector_near(ori.hand_rotation(0.0, hand.turn, 0.0),
+                                                self._hand_rot)
         else:
-            hand_rot = kin.rotation_vector(ori.hand_rotation(hand.rotate, hand.turn, hand.swing))
+            hand_rot = kin.rotation_vector_near(
+                ori.hand_rotation(hand.rotate, hand.turn, hand.swing), self._hand_rot)
         hand_rot.flags.writeable = False
         self._hand_rot_key, self._hand_rot = key, hand_rot
         return hand_rot
@@ -491,27 +496,35 @@ class ArmTeleop:
         self._hand_rot_ref = hand_rot.copy()
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
+        self._tool_near = (None, None)
         self._goal = None
         self._filter.reset(palm, now)
         self._rotation_filter.reset(hand_rot, now)
         self.status.origin_set = True
         self._set(TRACKING, 'origin set')
 
-    def _tool_rotation(self, hand_rot):
-        """Target tool rotation (base frame) for the filtered hand rotation vector."""
+    def _tool_rotation(self, hand_rot, aim=False):
+        """Target tool rotation (base frame) for the filtered hand rotation vector; aim:
+        it is the target from here on (the next one is taken nearest to it)."""
         mode = self.p.orientation
         if mode == 'fixed':
             return self._rotation
-        # The hand's rotation since the origin, turned into the arm base's axes.
+        # The hand's rotation since the origin, turned into the arm base's axes; nearest
+        # the last one, so that a scale other than 1 sees no jump where it passes pi.
         rel = kin.rotation_from_vector(hand_rot) @ self._hand_ref_rotation_t
-        delta = kin.rotation_vector(ori.map_rotation(rel, self._axes_rotation))
-        delta = delta * self.p.orientation_scale
+        near_delta, near_limit = self._tool_near
+        delta = kin.rotation_vector_near(ori.map_rotation(rel, self._axes_rotation), near_delta)
         if mode == 'yaw':
-            turn = max(-self.p.max_tool_turn, min(self.p.max_tool_turn, float(delta[2])))
-            return kin.tool_down(self._yaw_ref + turn)
-        R = kin.rotation_from_vector(delta) @ self._tool_ref
-        return kin.limit_tool_rotation(R, self.p.max_tool_tilt, self._yaw_ref,
-                                       self.p.max_tool_turn)
+            turn = float(delta[2]) * self.p.orientation_scale
+            R = kin.tool_down(self._yaw_ref + max(-self.p.max_tool_turn,
+                                                  min(self.p.max_tool_turn, turn)))
+        else:
+            R, near_limit = kin.limit_tool_rotation(
+                kin.rotation_from_vector(delta * self.p.orientation_scale) @ self._tool_ref,
+                self.p.max_tool_tilt, self._yaw_ref, self.p.max_tool_turn, near_limit)
+        if aim:
+            self._tool_near = (delta, near_limit)
+        return R
 
     def _joystick(self, offset_mm, dt, now):
         n = float(np.linalg.norm(offset_mm))
