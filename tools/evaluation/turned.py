@@ -129,7 +129,9 @@ def main(argv=None):
     for lo, hi in zip(BINS_DEG, BINS_DEG[1:]):
         key = '%d-%d deg' % (lo, hi)
         right, total = results.get(key, (0, 0))
-        print('  %-12s %6d / %-6d %.4f' % (key, right, total, right / total if total else 0))
+        # An empty bin has no fraction: a 0 there would read as every value wrong.
+        share = '%.4f' % (right / total) if total else '-'
+        print('  %-12s %6d / %-6d %s' % (key, right, total, share))
     print('synthetic hands turned up to 70 deg, both sides, fraction recognised:')
     for pose, frac in synthetic().items():
         print('  %-10s %.3f' % (pose, frac))
