@@ -13,14 +13,26 @@ DEEP = 'a: ' + '[' * 5000 + ']' * 5000 + '\n'
 HUGE = '1' + '0' * 400
 
 
-@pytest.mark.parametrize('load, error', [
-    (GestureScript.load, SourceError), (load_bindings, BindingError),
-    (read_cell_config, CellConfigError)])
-def test_yaml_nested_thousands_deep_is_one_error(load, error, tmp_path):
-    path = tmp_path / 'deep.yaml'
-    path.write_text(DEEP)
-    with pytest.raises(error, match='nested too deeply'):
+BAD_FILES = [(None, 'cannot read (No such file or directory)'),
+             (b'\xff\xfe hands: {}', 'not UTF-8 text'),
+             (b'a: [1,\n', 'not valid YAML (line 2: '),
+             (DEEP.encode(), 'nested too deeply')]
+
+
+@pytest.mark.parametrize('load, error, what', [
+    (GestureScript.load, SourceError, 'gesture script'),
+    (load_bindings, BindingError, 'gesture bindings'),
+    (read_cell_config, CellConfigError, 'cell config')])
+@pytest.mark.parametrize('data, why', BAD_FILES, ids=[b[1].split(' (')[0] for b in BAD_FILES])
+def test_every_yaml_file_a_user_hands_in_fails_the_same_one_line_way(load, error, what, data,
+                                                                     why, tmp_path):
+    path = tmp_path / 'bad.yaml'
+    if data is not None:
+        path.write_bytes(data)
+    with pytest.raises(error) as e:
         load(str(path))
+    line = str(e.value)
+    assert line.startswith('%s %s: %s' % (what, path, why)) and '\n' not in line, line
 
 
 def test_integers_of_hundreds_of_digits_are_refused_by_name(tmp_path):

@@ -11,12 +11,12 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
-import yaml
 
 from leap_teleop.package_files import package_path
 from leap_teleop.params import Param, ParamError, check_params
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_LOWER, JOINT_UPPER
 from leap_teleop.vectors import rpy_matrix
+from leap_teleop.yaml_file import load_yaml_file
 
 
 def config_path(name):
@@ -43,12 +43,6 @@ def read_cell_config(name):
     path = config_path(name)
     try:
         return load_config(name)
-    except OSError as e:
-        why = e.strerror or e
-    except yaml.YAMLError as e:     # its text spans lines and points into the file
-        mark = getattr(e, 'problem_mark', None)
-        why = 'not valid YAML (%s%s)' % ('line %d: ' % (mark.line + 1) if mark else '',
-                                         getattr(e, 'problem', None) or ' '.join(str(e).split()))
     except ValueError as e:
         why = str(e)
         if why.startswith('cell config'):
@@ -292,9 +286,4 @@ def _check_cubes(cubes, table_height, size, table_center, table_size):
 def load_config(name='ur10_cell.yaml'):
     """Load a cell config by path or by file name in config/ (e.g. 'ur10_dual_cell')."""
     path = config_path(name)
-    with open(path) as f:
-        try:
-            data = yaml.safe_load(f)
-        except RecursionError:          # the YAML composer recurses per nesting level
-            raise ValueError('cell config %s: nested too deeply' % path) from None
-    return parse_config(data, path)
+    return parse_config(load_yaml_file(path, 'cell config'), path)

@@ -28,9 +28,8 @@ flip -> circle_cw / circle_ccw, hover -> hand_lost: the pilot hovers and, in til
 takes the hand's place on its next frame as the new neutral point). Raw unfold / fold /
 circle events go out only as the actions they are bound to.
 """
-import yaml
-
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES, HandEvent
+from leap_teleop.yaml_file import YamlFileError, load_yaml_file
 
 ARM_ACTIONS = ('arm', 'origin', 'stop', 'gripper')
 DRONE_ACTIONS = ('takeoff', 'land', 'flip', 'hover')
@@ -214,17 +213,9 @@ def load_bindings(path=None):
     if not path:
         return Bindings(None, 'default gesture bindings')
     try:
-        with open(path, encoding='utf-8') as f:
-            data = yaml.safe_load(f)
-    except OSError as e:
-        raise BindingError('gesture bindings %s: cannot read (%s)' % (path, e.strerror or e))
-    except yaml.YAMLError as e:
-        mark = getattr(e, 'problem_mark', None)
-        where = ' line %d' % (mark.line + 1) if mark is not None else ''
-        raise BindingError('gesture bindings %s:%s not YAML (%s)'
-                           % (path, where, getattr(e, 'problem', None) or e))
-    except RecursionError:              # the YAML composer recurses per nesting level
-        raise BindingError('gesture bindings %s: nested too deeply' % path) from None
+        data = load_yaml_file(path, 'gesture bindings')
+    except YamlFileError as e:
+        raise BindingError(str(e)) from None
     return Bindings(data, 'gesture bindings %s' % path)
 
 

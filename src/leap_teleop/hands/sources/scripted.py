@@ -25,11 +25,11 @@ import math
 import time
 
 import numpy as np
-import yaml
 
 from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.rendered_hand import POSES, render_hand, rpy_to_basis
 from leap_teleop.hands.sources.source import HandSource, SourceError
+from leap_teleop.yaml_file import YamlFileError, load_yaml_file
 
 DEFAULT_PALM = (0.0, 200.0, 0.0)
 # Frames a second a script may ask for: the sender's ~rate bound, and a rate the renderer
@@ -142,16 +142,9 @@ class GestureScript:
     @classmethod
     def load(cls, path):
         try:
-            with open(path) as f:
-                data = yaml.safe_load(f)
-        except OSError as e:
-            raise SourceError('cannot read gesture script %s: %s' % (path, e.strerror))
-        except UnicodeDecodeError as e:
-            raise SourceError('gesture script %s is not UTF-8 text: %s' % (path, e))
-        except yaml.YAMLError as e:
-            raise SourceError('gesture script %s is not valid YAML: %s' % (path, e))
-        except RecursionError:          # the YAML composer recurses per nesting level
-            raise SourceError('gesture script %s is nested too deeply' % path) from None
+            data = load_yaml_file(path, 'gesture script')
+        except YamlFileError as e:
+            raise SourceError(str(e)) from None
         return cls(data, name=str(path))
 
     def _palm(self, seg, u):
