@@ -651,6 +651,34 @@ def test_full_mode_follows_a_hand_turned_past_half_a_turn_without_a_jump(axis, s
     np.testing.assert_allclose(last, kin.fk(HOME)[:3, :3], atol=0.05)
 
 
+def test_a_live_scale_applies_to_the_motion_from_then_on_and_moves_nothing_by_itself():
+    t, c = armed_with_origin(scale=2.5)
+    drive(t, c, hand(palm_mm=(100.0, 200.0, 0.0)), periods=50)     # held 10 cm out
+    before = np.array(t.status.target)
+    t.retune({'scale': 5.0})
+    drive(t, c, hand(palm_mm=(100.0, 200.0, 0.0)))
+    np.testing.assert_allclose(t.status.target, before, atol=1e-9)  # it was 0.25 m away
+    drive(t, c, hand(palm_mm=(110.0, 200.0, 0.0)))                  # 10 mm more: 5 cm
+    assert np.linalg.norm(np.array(t.status.target) - before) == pytest.approx(0.05, abs=1e-9)
+    assert t.status.state == TRACKING
+
+
+@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+def test_a_live_orientation_scale_turns_nothing_by_itself(orientation):
+    t, c = armed_with_origin(orientation=orientation)
+    drive(t, c, hand(turn=-0.6), periods=50)
+    before = np.array(t.status.target_rotation)
+    t.retune({'orientation_scale': 2.0})
+    drive(t, c, hand(turn=-0.6))
+    assert kin.rotation_error(before, np.array(t.status.target_rotation)) < 1e-9  # was 0.6 rad
+    drive(t, c, hand(turn=-0.7))                                     # 0.1 rad more: 0.2
+    turned = kin.tilt_and_yaw(np.array(t.status.target_rotation))[1] - kin.tilt_and_yaw(before)[1]
+    assert turned == pytest.approx(0.2, abs=1e-6)
+    t.retune({'orientation_scale': 1.0})
+    drive(t, c, hand())                                              # the hand back to the rock
+    np.testing.assert_allclose(t.status.target_rotation, kin.fk(HOME)[:3, :3], atol=0.25)
+
+
 def test_orientation_is_captured_at_the_rock():
     t, c = armed_with_origin(orientation='yaw', max_joint_speed=1.0, max_joint_accel=3.0)
     drive(t, c, hand(turn=-0.6), periods=250)        # 2 s: the servo gets there

@@ -155,6 +155,7 @@ class ArmTeleop:
         self._tcp_ref = None
         self._tool_ref = None          # tool rotation at the origin (base frame)
         self._yaw_ref = 0.0
+        self._turn_ref = 0.0           # yaw mode: the tool's turn at the hand's reference
         self._hand_rot_ref = None      # hand rotation vector at the origin (Leap axes)
         self._hand_ref_rotation_t = None   # its rotation matrix, transposed
         self._hand_rot_key = None      # (orientation mode, hand angles) of _hand_rot
@@ -171,9 +172,12 @@ class ArmTeleop:
     def retune(self, changes):
         """Apply checked changes ({name: value}, the node's reconfigurable ones) while
         running: the params (read where used) and the filters and servo built from them."""
+        old_scale, old_turn_scale = self.p.scale, self.p.orientation_scale
         for name, value in changes.items():
             setattr(self.p, name, value)
         p = self.p
+        if self._palm_ref is not None:
+            self._rescale_origin(old_scale, old_turn_scale)
         for filt, prefix in ((self._filter, 'filter_'), (self._rotation_filter, 'rotation_')):
             filt.min_cutoff_hz = getattr(p, prefix + 'min_cutoff_hz')
             filt.beta = getattr(p, prefix + 'beta')
@@ -182,6 +186,28 @@ class ArmTeleop:
         self._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
         self._servo.gain = float(p.servo_gain)
         self._servo.lead = float(p.servo_lead)
+
+    def _rescale_origin(self, old_scale, old_turn_scale):
+        """A new scale applies to the hand's motion from here on: the target stays where it
+        is. (Applied to the whole offset since the rock, it moved the arm of a hand held
+        still: 0.25 m for a palm 10 cm out when the scale went from 2.5 to 5.)"""
+        if (self.p.scale != old_scale and self.p.mode == 'imitation'
+                and self._filter.value is not None):
+            offset = self._filter.value - self._palm_ref
+            self._tcp_ref = self._tcp_ref + self._axes @ offset * (0.001 * (old_scale - self.p.scale))
+        hand_rot = self._rotation_filter.value
+        if (self.p.orientation_scale != old_turn_scale and self.p.orientation != 'fixed'
+                and hand_rot is not None):
+            # The rotation so far becomes part of the reference; the hand's own reference
+            # moves to where it is.
+            rel = kin.rotation_from_vector(hand_rot) @ self._hand_ref_rotation_t
+            delta = old_turn_scale * kin.rotation_vector_near(
+                ori.map_rotation(rel, self._axes_rotation), self._tool_near[0])
+            self._turn_ref += float(delta[2])
+            self._tool_ref = kin.rotation_from_vector(delta) @ self._tool_ref
+            self._hand_rot_ref = hand_rot.copy()
+            self._hand_ref_rotation_t = kin.rotation_from_vector(hand_rot).T
+            self._tool_near = (np.zeros(3), self._tool_near[1])
 
     def diagnostics(self):
         """(level 'ok' | 'warn', summary, [(key, value)]) of the status, for a diagnostics
@@ -493,6 +519,7 @@ class ArmTeleop:
         self._tcp_ref = tool[:3, 3].copy()
         self._tool_ref = tool[:3, :3].copy()
         self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
+        self._turn_ref = 0.0
         self._hand_rot_ref = hand_rot.copy()
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
@@ -515,7 +542,7 @@ class ArmTeleop:
         near_delta, near_limit = self._tool_near
         delta = kin.rotation_vector_near(ori.map_rotation(rel, self._axes_rotation), near_delta)
         if mode == 'yaw':
-            turn = float(delta[2]) * self.p.orientation_scale
+            turn = self._turn_ref + float(delta[2]) * self.p.orientation_scale
             R = kin.tool_down(self._yaw_ref + max(-self.p.max_tool_turn,
                                                   min(self.p.max_tool_turn, turn)))
         else:
