@@ -112,6 +112,59 @@ def test_tilt_mode_maps_offsets_from_the_reference():
     assert len(t) == 4                                 # one twist per hand sample, no more
 
 
+def oriented(R, palm=(0.0, 0.2, 0.0), t=0.0):
+    """A hand turned by rotation R (3x3, Leap axes) from flat and pointing away."""
+    R = np.asarray(R)
+    return PilotInput(True, palm, tuple(R @ [0.0, -1.0, 0.0]), tuple(R @ [0.0, 0.0, -1.0]), t)
+
+
+def rotation(axis, deg):
+    from leap_teleop.ur10.kinematics import rotation_from_vector
+    return rotation_from_vector(np.asarray(axis, dtype=float) * math.radians(deg))
+
+
+def yaw_commands(pilot, hands):
+    out = []
+    for k, h in enumerate(hands):
+        now = 0.1 + 0.01 * k
+        pilot.on_navdata(3, 1000, now)
+        pilot.on_hand(h, now)
+        out += [tw[5] for tw in twists(drain(pilot))]
+    return out
+
+
+@pytest.mark.parametrize('axis', [(1.0, 0.0, 0.0), (0.0, 0.0, 1.0)], ids=['raised', 'rolled'])
+def test_raising_or_rolling_the_hand_turns_nothing_even_past_upright(axis):
+    # Fingers raised through vertical and past it (a "stop" hand), or the palm rolled up to
+    # nearly upside down, with sideways tracking jitter of +-0.6 deg: the Leap yaw of the
+    # direction swung across +-180 there and the drone spun at full rate either way.
+    pilot = airborne(PilotParams())
+    hands = [oriented(rotation((0.0, 1.0, 0.0), 0.6 * (-1) ** k) @ rotation(axis, deg))
+             for k, deg in enumerate(np.linspace(0.0, 170.0, 171))]
+    assert yaw_commands(pilot, hands) == [0.0] * len(hands)
+
+
+def test_an_unfold_shown_upright_steers_by_the_turn_from_it():
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    upright = rotation((0.0, 1.0, 0.0), 0.5) @ rotation((1.0, 0.0, 0.0), 90.5)
+    pilot.on_hand(oriented(upright), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    flat_left = rotation((0.0, 1.0, 0.0), 40.0)            # flat, turned left by 40 deg
+    commands = yaw_commands(pilot, [oriented(np.eye(3)), oriented(flat_left),
+                                    oriented(flat_left @ upright)])
+    # Lowered flat: no turn (the unfold's yaw was +-135 deg of noise); 40 deg: the same
+    # command as from a flat unfold; raised again, still turned: the same.
+    assert commands == pytest.approx([0.0, 25.0 / 45.0, 25.0 / 45.0], abs=0.02)
+
+
+def test_a_hand_turned_half_round_keeps_its_side():
+    pilot = airborne(PilotParams())
+    commands = yaw_commands(pilot, [oriented(rotation((0.0, 1.0, 0.0), deg))
+                                    for deg in list(range(0, 200, 5)) + list(range(200, -1, -5))])
+    assert max(commands) == pytest.approx(1.0) and min(commands) == 0.0
+
+
 def test_no_hand_twists_while_landed_or_taking_off():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)
@@ -336,6 +389,20 @@ def test_a_hand_held_through_a_stall_keeps_its_reference():
     silence(pilot, t, t + 0.6)
     pilot.on_hand(stamped((0.0, 0.2, -0.1), t + 0.6), t + 0.6)
     assert twists(drain(pilot)) == [(0.0,) * 6]
+
+
+@pytest.mark.parametrize('turn, kept', [(5.0, True), (70.0, False)])
+def test_a_hand_back_turned_where_it_was_lost_is_re_captured(turn, kept):
+    # Back at the same spot turned 70 deg: the old reference gave full yaw at once.
+    pilot, t = flying_forward(PilotParams(navdata_timeout=10.0, disarm_after=1.0))
+    silence(pilot, t, t + 0.6)
+    t += 0.6
+    pilot.on_hand(oriented(rotation((0.0, 1.0, 0.0), turn), (0.0, 0.2, -0.1), t), t)
+    first = twists(drain(pilot))[-1]
+    if kept:                         # a small turn: the forward command goes on
+        assert first[0] == pytest.approx(0.7) and first[5] == 0.0
+    else:
+        assert first == (0.0,) * 6
 
 
 def test_an_unfold_that_came_while_the_hand_was_away_captures_when_it_comes_back():

@@ -19,14 +19,16 @@ thing); unknown names are warned about.
 
 Modes:
 
-- ``tilt`` (default): on unfold the palm position and hand yaw become the reference
-  (back after a short loss, kept if the palm is within ``recapture_beyond`` of where it
-  was lost, else re-captured where it is, so nothing jumps). Palm offset
+- ``tilt`` (default): on unfold the palm position and the hand's orientation become the
+  reference (back after a short loss, kept if the palm is within ``recapture_beyond`` of
+  where it was lost and turned less than RECAPTURE_TURN_DEG, else re-captured where it
+  is, so nothing jumps). Palm offset
   beyond ``dead_zone`` maps linearly to a command reaching 1 at ``dead_zone +
   full_scale``: away from the user (-Leap z) -> forward (linear.x), to the left
   (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
-  left -> yaw left (angular.z). Clamped to ``max_cmd``; angular.x / y are zero, so a
-  centred hand is the driver's auto-hover.
+  left about the vertical -> yaw left (angular.z; raising or rolling it turns nothing).
+  Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
+  auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
   README), quirks included. With the Leap SDK's angles
   (pitch = atan2(dir_y, -dir_z), roll = atan2(normal_x, -normal_y)), a frame whose
@@ -66,6 +68,7 @@ from dataclasses import dataclass
 
 from leap_teleop.control.input_check import InputStream
 from leap_teleop.drone.pilot_params import PILOT_PARAMS, PilotParams  # noqa: F401 (re-exported)
+from leap_teleop.vectors import cross3, norm3
 
 FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
@@ -85,6 +88,9 @@ SAFE_EVENTS = ('hand_lost', 'fold')
 # pose model (letters, digits, _; at most 64). The pilot acts on unfold, fold, circle_* and
 # hand_lost and passes over the others quietly; a name no sender sends is warned about.
 GESTURE_NAME = re.compile(r'[A-Za-z0-9_]{1,64}')
+# Back from a short loss turned this far (deg) about the vertical from where it was lost,
+# the hand's reference is re-captured, as when it comes back elsewhere (the arm's 0.3 rad).
+RECAPTURE_TURN_DEG = 17.0
 
 
 @dataclass
@@ -112,6 +118,34 @@ def leap_angles(normal, direction):
     roll = math.degrees(math.atan2(normal[0], -normal[1]))
     yaw = math.degrees(math.atan2(direction[0], -direction[2]))
     return pitch, roll, yaw
+
+
+def hand_axes(normal, direction):
+    """The hand's orientation (Leap axes) as the rows of the matrix whose columns are
+    across the palm, the palm normal and the direction, made orthonormal; None when the
+    normal lies along the direction (no orientation)."""
+    d_len = norm3(direction)
+    d = (direction[0] / d_len, direction[1] / d_len, direction[2] / d_len)
+    c = cross3(normal, d)
+    c_len = norm3(c)
+    if c_len < 1e-6:
+        return None
+    c = (c[0] / c_len, c[1] / c_len, c[2] / c_len)
+    n = cross3(d, c)
+    return ((c[0], n[0], d[0]), (c[1], n[1], d[1]), (c[2], n[2], d[2]))
+
+
+def turn_about_vertical(before, after):
+    """How far (deg, as the Leap yaw counts: positive with the fingers turning to +x) the
+    hand turned about the vertical from orientation `before` to `after` (hand_axes): the
+    twist part of the rotation between them. Unlike the difference of two yaws it is
+    defined for a hand raised upright or past it (their direction has no heading) and
+    unmoved by raising or rolling the hand; only a half turn about a level axis leaves
+    it undefined (0 there)."""
+    # R = after * before^T; the twist about y of R is 2 atan2(R02 - R20, 1 + trace R).
+    r = [[sum(after[i][k] * before[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    twist = 2.0 * math.atan2(r[0][2] - r[2][0], 1.0 + r[0][0] + r[1][1] + r[2][2])
+    return -math.degrees(twist)
 
 
 def paper_twist(palm_mm, normal, init_x, init_y, scale=3000.0):
@@ -198,7 +232,8 @@ class DronePilot:
         self.engaged = False             # tilt: unfold seen, not folded since
         self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
         self._takeoff_at = None          # when the last takeoff was queued
-        self.reference = None            # tilt: (palm xyz m, yaw deg)
+        self.reference = None            # tilt: (palm xyz m, hand_axes or None)
+        self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
         self._hand_at_loss = None        # the last hand before the latest loss
@@ -359,10 +394,16 @@ class DronePilot:
         command, so re-capturing a hand held forward through a stall would turn the
         old neutral into a command backwards."""
         lost = self._hand_at_loss
-        return lost is None or math.dist(hand.palm, lost.palm) >= self.cfg.recapture_beyond
+        if lost is None or math.dist(hand.palm, lost.palm) >= self.cfg.recapture_beyond:
+            return True
+        # Turned since: its old reference would give a yaw command nobody showed.
+        before, after = (hand_axes(h.normal, h.direction) for h in (lost, hand))
+        return (before is not None and after is not None
+                and abs(turn_about_vertical(before, after)) > RECAPTURE_TURN_DEG)
 
     def _capture(self, hand):
-        self.reference = (tuple(hand.palm), leap_angles(hand.normal, hand.direction)[2])
+        self.reference = (tuple(hand.palm), hand_axes(hand.normal, hand.direction))
+        self._last_turn = 0.0
 
     def _twist(self, hand):
         cfg = self.cfg
@@ -380,10 +421,16 @@ class DronePilot:
             return tuple(max(-1.0, min(1.0, v)) for v in t[:3]) + t[3:]
         if not self.engaged or self.reference is None:
             return None
-        ref, yaw_ref = self.reference
+        ref, axes_ref = self.reference
         d = [hand.palm[i] - ref[i] for i in range(3)]
-        yaw = leap_angles(hand.normal, hand.direction)[2]
-        dyaw = (yaw - yaw_ref + 180.0) % 360.0 - 180.0
+        axes = hand_axes(hand.normal, hand.direction)
+        if axes_ref is None:                # captured from a hand with no orientation
+            self.reference = (ref, axes)
+            axes_ref = axes
+        dyaw = 0.0 if axes is None else turn_about_vertical(axes_ref, axes)
+        # On from the last turn (a hand turned half round keeps its side, at full rate).
+        dyaw += 360.0 * round((self._last_turn - dyaw) / 360.0)
+        self._last_turn = dyaw
         cap = min(abs(cfg.max_cmd), 1.0)
         return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
                 -shaped(d[0], cfg.dead_zone, cfg.full_scale, cap),

@@ -42,7 +42,8 @@ PILOT_PARAMS = {
     'z_dead_zone': Param(0.03, 'tilt: vertical dead zone', unit='m', ge=0.0, le=0.5),
     'z_full_scale': Param(0.10, 'tilt: offset beyond it for full climb rate', unit='m',
                           gt=0.0, le=1.0),
-    'yaw_dead_zone': Param(15.0, 'tilt: hand yaw dead zone', unit='deg', ge=0.0, lt=180.0),
+    'yaw_dead_zone': Param(15.0, 'tilt: dead zone of the hand\'s turn about the vertical '
+                                 'since the unfold', unit='deg', ge=0.0, lt=180.0),
     'yaw_full_scale': Param(45.0, 'tilt: yaw beyond it for full yaw rate', unit='deg',
                             gt=0.0, le=180.0),
     'max_cmd': Param(1.0, 'tilt: cap on every cmd_vel component', gt=0.0, le=1.0),
