@@ -165,6 +165,32 @@ def test_a_hand_turned_half_round_keeps_its_side():
     assert max(commands) == pytest.approx(1.0) and min(commands) == 0.0
 
 
+@pytest.mark.parametrize('then', ['fold', 'hand_lost'])
+def test_a_fold_or_a_lost_hand_withdraws_a_takeoff_not_yet_sent(then):
+    # Both events handled before the worker popped the takeoff (one burst after a stall):
+    # the takeoff went out all the same, against the fold.
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.01)
+    pilot.on_gesture(then, True, 0.02)
+    out = kinds(drain(pilot))
+    assert 'takeoff' not in out and 'land' not in out, out
+
+
+def test_a_fold_before_navdata_reports_the_takeoff_lands():
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.01)
+    assert kinds(drain(pilot)) == ['takeoff']                 # sent
+    pilot.on_gesture('fold', True, 0.02)                      # navdata still says landed
+    assert kinds(drain(pilot)) == ['land']
+    pilot.on_navdata(2, 0, 0.5)                               # landed since: a fold lands nothing
+    pilot.on_gesture('fold', True, 0.51)
+    assert kinds(drain(pilot)) == []
+
+
 def test_no_hand_twists_while_landed_or_taking_off():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)

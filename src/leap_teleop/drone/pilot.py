@@ -192,6 +192,14 @@ class CommandQueue:
             self._items.append(cmd)
             self._cond.notify()
 
+    def discard(self, kind):
+        """Withdraw every unsent command of this kind; how many there were."""
+        with self._cond:
+            kept = [c for c in self._items if c.kind != kind]
+            gone = len(self._items) - len(kept)
+            self._items = collections.deque(kept)
+            return gone
+
     def peek(self):
         with self._cond:
             return self._items[0] if self._items else None
@@ -358,8 +366,14 @@ class DronePilot:
                 self.engaged = False
                 self._takeoff_asked = False
                 self.reference = None
-                if state is None or state in AIRBORNE_STATES:
+                withdrawn = self.queue.discard('takeoff')
+                # A takeoff sent after the last navdata flies however that navdata read.
+                sent = (not withdrawn and self._takeoff_at is not None
+                        and not self._takeoff_at < (self.last_navdata_time or -math.inf))
+                if state is None or state in AIRBORNE_STATES or sent:
                     self.queue.push(Command('land', stamp=now, input_stamp=stamp))
+                elif withdrawn:
+                    self._warn('fold', 'fold: the unsent takeoff withdrawn')
                 else:
                     self._warn('fold', 'fold: no landing, the drone is not flying (state %s)'
                                % state)
@@ -446,6 +460,7 @@ class DronePilot:
     # -- watchdog ----------------------------------------------------------------------
     def _lose(self, now):
         self._takeoff_asked = False
+        self.queue.discard('takeoff')       # nothing takes off that no hand in view asks for
         if self.hand_present or self.lost_since is None:
             self.lost_since = now
         was_present = self.hand_present
