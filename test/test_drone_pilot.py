@@ -191,6 +191,26 @@ def test_a_fold_before_navdata_reports_the_takeoff_lands():
     assert kinds(drain(pilot)) == []
 
 
+@pytest.mark.parametrize('lost', ['hand', 'navdata'])
+def test_the_clock_jumping_back_under_a_loss_still_lands(lost):
+    # The /clock publisher restarts 1 s into a loss, and a Hand message (every 10 ms) sees
+    # the new time before the watchdog: the loss's start stayed at the old time, and the
+    # drone hovered without landing for as long as the jump (25 s and 55 s here).
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    gone = dict(hand=lambda t: pilot.on_hand(hand((0.0, 0.2, 0.0), present=False), t),
+                navdata=lambda t: pilot.on_hand(hand((0.0, 0.2, 0.0)), t))[lost]
+    landed_at = None
+    for t in list(np.arange(1000.0, 1001.0, 0.01)) + list(np.arange(5.0, 30.0, 0.01)):
+        if lost == 'hand':
+            pilot.on_navdata(3, 1000, t)
+        gone(t)
+        pilot.watchdog(t)
+        if landed_at is None and 'land' in kinds(drain(pilot)):
+            landed_at = t
+    assert landed_at is not None and 5.0 < landed_at <= 5.0 + 3.0 + 0.02, landed_at
+
+
 def test_no_hand_twists_while_landed_or_taking_off():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)

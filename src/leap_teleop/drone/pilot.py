@@ -493,6 +493,15 @@ class DronePilot:
                 self._stream.reset()
                 self.lost_since = None
                 self._lose(now)
+            # A callback usually sees such a jump first (a Hand message comes every 10 ms):
+            # times kept from the old timeline would hold the landings off for as long as
+            # the jump. They start again from now.
+            if self.lost_since is not None and self.lost_since > now:
+                self.lost_since = now
+            if self.navdata_lost_since is not None and self.navdata_lost_since > now:
+                self.navdata_lost_since = now
+            if self._takeoff_at is not None and self._takeoff_at > now:
+                self._takeoff_at = now
             if (self.hand_present and self.last_hand_time is not None
                     and now - self.last_hand_time > self.cfg.hand_timeout):
                 self._warn('stale', 'no Hand message for %.2f s: hovering'
