@@ -544,28 +544,40 @@ def test_queue_is_bounded_and_keeps_discrete_commands():
     q.push(Command('land'))
     items = [q.popleft() for _ in range(len(q))]
     assert [c.kind for c in items] == ['takeoff', 'twist', 'land']
-    assert items[1].twist[0] == 4.0 and q.dropped == 4
+    # the land puts a hover in place of the unsent twist
+    assert items[1].twist == (0.0,) * 6 and q.dropped == 5
     for kind in ('twist', 'flip', 'twist', 'land', 'twist'):
         q.push(Command(kind))                # full (3): the oldest twist goes first
     assert [c.kind for c in (q.popleft() for _ in range(len(q)))] == ['flip', 'land', 'twist']
 
 
-def test_twists_are_paced_at_the_rate():
+def test_twists_are_paced_at_the_rate_but_not_a_stop_or_a_land():
     pilot = DronePilot(PilotParams(rate=50.0))
-    pilot.queue.push(Command('twist'))
+    steer = Command('twist', (0.5, 0.0, 0.0, 0.0, 0.0, 0.0))
+    pilot.queue.push(steer)
     pilot.queue.push(Command('flip'))
-    pilot.queue.push(Command('twist'))
-    pilot.queue.push(Command('land'))
+    pilot.queue.push(steer)
     cmd, _ = pilot.pop(10.0)
     assert cmd.kind == 'twist'
     cmd, _ = pilot.pop(10.001)
-    assert cmd.kind == 'flip'
+    assert cmd.kind == 'flip'                                # discrete: not paced
     cmd, wait = pilot.pop(10.005)
     assert cmd is None and wait == pytest.approx(0.015)
     cmd, _ = pilot.pop(10.02)
-    assert cmd.kind == 'twist'
-    cmd, _ = pilot.pop(10.021)                               # discrete: not paced
-    assert cmd.kind == 'land'
+    assert cmd is steer
+    # The hover after steering goes at once (at 2 Hz it waited 0.49 s); a hover after a
+    # hover keeps the pace.
+    pilot.queue.push(Command('twist'))
+    cmd, _ = pilot.pop(10.021)
+    assert cmd.twist == (0.0,) * 6
+    pilot.queue.push(Command('twist'))
+    cmd, wait = pilot.pop(10.022)
+    assert cmd is None and wait == pytest.approx(0.019)
+    assert pilot.pop(10.041)[0].twist == (0.0,) * 6
+    # A land puts a hover in place of the steering not sent yet: neither waits.
+    pilot.queue.push(steer)
+    pilot.queue.push(Command('land'))
+    assert pilot.pop(10.042)[0].twist == (0.0,) * 6 and pilot.pop(10.043)[0].kind == 'land'
 
 
 def test_bad_config_rejected():

@@ -55,8 +55,8 @@ teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed 
 watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded
 FIFO: a twist replaces an unsent twist at the tail (the newer hand state wins, so a hand
 faster than ``rate`` adds no lag); when full, the oldest twist is dropped (takeoff /
-land / flip never are); twists leave at most ``rate`` per second, discrete commands at
-once.
+land / flip never are) and a land puts a hover in place of the unsent ones; steering
+twists leave at most ``rate`` per second, a hover after them and discrete commands at once.
 """
 import collections
 import math
@@ -173,6 +173,14 @@ class CommandQueue:
 
     def push(self, cmd):
         with self._cond:
+            if cmd.kind == 'land':
+                # Supersedes the steering not sent yet: a hover in its place, which leaves
+                # at once (the land waited behind the steering's pacing).
+                for i, old in enumerate(self._items):
+                    if old.kind == 'twist' and old.twist != ZERO_TWIST:
+                        self._items[i] = Command('twist', ZERO_TWIST, stamp=old.stamp,
+                                                 input_stamp=old.input_stamp)
+                        self.dropped += 1
             if cmd.kind == 'twist' and self._items and self._items[-1].kind == 'twist':
                 # A newer hand state supersedes an unsent twist: latency stays one slot.
                 self._items[-1] = cmd
@@ -199,6 +207,10 @@ class CommandQueue:
             gone = len(self._items) - len(kept)
             self._items = collections.deque(kept)
             return gone
+
+    def holds(self, kind):
+        with self._cond:
+            return any(c.kind == kind for c in self._items)
 
     def peek(self):
         with self._cond:
@@ -246,6 +258,7 @@ class DronePilot:
         self._last_hand = None
         self._hand_at_loss = None        # the last hand before the latest loss
         self._last_twist_out = None      # monotonic time of the last twist published
+        self._last_twist_sent = None     # and its values
         self._zero_sent = False
         self._stream = InputStream(self.cfg.max_input_age, self.cfg.hand_timeout)
         self.rejected_inputs = 0         # bad or late Hand messages and gesture events
@@ -574,13 +587,17 @@ class DronePilot:
         cmd = self.queue.peek()
         if cmd is None:
             return None, None
-        if cmd.kind == 'twist' and self._last_twist_out is not None:
+        # A hover after steering or before a land is not paced (at a low rate it waited up
+        # to 1/rate s); hovers after hovers are.
+        stopping = cmd.kind == 'twist' and cmd.twist == ZERO_TWIST and (
+            self._last_twist_sent != ZERO_TWIST or self.queue.holds('land'))
+        if cmd.kind == 'twist' and not stopping and self._last_twist_out is not None:
             wait = self._last_twist_out + 1.0 / self.cfg.rate - mono_now
             if wait > 0:
                 return None, wait
         cmd = self.queue.popleft()
         if cmd is not None and cmd.kind == 'twist':
-            self._last_twist_out = mono_now
+            self._last_twist_out, self._last_twist_sent = mono_now, cmd.twist
         return cmd, 0.0
 
 
