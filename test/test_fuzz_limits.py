@@ -720,6 +720,53 @@ def test_found_hung_flip_call_never_blocks_the_watchdog():
         release.set()
 
 
+def test_found_a_flip_waiting_for_its_service_is_not_called_after_a_fold():
+    # The service appeared 0.3 s after the circle; the fold's land went out meanwhile,
+    # then the flip was called all the same.
+    import types
+
+    from leap_teleop.ros.ardrone_commands import ArdroneCommands
+    clock = FakeClock()
+    called, answers = [], []
+
+    class SlowService:
+        def wait_for_service(self, timeout):
+            clock.t += 0.3                    # the fold comes while this waits
+            pilot.on_gesture('fold', True, clock.t)
+
+        def __call__(self, anim, duration):
+            called.append(anim)
+            return types.SimpleNamespace(result=True)
+
+    commands = object.__new__(ArdroneCommands)      # its ROS parts are not needed here
+    commands.flight_animation, commands.service_timeout = SlowService(), 0.5
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0))
+    w, sent, warnings = _worker(pilot, lambda *args: answers.append(commands.flip(*args)), clock)
+    pilot.on_navdata(4, 1500, 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
+    pilot.on_gesture('circle_cw', True, 0.01, 0.035)
+    clock.t = 0.01
+    while w.flip_call._thread is None and len(pilot.queue):     # the hover, then the flip
+        w.step()
+    w.flip_call._thread.join(2.0)
+    w.step()
+    assert called == [] and answers == [] and any('not called' in text for text in warnings)
+    assert 'land' in [c.kind for _, c in sent]
+    # Without the fold the same flip is called.
+    pilot = DronePilot(PilotParams(navdata_timeout=10.0))
+    SlowService.wait_for_service = lambda self, timeout: None
+    w, sent, warnings = _worker(pilot, commands.flip, clock)
+    pilot.on_navdata(4, 1500, clock.t)
+    pilot.on_gesture('unfold', True, clock.t)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=clock.t), clock.t)
+    pilot.on_gesture('circle_cw', True, clock.t, 0.035)
+    while w.flip_call._thread is None and len(pilot.queue):
+        w.step()
+    w.flip_call._thread.join(2.0)
+    assert called == [19]
+
+
 def test_found_any_worker_exception_is_answered_with_hover_then_land():
     # Before: any exception other than ROSException killed the worker while the node
     # looked alive.

@@ -59,6 +59,7 @@ land / flip never are) and a land puts a hover in place of the unsent ones; stee
 twists leave at most ``rate`` per second, a hover after them and discrete commands at once.
 """
 import collections
+import functools
 import math
 import numbers
 import re
@@ -252,6 +253,7 @@ class DronePilot:
         self.engaged = False             # tilt: unfold seen, not folded since
         self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
         self._takeoff_at = None          # when the last takeoff was queued
+        self._stopped_at = None          # when the last fold or loss came
         self.reference = None            # tilt: (palm xyz m, hand_axes or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
@@ -286,6 +288,14 @@ class DronePilot:
         callback reads the clock before it takes the lock, so the watchdog may have found
         the navdata stale (and hovered) in between."""
         return self.navdata_lost_since is None and self.navdata_fresh(now)
+
+    def flip_still_wanted(self, since, now):
+        """A flip queued at `since` may still go: fresh navdata says flying or hovering at
+        flip_min_altitude or higher, the hand is fresh, and no fold or loss came since."""
+        with self._lock:
+            return (self._navdata_ok(now) and self.drone_state in (3, 4)
+                    and self.altitude >= self.cfg.flip_min_altitude and self._hand_fresh(now)
+                    and (self._stopped_at is None or self._stopped_at < since))
 
     def takeoff_still_wanted(self, now):
         """A takeoff held back (its driver not listening yet) may still go: no fold and no
@@ -378,6 +388,7 @@ class DronePilot:
             elif name == 'fold':
                 self.engaged = False
                 self._takeoff_asked = False
+                self._stopped_at = now
                 self.reference = None
                 withdrawn = self.queue.discard('takeoff')
                 # A takeoff sent after the last navdata flies however that navdata read.
@@ -473,6 +484,7 @@ class DronePilot:
     # -- watchdog ----------------------------------------------------------------------
     def _lose(self, now):
         self._takeoff_asked = False
+        self._stopped_at = now
         self.queue.discard('takeoff')       # nothing takes off that no hand in view asks for
         if self.hand_present or self.lost_since is None:
             self.lost_since = now
@@ -515,6 +527,8 @@ class DronePilot:
                 self.navdata_lost_since = now
             if self._takeoff_at is not None and self._takeoff_at > now:
                 self._takeoff_at = now
+            if self._stopped_at is not None and self._stopped_at > now:
+                self._stopped_at = now
             if (self.hand_present and self.last_hand_time is not None
                     and now - self.last_hand_time > self.cfg.hand_timeout):
                 self._warn('stale', 'no Hand message for %.2f s: hovering'
@@ -639,7 +653,8 @@ class PilotWorker:
             cmd, wait = self.pilot.pop(self.mono())
             if cmd is not None:
                 if cmd.kind == 'flip':
-                    if not self.flip_call.submit(*cmd.anim):
+                    wanted = functools.partial(self._flip_wanted, cmd.stamp)
+                    if not self.flip_call.submit(*cmd.anim, wanted):
                         self.warn('flip_busy', 'no flip: the previous flight animation call '
                                   'has not returned')
                 else:
@@ -688,6 +703,10 @@ class PilotWorker:
         values += [('rejected inputs', pl.rejected_inputs),
                    ('twists superseded or dropped', pl.queue.dropped)]
         return level, summary, values
+
+    def _flip_wanted(self, since):
+        """Asked on the flip call's thread once the service is there."""
+        return self.pilot.flip_still_wanted(since, self.clock())
 
     def _poll_flip(self):
         outcome = self.flip_call.poll()

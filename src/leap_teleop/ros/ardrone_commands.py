@@ -64,8 +64,12 @@ class ArdroneCommands:
         self.one_shot_pubs[cmd.kind].publish(Empty())
         self.input_age.add(rospy.get_time(), cmd.input_stamp)
 
-    def flip(self, anim_type, duration):
+    def flip(self, anim_type, duration, still_wanted=None):
         """The flight animation service's result: waits up to service_timeout for the
-        service, then for its answer."""
+        service, then for its answer. `still_wanted()` is asked once the service is there:
+        a land or a lost hand meanwhile must not be followed by a flip."""
         self.flight_animation.wait_for_service(self.service_timeout)
+        if still_wanted is not None and not still_wanted():
+            raise RuntimeError('not called: the drone is no longer flying high enough, was '
+                               'told to land or lost the hand while the service was awaited')
         return self.flight_animation(anim_type, duration).result
