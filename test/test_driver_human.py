@@ -158,6 +158,36 @@ def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
     assert human.left_hand.valid_gestures and human.right_hand.valid_gestures
 
 
+def serialized(msg):
+    import io
+    buf = io.BytesIO()
+    msg.serialize(buf)
+    return buf.getvalue()
+
+
+def test_recorded_values_of_any_shape_or_size_still_make_a_message():
+    # Each of these ended the sender's source thread (one frame ended the session): a
+    # gesture type or state that is a list or an object (unhashable), a duration beyond
+    # int64 microseconds, and a velocity, tip or joint beyond float32.
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0], velocity=[1e40, -1e40, 0.0], hand_id=3)
+    index = hand.fingers[1]
+    hand.fingers = hand.fingers[:1] + (Finger(tip=np.array([1e200, 0.0, 0.0]),
+                                              direction=index.direction, mcp=np.array([1e300, 0.0, 0.0]),
+                                              pip=index.pip, dip=index.dip),) + hand.fingers[2:]
+    gestures = [{'id': 1, 'type': ['swipe'], 'state': 'stop', 'handIds': [3]},
+                {'id': 2, 'type': 'swipe', 'state': {'a': 1}, 'handIds': [3]},
+                {'id': 3, 'type': 'keyTap', 'state': 'stop', 'duration': 2 ** 63, 'handIds': [3]},
+                {'id': 4, 'type': 'keyTap', 'state': 'stop', 'duration': 10 ** 400, 'handIds': [3]},
+                {'id': 5, 'type': 'keyTap', 'state': 'stop', 'duration': math.inf, 'handIds': [3]}]
+    (human, _), = run([Frame(id=1, timestamp=1.0, hands=[hand], gestures=gestures)])
+    assert serialized(human)
+    h = human.right_hand
+    assert h.is_present and list(h.palm_velocity) == [0.0, 0.0, 0.0]    # no speed of 1e37 m/s
+    assert h.finger_list == []                                       # no usable joints
+    assert [(g.lmc_gesture_id, g.gesture_state, g.duration_us) for g in h.gesture_list] == [
+        (2, -1, 0), (3, 3, 2 ** 63 - 1), (4, 3, 2 ** 63 - 1), (5, 3, 0)]
+
+
 def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture():
     builder = hand_conversions.DriverHumanBuilder()
     hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)

@@ -192,3 +192,23 @@ def test_frames_without_a_valid_capture_time_are_dropped(stamp):
     assert li.on_frame(bad) is None
     assert li.rejected_frames == 1 and seen == [1]
     assert li.get_right_hand_fist()                    # the last good frame stands
+
+
+def test_a_palm_normal_or_direction_of_no_length_is_no_hand_and_others_are_made_unit():
+    # A zero normal's angles are atan2 of zeros: with an origin set, one such frame sent
+    # rotate -2.74, turn -2.99, swing -3.09 rad, and zero 'unit' vectors were published.
+    from leap_teleop.hands.tracker import HandTracker
+    tracker = HandTracker('right')
+    good = render_hand('right', 'rock', [0.0, 200.0, 0.0])
+    state = tracker.update(good, 1.0, 1)
+    zero = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    zero.palm_normal = np.zeros(3)
+    state = tracker.update(zero, 1.01, 2)
+    assert not state.present and tracker.rejected_frames == 1
+    assert (state.rotate, state.turn, state.swing) == (0.0, 0.0, 0.0)
+    long = render_hand('right', 'open', [0.0, 200.0, 0.0], velocity=[3e4, 0.0, 0.0])
+    long.palm_normal = long.palm_normal * 1.5
+    long.fingers[1].tip[0] = 1e200
+    state = tracker.update(long, 1.02, 3)
+    assert state.present and math.hypot(*state.palm_normal) == pytest.approx(1.0)
+    assert state.palm_velocity == (0.0, 0.0, 0.0) and state.finger_tips[1] == (0.0, 0.0, 0.0)

@@ -10,6 +10,7 @@ import numpy as np
 
 BONE_NAMES = ('metacarpal', 'proximal', 'intermediate', 'distal')
 FINGER_JOINT_NAMES = ('mcp', 'pip', 'dip', 'tip')
+MAX_JOINT = 1e6
 
 
 def hand_joints(hand):
@@ -22,7 +23,9 @@ def hand_joints(hand):
                           dtype=float)
     except (TypeError, ValueError):     # a joint is None or not a 3-vector
         return None
-    if joints.shape != (5, 4, 3) or not np.all(np.isfinite(joints)):
+    # Beyond any tracking volume in any unit (and far inside float32, which bone messages
+    # carry: a joint of 1e300 ended the sender).
+    if joints.shape != (5, 4, 3) or not np.all(np.abs(joints) <= MAX_JOINT):
         return None
     return joints
 

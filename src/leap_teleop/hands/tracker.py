@@ -17,6 +17,7 @@ log = logging.getLogger(__name__)
 # Rotation since the origin: (dead band low, high) in rad, per DESIGN.md section 3.
 DEAD_BANDS = {'rotate': (-0.40, 0.40), 'turn': (-0.15, 0.35), 'swing': (-0.05, 0.45)}
 MAX_PALM_MM = 2000.0     # beyond this a palm position is a tracking error, not a hand
+MAX_PALM_SPEED_MM_S = 20000.0    # beyond this a palm velocity is one too (20 m/s): zero
 
 
 def dead_band(angle, low, high):
@@ -85,6 +86,18 @@ def _finite_tuple(v, limit=None):
     return (x, y, z)
 
 
+def _unit_tuple(v):
+    """A palm normal or direction scaled to length 1; None when not finite or of a length
+    no tracker sends (a zero vector's angles are atan2 of zeros: pi, a full-scale turn)."""
+    v = _finite_tuple(v)
+    if v is None:
+        return None
+    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if not 0.5 <= n <= 2.0:
+        return None
+    return (v[0] / n, v[1] / n, v[2] / n)
+
+
 def _unit_interval(x):
     try:
         x = float(x)
@@ -123,14 +136,15 @@ class HandTracker:
         if hand is None:
             return self._lost(timestamp, frame_id)
         palm = _finite_tuple(hand.palm_position, MAX_PALM_MM)
-        normal = _finite_tuple(hand.palm_normal)
-        direction = _finite_tuple(hand.direction)
+        normal = _unit_tuple(hand.palm_normal)
+        direction = _unit_tuple(hand.direction)
         if palm is None or normal is None or direction is None:
             # A hand we cannot place is treated as gone: consumers hold still.
             self.rejected_frames += 1
             if self.rejected_frames in (1, 10, 100) or self.rejected_frames % 1000 == 0:
                 log.warning('%s hand: rejected %d frame(s) with a non-finite or out-of-range '
-                            'palm (|p| > %g mm)', self.side, self.rejected_frames, MAX_PALM_MM)
+                            'palm (|p| > %g mm) or a palm normal or direction of no length',
+                            self.side, self.rejected_frames, MAX_PALM_MM)
             return self._lost(timestamp, frame_id)
         was_present = self.state.present
         g = self.recognizer.update(hand, timestamp)
@@ -151,9 +165,9 @@ class HandTracker:
                 angle = wrap_angle(now - ref)
                 rotation[key] = (angle if self.dead_bands is None
                                  else dead_band(angle, *self.dead_bands[key]))
-        tips = tuple((_finite_tuple(f.tip) or (0.0, 0.0, 0.0)) for f in hand.fingers[:5])
+        tips = tuple((_finite_tuple(f.tip, MAX_PALM_MM) or (0.0, 0.0, 0.0)) for f in hand.fingers[:5])
         tips = tips + ((0.0, 0.0, 0.0),) * (5 - len(tips))
-        velocity = _finite_tuple(hand.palm_velocity) or (0.0, 0.0, 0.0)
+        velocity = _finite_tuple(hand.palm_velocity, MAX_PALM_SPEED_MM_S) or (0.0, 0.0, 0.0)
         self.state = HandState(
             side=self.side, present=True, timestamp=timestamp, frame_id=frame_id,
             palm_position=palm, palm_velocity=velocity, palm_normal=normal,

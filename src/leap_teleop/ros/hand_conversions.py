@@ -173,6 +173,9 @@ EVENT_GESTURE_TYPES = {'circle_cw': GESTURE_TYPES['circle'],
                        'circle_ccw': GESTURE_TYPES['circle']}
 
 
+MAX_DURATION_US = 2 ** 63 - 1
+
+
 def _int32(x):
     return ((int(x) + 2 ** 31) % 2 ** 32) - 2 ** 31
 
@@ -180,24 +183,28 @@ def _int32(x):
 def _sdk_gesture(g):
     """DriverGesture from a recorded SDK gesture dict (LeapJS: type, state, id, duration in
     us, pointableIds); None for a type the driver does not have."""
-    gtype = GESTURE_TYPES.get(g.get('type'))
+    # A recording's fields may be any JSON: a list as a dict key raised, and ended the source.
+    kind, state = g.get('type'), g.get('state')
+    gtype = GESTURE_TYPES.get(kind) if isinstance(kind, str) else None
     if gtype is None:
         return None
     msg = DriverGesture()
     msg.lmc_gesture_id = _int32(g.get('id', 0)) if isinstance(g.get('id'), int) else 0
     msg.gesture_type = gtype
-    msg.gesture_state = GESTURE_STATES.get(g.get('state'), -1)
+    msg.gesture_state = GESTURE_STATES.get(state, -1) if isinstance(state, str) else -1
     msg.is_valid = msg.gesture_state != -1
     duration = g.get('duration', 0)
-    duration = int(duration) if isinstance(duration, (int, float)) and math.isfinite(duration) \
-        and duration >= 0 else 0
+    if (isinstance(duration, bool) or not isinstance(duration, (int, float)) or duration < 0
+            or (isinstance(duration, float) and not math.isfinite(duration))):
+        duration = 0
+    # Within int64 microseconds (292,000 years): beyond, serialising it ended the source.
+    duration = int(min(duration, MAX_DURATION_US))
     msg.duration_us = duration
     msg.duration_s = duration * 1e-6
     ids = g.get('pointableIds')
     msg.pointable_ids = [_int32(i) for i in ids if isinstance(i, int)] if isinstance(ids, list) \
         else []
-    msg.to_string = 'Gesture id:%d type:%s state:%s' % (msg.lmc_gesture_id, g.get('type'),
-                                                         g.get('state'))
+    msg.to_string = 'Gesture id:%d type:%s state:%s' % (msg.lmc_gesture_id, kind, state)
     return msg
 
 
