@@ -180,6 +180,23 @@ def test_truncated_gzip_and_lz(tmp_path):
         make_source('recording', path=str(tmp_path / 't.json.lz'))
 
 
+def test_a_stamp_days_ahead_or_a_second_take_is_a_break_not_the_end(tmp_path):
+    # Measured against the last stamp, one stamp 11.6 days ahead dropped every later frame
+    # (and realtime play slept till then), and a second take appended to the file was lost.
+    frames = _frames(20, 10000)
+    frames[10]['timestamp'] += 10 ** 12
+    path = _write(tmp_path, 'r.json', frames + _frames(20, 10000))
+    src = make_source('recording', path=path, realtime=False, clock=lambda: 1000.0)
+    stamps = [f.timestamp for f in src.frames()]
+    assert len(stamps) == 40 and src.breaks == 3 and src.bad_frames == 0   # on, back, back
+    steps = np.diff(stamps)
+    assert np.allclose(steps, 0.01) and src.duration == pytest.approx(0.39)
+    # Played in real time, it takes its 0.4 s.
+    src = make_source('recording', path=path, realtime=True)
+    t0 = time.monotonic()
+    assert len(list(src.frames())) == 40 and time.monotonic() - t0 < 2.0
+
+
 def test_bad_single_frames_are_skipped_and_counted(tmp_path):
     frames = _frames(10)
     frames[3] = 'garbage'

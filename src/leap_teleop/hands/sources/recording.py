@@ -1,7 +1,8 @@
 """Replay of LeapJS Playback recordings (.json, .json.gz, .json.lz; formats 0.1 / 1 / 2).
 
 Frames are stamped on the caller's clock: stamp = clock() at start + (ts - ts0), where ts
-is the recorded Leap timestamp; realtime=True also paces them at that timing, otherwise
+is the recorded Leap timestamp (time going back, or stopping for over MAX_GAP_S, is a
+break: play goes on one frame period later); realtime=True also paces them at that timing, otherwise
 they come as fast as the consumer takes them. loop=True replays forever, each pass
 continuing the stamps where the previous one ended.
 """
@@ -14,6 +15,7 @@ from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
 log = logging.getLogger(__name__)
+MAX_GAP_S = 2.0     # s between two frames: longer (or back) is a break in the recording
 
 
 class RecordingSource(HandSource):
@@ -27,19 +29,33 @@ class RecordingSource(HandSource):
         self.bad_frames = 0
         for _, why in errors:
             self._warn_bad(why)
-        self._frames = []          # (recorded time s, Frame)
-        last_ts = None
+        usable = []
         for frame in frames:
-            ts = frame.timestamp
-            if not math.isfinite(ts) or (last_ts is not None and ts < last_ts):
-                self._warn_bad('no usable timestamp' if not math.isfinite(ts)
-                               else 'timestamp goes backwards')
-                continue
-            self._frames.append((ts, frame))
-            last_ts = ts
-        if not self._frames:
+            if math.isfinite(frame.timestamp):
+                usable.append(frame)
+            else:
+                self._warn_bad('no usable timestamp')
+        if not usable:
             raise SourceError('recording %s has no frame with a usable timestamp' % self.path)
-        span = self._frames[-1][0] - self._frames[0][0]
+        # Time going back, or a silence longer than MAX_GAP_S, is a break (two takes in one
+        # file, a corrupt stamp): the next frame follows one frame period later. Measured
+        # against the last stamp instead, one stamp days ahead dropped the rest of the take
+        # and made realtime playback sleep until then.
+        steps = [b.timestamp - a.timestamp for a, b in zip(usable, usable[1:])]
+        regular = sorted(d for d in steps if 0 < d <= MAX_GAP_S)
+        period = regular[len(regular) // 2] if regular else 0.01
+        self._frames = [(0.0, usable[0])]      # (seconds since the first frame, Frame)
+        self.breaks = 0
+        for step, frame in zip(steps, usable[1:]):
+            if not 0 <= step <= MAX_GAP_S:
+                self.breaks += 1
+                step = period
+            self._frames.append((self._frames[-1][0] + step, frame))
+        if self.breaks:
+            log.warning('recording %s: time went back or stopped for over %g s %d time(s); '
+                        'played on at one frame period (%.4f s) each time', self.path,
+                        MAX_GAP_S, self.breaks, period)
+        span = self._frames[-1][0]
         n = len(self._frames)
         self.duration = span
         self.rate_hz = (n - 1) / span if span > 0 and n > 1 else None
@@ -51,7 +67,6 @@ class RecordingSource(HandSource):
                         self.path, self.bad_frames, why)
 
     def frames(self):
-        ts0 = self._frames[0][0]
         period = 1.0 / self.rate_hz if self.rate_hz else 0.01
         start_stamp = self._clock()
         start_mono = time.monotonic()
@@ -60,15 +75,16 @@ class RecordingSource(HandSource):
             for ts, f in self._frames:
                 if self.stopped:
                     return
-                rel = offset + ts - ts0
-                if self.realtime:
+                rel = offset + ts
+                if self.realtime:           # in slices: stop() takes effect at once
                     delay = start_mono + rel - time.monotonic()
-                    if delay > 0:
-                        time.sleep(delay)
+                    while delay > 0 and not self.stopped:
+                        time.sleep(min(delay, 0.05))
+                        delay = start_mono + rel - time.monotonic()
                 # A fresh Frame per pass; its Hands are shared between loop passes
                 # (read-only, as every source's are).
                 frame = Frame(f.id, start_stamp + rel, f.hands, f.gestures)
                 yield frame
             if not self.loop:
                 return
-            offset += self._frames[-1][0] - ts0 + period
+            offset += self._frames[-1][0] + period
