@@ -805,6 +805,22 @@ def test_service_call_reports_failures_and_times_out_once():
 
 
 # -- live sources: the newest frame after a stall ------------------------------------------
+def test_found_a_late_start_up_burst_does_not_stamp_later_frames_ahead():
+    # Before: the first frames, delivered 150 ms late in one burst, set the mapping, and
+    # every later frame was stamped 0.148 s after its arrival, for the whole session.
+    from leap_teleop.hands.sources.device_queue import PushQueue
+    clock = FakeClock()
+    pq = PushQueue(clock)
+    ahead = []
+    for k in range(3000):                     # 100 Hz; each frame arrives 2 ms after capture
+        clock.t = max(1000.15, 1000.0 + 0.01 * k + 0.002)      # but the first 15 at 1000.15
+        stamp = pq.stamp((5.0 + 0.01 * k) * 1e6)
+        ahead.append(stamp - clock.t)
+    assert max(ahead) <= 1e-9                 # never stamped after it arrived
+    # From the first frame on time, stamps are its arrival less the least delay seen: 0.
+    assert ahead[16] == pytest.approx(0.0, abs=1e-9) and ahead[-1] == pytest.approx(0.0, abs=1e-6)
+
+
 def test_found_live_queue_delivers_the_newest_frame_after_a_stall():
     # Before: a 256-frame queue handed a 2 s old hand to the robots after a stall.
     from types import SimpleNamespace

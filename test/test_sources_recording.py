@@ -414,7 +414,8 @@ def _take(source, n):
 def test_leap_v2_backend_with_a_fake_sdk(monkeypatch):
     monkeypatch.setitem(sys.modules, 'Leap', _fake_leap_v2())
     from leap_teleop.hands.leap_interface import LeapInterface
-    src = make_source('leap', clock=lambda: 50.0)
+    ticks = iter(range(10 ** 6))            # a clock that moves on: no stamp is after its arrival
+    src = make_source('leap', clock=lambda: 50.0 + 0.001 * next(ticks))
     frames = _take(src, 10)
     assert len(frames) == 10
     f = frames[-1]

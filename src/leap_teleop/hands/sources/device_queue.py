@@ -51,8 +51,11 @@ class PushQueue:
     def stamp(self, device_us):
         """Map a device timestamp (us) onto the clock, keeping the device's spacing. Late
         frames move the mapping only slowly (it absorbs clock drift), so a backlog
-        delivered late keeps its capture time and reads as old; a device clock that
-        jumps back (device restart), runs > 0.2 s ahead or an absurd offset re-syncs."""
+        delivered late keeps its capture time and reads as old; a frame less delayed than
+        every one before becomes the reference at once (a late start-up burst taken as the
+        reference stamped every later frame up to 0.15 s ahead of its capture, for good),
+        so no stamp is later than its arrival; a device clock that jumps back (device
+        restart) or an absurd offset re-syncs."""
         now = self.clock()
         try:
             dev = float(device_us) * 1e-6
@@ -61,9 +64,9 @@ class PushQueue:
         if not math.isfinite(dev):
             return now
         offset = now - dev
-        if (self._offset is None or dev < self._last_dev or offset < self._offset - 0.2
+        if (self._offset is None or dev < self._last_dev or offset < self._offset
                 or offset - self._offset > 60.0 or now < self._last_now):
-            self._offset = offset         # first frame, device restart or clock jump
+            self._offset = offset         # first or least delayed frame, restart, clock jump
         elif offset > self._offset:       # a late frame moves the mapping only slowly
             self._offset = min(offset, self._offset + self._leak * (now - self._last_now))
         self._last_dev, self._last_now = dev, now
