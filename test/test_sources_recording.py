@@ -562,3 +562,16 @@ def test_a_source_that_fails_mid_take_leaves_the_frames_before_it(tmp_path, caps
     with pytest.raises(SourceError, match='gone$'):       # nothing taken: nothing written
         record_frames.record(FailingAtOnce(), str(tmp_path / 'none.json'))
     assert not (tmp_path / 'none.json').exists()
+
+
+def test_a_hand_without_an_id_keeps_its_own_fingers_through_a_recording():
+    # Id 0 was written as its list position + 1: here the right hand's id, whose fingers
+    # the left hand then read back.
+    left = render_hand('left', 'fist', (-30.0, 170.0, 0.0), hand_id=0)
+    right = render_hand('right', 'open', (40.0, 160.0, 0.0), hand_id=1)
+    back = leapjs.frame_from_dict(leapjs.frame_to_dict(Frame(1, 2.0, [left, right])))
+    for before, after in zip((left, right), sorted(back.hands, key=lambda h: h.side)):
+        assert after.side == before.side
+        np.testing.assert_allclose([f.tip for f in after.fingers],
+                                   [f.tip for f in before.fingers], atol=1e-6)
+    assert len({h.id for h in back.hands}) == 2

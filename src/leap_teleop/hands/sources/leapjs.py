@@ -473,10 +473,14 @@ def frame_to_dict(frame):
     without a palm position or orientation (a recording's unreadable values) is left out:
     written as zeros it would read back as a hand at the device."""
     hands, pointables = [], []
-    for k, hand in enumerate(frame.hands):
+    # A hand without an id (0) gets one no other hand of the frame has: its fingers are
+    # found by it (k + 1 could be the other hand's, which then read back with these fingers).
+    taken = {hand.id for hand in frame.hands if hand.id}
+    free = (i for i in range(1, len(frame.hands) + len(taken) + 2) if i not in taken)
+    for hand in frame.hands:
         if not _whole(hand):
             continue
-        hid = hand.id if hand.id else k + 1
+        hid = hand.id if hand.id else next(free)
         hands.append({
             'id': hid, 'type': hand.side,
             'palmPosition': _list(hand.palm_position), 'palmVelocity': _list(hand.palm_velocity),
