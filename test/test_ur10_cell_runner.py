@@ -62,13 +62,33 @@ def test_each_arm_reports_how_long_its_commands_waited_for_the_physics(runner):
     assert runner.command_waits.windows[ARM].summary(runner.command_waits.clock())[2] == 1
 
 
+def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner, monkeypatch):
+    # The physics step applies every queued command: ten 10,000-point ones held it (and
+    # joint_states, /clock) for a minute, though each replaced the one before at once.
+    planned = []
+    real = runner.cell.command_arm
+    monkeypatch.setattr(runner.cell, 'command_arm',
+                        lambda arm, points, start: planned.append(points[0][0]) or real(arm, points, start))
+    q = runner.cell.joint_state(ARM)[0]
+    t = runner.ros_time()
+    runner.queue(ARM, 'arm', [(0.1, q, None)], 0.0)            # replaced by the next
+    runner.queue(ARM, 'arm', [(0.2, q, None)], t + 5.0)        # starts later than the next
+    runner.queue(ARM, 'arm', [(0.3, q, None)], 0.0)            # now: replaces both above
+    runner.queue(ARM, 'arm', [(0.4, q, None)], t + 1.0)        # starts later: kept
+    runner.queue(ARM, 'gripper', [(0.5, [0.1], None)], 0.0)    # another controller: kept
+    runner.step()
+    assert planned == [0.3, 0.4] and runner.superseded_commands == 2
+    assert dict(runner.report(0)[2])['commands replaced before they began'] == 2
+
+
 def test_the_cell_warns_for_a_while_after_a_dropped_or_refused_command(runner, monkeypatch):
     now = [100.0]
     monkeypatch.setattr(runner.command_waits, 'clock', lambda: now[0])
     monkeypatch.setattr(cell_runner, 'MAX_PENDING', 1)
     level, summary, values = runner.report(0)
     assert level == 'ok' and summary == 'arms ur10_1'
-    assert dict(values) == {'commands rejected': 0, 'commands dropped (physics loop behind)': 0}
+    assert dict(values) == {'commands rejected': 0, 'commands dropped (physics loop behind)': 0,
+                            'commands replaced before they began': 0}
     runner.queue(ARM, 'gripper', [(0.1, [0.1], None)], 0.0)
     runner.queue(ARM, 'gripper', [(0.2, [0.1], None)], 0.0)       # drops the first
     now[0] += 1.0

@@ -78,6 +78,7 @@ class CellRunner:
         self.renderer = SnapshotRenderer(self.cell.config)
         self.pending = collections.deque()         # validated commands for the loop
         self.dropped_commands = 0
+        self.superseded_commands = 0              # replaced by a later one before they began
         self.command_waits = CommandWaits(self.cell.arm_names)
         self._counts_seen, self._trouble_at = (0, 0), -math.inf
         self.use_sim_time = use_sim_time
@@ -106,10 +107,18 @@ class CellRunner:
         meanwhile wait for the next step, so a burst of long commands cannot hold the
         physics (and joint_states) until it ends."""
         cell = self.cell
+        batch = []
         for _ in range(len(self.pending)):
             if not self.pending:           # queue() dropped the oldest meanwhile
                 break
-            arm, kind, points, stamp, received = self.pending.popleft()
+            batch.append(self.pending.popleft())
+        for i, (arm, kind, points, stamp, received) in enumerate(batch):
+            if any(a == arm and k == kind and (s <= 0 or 0 < stamp and s <= stamp)
+                   for a, k, _, s, _ in batch[i + 1:]):
+                # A later command of the batch replaces it before it starts: not planned
+                # (ten 10,000-point ones held the physics for a minute).
+                self.superseded_commands += 1
+                continue
             # A stamped start in ROS time -> cell time; 0 = now.
             start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
             command = cell.command_arm if kind == 'arm' else cell.command_gripper
@@ -172,7 +181,8 @@ class CellRunner:
             summary += '; commands refused or dropped in the last %g s' % TROUBLE_S
         return ('warn' if trouble else 'ok'), summary, [
             ('commands rejected', rejected),
-            ('commands dropped (physics loop behind)', dropped)]
+            ('commands dropped (physics loop behind)', dropped),
+            ('commands replaced before they began', self.superseded_commands)]
 
     def snapshot(self):
         """The path of a PNG of the cell now. Only the poses are copied under the physics
