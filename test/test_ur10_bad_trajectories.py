@@ -3,6 +3,7 @@ refused naming the joint, legal ones never carry a joint past its points, a maxi
 trajectory with accelerations costs no more than one without, a start far ahead is warned
 about while the arm finishes what it was doing and then holds, and each command topic's type
 is watched."""
+import math
 import sys
 
 import numpy as np
@@ -182,6 +183,22 @@ def test_a_segment_too_fast_is_stretched_in_a_few_tries_to_within_a_tenth_of_its
         assert real(seg, f.vmax) <= 1.0 + 1e-9
         assert real(trajectory._retimed(seg, T / 1.1), f.vmax) > 1.0
     assert end > 2.0
+
+
+@pytest.mark.parametrize('with_accelerations', [False, True], ids=['cubic', 'quintic'])
+def test_no_segment_swings_a_joint_past_its_limit(with_accelerations):
+    # Both points inside the elbow's +-pi, at +3 then -3 rad/s: the cubic's desired elbow
+    # reached 3.75 rad (the quintic was already held at the limit).
+    f = TrajectoryFollower(HOME, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    q = HOME.copy()
+    q[2] = 3.0
+    f.command(0.0, [(1.0, q, ZERO)])
+    v = np.zeros(6)
+    v[2] = 3.0
+    extra = (ZERO,) if with_accelerations else ()
+    f.command(1.0, [(1.5, q, v) + extra, (2.0, q, -v) + extra])
+    elbow = [f.sample(t)[0][2] for t in np.linspace(1.0, 3.0, 2001)]
+    assert max(elbow) <= math.pi and max(elbow) == pytest.approx(math.pi)
 
 
 def test_a_later_start_lets_the_current_motion_finish_then_holds_at_rest():

@@ -10,7 +10,8 @@ continues the motion without a jump in velocity. Unlike a bare JTC, segments too
 the joint speed limits are stretched in time (and every later point shifted by the same
 amount), so the desired velocity never exceeds the limits; a quintic that does not fit
 them in its time is followed as the cubic through the same positions and velocities, and
-never strays past that cubic's reach (accelerations beyond max_accel refuse the command).
+never strays past that cubic's reach (accelerations beyond max_accel refuse the command);
+neither swings past a joint limit (it stays there, at rest, while its path is beyond).
 A command that starts later keeps the current trajectory until then, as in the JTC. After
 the last point the desired state holds it.
 """
@@ -119,7 +120,16 @@ def _state(seg, t):
         return q0 + (q1 - q0) * s, (q1 - q0) / T if T > 0 else np.zeros_like(q0), \
             np.zeros_like(q0)
     if a0 is None:
-        return _hermite(q0, q1, v0, v1, T, s)
+        q, v, a = _hermite(q0, q1, v0, v1, T, s)
+        if seg[8] is not None:
+            # Its swing may carry past a joint limit though both ends are inside (3.75 rad
+            # for the elbow's pi): there it stays at the limit, at rest, as a quintic does.
+            lo, hi = seg[8]
+            inside = (q >= lo) & (q <= hi)
+            if not inside.all():
+                return (np.minimum(np.maximum(q, lo), hi), np.where(inside, v, 0.0),
+                        np.where(inside, a, 0.0))
+        return q, v, a
     return _quintic(q0, q1, v0, v1, a0, a1, T, s, *_reach(seg))
 
 
@@ -231,7 +241,8 @@ class TrajectoryFollower:
         self.qd = np.zeros(self.n)
         self.qdd = np.zeros(self.n)
         # (t0, t1, q0, q1, v0|None, v1|None, a0|None, a1|None, joint limits|None,
-        # reach|None): the last two bound a quintic's positions (_reach)
+        # reach|None): the limits bound a cubic's or a quintic's positions, the reach a
+        # quintic's (_reach)
         self.segments = []
         self.end_time = -math.inf
 
@@ -341,7 +352,7 @@ class TrajectoryFollower:
             v0 = None if vel is None else v_prev
             a0 = None if acc is None else a_prev
             seg = (t_prev, t1, q_prev, pos, v0, vel, a0, acc,
-                   None if acc is None else self._reach_limits, None)
+                   None if vel is None else self._reach_limits, None)
             T = t1 - t_prev
             if vel is None and (q_prev == pos).all():
                 ratio = 0.0
@@ -351,7 +362,7 @@ class TrajectoryFollower:
                 # Accelerations the speed limits cannot follow in this time (stretching it
                 # only widens their swing): the cubic through the same points instead.
                 acc = None
-                seg = seg[:6] + (None, None, None, None)
+                seg = seg[:6] + (None, None, seg[8], None)
                 ratio = _peak_ratio(seg, self.vmax)
             if ratio > 1.0:
                 # Stretch until the segment respects every speed limit.
