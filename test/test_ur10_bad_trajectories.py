@@ -17,7 +17,7 @@ from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.cell import POINT_ACCEL_RAMP_S, UR10Cell
 from leap_teleop.ur10.cell_runner import RUNNER_PARAMS, CellRunner
 from leap_teleop.ur10.config import load_config
-from leap_teleop.ur10.trajectory import TrajectoryFollower
+from leap_teleop.ur10.trajectory import TrajectoryError, TrajectoryFollower
 
 ARM = 'ur10_1'
 HOME = np.array(kin.HOME_Q)
@@ -199,6 +199,18 @@ def test_no_segment_swings_a_joint_past_its_limit(with_accelerations):
     f.command(1.0, [(1.5, q, v) + extra, (2.0, q, -v) + extra])
     elbow = [f.sample(t)[0][2] for t in np.linspace(1.0, 3.0, 2001)]
     assert max(elbow) <= math.pi and max(elbow) == pytest.approx(math.pi)
+
+
+@pytest.mark.parametrize('cell_age', [1.0, 5.0])
+def test_a_command_stamped_in_the_past_is_judged_alike_however_old_the_cell(cell_age):
+    # Stamped 3 s ago with points 1 and 2 s after it: on a cell 1 s old its start (-2) was
+    # read as 'now' and the whole command played; on one 5 s old it was refused.
+    f = TrajectoryFollower(HOME, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    f.sample(cell_age)
+    with pytest.raises(TrajectoryError, match='ends in the past'):
+        f.command(cell_age, [(1.0, pan(0.1), None), (2.0, pan(0.2), None)],
+                  start_time=cell_age - 3.0)
+    assert not f.active
 
 
 def test_a_later_start_lets_the_current_motion_finish_then_holds_at_rest():

@@ -308,7 +308,9 @@ class TrajectoryFollower:
         at which the last point will be reached."""
         if not points:
             raise TrajectoryError('empty trajectory (no points)')
-        start = now if start_time is None or start_time <= 0 else float(start_time)
+        # None alone means now: a start that is 0 or less is a time like any other (a
+        # past stamp on a cell younger than its age played in full, later was refused).
+        start = now if start_time is None else float(start_time)
         parsed = []
         last_t = -math.inf
         for k, point in enumerate(points):
