@@ -57,7 +57,7 @@ def test_land_sequence_and_motors_off(drone):
 def test_commands_that_make_no_sense_are_ignored_with_a_warning(drone, warnings):
     assert not drone.land()                       # landed already
     assert not drone.flight_animation(19, 0)      # not flying
-    drone.set_cmd_vel(0.5, 0, 0, 0, 0, 0)        # landed: accepted but does nothing
+    drone.set_cmd_vel(0.5, 0, 0, 0, 0, 0)        # landed: held, nothing moves yet
     drone.advance(0.5)
     assert drone.state == ds.LANDED and drone.altitude < 0.01
     drone.set_cmd_vel()                           # the driver holds the last command
@@ -188,6 +188,52 @@ def test_reset_toggles_emergency(drone):
     drone.reset()
     assert drone.state == ds.LANDED and not drone.emergency
     assert drone.takeoff()
+
+
+def test_a_land_during_a_flip_lands_once_it_has_caught_upright(drone):
+    # Cut short upside down, the landing thrust drove it into the ground at 8 m/s, it then
+    # read 'landed' on its back, and a takeoff from there never ended.
+    fly(drone)
+    assert drone.flight_animation(19, 0)
+    while drone.R[8] > -0.3:                            # well past 90 deg
+        drone.step()
+    assert drone.land() and drone.state == ds.LOOPING  # taken, for after the flip
+    fastest = 0.0
+    for _ in range(int(6.0 / drone.dt)):
+        drone.step()
+        fastest = max(fastest, -drone.vel[2])
+    assert states(drone)[-3:] == [ds.LOOPING, ds.LANDING, ds.LANDED]
+    assert fastest < 2.5 and drone.R[8] > 0.99 and drone.flip_count == 1
+
+
+def test_a_drone_on_its_back_does_not_take_off(drone, warnings):
+    import pybullet as pb
+    pb.resetBasePositionAndOrientation(drone.body, drone.pos, (1.0, 0.0, 0.0, 0.0),
+                                       physicsClientId=drone.client)
+    drone.advance(0.5)
+    assert not drone.takeoff() and drone.state == ds.LANDED
+    assert any('not upright' in text for _, text in warnings)
+
+
+def test_leaving_an_emergency_in_the_air_is_landed_only_once_down(drone):
+    fly(drone)
+    drone.reset()
+    drone.advance(0.1)                                  # falling, motors off
+    drone.reset()
+    assert not drone.emergency and drone.state == ds.UNKNOWN   # was 'landed' at 968 mm
+    assert not drone.takeoff()
+    drone.advance(2.0)
+    assert drone.state == ds.LANDED and drone.altitude < 0.03 and drone.takeoff()
+
+
+def test_a_hover_after_a_full_descent_holds_at_the_altitude_floor(drone):
+    fly(drone)
+    drone.set_cmd_vel(0, 0, -1.0, 0, 0, 0)
+    drone.advance(4.0)                                  # overshoots the floor a little
+    drone.set_cmd_vel()
+    drone.advance(3.0)
+    assert drone.state == ds.HOVERING
+    assert drone.altitude == pytest.approx(drone.p.altitude_min / 1000, abs=0.005)   # was 38 mm
 
 
 def test_battery_drains_and_empty_battery_lands(drone):

@@ -47,6 +47,7 @@ log = logging.getLogger(__name__)
 
 G = 9.81
 UNKNOWN, INIT, LANDED, FLYING, HOVERING, TEST, TAKING_OFF, GOTO_FIX, LANDING, LOOPING = range(10)
+UPRIGHT_COS = math.cos(math.radians(30.0))   # a takeoff needs the body z this near vertical
 STATE_NAMES = {0: 'unknown/emergency', 1: 'init', 2: 'landed', 3: 'flying', 4: 'hovering',
                5: 'test', 6: 'taking off', 7: 'goto fix point', 8: 'landing', 9: 'looping'}
 FLIP_AHEAD, FLIP_BEHIND, FLIP_LEFT, FLIP_RIGHT = 16, 17, 18, 19
@@ -209,6 +210,7 @@ class ArDroneSim:
         self._pos_hold = None
         self._yaw_d = 0.0
         self._anim = None                 # dict describing a running animation
+        self._land_after_flip = False     # a land came during a flip
         self._acc_world = (0.0, 0.0, 0.0)
         self._prev_vel = (0.0, 0.0, 0.0)
         self.flip_count = 0
@@ -260,6 +262,12 @@ class ArDroneSim:
             self._warn('takeoff', 'takeoff refused: battery %.0f%% < %.0f%%',
                        self.battery, self.p.battery_takeoff_min)
             return False
+        if self.R[8] < UPRIGHT_COS:
+            # Thrust along a body axis pointing sideways or down lifts nothing: it stayed
+            # 'taking off' for ever, motors running.
+            self._warn('takeoff', 'takeoff refused: the drone is not upright (tilted %.0f deg)',
+                       math.degrees(math.acos(_clamp(self.R[8], -1.0, 1.0))))
+            return False
         self._yaw_d = self.yaw
         self._alt_hold = None
         self._pos_hold = None
@@ -268,7 +276,11 @@ class ArDroneSim:
 
     def land(self):
         self.last_input_time = self.time
-        if self.state in (FLYING, HOVERING, TAKING_OFF, LOOPING, GOTO_FIX) and not self.emergency:
+        if self.state == LOOPING and not self.emergency:
+            # Cut short upside down it fell at 4-8 m/s: it lands once the flip has caught.
+            self._land_after_flip = True
+            return True
+        if self.state in (FLYING, HOVERING, TAKING_OFF, GOTO_FIX) and not self.emergency:
             self._anim = None
             self._set_state(LANDING)
             return True
@@ -280,11 +292,17 @@ class ArDroneSim:
         self.last_input_time = self.time
         self.emergency = not self.emergency
         self._anim = None
-        if self.emergency:
+        self._land_after_flip = False
+        if self.emergency or not self._at_rest_on_ground():
+            # Left while still falling, it stays unknown until it is down: 'landed' at
+            # 968 mm was believed, and took off in the air.
             self._set_state(UNKNOWN)
         else:
             self._set_state(LANDED)
         return True
+
+    def _at_rest_on_ground(self):
+        return self.altitude < 0.03 and abs(self.vel[2]) < 0.05
 
     def set_cmd_vel(self, lx=0.0, ly=0.0, lz=0.0, ax=0.0, ay=0.0, az=0.0):
         """The driver's cmd_vel: each component clamped to [-1, 1]; NaN rejects the command."""
@@ -300,7 +318,8 @@ class ArDroneSim:
                        '(as the driver does)', (lx, ly, lz, ax, ay, az))
         self.cmd = tuple(_clamp(v, -1.0, 1.0) for v in values)
         if self.state in (LANDED, UNKNOWN) and any(abs(v) > HOVER_EPS for v in self.cmd):
-            self._warn('cmd_vel_landed', 'cmd_vel ignored: drone is %s', STATE_NAMES[self.state])
+            self._warn('cmd_vel_landed', 'cmd_vel held: drone is %s (flown after takeoff, as '
+                       'the driver keeps the last one)', STATE_NAMES[self.state])
         return True
 
     @property
@@ -447,6 +466,8 @@ class ArDroneSim:
         p = self.p
         if self.emergency:
             return
+        if self.state == UNKNOWN and self._at_rest_on_ground():
+            self._set_state(LANDED)         # down after an emergency left in the air
         if self.airborne and self.state != LANDING:
             if self.battery <= 0.0:
                 self._warn('battery', 'battery empty: landing')
@@ -462,8 +483,13 @@ class ArDroneSim:
     # -- the onboard controller -------------------------------------------------------
     def _vertical(self, vz_des, kv=5.0):
         """Thrust that tracks a climb rate (m/s), compensating the tilt."""
+        if self.R[8] < 0.5:
+            # Tilted past 60 deg (a flip cut short by a land, a battery or link landing):
+            # climb control would thrust toward the ground; half the weight while the
+            # attitude control levels it, as a flip's catch does.
+            return 0.5 * self.p.mass * G
         az = kv * (vz_des - self.vel[2])
-        return self.p.mass * (G + az) / max(self.R[8], 0.5)
+        return self.p.mass * (G + az) / self.R[8]
 
     def _attitude(self, roll_d, pitch_d, yaw_rate_d):
         """Body torque tracking roll/pitch set points and a yaw rate (integrated yaw)."""
@@ -503,8 +529,8 @@ class ArDroneSim:
 
     def _hold_alt_rate(self):
         if self._alt_hold is None:
-            if abs(self.vel[2]) < 0.1:
-                self._alt_hold = self.altitude
+            if abs(self.vel[2]) < 0.1:     # not below the floor a full descent overshoots
+                self._alt_hold = max(self.altitude, self.p.altitude_min / 1000.0)
             return 0.0
         return _clamp(2.0 * (self._alt_hold - self.altitude), -0.5, 0.5)
 
@@ -594,7 +620,8 @@ class ArDroneSim:
             self._anim = None
             self._alt_hold = a['alt0']
             self._pos_hold = None
-            self._set_state(FLYING)
+            self._set_state(LANDING if self._land_after_flip else FLYING)
+            self._land_after_flip = False
         return self._vertical(vz) if tilt < math.radians(60) else 0.5 * mg, torque
 
     def _mix(self, thrust, torque):
