@@ -86,6 +86,35 @@ def test_lowpass_refuses_a_cutoff_that_is_not_a_positive_number(bad):
     assert lp.cutoff == 3.0
 
 
+def test_a_live_cutoff_change_never_mixes_old_and_new_coefficients():
+    # The three coefficients were assigned one by one on dynamic_reconfigure's thread: a
+    # frame between them was filtered with a gain other than 1 (71 of 1600 frames of a
+    # constant input left it when threads switched every 10 us).
+    import sys
+    import threading
+    lp = LowPass(4.0)
+    x = np.array([100.0, -50.0, 7.0])
+    lp('hand', x)
+    stop = threading.Event()
+
+    def slider():
+        k = 0
+        while not stop.is_set():
+            lp.set_cutoff(1.0 + (k % 50) / 10.0)
+            k += 1
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    thread = threading.Thread(target=slider)
+    thread.start()
+    try:
+        worst = max(float(np.abs(lp('hand', x) - x).max()) for _ in range(20000))
+    finally:
+        stop.set()
+        thread.join()
+        sys.setswitchinterval(interval)
+    assert worst < 1e-9
+
+
 # --- DriverHuman -------------------------------------------------------------------------
 def run(frames, builder=None, lowpass=None):
     """[(raw, filtered)] per frame through a LeapInterface and the builder."""

@@ -23,11 +23,13 @@ class LowPass:
         c = float(cutoff)
         if not (math.isfinite(c) and c > 0.0):
             raise ValueError('cutoff must be a finite number > 0, got %r' % (cutoff,))
-        self.cutoff = c
         gain = 1.0 + c * c + math.sqrt(2.0) * c
-        self._b = 1.0 / gain                                  # on x[n] + 2 x[n-1] + x[n-2]
-        self._a1 = (2.0 - 2.0 * c * c) / gain                 # on y[n-1]
-        self._a2 = (1.0 - math.sqrt(2.0) * c + c * c) / gain  # on y[n-2]
+        # One assignment (b on x[n] + 2 x[n-1] + x[n-2], a1 on y[n-1], a2 on y[n-2]): a
+        # live change comes on another thread than the frames, and a frame filtered with a
+        # new b and old a's has a gain other than 1.
+        self._coefficients = (1.0 / gain, (2.0 - 2.0 * c * c) / gain,
+                              (1.0 - math.sqrt(2.0) * c + c * c) / gain)
+        self.cutoff = c
 
     def reset(self, key=None):
         """Forget one key's history (all keys when None)."""
@@ -45,6 +47,7 @@ class LowPass:
             self._state[key] = [x.copy(), x.copy(), x.copy(), x.copy()]    # x1, x2, y1, y2
             return x.copy()
         x1, x2, y1, y2 = st
-        y = self._b * (x + 2.0 * x1 + x2) - self._a1 * y1 - self._a2 * y2
+        b, a1, a2 = self._coefficients
+        y = b * (x + 2.0 * x1 + x2) - a1 * y1 - a2 * y2
         self._state[key] = [x, x1, y, y1]
         return y
