@@ -221,3 +221,37 @@ def test_cell_config_fields_are_checked_and_named(spoil, message):
     with pytest.raises(ValueError) as e:
         parse_config(data, 'cell.yaml')
     assert str(e.value).startswith('cell config cell.yaml: ') and message in str(e.value), e.value
+
+
+def test_an_empty_topic_list_given_as_an_empty_string_is_no_topic():
+    # _wait_topics:='' (or an empty launch arg) was [''], which rospy resolves to '/': the
+    # sender then waited for ever for subscribers on '/'.
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    wait = SENDER_PARAMS['wait_topics']
+    assert wait.check('wait_topics', '') == []
+    assert wait.check('wait_topics', 'leapmotion/data_right') == ['leapmotion/data_right']
+    with pytest.raises(ParamError, match='an empty name'):
+        wait.check('wait_topics', ['leapmotion/data_right', ''])
+
+
+@pytest.mark.parametrize('frame', ['leap-hands', 'leap.hands', '2nd_leap', 'leap_hands'])
+def test_every_frame_the_sender_may_stamp_is_one_a_consumer_may_ask_for(frame):
+    # A frame id the sender took (leap-hands) was refused as ~hand_frame, though the
+    # consumers' warning advised setting it so.
+    from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    assert SENDER_PARAMS['frame_id'].check('frame_id', frame) == frame
+    assert HAND_SUBSCRIPTION_PARAMS['hand_frame'].check('hand_frame', frame) == frame
+
+
+def test_two_field_limits_name_the_axis_and_the_values():
+    with pytest.raises(ValueError, match=r'workspace_min \[0.3, 0.9, 0.1\] must be below '
+                                         r'workspace_max \[0.9, 0.5, 1.0\] .*\(not on y\)'):
+        ArmTeleopParams.from_dict({'workspace_min': [0.3, 0.9, 0.1], 'workspace_max': [0.9, 0.5, 1.0]})
+    with pytest.raises(ValueError, match=r'\(not for wrist 3\)'):
+        ArmTeleopParams.from_dict({'wrist_lower': [-1.0, -1.0, 1.0], 'wrist_upper': [1.0, 1.0, 1.0]})
+
+
+def test_a_misspelt_pilot_parameter_is_refused_by_name():
+    with pytest.raises(ParamError, match='unknown pilot parameters: dead_zon'):
+        PilotParams().update({'dead_zon': 0.2})

@@ -69,9 +69,11 @@ class Param:
 
     def _check_list(self, value):
         if isinstance(value, str) and self.item == 'str':
-            value = [value]
+            value = [value] if value else []        # _name:='' (an empty launch arg): none
         if not isinstance(value, (list, tuple)):
             raise ParamError('not a list')
+        if self.item == 'str' and self.ros_name and '' in value:
+            raise ParamError('an empty name')       # rospy resolves it to '/'; no topic is
         if self.length is not None and len(value) != self.length:
             raise ParamError('%d items' % len(value))
         if self.min_length is not None and len(value) < self.min_length:

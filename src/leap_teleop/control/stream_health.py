@@ -60,7 +60,7 @@ HAND_SUBSCRIPTION_PARAMS = {
     'hand_frame': Param('leap_hands', 'frame the hand messages must be in (the sender\'s '
                                       '~frame_id); others are refused with a warning, messages '
                                       'with no frame (the original sender\'s) are taken; '
-                                      '\'\' takes any frame', ros_name=True),
+                                      '\'\' takes any frame'),
 }
 
 

@@ -5,7 +5,7 @@ The drone_pilot block of config/ardrone.yaml sets the same names (a test keeps i
 these declarations).
 """
 from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
-from leap_teleop.params import Param, check_params, declared_fields
+from leap_teleop.params import Param, ParamError, check_params, declared_fields
 
 # Every PilotParams field. Watchdog times have upper bounds too: a huge timeout is a
 # disabled watchdog.
@@ -82,11 +82,14 @@ class PilotParams:
     """The pilot's configuration: one field per PILOT_PARAMS entry, its default."""
 
     def update(self, values):
-        """Set the known keys from `values`, then check every field against PILOT_PARAMS
-        (ParamError, a ValueError, names the first bad one)."""
+        """Set the keys of `values`, then check every field against PILOT_PARAMS
+        (ParamError, a ValueError, names the first bad one); a key it does not declare is
+        refused by name (a misspelt one was dropped without a word)."""
+        unknown = sorted(set(values) - set(PILOT_PARAMS))
+        if unknown:
+            raise ParamError('unknown pilot parameters: %s' % ', '.join(unknown))
         for key, value in values.items():
-            if key in PILOT_PARAMS:
-                setattr(self, key, value)
+            setattr(self, key, value)
         return self.validate()
 
     def validate(self):

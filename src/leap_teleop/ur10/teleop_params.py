@@ -175,11 +175,16 @@ class ArmTeleopParams:
             setattr(self, name, value)
         lo, hi = np.asarray(self.workspace_min, float), np.asarray(self.workspace_max, float)
         if np.any(lo >= hi):
-            raise ValueError('workspace_min must be below workspace_max on every axis')
+            raise ValueError('workspace_min %s must be below workspace_max %s on every axis '
+                             '(not on %s)' % (list(self.workspace_min), list(self.workspace_max),
+                                              'xyz'[int(np.argmax(lo >= hi))]))
         if not ori.axis_map_rank(self.axis_map) == 3:
             raise ValueError('axis_map must be invertible (every hand axis moves the robot)')
-        if np.any(np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)):
-            raise ValueError('wrist_lower must be below wrist_upper for every wrist joint')
+        bad = np.asarray(self.wrist_lower, float) >= np.asarray(self.wrist_upper, float)
+        if np.any(bad):
+            raise ValueError('wrist_lower %s must be below wrist_upper %s for every wrist joint '
+                             '(not for wrist %d)' % (list(self.wrist_lower), list(self.wrist_upper),
+                                                     int(np.argmax(bad)) + 1))
         if self.joint_loss_after < self.joint_timeout:
             raise ValueError('joint_loss_after (%g s) must be at least joint_timeout (%g s)'
                              % (self.joint_loss_after, self.joint_timeout))

@@ -17,6 +17,7 @@ import rospy
 from leap_teleop.control.service_call import ServiceCall
 from leap_teleop.drone.pilot import DronePilot, PilotParams, PilotWorker
 from leap_teleop.drone.pilot_params import PILOT_NODE_PARAMS as PARAMS
+from leap_teleop.drone.pilot_params import PILOT_PARAMS
 from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE as RECONFIGURABLE
 from leap_teleop.msg import Hand
 from leap_teleop.ros import drone_conversions, hand_conversions
@@ -33,7 +34,7 @@ class DronePilotNode:
     def __init__(self, p):
         self.side = hand_conversions.SIDE_CODES[p['side']]
         self.log = RateLimitedLog(2.0)
-        self.pilot = DronePilot(PilotParams().update(p), warn=self.warn)
+        self.pilot = DronePilot(PilotParams().update({k: p[k] for k in PILOT_PARAMS}), warn=self.warn)
         self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], lambda: (
             self.pilot.takeoff_still_wanted(rospy.get_time())), self.warn)
         hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['side'])['hand']
