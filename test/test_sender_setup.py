@@ -61,6 +61,17 @@ def test_a_side_twice_or_two_outputs_on_one_topic_are_refused():
     check_outputs(params(sides=['right'], hand_topic_left='leapmotion/hand_right'))
 
 
+def test_two_outputs_are_compared_as_the_node_resolves_their_topics():
+    # In the root namespace '/leapmotion/data_right' and 'leapmotion/data_right' are one
+    # topic (rospy would put Hand and leapcobot messages on it); elsewhere they are two.
+    import rospy.names
+    values = dict(hand_topic_right='/leapmotion/data_right', leapcobot_topic_right='leapmotion/data_right')
+    check_outputs(params(**values))                                        # names as given
+    with pytest.raises(ValueError, match="both '/leapmotion/data_right'"):
+        check_outputs(params(**values), lambda t: rospy.names.ns_join('/', t))
+    check_outputs(params(**values), lambda t: rospy.names.ns_join('/robot1', t))
+
+
 def test_a_static_tf_from_a_frame_to_itself_is_refused():
     # it was taken, and tf2 listeners then complained of TF_SELF_TRANSFORM
     with pytest.raises(ValueError, match="~world_frame and ~frame_id are both 'world'"):

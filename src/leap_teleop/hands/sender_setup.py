@@ -10,7 +10,7 @@ OUTPUT_TOPICS = ('leapcobot_topic_right', 'leapcobot_topic_left', 'hand_topic_ri
                  'filtered_human_topic', 'driver_marker_topic', 'annotated_image_topic')
 
 
-def check_outputs(p):
+def check_outputs(p, resolve=lambda topic: topic):
     """ValueError when the ~params ask for outputs that cannot be: a side twice, leapros /
     leap carrying a hand the sender does not publish, two outputs on one topic (two
     message types on a topic, or two streams mixed in one), a static TF from a frame to
@@ -28,7 +28,9 @@ def check_outputs(p):
         topic = p.get(name, '')
         if not topic or (side in ('right', 'left') and side not in p['sides']):
             continue
-        # as given: 'x' and '/x' differ inside a namespace
+        # as the node resolves them (rospy.resolve_name): 'x' and '/x' are one topic in the
+        # root namespace, two inside another
+        topic = resolve(topic)
         if topic in used:
             raise ValueError('~%s and ~%s are both %r: one topic per output' % (
                 used[topic], name, topic))

@@ -34,7 +34,7 @@ LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 def sender_parts(p):
     """What the checked ~params make before any topic exists (a bad one ends the node)."""
-    check_outputs(p)
+    check_outputs(p, rospy.resolve_name)
     factory = recognizer_factory(p)
     bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
     view = camera_view_publisher(p)
