@@ -212,3 +212,29 @@ def test_a_palm_normal_or_direction_of_no_length_is_no_hand_and_others_are_made_
     state = tracker.update(long, 1.02, 3)
     assert state.present and math.hypot(*state.palm_normal) == pytest.approx(1.0)
     assert state.palm_velocity == (0.0, 0.0, 0.0) and state.finger_tips[1] == (0.0, 0.0, 0.0)
+
+
+def test_two_hands_typed_alike_the_followed_one_stays_and_a_new_one_starts_afresh():
+    # Both hands typed right, listed in either order: the first listed was taken, and the
+    # right hand jumped 90 mm from frame to frame with no hand_lost.
+    li = LeapInterface(recognizer_factory=per_frame)
+    seen = []
+    li.add_listener(lambda f, states: seen.append(len([h for h in f.hands if h.side == 'right'])))
+    a = render_hand('right', 'open', [50.0, 200.0, 0.0], hand_id=23, confidence=0.6)
+    b = render_hand('right', 'open', [-40.0, 200.0, 0.0], hand_id=10, confidence=0.9)
+    palms, events = [], []
+    li.on_frame(frame(1, a))
+    for i in range(2, 30):
+        states = li.on_frame(frame(i, *((a, b) if i % 3 else (b, a))))
+        palms.append(states['right'].palm_position[0])
+        events += [e.gesture for e in states['right'].events]
+    assert palms == [50.0] * len(palms) and events == [] and set(seen) == {1}
+    # The followed hand leaves: the other one is a new hand, after one frame without.
+    states = li.on_frame(frame(30, b))
+    assert not states['right'].present and [e.gesture for e in states['right'].events] == ['hand_lost']
+    states = li.on_frame(frame(31, b))
+    assert states['right'].present and states['right'].palm_position[0] == -40.0
+    assert [e.gesture for e in states['right'].events] == ['hand_found']
+    # With none followed, the most confident of two alike is taken.
+    li = LeapInterface(recognizer_factory=per_frame)
+    assert li.on_frame(frame(1, a, b))['right'].palm_position[0] == -40.0

@@ -9,7 +9,7 @@ import logging
 import math
 import threading
 
-from leap_teleop.hands.frame import SIDES
+from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.tracker import DEAD_BANDS, HandState, HandTracker
 
@@ -62,6 +62,7 @@ class LeapInterface:
                 log.warning('dropped %d frame(s) without a valid capture time (got %r)',
                             self.rejected_frames, frame.timestamp)
             return None
+        frame = self._one_hand_per_side(frame)
         states = {}
         for side, tracker in self._trackers.items():
             states[side] = state = tracker.update(frame.hand(side), frame.timestamp, frame.id)
@@ -73,6 +74,28 @@ class LeapInterface:
         for callback in self._listeners:
             callback(frame, states)
         return states
+
+    def _one_hand_per_side(self, frame):
+        """The frame with one hand of each side, for every listener alike: the one followed
+        (by id), else the most confident. A tracker may type two hands alike, and the
+        first listed, whichever it was, moved the hand by 90 mm from frame to frame."""
+        sides = [h.side for h in frame.hands]
+        if len(set(sides)) == len(sides):
+            return frame
+        def rank(hand):
+            tracker = self._trackers.get(hand.side)
+            followed = tracker is not None and tracker.hand_id is not None \
+                and hand.id == tracker.hand_id
+            c = hand.confidence
+            return followed, float(c) if isinstance(c, (int, float)) and c == c else 0.0
+
+        chosen = {}
+        for hand in frame.hands:            # on a tie the first listed stays
+            if hand.side not in chosen or rank(hand) > rank(chosen[hand.side]):
+                chosen[hand.side] = hand
+        kept = set(map(id, chosen.values()))
+        return Frame(frame.id, frame.timestamp, [h for h in frame.hands if id(h) in kept],
+                     frame.gestures)
 
     def start(self):
         if self.source is None:

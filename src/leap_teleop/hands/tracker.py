@@ -122,11 +122,13 @@ class HandTracker:
         self.state = HandState(side)
         self._origin_angles = None
         self.rejected_frames = 0
+        self.hand_id = None             # the id of the hand followed, while present
 
     def _lost(self, timestamp, frame_id):
         was_present = self.state.present
         self.recognizer.reset()
         self._origin_angles = None
+        self.hand_id = None
         events = (HandEvent('hand_lost'),) if was_present else ()
         self.state = HandState(self.side, timestamp=timestamp, frame_id=frame_id, events=events)
         return self.state
@@ -147,6 +149,14 @@ class HandTracker:
                             self.side, self.rejected_frames, MAX_PALM_MM)
             return self._lost(timestamp, frame_id)
         was_present = self.state.present
+        if was_present and hand.id != self.hand_id:
+            # Another hand took this side (the SDK re-found one, or typed two alike): the
+            # one followed is gone, and this one is new from the next frame, with no origin
+            # or gesture of the other's (its palm was 90 mm away, with no hand_lost).
+            lost = self._lost(timestamp, frame_id)
+            self.hand_id = hand.id
+            return lost
+        self.hand_id = hand.id
         g = self.recognizer.update(hand, timestamp)
         arm, origin, stop, gripper, gripper_value = self.actions.flags(g)
         events = list(self.actions.events(g.events))
