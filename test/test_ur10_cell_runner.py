@@ -62,7 +62,7 @@ def test_each_arm_reports_how_long_its_commands_waited_for_the_physics(runner):
     assert runner.command_waits.windows[ARM].summary(runner.command_waits.clock())[2] == 1
 
 
-def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner, monkeypatch):
+def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner, rejected, monkeypatch):
     # The physics step applies every queued command: ten 10,000-point ones held it (and
     # joint_states, /clock) for a minute, though each replaced the one before at once.
     planned = []
@@ -79,6 +79,16 @@ def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner,
     runner.step()
     assert planned == [0.3, 0.4] and runner.superseded_commands == 2
     assert dict(runner.report(0)[2])['commands replaced before they began'] == 2
+    # A later command the cell refuses replaces nothing: what it would have replaced runs.
+    planned.clear()
+    bad = q.copy()
+    bad[2] = 4.0                                              # the elbow beyond +-pi
+    runner.queue(ARM, 'arm', [(0.6, q, None)], 0.0)
+    runner.queue(ARM, 'arm', [(0.7, q, None)], 0.0)
+    runner.queue(ARM, 'arm', [(0.8, bad, None)], 0.0)           # refused
+    runner.step()
+    assert planned == [0.8, 0.7] and runner.superseded_commands == 3
+    assert len(rejected) == 1 and runner.cell.arm(ARM).arm_follower.active
 
 
 def test_the_cell_warns_for_a_while_after_a_dropped_or_refused_command(runner, monkeypatch):

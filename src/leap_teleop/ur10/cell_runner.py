@@ -106,32 +106,52 @@ class CellRunner:
         """Hand the commands queued before this step to the cell (lock held); those arriving
         meanwhile wait for the next step, so a burst of long commands cannot hold the
         physics (and joint_states) until it ends."""
-        cell = self.cell
         batch = []
         for _ in range(len(self.pending)):
             if not self.pending:           # queue() dropped the oldest meanwhile
                 break
             batch.append(self.pending.popleft())
-        for i, (arm, kind, points, stamp, received) in enumerate(batch):
-            if any(a == arm and k == kind and (s <= 0 or 0 < stamp and s <= stamp)
-                   for a, k, _, s, _ in batch[i + 1:]):
-                # A later command of the batch replaces it before it starts: not planned
-                # (ten 10,000-point ones held the physics for a minute).
-                self.superseded_commands += 1
-                continue
-            # A stamped start in ROS time -> cell time; 0 = now.
-            start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
-            command = cell.command_arm if kind == 'arm' else cell.command_gripper
-            try:
-                command(arm, points, start)
-                self.command_waits.add(arm, received, self.command_waits.clock())
-            except TrajectoryError as e:
-                self.reject(arm, kind, e)
-                continue
-            if start is not None and start - cell.time > FAR_START_S:
-                self.warn(arm, kind, 'starts in %.0f s (header.stamp %.3f, the clock %.3f); '
-                          'until then the arm goes on with what it was doing, then holds'
-                          % (start - cell.time, stamp, self.ros_time()))
+        # A command that a later one of the batch (same arm and controller) replaces
+        # before it begins is not planned (ten 10,000-point ones held the physics for a
+        # minute) - unless every such later one is refused: then it runs after all.
+        waiting = {}                      # index -> indices of the later ones replacing it
+        for i, (arm, kind, _, stamp, _) in enumerate(batch):
+            later = {j for j in range(i + 1, len(batch)) if batch[j][:2] == (arm, kind)
+                     and (batch[j][3] <= 0 or 0 < stamp and batch[j][3] <= stamp)}
+            if later:
+                waiting[i] = later
+        refused = []
+        for i in range(len(batch)):
+            if i not in waiting and not self._apply(batch[i]):
+                refused.append(i)
+            while refused:                # the commands waiting on a refused one, in order
+                j = refused.pop()
+                for k in sorted(waiting):
+                    waiting[k].discard(j)
+                    if not waiting[k]:
+                        del waiting[k]
+                        if not self._apply(batch[k]):
+                            refused.append(k)
+        self.superseded_commands += len(waiting)
+
+    def _apply(self, command):
+        """One queued command to the cell; False when it refuses it (reported)."""
+        arm, kind, points, stamp, received = command
+        cell = self.cell
+        # A stamped start in ROS time -> cell time; 0 = now.
+        start = None if stamp <= 0 else cell.time + (stamp - self.ros_time())
+        follow = cell.command_arm if kind == 'arm' else cell.command_gripper
+        try:
+            follow(arm, points, start)
+            self.command_waits.add(arm, received, self.command_waits.clock())
+        except TrajectoryError as e:
+            self.reject(arm, kind, e)
+            return False
+        if start is not None and start - cell.time > FAR_START_S:
+            self.warn(arm, kind, 'starts in %.0f s (header.stamp %.3f, the clock %.3f); '
+                      'until then the arm goes on with what it was doing, then holds'
+                      % (start - cell.time, stamp, self.ros_time()))
+        return True
 
     def step(self):
         """Apply the queued commands, step the physics once; a CellTick of what is due."""
