@@ -622,7 +622,7 @@ def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
 
 @pytest.mark.parametrize('axis', [(0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (1.0, 0.0, 1.0)],
                          ids=['palm up', 'fingers up and back', 'turned back', 'rolled and pitched'])
-@pytest.mark.parametrize('scale', [1.0, 0.5])
+@pytest.mark.parametrize('scale', [1.0, 0.5, 3.0])
 def test_full_mode_follows_a_hand_turned_past_half_a_turn_without_a_jump(axis, scale):
     # The hand turns steadily from the rock to 3.4 rad about one axis, lingers around pi,
     # and comes back, with the angles the sender measures (they jump where the palm turns
@@ -647,7 +647,7 @@ def test_full_mode_follows_a_hand_turned_past_half_a_turn_without_a_jump(axis, s
             worst = max(worst, kin.rotation_error(last, target))
         last = target
         assert t.status.state == TRACKING, t.status.reason
-    assert worst < 0.06 and t.status.ik_failures == 0
+    assert worst < 0.06 * max(1.0, scale / 2) and t.status.ik_failures == 0
     np.testing.assert_allclose(last, kin.fk(HOME)[:3, :3], atol=0.05)
 
 

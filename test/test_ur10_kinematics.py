@@ -213,7 +213,7 @@ def test_limited_tool_rotation_keeps_its_side_over_the_top_and_past_a_half_turn(
     # tilt axis) flips where the tool points up; with the last side handed back it stays.
     down = kin.tool_down()
     flips, near, last, last_plain = 0, None, None, None
-    for angle in np.linspace(0.0, 4.0, 200):
+    for angle in np.linspace(0.0, 6.0, 300):        # on past 1.5 pi (a higher scale)
         R = kin.rotation_from_vector([angle, 0.0, 0.0]) @ down
         limited, near = kin.limit_tool_rotation(R, 0.5, 0.0, 1.0, near)
         plain, _ = kin.limit_tool_rotation(R, 0.5, 0.0, 1.0)
@@ -221,7 +221,7 @@ def test_limited_tool_rotation_keeps_its_side_over_the_top_and_past_a_half_turn(
             assert kin.rotation_error(last, limited) < 0.05
             flips += kin.rotation_error(last_plain, plain) > 0.5
         last, last_plain = limited, plain
-    assert flips == 1                    # what the side handed back prevents
+    assert flips == 1                    # what the swing handed back prevents
     np.testing.assert_allclose(last, kin.rotation_from_vector([0.5, 0.0, 0.0]) @ down, atol=1e-9)
     # A turn about the vertical past pi keeps counting: clamped at +1, not flipped to -1.
     near = None

@@ -149,39 +149,41 @@ def tilt_and_yaw(R):
 def limit_tool_rotation(R, max_tilt, yaw_center, max_turn, near=None):
     """R with its tilt from vertical limited to max_tilt and its yaw to
     yaw_center +- max_turn (rad): the orientation counterpart of the workspace box.
-    Returns (limited R, (tilt axis, turn)). Hand that pair back as `near` on the next
-    call: a tool tilted past horizontal then keeps the side it went over on, and a turn
-    past +-pi keeps counting, so a clamped target does not jump to the other side where
-    the tool points straight up or turns half a circle (a palm turned up from the rock)."""
+    Returns (limited R, (swing, turn)): the swing as a rotation vector taking straight
+    down to the tool axis, and the turn from yaw_center. Hand that pair back as `near` on
+    the next call: both are then taken nearest their last values (the swing about its
+    axis by tilt + 2 pi k, the turn + 2 pi k), so a tool turned on past straight up keeps
+    the side it went over on, and a turn past +-pi keeps counting: a clamped target does
+    not jump to the other side (a palm turned up from the rock, or less at a higher
+    orientation_scale)."""
     R = np.asarray(R, dtype=float)
     z = R[:, 2].tolist()
     tilt = math.acos(max(-1.0, min(1.0, -z[2])))
-    near_axis, near_turn = near if near is not None else (None, None)
+    near_swing, near_turn = near if near is not None else (None, None)
     axis = cross3(_DOWN, z)
     n = norm3(axis)
     if n > 1e-12:
         axis = (axis[0] / n, axis[1] / n, axis[2] / n)
-    elif tilt > math.pi / 2:            # straight up: the side it came from, else any
-        axis = near_axis if near_axis is not None else (1.0, 0.0, 0.0)
-    else:                               # straight down: no tilt to clamp
-        axis = near_axis if near_axis is not None else (1.0, 0.0, 0.0)
-        tilt = 0.0
-    side = 1.0
-    if (tilt > math.pi / 2 and near_axis is not None
-            and axis[0] * near_axis[0] + axis[1] * near_axis[1] + axis[2] * near_axis[2] < 0):
-        # Over the top from the other side: the same tilt, about the opposite axis.
-        axis, side = (-axis[0], -axis[1], -axis[2]), -1.0
-    swing = rotation_from_vector((axis[0] * side * tilt, axis[1] * side * tilt,
-                                  axis[2] * side * tilt))
-    upright = swing.T @ R @ TOOL_DOWN.T          # = rot_z(yaw)
+    else:                               # straight down or up: the axis it had, else any
+        m = norm3(near_swing) if near_swing is not None else 0.0
+        axis = (1.0, 0.0, 0.0) if m < 1e-12 else tuple(c / m for c in near_swing)
+        if tilt < math.pi / 2:
+            tilt = 0.0
+    angle = tilt
+    if near_swing is not None:
+        along = axis[0] * near_swing[0] + axis[1] * near_swing[1] + axis[2] * near_swing[2]
+        angle += 2.0 * math.pi * round((along - tilt) / (2.0 * math.pi))
+    swing = (axis[0] * angle, axis[1] * angle, axis[2] * angle)
+    level = rotation_from_vector((axis[0] * tilt, axis[1] * tilt, axis[2] * tilt)).T @ R
+    upright = level @ TOOL_DOWN.T               # = rot_z(yaw)
     turn = math.atan2(upright[1, 0], upright[0, 0]) - yaw_center
     reference = 0.0 if near_turn is None else near_turn
     turn += 2.0 * math.pi * round((reference - turn) / (2.0 * math.pi))
-    if tilt <= max_tilt and abs(turn) <= max_turn:
-        return R, (axis, turn)
-    limited = min(tilt, max_tilt)
-    swing = rotation_from_vector((axis[0] * limited, axis[1] * limited, axis[2] * limited))
-    return swing @ tool_down(yaw_center + max(-max_turn, min(max_turn, turn))), (axis, turn)
+    if abs(angle) <= max_tilt and abs(turn) <= max_turn:
+        return R, (swing, turn)
+    limited = math.copysign(min(abs(angle), max_tilt), angle)
+    tilted = rotation_from_vector((axis[0] * limited, axis[1] * limited, axis[2] * limited))
+    return tilted @ tool_down(yaw_center + max(-max_turn, min(max_turn, turn))), (swing, turn)
 
 
 def pose(position, rotation=TOOL_DOWN):
