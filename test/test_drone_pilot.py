@@ -211,6 +211,24 @@ def test_the_clock_jumping_back_under_a_loss_still_lands(lost):
     assert landed_at is not None and 5.0 < landed_at <= 5.0 + 3.0 + 0.02, landed_at
 
 
+def test_a_takeoff_navdata_never_confirmed_still_lands_across_a_clock_jump():
+    # The takeoff's time was moved to the jump's 'now' while the last navdata's stayed on
+    # the old timeline: compared, the takeoff looked older than the navdata saying landed,
+    # and a drone that may be flying got no hover and no land.
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 100.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 100.0)
+    pilot.on_gesture('unfold', True, 100.002)
+    assert kinds(drain(pilot)) == ['takeoff']            # then navdata goes silent
+    landed_at = None
+    for t in list(np.arange(100.01, 100.5, 0.01)) + list(np.arange(5.0, 12.0, 0.01)):
+        pilot.on_hand(hand((0.0, 0.2, 0.0)), t)
+        pilot.watchdog(t)
+        if landed_at is None and 'land' in kinds(drain(pilot)):
+            landed_at = t
+    assert landed_at is not None and 5.0 < landed_at <= 8.02, landed_at
+
+
 def test_no_hand_twists_while_landed_or_taking_off():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)

@@ -252,7 +252,7 @@ class DronePilot:
         self._landed_for_loss = False
         self.engaged = False             # tilt: unfold seen, not folded since
         self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
-        self._takeoff_at = None          # when the last takeoff was queued
+        self._takeoff_unconfirmed = False   # a takeoff was queued, no navdata since
         self._stopped_at = None          # when the last fold or loss came
         self.reference = None            # tilt: (palm xyz m, hand_axes or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
@@ -277,6 +277,8 @@ class DronePilot:
                     'arrived' if first else 'back', now - self.navdata_lost_since))
             self.navdata_lost_since = None
             self._landed_for_navdata = False
+            # A flag, not two times compared: a clock jumping back reversed their order.
+            self._takeoff_unconfirmed = False
 
     def navdata_fresh(self, now):
         """Navdata arrived within navdata_timeout (and the clock did not jump back)."""
@@ -378,7 +380,7 @@ class DronePilot:
                     self._warn('unfold', 'unfold: no takeoff, no fresh Hand input')
                 elif state == LANDED:
                     self._takeoff_asked = True
-                    self._takeoff_at = now
+                    self._takeoff_unconfirmed = True
                     self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
@@ -392,8 +394,7 @@ class DronePilot:
                 self.reference = None
                 withdrawn = self.queue.discard('takeoff')
                 # A takeoff sent after the last navdata flies however that navdata read.
-                sent = (not withdrawn and self._takeoff_at is not None
-                        and not self._takeoff_at < (self.last_navdata_time or -math.inf))
+                sent = not withdrawn and self._takeoff_unconfirmed
                 if state is None or state in AIRBORNE_STATES or sent:
                     self.queue.push(Command('land', stamp=now, input_stamp=stamp))
                 elif withdrawn:
@@ -514,7 +515,6 @@ class DronePilot:
                 # The clock jumped back (a /clock publisher restarted): the hand is stale.
                 self._warn('clock', 'the clock jumped back: hovering')
                 self.last_hand_time = None
-                self._takeoff_at = None
                 self._stream.reset()
                 self.lost_since = None
                 self._lose(now)
@@ -525,8 +525,6 @@ class DronePilot:
                 self.lost_since = now
             if self.navdata_lost_since is not None and self.navdata_lost_since > now:
                 self.navdata_lost_since = now
-            if self._takeoff_at is not None and self._takeoff_at > now:
-                self._takeoff_at = now
             if self._stopped_at is not None and self._stopped_at > now:
                 self._stopped_at = now
             if (self.hand_present and self.last_hand_time is not None
@@ -568,7 +566,7 @@ class DronePilot:
     def _known_landed(self):
         """The last navdata said landed and no takeoff was queued after it."""
         return (self.drone_state == LANDED
-                and (self._takeoff_at is None or self._takeoff_at < self.last_navdata_time))
+                and not self._takeoff_unconfirmed)
 
     def _navdata_watchdog(self, now):
         """Stale navdata: hover at once (again every HOVER_REPEAT s), land after land_after
