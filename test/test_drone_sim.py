@@ -204,6 +204,20 @@ def test_a_land_during_a_flip_lands_once_it_has_caught_upright(drone):
         fastest = max(fastest, -drone.vel[2])
     assert states(drone)[-3:] == [ds.LOOPING, ds.LANDING, ds.LANDED]
     assert fastest < 2.5 and drone.R[8] > 0.99 and drone.flip_count == 1
+    # A flip cut short by a battery landing takes the land asked in it along: the next
+    # flip ended in a landing nobody asked for.
+    fly(drone)
+    assert drone.flight_animation(19, 0)
+    drone.advance(0.3)
+    assert drone.land() and drone.state == ds.LOOPING
+    drone.battery = 0.0
+    drone.advance(8.0)
+    assert drone.state == ds.LANDED
+    drone.battery = 100.0
+    fly(drone)
+    assert drone.flight_animation(19, 0)
+    drone.advance(4.0)
+    assert drone.state == ds.HOVERING and drone.flip_count == 2
 
 
 def test_a_drone_on_its_back_does_not_take_off(drone, warnings):

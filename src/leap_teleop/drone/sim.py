@@ -241,6 +241,8 @@ class ArDroneSim:
             log.warning(text)
 
     def _set_state(self, state):
+        if state != LOOPING:               # a land asked during a flip goes with the flip
+            self._land_after_flip = False
         if state != self.state:
             self.state = state
             self.events.append((self.time, state))
@@ -292,7 +294,6 @@ class ArDroneSim:
         self.last_input_time = self.time
         self.emergency = not self.emergency
         self._anim = None
-        self._land_after_flip = False
         if self.emergency or not self._at_rest_on_ground():
             # Left while still falling, it stays unknown until it is down: 'landed' at
             # 968 mm was believed, and took off in the air.
@@ -621,7 +622,6 @@ class ArDroneSim:
             self._alt_hold = a['alt0']
             self._pos_hold = None
             self._set_state(LANDING if self._land_after_flip else FLYING)
-            self._land_after_flip = False
         return self._vertical(vz) if tilt < math.radians(60) else 0.5 * mg, torque
 
     def _mix(self, thrust, torque):
