@@ -741,7 +741,8 @@ def test_found_a_flip_waiting_for_its_service_is_not_called_after_a_fold():
     commands = object.__new__(ArdroneCommands)      # its ROS parts are not needed here
     commands.flight_animation, commands.service_timeout = SlowService(), 0.5
     pilot = DronePilot(PilotParams(navdata_timeout=10.0))
-    w, sent, warnings = _worker(pilot, lambda *args: answers.append(commands.flip(*args)), clock)
+    w, sent, warnings = _worker(pilot, lambda *args: answers.append(commands.flip(*args)) or answers[-1],
+                                clock)
     pilot.on_navdata(4, 1500, 0.0)
     pilot.on_gesture('unfold', True, 0.0)
     pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=0.0), 0.0)
@@ -751,7 +752,10 @@ def test_found_a_flip_waiting_for_its_service_is_not_called_after_a_fold():
         w.step()
     w.flip_call._thread.join(2.0)
     w.step()
-    assert called == [] and answers == [] and any('not called' in text for text in warnings)
+    assert called == [] and answers == ['not called'] and w.flips_not_called == 1
+    assert not warnings                      # a safety refusal: said at info level
+    diag = dict(w.diagnostics(clock.t)[2])
+    assert diag['flip calls ok'] == 0 and diag['flip calls failed'] == 0
     assert 'land' in [c.kind for _, c in sent]
     # Without the fold the same flip is called.
     pilot = DronePilot(PilotParams(navdata_timeout=10.0))

@@ -92,6 +92,8 @@ GESTURE_NAME = re.compile(r'[A-Za-z0-9_]{1,64}')
 # Back from a short loss turned this far (deg) about the vertical from where it was lost,
 # the hand's reference is re-captured, as when it comes back elsewhere (the arm's 0.3 rad).
 RECAPTURE_TURN_DEG = 17.0
+# What a flip call returns when, the service there at last, the flip is no longer wanted.
+FLIP_NOT_CALLED = 'not called'
 
 
 @dataclass
@@ -634,6 +636,7 @@ class PilotWorker:
         self.info = info or (lambda text: None)
         self.extra = extra                      # called every step (diagnostics)
         self.errors = 0
+        self.flips_not_called = 0
         self.last_error = ''
         self.fault_since = None
         self._fault_landed = False
@@ -697,7 +700,10 @@ class PilotWorker:
         else:
             level = 'warn' if lost and pl.drone_state in AIRBORNE_STATES else 'ok'
         values = [('navdata', 'stale' if stale else 'fresh'), ('worker faults', self.errors)]
-        values += [('flip calls %s' % outcome, n) for outcome, n in self.flip_call.counts.items()]
+        counts = dict(self.flip_call.counts, ok=self.flip_call.counts['ok'] - self.flips_not_called)
+        values += [('flip calls %s' % outcome, n) for outcome, n in counts.items()]
+        values += [('flips not called (landed, folded or hand lost meanwhile)',
+                    self.flips_not_called)]
         values += [('rejected inputs', pl.rejected_inputs),
                    ('twists superseded or dropped', pl.queue.dropped)]
         return level, summary, values
@@ -711,7 +717,11 @@ class PilotWorker:
         if outcome is None:
             return
         kind, value = outcome
-        if kind == 'ok':
+        if kind == 'ok' and value == FLIP_NOT_CALLED:     # a safety refusal, not a fault
+            self.flips_not_called += 1
+            self.info('flight animation not called: the drone is no longer flying high '
+                      'enough, was told to land or lost the hand while its service was awaited')
+        elif kind == 'ok':
             self.info('flight animation -> %s' % (value,))
         elif kind == 'timeout':
             self.warn('flip_timeout', 'flight animation call timed out after %.2f s (still '

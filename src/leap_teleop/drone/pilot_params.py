@@ -12,7 +12,8 @@ from leap_teleop.params import Param, ParamError, check_params, declared_fields
 PILOT_PARAMS = {
     'mode': Param('tilt', 'tilt (palm offset -> tilt, dead zone, clamps) or paper '
                           '(the original drone paper\'s mapping, exactly)', choices=('tilt', 'paper')),
-    'rate': Param(200.0, 'max twist publishing rate (queue drain rate)', unit='Hz',
+    'rate': Param(200.0, 'max steering twist publishing rate (queue drain rate; a hover '
+                         'after steering goes at once)', unit='Hz',
                   ge=1.0, le=1000.0),
     'queue_size': Param(10, 'command FIFO bound (oldest twist dropped when full)',
                         ge=1, le=1000),

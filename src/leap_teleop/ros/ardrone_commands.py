@@ -8,6 +8,7 @@ from std_msgs.msg import Empty
 
 from leap_teleop.control.input_age import InputAgeWindow
 from leap_teleop.drone.one_shot import HeldOneShot
+from leap_teleop.drone.pilot import FLIP_NOT_CALLED
 from leap_teleop.ros import drone_conversions
 from leap_teleop.srv import FlightAnim
 
@@ -70,6 +71,5 @@ class ArdroneCommands:
         a land or a lost hand meanwhile must not be followed by a flip."""
         self.flight_animation.wait_for_service(self.service_timeout)
         if still_wanted is not None and not still_wanted():
-            raise RuntimeError('not called: the drone is no longer flying high enough, was '
-                               'told to land or lost the hand while the service was awaited')
+            return FLIP_NOT_CALLED
         return self.flight_animation(anim_type, duration).result
