@@ -235,6 +235,12 @@ def test_two_hands_typed_alike_the_followed_one_stays_and_a_new_one_starts_afres
     states = li.on_frame(frame(31, b))
     assert states['right'].present and states['right'].palm_position[0] == -40.0
     assert [e.gesture for e in states['right'].events] == ['hand_found']
+    # An id of 0 is none known: a hand going from 0 to an id, or back, is the same hand.
+    li = LeapInterface(recognizer_factory=per_frame)
+    li.on_frame(frame(1, render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=0)))
+    for i, hid in enumerate((5, 0, 5)):
+        states = li.on_frame(frame(2 + i, render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=hid)))
+        assert states['right'].present and not states['right'].events
     # With none followed, the most confident of two alike is taken.
     li = LeapInterface(recognizer_factory=per_frame)
     assert li.on_frame(frame(1, a, b))['right'].palm_position[0] == -40.0

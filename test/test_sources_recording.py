@@ -575,3 +575,8 @@ def test_a_hand_without_an_id_keeps_its_own_fingers_through_a_recording():
         np.testing.assert_allclose([f.tip for f in after.fingers],
                                    [f.tip for f in before.fingers], atol=1e-6)
     assert len({h.id for h in back.hands}) == 2
+    # Each keeps its id from frame to frame, whoever else is in view: the left hand alone,
+    # then listed after the right, was 1 then 2 (a new hand to a reader).
+    ids = [{h.side: h.id for h in leapjs.frame_from_dict(leapjs.frame_to_dict(Frame(i, 2.0 + i, hands))).hands}
+           for i, hands in enumerate([[left], [right, left], [left, right], [right]])]
+    assert ids == [{'left': 2}, {'right': 1, 'left': 2}, {'left': 2, 'right': 1}, {'right': 1}]

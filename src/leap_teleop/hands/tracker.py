@@ -149,10 +149,11 @@ class HandTracker:
                             self.side, self.rejected_frames, MAX_PALM_MM)
             return self._lost(timestamp, frame_id)
         was_present = self.state.present
-        if was_present and hand.id != self.hand_id:
+        if was_present and hand.id != self.hand_id and hand.id and self.hand_id:
             # Another hand took this side (the SDK re-found one, or typed two alike): the
             # one followed is gone, and this one is new from the next frame, with no origin
-            # or gesture of the other's (its palm was 90 mm away, with no hand_lost).
+            # or gesture of the other's (its palm was 90 mm away, with no hand_lost). An id
+            # of 0 is none known: no change is seen in it.
             lost = self._lost(timestamp, frame_id)
             self.hand_id = hand.id
             return lost

@@ -468,19 +468,28 @@ def _whole(hand):
                for v in (hand.palm_position, hand.palm_normal, hand.direction))
 
 
+SIDE_IDS = {'right': 1, 'left': 2}      # ids written for hands that have none
+
+
 def frame_to_dict(frame):
     """The LeapJS (formatVersion 1) dict of a Frame; what frame_from_dict reads back. A hand
     without a palm position or orientation (a recording's unreadable values) is left out:
     written as zeros it would read back as a hand at the device."""
     hands, pointables = [], []
-    # A hand without an id (0) gets one no other hand of the frame has: its fingers are
-    # found by it (k + 1 could be the other hand's, which then read back with these fingers).
+    # A hand without an id (0) gets one no other hand of the frame has, its fingers are
+    # found by it (k + 1 could be the other hand's, which then read back with these
+    # fingers): its side's own (right 1, left 2) when free, so it keeps it from frame to
+    # frame (a reader takes a new id for a new hand), else the next free one.
     taken = {hand.id for hand in frame.hands if hand.id}
-    free = (i for i in range(1, len(frame.hands) + len(taken) + 2) if i not in taken)
     for hand in frame.hands:
         if not _whole(hand):
             continue
-        hid = hand.id if hand.id else next(free)
+        hid = hand.id
+        if not hid:
+            hid = SIDE_IDS.get(hand.side, 1)
+            while hid in taken:
+                hid += 1
+            taken.add(hid)
         hands.append({
             'id': hid, 'type': hand.side,
             'palmPosition': _list(hand.palm_position), 'palmVelocity': _list(hand.palm_velocity),
