@@ -325,3 +325,38 @@ def test_a_follower_takes_both_joint_limits_or_neither():
     beyond[0] = kin.JOINT_UPPER[0] + 1e-6
     with pytest.raises(TrajectoryError, match='joint limits'):
         follower.command(0.0, [(1.0, beyond, None)])
+
+
+def _moving_follower():
+    """One joint at 1 rad/s (its limit), 0.5 s into a 2 s ramp."""
+    f = TrajectoryFollower(np.zeros(1), [1.0])
+    f.command(0.0, [(2.0, [2.0], [1.0])])
+    f.sample(0.5)
+    return f
+
+
+def test_a_plan_made_ahead_is_followed_as_the_command_planned_at_once():
+    points = [(0.2, [0.6], [0.5], [0.1]), (0.6, [0.8], [0.2], [-0.2]), (1.0, [0.9], [0.0], [0.0])]
+    ahead, at_once = _moving_follower(), _moving_follower()
+    plan = ahead.plan(points)                  # before the state it will start from
+    ahead.sample(0.7)
+    at_once.sample(0.7)
+    assert ahead.command(0.7, plan, 0.65) == pytest.approx(at_once.command(0.7, points, 0.65))
+    for t in np.linspace(0.7, 2.0, 27):
+        np.testing.assert_allclose(ahead.sample(t), at_once.sample(t), atol=1e-12)
+
+
+def test_a_first_point_whose_accelerations_the_arm_cannot_follow_replans_the_next_segment():
+    # The plan assumed the first point's accelerations (2 rad/s^2); from a joint moving at
+    # +1 rad/s, turning to -1 rad/s in 0.1 s is too fast for them: the cubic is followed
+    # instead and the second segment must start at rest in acceleration, not at 2.
+    f = _moving_follower()
+    points = [(0.1, [0.5], [-1.0], [2.0]), (0.6, [0.2], [-0.5], [0.5]), (1.2, [0.0], [0.0], [0.0])]
+    plan = f.plan(points)
+    assert plan.segments[1][6][0] == 2.0
+    f.command(0.5, plan)
+    first, second, third = f.segments
+    assert first[6] is None and first[7] is None               # let go: the cubic
+    assert second[6][0] == 0.0                                 # replanned from that
+    assert third[2:4] == (plan.segments[2][2], plan.segments[2][3])
+    assert third[1] - third[0] == pytest.approx(plan.segments[2][1] - plan.segments[2][0])

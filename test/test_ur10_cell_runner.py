@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.params import check_params
-from leap_teleop.ur10 import cell_runner
+from leap_teleop.ur10 import cell_runner, trajectory
 from leap_teleop.ur10.cell_runner import KINDS, RUNNER_PARAMS, CellRunner
 from leap_teleop.ur10.config import CellConfigError, load_config
 from leap_teleop.ur10.kinematics import HOME_Q, JOINT_NAMES
@@ -67,8 +67,8 @@ def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner,
     # joint_states, /clock) for a minute, though each replaced the one before at once.
     planned = []
     real = runner.cell.command_arm
-    monkeypatch.setattr(runner.cell, 'command_arm',
-                        lambda arm, points, start: planned.append(points[0][0]) or real(arm, points, start))
+    monkeypatch.setattr(runner.cell, 'command_arm', lambda arm, plan, start: planned.append(
+        plan.points[0][0]) or real(arm, plan, start))
     q = runner.cell.joint_state(ARM)[0]
     t = runner.ros_time()
     runner.queue(ARM, 'arm', [(0.1, q, None)], 0.0)            # replaced by the next
@@ -83,12 +83,30 @@ def test_commands_a_later_one_replaces_before_they_begin_are_not_planned(runner,
     planned.clear()
     bad = q.copy()
     bad[2] = 4.0                                              # the elbow beyond +-pi
-    runner.queue(ARM, 'arm', [(0.6, q, None)], 0.0)
-    runner.queue(ARM, 'arm', [(0.7, q, None)], 0.0)
-    runner.queue(ARM, 'arm', [(0.8, bad, None)], 0.0)           # refused
+    runner.queue(ARM, 'arm', [(0.6, q, None)], t)
+    runner.queue(ARM, 'arm', [(0.7, q, None)], t)
+    runner.queue(ARM, 'arm', [(0.8, bad, None)], t)             # refused as it is queued
+    runner.queue(ARM, 'arm', [(0.9, q, None)], t - 100.0)       # refused: over by now
     runner.step()
-    assert planned == [0.8, 0.7] and runner.superseded_commands == 3
-    assert len(rejected) == 1 and runner.cell.arm(ARM).arm_follower.active
+    assert planned == [0.9, 0.7] and runner.superseded_commands == 3
+    assert len(rejected) == 2 and runner.cell.arm(ARM).arm_follower.active
+
+
+def test_a_long_command_is_planned_as_it_is_queued_not_in_the_physics_step(runner, monkeypatch):
+    # Planning 10,000 points took 0.15-0.4 s; in step(), under the physics lock, it held the
+    # physics and every arm's joint_states that long.
+    home = np.array(HOME_Q)
+    points = [(0.01 * k, home + [0.2 * np.sin(0.01 * k), 0, 0, 0, 0, 0], None)
+              for k in range(1, 1001)]
+    ratios = []
+    real = trajectory._peak_ratio
+    monkeypatch.setattr(trajectory, '_peak_ratio', lambda seg, vmax: ratios.append(seg) or real(seg, vmax))
+    runner.queue(ARM, 'arm', points, 0.0)
+    queued = len(ratios)
+    runner.step()
+    assert queued >= 999 and len(ratios) - queued <= 1
+    runner.cell.run(10.5)
+    assert runner.cell.joint_state(ARM)[0][0] == pytest.approx(points[-1][1][0], abs=1e-3)
 
 
 def test_the_cell_warns_for_a_while_after_a_dropped_or_refused_command(runner, monkeypatch):
@@ -144,7 +162,7 @@ def test_a_stalled_loop_drops_the_oldest_commands(runner, monkeypatch):
     monkeypatch.setattr(cell_runner, 'MAX_PENDING', 3)
     drops = [runner.queue(ARM, 'gripper', [(0.1 * (i + 1), [0.1], None)], 0.0) for i in range(5)]
     assert drops == [False, False, False, True, True] and runner.dropped_commands == 2
-    assert [p[2][0][0] for p in runner.pending] == pytest.approx([0.3, 0.4, 0.5])
+    assert [p[2].points[0][0] for p in runner.pending] == pytest.approx([0.3, 0.4, 0.5])
     runner.reset()
     assert not runner.pending
 

@@ -240,14 +240,22 @@ class UR10Cell:
 
     def command_arm(self, name, points, start_time=None):
         """Follow joint points [(time_from_start, q[6] in JOINT_NAMES order, qd[6]|None
-        [, qdd[6]])] from start_time (sim time; None: now), replacing the current trajectory
-        from then on. Raises TrajectoryError on a bad command (the arm keeps what it was
-        doing). Returns the sim time the last point will be reached."""
+        [, qdd[6]])], or their plan_arm(), from start_time (sim time; None: now), replacing
+        the current trajectory from then on. Raises TrajectoryError on a bad command (the
+        arm keeps what it was doing). Returns the sim time the last point will be reached."""
         return self.arm(name).arm_follower.command(self.time, points, start_time)
 
     def command_gripper(self, name, points, start_time=None):
         """Like command_arm for the one gripper joint (knuckle: 0 open .. 0.8 closed)."""
         return self.arm(name).gripper_follower.command(self.time, points, start_time)
+
+    def plan_arm(self, name, points):
+        """command_arm's points checked and timed (TrajectoryError when bad) without the
+        arm's state: safe beside step(), so a long command need not hold the physics."""
+        return self.arm(name).arm_follower.plan(points)
+
+    def plan_gripper(self, name, points):
+        return self.arm(name).gripper_follower.plan(points)
 
     def move_to(self, name, q, duration=0.0):
         """Convenience: one-point trajectory to q (duration stretched to the speed limits)."""

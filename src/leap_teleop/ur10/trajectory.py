@@ -15,7 +15,9 @@ neither swings past a joint limit (it stays there, at rest, while its path is be
 A command that starts later keeps the current trajectory until then, as in the JTC. After
 the last point the desired state holds it.
 """
+import bisect
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -219,6 +221,19 @@ def _stretched(seg, T, vmax):
     return hi
 
 
+@dataclass(frozen=True)
+class Plan:
+    """A checked command (TrajectoryFollower.plan): its points [(time_from_start, positions,
+    velocities|None, accelerations|None)], the segment into each point from the one before
+    (segments[0] is None: that one starts from the arm's state), timed from the start, the
+    time each point is reached (ends) and the accelerations each point is followed with
+    (accels: None where none or let go)."""
+    points: list
+    segments: list
+    ends: list
+    accels: list
+
+
 class TrajectoryFollower:
     """Desired joint state over time for n joints with per-joint speed limits; optional
     joint limits, acceleration bounds for the points (max_accel) and joint names (for
@@ -301,16 +316,15 @@ class TrajectoryFollower:
         q = kept[-1][3] if kept else self.q
         return kept, (q.copy(), np.zeros(self.n), np.zeros(self.n))
 
-    def command(self, now, points, start_time=None):
-        """Replace the trajectory from its start on (until then the current one goes on).
-        points: [(time_from_start, positions, velocities|None[, accelerations])]. Raises
-        TrajectoryError (and keeps the old trajectory) on a bad command. Returns the time
-        at which the last point will be reached."""
+    def plan(self, points):
+        """Check a command's points and time every segment from its second point on: what
+        does not depend on the state the arm will be in when it takes the command. Reads
+        only what never changes, so it may run beside command() and sample() (the
+        simulator plans in the subscriber thread, outside its physics lock). points:
+        [(time_from_start, positions, velocities|None[, accelerations])]. TrajectoryError
+        on a bad command."""
         if not points:
             raise TrajectoryError('empty trajectory (no points)')
-        # None alone means now: a start that is 0 or less is a time like any other (a
-        # past stamp on a cell younger than its age played in full, later was refused).
-        start = now if start_time is None else float(start_time)
         parsed = []
         last_t = -math.inf
         for k, point in enumerate(points):
@@ -331,10 +345,68 @@ class TrajectoryFollower:
             if vel is not None:
                 vel = np.minimum(np.maximum(vel, -self.vmax), self.vmax)    # np.clip's values
             acc = self._accelerations(acc, k) if vel is not None else None
-            parsed.append((start + tfs, pos, vel, acc))
+            parsed.append((tfs, pos, vel, acc))
+        # Segment k (point k - 1 -> k) in time from the start, assuming point 0 keeps its
+        # accelerations; command() checks that assumption and shifts these in time.
+        segments, ends, accels = [None], [parsed[0][0]], [parsed[0][3]]
+        shift = 0.0
+        for k in range(1, len(parsed)):
+            _, q_prev, v_prev, _ = parsed[k - 1]
+            seg, t1, shift, acc = self._segment(
+                ends[-1], q_prev, self._zeros_if_none(v_prev), self._zeros_if_none(accels[-1]),
+                parsed[k], 0.0, shift)
+            segments.append(seg)
+            ends.append(t1)
+            accels.append(acc)
+        return Plan(parsed, segments, ends, accels)
+
+    def _zeros_if_none(self, value):
+        return np.zeros(self.n) if value is None else value
+
+    def _segment(self, t_prev, q_prev, v_prev, a_prev, point, start, shift):
+        """The segment from the state (t_prev, q_prev, v_prev, a_prev) to a parsed point
+        due at start + its time_from_start + shift: (segment, its end, the shift after it,
+        the point's accelerations as followed: None where it has none or they were let go)."""
+        tfs, pos, vel, acc = point
+        t1 = max(start + tfs + shift, t_prev)
+        v0 = None if vel is None else v_prev
+        a0 = None if acc is None else a_prev
+        seg = (t_prev, t1, q_prev, pos, v0, vel, a0, acc,
+               None if vel is None else self._reach_limits, None)
+        T = t1 - t_prev
+        if vel is None and (q_prev == pos).all():
+            ratio = 0.0
+        else:
+            ratio = _peak_ratio(seg, self.vmax)
+        if ratio > 1.0 + 1e-9 and acc is not None:   # float noise of a plan at the limits
+            # Accelerations the speed limits cannot follow in this time (stretching it
+            # only widens their swing): the cubic through the same points instead.
+            acc = None
+            seg = seg[:6] + (None, None, seg[8], None)
+            ratio = _peak_ratio(seg, self.vmax)
+        if ratio > 1.0:
+            # Stretch until the segment respects every speed limit.
+            if vel is None:
+                T_new = float(np.max(np.abs(pos - q_prev) / self.vmax))
+            else:
+                T_new = _stretched(seg, max(T, 1e-3), self.vmax)
+            shift += T_new - T
+            seg = _retimed(seg, T_new)
+            t1 = t_prev + T_new
+        return seg, t1, shift, acc
+
+    def command(self, now, points, start_time=None):
+        """Replace the trajectory from its start on (until then the current one goes on).
+        points: a Plan from plan(), or the points plan() takes. Raises TrajectoryError (and
+        keeps the old trajectory) on a bad command. Returns the time at which the last
+        point will be reached."""
+        plan = points if isinstance(points, Plan) else self.plan(points)
+        # None alone means now: a start that is 0 or less is a time like any other (a
+        # past stamp on a cell younger than its age played in full, later was refused).
+        start = now if start_time is None else float(start_time)
         # Points already in the past are dropped, as the JTC does.
-        parsed = [pt for pt in parsed if pt[0] >= now] or None
-        if parsed is None:
+        first = bisect.bisect_left(plan.points, now, key=lambda pt: start + pt[0])
+        if first == len(plan.points):
             raise TrajectoryError('trajectory ends in the past')
         self.sample(now)   # the desired state we start from
         t_prev = max(now, start)
@@ -347,38 +419,23 @@ class TrajectoryFollower:
             q_prev, v_prev, a_prev = self.q.copy(), self.qd.copy(), self.qdd.copy()
         if self.max_accel is not None:
             a_prev = np.minimum(np.maximum(a_prev, -self.max_accel), self.max_accel)
+        # From the current state up to the first point the plan starts from alike (it
+        # assumed a point's accelerations as this state's segments follow them), then the
+        # plan's segments, shifted to this start.
         shift = 0.0
         segments = []
-        for t_abs, pos, vel, acc in parsed:
-            t1 = max(t_abs + shift, t_prev)
-            v0 = None if vel is None else v_prev
-            a0 = None if acc is None else a_prev
-            seg = (t_prev, t1, q_prev, pos, v0, vel, a0, acc,
-                   None if vel is None else self._reach_limits, None)
-            T = t1 - t_prev
-            if vel is None and (q_prev == pos).all():
-                ratio = 0.0
-            else:
-                ratio = _peak_ratio(seg, self.vmax)
-            if ratio > 1.0 + 1e-9 and acc is not None:   # float noise of a plan at the limits
-                # Accelerations the speed limits cannot follow in this time (stretching it
-                # only widens their swing): the cubic through the same points instead.
-                acc = None
-                seg = seg[:6] + (None, None, seg[8], None)
-                ratio = _peak_ratio(seg, self.vmax)
-            if ratio > 1.0:
-                # Stretch until the segment respects every speed limit.
-                if vel is None:
-                    T_new = float(np.max(np.abs(pos - q_prev) / self.vmax))
-                else:
-                    T_new = _stretched(seg, max(T, 1e-3), self.vmax)
-                shift += T_new - T
-                seg = _retimed(seg, T_new)
-                t1 = t_prev + T_new
+        for k in range(first, len(plan.points)):
+            seg, t_prev, shift, acc = self._segment(t_prev, q_prev, v_prev, a_prev,
+                                                    plan.points[k], start, shift)
             segments.append(seg)
-            t_prev, q_prev = t1, pos
-            v_prev = np.zeros(self.n) if vel is None else vel
-            a_prev = np.zeros(self.n) if acc is None else acc
+            _, q_prev, vel, _ = plan.points[k]
+            v_prev, a_prev = self._zeros_if_none(vel), self._zeros_if_none(acc)
+            if k + 1 < len(plan.points) and (acc is None) == (plan.accels[k] is None):
+                offset = t_prev - plan.ends[k]
+                segments.extend((s[0] + offset, s[1] + offset) + s[2:]
+                                for s in plan.segments[k + 1:])
+                t_prev = plan.ends[-1] + offset
+                break
         self.segments = kept + segments
         self.end_time = t_prev
         return t_prev
