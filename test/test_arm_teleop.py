@@ -278,6 +278,49 @@ def test_a_small_gap_after_a_stall_keeps_the_origin_and_is_caught_up_within_the_
     check_points(cmd, t.p.max_joint_speed, t.p.max_joint_accel)
 
 
+def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes_to_rest():
+    # Taken at the pose passed while braking, the origin was one the arm ran on past and
+    # then drove back to, with the hand still (here 6 mm: the last command's own plan had
+    # braked for most of the stall already).
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    palm = np.array(PALM)
+    for _ in range(120):                                      # 180 mm/s: the arm at speed
+        palm = palm + [0.0, 0.0, -1.5]
+        cmd, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+    assert np.abs(t._servo.state_at(c.t, q)[1]).max() > 0.5
+    for _ in range(26):                                       # a 0.21 s stall: the hold
+        now = c.tick()
+        t.on_joints(q)
+        t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+    assert t.status.state == HOLDING
+    rest = t._servo.rest(q)
+    passing = t._servo.state_at(c.t + 0.008, q)[0]
+    assert np.linalg.norm(kin.fk(rest)[:3, 3] - kin.fk(passing)[:3, 3]) > 0.004
+    follow(t, c, hand(palm_mm=tuple(palm + [0.0, 0.0, -100.0])), 1, q)
+    assert 'origin re-anchored' in t.status.reason
+    np.testing.assert_allclose(t._tcp_ref, kin.fk(rest)[:3, 3], atol=1e-9)
+
+
+def test_a_thumbs_up_is_held_only_while_it_is_seen():
+    t = ArmTeleop()
+    c = Clock()
+    t.on_joints(HOME)
+    drive(t, c, hand(thumb_up=True))                          # a glimpse,
+    stall(t, c, 0.5)                                          # a silence,
+    drive(t, c, hand(thumb_up=True))                          # another glimpse: not held
+    assert t.status.state == DISARMED and 'hold' in t.status.reason
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    assert t.status.state == ARMED
+    stall(t, c, t.p.disarm_after + 0.05)                      # the watchdog disarms
+    assert t.status.state == DISARMED
+    drive(t, c, hand(thumb_up=True))                          # one frame does not re-arm
+    assert t.status.state == DISARMED
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    assert t.status.state == ARMED
+
+
 def test_stall_while_armed_without_origin_resumes_armed():
     t = ArmTeleop()
     c = Clock()

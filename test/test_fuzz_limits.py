@@ -265,6 +265,44 @@ def test_a_fist_during_a_joint_state_stall_disarms_at_once_without_a_command():
     assert a.t.status.state == DISARMED
 
 
+def test_a_hand_lost_longer_than_disarm_after_during_a_joint_state_stall_disarms():
+    # The hand's watchdog runs during a joint stall too: joints and hand back after 2 s
+    # (hand silent for all of it) once tracked on from the old origin, no thumbs-up.
+    a = Arm()
+    a.arm_with_origin()
+    a.period(hand(palm_mm=(0.0, 260.0, 0.0)))
+    cmds, reasons = [], set()
+    for _ in range(250):                                           # 2 s: no states, no hand
+        cmds.append(a.period(None, joints=False))
+        reasons.add((a.t.status.state, a.t.status.reason))
+    assert not any(c.q is not None or c.points is not None for c in cmds[63:])
+    assert (DISARMED, 'no hand input for 1.00 s (watchdog)') in reasons
+    assert a.t.status.state == DISARMED
+    for _ in range(5):
+        assert a.period(hand(palm_mm=(100.0, 260.0, 0.0))).q is None
+    assert a.t.status.state == DISARMED and not a.t.status.origin_set
+
+
+@pytest.mark.parametrize('hand_first', [False, True])
+def test_a_hand_stall_overlapping_a_joint_state_stall_re_anchors_on_its_return(hand_first):
+    # Whichever stalled first, the hand was not followed meanwhile: back 100 mm further on
+    # (0.25 m of target), it re-anchors instead of driving the arm there.
+    a = Arm()
+    a.arm_with_origin()
+    for _ in range(5):
+        a.period(hand(palm_mm=(0.0, 260.0, 0.0)))
+    periods = [(True, False)] * 20 + [(False, False)] * 70 if hand_first else \
+        [(False, True)] * 20 + [(False, False)] * 70
+    for joints, with_hand in periods:
+        a.period(hand(palm_mm=(0.0, 260.0, 0.0)) if with_hand else None, joints=joints)
+    assert a.t.status.state == HOLDING
+    held = kin.fk(a.q)[:3, 3]
+    cmd = a.period(hand(palm_mm=(100.0, 260.0, 0.0)))
+    assert a.t.status.state == TRACKING and 'origin re-anchored' in a.t.status.reason
+    assert np.linalg.norm(np.array(a.t.status.target) - held) < 1e-3
+    assert np.linalg.norm(kin.fk(cmd.q)[:3, 3] - held) < 1e-3
+
+
 def test_clock_jumping_back_disarms_and_forgets_the_robot():
     a = Arm()
     a.arm_with_origin()

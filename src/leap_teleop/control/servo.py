@@ -106,6 +106,13 @@ class JointServo:
             v.append(w - dec * tau2)
         return q, v
 
+    def rest(self, q_measured):
+        """Where the last plan brings the joints to rest (the measured joints when there is
+        none), leaving the plan as it is."""
+        if self._plan is None:
+            return np.array(q_measured, dtype=float)
+        return np.array(self._planned(self._plan, self._plan[5] + self._plan[6])[0])
+
     def reach(self, t, q_measured):
         """(lo, hi): per joint, the extremes of the positions the last plan commands from
         time t until it rests (the measured joints when there is none). Its segments are

@@ -167,6 +167,9 @@ class ArmTeleop:
         self._gripper_sent = None
         self._thumb_up_since = None       # (capture stamp, receipt) of the current thumbs-up's start
         self._stalled = None              # holding: (what stalled, when it last came)
+        # The hand input fell silent during the current stall (when it last came), whatever
+        # else stalled with it: its return re-anchors as after a hand stall alone.
+        self._hand_silent = None
         self._resume_box = None           # joint stall: (lo, hi) joints it may resume in
 
     def retune(self, changes):
@@ -241,6 +244,8 @@ class ArmTeleop:
             self.status.rejected_inputs += 1
             return why
         self._rewound = self._rewound or self._stream.rewound
+        if self._hand_rx is not None and now - self._hand_rx > self.p.input_timeout:
+            self._thumb_up_since = None       # a hold is seen, not assumed across a silence
         self._hand, self._hand_rx = hand, now
         if not (hand.present and hand.thumb_up):
             self._thumb_up_since = None
@@ -283,6 +288,7 @@ class ArmTeleop:
         self._q = self._joints_rx = self._hand = None
         self._qd = np.zeros(6)
         self._stalled = self._gripper_sent = self._gripper_asked = None   # a new robot
+        self._hand_silent = self._thumb_up_since = None
         self._stream.reset()
         self._servo.reset()
         if self.status.state != DISARMED:
@@ -294,8 +300,9 @@ class ArmTeleop:
     def _disarm(self, reason, now):
         # A stall has already sent its hold: the arm is stopping or at rest.
         was_moving = self.status.state in (ARMED, TRACKING, HOLDING) and self._stalled is None
-        self._stalled = None
+        self._stalled = self._hand_silent = None
         self._gripper_asked = None
+        self._thumb_up_since = None           # re-arming needs a thumbs-up held anew
         self._set(DISARMED, reason)
         self.status.origin_set = False
         self._palm_ref = self._tcp_ref = self._target = None
@@ -322,6 +329,13 @@ class ArmTeleop:
                 and (not hand.present or hand.fist)):
             self._stalled = self._stalled or ('joint states', self._joints_rx)   # no hold
             return self._disarm('fist' if hand.present else 'hand left the sensor', now)
+        if hand is None or now - self._hand_rx > self.p.input_timeout:
+            if self._hand_silent is None:
+                self._hand_silent = self._hand_rx
+            if hand is None or now - self._hand_rx > self.p.disarm_after:
+                self._stalled = self._stalled or ('joint states', self._joints_rx)   # no hold
+                return self._disarm('no hand input for %.2f s (watchdog)' % self.p.disarm_after,
+                                    now)
         if self._stalled is None or self._stalled[0] != 'joint states':
             self._stalled = ('joint states', self._joints_rx)
             # Where the robot may be when states return: wherever its last trajectory
@@ -370,6 +384,8 @@ class ArmTeleop:
             if hand is None or now - self._hand_rx > self.p.disarm_after:
                 return self._disarm('no hand input for %.2f s (watchdog)'
                                     % self.p.disarm_after, now)
+            if self._hand_silent is None:
+                self._hand_silent = self._hand_rx
             if self._stalled is not None:     # the hold was sent: nothing moves meanwhile
                 return ArmCommand()
             # A stall: stop at once, but stay armed for a while in case input resumes.
@@ -413,16 +429,18 @@ class ArmTeleop:
             what, since = self._stalled
             fresh = self._hand_rx if what == 'hand input' else self._joints_rx
             back = '%s back after %.2f s' % (what, fresh - since)
-            self._stalled = None
+            # A hand silent during a joint stall was not followed either, whichever stalled first.
+            hand_stalled = what == 'hand input' or self._hand_silent is not None
+            self._stalled = self._hand_silent = None
             if self._palm_ref is not None:
-                # After a joint-state stall the hand's input never stopped: the mapping
+                # After a joint-state stall alone the hand's input never stopped: the mapping
                 # the operator followed stays, and the servo catches up within its limits.
-                gap = self._resume_gap(palm, now)
-                turn = self._resume_turn(hand_rot, now) if what == 'hand input' else 0.0
-                if what == 'hand input' and (gap > self.p.reanchor_beyond
-                                             or turn > REANCHOR_TURN_RAD):
-                    # Re-anchor: the hand where it is now maps to the pose the arm holds.
-                    self._set_origin(palm, hand_rot, now)
+                gap = self._resume_gap(palm)
+                turn = self._resume_turn(hand_rot) if hand_stalled else 0.0
+                if hand_stalled and (gap > self.p.reanchor_beyond or turn > REANCHOR_TURN_RAD):
+                    # Re-anchor: the hand where it is now maps to the pose the arm holds
+                    # (where its hold comes to rest: one still braking would be driven back).
+                    self._set_origin(palm, hand_rot, now, at_rest=True)
                     self._set(TRACKING, back + ': origin re-anchored')
                 else:
                     # The servo catches up within its limits; the mapping stays.
@@ -496,26 +514,28 @@ class ArmTeleop:
         self._hand_rot_key, self._hand_rot = key, hand_rot
         return hand_rot
 
-    def _resume_gap(self, palm, now):
-        """How far (m) the old origin would put the target from the arm's pose; joystick
-        mode has no such target (its origin is the dead zone's centre): infinite."""
+    def _resume_gap(self, palm):
+        """How far (m) the old origin would put the target from where the arm comes to rest;
+        joystick mode has no such target (its origin is the dead zone's centre): infinite."""
         if self.p.mode != 'imitation':
             return math.inf
         target = np.minimum(np.maximum(
             self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
             self._lo), self._hi)
-        return float(np.linalg.norm(target - kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]))
+        return float(np.linalg.norm(target - kin.fk(self._servo.rest(self._q))[:3, 3]))
 
-    def _resume_turn(self, hand_rot, now):
+    def _resume_turn(self, hand_rot):
         """How far (rad) the old origin would turn the tool from where the arm holds it."""
         if self.p.orientation == 'fixed':
             return 0.0
-        held = kin.fk(self._servo.state_at(now, self._q)[0])[:3, :3]
+        held = kin.fk(self._servo.rest(self._q))[:3, :3]
         return float(kin.rotation_error(held, self._tool_rotation(hand_rot)))
 
-    def _set_origin(self, palm, hand_rot, now):
+    def _set_origin(self, palm, hand_rot, now, at_rest=False):
+        """The hand at palm / hand_rot maps to the tool's pose now (at_rest: where the arm's
+        last plan comes to rest)."""
         self._palm_ref = palm.copy()
-        tool = kin.fk(self._servo.state_at(now, self._q)[0])
+        tool = kin.fk(self._servo.rest(self._q) if at_rest else self._servo.state_at(now, self._q)[0])
         self._tcp_ref = tool[:3, 3].copy()
         self._tool_ref = tool[:3, :3].copy()
         self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
