@@ -35,6 +35,10 @@ _CHAINS = np.array([[0, 1, 2, 3, 4], [0, 5, 6, 7, 8], [0, 9, 10, 11, 12],
                     [0, 13, 14, 15, 16], [0, 17, 18, 19, 20]])
 _MP_TIPS = np.array([4, 8, 12, 16, 20])
 _isfinite = math.isfinite
+# Index-to-pinky knuckle distance of upright landmarks (largest coordinate 1) under which
+# the landmarks are collapsed, not a hand: no features. Real rows (a hand edge-on): 0.018
+# and more.
+MIN_KEYPOINT_PALM_WIDTH = 0.002
 
 
 def leap_features(hand, geometry=None):
@@ -80,16 +84,17 @@ def upright_keypoints(xy):
 
 def keypoint_features(xy):
     """Feature vector (KEYPOINT_FEATURES,) of 21 2-D landmarks (any scale and roll), or
-    None: the upright landmarks, bone directions, fingertip gaps and the cosines between
-    successive bones, each finger's straightness (knuckle-to-tip distance over its bones'
-    length), each tip's reach from the wrist and the thumb tip's gaps to the index
-    knuckles. Not mirror-invariant by itself: see module doc."""
+    None (collapsed landmarks: see MIN_KEYPOINT_PALM_WIDTH): the upright landmarks, bone
+    directions, fingertip gaps and the cosines between successive bones, each finger's
+    straightness (knuckle-to-tip distance over its bones' length), each tip's reach from
+    the wrist and the thumb tip's gaps to the index knuckles. Not mirror-invariant by
+    itself: see module doc."""
     p = upright_keypoints(xy)
     if p is None:
         return None
     w = math.hypot(*(p[5] - p[17]))             # palm width, the unit of the gaps
-    if not w > 1e-6:
-        w = 1e-6
+    if not w >= MIN_KEYPOINT_PALM_WIDTH:
+        return None
     chain = p[_CHAINS]                               # (5, 5, 2)
     d = np.diff(chain, axis=1)
     length = np.sqrt((d * d).sum(axis=2))            # (5, 4)
@@ -137,7 +142,10 @@ def keypoint_features_rows(xy):
     p[turn] = q
     v = p[:, 5] - p[:, 17]
     w = np.array([hyp(a, b) for a, b in zip(v[:, 0].tolist(), v[:, 1].tolist())])
-    w[~(w > 1e-6)] = 1e-6
+    wide = w >= MIN_KEYPOINT_PALM_WIDTH
+    idx, p, w = idx[wide], p[wide], w[wide]
+    if not len(idx):
+        return feats, ok
     chain = p[:, _CHAINS]                            # (n, 5, 5, 2)
     d = np.diff(chain, axis=2)
     length = np.sqrt((d * d).sum(axis=3))            # (n, 5, 4)

@@ -4,7 +4,7 @@ Hand frame used throughout (from palm normal n and hand direction d): x = thumbw
 (cross(d, n) for a right hand, its negative for a left one), y = n (out of the palm),
 z = d (toward the fingers), so one code path serves both hands (a left hand is a mirrored
 right one). Lengths are in palm widths: the distance between the index and pinky
-knuckles, or a nominal adult value when the frame has no knuckles.
+knuckles, or a nominal adult value when the frame has no usable knuckles.
 """
 import math
 import operator
@@ -19,7 +19,13 @@ NOMINAL_PALM_WIDTH_MM = 55.0
 # No tracker reports a hand this far out (100 m): a coordinate beyond it is garbage, and
 # its squares would overflow.
 MAX_COORD_MM = 1e5
-PALM_WIDTH_RANGE_MM = (25.0, 120.0)      # outside: the knuckles are mis-tracked
+# Knuckle width outside this: the knuckles are mis-tracked (a hand collapsed onto one
+# point has none apart) and the joints say nothing: the hand has no joints. Real hands of
+# the shared Leap data: 43..73 mm.
+PALM_WIDTH_RANGE_MM = (25.0, 120.0)
+# A finger whose bones add up to less than this (palm widths) has collapsed onto a point:
+# the hand has no joints. Real hands: 0.86 and more (the pinky).
+MIN_FINGER_BONES = 0.3
 # Where the index knuckle sits thumbward of the palm centre, in palm widths (when the
 # frame has no knuckles the thumb is measured from there).
 INDEX_KNUCKLE_THUMBWARD = 0.45
@@ -65,7 +71,8 @@ class HandGeometry:
     palm: list                    # [x, y, z] palm centre, mm
     palm_width: float             # mm, the unit of the rest
     joints: Optional[np.ndarray]  # (5, 4, 3) mcp, pip, dip, tip per finger, mm; None
-                                  # when any joint is missing
+                                  # when any joint is missing or they are mis-tracked
+                                  # (PALM_WIDTH_RANGE_MM, MIN_FINGER_BONES)
     local: Optional[np.ndarray]   # the joints in the hand frame, palm widths (origin: the
                                   # tracker's), None without joints
     bones: Optional[np.ndarray]   # (5, 3, 3) unit bone directions in the hand frame
@@ -170,17 +177,12 @@ def hand_geometry(hand):
     t = (sgn * (dy * nz - dz * ny), sgn * (dz * nx - dx * nz), sgn * (dx * ny - dy * nx))
     n, d = (nx, ny, nz), (dx, dy, dz)
     width = NOMINAL_PALM_WIDTH_MM
-    thumb_dir = None
     if joints is not None:
         w = math.dist(jl[12:15], jl[48:51])         # index and pinky knuckles
         if PALM_WIDTH_RANGE_MM[0] <= w <= PALM_WIDTH_RANGE_MM[1]:
             width = w
-        thumb_dir = _unit3(jl[9] - jl[3], jl[10] - jl[4], jl[11] - jl[5])   # pip -> tip
-    if thumb_dir is None:
-        fd = _vec(fingers[0].direction)
-        thumb_dir = _unit3(*fd) if fd is not None else None
-    if thumb_dir is None:
-        thumb_dir = (math.nan,) * 3
+        else:
+            joints = None
     local = bones = length = reach = gaps = None
     if joints is not None:
         # ndarray.dot, not @: the same product at half the call overhead on arrays this small
@@ -189,10 +191,21 @@ def hand_geometry(hand):
                                      t[2] / width, n[2] / width, d[2] / width)).reshape(3, 3))
         diffs = _DIFFS.dot(local)                   # rows: see _difference_rows
         norms = np.sqrt((diffs * diffs).dot(_ONES_COLUMN))  # (38, 1)
+        length = norms[15:30].reshape(5, 3)
+        if not length.sum(axis=1).min() >= MIN_FINGER_BONES:
+            joints = local = length = None
+    thumb_dir = None
+    if joints is not None:
+        thumb_dir = _unit3(jl[9] - jl[3], jl[10] - jl[4], jl[11] - jl[5])   # pip -> tip
+    if thumb_dir is None:
+        fd = _vec(fingers[0].direction)
+        thumb_dir = _unit3(*fd) if fd is not None else None
+    if thumb_dir is None:
+        thumb_dir = (math.nan,) * 3
+    if joints is not None:
         unit = diffs / np.maximum(norms, _NORM_FLOOR)
         reach = diffs[:15].reshape(5, 3, 3)
         bones = unit[15:30].reshape(5, 3, 3)
-        length = norms[15:30].reshape(5, 3)
         gaps = norms[30:37, 0]
         extended = _extended_from_local(diffs, unit, norms)
         local = local.reshape(5, 4, 3)

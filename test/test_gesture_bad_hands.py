@@ -1,0 +1,134 @@
+"""Hands no tracker would report as a real one (collapsed joints, absurd landmarks, frames
+that cannot be judged) never fire a gesture, and the guards that refuse them refuse no
+real hand of the shared data."""
+import glob
+import os
+
+import numpy as np
+import pytest
+
+from leap_teleop.hands.frame import Finger, TrackedHand
+from leap_teleop.hands.gestures import GestureRecognizer, hand_geometry
+from leap_teleop.hands.gestures import datasets as gd
+from leap_teleop.hands.gestures.features import (
+    keypoint_features,
+    keypoint_features_rows,
+    leap_features,
+    mirror_keypoints,
+)
+from leap_teleop.hands.rendered_hand import POSES, render_hand
+from leap_teleop.hands.sources import leapjs
+
+GESTURES = ('fist', 'open', 'pinch', 'rock', 'thumb_up', 'thumb_down')
+
+
+def shown(state):
+    return [k for k in GESTURES if getattr(state, k)]
+
+
+def jointed(joints, side='right', normal=(0, -1, 0), direction=(0, 0, -1)):
+    fingers = tuple(Finger(tip=np.array(j[3], float), direction=np.array(direction, float),
+                           mcp=np.array(j[0], float), pip=np.array(j[1], float),
+                           dip=np.array(j[2], float)) for j in joints)
+    return TrackedHand(side, palm_position=np.array([0.0, 200.0, 0.0]),
+                       palm_normal=np.array(normal, float), direction=np.array(direction, float),
+                       fingers=fingers)
+
+
+def _joints(hand):
+    return np.array([[f.mcp, f.pip, f.dip, f.tip] for f in hand.fingers], dtype=float)
+
+
+_OPEN = _joints(render_hand('right', 'open', (0, 200, 0)))
+_CENTRE = np.array([0.0, 200.0, 0.0])
+COLLAPSED = {
+    'every joint at the origin': np.zeros((5, 4, 3)),
+    'every joint at the palm': np.tile(_CENTRE, (5, 4, 1)),
+    'fingers of zero length': np.repeat(_OPEN[:, :1], 4, axis=1),
+    'each finger on its tip': np.repeat(_OPEN[:, 3:], 4, axis=1),
+    'every knuckle on one spot': np.concatenate([np.tile(_OPEN[1, 0], (5, 1, 1)), _OPEN[:, 1:]], axis=1),
+    'a hand 1 mm across': (_OPEN - _CENTRE) * 0.02 + _CENTRE,
+    'a hand 10 m across': (_OPEN - _CENTRE) * 200 + _CENTRE,
+}
+
+
+@pytest.mark.parametrize('side', ['right', 'left'])
+@pytest.mark.parametrize('name', sorted(COLLAPSED))
+def test_a_collapsed_leap_hand_has_no_joints_and_shows_nothing(name, side):
+    # every joint on one spot read as a fist at p = 1.00 (a drone lands on a fold)
+    for normal in ((0, -1, 0), (-1, 0, 0), (1, 0, 0)):
+        hand = jointed(COLLAPSED[name], side, normal)
+        g = hand_geometry(hand)
+        assert g is not None and g.joints is None and leap_features(hand, g) is None
+        assert shown(GestureRecognizer(stateless=True).update(hand, 0.0)) == [], (name, normal)
+
+
+@pytest.mark.parametrize('pose', sorted(POSES))
+@pytest.mark.parametrize('how', ['pinky knuckle on the index one', 'index knuckle on the pinky one'])
+def test_a_hand_of_zero_palm_width_shows_nothing(pose, how):
+    # a pointing hand read as horns (the arm's origin), a thumbs-up as an open hand
+    hand = render_hand('right', pose, (0, 200, 0))
+    if how.startswith('pinky'):
+        hand.fingers[4].mcp = hand.fingers[1].mcp.copy()
+    else:
+        hand.fingers[1].mcp = hand.fingers[4].mcp.copy()
+    assert hand_geometry(hand).joints is None
+    assert shown(GestureRecognizer(stateless=True).update(hand, 0.0)) == []
+
+
+def _collapsed_hand():
+    return jointed(np.tile(_CENTRE, (5, 4, 1)))
+
+
+@pytest.mark.parametrize('first, second', [('open', 'collapsed'), ('collapsed', 'open')])
+def test_a_hand_collapsing_or_coming_back_neither_folds_nor_unfolds(first, second):
+    rec, t, events = GestureRecognizer(), 0.0, []
+    for pose, seconds in ((first, 1.0), (second, 0.5)):
+        for _ in range(int(seconds * 120)):
+            hand = _collapsed_hand() if pose == 'collapsed' else render_hand('right', pose, (0, 200, 0))
+            events += [e.gesture for e in rec.update(hand, t).events]
+            t += 1 / 120
+    assert 'fold' not in events and 'unfold' not in events and 'fist' not in events
+
+
+def test_collapsed_camera_landmarks_show_nothing():
+    # 20 landmarks on the wrist and the thumb tip above: once an open hand at p = 1.0
+    rec = GestureRecognizer(stateless=True)
+    for xy in (np.zeros((21, 2)), np.vstack([np.zeros((4, 2)), [[0.0, -1.0]], np.zeros((16, 2))]),
+               np.vstack([[[0.0, 0.0]], [[0.0, -0.25 * k] for k in (1, 2, 3, 4)], np.zeros((16, 2))])):
+        assert keypoint_features(xy) is None
+        assert not keypoint_features_rows(xy[None])[1].any()
+        assert shown(rec.update(TrackedHand('right', image_landmarks=xy), 0.0)) == []
+
+
+def _real_leap_hands():
+    for _, _, frame in gd.read_pose_lines(os.path.join(gd.LEAP_PEOPLE, 'gti_dev.jsonl.gz')):
+        yield gd.first_hand(frame)
+    for _, _, path in gd.guinevere_takes():
+        for frame in gd.read_take(path):
+            yield gd.first_hand(frame)
+    for path in sorted(glob.glob(os.path.join(gd.data_dir(), 'decoded', '*.json.gz'))):
+        for frame in leapjs.load_frames(path)[1]:
+            yield from frame.hands
+
+
+def test_no_real_hand_is_refused_as_collapsed(leapjs_data):
+    if not os.path.isdir(gd.LEAP_PEOPLE) or not os.path.isdir(gd.KEYPOINTS):
+        pytest.fail('the shared data is not at %s' % gd.SHARED_DATA)
+    n = 0
+    for hand in _real_leap_hands():
+        try:
+            j = _joints(hand) if hand is not None else None
+        except (TypeError, ValueError):
+            j = None
+        if j is None or j.shape != (5, 4, 3) or not np.isfinite(j).all():
+            continue
+        assert hand_geometry(hand).joints is not None
+        n += 1
+    assert n > 40000
+    xy = np.concatenate([gd.read_keypoints(p)[2]
+                         for p in sorted(glob.glob(os.path.join(gd.KEYPOINTS, '*.csv')))]
+                        + [np.array([q for _, _, q in gd.photo_hands()])])
+    assert len(xy) > 8000
+    for rows in (xy, np.array([mirror_keypoints(q) for q in xy])):
+        assert keypoint_features_rows(rows)[1].all()
