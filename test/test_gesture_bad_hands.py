@@ -132,3 +132,60 @@ def test_no_real_hand_is_refused_as_collapsed(leapjs_data):
     assert len(xy) > 8000
     for rows in (xy, np.array([mirror_keypoints(q) for q in xy])):
         assert keypoint_features_rows(rows)[1].all()
+
+
+def _thumbs_up(confidence=1.0):
+    return render_hand('right', 'thumbs_up', (0.0, 200.0, 0.0), np.array([-1.0, 0, 0]),
+                       np.array([0, 0, -1.0]), confidence=confidence)
+
+
+def _nan_hand():
+    hand = render_hand('right', 'fist', (0.0, 200.0, 0.0))
+    hand.fingers[2].tip = np.array([np.nan] * 3)
+    return hand
+
+
+@pytest.mark.parametrize('unjudged', ['low confidence', 'NaN joints'])
+def test_a_thumbs_up_is_not_carried_through_frames_that_cannot_be_judged(unjudged):
+    rec = GestureRecognizer()
+    states = [rec.update(_thumbs_up(), i / 120) for i in range(12)]
+    assert states[-1].thumb_up
+    bad = _thumbs_up(0.05) if unjudged == 'low confidence' else _nan_hand()
+    state = rec.update(bad, 12 / 120)
+    assert not state.thumb_up and [(e.gesture, e.active) for e in state.events] == [('thumb_up', False)]
+    # other held gestures still ride out a moment of such frames
+    rec = GestureRecognizer()
+    for i in range(12):
+        rec.update(render_hand('right', 'fist', (0.0, 200.0, 0.0)), i / 120)
+    assert rec.update(bad, 12 / 120).fist
+
+
+@pytest.mark.parametrize('unjudged', ['low confidence', 'NaN joints'])
+def test_a_glimpse_of_thumbs_up_then_unjudged_frames_does_not_arm(unjudged):
+    # 0.1 s of thumbs-up and 0.25 s that shows nothing judgeable armed the arm, whose hold
+    # (arm_hold_s) is 0.3 s
+    from leap_teleop.hands.tracker import HandTracker
+    from leap_teleop.ur10 import kinematics as kin
+    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
+
+    def armed(parts, dt=1 / 120):
+        tracker, arm = HandTracker('right', GestureRecognizer()), ArmTeleop()
+        arm.on_joints(kin.HOME_Q.copy())
+        t = 0.0
+        for make, seconds in parts:
+            for _ in range(int(round(seconds / dt))):
+                st = tracker.update(make(), t, 0)
+                arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+                                     thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
+                arm.step(100.0 + t)
+                if arm.status.state == ARMED:
+                    return True
+                t += dt
+        return False
+
+    def fist():
+        return render_hand('right', 'fist', (0.0, 200.0, 0.0))
+
+    bad = (lambda: _thumbs_up(0.05)) if unjudged == 'low confidence' else _nan_hand
+    assert not armed([(_thumbs_up, 0.1), (bad, 0.25), (fist, 0.5)])
+    assert armed([(_thumbs_up, 0.4)])           # a held one still arms

@@ -2,12 +2,12 @@
 
 A held gesture turns on after `on_frames` consistent frames (and `on_time` seconds, per
 gesture), off after `off_frames`; frames too unsure to judge hold the state for a moment,
-then let go. Events: start / stop of each held gesture (and of a user's own gestures),
-unfold (fist -> open) and fold (open -> fist). Fold and unfold land or launch a drone, so
-they need a deliberate change: the first shape held FOLD_HOLD_S, the second one shown
-within FOLD_GAP_S of its end and held FOLD_CONFIRM_S (a fist or an open hand misread for a
-moment while a hand swipes, pinches or turns is no fold; the event comes FOLD_CONFIRM_S
-after the second shape appears).
+then let go (all but a thumbs-up, which such a frame ends). Events: start / stop of each
+held gesture (and of a user's own gestures), unfold (fist -> open) and fold (open -> fist).
+Fold and unfold land or launch a drone, so they need a deliberate change: the first shape
+held FOLD_HOLD_S, the second one shown within FOLD_GAP_S of its end and held
+FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes, pinches
+or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears).
 """
 import math
 from dataclasses import dataclass, field
@@ -95,9 +95,11 @@ class HeldFilter:
         return active
 
     def unusable(self, timestamp):
-        """An unusable frame: hold what we had for a moment, then let go."""
+        """An unusable frame: hold what we had for a moment, then let go; a thumbs-up
+        at once (it arms a robot after a hold, which must be seen, not assumed)."""
         if timestamp - self._last_confident > HOLD_LOW_CONFIDENCE_S:
             self.active.clear()
+        self.active.discard('thumb_up')
         for name in self.names:
             self._count[name] = 0
         return self.active
