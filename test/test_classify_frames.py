@@ -282,6 +282,11 @@ def _model_arrays():
     ('weights near the float limit', 'weights beyond 1e+06: not a fitted model'),
     # numpy allocated what the header said before reading: terabytes
     ('a header declaring 10**12 numbers', 'mean.npy declares 8000000000000 bytes in'),
+    # numpy reads format 3.0 too: the check skipped it and numpy asked for 7 TB
+    ('a 3.0 header declaring 10**12 numbers', 'mean.npy declares 8000000000000 bytes in'),
+    ('a header of a format numpy does not write', 'mean.npy is .npy format 9.0'),
+    # json's RecursionError was a traceback
+    ('a card nested 100000 deep', 'cannot read a pose model (maximum recursion depth'),
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -309,16 +314,24 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
         elif spoil == 'weights near the float limit':
             arrays['w0'] = arrays['w0'] * 1e200      # finite, but the folding overflows
             arrays['scale'] = arrays['scale'] * 1e-120
+        elif spoil == 'a card nested 100000 deep':
+            arrays['card'] = np.array('[' * 100000 + ']' * 100000)
         np.savez(bad, **arrays)
-        if spoil == 'a header declaring 10**12 numbers':
+        if 'header' in spoil:
             import io
             import zipfile
             with zipfile.ZipFile(bad) as z:
                 members = {n: z.read(n) for n in z.namelist()}
             head = io.BytesIO()
-            np.lib.format.write_array_header_1_0(head, {'descr': '<f8', 'fortran_order': False,
-                                                        'shape': (10 ** 12,)})
-            members['mean.npy'] = head.getvalue() + arrays['mean'].astype('<f8').tobytes()
+            write = (np.lib.format.write_array_header_2_0 if '3.0' in spoil
+                     else np.lib.format.write_array_header_1_0)
+            write(head, {'descr': '<f8', 'fortran_order': False, 'shape': (10 ** 12,)})
+            head = bytearray(head.getvalue())
+            if '3.0' in spoil:
+                head[6:8] = b'\x03\x00'       # 3.0: 2.0's layout, the header in UTF-8
+            elif 'format' in spoil:
+                head[6:8] = b'\x09\x00'
+            members['mean.npy'] = bytes(head) + arrays['mean'].astype('<f8').tobytes()
             with zipfile.ZipFile(bad, 'w') as z:
                 for n, data in members.items():
                     z.writestr(n, data)

@@ -127,6 +127,23 @@ def test_a_model_file_of_the_wrong_family_or_malformed_is_refused(tmp_path):
                        m.b1)
 
 
+def test_a_model_saved_in_npy_format_3_loads(tmp_path):
+    # the size check reads format 3.0 headers too, and refuses none that is sound
+    import io
+    import zipfile
+
+    from leap_teleop.hands.gestures import PoseClassifier
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS
+    path = tmp_path / 'v3.npz'
+    with np.load(DEFAULT_MODELS['leap'], allow_pickle=False) as z, zipfile.ZipFile(path, 'w') as out:
+        for k in z.files:
+            b = io.BytesIO()
+            np.lib.format.write_array(b, z[k], version=(3, 0))
+            out.writestr(k + '.npy', b.getvalue())
+    m = load_model(None, 'leap')
+    np.testing.assert_array_equal(PoseClassifier.load(str(path), 'leap').w0, m.w0)
+
+
 def test_a_model_that_says_nan_holds_no_gesture(monkeypatch):
     model = load_model(None, 'leap')
     hand = render_hand('right', 'fist', (0, 200, 0))

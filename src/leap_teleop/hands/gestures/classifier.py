@@ -145,7 +145,9 @@ class PoseClassifier:
                     raise ModelError('%s: its card is not a JSON object' % path)
                 model = cls(np.atleast_1d(z['classes']).tolist(), str(z['family']), z['mean'],
                             z['scale'], z['w0'], z['b0'], z['w1'], z['b1'], card)
-        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as e:
+        # a card of deeply nested JSON raises RecursionError; arrays too big to hold, MemoryError
+        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile,
+                RecursionError, MemoryError) as e:
             if isinstance(e, ModelError):
                 if str(e).startswith(str(path)):
                     raise
@@ -161,6 +163,13 @@ class PoseClassifier:
         return model
 
 
+# .npy header readers by format version: 3.0 is 2.0 with the header in UTF-8 instead of
+# latin-1 (the same for the ASCII numpy writes)
+_HEADER_READERS = {(1, 0): np.lib.format.read_array_header_1_0,
+                   (2, 0): np.lib.format.read_array_header_2_0,
+                   (3, 0): np.lib.format.read_array_header_2_0}
+
+
 def _check_array_sizes(path):
     """ModelError when an array of the .npz declares more data than its file holds: numpy
     allocates what the header says before it reads (a crafted header of 10**12 numbers
@@ -173,10 +182,10 @@ def _check_array_sizes(path):
                 continue
             with z.open(info) as f:
                 version = np.lib.format.read_magic(f)
-                if version not in ((1, 0), (2, 0)):
-                    continue            # numpy's own reading will say what it makes of it
-                read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
-                        else np.lib.format.read_array_header_2_0)
+                read = _HEADER_READERS.get(version)
+                if read is None:        # numpy may read a newer one: unchecked, it is refused
+                    raise ModelError('%s: not a pose model (%s is .npy format %d.%d)'
+                                     % (path, info.filename, *version))
                 shape, _, dtype = read(f)
             declared = math.prod(shape) * dtype.itemsize
             if declared > info.file_size:
