@@ -189,3 +189,16 @@ def test_a_glimpse_of_thumbs_up_then_unjudged_frames_does_not_arm(unjudged):
     bad = (lambda: _thumbs_up(0.05)) if unjudged == 'low confidence' else _nan_hand
     assert not armed([(_thumbs_up, 0.1), (bad, 0.25), (fist, 0.5)])
     assert armed([(_thumbs_up, 0.4)])           # a held one still arms
+
+
+@pytest.mark.parametrize('scale, shift', [(1e12, 0.0), (1e300, 0.0), (1.7e308, 1e300), (1.0, 1e300)])
+def test_camera_landmarks_at_absurd_coordinates_show_nothing(scale, shift):
+    # a real thumbs-up row scaled by 1e300 was still a thumbs-up at p = 1.00
+    rows = gd.read_keypoints(os.path.join(gd.KEYPOINTS, 'Harikumar4.csv'))[2]
+    rec = GestureRecognizer(stateless=True)
+    xy = rows[0]
+    assert rec.update(TrackedHand('right', image_landmarks=xy), 0.0).thumb_up
+    far = xy * scale + shift
+    assert np.isfinite(far).all() and np.abs(far).max() > gd.MAX_KEYPOINT
+    assert keypoint_features(far) is None and not keypoint_features_rows(far[None])[1].any()
+    assert shown(rec.update(TrackedHand('right', image_landmarks=far), 0.0)) == []

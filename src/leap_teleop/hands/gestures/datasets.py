@@ -26,6 +26,7 @@ try:                       # several times faster than the stdlib parser (tools/
 except ImportError:        # pragma: no cover - the stdlib parser is the fallback
     _orjson = None
 
+from leap_teleop.hands.gestures.features import MAX_KEYPOINT
 from leap_teleop.hands.sources import leapjs
 
 SHARED_DATA = os.environ.get('LEAP_TELEOP_SHARED_DATA') or os.path.normpath(
@@ -101,8 +102,6 @@ def bounded_lines(stream, limit=MAX_LINE_CHARS):
         yield line
 
 
-# Keypoints are pixels or the community's normalised values: anything larger is no hand.
-MAX_KEYPOINT = 1e6
 # What reading a text file can raise besides its format's own errors: not UTF-8, a gzip
 # stream cut short or with junk after it, a CSV field past the csv module's limit.
 UNREADABLE = (UnicodeDecodeError, EOFError, gzip.BadGzipFile, zlib.error, csv.Error)

@@ -35,6 +35,8 @@ _CHAINS = np.array([[0, 1, 2, 3, 4], [0, 5, 6, 7, 8], [0, 9, 10, 11, 12],
                     [0, 13, 14, 15, 16], [0, 17, 18, 19, 20]])
 _MP_TIPS = np.array([4, 8, 12, 16, 20])
 _isfinite = math.isfinite
+# Keypoints are pixels or the community's normalised values: anything larger is no hand.
+MAX_KEYPOINT = 1e6
 # Index-to-pinky knuckle distance of upright landmarks (largest coordinate 1) under which
 # the landmarks are collapsed, not a hand: no features. Real rows (a hand edge-on): 0.018
 # and more.
@@ -55,9 +57,10 @@ def leap_features(hand, geometry=None):
 
 def normalize_keypoints(xy):
     """The community's normalisation of 21 image landmarks: relative to the wrist,
-    divided by the largest absolute coordinate. (21, 2) array, or None when degenerate."""
+    divided by the largest absolute coordinate. (21, 2) array, or None when degenerate or
+    beyond MAX_KEYPOINT."""
     p = np.asarray(xy, dtype=float).reshape(21, 2)
-    if not np.isfinite(p).all():
+    if not np.abs(p).max() <= MAX_KEYPOINT:         # NaN compares false
         return None
     p = p - p[0]
     m = np.abs(p).max()
@@ -121,7 +124,7 @@ def keypoint_features_rows(xy):
     outside the mask are zeros."""
     p = np.array(xy, dtype=float).reshape(-1, 21, 2)
     feats = np.zeros((len(p), KEYPOINT_FEATURES))
-    idx = np.flatnonzero(np.isfinite(p).all(axis=(1, 2)))
+    idx = np.flatnonzero((np.abs(p) <= MAX_KEYPOINT).all(axis=(1, 2)))   # NaN: false
     p = p[idx] - p[idx, :1]
     m = np.abs(p).max(axis=(1, 2))
     keep = m > 0.0
