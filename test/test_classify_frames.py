@@ -156,6 +156,27 @@ def test_keypoints_in_both_csv_forms_give_one_line_per_row(tmp_path, capsys):
     assert [o['hands'] for o in a] == [o['hands'] for o in b]
 
 
+@pytest.mark.parametrize('before', ['\n', '\r\n\n', ' \n,,\n', '\ufeff\n'])
+def test_blank_lines_before_the_header_are_skipped(tmp_path, capsys, before):
+    # the header was told only on the file's first line: the next one was 'not a keypoint
+    # row (45 columns, not 43)' and the run stopped
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    with open(os.path.join(KEYPOINTS, 'Harikumar4.csv'), encoding='utf-8') as f:
+        head = ''.join(f.readline() for _ in range(6))
+    plain, blank = tmp_path / 'plain.csv', tmp_path / 'blank.csv'
+    plain.write_text(head, encoding='utf-8')
+    blank.write_text(before + head, encoding='utf-8', newline='')
+    want = run_main(['--keypoints', str(plain)], capsys)
+    assert len(want) == 5 and run_main(['--keypoints', str(blank)], capsys) == want
+    persons, labels, xy = gesture_data.read_keypoints(str(blank))
+    assert persons == ['Harikumar4'] * 5 and len(xy) == 5
+    # a header after a row is still no row
+    late = tmp_path / 'late.csv'
+    late.write_text('7,' + ','.join(['0.5'] * 42) + '\n' + head, encoding='utf-8')
+    with pytest.raises(gesture_data.DataError, match='row 2: not a keypoint row'):
+        gesture_data.read_keypoints(str(late))
+
+
 def test_keypoints_mirror_image_reads_the_same(tmp_path, capsys):
     from leap_teleop.hands.gestures import datasets as gesture_data
     _, _, xy = gesture_data.read_keypoints(os.path.join(KEYPOINTS, 'Kazuhito00.csv'))

@@ -235,7 +235,8 @@ def iter_keypoints(path, label=None, person=None):
             for n, row in enumerate(csv.reader(f), 1):
                 if not row or not ''.join(row).strip():
                     continue
-                if n == 1 and row[0].strip() == 'person':
+                # the header: the first row that is not blank (an editor may add blank lines)
+                if header is None and n_rows == 0 and row[0].strip() == 'person':
                     header = row
                     continue
                 p, lab, src, xy = _keypoint_row(path, n, row, header is not None, default_person)
