@@ -191,9 +191,11 @@ def hand_geometry(hand):
                                      t[2] / width, n[2] / width, d[2] / width)).reshape(3, 3))
         diffs = _DIFFS.dot(local)                   # rows: see _difference_rows
         norms = np.sqrt((diffs * diffs).dot(_ONES_COLUMN))  # (38, 1)
-        length = norms[15:30].reshape(5, 3)
-        if not length.sum(axis=1).min() >= MIN_FINGER_BONES:
-            joints = local = length = None
+        nl = norms[:, 0].tolist()                   # plain floats: cheaper than numpy sums
+        # each finger's three bones (rows 15..29): a collapsed finger means no joints
+        if not min(nl[15] + nl[16] + nl[17], nl[18] + nl[19] + nl[20], nl[21] + nl[22] + nl[23],
+                   nl[24] + nl[25] + nl[26], nl[27] + nl[28] + nl[29]) >= MIN_FINGER_BONES:
+            joints = local = None
     thumb_dir = None
     if joints is not None:
         thumb_dir = _unit3(jl[9] - jl[3], jl[10] - jl[4], jl[11] - jl[5])   # pip -> tip
@@ -206,8 +208,9 @@ def hand_geometry(hand):
         unit = diffs / np.maximum(norms, _NORM_FLOOR)
         reach = diffs[:15].reshape(5, 3, 3)
         bones = unit[15:30].reshape(5, 3, 3)
+        length = norms[15:30].reshape(5, 3)
         gaps = norms[30:37, 0]
-        extended = _extended_from_local(diffs, unit, norms)
+        extended = _extended_from_local(diffs, unit, nl)
         local = local.reshape(5, 4, 3)
         joints = joints.reshape(5, 4, 3)
     else:
@@ -228,10 +231,9 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _extended_from_local(diffs, unit, norms):
+def _extended_from_local(diffs, unit, nl):
     """5 flags from the _DIFFS rows in the hand frame, as they are, as unit vectors and
-    their norms (see EXTENDED_*)."""
-    nl = norms[:, 0].tolist()
+    their norms (a list; see EXTENDED_*)."""
     flex = unit[17:30:3, 2].tolist()                # each finger's last bone, along z
     flags = [float(diffs[37, 0]) > THUMB_OUT]       # thumb tip thumbward of index knuckle
     for f in (1, 2, 3, 4):
