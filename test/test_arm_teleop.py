@@ -8,7 +8,17 @@ from hypothesis import strategies as st
 
 from leap_teleop.hands.tracker import hand_angles, wrap_angle
 from leap_teleop.ur10 import kinematics as kin
-from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
+from leap_teleop.ur10.teleop import (
+    ARMED,
+    DISARMED,
+    HOLDING,
+    OFF_PLAN_LAG_S,
+    OFF_PLAN_S,
+    TRACKING,
+    ArmInput,
+    ArmTeleop,
+    ArmTeleopParams,
+)
 
 HOME = kin.HOME_Q.copy()
 PALM = (0.0, 200.0, 0.0)
@@ -31,13 +41,18 @@ def hand(**kw):
 
 
 def drive(teleop, clock, h, periods=1, q=None):
-    """Feed the same hand for some control periods; the arm 'teleports' to each target."""
+    """Feed the same hand for some control periods; the joints are at q, or where the
+    servo's plan puts them (a perfect controller)."""
     cmd = None
     for _ in range(periods):
         now = clock.tick()
         h.stamp = now
         teleop.on_hand(h, now)
-        teleop.on_joints(q if q is not None else teleop._q)
+        if q is None:
+            planned = teleop._servo.planned_at(now)
+            teleop.on_joints(teleop._q if planned is None else planned)
+        else:
+            teleop.on_joints(q)
         cmd = teleop.step(now)
     return cmd
 
@@ -319,6 +334,47 @@ def test_a_thumbs_up_is_held_only_while_it_is_seen():
     assert t.status.state == DISARMED
     drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
     assert t.status.state == ARMED
+
+
+def _moving_with_the_robot_lagging(lag):
+    """2.4 s of a hand sweeping back and forth at 100 mm/s; the robot's joints are where the
+    plan put them `lag` s before (None: it stopped at home). (teleop, [state per period])"""
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    q, planned, states, palm = HOME.copy(), [], [], np.array(PALM)
+    for k in range(300):
+        palm = palm + np.array([0.0, 0.3, -0.8]) * (1 if (k // 150) % 2 == 0 else -1)
+        now = c.tick()
+        h = hand(palm_mm=tuple(palm), stamp=now)
+        t.on_hand(h, now)
+        t.on_joints(q, now)
+        cmd = t.step(now)
+        states.append((t.status.state, t.status.reason, cmd))
+        p = t._servo.planned_at(now)
+        planned.append((now, q.copy() if p is None else p))
+        if lag is not None:
+            q = [x for when, x in planned if when <= now - lag + 1e-9][-1] if now - lag >= planned[0][0] else q
+    return t, states
+
+
+def test_a_robot_that_stops_following_its_commands_disarms_without_a_command():
+    # A protective stop while joint states keep coming: the plan ran away from the robot
+    # (0.85 rad in 2 s), and the first command it took again would have asked for all of it.
+    t, states = _moving_with_the_robot_lagging(None)
+    first = next(i for i, (state, _, _) in enumerate(states) if state == DISARMED)
+    assert 'does not follow its commands' in states[first][1]
+    assert states[first][2].points is None and states[first][2].q is None
+    assert not any(sent(cmd) for _, _, cmd in states[first:])
+    # Off by the plan's 0.6 s at 1 rad/s (+ 0.02), then for 0.25 s more at most.
+    off = float(states[first][1].split(' rad from')[0].split()[-1])
+    assert OFF_PLAN_LAG_S * 1.0 < off <= (OFF_PLAN_LAG_S + OFF_PLAN_S + 0.01) * 1.0 + 0.02
+    assert t._servo.planned_at(0.0) is None          # plans start from the measured joints
+
+
+@pytest.mark.parametrize('lag', [0.0, 0.2, 0.5])
+def test_a_robot_following_late_is_not_taken_for_one_that_stopped(lag):
+    # A simulator under load lags its commands by up to 0.5 s before it counts afresh.
+    _, states = _moving_with_the_robot_lagging(lag)
+    assert all(state == TRACKING for state, _, _ in states), {r for _, r, _ in states}
 
 
 def test_stall_while_armed_without_origin_resumes_armed():

@@ -106,6 +106,12 @@ class JointServo:
             v.append(w - dec * tau2)
         return q, v
 
+    def planned_at(self, t):
+        """(q) the last plan commands at time t, or None without one; leaves the plan as it is."""
+        if self._plan is None:
+            return None
+        return np.array(self._planned(self._plan, max(t - self._plan[0], 0.0))[0])
+
     def rest(self, q_measured):
         """Where the last plan brings the joints to rest (the measured joints when there is
         none), leaving the plan as it is."""

@@ -45,6 +45,13 @@ RESUME_TOLERANCE = 0.02
 # After a hand-input stall, a hand turned further than this (rad) from where the old
 # mapping holds the tool re-anchors the origin, as reanchor_beyond does for its position.
 REANCHOR_TURN_RAD = 0.3
+# A robot whose joints stay further from the plan than this much of its motion at
+# max_joint_speed (plus RESUME_TOLERANCE) for OFF_PLAN_S does not follow its commands (a
+# protective stop, a stopped controller): planning on from the plan would ask it for the
+# whole distance within one command once it follows again. A simulator lagging under load
+# stays within it (it falls behind by at most 0.5 s before it starts its count afresh).
+OFF_PLAN_LAG_S = 0.6
+OFF_PLAN_S = 0.25
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -170,6 +177,7 @@ class ArmTeleop:
         # The hand input fell silent during the current stall (when it last came), whatever
         # else stalled with it: its return re-anchors as after a hand stall alone.
         self._hand_silent = None
+        self._off_plan_since = None       # when the joints were first seen off the plan
         self._resume_box = None           # joint stall: (lo, hi) joints it may resume in
 
     def retune(self, changes):
@@ -377,6 +385,16 @@ class ArmTeleop:
         if self._q is None:
             self._set(DISARMED, 'waiting for joint states')
             return ArmCommand()
+        if self._off_plan(now):
+            # Nothing is commanded (the robot's last trajectory ends at rest); the next plan
+            # starts from the measured joints.
+            self._stalled = ('joint states', self._joints_rx)
+            self._disarm('the robot does not follow its commands (joint %d %.3f rad from where '
+                         'they put it for %.2f s: a protective stop, a stopped controller?)'
+                         % self._off_plan_seen, now)
+            self._servo.reset()
+            self._off_plan_since = None
+            return ArmCommand()
         hand = self._hand
         if hand is None or now - self._hand_rx > self.p.input_timeout:
             if self.status.state == DISARMED:
@@ -491,6 +509,25 @@ class ArmTeleop:
         cmd.stamp = now + self.p.command_lead
         cmd.points = self._servo.track(cmd.stamp, self._q, q, goal_velocity)
         return cmd
+
+    def _off_plan(self, now):
+        """The measured joints have stayed off the servo's plan for OFF_PLAN_S (never while
+        disarmed: nothing is planned then)."""
+        # Joints given without their receipt time (no staleness watch) count as of now.
+        seen = now if self._joints_rx is None else self._joints_rx
+        planned = None if self.status.state == DISARMED else self._servo.planned_at(seen)
+        if planned is None:
+            self._off_plan_since = None
+            return False
+        off = np.abs(planned - self._q)
+        if float(off.max()) <= OFF_PLAN_LAG_S * self.p.max_joint_speed + RESUME_TOLERANCE:
+            self._off_plan_since = None
+            return False
+        if self._off_plan_since is None:
+            self._off_plan_since = now
+        j = int(np.argmax(off))
+        self._off_plan_seen = (j + 1, float(off[j]), now - self._off_plan_since)
+        return now - self._off_plan_since >= OFF_PLAN_S
 
     def _hand_rotation(self, hand):
         """The hand's rotation since the origin as a rotation vector (Leap axes), as far as
