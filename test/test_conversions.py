@@ -119,3 +119,29 @@ def test_a_hand_message_becomes_the_pilots_input_and_a_twist_its_cmd_vel():
     assert got.normal == (0.0, -1.0, 0.0) and got.direction == (0.0, 0.0, -1.0)
     t = drone_conversions.twist_msg((0.1, 0.2, 0.3, 0.0, 0.0, -0.5))
     assert (t.linear.x, t.linear.y, t.linear.z, t.angular.z) == (0.1, 0.2, 0.3, -0.5)
+
+
+@pytest.mark.parametrize('lead, stamped', [(0.0, False), (0.008, True)])
+def test_arm_trajectories_start_at_their_stamp_only_with_a_command_lead(monkeypatch, lead, stamped):
+    # A command_lead is what lets a command that arrives within it continue the last one;
+    # it did nothing while every trajectory went out stamped 0.
+    import rospy
+
+    from leap_teleop.ros import arm_topics
+    from leap_teleop.ur10.teleop import ArmCommand
+
+    sent = []
+
+    class Publisher:
+        def __init__(self, name, *args, **kwargs):
+            self.name = name
+
+        def publish(self, msg):
+            sent.append((self.name, msg))
+    monkeypatch.setattr(rospy, 'Publisher', Publisher)
+    monkeypatch.setattr(rospy, 'get_time', lambda: 100.0)
+    topics = arm_topics.ArmCommandTopics('ur10_1/')
+    topics.send(ArmCommand(points=[(0.024, [0.0] * 6, [0.0] * 6)], stamp=100.0 + lead), stamped)
+    (name, msg), = sent
+    assert name == 'arm_controller/command'
+    assert msg.header.stamp.to_sec() == (pytest.approx(100.008) if stamped else 0.0)

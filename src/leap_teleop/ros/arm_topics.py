@@ -24,12 +24,14 @@ class ArmCommandTopics:
         self.status = rospy.Publisher('~status', ArmStatus, queue_size=10, latch=True)
         self.input_age = InputAgeWindow()
 
-    def send(self, cmd):
-        """Publish what an ArmCommand holds: its trajectory, its gripper goal, or neither."""
+    def send(self, cmd, stamped=False):
+        """Publish what an ArmCommand holds: its trajectory, its gripper goal, or neither.
+        stamped (a command_lead): the trajectory starts at cmd.stamp."""
         if cmd.points:
-            # Stamp 0 (start on receipt): a command delayed in transport still starts
+            # Else stamp 0 (start on receipt): a command delayed in transport still starts
             # from the controller's current state instead of partly in the past.
-            self.arm.publish(ur10_conversions.joint_trajectory_msg(self.arm_joints, cmd.points))
+            self.arm.publish(ur10_conversions.joint_trajectory_msg(
+                self.arm_joints, cmd.points, cmd.stamp if stamped else 0.0))
         if cmd.gripper is not None:
             self.gripper.publish(ur10_conversions.joint_trajectory_msg(
                 [self.gripper_joint], [(0.1, [cmd.gripper], None)]))

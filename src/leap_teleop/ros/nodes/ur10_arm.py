@@ -94,7 +94,7 @@ class ArmNode:
 
     def tick(self, cmd, snapshot, now):
         """After each step, on the control loop's thread."""
-        self.topics.send(cmd)
+        self.topics.send(cmd, self.runner.teleop.p.command_lead > 0)
         if self.reporter.due(snapshot, now):
             self.topics.send_status(self.runner.teleop.status)
         self.diagnostics.update()
