@@ -817,3 +817,36 @@ def test_the_diagnostics_report_warns_while_holding():
     assert dict(values) == {'origin set': False, 'rejected inputs': 0, 'IK failures': 0}
     teleop.status.state, teleop.status.reason = HOLDING, 'input stalled'
     assert teleop.diagnostics()[:2] == ('warn', 'holding: input stalled')
+
+
+def test_a_joystick_push_out_of_reach_does_not_wind_the_target_up():
+    # The target integrated on while the IK failed: after 5 s of pushing out of reach the
+    # arm followed a pull-back only 1.9 s later.
+    t, c = armed_with_origin(mode='joystick', max_tcp_speed=0.25, max_joint_speed=1.0,
+                             max_joint_accel=math.pi)
+    q, held_at = HOME.copy(), None
+    for _ in range(625):
+        _, q = follow(t, c, hand(palm_mm=(-200.0, 400.0, -200.0)), 1, q)
+        if held_at is None and t.status.state == HOLDING:
+            held_at = np.array(t.status.target)
+    assert t.status.state == HOLDING and t.status.ik_failures > 0
+    assert np.linalg.norm(np.array(t.status.target) - held_at) < 0.01
+    _, q = follow(t, c, hand(palm_mm=(200.0, 0.0, 200.0)), 2, q)
+    assert t.status.state == TRACKING
+
+
+@pytest.mark.parametrize('fields', [dict(palm_mm=(10.0, 200.0)), dict(palm_mm=(10.0, 200.0, 0.0, 5.0)),
+                                    dict(palm_mm=(1.0, 'x', 3.0)), dict(pinch_value=None),
+                                    dict(turn='0.1'), dict(stamp=None)])
+def test_hand_fields_of_the_wrong_shape_or_type_are_refused_not_raised(fields):
+    # Reachable through the Python API only (ROS messages have typed fields): a palm of two
+    # values was taken and raised in step(), which ends the control loop.
+    t, c = armed_with_origin()
+    before = t.status.rejected_inputs
+    now = c.tick()
+    assert t.on_hand(hand(**dict({'stamp': now}, **fields)), now) in (
+        'hand fields are not numbers', 'palm position %s is not a trackable hand' % (fields.get('palm_mm'),))
+    assert t.status.rejected_inputs == before + 1
+    t.on_joints(t._q)
+    t.step(now)
+    assert t.status.state == TRACKING

@@ -23,6 +23,7 @@ loss or the clock jumping back (a simulator restart) disarms without commanding 
 pose. Every state change says why.
 """
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -236,10 +237,17 @@ class ArmTeleop:
 
     def on_hand(self, hand, now):
         """Store one hand message. Returns None, or why it was rejected."""
-        palm = np.asarray(hand.palm_mm, dtype=float)
         angles = (hand.rotate, hand.turn, hand.swing)
+        try:
+            palm = np.asarray(hand.palm_mm, dtype=float)
+        except (TypeError, ValueError):
+            palm = None
+        if palm is None or not all(isinstance(v, numbers.Real)
+                                   for v in angles + (hand.pinch_value, hand.stamp)):
+            self.status.rejected_inputs += 1
+            return 'hand fields are not numbers'
         why = None
-        if hand.present and not _within(palm, self.p.max_palm_mm):
+        if hand.present and (palm.shape != (3,) or not _within(palm, self.p.max_palm_mm)):
             why = 'palm position %s is not a trackable hand' % (tuple(palm),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
@@ -473,6 +481,7 @@ class ArmTeleop:
             return cmd
         palm_f = self._filter.update(palm, now)
         offset = palm_f - self._palm_ref
+        reachable = self._target          # joystick: what an unreachable push falls back to
         if self.p.mode == 'imitation':
             target = self._tcp_ref + self._axes @ offset * 0.001 * self.p.scale
         else:
@@ -493,6 +502,10 @@ class ArmTeleop:
             q, why = None, 'only another arm configuration reaches'
         if q is None:
             self.status.ik_failures += 1
+            if self.p.mode != 'imitation':
+                # A push out of reach does not wind the joystick's target up: pulling back
+                # moves the arm at once.
+                target = self._target = reachable
             if self.status.state != HOLDING:
                 self._set(HOLDING, '%s %s' % (why, np.round(target, 3).tolist()))
                 held = self._hold(now)
