@@ -175,3 +175,13 @@ def test_a_folder_without_the_takes_is_no_score(tmp_path, capsys):
     out = tmp_path / 'eval_results.json'
     assert evaluate.main(['--data', str(empty), '--out', str(out), '--no-people', '--no-photos']) == 2
     assert 'takes missing from' in capsys.readouterr().err and not out.exists()
+
+
+def test_shared_data_without_the_people_is_one_line_not_a_traceback(tmp_path, capsys, leapjs_data):
+    # The people part read its data beside --data: a takes folder elsewhere gave a
+    # FileNotFoundError traceback. It reads --shared-data (default the shared folder).
+    assert evaluate.main(['--data', leapjs_data, '--shared-data', str(tmp_path), '--no-photos',
+                          '--out', str(tmp_path / 'e.json')]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ['evaluate: no leap_people or keypoints or leapjs or strokes folder in %s '
+                   '(--shared-data)' % tmp_path]

@@ -73,11 +73,13 @@ def fits_once():
         return copy.deepcopy(datasets[key])
 
     def models_without(x, y, persons, labels, held, stride=tg.FIT_STRIDE, log=print,
-                       alpha=tg.L2):
-        key = _fingerprint(x, y, persons, labels), stride, alpha, tg.MAX_ITER
+                       alpha=tg.L2, groups=None):
+        key = (_fingerprint(x, y, persons, labels), stride, alpha, tg.MAX_ITER,
+               None if groups is None else hash(np.asarray(groups).tobytes()))
         todo = sorted(p for p in set(held) if (key, p) not in memo)
         if todo:
-            for p, m in real(x, y, persons, labels, todo, stride, log, alpha=alpha).items():
+            for p, m in real(x, y, persons, labels, todo, stride, log, alpha=alpha,
+                             groups=groups).items():
                 memo[key, p] = m
         return {p: copy.deepcopy(memo[key, p]) for p in sorted(held)}
     with pytest.MonkeyPatch.context() as mp:

@@ -47,3 +47,16 @@ def test_takes_that_did_not_arm_say_how_many_frames_read_thumbs_up():
     t = ep.take_summary(rows)
     assert t['thumbs_up_takes_armed'] == [1, 3]
     assert t['thumbs_up_takes_not_armed'] == {'g1/thumbs_up-1': 2, 'g2/thumbs_up-1': 0}
+
+
+def test_an_unlabelled_frame_counts_against_thumbs_up_alone_read_as_it_or_not():
+    # Before, only the unlabelled frames read as a thumbs-up were counted, as negatives
+    # too: guinevere_02's knob turns made a thumbs-up FPR of 13 / (635 + 13), not 13 / 2889.
+    t = ep.Tally()
+    t.add('g', 'thumbs_up', 'thumb_up', 'thumb_up')
+    for read in ['thumb_up'] + ['nothing'] * 8 + ['fist']:
+        t.add_negative('g', 'thumb_up', 'turn_clockwise', read)
+    s = t.summary()['per_gesture']
+    assert s['thumb_up']['fpr_pooled'] == s['thumb_up']['fpr_worst'] == 0.1
+    assert s['fist']['fpr_pooled'] == 0.0                       # the labelled frame alone
+    assert t.summary()['confusion']['turn_clockwise'] == {'thumb_up': 1, 'nothing': 8, 'fist': 1}

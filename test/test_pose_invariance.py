@@ -217,6 +217,29 @@ def test_keypoint_classes_that_show_another_pose_are_left_out_of_the_fit():
     assert set(ds.y) == {'mine'} and len(ds.y) == 2 * 2 * 912
 
 
+def test_a_fitted_keypoint_row_is_fitted_with_all_its_copies():
+    # The stride kept every second pair of rows over the whole data set, so every row's
+    # first turned copy fell on a dropped pair: open, fist and none were never fitted
+    # turned, and every row as recorded was.
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    from leap_teleop.hands.gestures import training_set
+    from leap_teleop.hands.gestures.train import strided
+    ds = training_set.Dataset('keypoints')
+    training_set.add_keypoints(ds, os.path.join(gesture_data.KEYPOINTS, 'kinivi.csv'))
+    groups, augmented = ds.groups(), ~ds.clean()
+    kept = strided(np.arange(len(groups)), groups)
+    assert 0.45 < len(kept) / len(groups) < 0.55             # every second recorded row
+    y = np.array(ds.y)
+    for cls in set(ds.y):
+        mine = kept[y[kept] == cls]
+        copies = training_set.RARE_KEYPOINT_COPIES if cls in ('thumb', 'pinch') else 2
+        # each recorded row as itself and mirrored, its copies too
+        assert augmented[mine].sum() == (copies - 1) * (~augmented[mine]).sum() > 0, cls
+    for g in set(groups[kept].tolist()):
+        assert len(set(groups[kept][groups[kept] == g])) == 1
+        assert (groups[kept] == g).sum() == (groups == g).sum()   # a group is kept whole
+
+
 def test_keypoint_feature_rows_of_sets_with_no_hand_are_none():
     # A batch in which no set has features (every landmark on one spot, or not finite)
     # raised a ValueError from an empty reshape, not the mask it documents.

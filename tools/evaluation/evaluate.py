@@ -50,6 +50,7 @@ from leap_teleop.hands.gestures.datasets import (
     DEFAULT_LEAPJS_DATA,
     HANDS_DATA,
     LEAPJS_LABELS,
+    SHARED_DATA,
     data_dir,
     expected,
     find_take,
@@ -315,14 +316,25 @@ def main(argv=None):
                     help='skip the labelled photos under camera / person changes')
     ap.add_argument('--hands-data', default=HANDS_DATA,
                     help='folder of the labelled hand photos (default %(default)s)')
+    ap.add_argument('--shared-data', default=None,
+                    help='the shared data folder the people and strokes parts read (default %s)'
+                    % SHARED_DATA)
     args = ap.parse_args(argv)
     if not os.path.isdir(args.data):
         print('evaluate: no recordings folder at %s' % args.data, file=sys.stderr)
         return 2
+    shared = args.shared_data or SHARED_DATA
+    if not args.no_people:
+        missing = [sub for sub in ('leap_people', 'keypoints', 'leapjs', 'strokes')
+                   if not os.path.isdir(os.path.join(shared, sub))]
+        if missing:
+            print('evaluate: no %s folder in %s (--shared-data)' % (' or '.join(missing), shared),
+                  file=sys.stderr)
+            return 2
     results = {}
     if not args.no_people:
         from tools.evaluation import people as evaluate_people
-        results['people'] = evaluate_people.run(os.path.dirname(os.path.abspath(args.data)))
+        results['people'] = evaluate_people.run(shared)
         evaluate_people.print_tables(results['people'])
     results.update(evaluate(args.data))
     if results['missing_takes']:             # a partial table would read as a result
@@ -331,7 +343,10 @@ def main(argv=None):
         return 2
     if not args.no_people:
         from tools.evaluation import strokes as evaluate_strokes
-        results['strokes'] = evaluate_strokes.run(leapjs_dir=args.data, loso=True)
+        where = {} if args.shared_data is None else {
+            'strokes_dir': os.path.join(shared, 'strokes'),
+            'leap_people_dir': os.path.join(shared, 'leap_people')}
+        results['strokes'] = evaluate_strokes.run(leapjs_dir=args.data, loso=True, **where)
         evaluate_strokes.print_table(results['strokes'])
     from tools.evaluation import invariance as evaluate_invariance
     results['invariance'] = evaluate_invariance.run()

@@ -99,6 +99,13 @@ class Tally:
                 self.neg[g][person][1] += 1
         self.confusion[label][read] += 1
 
+    def add_negative(self, person, gesture, label, read):
+        """A frame that is no `gesture` and nothing else known (an unlabelled take's):
+        counted against that gesture alone."""
+        self.neg[gesture][person][0] += read == gesture
+        self.neg[gesture][person][1] += 1
+        self.confusion[label][read] += 1
+
     def summary(self):
         out = {}
         for g in GESTURES:
@@ -156,7 +163,7 @@ def leap_people(data_dir, log=print):
     takes = gd.guinevere_takes(os.path.join(data_dir, 'leap_people', 'guinevere'))
     tally = Tally()
     take_rows = []
-    models = tg.models_without(x, y, persons, labels, set(persons), log=log)
+    models = tg.models_without(x, y, persons, labels, set(persons), log=log, groups=ds.groups())
     for person in sorted(models):
         t0 = time.time()
         model = models[person]
@@ -177,8 +184,8 @@ def leap_people(data_dir, log=print):
                         thumb_up_frames += read == 'thumb_up'
                         if want is not None:
                             tally.add(person, gesture, want, read, why_missed(decision, want))
-                        elif read == 'thumb_up':    # unlabelled frames count for this only
-                            tally.add(person, gesture, 'unlabelled', read)
+                        else:       # an unlabelled take (knob turns, swipes): no thumbs-up
+                            tally.add_negative(person, 'thumb_up', gesture, read)
                 armed, events = take_outcome(frames, model)
                 take_rows.append({'person': person, 'take': os.path.basename(path),
                                   'gesture': gesture, 'thumb_up_armed': armed['thumb_up'],
@@ -253,7 +260,7 @@ def keypoint_people(data_dir, log=print):
     photo_hands = gd.photo_hands(os.path.join(data_dir, 'hands')) \
         if os.path.isfile(os.path.join(data_dir, 'hands', 'hands.json')) else []
     models = tg.models_without(x, y, persons, labels, set(persons), log=log,
-                               alpha=tg.L2_OF['keypoints'])
+                               alpha=tg.L2_OF['keypoints'], groups=ds.groups())
     for person in sorted(models):
         t0 = time.time()
         model = models[person]

@@ -63,11 +63,12 @@ MIN_SCALE = 0.05        # features are unit vectors, cosines and palm widths
 THUMB_TAKE_REPEAT = 10
 
 
-def strided(rows, stride=FIT_STRIDE):
-    """Every stride-th pair of rows: rows come in pairs (a hand and its noisy copy, a
-    keypoint row and its mirror image), kept together."""
+def strided(rows, groups, stride=FIT_STRIDE):
+    """The rows of every stride-th group (Dataset.group: a recorded hand or row with its
+    copies and mirror images, kept together) and those of group -1 (always fitted)."""
     rows = np.asarray(rows)
-    return rows[(rows // 2) % stride == 0]
+    g = np.asarray(groups)[rows]
+    return rows[(g < 0) | (g % stride == 0)]
 
 
 def fit_rows(labels, persons, rows):
@@ -105,21 +106,24 @@ _FOLD_DATA = None
 
 
 def _fit_without(person):
-    x, y, persons, labels, stride, alpha = _FOLD_DATA
-    rows = fit_rows(labels, persons, strided(np.where(persons != person)[0], stride))
+    x, y, persons, labels, stride, alpha, groups = _FOLD_DATA
+    rows = fit_rows(labels, persons, strided(np.where(persons != person)[0], groups, stride))
     return fit(x[rows], y[rows], alpha=alpha)
 
 
-def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print, alpha=L2):
+def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print, alpha=L2,
+                   groups=None):
     """{person: model fitted on everyone else} for each held-out person, two folds at a
-    time (one per core; each fit is seeded, so the result does not depend on the order)."""
+    time (one per core; each fit is seeded, so the result does not depend on the order).
+    groups: Dataset.groups() (default: rows in pairs, a hand and its copy)."""
+    groups = np.arange(len(y)) // 2 if groups is None else groups
     global _FOLD_DATA
     import multiprocessing
 
     # imported here, once, rather than by each forked worker again (seconds of CPU each)
     import sklearn.neural_network  # noqa: F401
     import threadpoolctl  # noqa: F401
-    _FOLD_DATA = (x, y, persons, labels, stride, alpha)
+    _FOLD_DATA = (x, y, persons, labels, stride, alpha, groups)
     held = sorted(held)
     out = {}
     try:
@@ -133,14 +137,16 @@ def models_without(x, y, persons, labels, held, stride=FIT_STRIDE, log=print, al
     return out
 
 
-def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print, clean=None, held=None):
+def lopo(x, y, persons, labels, family, stride=FIT_STRIDE, log=print, clean=None, held=None,
+         groups=None):
     """Leave-one-person-out: per class recall and false-positive rate per held-out person,
     their mean and worst, and the confusion of source labels into classes."""
     classes = sorted(set(y))
     per = {c: {} for c in classes}
     confusion = collections.defaultdict(collections.Counter)
     held = sorted(set(persons) if held is None else held)
-    models = models_without(x, y, persons, labels, held, stride, log, alpha=L2_OF[family])
+    models = models_without(x, y, persons, labels, held, stride, log, alpha=L2_OF[family],
+                            groups=groups)
     for person in held:
         test = persons == person
         model = models[person]
@@ -339,11 +345,12 @@ def train(family, data_dir, adds=(), report=True, log=print):
             log('  (one file of your own: while it is held out, the fit knows its gesture '
                 'only where shared people show it; record a second session to judge it on '
                 'data the fit never saw)')
-        report = lopo(x, y, persons, labels, family, log=log, clean=ds.clean(), held=held)
+        report = lopo(x, y, persons, labels, family, log=log, clean=ds.clean(), held=held,
+                      groups=ds.groups())
         card['leave_one_person_out'] = report['per_class']
         card['confusion'] = report['confusion']
     mine = np.char.startswith(persons.astype(str), 'user:')
-    rows = np.union1d(strided(np.where(~mine)[0]), np.where(mine)[0])
+    rows = np.union1d(strided(np.where(~mine)[0], ds.groups()), np.where(mine)[0])
     rows = fit_rows(labels, persons, rows)
     model = fit(x[rows], y[rows], alpha=L2_OF[family])
     model.family = family

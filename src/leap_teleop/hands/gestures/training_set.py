@@ -67,21 +67,30 @@ def data_terms(family, persons):
 
 class Dataset:
     """Feature rows with their class, person and source label; `augmented` marks the
-    noisy copies (fitted on, never scored)."""
+    noisy copies (fitted on, never scored); `group` the recorded row or hand each row
+    comes from (its copies and mirror images share it; the fit keeps or strides a group
+    whole), or -1 for one always fitted."""
 
     def __init__(self, family, seed=SEED):
         self.family = family
         self.x, self.y, self.person, self.label, self.augmented = [], [], [], [], []
+        self.group = []
         self.sources = []
         self.rng = np.random.default_rng(seed)
+        self._groups = 0
 
-    def add(self, x, cls, person, label, augmented=False):
+    def new_group(self):
+        self._groups += 1
+        return self._groups - 1
+
+    def add(self, x, cls, person, label, augmented=False, group=-1):
         if x is not None:
             self.x.append(x)
             self.y.append(cls)
             self.person.append(person)
             self.label.append(label)
             self.augmented.append(augmented)
+            self.group.append(group)
 
     def add_hand(self, hand, cls, person, label):
         """A Leap-family hand, and a copy with JOINT_NOISE_MM of tracker noise on every
@@ -91,9 +100,10 @@ class Dataset:
         x = leap_features(hand)
         if x is None:
             return False
-        self.add(x, cls, person, label)
+        group = self.new_group()
+        self.add(x, cls, person, label, group=group)
         self.add(leap_features(noisy_hand(hand, JOINT_NOISE_MM, self.rng)), cls, person, label,
-                 augmented=True)
+                 augmented=True, group=group)
         return True
 
     def arrays(self):
@@ -102,6 +112,9 @@ class Dataset:
 
     def clean(self):
         return ~np.array(self.augmented, dtype=bool)
+
+    def groups(self):
+        return np.array(self.group, dtype=int)
 
 
 def noisy_hand(hand, sigma, rng):
@@ -194,29 +207,31 @@ def add_guinevere(ds, root):
     ds.sources.append('guinevere takes (%d hands of %s)' % (n, ', '.join(sorted(TAKE_LABELS))))
 
 
-def keypoint_copies(ds, pts, cls, person, label, copies=1):
-    """A keypoint row's copies for add_keypoint_rows: the first as recorded, further
-    copies turned in the picture by up to TURN_RAD with KEYPOINT_NOISE on every landmark."""
+def keypoint_copies(ds, pts, cls, person, label, copies=1, group=None):
+    """A keypoint row's copies for add_keypoint_rows, in one group (default a new one):
+    the first as recorded, further copies turned in the picture by up to TURN_RAD with
+    KEYPOINT_NOISE on every landmark."""
+    group = ds.new_group() if group is None else group
     out = []
     for k in range(copies):
         q = pts if k == 0 else rotate_keypoints(pts, ds.rng.uniform(-TURN_RAD, TURN_RAD))
         if k:
             q = q + ds.rng.normal(0.0, KEYPOINT_NOISE, q.shape)
-        out.append((q, cls, person, label, k > 0))
+        out.append((q, cls, person, label, k > 0, group))
     return out
 
 
 def add_keypoint_rows(ds, rows):
-    """Keypoint rows [(landmarks, class, person, label, augmented)], each followed by its
-    mirror image (a left hand is a mirrored right one); their features computed at once."""
+    """Keypoint rows [(landmarks, class, person, label, augmented, group)], each followed by
+    its mirror image (a left hand is a mirrored right one); their features computed at once."""
     if not rows:
         return
     xy = np.repeat(np.array([np.reshape(q, (21, 2)) for q, *_ in rows], dtype=float), 2, axis=0)
     xy[1::2, :, 0] = -xy[1::2, :, 0]
     x, ok = keypoint_features_rows(xy)
-    for i, (_, cls, person, label, augmented) in enumerate(rows):
+    for i, (_, cls, person, label, augmented, group) in enumerate(rows):
         for j in (2 * i, 2 * i + 1):
-            ds.add(x[j] if ok[j] else None, cls, person, label, augmented=augmented)
+            ds.add(x[j] if ok[j] else None, cls, person, label, augmented=augmented, group=group)
 
 
 def add_keypoints(ds, path, label=None, person=None):
@@ -263,7 +278,7 @@ RARE_KEYPOINT_COPIES = 4
 
 # Landmark noise on those copies, in the keypoint files' units (the largest coordinate is 1)
 KEYPOINT_NOISE = 0.015
-PHOTO_COPIES = 20       # a photo is one hand against hundreds of rows of each keypoint file
+PHOTO_COPIES = 10       # a photo is one hand against hundreds of rows of each keypoint file
 
 
 def projected_landmarks(landmarks, yaw, pitch):
@@ -291,7 +306,7 @@ def add_leap_views(ds, path, seed=SEED):
             continue
         yaw, pitch = np.radians(rng.uniform(-1, 1, 2) * (VIEW_YAW_DEG, VIEW_PITCH_DEG))
         xy = rotate_keypoints(projected_landmarks(lm, yaw, pitch), rng.uniform(-TURN_RAD, TURN_RAD))
-        rows.append((xy, cls, 'leap:' + p, lab, False))
+        rows.append((xy, cls, 'leap:' + p, lab, False, ds.new_group()))
         n += 1
     add_keypoint_rows(ds, rows)
     ds.sources.append('%s seen as a webcam would (%d views)' % (os.path.basename(path), n))
@@ -299,13 +314,14 @@ def add_leap_views(ds, path, seed=SEED):
 
 def add_photos(ds, folder):
     """The labelled photos' hands, one person per photo source (a few photos each, from
-    other people than the keypoint files): PHOTO_COPIES turned copies each."""
+    other people than the keypoint files): PHOTO_COPIES turned copies each, every one
+    fitted (no stride: each photo is a hand of its own)."""
     n = 0
     rows = []
     for source, label, xy in gd.photo_hands(folder):
         cls = gd.PHOTO_LABELS.get(label)
         if cls is not None:
-            rows += keypoint_copies(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES)
+            rows += keypoint_copies(ds, xy, cls, 'photo:' + source, label, PHOTO_COPIES, group=-1)
             n += 1
     add_keypoint_rows(ds, rows)
     ds.sources.append('the labelled photos of ../hands (%d hands)' % n)
