@@ -100,3 +100,92 @@ def test_every_ros_package_package_xml_names_is_there():
     missing = [n for n in names if subprocess.run(['rospack', 'find', n], capture_output=True,
                                                   timeout=60).returncode != 0]
     assert len(names) > 20 and missing == [], missing
+
+
+def load_params(name, argv):
+    """{key: value} of the parameters `roslaunch name argv...` sets (its loader, no master)."""
+    import roslaunch.config
+    import roslaunch.xmlloader
+    config = roslaunch.config.ROSLaunchConfig()
+    loader = roslaunch.xmlloader.XmlLoader(resolve_anon=False)
+    loader.ignore_unset_args = False
+    loader.load(os.path.join(LAUNCH, name), config, verbose=False, argv=['roslaunch'] + list(argv))
+    return {k: v.value for k, v in config.params.items()}
+
+
+# A launch arg's default once overrode the same key in config:= (roslaunch applies a node's
+# <param> over its <rosparam load>): a max_joint_speed lowered there did not reach the arm.
+CONFIG_CASES = [
+    ('ur10_arm.launch', '', {'max_joint_speed': 0.02, 'max_joint_accel': 0.2, 'mode': 'joystick',
+                             'orientation': 'yaw', 'gripper_mode': 'proportional'},
+     '/ur10_1/ur10_arm/', {'max_joint_speed': 0.1, 'mode': 'imitation'}),
+    ('ardrone.launch', 'drone_pilot', {'mode': 'paper'}, '/drone_pilot/', {'mode': 'tilt'}),
+    ('ardrone.launch', 'ardrone_sim', {'gui': True, 'front_rate': 0.0, 'bottom_rate': 1.0},
+     '/ardrone_sim/', {'gui': False, 'front_rate': 2.0}),
+    ('ardrone_sim.launch', 'ardrone_sim', {'gui': True, 'front_rate': 0.0, 'realtime_factor': 2.0},
+     '/ardrone_sim/', {'gui': False, 'realtime_factor': 1.0}),
+    ('ardrone_dual.launch', 'ardrone_sim', {'gui': True, 'front_rate': 0.0, 'bottom_rate': 1.0},
+     '/drone2/ardrone_sim/', {'front_rate': 3.0}),
+]
+
+
+@pytest.mark.parametrize('name, block, keys, prefix, args', CONFIG_CASES)
+def test_a_config_file_key_reaches_the_node_and_an_explicit_arg_wins(name, block, keys, prefix, args,
+                                                                    tmp_path):
+    import yaml
+    config = tmp_path / 'mine.yaml'
+    config.write_text(yaml.safe_dump({block: keys} if block else keys))
+    params = load_params(name, ['config:=%s' % config])
+    assert {k: params[prefix + k] for k in keys} == keys
+    params = load_params(name, ['config:=%s' % config] + ['%s:=%s' % kv for kv in args.items()])
+    assert {k: params[prefix + k] for k in args} == args
+    for k in set(keys) - set(args):
+        assert params[prefix + k] == keys[k], k
+
+
+def test_the_launch_files_own_values_still_apply_without_config_keys(tmp_path):
+    # config/ur10_teleop.yaml carries the real-robot limits; a config without them: the node's
+    arm = load_params('ur10_arm.launch', [])
+    assert (arm['/ur10_1/ur10_arm/max_joint_speed'], arm['/ur10_1/ur10_arm/max_joint_accel'],
+            arm['/ur10_1/ur10_arm/mode']) == (0.05, 0.5, 'imitation')
+    empty = tmp_path / 'empty.yaml'
+    empty.write_text('scale: 1.5\n')
+    arm = load_params('ur10_arm.launch', ['config:=%s' % empty])
+    assert '/ur10_1/ur10_arm/max_joint_speed' not in arm and arm['/ur10_1/ur10_arm/scale'] == 1.5
+    drone = load_params('ardrone.launch', [])
+    assert drone['/drone_pilot/mode'] == 'tilt' and '/ardrone_sim/front_rate' not in drone
+    sender = load_params('sender.launch', [])
+    assert sender['/leap_sender/shutdown_on_end'] is False       # the node's own default: True
+    assert '/leap_sender/device' not in sender and '/leap_sender/rate' not in sender
+
+
+@pytest.mark.integration
+def test_the_simulations_keep_their_own_arm_limits_and_camera_rates():
+    # ur10_single / ur10_dual pass sim_max_joint_* explicitly; demo passes the drone's rates
+    for name, arms in (('ur10_single.launch', ['ur10_1']), ('ur10_dual.launch', ['ur10_1', 'ur10_2'])):
+        params = load_params(name, [])
+        for arm in arms:
+            assert params['/%s/ur10_arm/max_joint_speed' % arm] == 1.0, name
+            assert params['/%s/ur10_arm/max_joint_accel' % arm] == 3.14159, name
+    params = load_params('demo.launch', ['ur10:=false'])
+    assert (params['/drone/ardrone_sim/front_rate'], params['/drone/ardrone_sim/bottom_rate']) == (2.0, 0.0)
+
+
+CAMERA_CONFIG = {'rate': 10.0, 'loop': True, 'realtime': False, 'freq': 0.1, 'mirror': True,
+                 'device': '/dev/video2', 'shutdown_on_end': True, 'width': 320}
+
+
+@pytest.mark.parametrize('name', [
+    pytest.param(f, marks=pytest.mark.integration) if runs_commands(f) else f
+    for f in ['sender.launch'] + SOURCE_LAUNCHES])
+def test_every_camera_config_key_reaches_the_sender_and_an_explicit_arg_wins(name, tmp_path):
+    # Keys sender.launch also has args for once kept those args' defaults instead.
+    import yaml
+    camera = tmp_path / 'camera.yaml'
+    camera.write_text(yaml.safe_dump(CAMERA_CONFIG))
+    params = load_params(name, ['source:=video', 'camera_config:=%s' % camera])
+    assert {k: params['/leap_sender/' + k] for k in CAMERA_CONFIG} == CAMERA_CONFIG
+    params = load_params(name, ['source:=video', 'camera_config:=%s' % camera, 'mirror:=false',
+                                'device:=1', 'loop:=false'])
+    assert (params['/leap_sender/mirror'], params['/leap_sender/device'],
+            params['/leap_sender/loop'], params['/leap_sender/rate']) == (False, '1', False, 10.0)
