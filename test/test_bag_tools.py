@@ -74,6 +74,13 @@ def test_to_bag_writes_a_scripted_session(tmp_path):
     (['--right-topic='], "--right-topic '': not a legal ROS topic name"),
     (['--left-topic=a b'], "--left-topic 'a b': not a legal ROS topic name"),
     (['--left-topic=~data'], "--left-topic '~data': a bag has no node to be private to"),
+    # two outputs on one topic: on replay a subscriber of the other type got none of them
+    (['--right-topic=/x', '--left-topic=x'],
+     'the right leapcobot and the left leapcobot are both on /x: one topic per output'),
+    (['--right-topic=/leapmotion/hand_right'],
+     'the right leapcobot and the right hand are both on /leapmotion/hand_right'),
+    (['--left-topic=leapmotion/gestures'],
+     'the right gesture and the left leapcobot are both on /leapmotion/gestures'),
 ])
 def test_recording_to_bag_refuses_bad_arguments(tmp_path, leapjs_data, capsys, args, message):
     from leap_teleop.ros import recording_to_bag
@@ -83,6 +90,19 @@ def test_recording_to_bag_refuses_bad_arguments(tmp_path, leapjs_data, capsys, a
     assert stop.value.code == 2
     assert message in capsys.readouterr().err.splitlines()[-1]
     assert os.listdir(tmp_path) == []
+
+
+def test_recording_to_bag_takes_a_shared_topic_only_one_output_writes(tmp_path, leapjs_data):
+    from leap_teleop.ros import recording_to_bag
+    take = os.path.join(leapjs_data, 'grab.json.lz')
+    out = tmp_path / 'right.bag'
+    assert recording_to_bag.main([take, str(out), '--sides', 'right', '--left-topic',
+                                  '/leapmotion/data_right']) == 0
+    out = tmp_path / 'leapcobot.bag'
+    assert recording_to_bag.main([take, str(out), '--kinds', 'leapcobot', '--right-topic',
+                                  '/leapmotion/hand_right']) == 0
+    assert topics(str(out)) == {'/leapmotion/hand_right': ('leap_teleop/leapcobotright', 374),
+                                '/leapmotion/data_left': ('leap_teleop/leapcobotleft', 374)}
 
 
 def test_recording_to_bag_refuses_an_output_without_a_folder(tmp_path, leapjs_data, capsys):

@@ -73,6 +73,23 @@ def write_bag(source, out_path, sides=SIDES, topics=None, kinds=KINDS, start=Non
     return count
 
 
+def topic_collision(topics, kinds):
+    """What is wrong when two outputs of `topics` ({side: {kind: topic}}) that get written
+    (`kinds`) share a topic, else None. Two types on one topic replay as the first one
+    only, and two streams of one type mix; the gesture topic is one stream for both hands."""
+    used = {}
+    for side, by_kind in topics.items():
+        for kind, topic in by_kind.items():
+            if kind not in kinds:
+                continue
+            topic = '/' + topic.lstrip('/')     # as write_bag stores it
+            other = used.setdefault(topic, (side, kind))
+            if other != (side, kind) and not (kind == other[1] == 'gesture'):
+                return 'the %s %s and the %s %s are both on %s: one topic per output' % (
+                    other[0], other[1], side, kind, topic)
+    return None
+
+
 def comma_list(allowed):
     """An argparse type: a comma-separated list of `allowed` names, in order, once each."""
     def parse(text):
@@ -125,6 +142,14 @@ def main(argv=None):
             ap.error('%s %r: not a legal ROS topic name' % (option, topic))
         if topic.startswith('~'):
             ap.error('%s %r: a bag has no node to be private to: give a global name' % (option, topic))
+    topics = {side: hand_conversions.default_topics(side) for side in args.sides}
+    if 'right' in topics:
+        topics['right']['leapcobot'] = args.right_topic
+    if 'left' in topics:
+        topics['left']['leapcobot'] = args.left_topic
+    problem = topic_collision(topics, args.kinds)
+    if problem:
+        ap.error(problem)
     inputs = [args.recording, args.script, args.video]
     if args.video:
         inputs += capture.resolve_stills(args.video)
@@ -141,11 +166,6 @@ def main(argv=None):
     except SourceError as e:
         print('recording_to_bag: %s' % e, file=sys.stderr)
         return 2
-    topics = {side: hand_conversions.default_topics(side) for side in args.sides}
-    if 'right' in topics:
-        topics['right']['leapcobot'] = args.right_topic
-    if 'left' in topics:
-        topics['left']['leapcobot'] = args.left_topic
     try:
         n = write_bag(source, args.out, args.sides, topics, tuple(args.kinds), args.start)
     except (OSError, rosbag.ROSBagException) as e:
