@@ -54,7 +54,8 @@ def update_every(updater, period_s=0.25):
     """A rospy.Timer calling updater.update() (which publishes once per ~diagnostic_period)
     every period_s, for a node whose own loop is a hot path that should not carry it (the
     sender); keep the timer referenced."""
-    return rospy.Timer(rospy.Duration.from_sec(period_s), lambda _event: update(updater))
+    # reset: a /clock that jumps back (a looped bag) would otherwise end the timer's thread
+    return rospy.Timer(rospy.Duration.from_sec(period_s), lambda _event: update(updater), reset=True)
 
 
 def update(updater):

@@ -59,7 +59,8 @@ class TopicTypeWatch:
     def __init__(self, who, log, period=5.0):
         self.who, self.log = who, log
         self.topics = ()        # WatchedTopic; replaced whole, never changed in place
-        self.timer = rospy.Timer(rospy.Duration(period), self.check)
+        # reset: a /clock that jumps back (a looped bag) would otherwise end the timer's thread
+        self.timer = rospy.Timer(rospy.Duration(period), self.check, reset=True)
 
     def add(self, topic, msg_type, reader, hint):
         """Watch `topic`, read as `msg_type` by `reader` (words for the warning)."""

@@ -58,7 +58,8 @@ class HandMarkersNode:
         self.latency_shown = False
         if p['latency_text']:
             self.latency = LatencyMonitor()
-            self.timer = rospy.Timer(rospy.Duration(1.0), self.on_latency_timer)
+            # reset: survives a /clock jumping back (a looped bag)
+            self.timer = rospy.Timer(rospy.Duration(1.0), self.on_latency_timer, reset=True)
 
     def on_latency_timer(self, _event):
         now = rospy.get_time()

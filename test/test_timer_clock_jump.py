@@ -1,0 +1,95 @@
+"""The nodes' rospy.Timers keep running when ROS time jumps back, as /clock does on every
+loop of `rosbag play --clock -l` (no master: sim time is set in-process). Without
+reset=True the timer's thread ended with ROSTimeMovedBackwardsException, for good."""
+import time
+
+import pytest
+import rospy
+
+# rospy's own sim-time calls
+pytestmark = pytest.mark.filterwarnings('ignore:notifyAll:DeprecationWarning')
+
+
+class SimTime:
+    def __init__(self):
+        self.timers = []
+
+    def __call__(self, t):
+        rospy.rostime._set_rostime(rospy.Time.from_sec(t))
+
+
+@pytest.fixture
+def sim_time():
+    """set(t): ROS time is sim time t (s); its .timers are stopped afterwards, then wall
+    time is back."""
+    was = rospy.rostime.is_rostime_initialized()
+    rospy.rostime.set_rostime_initialized(True)
+    clock = SimTime()
+    clock(100.0)
+    yield clock
+    for timer in clock.timers:
+        timer.shutdown()
+    rospy.rostime.switch_to_wallclock()         # wakes a timer thread still asleep
+    for timer in clock.timers:
+        timer.join(5.0)
+    rospy.rostime.set_rostime_initialized(was)
+
+
+def run_clock(set_time, start, end, step=0.25, wall=0.01):
+    t = start
+    while t <= end:
+        set_time(t)
+        time.sleep(wall)
+        t += step
+
+
+def calls_after_a_jump_back(set_time, calls, timer):
+    run_clock(set_time, 100.0, 106.0)
+    before = len(calls)
+    run_clock(set_time, 50.0, 56.0)                # the bag loops: 106 s -> 50 s
+    after = calls[before:]
+    assert before >= 3
+    assert timer.is_alive() or after, 'the timer thread ended at the jump'
+    return after
+
+
+def test_the_topic_type_watch_checks_on_after_the_clock_jumps_back(sim_time, monkeypatch):
+    from leap_teleop.ros.graph import TopicTypeWatch
+    calls = []
+    monkeypatch.setattr(TopicTypeWatch, 'check', lambda self, _event=None: calls.append(rospy.get_time()))
+    watch = TopicTypeWatch('node', log=None, period=1.0)
+    sim_time.timers.append(watch.timer)
+    after = calls_after_a_jump_back(sim_time, calls, watch.timer)
+    assert len(after) >= 3 and all(t < 60 for t in after)
+
+
+def test_the_diagnostics_timer_updates_on_after_the_clock_jumps_back(sim_time):
+    from leap_teleop.ros.diagnostics import update_every
+
+    class Updater:
+        calls = []
+
+        def update(self):
+            self.calls.append(rospy.get_time())
+    timer = update_every(Updater(), 0.5)
+    sim_time.timers.append(timer)
+    after = calls_after_a_jump_back(sim_time, Updater.calls, timer)
+    assert len(after) >= 6 and all(t < 60 for t in after)
+
+
+def test_the_hand_markers_latency_text_goes_on_after_the_clock_jumps_back(sim_time, monkeypatch):
+    from leap_teleop.params import check_params
+    from leap_teleop.ros.graph import TopicTypeWatch
+    from leap_teleop.ros.nodes import hand_markers
+    calls = []
+    monkeypatch.setattr(TopicTypeWatch, 'check', lambda self, _event=None: None)
+    monkeypatch.setattr(hand_markers.HandMarkersNode, 'on_latency_timer',
+                        lambda self, _event: calls.append(rospy.get_time()))
+    node = hand_markers.HandMarkersNode(check_params(hand_markers.PARAMS, {}))
+    sim_time.timers += [node.timer, node.type_watch.timer]
+    try:
+        after = calls_after_a_jump_back(sim_time, calls, node.timer)
+    finally:
+        for sub in node.subs + [node.latency.sub]:
+            sub.unregister()
+    assert len(after) >= 3 and all(t < 60 for t in after)
