@@ -72,6 +72,27 @@ def test_the_table_is_in_data_path_order_and_the_board_forgets_silent_nodes():
     assert board.notes(30.0) == []
 
 
+def test_the_monitors_table_drops_a_node_that_stopped_reporting(monkeypatch):
+    """A dead arm's last numbers once stayed in every refresh, as if it were alive."""
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+    from leap_teleop.ros.latency_monitor import LatencyMonitor
+    arm = InputAgeWindow()
+    arm.add(10.0, 9.99)
+    status = DiagnosticStatus(name='ur10_1/ur10_arm: teleop', values=[
+        KeyValue(k, str(v)) for k, v in arm.diagnostic_values(10.0)])
+    now = [10.0]
+    monkeypatch.setattr(rospy, 'get_time', lambda: now[0])
+    monitor = LatencyMonitor(subscribe=False)
+    monitor.on_diagnostics(DiagnosticArray(status=[status]))
+    now[0] = 12.0
+    assert 'ur10_1/ur10_arm' in monitor.table()
+    now[0] = 21.5                           # stale after 5 s
+    assert 'ur10_1/ur10_arm' not in monitor.table()
+    assert monitor.table().startswith('capture -> stage')
+
+
 def test_a_simulators_command_waits_are_rows_of_their_own_after_the_commands():
     clock = [50.0]
     waits = CommandWaits(('ur10_1', 'ur10_2'), clock=lambda: clock[0])
