@@ -153,3 +153,36 @@ def test_a_hand_source_publishing_into_a_shutdown_is_quiet(monkeypatch):
     monkeypatch.setattr(rospy.core, 'is_shutdown_requested', lambda: True)
     assert call('frame', 'state') is None
     assert quiet_at_shutdown(lambda a, b: a + b)(1, 2) == 3
+
+
+def test_ctrl_c_stops_the_sender_cleanly_not_as_a_source_end_or_a_bad_parameter(tmp_path):
+    """Ctrl-C on a running sender once logged 'source ended after N frames' (the shutdown
+    hook stops the source before rospy.is_shutdown() turns true); while it waited for
+    ~camera_info_topic, a FATAL 'bad parameter' and status 1."""
+    import random
+
+    import cv2
+    import numpy as np
+
+    from tools.bench.ros_processes import ros_master
+    image = str(tmp_path / 'still.png')
+    cv2.imwrite(image, np.zeros((48, 64, 3), np.uint8))
+    sender = [sys.executable, os.path.join(ROOT, 'scripts', 'sender.py')]
+    rng = random.Random(5)
+    with ros_master() as env:
+        master = rosgraph.Master('/signals_test', master_uri=env['ROS_MASTER_URI'])
+
+        def sender_up(_i):
+            try:
+                return bool(master.lookupNode('/leap_sender'))
+            except rosgraph.MasterError:
+                return False
+        runs = interrupt_runs(env, lambda i: sender + ['_loop:=true', '_shutdown_on_end:=%s' % bool(i)],
+                              'sender: publishing', 2, rng)
+        waits = interrupt_runs(env, lambda i: sender + ['_source:=video', '_video:=' + image,
+                                                        '_camera_info_topic:=/camera/camera_info'],
+                               sender_up, 1, rng)
+    for status, text in runs + waits:
+        assert status == 0, (status, text[-2000:])
+        for sign in ('source ended', 'bad parameter', 'Traceback'):
+            assert sign not in text, text[-2000:]

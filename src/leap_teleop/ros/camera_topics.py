@@ -16,7 +16,11 @@ def camera_model(p, timeout=10.0):
     from leap_teleop.hands.sources.landmarks import CameraModel
     try:
         info = rospy.wait_for_message(p['camera_info_topic'], CameraInfo, timeout)
-    except rospy.ROSException:
+    except rospy.ROSException as e:
+        # ROSInterruptException is a ROSException: a Ctrl-C while waiting is no bad parameter
+        if isinstance(e, rospy.ROSInterruptException) or rospy.core.is_shutdown_requested():
+            rospy.loginfo('sender: shut down while waiting for %s', p['camera_info_topic'])
+            raise SystemExit(0)
         raise SourceError('no sensor_msgs/CameraInfo on %s within %.0f s (~camera_info_topic)'
                           % (p['camera_info_topic'], timeout))
     try:

@@ -43,6 +43,12 @@ def sender_parts(p):
     return source, view, factory, bindings
 
 
+def ended_by_itself(interface):
+    """Whether the source came to its end, not stopped by a shutdown (Ctrl-C): the
+    on_shutdown hook sets `finished` before rospy.is_shutdown() turns true."""
+    return interface.finished.is_set() and not rospy.core.is_shutdown_requested()
+
+
 def main(argv=None):
     p, (source, view, factory, bindings) = start_node(
         'sender.py', 'leap_sender', __doc__, PARAMS, sender_parts, argv, errors=(SourceError, ValueError))
@@ -83,7 +89,7 @@ def main(argv=None):
             interface.stop()    # also when a signal came before on_shutdown was registered
     if interface.error is not None:
         rospy.logerr('sender: the hand source failed: %s', interface.error)
-    if interface.finished.is_set() and not rospy.is_shutdown():
+    if ended_by_itself(interface):
         rospy.loginfo('sender: source ended after %d frames', interface.frames_seen)
         if p['shutdown_on_end']:
             rospy.sleep(0.5)   # let subscribers drain the last frames
