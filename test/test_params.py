@@ -56,6 +56,7 @@ def test_allowed_text():
 
 # -- every node's table: declarations, bad values, bounds of the safety functions ----------
 
+from leap_teleop.hands.sources.camera_params import DeviceParam  # noqa: E402
 from tools.param_table import node_tables  # noqa: E402
 
 TABLES = {module: params for module, _, params in node_tables()}
@@ -82,7 +83,8 @@ def _scalar_bad(p, kind):
     if kind == 'bool':
         return [1, 0, 'yes', None, 1.0]
     if kind == 'str':
-        out = [5, None, 2.5, True]
+        # ~device also takes an index as an integer (YAML reads `1` as one), not a negative one
+        out = [-1 if isinstance(p, DeviceParam) else 5, None, 2.5, True]
         if p.choices is not None:
             out.append('no-such-choice')
         if not p.empty_ok:
@@ -126,6 +128,18 @@ def bad_values(p):
     for i in range(len(good)):
         out += [good[:i] + [b] + good[i + 1:] for b in bad_items]
     return out
+
+
+def test_the_device_takes_an_index_given_as_an_integer():
+    """`_device:=1` or `device: 1` in a camera_config: YAML gives an int, once refused as
+    'not a string'."""
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    assert check_params(SENDER_PARAMS, {'device': 1})['device'] == '1'
+    assert check_params(SENDER_PARAMS, {'device': 0})['device'] == '0'
+    assert check_params(SENDER_PARAMS, {'device': '/dev/video2'})['device'] == '/dev/video2'
+    for bad in (-1, True, 1.0, ''):
+        with pytest.raises(ParamError, match='~device = '):
+            check_params(SENDER_PARAMS, {'device': bad})
 
 
 def test_every_bad_value_of_every_parameter_is_refused_in_one_line():

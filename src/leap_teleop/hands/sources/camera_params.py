@@ -1,12 +1,29 @@
 """The camera sources' node parameters (declared once, used by the sender) and their
 mapping onto make_source('webcam' | 'video', ...) keywords."""
+import numbers
+
 from leap_teleop.hands.sources.landmarks import DEFAULT_CAMERA_POSITION_MM, DEFAULT_HFOV_DEG, DEFAULT_PALM_LENGTH_MM
-from leap_teleop.params import Param
+from leap_teleop.params import Param, ParamError
 
 CAMERA_SOURCES = ('webcam', 'video')
 
+
+class DeviceParam(Param):
+    """~device: a string, or an index as an integer: YAML (`_device:=1`, `device: 1` in a
+    camera_config) reads a bare number as one. Checked as its text."""
+
+    def check(self, name, value):
+        if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+            if value < 0:
+                raise ParamError('~%s = %r: a negative index; allowed: %s' % (name, value, self.allowed()))
+            value = str(value)
+        return super().check(name, value)
+
+    def allowed(self):
+        return 'an index (0 or more) or a device path (not empty)'
+
 CAMERA_PARAMS = {
-    'device': Param('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
+    'device': DeviceParam('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
     'video': Param('', 'video source: a video file, an image, a folder or a glob of images'),
     'width': Param(640, 'webcam: capture width asked of the device; video: frames are '
                         'letterboxed to width x height (0 = as they come)',
