@@ -850,3 +850,79 @@ def test_hand_fields_of_the_wrong_shape_or_type_are_refused_not_raised(fields):
     t.on_joints(t._q)
     t.step(now)
     assert t.status.state == TRACKING
+
+
+def test_a_robot_moved_while_disarmed_is_not_taken_for_one_that_stopped_when_re_armed():
+    # The old hold's plan (a fist while moving) was compared with a robot moved by hand
+    # since: the fresh thumbs-up was disarmed again as 'does not follow its commands'.
+    t, c = armed_with_origin()
+    q = HOME.copy()
+    _, q = follow(t, c, hand(palm_mm=(0.0, 260.0, -60.0)), 60, q)
+    _, q = follow(t, c, hand(fist=True), 1, q)
+    assert t.status.state == DISARMED
+    for _ in range(250):                                  # the robot brakes along the hold
+        now = c.tick()
+        planned = t._servo.planned_at(now)
+        q = q if planned is None else planned
+        t.on_hand(hand(stamp=now), now)
+        t.on_joints(q, now)
+        t.step(now)
+    moved = q + [0.3, -0.2, 0.2, 0.0, 0.0, 0.0]
+    for _ in range(HOLD_PERIODS + 60):
+        now = c.tick()
+        t.on_hand(hand(thumb_up=True, stamp=now), now)
+        t.on_joints(moved, now)
+        t.step(now)
+    assert t.status.state == ARMED, t.status.reason
+
+
+def test_a_speed_limit_lowered_live_is_not_taken_for_a_robot_that_stopped():
+    # A robot following 0.2 s late (under the 0.5 s allowed) while max_joint_speed drops
+    # from 1 to 0.05 rad/s: judged by the new limit at once, its lag tripped the guard.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    q, planned, palm, states = HOME.copy(), [], np.array(PALM), set()
+    for k in range(300):
+        if k == 140:
+            t.retune({'max_joint_speed': 0.05})
+        palm = palm + np.array([0.0, 0.3, -0.8]) * (1 if (k // 150) % 2 == 0 else -1)
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
+        t.on_joints(q, now)
+        t.step(now)
+        states.add(t.status.state)
+        p = t._servo.planned_at(now)
+        planned.append((now, q.copy() if p is None else p))
+        q = [x for when, x in planned if when <= now - 0.2 + 1e-9][-1] if now - 0.2 >= planned[0][0] else q
+    assert states == {TRACKING}, t.status.reason
+
+
+def test_joystick_out_of_reach_right_after_a_joint_state_stall_holds_without_raising():
+    # The stall had dropped the target; the anti-wind-up fallback restored None and the
+    # holding message raised, ending the control loop.
+    t, c = armed_with_origin(mode='joystick', max_tcp_speed=0.5, max_joint_speed=2.0,
+                             max_joint_accel=math.pi, joystick_gain=5.0)
+    q = HOME.copy()
+
+    def period(joints=True):
+        now = c.tick()
+        t.on_hand(hand(palm_mm=(-200.0, 400.0, -200.0), stamp=now), now)
+        if joints:
+            t.on_joints(q, now)
+        t.step(now)
+        return t._servo.state_at(now + 0.008, q)[0]
+    for _ in range(400):
+        q = period()
+    assert t.status.state == HOLDING
+    for _ in range(70):                                   # joint states stall, the push goes on
+        period(joints=False)
+    assert 'no joint states' in t.status.reason
+    for _ in range(5):
+        q = period()                                      # back: no exception
+    assert t.status.state in (HOLDING, TRACKING)
+
+
+@pytest.mark.parametrize('palm', [None, 5.0, ()])
+def test_a_palm_that_is_no_vector_is_refused(palm):
+    t, c = armed_with_origin()
+    now = c.tick()
+    assert 'is not a trackable hand' in t.on_hand(hand(palm_mm=palm, stamp=now), now)

@@ -182,16 +182,19 @@ hand = {'thumb_up': False, 'rock': False, 'palm': (0.0, 200.0, 0.0)}
 states, speeds = [], []
 rospy.Subscriber('ur10_arm/status', ArmStatus,
                  lambda m: states.append((time.monotonic(), m.state)), queue_size=100)
-rospy.Subscriber('arm_controller/command', JointTrajectory,
-                 lambda m: speeds.append((time.monotonic(), max(
-                     (abs(v) for p in m.points for v in p.velocities), default=0.0))),
-                 queue_size=1000)
+robot = list(HOME_Q)        # the robot follows each command (to its first point)
+
+def on_command(m):
+    speeds.append((time.monotonic(), max((abs(v) for p in m.points for v in p.velocities),
+                                         default=0.0)))
+    robot[:] = m.points[0].positions
+rospy.Subscriber('arm_controller/command', JointTrajectory, on_command, queue_size=1000)
 joints = rospy.Publisher('joint_states', JointState, queue_size=10)
 hands = rospy.Publisher('leapmotion/data_right', leapcobotright, queue_size=10)
 
 def feed():
     while not rospy.is_shutdown():
-        joints.publish(JointState(name=list(JOINT_NAMES), position=list(HOME_Q)))
+        joints.publish(JointState(name=list(JOINT_NAMES), position=list(robot)))
         m = leapcobotright(is_right_hand=True, right_hand_thumb_up=hand['thumb_up'],
                            right_hand_set_origin_frame_detected=hand['rock'])
         m.header.stamp = rospy.Time.now()

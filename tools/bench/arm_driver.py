@@ -38,18 +38,20 @@ def main():
     joints_pub = rospy.Publisher('ur10_1/joint_states', JointState, queue_size=10)
     got = {'arm': threading.Event(), 'bare': threading.Event()}
     last_q = [None]
+    js = JointState(name=['ur10_1_' + n for n in JOINT_NAMES], position=list(HOME_Q))
 
     def on_command(msg):
         q = tuple(msg.points[0].positions) if msg.points else None
         if q != last_q[0]:
             last_q[0] = q
             got['arm'].set()
+        if q is not None:       # the robot follows (a robot that does not is disarmed)
+            js.position = list(q)
 
     rospy.Subscriber('bench/echo', leapcobotright, lambda _m: got['bare'].set(),
                      tcp_nodelay=True)
     rospy.Subscriber('ur10_1/arm_controller/command', JointTrajectory, on_command,
                      tcp_nodelay=True)
-    js = JointState(name=['ur10_1_' + n for n in JOINT_NAMES], position=list(HOME_Q))
 
     def publish_joints():
         while not rospy.is_shutdown():

@@ -107,10 +107,12 @@ class JointServo:
         return q, v
 
     def planned_at(self, t):
-        """(q) the last plan commands at time t, or None without one; leaves the plan as it is."""
-        if self._plan is None:
+        """(q) the last plan commands at time t, or None without one or once it has come to
+        rest by then; leaves the plan as it is."""
+        plan = self._plan
+        if plan is None or t - plan[0] - plan[5] >= plan[6]:
             return None
-        return np.array(self._planned(self._plan, max(t - self._plan[0], 0.0))[0])
+        return np.array(self._planned(plan, max(t - plan[0], 0.0))[0])
 
     def rest(self, q_measured):
         """Where the last plan brings the joints to rest (the measured joints when there is

@@ -179,12 +179,16 @@ class ArmTeleop:
         # else stalled with it: its return re-anchors as after a hand stall alone.
         self._hand_silent = None
         self._off_plan_since = None       # when the joints were first seen off the plan
+        self._slower_since = (0.0, -math.inf)   # (max_joint_speed before, when it was lowered)
         self._resume_box = None           # joint stall: (lo, hi) joints it may resume in
 
     def retune(self, changes):
         """Apply checked changes ({name: value}, the node's reconfigurable ones) while
         running: the params (read where used) and the filters and servo built from them."""
         old_scale, old_turn_scale = self.p.scale, self.p.orientation_scale
+        if changes.get('max_joint_speed', math.inf) < self.p.max_joint_speed:
+            self._slower_since = (self.p.max_joint_speed,
+                                  -math.inf if self._last_step is None else self._last_step)
         for name, value in changes.items():
             setattr(self.p, name, value)
         p = self.p
@@ -248,7 +252,7 @@ class ArmTeleop:
             return 'hand fields are not numbers'
         why = None
         if hand.present and (palm.shape != (3,) or not _within(palm, self.p.max_palm_mm)):
-            why = 'palm position %s is not a trackable hand' % (tuple(palm),)
+            why = 'palm position %s is not a trackable hand' % (palm.tolist(),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
         elif not (-_TWO_PI <= hand.rotate <= _TWO_PI and -_TWO_PI <= hand.turn <= _TWO_PI
@@ -502,9 +506,9 @@ class ArmTeleop:
             q, why = None, 'only another arm configuration reaches'
         if q is None:
             self.status.ik_failures += 1
-            if self.p.mode != 'imitation':
+            if self.p.mode != 'imitation' and reachable is not None:
                 # A push out of reach does not wind the joystick's target up: pulling back
-                # moves the arm at once.
+                # moves the arm at once. (None: it moves on from the arm, after a hold.)
                 target = self._target = reachable
             if self.status.state != HOLDING:
                 self._set(HOLDING, '%s %s' % (why, np.round(target, 3).tolist()))
@@ -528,12 +532,18 @@ class ArmTeleop:
         disarmed: nothing is planned then)."""
         # Joints given without their receipt time (no staleness watch) count as of now.
         seen = now if self._joints_rx is None else self._joints_rx
-        planned = None if self.status.state == DISARMED else self._servo.planned_at(seen)
+        # Only while it commands motion: an old hold's plan says nothing of a robot moved
+        # since (by hand, another program) once the arm is re-armed.
+        commanding = self.status.state in (TRACKING, HOLDING)
+        planned = self._servo.planned_at(seen) if commanding else None
         if planned is None:
             self._off_plan_since = None
             return False
         off = np.abs(planned - self._q)
-        if float(off.max()) <= OFF_PLAN_LAG_S * self.p.max_joint_speed + RESUME_TOLERANCE:
+        # A speed limit lowered live: the robot may still lag the faster plans of before.
+        speed = max(self.p.max_joint_speed, self._slower_since[0]
+                    if now - self._slower_since[1] < OFF_PLAN_LAG_S + OFF_PLAN_S else 0.0)
+        if float(off.max()) <= OFF_PLAN_LAG_S * speed + RESUME_TOLERANCE:
             self._off_plan_since = None
             return False
         if self._off_plan_since is None:
