@@ -252,7 +252,8 @@ class ArmTeleop:
             return 'hand fields are not numbers'
         why = None
         if hand.present and (palm.shape != (3,) or not _within(palm, self.p.max_palm_mm)):
-            why = 'palm position %s is not a trackable hand' % (palm.tolist(),)
+            why = 'palm position %s is not a trackable hand' % (
+                tuple(palm.tolist()) if palm.ndim else palm.tolist(),)
         elif not math.isfinite(hand.pinch_value):
             why = 'pinch value %r is not finite' % hand.pinch_value
         elif not (-_TWO_PI <= hand.rotate <= _TWO_PI and -_TWO_PI <= hand.turn <= _TWO_PI
