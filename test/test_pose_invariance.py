@@ -236,7 +236,6 @@ def test_a_fitted_keypoint_row_is_fitted_with_all_its_copies():
         # each recorded row as itself and mirrored, its copies too
         assert augmented[mine].sum() == (copies - 1) * (~augmented[mine]).sum() > 0, cls
     for g in set(groups[kept].tolist()):
-        assert len(set(groups[kept][groups[kept] == g])) == 1
         assert (groups[kept] == g).sum() == (groups == g).sum()   # a group is kept whole
 
 

@@ -529,8 +529,8 @@ class ArmTeleop:
         return cmd
 
     def _off_plan(self, now):
-        """The measured joints have stayed off the servo's plan for OFF_PLAN_S (never while
-        disarmed: nothing is planned then)."""
+        """The measured joints have stayed off the servo's plan for OFF_PLAN_S; judged only
+        while tracking or holding, on a plan not yet at rest."""
         # Joints given without their receipt time (no staleness watch) count as of now.
         seen = now if self._joints_rx is None else self._joints_rx
         # Only while it commands motion: an old hold's plan says nothing of a robot moved
