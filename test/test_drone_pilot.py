@@ -191,6 +191,59 @@ def test_a_fold_before_navdata_reports_the_takeoff_lands():
     assert kinds(drain(pilot)) == []
 
 
+def test_a_fold_lands_a_takeoff_that_navdata_made_before_it_still_shows_landed():
+    # Navdata comes every 20 ms: one produced before the driver acted on the takeoff
+    # still says landed, and a fold after it sent nothing while the drone took off.
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.005)
+    assert kinds(drain(pilot)) == ['takeoff']
+    pilot.on_navdata(2, 0, 0.01)
+    pilot.on_gesture('fold', True, 0.05)
+    assert kinds(drain(pilot)) == ['land']
+
+
+def test_a_fold_lands_a_sent_takeoff_when_a_second_one_is_withdrawn():
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.01)
+    assert kinds(drain(pilot)) == ['takeoff']                 # sent
+    pilot.on_gesture('unfold', True, 0.02)                    # queued, not sent
+    pilot.on_gesture('fold', True, 0.03)
+    assert kinds(drain(pilot)) == ['land']
+
+
+def test_a_takeoff_navdata_shows_landed_for_long_is_forgotten():
+    # The firmware refused it (a low battery): a later fold has nothing to land.
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
+    pilot.on_gesture('unfold', True, 0.01)
+    assert kinds(drain(pilot)) == ['takeoff']
+    for i in range(1, 301):                                   # 6 s of landed navdata
+        pilot.on_navdata(2, 0, 0.02 * i)
+        pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.02 * i)
+    pilot.on_gesture('fold', True, 6.01)
+    assert kinds(drain(pilot)) == []
+
+
+def test_a_pilot_that_never_gets_a_hand_hovers_and_lands_a_flying_drone():
+    # Restarted beside a flying drone with its sender down: not a word was sent before.
+    cfg = PilotParams()
+    pilot = DronePilot(cfg)
+    sent = []
+    for i in range(int((cfg.land_after + 1.0) / 0.02)):
+        t = 0.02 * i
+        pilot.on_navdata(3, 1000, t)
+        pilot.watchdog(t)
+        sent += [(t, c.kind, c.twist) for c in drain(pilot)]
+    assert sent[0][1:] == ('twist', (0.0,) * 6) and sent[0][0] == 0.0
+    lands = [t for t, kind, _ in sent if kind == 'land']
+    assert len(lands) == 1 and abs(lands[0] - cfg.land_after) < 0.03, sent
+
+
 @pytest.mark.parametrize('lost', ['hand', 'navdata'])
 def test_the_clock_jumping_back_under_a_loss_still_lands(lost):
     # The /clock publisher restarts 1 s into a loss, and a Hand message (every 10 ms) sees

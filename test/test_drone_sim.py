@@ -163,6 +163,27 @@ def test_flip_turns_360_degrees_and_recovers(drone, kind):
     assert drone.flip_count == 1
 
 
+def test_a_flip_that_strikes_the_floor_cuts_the_motors_and_reset_recovers():
+    # From 0.15 m the spin ends upside down on the floor: it looped there with two motors
+    # at full for ever, and a land was answered true and never happened.
+    d = ArDroneSim(warn=lambda key, text: None, params={'takeoff_altitude': 0.15})
+    try:
+        fly(d)
+        assert d.flight_animation(ds.FLIP_RIGHT, 0)
+        t0 = d.time
+        while d.state == ds.LOOPING and d.time - t0 < ds.FLIP_CUTOFF_S + 1.0:
+            d.step()
+        assert d.state == ds.UNKNOWN and d.emergency
+        assert d.time - t0 == pytest.approx(ds.FLIP_CUTOFF_S, abs=0.05)
+        d.advance(1.0)
+        nav = d.navdata()
+        assert [nav['motor%d' % i] for i in range(1, 5)] == [0, 0, 0, 0]
+        assert d.reset() and d.state == ds.LANDED
+        assert not d.takeoff()                                  # upside down
+    finally:
+        d.close()
+
+
 def test_bad_animation_type_refused_other_types_accepted(drone, warnings):
     fly(drone)
     assert not drone.flight_animation(20, 0)

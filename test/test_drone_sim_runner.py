@@ -144,6 +144,9 @@ def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
     ({'base_frame': 'odom'}, "~base_frame and ~odom_frame are both 'odom'"),
     ({'world_frame': 'odom'}, "~world_frame 'odom' is the drone's own frame"),
     ({'world_frame': 'uav/odom', 'tf_prefix': 'uav'}, "~world_frame 'uav/odom' is the drone's"),
+    # published at 100 Hz and 200 Hz
+    ({'looprate': 80.0, 'physics_rate': 200.0}, r'~looprate 80 Hz must be ~physics_rate 200 Hz'),
+    ({'looprate': 1000.0, 'physics_rate': 200.0}, r'~looprate 1000 Hz must be'),
 ])
 def test_parameters_that_cannot_go_together_are_refused(values, message):
     # each was taken: an empty flight band, a transform from a frame to itself
@@ -156,3 +159,5 @@ def test_parameters_that_go_together_are_taken():
     # the sim levels off at the ceiling; drones behind prefixes share one world frame
     check_combinations(params(takeoff_altitude=1.0, altitude_max=800.0))
     check_combinations(params(world_frame='odom', tf_prefix='drone1'))
+    check_combinations(params(looprate=200.0 / 3.0, physics_rate=200.0))
+    check_combinations(params(looprate=5.0, physics_rate=2000.0))

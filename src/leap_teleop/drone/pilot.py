@@ -45,7 +45,8 @@ Safety added in both modes: hand twists are only sent while fresh navdata (no ol
 than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
 says landed; stale or missing navdata -> hover (repeated every HOVER_REPEAT s) and, if
 the drone was last seen airborne, land after ``land_after``; hand lost (Hand.present
-false, a hand_lost event, or no Hand message for ``hand_timeout``) -> one zero Twist (auto-hover) at once; back within
+false, a hand_lost event, no Hand message for ``hand_timeout``, or none since the start)
+-> one zero Twist (auto-hover) at once; back within
 ``disarm_after`` -> steering resumes without a new unfold (tilt: with the same reference
 when the palm is back within ``recapture_beyond`` of where it was lost, so a hand held
 through a stall gives the command it gave; else re-captured, so nothing jumps); lost for ``disarm_after`` ->
@@ -75,6 +76,8 @@ FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
+# Navdata still saying landed this long after a takeoff went in: the firmware refused it.
+TAKEOFF_CONFIRM_S = 5.0
 ZERO_TWIST = (0.0,) * 6
 HOVER_REPEAT = 1.0                   # s between hover commands while navdata is stale
 # The recognizer reports circles up to 0.3 m (CircleRules.r_max; people's fitted 0.2 m) in
@@ -254,7 +257,10 @@ class DronePilot:
         self._landed_for_loss = False
         self.engaged = False             # tilt: unfold seen, not folded since
         self._takeoff_asked = False      # an unfold asked for a takeoff; no fold or loss since
-        self._takeoff_unconfirmed = False   # a takeoff was queued, no navdata since
+        # takeoffs queued (withdrawn ones taken off) that no navdata has shown yet, and when
+        # the last went in
+        self._takeoffs_unconfirmed = 0
+        self._takeoff_queued_at = None
         self._stopped_at = None          # when the last fold or loss came
         self.reference = None            # tilt: (palm xyz m, hand_axes or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
@@ -279,8 +285,13 @@ class DronePilot:
                     'arrived' if first else 'back', now - self.navdata_lost_since))
             self.navdata_lost_since = None
             self._landed_for_navdata = False
-            # A flag, not two times compared: a clock jumping back reversed their order.
-            self._takeoff_unconfirmed = False
+            # Only navdata that shows the drone off the ground confirms a takeoff: one made
+            # before the driver acted on it still says landed. A takeoff the firmware
+            # refused (landed for TAKEOFF_CONFIRM_S) is forgotten.
+            at = self._takeoff_queued_at
+            if self.drone_state != LANDED or (at is not None
+                                              and now - at > TAKEOFF_CONFIRM_S):
+                self._takeoffs_unconfirmed = 0
 
     def navdata_fresh(self, now):
         """Navdata arrived within navdata_timeout (and the clock did not jump back)."""
@@ -382,7 +393,8 @@ class DronePilot:
                     self._warn('unfold', 'unfold: no takeoff, no fresh Hand input')
                 elif state == LANDED:
                     self._takeoff_asked = True
-                    self._takeoff_unconfirmed = True
+                    self._takeoffs_unconfirmed += 1
+                    self._takeoff_queued_at = now
                     self.queue.push(Command('takeoff', stamp=now, input_stamp=stamp))
                 elif state is None:
                     self._warn('unfold', 'unfold: no takeoff, %s' % self._no_navdata(now))
@@ -394,10 +406,11 @@ class DronePilot:
                 self._takeoff_asked = False
                 self._stopped_at = now
                 self.reference = None
-                withdrawn = self.queue.discard('takeoff')
-                # A takeoff sent after the last navdata flies however that navdata read.
-                sent = not withdrawn and self._takeoff_unconfirmed
+                withdrawn = self._withdraw_takeoffs()
+                # A takeoff sent and not yet shown by navdata flies however that navdata read.
+                sent = self._takeoffs_unconfirmed > 0
                 if state is None or state in AIRBORNE_STATES or sent:
+                    self._takeoffs_unconfirmed = 0      # the land follows them
                     self.queue.push(Command('land', stamp=now, input_stamp=stamp))
                 elif withdrawn:
                     self._warn('fold', 'fold: the unsent takeoff withdrawn')
@@ -422,6 +435,12 @@ class DronePilot:
                     self.queue.push(Command('flip', anim=(self.cfg.flip_type,
                                                           self.cfg.flip_duration), stamp=now,
                                             input_stamp=stamp))
+
+    def _withdraw_takeoffs(self):
+        """Withdraw the unsent takeoffs; how many. Those left unconfirmed were sent."""
+        gone = self.queue.discard('takeoff')
+        self._takeoffs_unconfirmed = max(0, self._takeoffs_unconfirmed - gone)
+        return gone
 
     def _hand_fresh(self, now):
         """A present hand arrived within hand_timeout (the watchdog may not have run yet)."""
@@ -488,7 +507,7 @@ class DronePilot:
     def _lose(self, now):
         self._takeoff_asked = False
         self._stopped_at = now
-        self.queue.discard('takeoff')       # nothing takes off that no hand in view asks for
+        self._withdraw_takeoffs()           # nothing takes off that no hand in view asks for
         if self.hand_present or self.lost_since is None:
             self.lost_since = now
         was_present = self.hand_present
@@ -523,6 +542,10 @@ class DronePilot:
             # A callback usually sees such a jump first (a Hand message comes every 10 ms):
             # times kept from the old timeline would hold the landings off for as long as
             # the jump. They start again from now.
+            if self.last_hand_time is None and self.lost_since is None:
+                # No Hand message yet (a pilot restarted beside a flying drone, its sender
+                # down or on another topic): lost from the start, so it hovers, then lands.
+                self._lose(now)
             if self.lost_since is not None and self.lost_since > now:
                 self.lost_since = now
             if self.navdata_lost_since is not None and self.navdata_lost_since > now:
@@ -568,7 +591,7 @@ class DronePilot:
     def _known_landed(self):
         """The last navdata said landed and no takeoff was queued after it."""
         return (self.drone_state == LANDED
-                and not self._takeoff_unconfirmed)
+                and not self._takeoffs_unconfirmed)
 
     def _navdata_watchdog(self, now):
         """Stale navdata: hover at once (again every HOVER_REPEAT s), land after land_after

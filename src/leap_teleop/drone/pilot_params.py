@@ -20,7 +20,8 @@ PILOT_PARAMS = {
     'flip_type': Param(19, 'flight animation for a circle gesture (19 = flip right)',
                        ge=0, le=19),
     'flip_duration': Param(0, 'its duration (0 = default)', unit='ms', ge=0, le=10000),
-    'flip_min_altitude': Param(0.6, 'no flip below this altitude', unit='m', ge=0.3, le=10.0),
+    # a flip loses up to 0.45 m (the simulated one, at its lowest): lower, it strikes the floor
+    'flip_min_altitude': Param(0.6, 'no flip below this altitude', unit='m', ge=0.5, le=10.0),
     'flip_min_radius': Param(0.025, 'no flip on a smaller circle (fingertip loops are 4-20 '
                                     'mm)', unit='m', ge=0.0, le=0.5),
     'hand_timeout': Param(0.15, 'no Hand message this long = hand lost (hover)', unit='s',

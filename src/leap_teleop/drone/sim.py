@@ -63,6 +63,10 @@ DEFAULT_DURATION_MS = (1000, 1000, 1000, 1000, 1000, 1000, 5000, 5000, 2000, 500
 FLIP_AXES = {FLIP_AHEAD: (1, 1.0), FLIP_BEHIND: (1, -1.0), FLIP_LEFT: (0, -1.0),
              FLIP_RIGHT: (0, 1.0)}
 HOVER_EPS = 1e-4        # a command component below this counts as zero
+# A flip not caught this long after it began (1.8 s from any height above 0.45 m; one
+# asked too low strikes the floor and ends upside down) cuts the motors: the firmware's
+# emergency, which ardrone/reset clears.
+FLIP_CUTOFF_S = 3.0
 # Longest flight animation ardrone_sim takes, ms: twice the SDK's longest default (5 s), the
 # pilot's own flip_duration bound; steering waits out an animation: longer is a lockout.
 MAX_ANIMATION_MS = 10000
@@ -590,6 +594,13 @@ class ArDroneSim:
 
     def _flip(self, a, t):
         p, J = self.p, self.p.inertia
+        if t >= FLIP_CUTOFF_S and a['phase'] != 'settle':
+            self._warn('flip', 'the flip did not catch in %.0f s (asked at %.2f m): motors '
+                       'cut, emergency (ardrone/reset clears it)', FLIP_CUTOFF_S, a['alt0'])
+            self._anim = None
+            self.emergency = True
+            self._set_state(UNKNOWN)
+            return 0.0, (0.0, 0.0, 0.0)
         axis, sign = FLIP_AXES[a['type']]
         a['angle'] += sign * self.omega[axis] * self.dt
         a['min_alt'] = min(a.get('min_alt', a['alt0']), self.altitude)

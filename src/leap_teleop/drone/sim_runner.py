@@ -162,6 +162,12 @@ class DroneReading:
 def check_combinations(p):
     """ValueError for ~params each allowed alone but not together. (A takeoff above the
     ceiling is no error: the sim levels off at the ceiling.)"""
+    steps = p['physics_rate'] / p['looprate']
+    if steps < 1.0 - 1e-9 or abs(steps - round(steps)) > 1e-6 * steps:
+        # each tick runs whole physics steps: any other rate would be rounded to one
+        raise ValueError('~looprate %g Hz must be ~physics_rate %g Hz divided by a whole '
+                         'number (%s Hz, ...)' % (p['looprate'], p['physics_rate'], ', '.join(
+                             '%g' % (p['physics_rate'] / n) for n in range(1, 5))))
     if p['altitude_min'] >= p['altitude_max']:
         raise ValueError('~altitude_min %g mm must be below ~altitude_max %g mm'
                          % (p['altitude_min'], p['altitude_max']))
