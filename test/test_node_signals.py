@@ -186,3 +186,65 @@ def test_ctrl_c_stops_the_sender_cleanly_not_as_a_source_end_or_a_bad_parameter(
         assert status == 0, (status, text[-2000:])
         for sign in ('source ended', 'bad parameter', 'Traceback'):
             assert sign not in text, text[-2000:]
+
+
+# A source that delivers frames, then fails as an unplugged webcam does.
+FAILING_SOURCE_SENDER = textwrap.dedent('''
+    import sys, time
+    import numpy as np
+    from leap_teleop.hands.frame import Frame, TrackedHand
+    from leap_teleop.hands.sources import SOURCES
+    from leap_teleop.hands.sources.source import HandSource, SourceError
+
+    class Unplugged(HandSource):
+        rate_hz = 30.0
+
+        def __init__(self, **_):
+            pass
+
+        def frames(self):
+            for k in range(30):
+                time.sleep(1 / 30.0)
+                yield Frame(k + 1, time.time(), [TrackedHand('right', np.array([0., 200., 0.]), id=1)])
+            raise SourceError('camera 0 stopped delivering frames (unplugged?)')
+
+    sys.modules['unplugged'] = sys.modules[__name__]
+    SOURCES['scripted'] = ('unplugged', 'Unplugged')
+    from leap_teleop.ros.nodes import sender
+    sender.main(['sender.py'] + sys.argv[1:])
+''')
+
+
+def test_a_sender_whose_source_fails_ends_with_status_2_so_it_can_be_respawned():
+    # It logged 'source ended', reported OK on /diagnostics and spun for ever, publishing
+    # nothing (sender.launch leaves ~shutdown_on_end false), so respawn never came.
+    from tools.bench.ros_processes import ros_master
+    with ros_master() as env:
+        proc = subprocess.Popen([sys.executable, '-c', FAILING_SOURCE_SENDER,
+                                 '_shutdown_on_end:=false'], env=env,
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        try:
+            out, _ = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out = proc.communicate()[0]
+            raise AssertionError('the sender did not end: ' + out[-2000:])
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    assert proc.returncode == 2, out[-2000:]
+    assert 'the hand source failed: camera 0 stopped delivering frames' in out, out[-2000:]
+    assert 'source ended' not in out and 'Traceback' not in out, out[-2000:]
+
+
+def test_the_sender_reports_a_failed_source_as_an_error_on_diagnostics():
+    import types
+
+    from leap_teleop.ros.hand_topics import HandTopics
+    topics = types.SimpleNamespace(interface=types.SimpleNamespace(
+        frames_seen=30, rejected_frames=0, error=None), published=30)
+    assert HandTopics.report(topics)[0] == 'ok'
+    topics.interface.error = RuntimeError('camera 0 stopped delivering frames')
+    level, summary, _ = HandTopics.report(topics)
+    assert level == 'error' and 'camera 0 stopped delivering frames' in summary

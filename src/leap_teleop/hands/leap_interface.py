@@ -11,6 +11,7 @@ import threading
 
 from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.sources.source import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS, HandState, HandTracker
 
 log = logging.getLogger(__name__)
@@ -108,7 +109,9 @@ class LeapInterface:
         try:
             for frame in self.source.frames():
                 self.on_frame(frame)
-        except Exception as e:   # reported to the owner, who decides what to do
+        except SourceError as e:    # a device gone, a file gone bad: the owner says so
+            self.error = e
+        except Exception as e:   # a bug: its traceback; the owner decides what to do
             log.exception('hand source failed: %s', e)
             self.error = e
         finally:

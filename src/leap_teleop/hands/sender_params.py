@@ -36,7 +36,8 @@ SENDER_PARAMS = {
     'world_frame': Param('world', 'parent frame of the static TF to frame_id', empty_ok=False),
     'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame', unit='m',
                       length=3, ge=-100.0, le=100.0),
-    'shutdown_on_end': Param(True, 'shut the node down when a finite source ends'),
+    'shutdown_on_end': Param(True, 'shut the node down when a finite source ends (a source '
+                                   'that fails, e.g. a camera unplugged, always does: status 2)'),
     # Bounded: a slow subscriber holds at most this many frames (~2 s at 120 Hz) per topic.
     'queue_size': Param(200, 'publisher queue size (frames buffered per subscriber)',
                         ge=1, le=1000),

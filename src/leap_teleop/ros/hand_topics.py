@@ -68,7 +68,10 @@ class HandTopics:
     def report(self):
         """The sender's /diagnostics (level, summary, values); the stage ages follow them."""
         i = self.interface
-        return ('ok', '%d frames, %d hands published' % (i.frames_seen, self.published),
+        failed = i.error is not None
+        return ('error' if failed else 'ok',
+                ('the hand source failed: %s; ' % i.error if failed else '')
+                + '%d frames, %d hands published' % (i.frames_seen, self.published),
                 [('frames', str(i.frames_seen)), ('frames without a capture time', str(i.rejected_frames)),
                  ('hands published', str(self.published))])
 

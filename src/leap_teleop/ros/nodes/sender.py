@@ -88,7 +88,11 @@ def main(argv=None):
         if rospy.core.is_shutdown_requested():
             interface.stop()    # also when a signal came before on_shutdown was registered
     if interface.error is not None:
+        # ends the node whatever ~shutdown_on_end says: a failed source publishes nothing, and
+        # only an ended process can be respawned
         rospy.logerr('sender: the hand source failed: %s', interface.error)
+        rospy.signal_shutdown('the hand source failed')
+        raise SystemExit(2)
     if ended_by_itself(interface):
         rospy.loginfo('sender: source ended after %d frames', interface.frames_seen)
         if p['shutdown_on_end']:
@@ -96,5 +100,3 @@ def main(argv=None):
             rospy.signal_shutdown('source ended')
         else:
             rospy.spin()
-    if interface.error is not None:
-        raise SystemExit(2)
