@@ -181,6 +181,49 @@ def test_forget_hands_starts_a_new_track(hands_json):
         source.detector.close()
 
 
+class MovingHandDetector:
+    """Stands in for MediaPipe: one hand per image, 5 % of the width further right each
+    call (a hand that moves), so a hand followed across images has a velocity."""
+
+    def __init__(self, lm, real):
+        self.lm, self.real, self.calls = lm, real, 0
+
+    def detect(self, rgb):
+        self.calls += 1
+        return [HandLandmarks(self.lm.image + [0.05 * self.calls, 0.0, 0.0], self.lm.world,
+                              self.lm.label, self.lm.score)]
+
+    def close(self):
+        self.real.close()
+
+
+def one_hand(hands_json):
+    name = next(n for n, v in hands_json['images'].items() if len(v['hands']) == 1)
+    return HandLandmarks.from_dict(hands_json['images'][name]['hands'][0])
+
+
+def test_a_looped_video_starts_each_pass_with_a_new_hand(tmp_path, hands_json):
+    # Before: the hand kept its id over the seam, and got the jump back as its velocity.
+    import cv2
+    path = str(tmp_path / 'clip.mp4')
+    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*'mp4v'), 10, (64, 48))
+    for _ in range(3):
+        writer.write(np.zeros((48, 64, 3), np.uint8))
+    writer.release()
+    source = make_source('video', path=path, realtime=False, loop=True, clock=lambda: 0.0)
+    source.detector = MovingHandDetector(one_hand(hands_json), source.detector)
+    frames = []
+    for frame in source.frames():
+        frames.append(frame)
+        if len(frames) == 6:
+            source.stop()
+    hands = [f.hands[0] for f in frames]
+    assert all(b.timestamp > a.timestamp for a, b in zip(frames, frames[1:]))
+    assert hands[0].id == hands[1].id == hands[2].id and np.any(hands[2].palm_velocity)
+    assert hands[3].id != hands[2].id and not np.any(hands[3].palm_velocity)
+    assert hands[4].id == hands[3].id
+
+
 def clip_run(name, **kwargs):
     """Per frame (frame id, stamp, {side: HandState}) of a clip played through the
     video source (letterboxed to 640x480, as fast as possible) and LeapInterface."""

@@ -15,6 +15,7 @@ from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.datasets import data_dir
 from leap_teleop.hands.rendered_hand import render_hand
 from leap_teleop.hands.sources import SourceError, leapjs, make_source
+from leap_teleop.hands.tracker import HandTracker
 
 DATA = data_dir()
 need_data = pytest.mark.usefixtures('leapjs_data')     # fails without the shared recordings
@@ -127,8 +128,41 @@ def test_realtime_pacing_loop_and_clock_mapping(tmp_path):
     assert 0.5 < elapsed < 2.0                                # two passes of 0.29 s + a period
     stamps = [f.timestamp for f in got]
     assert stamps[0] == 1000.0 and all(b > a for a, b in zip(stamps, stamps[1:]))
-    assert stamps[30] - stamps[29] == pytest.approx(0.01, abs=1e-6)
-    assert got[30].hands[0].palm_position[0] == pytest.approx(0.0)
+    assert np.allclose(np.diff(stamps[28:33]), 0.01)
+    assert got[29].hands and not got[30].hands             # a hand-less frame between passes
+    assert got[31].hands[0].palm_position[0] == pytest.approx(0.0)
+
+
+def test_a_looped_take_or_a_break_loses_the_hand_and_starts_a_new_session(tmp_path):
+    # The same hand ids in every pass: without a frame between them the tracker followed
+    # one hand jumping 150 mm back in a frame, with its origin kept.
+    script = tmp_path / 's.yaml'
+    script.write_text('rate_hz: 60\nhands:\n  right:\n'
+                      '    - {pose: thumbs_up, palm: [0, 200, 0], duration: 0.5}\n'
+                      '    - {pose: rock, duration: 0.4}\n'
+                      '    - {pose: open, palm: [150, 200, 0], duration: 1.0}\n'
+                      '    - {pose: open, duration: 0.3}\n')
+    frames = [leapjs.frame_to_dict(f) for f in make_source('scripted', script=str(script),
+                                                             realtime=False).frames()]
+    n = len(frames)
+    for name, loop, recorded in (('loop.json', True, frames), ('joined.json', False, frames + frames)):
+        src = make_source('recording', path=_write(tmp_path, name, recorded), loop=loop,
+                          realtime=False, clock=lambda: 1000.0)
+        tracker = HandTracker('right')
+        states, stamps = [], []
+        for f in src.frames():
+            states.append(tracker.update(f.hand('right'), f.timestamp, f.id))
+            stamps.append(f.timestamp)
+            if len(states) == 2 * n + 1:
+                break
+        src.stop()
+        assert len(states) == 2 * n + 1 and all(b > a for a, b in zip(stamps, stamps[1:]))
+        end, seam, again = states[n - 1], states[n], states[n + 1]
+        assert end.present and end.origin_set and end.palm_position[0] == pytest.approx(150, abs=1)
+        assert not seam.present and not seam.origin_set and [e.gesture for e in seam.events] == ['hand_lost']
+        assert again.present and not again.origin_set and again.palm_position[0] == pytest.approx(0, abs=1)
+        assert [e.gesture for e in again.events][:1] == ['hand_found']
+        assert seam.timestamp - end.timestamp == pytest.approx(again.timestamp - seam.timestamp)
 
 
 def test_stop_from_another_thread(tmp_path):
@@ -187,14 +221,17 @@ def test_a_stamp_days_ahead_or_a_second_take_is_a_break_not_the_end(tmp_path):
     frames[10]['timestamp'] += 10 ** 12
     path = _write(tmp_path, 'r.json', frames + _frames(20, 10000))
     src = make_source('recording', path=path, realtime=False, clock=lambda: 1000.0)
-    stamps = [f.timestamp for f in src.frames()]
-    assert len(stamps) == 40 and src.breaks == 3 and src.bad_frames == 0   # on, back, back
+    got = list(src.frames())
+    stamps = [f.timestamp for f in got]
+    # 40 frames and a hand-less one at each break: on, back, back
+    assert len(stamps) == 43 and src.breaks == 3 and src.bad_frames == 0
+    assert sum(1 for f in got if not f.hands) == 3
     steps = np.diff(stamps)
-    assert np.allclose(steps, 0.01) and src.duration == pytest.approx(0.39)
-    # Played in real time, it takes its 0.4 s.
+    assert np.allclose(steps, 0.01) and src.duration == pytest.approx(0.42)
+    # Played in real time, it takes its 0.43 s.
     src = make_source('recording', path=path, realtime=True)
     t0 = time.monotonic()
-    assert len(list(src.frames())) == 40 and time.monotonic() - t0 < 2.0
+    assert len(list(src.frames())) == 43 and time.monotonic() - t0 < 2.0
 
 
 def test_bad_single_frames_are_skipped_and_counted(tmp_path):

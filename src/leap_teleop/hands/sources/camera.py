@@ -199,6 +199,9 @@ class CameraSource(HandSource):
             while not self.stopped:
                 if media is None:
                     media = self._open_media()
+                # A pass starts over: the hand at its start is not the one at the last
+                # pass's end (a new id, no velocity from the jump back).
+                self.forget_hands()
                 pace = (self.pace_hz if self.realtime else None)
                 reader = capture.CaptureThread(media, clock=self._clock,
                                                latest_only=self.latest_only, pace_hz=pace)

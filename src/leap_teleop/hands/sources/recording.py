@@ -2,9 +2,14 @@
 
 Frames are stamped on the caller's clock: stamp = clock() at start + (ts - ts0), where ts
 is the recorded Leap timestamp (time going back, or stopping for over MAX_GAP_S, is a
-break: play goes on one frame period later); realtime=True also paces them at that timing, otherwise
-they come as fast as the consumer takes them. loop=True replays forever, each pass
-continuing the stamps where the previous one ended.
+break); realtime=True also paces them at that timing, otherwise they come as fast as the
+consumer takes them. loop=True replays forever, each pass continuing the stamps where the
+previous one ended.
+
+At each break and between loop passes comes one frame without hands, then play goes on,
+each one frame period after the last: with the same hand ids the trackers would otherwise
+follow one hand that jumps in a frame, keeping its origin; this way it is lost, and the
+next part is a new session.
 """
 import logging
 import math
@@ -44,17 +49,19 @@ class RecordingSource(HandSource):
         steps = [b.timestamp - a.timestamp for a, b in zip(usable, usable[1:])]
         regular = sorted(d for d in steps if 0 < d <= MAX_GAP_S)
         period = regular[len(regular) // 2] if regular else 0.01
-        self._frames = [(0.0, usable[0])]      # (seconds since the first frame, Frame)
+        # (seconds since the first frame, Frame); a Frame of None is a hand-less one
+        self._frames = [(0.0, usable[0])]
         self.breaks = 0
         for step, frame in zip(steps, usable[1:]):
             if not 0 <= step <= MAX_GAP_S:
                 self.breaks += 1
+                self._frames.append((self._frames[-1][0] + period, None))
                 step = period
             self._frames.append((self._frames[-1][0] + step, frame))
         if self.breaks:
             log.warning('recording %s: time went back or stopped for over %g s %d time(s); '
-                        'played on at one frame period (%.4f s) each time', self.path,
-                        MAX_GAP_S, self.breaks, period)
+                        'played on after a hand-less frame, one frame period (%.4f s) apart, '
+                        'each time', self.path, MAX_GAP_S, self.breaks, period)
         span = self._frames[-1][0]
         n = len(self._frames)
         self.duration = span
@@ -71,8 +78,9 @@ class RecordingSource(HandSource):
         start_stamp = self._clock()
         start_mono = time.monotonic()
         offset = 0.0                 # recorded seconds of the passes already played
+        seam = [(self._frames[-1][0] + period, None)]    # between passes: no hand
         while not self.stopped:
-            for ts, f in self._frames:
+            for ts, f in self._frames + seam if self.loop else self._frames:
                 if self.stopped:
                     return
                 rel = offset + ts
@@ -83,8 +91,10 @@ class RecordingSource(HandSource):
                         delay = start_mono + rel - time.monotonic()
                 # A fresh Frame per pass; its Hands are shared between loop passes
                 # (read-only, as every source's are).
-                frame = Frame(f.id, start_stamp + rel, f.hands, f.gestures)
-                yield frame
+                if f is None:
+                    yield Frame(0, start_stamp + rel)
+                else:
+                    yield Frame(f.id, start_stamp + rel, f.hands, f.gestures)
             if not self.loop:
                 return
-            offset += self._frames[-1][0] + period
+            offset += seam[0][0] + period
