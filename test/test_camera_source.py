@@ -224,6 +224,19 @@ def test_a_looped_video_starts_each_pass_with_a_new_hand(tmp_path, hands_json):
     assert hands[4].id == hands[3].id
 
 
+def test_still_images_share_no_hand_id_or_velocity(tmp_path, hands_json):
+    # Before: the hands of consecutive photos kept one id, and the jump between them over
+    # 1/30 s was their palm velocity (about 1 m/s).
+    import shutil
+    for name in ('a.jpg', 'b.jpg', 'c.jpg'):
+        shutil.copy(data('fist__htj__22.jpg'), tmp_path / name)
+    source = make_source('video', path=str(tmp_path), realtime=False, clock=lambda: 0.0)
+    source.detector = MovingHandDetector(one_hand(hands_json), source.detector)
+    hands = [f.hands[0] for f in source.frames()]
+    assert len(hands) == 3 and len({h.id for h in hands}) == 3
+    assert not any(np.any(h.palm_velocity) for h in hands)
+
+
 def clip_run(name, **kwargs):
     """Per frame (frame id, stamp, {side: HandState}) of a clip played through the
     video source (letterboxed to 640x480, as fast as possible) and LeapInterface."""

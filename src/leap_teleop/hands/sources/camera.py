@@ -228,6 +228,8 @@ class CameraSource(HandSource):
                         else:
                             last_media = item.media_time
                             stamp = start_stamp + offset + item.media_time
+                        if self.still:          # unrelated pictures: no id or velocity shared
+                            self.forget_hands()
                         frame, landmarks, bgr = self.process(item.bgr, stamp, frame_id)
                         if self.on_image is not None:
                             self.on_image(frame, bgr, landmarks)
