@@ -1,8 +1,10 @@
 """What the sender's ~params build, without a ROS master: the hand source, the recognizers
 and their retuning, the ~freq throttle; and the arm's joint_states lookup."""
 import os
+import sys
 
 import pytest
+from test_sources_recording import _fake_leap_v2, _fake_leapc, _take
 
 from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
 from leap_teleop.hands.sender_setup import (
@@ -32,6 +34,18 @@ def test_the_scripted_source_defaults_to_the_given_script_and_runs_on_the_clock(
     other = build_source(params(script=os.path.join(ROOT, 'config', 'gestures', 'sender_script.yaml'),
                                 realtime=False), lambda: 0.0, '/no/such/default.yaml')
     assert type(other).__name__ == 'ScriptedSource'
+
+
+@pytest.mark.parametrize('name, module, fake', [('leap', 'Leap', _fake_leap_v2),
+                                                ('leapc', 'leap', _fake_leapc)])
+def test_a_device_source_stamps_its_frames_on_the_senders_clock(name, module, fake, monkeypatch):
+    # Under /use_sim_time the sender's clock is the graph's; the devices stamped with
+    # time.time(), decades away from it.
+    monkeypatch.setitem(sys.modules, module, fake())
+    ticks = iter(range(10 ** 6))
+    source = build_source(params(source=name), lambda: 1234.5 + 0.001 * next(ticks), WAVE)
+    frames = _take(source, 5)
+    assert len(frames) == 5 and all(1234.5 <= f.timestamp < 1240.0 for f in frames)
 
 
 @pytest.mark.parametrize('values, says', [({'source': 'recording'}, 'needs ~recording'),

@@ -57,7 +57,7 @@ def build_source(p, clock, default_script, camera_model=lambda: None, on_image=N
             raise SourceError('~source recording needs ~recording:=PATH to a LeapJS file')
         return make_source('recording', path=p['recording'], loop=p['loop'],
                            realtime=p['realtime'], clock=clock)
-    return make_source(name)
+    return make_source(name, clock=clock)      # a device too: sim time under /use_sim_time
 
 
 def recognizer_factory(p):
