@@ -127,6 +127,14 @@ def test_the_period_throttle_lets_one_frame_per_period_and_key():
     assert all(every.due('right', 0.0) for _ in range(3))
 
 
+def test_the_period_throttle_starts_afresh_when_time_goes_back():
+    # A /clock that restarts: the frames after it were held back for as long as the
+    # clock had run before.
+    t = PeriodThrottle(0.25)
+    stamps = [100.0, 100.125, 100.25, 5.0, 5.125, 5.25, 5.5]
+    assert [ts for ts in stamps if t.due('right', ts)] == [100.0, 100.25, 5.0, 5.25, 5.5]
+
+
 def test_joint_states_are_found_by_name_prefix_and_order():
     index = JointStateIndex()
     names = ['ur10_1_gripper_joint'] + ['ur10_1_' + n for n in reversed(JOINT_NAMES)]

@@ -94,7 +94,8 @@ def retune_sender(recognizers, lowpass, changes):
 
 class PeriodThrottle:
     """The original sender's ~freq: at most one frame per `period` (s, by frame timestamp)
-    for each key; a period of 0 lets every frame through."""
+    for each key; a period of 0 lets every frame through. A stamp before the last one sent
+    (a /clock that restarts, a looped bag) starts afresh: it goes out."""
 
     def __init__(self, period):
         self.period = float(period)
@@ -105,7 +106,9 @@ class PeriodThrottle:
         if self.period <= 0:
             return True
         last = self._last.get(key)
-        if last is not None and timestamp - last < self.period:
+        # Time gone back: measured from the old stamps, nothing went out until the clock
+        # had passed them again.
+        if last is not None and 0 <= timestamp - last < self.period:
             return False
         self._last[key] = timestamp
         return True
