@@ -337,6 +337,26 @@ def test_annotated_view(detections):
     assert len(msg.data) == width * height * 3 and msg.header.stamp.to_sec() == 12.5
 
 
+def test_annotated_view_names_a_hand_by_the_side_it_is_published_as(hands_json):
+    # Where MediaPipe's label and the chirality disagree, the view drew the hand the source
+    # publishes as left as the right one, with the right hand's gestures.
+    from leap_teleop.hands.camera_view import SIDE_COLOURS
+    from leap_teleop.hands.sources.landmarks import person_side
+    name = 'pointing__fp__nocurl.jpg'
+    entry = hands_json['images'][name]
+    lm = HandLandmarks.from_dict(entry['hands'][0])
+    cam = CameraModel.from_hfov(entry['width'], entry['height'])
+    side = hand_from_landmarks(lm, cam).side
+    assert person_side(lm.label, False) != side               # the case in question
+    bgr = np.zeros((entry['height'], entry['width'], 3), np.uint8)
+    out = draw(bgr, [lm], False)
+
+    def ink(colour):
+        return int(np.all(out == colour, axis=2).sum())
+    other = 'right' if side == 'left' else 'left'
+    assert ink(SIDE_COLOURS[side]) > 100 and ink(SIDE_COLOURS[other]) == 0
+
+
 def test_annotated_view_draws_the_latency_notes_bottom_left(detections):
     width, height, found = detections['thumbs_up__mps__hand_thumb_up.jpg']
     bgr = np.zeros((height, width, 3), np.uint8)

@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES
-from leap_teleop.hands.sources.landmarks import person_side
+from leap_teleop.hands.sources.landmarks import hand_side
 
 # MediaPipe's hand skeleton: landmark index pairs.
 HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
@@ -34,7 +34,8 @@ def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=()):
     h, w = out.shape[:2]
     thick = max(1, round(min(w, h) / 240))
     for lm in landmarks:
-        side = person_side(lm.label, mirrored)
+        # as the camera source decides it (chirality first): the side its hand is published as
+        side = hand_side(lm, mirrored)
         colour = SIDE_COLOURS[side]
         pts = np.round(lm.image[:, :2] * (w, h)).astype(int)
         for a, b in HAND_CONNECTIONS:
