@@ -24,7 +24,7 @@ from leap_teleop.hands.gestures.bindings import Bindings
 from leap_teleop.hands.gestures.classifier import PoseClassifier
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.rendered_hand import render_hand
-from leap_teleop.hands.sources import make_source
+from leap_teleop.hands.sources import SourceError, make_source
 from leap_teleop.hands.sources.source import HandSource
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ur10 import kinematics as kin
@@ -309,6 +309,29 @@ def test_record_gestures_says_when_the_source_ends_before_the_time_asked(tmp_pat
     for seconds, name in (('0.5', 'two_b.jsonl'), ('1', 'two_c.jsonl')):
         assert record_one_second_of('open', tmp_path, tmp_path / name, '--seconds', seconds) == 0
         assert 'ended' not in capsys.readouterr().err
+
+
+class FailsNearTheEnd(HandSource):
+    """9 s of a right hand at 30 Hz, then the SourceError of an unplugged webcam."""
+
+    def frames(self):
+        for i in range(270):
+            yield Frame(i + 1, 100.0 + i / 30.0, [render_hand('right', 'open', (0, 200, 0))])
+        raise SourceError('camera 0 stopped delivering frames (unplugged?)')
+
+
+def test_record_gestures_keeps_the_take_when_the_source_fails(tmp_path, monkeypatch, capsys):
+    # The failure threw away the 9 s already recorded of a 10 s take.
+    monkeypatch.setattr(record_gestures, 'source_from_args', lambda args: FailsNearTheEnd())
+    out = tmp_path / 'wave.jsonl'
+    assert record_gestures.main(['--source', 'scripted', '--script', str(tmp_path / 's.yaml'),
+                                 '--label', 'wave', '--out', str(out)]) == 1
+    captured = capsys.readouterr()
+    assert ('the scripted source failed after 9.0 of the 10 s asked: camera 0 stopped '
+            'delivering frames (unplugged?)') in captured.err, captured.err
+    assert 'wrote 270 hand poses' in captured.out
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(records) == 270 and records[-1]['label'] == 'wave'
 
 
 class CameraHands(HandSource):

@@ -41,7 +41,8 @@ KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
 
 
 # what a recording session gave: its rows, frames seen, frames without a usable hand, the
-# source time it covered and why it ended ('time', 'source ended' or 'interrupted')
+# source time it covered and why it ended ('time', 'source ended', 'interrupted' or the
+# source's SourceError)
 Take = collections.namedtuple('Take', 'rows seen missing seconds ended')
 
 
@@ -87,7 +88,8 @@ def pose_record(frame, hand, person, label):
 
 
 def collect(source, family, label, person, seconds, side='any'):
-    """The Take of `seconds` of source time (or less, if the source ends first)."""
+    """The Take of `seconds` of source time (or less, if the source ends or fails first:
+    the rows before a failure are kept, its SourceError is the Take's `ended`)."""
     rows, seen, missing = [], 0, 0
     t0 = t_last = None
     period = 0.0                # between the last two frames: what the last one stands for
@@ -118,6 +120,8 @@ def collect(source, family, label, person, seconds, side='any'):
             missing += got == 0
     except KeyboardInterrupt:
         ended = 'interrupted'
+    except SourceError as e:        # a webcam unplugged near the end: the take so far stays
+        ended = e
     finally:
         source.stop()
     covered = seconds if ended == 'time' else (t_last - t0 + period if t0 is not None else 0.0)
@@ -227,7 +231,11 @@ def main(argv=None):
         print('record_gestures: the %s source failed: %s' % (args.source, e), file=sys.stderr)
         return 1
     rows, seen, missing = take.rows, take.seen, take.missing
-    if take.ended != 'time':    # a short take is kept, but not passed off as a whole one
+    failed = isinstance(take.ended, SourceError)
+    if failed:
+        print('record_gestures: the %s source failed after %.1f of the %g s asked: %s' % (
+            args.source, take.seconds, args.seconds, take.ended), file=sys.stderr)
+    elif take.ended != 'time':    # a short take is kept, but not passed off as a whole one
         print('record_gestures: %s after %.1f of the %g s asked' % (
             'the source ended' if take.ended == 'source ended' else 'interrupted',
             take.seconds, args.seconds), file=sys.stderr)
@@ -248,7 +256,7 @@ def main(argv=None):
     print('record_gestures: wrote %d %s of %r to %s (%d frames, hands missing in %d)'
           % (len(rows), 'keypoint rows' if family == 'keypoints' else 'hand poses',
              args.label, out, seen, missing))
-    return 0
+    return 1 if failed else 0       # written, but a script should know the source failed
 
 
 if __name__ == '__main__':
