@@ -1,6 +1,7 @@
 """Recording source, LeapJS reader / writer, recorder, and the Leap / LeapC backends
 with fake SDK modules."""
 import json
+import math
 import os
 import sys
 import threading
@@ -527,6 +528,39 @@ def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast
         assert meta == meta2 and [k for k, _ in errors] == idx
         _same_frames(got, want)
     assert len(leapjs.load_frames(paths[0])[2]) == 2       # 'garbage' and pointables=5
+
+
+@pytest.mark.parametrize('fastjson', [True, False])
+def test_every_parser_refuses_deep_nesting_and_nan_with_a_clear_error(tmp_path, monkeypatch, fastjson):
+    # Without orjson, nesting thousands deep escaped as a RecursionError, and NaN / Infinity
+    # (what json.dumps writes) loaded where orjson refused the file.
+    monkeypatch.setattr(leapjs, '_simdjson', None)
+    if not fastjson:
+        monkeypatch.setattr(leapjs, '_fastjson', None)
+    frames = _frames(3)
+    for name, text in (('deep.json', '[' * 100000 + ']' * 100000),
+                       ('nan.json', json.dumps({'frames': [dict(frames[0], timestamp=math.nan)] + frames[1:]})),
+                       ('inf.json', json.dumps({'frames': frames}).replace('200.0', '-Infinity', 1))):
+        (tmp_path / name).write_text(text)
+        with pytest.raises(SourceError, match='%s is not valid JSON' % name):
+            make_source('recording', path=str(tmp_path / name))
+
+
+def test_without_orjson_an_integer_beyond_any_float_is_a_bad_value_not_a_crash(tmp_path, monkeypatch):
+    # float() of it raised OverflowError, which escaped the reader as a traceback.
+    monkeypatch.setattr(leapjs, '_simdjson', None)
+    monkeypatch.setattr(leapjs, '_fastjson', None)
+    frames = _frames(3)
+    frames[1]['hands'][0]['palmPosition'] = [10 ** 400, 200, 0]
+    frames[2]['pointables'] = 5             # and the frame it makes unusable is counted
+    frames[2]['hands'][0]['palmVelocity'] = [10 ** 400, 0, 0]
+    path = tmp_path / 'huge.json'
+    path.write_text(json.dumps({'frames': frames}))
+    src = make_source('recording', path=str(path), realtime=False)
+    got = list(src.frames())
+    assert len(got) == 2 and src.bad_frames == 1
+    assert got[0].hands[0].palm_position[1] == pytest.approx(200)
+    assert not np.any(np.isfinite(got[1].hands[0].palm_position))     # no palm: no hand
 
 
 def test_a_hand_of_an_unknown_type_is_skipped_with_one_warning_per_type(caplog):

@@ -206,10 +206,17 @@ def parse_json(text):
                 return _fastjson.loads(text)
             except _fastjson.JSONDecodeError as e:
                 raise ValueError(str(e))
-        return json.loads(text)
+        # NaN / Infinity refused, as orjson does: a file reads the same with either
+        return json.loads(text, parse_constant=_no_constant)
+    except RecursionError:              # the stdlib parser on arrays nested thousands deep
+        raise ValueError('nested too deeply') from None
     finally:
         if paused:
             gc.enable()
+
+
+def _no_constant(name):
+    raise ValueError('%s is not a JSON value' % name)
 
 
 def unpack_frames(frames, path='<recording>'):
@@ -301,7 +308,7 @@ def _convert(metadata, dicts):
             continue
         try:
             frames.append(frame_from_dict(d))
-        except (FrameError, TypeError, ValueError) as e:
+        except (FrameError, TypeError, ValueError, OverflowError) as e:
             errors.append((k, str(e) or e.__class__.__name__))
     return metadata, frames, errors
 
@@ -337,7 +344,7 @@ def _v3(value):
     if isinstance(value, (list, tuple)) and len(value) == 3:
         try:
             return (float(value[0]), float(value[1]), float(value[2]))
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):     # an integer beyond any float
             return None
     return None
 
@@ -425,7 +432,7 @@ def _hand_from_dict(h, side, pointables):
         if set(map(len, rows)) != _LEN3 or set(map(type, rows)) != _LIST:
             raise ValueError
         arr = np.fromiter(_chain(rows), float, 3 * len(rows)).reshape(-1, 3)
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         # Slow path: take what is there, NaN for what is not.
         rows = [_v3(h.get('palmPosition')) or _NAN3,
                 _v3(h.get('palmVelocity')) or (0.0, 0.0, 0.0),
