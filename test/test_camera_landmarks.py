@@ -52,6 +52,25 @@ def synthetic(lm, cam, t_mm, palm_mm=95.0):
     return HandLandmarks(image, world, lm.label, lm.score)
 
 
+def test_a_hand_in_view_of_a_camera_anywhere_allowed_is_within_the_trackers_range(hands_json):
+    # ~camera_position_mm took +-5000 mm, but the tracker drops every palm beyond 2000 mm:
+    # a camera placed within the range could have its every hand refused.
+    import itertools
+
+    from leap_teleop.hands.sources.camera_params import CAMERA_PARAMS
+    from leap_teleop.hands.tracker import HandTracker
+    from leap_teleop.params import ParamError
+    param = CAMERA_PARAMS['camera_position_mm']
+    with pytest.raises(ParamError):
+        param.check('camera_position_mm', [0.0, 200.0, -2500.0])
+    name, cam, lm = next(photo_hands(hands_json))
+    far = synthetic(lm, cam, np.array([0.0, 0.0, 950.0]))          # at the end of an arm
+    for corner in itertools.product((param.ge, param.le), repeat=3):
+        hand = hand_from_landmarks(far, cam, camera_position_mm=corner)
+        state = HandTracker(hand.side).update(hand, 1.0, 1)
+        assert state.present, (corner, hand.palm_position)
+
+
 def test_side_follows_mirroring():
     assert person_side('Left', mirrored=False) == 'right'
     assert person_side('Right', mirrored=False) == 'left'

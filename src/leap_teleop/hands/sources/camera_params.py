@@ -6,6 +6,10 @@ from leap_teleop.hands.sources.landmarks import DEFAULT_CAMERA_POSITION_MM, DEFA
 from leap_teleop.params import Param, ParamError
 
 CAMERA_SOURCES = ('webcam', 'video')
+# Per axis: a hand up to 1 m from a camera placed this far from the device stays within
+# the 2000 mm the tracker takes a palm from (tracker.MAX_PALM_MM); further, every hand
+# would be refused as a tracking error.
+MAX_CAMERA_OFFSET_MM = 1000.0
 
 
 class DeviceParam(Param):
@@ -48,7 +52,10 @@ CAMERA_PARAMS = {
     'camera_position_mm': Param(list(DEFAULT_CAMERA_POSITION_MM),
                                 'camera sources: the camera\'s position in the Leap frame (a '
                                 'hand 500 mm in front of the camera is at y 200, z 0 by '
-                                'default)', unit='mm', length=3, ge=-5000.0, le=5000.0),
+                                'default); within 1000 mm of the device per axis, so that a '
+                                'hand in view is within the 2000 mm palms are taken from',
+                                unit='mm', length=3, ge=-MAX_CAMERA_OFFSET_MM,
+                                le=MAX_CAMERA_OFFSET_MM),
     'model': Param('full', 'camera sources: MediaPipe hand landmark model',
                    choices=('full', 'lite')),
     'max_hands': Param(2, 'camera sources: hands tracked at most', ge=1, le=2),
