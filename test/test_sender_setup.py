@@ -177,3 +177,52 @@ def test_an_arm_finds_its_own_joints_in_a_list_of_two_arms():
     assert JointStateIndex('ur10_1_').positions(list(JOINT_NAMES), list(range(6))) == list(range(6))
     with pytest.raises(ValueError, match='it lacks shoulder_pan_joint'):
         JointStateIndex('ur10_3_').state(names, positions, [])
+
+
+def test_a_throttled_sender_still_sends_every_gesture_event_and_every_hand_that_comes_or_goes():
+    # With ~freq a frame inside the period was dropped whole: its fold or hand_lost event
+    # with it, and the one hand-less frame between a recording's passes.
+    import types
+
+    from leap_teleop.hands.gestures import HandEvent
+    from leap_teleop.hands.tracker import HandState
+    from leap_teleop.ros import hand_conversions
+    from leap_teleop.ros.hand_topics import HandTopics
+    sent = []
+    pub = types.SimpleNamespace(publish=sent.append)
+    topics = types.SimpleNamespace(
+        pubs={'right': {'leapcobot': pub, 'hand': pub, 'gesture': pub}},
+        ages=types.SimpleNamespace(add=lambda *a: None), clock=lambda: 0.0,
+        throttle=PeriodThrottle(0.25), _present_sent={}, p={'frame_id': 'leap'},
+        _leapcobot={'right': hand_conversions.LEAPCOBOT_TYPES['right']()},
+        leapros_side='', published=0)
+    states = [HandState('right', True, 0.01 * i, i, palm_position=(0.0, 200.0, 0.0))
+              for i in range(10)]
+    states[3] = HandState('right', True, 0.03, 3, palm_position=(0.0, 200.0, 0.0),
+                          events=(HandEvent('fold'),))
+    states[6] = HandState('right', False, 0.06, 6, events=())
+    for state in states:
+        HandTopics.on_hand(topics, types.SimpleNamespace(timestamp=state.timestamp), state)
+    hands = [m for m in sent if type(m).__name__ == 'Hand']
+    gestures = [m.gesture for m in sent if type(m).__name__ == 'GestureEvent']
+    assert gestures == ['fold']
+    assert [(round(m.header.stamp.to_sec(), 2), m.present) for m in hands] == [
+        (0.0, True), (0.03, True), (0.06, False), (0.07, True)]
+
+
+def test_a_throttled_driver_topic_sends_every_frame_where_a_hand_comes_or_goes():
+    import types
+
+    from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
+    built = []
+    topics = types.SimpleNamespace(
+        throttle=PeriodThrottle(0.25), _sides_sent=None, pubs={'raw': types.SimpleNamespace(
+            publish=lambda msg: None)}, _wanted=lambda kind: kind == 'raw',
+        lowpass=types.SimpleNamespace(reset=lambda: None),
+        builder=types.SimpleNamespace(human_msgs=lambda frame, states, raw, lowpass: (
+            built.append(frame.timestamp), (None, None))[1]))
+    hands = [[types.SimpleNamespace(side='right')]] * 10
+    hands[4] = []
+    for i, h in enumerate(hands):
+        LeapMotionTopics.on_frame(topics, types.SimpleNamespace(timestamp=0.01 * i, hands=h), {})
+    assert [round(t, 2) for t in built] == [0.0, 0.04, 0.05]

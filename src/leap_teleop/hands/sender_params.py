@@ -19,7 +19,8 @@ SENDER_PARAMS = {
     'loop': Param(False, 'restart the script / recording when it ends'),
     'realtime': Param(True, 'pace frames at their recorded / scripted timing'),
     'freq': Param(0.0, 'the original sender\'s period; > 0 throttles publishing to at '
-                       'most one frame per period; 0 = every frame', unit='s',
+                       'most one frame per period (a frame with gesture events, or where a '
+                       'hand comes or goes, always goes out); 0 = every frame', unit='s',
                   ge=0.0, le=10.0),
     'sides': Param(['right', 'left'], 'hands to publish (one side: right, or [right])',
                    min_length=1, choices=('right', 'left')),

@@ -101,14 +101,16 @@ class PeriodThrottle:
         self.period = float(period)
         self._last = {}
 
-    def due(self, key, timestamp):
-        """True when a frame of `key` stamped `timestamp` goes out (and counts as sent)."""
+    def due(self, key, timestamp, change=False):
+        """True when a frame of `key` stamped `timestamp` goes out (and counts as sent);
+        a `change` (a hand appeared or went) always does: held back, a short loss (the one
+        hand-less frame between a recording's passes) would never reach the consumers."""
         if self.period <= 0:
             return True
         last = self._last.get(key)
         # Time gone back: measured from the old stamps, nothing went out until the clock
         # had passed them again.
-        if last is not None and 0 <= timestamp - last < self.period:
+        if not change and last is not None and 0 <= timestamp - last < self.period:
             return False
         self._last[key] = timestamp
         return True

@@ -42,6 +42,7 @@ class HandTopics:
         # One leapcobot message per side, refilled every frame (hand_conversions.to_leapcobot).
         self._leapcobot = {side: hand_conversions.LEAPCOBOT_TYPES[side]() for side in self.sides}
         self.throttle = PeriodThrottle(p['freq'])
+        self._present_sent = {}         # side: Hand.present of the last message sent
         self.published = 0
         self.leapros_side = p['leapros_side']
         self.leapros = (rospy.Publisher(p['leapros_topic'], leapros, queue_size=q)
@@ -82,8 +83,12 @@ class HandTopics:
         if pubs is None:
             return
         self.ages.add('recognized', self.clock(), frame.timestamp)
-        if not self.throttle.due(side, frame.timestamp):
+        # a frame with gesture events (edges: a fold, a lost hand) or a hand that came or
+        # went always goes out, whatever ~freq says
+        if not self.throttle.due(side, frame.timestamp, change=bool(state.events) or (
+                state.present != self._present_sent.get(side))):
             return
+        self._present_sent[side] = state.present
         for kind, msg in hand_conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)

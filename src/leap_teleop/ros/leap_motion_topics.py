@@ -20,6 +20,7 @@ class LeapMotionTopics:
         self.builder = hand_conversions.DriverHumanBuilder(p['frame_id'])
         self.lowpass = LowPass(p['filter_cutoff'])
         self.throttle = PeriodThrottle(p['freq'])
+        self._sides_sent = None         # the hands of the last frame sent
         self.pubs = {}
         for kind, topic, msg_type in (('raw', p['human_topic'], DriverHuman),
                                       ('filtered', p['filtered_human_topic'], DriverHuman),
@@ -33,8 +34,10 @@ class LeapMotionTopics:
         return pub is not None and pub.get_num_connections() > 0
 
     def on_frame(self, frame, states):
-        if not self.throttle.due('frame', frame.timestamp):
+        sides = tuple(sorted(h.side for h in frame.hands))
+        if not self.throttle.due('frame', frame.timestamp, change=sides != self._sides_sent):
             return
+        self._sides_sent = sides
         markers = self._wanted('markers')
         filtered = self._wanted('filtered') or (markers and 'filtered' in self.pubs)
         raw = self._wanted('raw') or (markers and not filtered)
