@@ -56,6 +56,29 @@ def test_a_string_parameter_is_not_offered():
         config_type(sender.PARAMS, ['source'], {'source': 'scripted'})
 
 
+def test_a_request_with_one_refused_value_changes_nothing(monkeypatch):
+    # One request (a tuning file loaded at once) whose max_cmd was NaN still applied its
+    # 5x steeper full_scale, with the cap meant to go with it left as it was.
+    from leap_teleop.drone.pilot_params import PILOT_RECONFIGURABLE, PilotParams
+    from leap_teleop.ros import reconfigure
+
+    class Server:
+        def __init__(self, _type, callback):
+            self.callback = callback
+    monkeypatch.setattr(reconfigure, '_RefusingServer', Server)
+    cfg = PilotParams()
+    applied = []
+    r = reconfigure.Reconfigure('drone_pilot', drone_pilot.PARAMS, PILOT_RECONFIGURABLE, vars(cfg),
+                                applied.append)
+    before = dict(r.values)
+    out = r._on_request(dict(before, dead_zone=0.10, full_scale=0.02, max_cmd=float('nan')), 1)
+    assert applied == [] and r.values == before
+    assert {k: out[k] for k in before} == before            # what clients are shown
+    assert r.refused == 3
+    out = r._on_request(dict(before, dead_zone=0.10, full_scale=0.02), 1)
+    assert applied == [{'dead_zone': 0.10, 'full_scale': 0.02}]
+
+
 def test_retune_reaches_the_arms_filters_and_servo():
     from leap_teleop.ur10.teleop import ArmTeleop
     teleop = ArmTeleop()

@@ -4,7 +4,8 @@ declarations: the same names, docs and bounds, no .cfg file or generated code.
 `rosrun dynamic_reconfigure dynparam set NODE name value` and rqt_reconfigure see them.
 A value the declaration refuses (out of range, NaN, not a number) is refused with a
 warning and the previous value kept: dynamic_reconfigure's own server would clamp it to
-the nearest bound instead, and lets NaN through.
+the nearest bound instead, and lets NaN through. A request is taken whole or not at all:
+the other values sent with a refused one are kept as they were too.
 """
 import math
 from types import SimpleNamespace
@@ -78,7 +79,7 @@ class Reconfigure:
                                       self._on_request)
 
     def _on_request(self, config, _level):
-        changes = {}
+        changes, refused = {}, []
         for name in self.names:
             value, old = config[name], self.values[name]
             if value == old and type(value) is type(old):
@@ -87,6 +88,16 @@ class Reconfigure:
                 changes[name] = self.table[name].check(name, value)
             except ParamError as e:
                 self._refuse(name, e, config)
+                refused.append(name)
+        if refused:
+            # All or nothing: values sent together (a tuning file loaded at once) belong
+            # together, e.g. a steeper gain with the lower cap meant to go with it.
+            for name in changes:
+                self._refuse(name, '~%s = %r: sent with the refused ~%s (a request is taken '
+                             'whole or not at all)' % (name, config[name], ', ~'.join(refused)),
+                             config)
+            config.update(self.values)
+            return config
         changes = {k: v for k, v in changes.items() if v != self.values[k]}
         if changes:
             try:
