@@ -69,9 +69,10 @@ class ClassicConsumer(unittest.TestCase):
             self.assertAlmostEqual(norm(m.direction), 1.0, delta=tol)
             self.assertAlmostEqual(norm(m.normal), 1.0, delta=tol)
             d, n = m.direction, m.normal
-            self.assertAlmostEqual(m.ypr.x, math.degrees(math.atan2(d.x, -d.z)), delta=tol)
+            # The classic sender's: yaw of the normal, pitch and roll of the direction.
+            self.assertAlmostEqual(m.ypr.x, math.degrees(math.atan2(n.x, -n.z)), delta=tol)
             self.assertAlmostEqual(m.ypr.y, math.degrees(math.atan2(d.y, -d.z)), delta=tol)
-            self.assertAlmostEqual(m.ypr.z, math.degrees(math.atan2(n.x, -n.y)), delta=tol)
+            self.assertAlmostEqual(m.ypr.z, math.degrees(math.atan2(d.x, -d.y)), delta=tol)
             for finger in ('thumb', 'index', 'middle', 'ring', 'pinky'):
                 tip = getattr(m, finger + '_tip')
                 self.assertLess(math.dist((tip.x, tip.y, tip.z),

@@ -1,4 +1,6 @@
 """HandState -> leapcobot / Hand / GestureEvent messages."""
+import math
+
 import pytest
 
 from leap_teleop.hands.frame import Frame
@@ -83,8 +85,8 @@ def test_gesture_events_carry_name_side_and_stamp():
 
 def test_leapros_has_the_classic_drivers_units_and_angles():
     hand = render_hand('right', 'open', [12.5, 210.0, -30.0])
-    hand.direction = direction = [0.0, 0.5, -0.5 * 3 ** 0.5]     # pitched 30 deg up
-    hand.palm_normal = [-0.5, -0.5 * 3 ** 0.5, 0.0]             # roll atan2(x, -y) = -30 deg
+    hand.direction = direction = [0.5, 0.5, -0.5 ** 0.5]        # up and to the right
+    hand.palm_normal = [-0.5, -0.5, -0.5 ** 0.5]                # at right angles to it
     s = states(hand)['right']
     msg = hand_conversions.to_leapros(s, hand)
     assert msg._type == 'leap_teleop/leapros'
@@ -92,8 +94,10 @@ def test_leapros_has_the_classic_drivers_units_and_angles():
     assert (msg.palmpos.x, msg.palmpos.y, msg.palmpos.z) == (12.5, 210.0, -30.0)    # mm
     assert (msg.direction.x, msg.direction.y, msg.direction.z) == pytest.approx(direction)
     assert msg.normal.x == pytest.approx(-0.5)
-    # (yaw, pitch, roll) in degrees, as the Leap SDK's Vector angles.
-    assert (msg.ypr.x, msg.ypr.y, msg.ypr.z) == pytest.approx((0.0, 30.0, -30.0), abs=1e-9)
+    # (yaw, pitch, roll) in degrees as the classic sender: the Leap SDK's Vector.yaw of the
+    # normal (atan2(x, -z)), .pitch (atan2(y, -z)) and .roll (atan2(x, -y)) of the direction.
+    a = math.degrees(math.atan(0.5 ** 0.5))                     # 35.26 deg
+    assert (msg.ypr.x, msg.ypr.y, msg.ypr.z) == pytest.approx((-a, a, 135.0), abs=1e-9)
     index = hand.fingers[1]
     assert (msg.index_tip.x, msg.index_tip.y, msg.index_tip.z) == pytest.approx(tuple(s.finger_tips[1]))
     assert (msg.index_proximal.x, msg.index_proximal.z) == pytest.approx((index.mcp[0], index.mcp[2]))

@@ -278,9 +278,10 @@ def test_leap_message_is_leap_mm_and_degrees_as_the_leapros():
     msg = hand_conversions.to_leap(s)
     assert list(msg.hand_palm_pos) == [10.0, 220.0, -5.0]
     n, d = s.palm_normal, s.direction
+    # The classic sender's: roll and pitch of the direction, yaw of the normal.
     assert (msg.hand_roll, msg.hand_pitch, msg.hand_yaw) == pytest.approx(tuple(
-        math.degrees(a) for a in (math.atan2(n[0], -n[1]), math.atan2(d[1], -d[2]),
-                                  math.atan2(d[0], -d[2]))))
+        math.degrees(a) for a in (math.atan2(d[0], -d[1]), math.atan2(d[1], -d[2]),
+                                  math.atan2(n[0], -n[2]))))
     ypr = hand_conversions.to_leapros(s).ypr
     assert (msg.hand_yaw, msg.hand_pitch, msg.hand_roll) == pytest.approx((ypr.x, ypr.y, ypr.z))
     absent = hand_conversions.to_leap(HandState('right', timestamp=3.0))

@@ -362,8 +362,11 @@ def test_a_recording_reaches_a_driver_consumer(driver_ws, leapjs_data, tmp_path)
     assert len(leaps) >= 0.9 * len(right_palms)
     for m in leaps:
         assert tuple(np.round(m['palm'], 6)) in set(right_palms)
-        np.testing.assert_allclose(m['rpy'], np.degrees(sdk_angles(m['normal'], m['direction'])),
-                                   atol=1e-9)
+        # The classic sender's angles: roll and pitch of the direction, yaw of the normal.
+        n, d = m['normal'], m['direction']
+        np.testing.assert_allclose(m['rpy'], np.degrees([math.atan2(d[0], -d[1]),
+                                                          math.atan2(d[1], -d[2]),
+                                                          math.atan2(n[0], -n[2])]), atol=1e-9)
 
 
 CIRCLE_SCRIPT = """\

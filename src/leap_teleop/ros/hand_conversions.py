@@ -84,10 +84,20 @@ def from_leapcobot(msg):
 _LEAPROS_BONES = (('proximal', 'mcp'), ('intermediate', 'pip'), ('distal', 'dip'))
 
 
+def classic_ypr(normal, direction):
+    """(yaw, pitch, roll) in degrees as the classic sender computed them for its leapros and
+    leap messages: yaw of the palm normal, pitch and roll of the direction, each the Leap
+    SDK's Vector angle (yaw atan2(x, -z), pitch atan2(y, -z), roll atan2(x, -y)). Not the
+    hand angles of DriverHand (roll of the normal, pitch and yaw of the direction): the
+    classic consumers were written against these numbers."""
+    n, d = normal, direction
+    return (math.degrees(math.atan2(n[0], -n[2])), math.degrees(math.atan2(d[1], -d[2])),
+            math.degrees(math.atan2(d[0], -d[1])))
+
+
 def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     """The classic leap_motion/leapros message for one side, in that driver's units: Leap
-    axes, millimetres, ypr in degrees as (yaw, pitch, roll), yaw and pitch of the hand's
-    direction, roll of its palm normal. Finger tips come from the state; bone bases
+    axes, millimetres, ypr in degrees as (yaw, pitch, roll) of classic_ypr. Finger tips come from the state; bone bases
     (proximal = knuckle, intermediate, distal) from `hand` (a hands.frame.TrackedHand) where
     its source tracks joints; a metacarpal base and anything untracked stays 0. A frame
     without the hand gives a message with only the header set."""
@@ -98,9 +108,7 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     msg.direction = Vector3(*d)
     msg.normal = Vector3(*n)
     msg.palmpos = Point(*state.palm_position)
-    # The Leap SDK's Vector.yaw / pitch / roll.
-    msg.ypr = Vector3(math.degrees(math.atan2(d[0], -d[2])), math.degrees(math.atan2(d[1], -d[2])),
-                      math.degrees(math.atan2(n[0], -n[1])))
+    msg.ypr = Vector3(*classic_ypr(n, d))
     fingers = hand.fingers if hand is not None else ()
     for i, name in enumerate(FINGER_NAMES):
         setattr(msg, name + '_tip', Point(*state.finger_tips[i]))
@@ -360,16 +368,13 @@ class DriverHumanBuilder:
 
 def to_leap(state, frame_id=LEAP_FRAME):
     """The old sender's leap message for one side, in that sender's units (the same getters
-    fed its leapros): Leap axes, millimetres, degrees; the angles as to_leapros's (pitch and
-    yaw of the direction, roll of the palm normal). A frame without the hand gives a message
-    with only the header set."""
+    fed its leapros): Leap axes, millimetres, degrees; the angles as to_leapros's
+    (classic_ypr). A frame without the hand gives a message with only the header set."""
     msg = _header(leap(), state, frame_id)
     if not state.present:
         return msg
     msg.hand_direction = list(state.direction)
     msg.hand_normal = list(state.palm_normal)
     msg.hand_palm_pos = list(state.palm_position)
-    roll, yaw, pitch = hand_angles(state.palm_normal, state.direction)
-    msg.hand_roll, msg.hand_yaw, msg.hand_pitch = (math.degrees(roll), math.degrees(yaw),
-                                                   math.degrees(pitch))
+    msg.hand_yaw, msg.hand_pitch, msg.hand_roll = classic_ypr(state.palm_normal, state.direction)
     return msg
