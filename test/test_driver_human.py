@@ -169,6 +169,33 @@ def test_time_visible_and_the_frame_rate_follow_the_stamps():
     assert out[-1].current_frames_per_second == pytest.approx(50.0, rel=1e-3)
 
 
+def test_time_visible_and_the_rate_restart_after_a_time_without_subscribers():
+    # While nobody subscribes the builder sees no frames: a hand that left and came back
+    # meanwhile was reported visible since its first appearance, and the rate averaged the gap.
+    import types
+
+    from leap_teleop.control.lowpass import LowPass
+    from leap_teleop.hands.sender_setup import PeriodThrottle
+    from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
+    sent, listening = [], {'on': True}
+    topics = types.SimpleNamespace(
+        throttle=PeriodThrottle(0.0), _sides_sent=None, lowpass=LowPass(4.0),
+        builder=hand_conversions.DriverHumanBuilder(),
+        pubs={'raw': types.SimpleNamespace(publish=sent.append)},
+        _wanted=lambda kind: kind == 'raw' and listening['on'])
+    li = LeapInterface()
+    li.add_listener(lambda f, s: LeapMotionTopics.on_frame(topics, f, s))
+    for i in range(522):        # 100 Hz; gone 0.1 .. 5.1 s, back unheard until 5.2 s
+        listening['on'] = not 10 <= i < 520
+        hands = [] if 10 <= i < 510 else [render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)]
+        li.on_frame(Frame(id=i, timestamp=i / 100.0, hands=hands))
+    first, second = sent[-2:]
+    assert (first.lmc_frame_id, second.lmc_frame_id) == (520, 521)
+    assert first.right_hand.time_visible == 0.0 and first.current_frames_per_second == 0.0
+    assert second.right_hand.time_visible == pytest.approx(0.01)
+    assert second.current_frames_per_second == pytest.approx(100.0)
+
+
 def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
     right = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
     left = render_hand('left', 'open', [50.0, 200.0, 0.0], hand_id=4)

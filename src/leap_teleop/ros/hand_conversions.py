@@ -236,6 +236,14 @@ class DriverHumanBuilder:
         self._fps = 0.0
         self._gesture_ids = 0
 
+    def reset(self):
+        """Forget each hand's time found and the frame rate, when frames stop coming through
+        (nobody subscribes): a hand that left and came back meanwhile is new, and the rate
+        does not average over the gap. Gesture ids keep counting (they stay unique)."""
+        self._found_at.clear()
+        self._last_stamp = None
+        self._fps = 0.0
+
     def _rate(self, stamp):
         last, self._last_stamp = self._last_stamp, stamp
         if last is not None and stamp > last:

@@ -14,7 +14,8 @@ from leap_teleop.ros.node import RateLimitedLog
 class LeapMotionTopics:
     """The leap_motion driver's topics: DriverHuman raw and filtered, and its visualizer's
     markers. Each is built only while it has subscribers; the filter forgets its history
-    while nobody reads the filtered Human (it restarts from the next frame)."""
+    while nobody reads the filtered Human (it restarts from the next frame), and the builder
+    its hands' time_visible and the frame rate while nobody reads either Human."""
 
     def __init__(self, p, queue_size):
         self.builder = hand_conversions.DriverHumanBuilder(p['frame_id'])
@@ -43,6 +44,7 @@ class LeapMotionTopics:
         raw = self._wanted('raw') or (markers and not filtered)
         if not (raw or filtered):
             self.lowpass.reset()
+            self.builder.reset()        # it sees no frames now: time_visible, rate go stale
             return
         if not filtered:
             self.lowpass.reset()
