@@ -169,6 +169,90 @@ def test_time_visible_and_the_frame_rate_follow_the_stamps():
     assert out[-1].current_frames_per_second == pytest.approx(50.0, rel=1e-3)
 
 
+def test_a_recordings_sphere_widths_and_time_visible_reach_the_driver_hand():
+    # LeapJS frames carry the SDK's sphere fit, time visible and finger widths: the driver
+    # fills them, and a grasp detector reading sphere_radius got 0.
+    from leap_teleop.hands.sources import leapjs
+    d = leapjs.frame_to_dict(Frame(id=5, timestamp=2.0, hands=[
+        render_hand('right', 'open', [10.0, 200.0, 0.0], hand_id=3)]))
+    d['hands'][0].update(sphereRadius=80.5, sphereCenter=[1.0, 150.0, -20.0], timeVisible=12.25,
+                         palmWidth=85.0)
+    for i, p in enumerate(d['pointables']):
+        p['width'] = 15.0 + i
+    frame = leapjs.frame_from_dict(d)
+    (raw, smooth), = run([frame], lowpass=LowPass(4.0))
+    for h in (raw.right_hand, smooth.right_hand):
+        assert h.sphere_radius == pytest.approx(0.0805)
+        assert list(h.sphere_center) == pytest.approx([0.001, 0.15, -0.02])
+        assert h.palm_width == pytest.approx(0.085)
+        assert h.time_visible == pytest.approx(12.25)            # the SDK's, in s
+        assert [f.width for f in h.finger_list] == pytest.approx([0.015, 0.016, 0.017, 0.018, 0.019])
+        assert {b.width for f in h.finger_list for b in f.bone_list} == {0.0}   # not recorded
+    back = leapjs.frame_to_dict(frame)
+    assert {k: back['hands'][0][k] for k in ('sphereRadius', 'sphereCenter', 'timeVisible', 'palmWidth')} \
+        == {'sphereRadius': 80.5, 'sphereCenter': [1.0, 150.0, -20.0], 'timeVisible': 12.25, 'palmWidth': 85.0}
+    assert [p['width'] for p in back['pointables']] == [15.0, 16.0, 17.0, 18.0, 19.0]
+    # LeapJS Playback 0.1 wrote the frame's timestamp (s) as timeVisible in every other frame:
+    # not a measure, so time_visible goes on from the last one.
+    later = dict(d, id=6, timestamp=2_010_000, hands=[dict(d['hands'][0], timeVisible=2.01)])
+    h = run([frame, leapjs.frame_from_dict(later)])[1][0].right_hand
+    assert h.time_visible == pytest.approx(12.26)
+    # Values that are no measure stay unmeasured: 0 / empty, time_visible counted here.
+    d['hands'][0].update(sphereRadius=-1.0, sphereCenter=[1.0, 'x'], timeVisible=None, palmWidth=True)
+    d['pointables'][0]['width'] = [1]
+    h = run([leapjs.frame_from_dict(d)])[0][0].right_hand
+    assert (h.sphere_radius, list(h.sphere_center), h.palm_width, h.time_visible) == (0.0, [], 0.0, 0.0)
+    assert h.finger_list[0].width == 0.0 and h.finger_list[1].width == pytest.approx(0.016)
+
+
+def _vec(v):
+    import types
+    return types.SimpleNamespace(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def test_the_leap_sdks_sizes_and_time_visible_reach_the_driver_hand():
+    import types
+
+    from leap_teleop.hands.sources import leap_sdk, leapc
+    ns = types.SimpleNamespace
+    src = render_hand('left', 'open', [0.0, 200.0, 0.0])
+
+    def sdk_finger(t, f):
+        joints = {0: f.mcp, 1: f.mcp, 2: f.pip, 3: f.dip}
+        return ns(type=t, tip_position=_vec(f.tip), direction=_vec(f.direction), is_extended=True,
+                  width=18.0, bone=lambda kind: ns(prev_joint=_vec(joints[kind]), width=20.0 - kind))
+
+    Leap = ns(Bone=ns(TYPE_METACARPAL=0, TYPE_PROXIMAL=1, TYPE_INTERMEDIATE=2, TYPE_DISTAL=3))
+    sdk = leap_sdk.convert_hand(Leap, ns(
+        is_right=False, id=4, palm_position=_vec(src.palm_position), palm_velocity=_vec((0, 0, 0)),
+        palm_normal=_vec(src.palm_normal), direction=_vec(src.direction), grab_strength=0.0,
+        pinch_strength=0.0, confidence=1.0, palm_width=84.0, sphere_radius=70.0,
+        sphere_center=_vec((5.0, 180.0, 10.0)), time_visible=3.5,
+        fingers=[sdk_finger(t, f) for t, f in enumerate(src.fingers)]))
+
+    def bone(a, b, w):
+        return ns(prev_joint=_vec(a), next_joint=_vec(b), width=w)
+
+    c = leapc.convert_hand(ns(HandType=ns(Left=0, Right=1)), ns(
+        type=0, id=6, grab_strength=0.0, pinch_strength=0.0, confidence=1.0, visible_time=2_500_000,
+        palm=ns(position=_vec(src.palm_position), velocity=_vec((0, 0, 0)), normal=_vec(src.palm_normal),
+                direction=_vec(src.direction), width=82.0),
+        digits=[ns(is_extended=True, metacarpal=bone(f.mcp, f.mcp, 21.0), proximal=bone(f.mcp, f.pip, 20.0),
+                   intermediate=bone(f.pip, f.dip, 19.0), distal=bone(f.dip, f.tip, 18.0))
+                for f in src.fingers]))
+    h = run([Frame(id=1, timestamp=1.0, hands=[sdk])])[0][0].left_hand
+    assert (h.palm_width, h.sphere_radius) == pytest.approx((0.084, 0.07))
+    assert list(h.sphere_center) == pytest.approx([0.005, 0.18, 0.01])
+    assert h.time_visible == pytest.approx(3.5)
+    assert h.finger_list[2].width == pytest.approx(0.018)
+    assert [b.width for b in h.finger_list[2].bone_list] == pytest.approx([0.02, 0.019, 0.018, 0.017])
+    h = run([Frame(id=1, timestamp=1.0, hands=[c])])[0][0].left_hand
+    assert h.palm_width == pytest.approx(0.082) and h.time_visible == pytest.approx(2.5)
+    assert (h.sphere_radius, list(h.sphere_center)) == (0.0, [])          # LeapC has no sphere
+    assert h.finger_list[0].width == 0.0                                    # nor a digit width
+    assert [b.width for b in h.finger_list[0].bone_list] == pytest.approx([0.021, 0.02, 0.019, 0.018])
+
+
 def test_time_visible_and_the_rate_restart_after_a_time_without_subscribers():
     # While nobody subscribes the builder sees no frames: a hand that left and came back
     # meanwhile was reported visible since its first appearance, and the rate averaged the gap.

@@ -85,11 +85,13 @@ def xyz(p):
 def hand(h):
     return {'present': h.is_present, 'id': h.lmc_hand_id, 'valid_gestures': h.valid_gestures,
             'time_visible': h.time_visible, 'confidence': h.confidence,
+            'palm_width': h.palm_width, 'sphere_radius': h.sphere_radius,
+            'sphere_center': list(h.sphere_center),
             'rpy': [h.roll, h.pitch, h.yaw], 'direction': xyz(h.direction),
             'normal': xyz(h.normal), 'grab': h.grab_strength, 'pinch': h.pinch_strength,
             'velocity': list(h.palm_velocity), 'palm': xyz(h.palm_center),
             'frame_id': h.header.frame_id,
-            'fingers': [{'id': f.lmc_finger_id, 'type': f.type, 'length': f.length,
+            'fingers': [{'id': f.lmc_finger_id, 'type': f.type, 'length': f.length, 'width': f.width,
                          'bones': [{'type': b.type, 'length': b.length,
                                     'start': xyz(b.bone_start.position),
                                     'end': xyz(b.bone_end.position), 'center': list(b.center)}
@@ -257,9 +259,17 @@ def check_hand(test_hand, src, tol_m=1e-6, tol_unit=1e-6):
     np.testing.assert_allclose(test_hand['normal'], src.palm_normal, atol=tol_unit)
     np.testing.assert_allclose(test_hand['rpy'], sdk_angles(src.palm_normal, src.direction),
                                atol=1e-5)
+    # The source's own measures in metres where it has them (a recording's), else 0 / empty.
+    assert test_hand['palm_width'] == pytest.approx((src.palm_width or 0.0) / 1000.0, rel=1e-6)
+    assert test_hand['sphere_radius'] == pytest.approx((src.sphere_radius or 0.0) / 1000.0, rel=1e-6)
+    np.testing.assert_allclose(test_hand['sphere_center'], [] if src.sphere_center is None
+                               else np.asarray(src.sphere_center) / 1000.0, atol=tol_m)
+    if src.time_visible is not None:
+        assert test_hand['time_visible'] == pytest.approx(src.time_visible, rel=1e-6)
     assert len(test_hand['fingers']) == 5
     for i, (f, sf) in enumerate(zip(test_hand['fingers'], src.fingers)):
         assert f['type'] == i and f['id'] == src.id * 10 + i
+        assert f['width'] == pytest.approx((sf.width or 0.0) / 1000.0, rel=1e-6)
         bones = f['bones']
         assert [b['type'] for b in bones] == [0, 1, 2, 3]
         joints = [sf.mcp, sf.pip, sf.dip, sf.tip]
@@ -348,10 +358,15 @@ def test_a_recording_reaches_a_driver_consumer(driver_ws, leapjs_data, tmp_path)
     assert both > 100
     # The recording has swipes, circles and key taps (flapping.json.lz).
     assert gestures[1] == {1, 2, 3} and gestures[4] == {1, 2, 3} and 3 in gestures[6]
-    # The frame rate is the recording's (~104 fps); time_visible grows.
+    # The recording's sphere fit reaches the consumer (checked per hand in check_hand).
+    assert all(r[side]['sphere_radius'] > 0.02 for r in raw for side in ('right', 'left')
+               if r[side]['present'])
+    # The frame rate is the recording's (~104 fps); time_visible is the SDK's as recorded
+    # (checked in check_hand): it grows while one hand (id) stays.
     assert 80 < raw[-1]['fps'] < 130
-    right = [r['right']['time_visible'] for r in raw if r['right']['present']]
-    assert right[-1] > right[0] and right[-1] > 2.0
+    right = [(r['right']['id'], r['right']['time_visible']) for r in raw if r['right']['present']]
+    assert all(b[1] >= a[1] - 1e-4 for a, b in zip(right, right[1:]) if a[0] == b[0])
+    assert max(t for _, t in right) > 2.0
     check_filtered(raw, filtered)
     check_markers(by_topic(got, 'markers'), raw)
     # The old leap message: Leap mm and degrees, for the right hand.

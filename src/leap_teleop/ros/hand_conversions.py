@@ -224,10 +224,11 @@ class DriverHumanBuilder:
     Filled from every source: palm centre, velocity, normal, direction, roll / pitch / yaw,
     grab / pinch strength, confidence, time_visible, the fingers' bones (skeleton), the
     recognizer's circles as circle gestures. Filled only where the frames carry them: the
-    SDK's swipe, key tap, screen tap and circle gestures (recordings). Left empty (no
-    source's frames have them): palm_width, sphere_radius, sphere_center, finger and bone
-    widths, the metacarpal's base (the bone has length 0), the arm, bone orientations
-    (identity)."""
+    SDK's swipe, key tap, screen tap and circle gestures (recordings), palm_width,
+    sphere_radius, sphere_center, finger and bone widths (0 / empty otherwise), and the
+    SDK's own time_visible (otherwise counted here from when the hand was found). Left
+    empty (no source's frames have them): the metacarpal's base (the bone has length 0),
+    the arm, bone orientations (identity)."""
 
     def __init__(self, frame_id=LEAP_FRAME):
         self.frame_id = frame_id
@@ -251,8 +252,9 @@ class DriverHumanBuilder:
             self._fps = fps if self._fps == 0.0 else 0.9 * self._fps + 0.1 * fps
 
     @staticmethod
-    def _fingers(header, hand_id, joints):
-        """Five DriverFingers from (5, 4, 3) joints in mm (mcp, pip, dip, tip)."""
+    def _fingers(header, hand_id, joints, fingers=()):
+        """Five DriverFingers from (5, 4, 3) joints in mm (mcp, pip, dip, tip); widths from
+        `fingers` (frame.Finger) where the source measured them."""
         starts, ends = skeleton.bone_ends(joints)
         lengths = (np.linalg.norm(ends - starts, axis=2) * MM).tolist()
         centers = ((starts + ends) * (MM / 2.0)).tolist()
@@ -261,9 +263,14 @@ class DriverHumanBuilder:
         for i in range(5):
             f = DriverFinger(header=header, type=i)
             f.lmc_finger_id = _int32(hand_id * 10 + i)
+            source = fingers[i] if i < len(fingers) else None
+            width = getattr(source, 'width', None)
+            if width is not None:
+                f.width = width * MM
+            bone_widths = getattr(source, 'bone_widths', None) or (0.0,) * 4
             for b in range(4):
                 bone = DriverBone(header=header, type=b, length=lengths[i][b],
-                                  center=centers[i][b])
+                                  width=bone_widths[b] * MM, center=centers[i][b])
                 for pose, xyz in ((bone.bone_start, starts[i][b]), (bone.bone_end, ends[i][b])):
                     pose.position.x, pose.position.y, pose.position.z = xyz
                     pose.orientation.w = 1.0
@@ -314,8 +321,15 @@ class DriverHumanBuilder:
         msg.pinch_strength = state.pinch_strength
         msg.palm_velocity = [x * MM for x in state.palm_velocity]
         msg.palm_center = Point(*(float(x) * MM for x in points[0]))
+        if hand.palm_width is not None:
+            msg.palm_width = hand.palm_width * MM
+        if hand.sphere_radius is not None:
+            msg.sphere_radius = hand.sphere_radius * MM
+        if hand.sphere_center is not None:
+            msg.sphere_center = [float(x) * MM for x in hand.sphere_center]
         if len(points) > 1:
-            msg.finger_list = self._fingers(header, hand.id, points[1:].reshape(5, 4, 3))
+            msg.finger_list = self._fingers(header, hand.id, points[1:].reshape(5, 4, 3),
+                                            hand.fingers)
         msg.gesture_list = gestures
         msg.valid_gestures = bool(gestures)
         msg.arm.header = header
@@ -350,6 +364,10 @@ class DriverHumanBuilder:
                 if lowpass is not None:
                     lowpass.reset(side)
                 continue
+            if hand.time_visible is not None:
+                # The tracker's own count where the source measures it (the driver passes the
+                # SDK's); kept as the time found, so a frame without one goes on from it.
+                self._found_at[side] = state.timestamp - hand.time_visible
             found = self._found_at.setdefault(side, state.timestamp)
             time_visible = max(state.timestamp - found, 0.0)
             gestures = self._gestures(frame, hand, state)

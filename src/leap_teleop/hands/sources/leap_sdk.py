@@ -6,7 +6,7 @@ optional: without it, constructing the source raises SourceError saying what to 
 """
 import time
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand, measured, measured3
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
@@ -22,6 +22,11 @@ def _import():
     except ImportError as e:
         raise SourceError('%s (%s)' % (INSTALL_HINT, e))
     return Leap
+
+
+def _bone_types(Leap):
+    B = Leap.Bone
+    return (B.TYPE_METACARPAL, B.TYPE_PROXIMAL, B.TYPE_INTERMEDIATE, B.TYPE_DISTAL)
 
 
 def convert_hand(Leap, h):
@@ -40,8 +45,17 @@ def convert_hand(Leap, h):
                 joints['dip'] = xyz(bone(Leap.Bone.TYPE_DISTAL).prev_joint)
             except Exception:       # a binding without bones: tip and direction only
                 joints = {}
+        widths = None
+        if bone is not None:
+            try:
+                widths = tuple(measured(attr(bone(t), 'width')) for t in _bone_types(Leap))
+            except Exception:       # sizes are extras: never lose the joints for them
+                widths = None
+            if widths is not None and None in widths:
+                widths = None
         fingers[i] = Finger(tip=xyz(attr(f, 'tip_position')), direction=xyz(attr(f, 'direction')),
-                            extended=bool(attr(f, 'is_extended')), **joints)
+                            extended=bool(attr(f, 'is_extended')), width=measured(attr(f, 'width')),
+                            bone_widths=widths, **joints)
     return TrackedHand(side=side, palm_position=xyz(attr(h, 'palm_position')),
                 palm_velocity=xyz(attr(h, 'palm_velocity')),
                 palm_normal=xyz(attr(h, 'palm_normal')), direction=xyz(attr(h, 'direction')),
@@ -49,7 +63,10 @@ def convert_hand(Leap, h):
                 pinch_strength=float(attr(h, 'pinch_strength') or 0.0),
                 confidence=float(attr(h, 'confidence') or 0.0),
                 fingers=tuple(fingers) if all(f is not None for f in fingers) else (),
-                id=int(attr(h, 'id') or 0))
+                id=int(attr(h, 'id') or 0), palm_width=measured(attr(h, 'palm_width')),
+                sphere_radius=measured(attr(h, 'sphere_radius')),
+                sphere_center=measured3(attr(h, 'sphere_center')),
+                time_visible=measured(attr(h, 'time_visible')))
 
 
 class LeapSdkSource(HandSource):

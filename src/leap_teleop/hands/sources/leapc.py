@@ -7,7 +7,7 @@ source raises SourceError saying what to install.
 """
 import time
 
-from leap_teleop.hands.frame import Finger, TrackedHand
+from leap_teleop.hands.frame import Finger, TrackedHand, measured
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
@@ -41,17 +41,24 @@ def convert_hand(leap, h):
         dip = xyz(attr(dist, 'prev_joint'))
         direction = tip - dip
         n = float((direction @ direction) ** 0.5)
+        # LeapC measures each bone's width, not the digit's.
+        widths = tuple(measured(attr(attr(d, b), 'width'))
+                       for b in ('metacarpal', 'proximal', 'intermediate', 'distal'))
         fingers.append(Finger(tip=tip, direction=direction / n if n > 0 else direction,
                               extended=bool(attr(d, 'is_extended')),
                               mcp=xyz(attr(prox, 'prev_joint')),
-                              pip=xyz(attr(inter, 'prev_joint')), dip=dip))
+                              pip=xyz(attr(inter, 'prev_joint')), dip=dip,
+                              bone_widths=None if None in widths else widths))
+    visible_us = measured(attr(h, 'visible_time'))      # LeapC: microseconds
     return TrackedHand(side=_side(leap, attr(h, 'type')), palm_position=xyz(attr(palm, 'position')),
                 palm_velocity=xyz(attr(palm, 'velocity')), palm_normal=xyz(attr(palm, 'normal')),
                 direction=xyz(attr(palm, 'direction')),
                 grab_strength=float(attr(h, 'grab_strength') or 0.0),
                 pinch_strength=float(attr(h, 'pinch_strength') or 0.0),
                 confidence=float(attr(h, 'confidence') or 0.0),
-                fingers=tuple(fingers) if len(fingers) == 5 else (), id=int(attr(h, 'id') or 0))
+                fingers=tuple(fingers) if len(fingers) == 5 else (), id=int(attr(h, 'id') or 0),
+                palm_width=measured(attr(palm, 'width')),
+                time_visible=visible_us * 1e-6 if visible_us is not None else None)
 
 
 class LeapCSource(HandSource):

@@ -28,7 +28,7 @@ try:                       # faster still for whole recordings (load_frames); op
 except ImportError:        # pragma: no cover
     _simdjson = None
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand, measured, measured3
 from leap_teleop.hands.sources.source import SourceError
 
 log = logging.getLogger(__name__)
@@ -392,7 +392,8 @@ def frame_from_dict(d, timestamp=None):
             _say_unknown_side(side)
             continue
         hand_id = h.get('id')
-        hands.append(_hand_from_dict(h, side, by_hand.get(hand_id, ()) if _is_id(hand_id) else ()))
+        hands.append(_hand_from_dict(h, side, by_hand.get(hand_id, ()) if _is_id(hand_id) else (),
+                                     timestamp))
     gestures = [g for g in (d.get('gestures') or []) if isinstance(g, dict)] \
         if isinstance(d.get('gestures'), list) else []
     return Frame(id=frame_id, timestamp=timestamp, hands=hands, gestures=gestures)
@@ -412,7 +413,17 @@ _chain = itertools.chain.from_iterable
 _FINGER_KEYS = ('tipPosition', 'direction', 'mcpPosition', 'pipPosition', 'dipPosition')
 
 
-def _hand_from_dict(h, side, pointables):
+def _time_visible(value, timestamp):
+    """A hand's timeVisible (s); None when absent, or when it is the frame's own timestamp
+    (s, to 6 digits): LeapJS Playback 0.1 recorded that in every other frame, and a hand
+    tracked since the service started is not a case worth keeping it for."""
+    tv = measured(value)
+    if tv is not None and math.isfinite(timestamp) and abs(tv - timestamp) <= 1e-4 * abs(timestamp):
+        return None
+    return tv
+
+
+def _hand_from_dict(h, side, pointables, timestamp=math.nan):
     by_type = [None] * 5
     for p in pointables:
         t = p.get('type')
@@ -452,16 +463,20 @@ def _hand_from_dict(h, side, pointables):
         for i in have:
             ext = by_type[i].get('extended')
             fl[i] = Finger(v[b], v[b + 1], ext if ext.__class__ is bool else None,
-                           v[b + 2], v[b + 3], v[b + 4])
+                           v[b + 2], v[b + 3], v[b + 4], measured(by_type[i].get('width')))
             b += 5
         if len(have) < 5:
             missing = np.full(3, math.nan)
             fl = [f if f is not None else Finger(tip=missing, direction=missing) for f in fl]
         fingers = tuple(fl)
     hid = h.get('id', 0)
+    # The SDK's sphere fit and time tracked (protocol 6 frames; later ones drop the sphere).
     return TrackedHand(side, v[0], v[1], v[2], v[3], _num(h.get('grabStrength'), math.nan),
                 _num(h.get('pinchStrength'), math.nan), _num(h.get('confidence'), 1.0),
-                fingers, hid if hid.__class__ is int else 0)
+                fingers, hid if hid.__class__ is int else 0,
+                palm_width=measured(h.get('palmWidth')), sphere_radius=measured(h.get('sphereRadius')),
+                sphere_center=measured3(h.get('sphereCenter')),
+                time_visible=_time_visible(h.get('timeVisible'), timestamp))
 
 
 def _list(v, nd=5):
@@ -497,13 +512,21 @@ def frame_to_dict(frame):
             while hid in taken:
                 hid += 1
             taken.add(hid)
-        hands.append({
+        h = {
             'id': hid, 'type': hand.side,
             'palmPosition': _list(hand.palm_position), 'palmVelocity': _list(hand.palm_velocity),
             'palmNormal': _list(hand.palm_normal), 'direction': _list(hand.direction),
             'stabilizedPalmPosition': _list(hand.palm_position),
             'grabStrength': _clean(hand.grab_strength), 'pinchStrength': _clean(hand.pinch_strength),
-            'confidence': _clean(hand.confidence)})
+            'confidence': _clean(hand.confidence)}
+        # What the source measured, read back as such; left out when it did not.
+        for key, value in (('palmWidth', hand.palm_width), ('sphereRadius', hand.sphere_radius),
+                           ('timeVisible', hand.time_visible)):
+            if measured(value) is not None:
+                h[key] = _clean(value)
+        if measured3(hand.sphere_center) is not None:
+            h['sphereCenter'] = _list(hand.sphere_center)
+        hands.append(h)
         for i, f in enumerate(hand.fingers[:5]):
             if f is None or not np.all(np.isfinite(np.asarray(f.tip, dtype=float))):
                 continue
@@ -511,6 +534,8 @@ def frame_to_dict(frame):
                  'tipPosition': _list(f.tip), 'direction': _list(f.direction)}
             if f.extended is not None:
                 p['extended'] = bool(f.extended)
+            if measured(f.width) is not None:
+                p['width'] = _clean(f.width)
             for key, value in (('mcpPosition', f.mcp), ('pipPosition', f.pip),
                                ('dipPosition', f.dip)):
                 if value is not None and np.all(np.isfinite(np.asarray(value, dtype=float))):
