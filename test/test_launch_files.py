@@ -5,6 +5,7 @@ import os
 import re
 import xml.etree.ElementTree as ET
 
+import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -189,3 +190,29 @@ def test_every_camera_config_key_reaches_the_sender_and_an_explicit_arg_wins(nam
                                 'device:=1', 'loop:=false'])
     assert (params['/leap_sender/mirror'], params['/leap_sender/device'],
             params['/leap_sender/loop'], params['/leap_sender/rate']) == (False, '1', False, 10.0)
+
+
+def _rotation_columns(q):
+    """World coordinates of a frame's x, y, z axes, rotated by q = (x, y, z, w)."""
+    x, y, z, w = q
+    return ((1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)),
+            (2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)),
+            (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)))
+
+
+def test_leap_motion_launch_turns_leap_hands_as_the_driver_and_sender_launch_as_rep_103():
+    # The driver publishes world -> leap_hands 90 deg about x, which its RViz config's view
+    # expects; sender.launch's REP 103 turn showed the hands side-on there.
+    from leap_teleop.hands.sender_params import SENDER_PARAMS, leap_rotation
+    key = '/leap_sender/leap_rotation_xyzw'
+    raw = load_params('leap_motion.launch', [])[key]
+    assert raw == [0.707, 0, 0, 0.707]
+    q = leap_rotation(SENDER_PARAMS['leap_rotation_xyzw'].check('leap_rotation_xyzw', raw))
+    # Leap x (user's right) -> world x, y (up) -> z, z (toward the user) -> -y
+    np.testing.assert_allclose(_rotation_columns(q), ((1, 0, 0), (0, 0, 1), (0, -1, 0)), atol=1e-9)
+    assert key not in load_params('sender.launch', [])          # the node's REP 103 default
+    default = leap_rotation(SENDER_PARAMS['leap_rotation_xyzw'].default)
+    np.testing.assert_allclose(_rotation_columns(default), ((0, -1, 0), (0, 0, 1), (-1, 0, 0)),
+                               atol=1e-9)
+    mine = load_params('leap_motion.launch', ['leap_rotation:=[0, 0, 0, 1]'])[key]
+    assert mine == [0, 0, 0, 1]

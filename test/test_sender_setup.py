@@ -226,3 +226,20 @@ def test_a_throttled_driver_topic_sends_every_frame_where_a_hand_comes_or_goes()
     for i, h in enumerate(hands):
         LeapMotionTopics.on_frame(topics, types.SimpleNamespace(timestamp=0.01 * i, hands=h), {})
     assert [round(t, 2) for t in built] == [0.0, 0.04, 0.05]
+
+
+def test_the_leap_rotation_is_a_checked_unit_quaternion():
+    from leap_teleop.hands.sender_params import LEAP_IN_WORLD_XYZW, leap_rotation
+    from leap_teleop.params import ParamError
+    p = params()
+    assert p['leap_rotation_xyzw'] == list(LEAP_IN_WORLD_XYZW)
+    assert leap_rotation(p['leap_rotation_xyzw']) == list(LEAP_IN_WORLD_XYZW)
+    # The driver's 4-digit 0.707s are taken, normalised.
+    q = leap_rotation(params(leap_rotation_xyzw=[0.707, 0, 0, 0.707])['leap_rotation_xyzw'])
+    assert q == pytest.approx([0.5 ** 0.5, 0.0, 0.0, 0.5 ** 0.5], abs=1e-12)
+    for bad in ([1.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.5, 0.5, 0.5, 0.4]):
+        with pytest.raises(ParamError, match='not a unit quaternion'):
+            leap_rotation(bad)
+    for bad in ([0.0, 0.0, 1.0], [2.0, 0.0, 0.0, 0.0], [float('nan'), 0.0, 0.0, 1.0]):
+        with pytest.raises(ParamError):
+            params(leap_rotation_xyzw=bad)

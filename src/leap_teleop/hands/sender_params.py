@@ -2,11 +2,16 @@
 leap_motion driver interface. The table is the sender node's ~params and --help, its
 dynamic_reconfigure server's and the docs' parameter table (re-exported by the node).
 """
+import math
+
 from leap_teleop.control.lowpass import DEFAULT_CUTOFF
 from leap_teleop.hands.gestures.recognizer import MIN_CONFIDENCE
 from leap_teleop.hands.sources import SOURCES
 from leap_teleop.hands.sources.camera_params import CAMERA_PARAMS
-from leap_teleop.params import Param
+from leap_teleop.params import Param, ParamError
+
+# Leap axes (x right, y up, z toward the user) in a ROS world frame (REP 103: x forward, z up).
+LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 SENDER_PARAMS = {
     'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
@@ -37,6 +42,11 @@ SENDER_PARAMS = {
     'world_frame': Param('world', 'parent frame of the static TF to frame_id', empty_ok=False),
     'leap_xyz': Param([0.0, 0.0, 0.0], 'Leap device position in world_frame', unit='m',
                       length=3, ge=-100.0, le=100.0),
+    'leap_rotation_xyzw': Param(list(LEAP_IN_WORLD_XYZW), 'rotation of frame_id in world_frame '
+                                '(x, y, z, w; a unit quaternion): by default Leap axes as REP 103 '
+                                'ones (x forward, z up); the leap_motion driver\'s is [0.707, 0, 0, '
+                                '0.707] (90 deg about x; leap_motion.launch sets it)',
+                                length=4, ge=-1.0, le=1.0),
     'shutdown_on_end': Param(True, 'shut the node down when a finite source ends (a source '
                                    'that fails, e.g. a camera unplugged, always does: status 2)'),
     # Bounded: a slow subscriber holds at most this many frames (~2 s at 120 Hz) per topic.
@@ -89,3 +99,15 @@ SENDER_PARAMS.update(CAMERA_PARAMS)
 # filter's cutoff. Sources, topics, sides and modes are start-up only.
 SENDER_RECONFIGURABLE = ('recognizer_on_frames', 'recognizer_off_frames',
                          'recognizer_min_confidence', 'filter_cutoff')
+
+
+def leap_rotation(xyzw, tolerance=0.01):
+    """~leap_rotation_xyzw as a unit quaternion [x, y, z, w]; ParamError when its norm is not
+    within `tolerance` of 1 (a typo, not a rotation). Normalised: the driver's 0.707s are 4
+    digits, and TF consumers expect a unit quaternion."""
+    norm = math.sqrt(sum(float(v) ** 2 for v in xyzw))
+    if abs(norm - 1.0) > tolerance:
+        raise ParamError('~leap_rotation_xyzw = %r: not a unit quaternion (norm %.4g); allowed: '
+                         'x, y, z, w with x^2 + y^2 + z^2 + w^2 = 1 (within %g)'
+                         % (list(xyzw), norm, tolerance))
+    return [float(v) / norm for v in xyzw]

@@ -11,7 +11,7 @@ import tf2_ros
 
 from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE
+from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE, leap_rotation
 from leap_teleop.hands.sender_setup import build_source, check_outputs, recognizer_factory, retune_sender
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
@@ -28,13 +28,12 @@ from leap_teleop.ros.signals import quiet_at_shutdown
 # the docs.
 PARAMS = SENDER_PARAMS
 RECONFIGURABLE = SENDER_RECONFIGURABLE
-# Leap axes (x right, y up, z toward the user) in a ROS world frame (x forward, z up).
-LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 
 
 def sender_parts(p):
     """What the checked ~params make before any topic exists (a bad one ends the node)."""
     check_outputs(p, rospy.resolve_name)
+    p['leap_rotation_xyzw'] = leap_rotation(p['leap_rotation_xyzw'])
     factory = recognizer_factory(p)
     bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
     view = camera_view_publisher(p)
@@ -67,7 +66,7 @@ def main(argv=None):
     if p['publish_tf']:     # a local of main: it lives, and its latched topic with it, as long as the node
         leap_tf = tf2_ros.StaticTransformBroadcaster()
         leap_tf.sendTransform(transform_msg(p['world_frame'], p['frame_id'], p['leap_xyz'],
-                                            LEAP_IN_WORLD_XYZW, rospy.Time.now()))
+                                            p['leap_rotation_xyzw'], rospy.Time.now()))
     rospy.loginfo('sender: publishing %s hands from the %s source on %s',
                   '/'.join(topics.sides), p['source'],
                   ', '.join(pubs['leapcobot'].resolved_name for pubs in topics.pubs.values()))
