@@ -243,3 +243,43 @@ def test_the_leap_rotation_is_a_checked_unit_quaternion():
     for bad in ([0.0, 0.0, 1.0], [2.0, 0.0, 0.0, 0.0], [float('nan'), 0.0, 0.0, 1.0]):
         with pytest.raises(ParamError):
             params(leap_rotation_xyzw=bad)
+
+
+@pytest.mark.parametrize('server, cutoff, says', [
+    ({}, 4.0, []),
+    ({'/filter_cutoff': 1.5}, 1.5, ['info: ~filter_cutoff not set: using the leap_motion driver\'s '
+                                    '/filter_cutoff = 1.5']),
+    ({'/filter_cutoff': 1.5, '/leap_sender/filter_cutoff': 6.0}, 6.0,
+     ['warn: the leap_motion driver\'s /filter_cutoff = 1.5 is ignored: ~filter_cutoff = 6 is set']),
+    ({'/enable_filter': True}, 4.0, []),
+    ({'/enable_filter': False}, 4.0, ['warn: the leap_motion driver\'s /enable_filter = False is ignored: '
+                                      'the filtered Human is on leap_motion/filtered_values']),
+])
+def test_the_drivers_global_parameters_are_used_or_said_to_be_ignored(server, cutoff, says, monkeypatch):
+    # The driver's nodes read /filter_cutoff and /enable_filter; the sender read only its own
+    # ~names, so a setup tuned the driver's way was silently ignored.
+    import rospy
+
+    from leap_teleop.ros.leap_motion_topics import use_driver_globals
+    private = {k.split('/')[-1]: v for k, v in server.items() if k.startswith('/leap_sender/')}
+    said = []
+    monkeypatch.setattr(rospy, 'has_param', lambda name: name in server or (
+        name.startswith('~') and name[1:] in private))
+    monkeypatch.setattr(rospy, 'get_param', lambda name: server[name])
+    monkeypatch.setattr(rospy, 'loginfo', lambda fmt, *a: said.append('info: ' + fmt % a))
+    monkeypatch.setattr(rospy, 'logwarn', lambda fmt, *a: said.append('warn: ' + fmt % a))
+    p = params(filtered_human_topic='leap_motion/filtered_values', **private)
+    use_driver_globals(p, SENDER_PARAMS)
+    assert p['filter_cutoff'] == cutoff
+    assert [s.replace('sender: ', '').split(' (~filtered')[0] for s in said] == says
+
+
+def test_a_bad_global_filter_cutoff_is_a_bad_parameter(monkeypatch):
+    import rospy
+
+    from leap_teleop.params import ParamError
+    from leap_teleop.ros.leap_motion_topics import use_driver_globals
+    monkeypatch.setattr(rospy, 'has_param', lambda name: name == '/filter_cutoff')
+    monkeypatch.setattr(rospy, 'get_param', lambda name: -2.0)
+    with pytest.raises(ParamError, match='/filter_cutoff'):
+        use_driver_globals(params(), SENDER_PARAMS)

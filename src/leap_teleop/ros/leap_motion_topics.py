@@ -6,9 +6,38 @@ from visualization_msgs.msg import MarkerArray
 from leap_teleop.control.lowpass import LowPass
 from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import DriverHuman
+from leap_teleop.params import ParamError
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers
 from leap_teleop.ros.node import RateLimitedLog
+
+
+def use_driver_globals(p, table):
+    """The leap_motion driver's own parameters, which its nodes read by absolute name (its
+    demo.launch loads them at the root): /filter_cutoff stands for an unset ~filter_cutoff
+    (one info line; checked as it is); /enable_filter cannot switch ~filtered_human_topic,
+    so a value that disagrees with it is named as ignored (one warning). Updates p."""
+    if rospy.has_param('/filter_cutoff'):
+        value = rospy.get_param('/filter_cutoff')
+        if not rospy.has_param('~filter_cutoff'):
+            try:
+                p['filter_cutoff'] = table['filter_cutoff'].check('filter_cutoff', value)
+            except ParamError as e:
+                raise ParamError('the driver\'s /filter_cutoff, used as ~filter_cutoff is not '
+                                 'set: %s' % e)
+            rospy.loginfo('sender: ~filter_cutoff not set: using the leap_motion driver\'s '
+                          '/filter_cutoff = %g', p['filter_cutoff'])
+        elif value != p['filter_cutoff']:
+            rospy.logwarn('sender: the leap_motion driver\'s /filter_cutoff = %r is ignored: '
+                          '~filter_cutoff = %g is set', value, p['filter_cutoff'])
+    if rospy.has_param('/enable_filter'):
+        value = rospy.get_param('/enable_filter')
+        if value is not bool(p['filtered_human_topic']):
+            rospy.logwarn('sender: the leap_motion driver\'s /enable_filter = %r is ignored: the '
+                          'filtered Human is %s (~filtered_human_topic; leap_motion.launch: '
+                          'enable_filter:=true / false)', value,
+                          'on ' + p['filtered_human_topic'] if p['filtered_human_topic'] else 'off')
+    return p
 
 
 class LeapMotionTopics:

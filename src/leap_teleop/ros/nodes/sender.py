@@ -19,6 +19,7 @@ from leap_teleop.package_files import package_path
 from leap_teleop.ros.camera_topics import camera_model, camera_view_publisher
 from leap_teleop.ros.diagnostics import diagnostics_updater, update_every
 from leap_teleop.ros.hand_topics import HandTopics
+from leap_teleop.ros.leap_motion_topics import use_driver_globals
 from leap_teleop.ros.node import start_node
 from leap_teleop.ros.reconfigure import Reconfigure
 from leap_teleop.ros.sensor_conversions import transform_msg
@@ -33,6 +34,7 @@ RECONFIGURABLE = SENDER_RECONFIGURABLE
 def sender_parts(p):
     """What the checked ~params make before any topic exists (a bad one ends the node)."""
     check_outputs(p, rospy.resolve_name)
+    use_driver_globals(p, PARAMS)
     p['leap_rotation_xyzw'] = leap_rotation(p['leap_rotation_xyzw'])
     factory = recognizer_factory(p)
     bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
