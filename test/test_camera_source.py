@@ -224,17 +224,25 @@ def test_a_looped_video_starts_each_pass_with_a_new_hand(tmp_path, hands_json):
     assert hands[4].id == hands[3].id
 
 
-def test_still_images_share_no_hand_id_or_velocity(tmp_path, hands_json):
-    # Before: the hands of consecutive photos kept one id, and the jump between them over
-    # 1/30 s was their palm velocity (about 1 m/s).
+def test_still_images_share_no_velocity_and_keep_the_hand_present(tmp_path, hands_json):
+    # Before: the jump between consecutive photos over 1/30 s was their palm velocity (about
+    # 1 m/s). A new hand id per photo instead read as the hand lost every other photo.
     import shutil
-    for name in ('a.jpg', 'b.jpg', 'c.jpg'):
+
+    from leap_teleop.hands.leap_interface import LeapInterface
+    for name in ('a.jpg', 'b.jpg', 'c.jpg', 'd.jpg'):
         shutil.copy(data('fist__htj__22.jpg'), tmp_path / name)
     source = make_source('video', path=str(tmp_path), realtime=False, clock=lambda: 0.0)
     source.detector = MovingHandDetector(one_hand(hands_json), source.detector)
-    hands = [f.hands[0] for f in source.frames()]
-    assert len(hands) == 3 and len({h.id for h in hands}) == 3
+    interface = LeapInterface(sides=['right', 'left'])
+    hands, present = [], []
+    for frame in source.frames():
+        hands += frame.hands
+        interface.on_frame(frame)
+        present.append(interface.snapshot(frame.hands[0].side).present)
+    assert len(hands) == 4
     assert not any(np.any(h.palm_velocity) for h in hands)
+    assert present == [True] * 4
 
 
 def clip_run(name, **kwargs):

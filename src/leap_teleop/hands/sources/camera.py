@@ -140,7 +140,7 @@ class CameraSource(HandSource):
                 self._next_id += 1
             else:
                 t0, p0, v0, hand_id = last
-                dt = t - t0
+                dt = t - t0 if t0 is not None else 0.0
                 velocity = v0
                 if dt > 0:
                     velocity = ((1 - VELOCITY_SMOOTHING) * v0
@@ -152,8 +152,14 @@ class CameraSource(HandSource):
 
     def forget_hands(self):
         """Treat the next image as unrelated to the last: new hand ids, no velocity (a
-        cut in a video, or a set of separate photos)."""
+        cut in a video)."""
         self._last.clear()
+
+    def forget_motion(self):
+        """No velocity from the last image to the next (separate photos), the same hand
+        ids: a new id would read as the hand lost and found again, every other photo."""
+        for side, (_t, _p, _v, hand_id) in self._last.items():
+            self._last[side] = (None, None, np.zeros(3), hand_id)
 
     def prepare(self, bgr):
         """A captured image as the detector sees it: (processed BGR, RGB, its CameraModel)
@@ -228,8 +234,8 @@ class CameraSource(HandSource):
                         else:
                             last_media = item.media_time
                             stamp = start_stamp + offset + item.media_time
-                        if self.still:          # unrelated pictures: no id or velocity shared
-                            self.forget_hands()
+                        if self.still:          # unrelated pictures: no velocity between them
+                            self.forget_motion()
                         frame, landmarks, bgr = self.process(item.bgr, stamp, frame_id)
                         if self.on_image is not None:
                             self.on_image(frame, bgr, landmarks)
@@ -275,7 +281,8 @@ class VideoSource(CameraSource):
     playback slows down rather than skip frames), unless drop_late: then paced playback
     behaves like a live camera (a frame that arrives while the previous one is being
     processed replaces it). Still images (an image, a folder, a glob) are unrelated
-    pictures: each is detected on its own."""
+    pictures: each is detected on its own, with no palm velocity between them (a side's
+    hand keeps its id, so it stays present from photo to photo)."""
 
     def __init__(self, path, realtime=True, loop=False, rate_hz=0.0, mirror=False,
                  width=0, height=0, drop_late=False, **kwargs):
