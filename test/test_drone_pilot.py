@@ -4,7 +4,16 @@ import math
 import numpy as np
 import pytest
 
-from leap_teleop.drone.pilot import Command, CommandQueue, DronePilot, PilotInput, PilotParams, leap_angles, shaped
+from leap_teleop.drone.pilot import (
+    TAKEOFF_CONFIRM_S,
+    Command,
+    CommandQueue,
+    DronePilot,
+    PilotInput,
+    PilotParams,
+    leap_angles,
+    shaped,
+)
 
 FLAT = dict(normal=(0.0, -1.0, 0.0), direction=(0.0, 0.0, -1.0))
 
@@ -215,18 +224,52 @@ def test_a_fold_lands_a_sent_takeoff_when_a_second_one_is_withdrawn():
     assert kinds(drain(pilot)) == ['land']
 
 
-def test_a_takeoff_navdata_shows_landed_for_long_is_forgotten():
-    # The firmware refused it (a low battery): a later fold has nothing to land.
+@pytest.mark.parametrize('landed_for, lands', [(6.0, True), (TAKEOFF_CONFIRM_S + 1.0, False)])
+def test_a_takeoff_navdata_shows_landed_for_long_is_forgotten(landed_for, lands):
+    # Held by the node up to ~takeoff_hold (5 s) before its driver listens, a takeoff may
+    # reach the drone late: a fold 6 s on still lands it. Landed for longer, the firmware
+    # refused it (a low battery): a later fold has nothing to land.
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
     pilot.on_gesture('unfold', True, 0.01)
     assert kinds(drain(pilot)) == ['takeoff']
-    for i in range(1, 301):                                   # 6 s of landed navdata
+    for i in range(1, int(landed_for / 0.02) + 1):
         pilot.on_navdata(2, 0, 0.02 * i)
         pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.02 * i)
-    pilot.on_gesture('fold', True, 6.01)
-    assert kinds(drain(pilot)) == []
+    pilot.on_gesture('fold', True, landed_for + 0.01)
+    assert kinds(drain(pilot)) == (['land'] if lands else [])
+
+
+@pytest.mark.parametrize('sink, flips', [(0.0, True), (0.1, True), (0.7, False)])
+def test_no_flip_while_the_drone_sinks_through_the_height_a_flip_needs(sink, flips):
+    # A flip asked 0.9 m up while sinking at full rate (0.7 m/s) struck the floor: the
+    # altitude alone allowed it.
+    cfg = PilotParams(flip_min_altitude=0.6, flip_type=19)
+    pilot = airborne(cfg, state=3)
+    for i in range(26):                                   # 0.5 s of navdata at 50 Hz
+        t = 0.02 * i
+        pilot.on_navdata(3, 1000.0 * (1.3 - sink * t), t)
+        pilot.on_hand(hand((0.0, 0.2, 0.0)), t)
+    drain(pilot)
+    assert pilot.sink_rate() == pytest.approx(sink, abs=1e-6)
+    pilot.on_gesture('circle_cw', True, 0.5, HAND_CIRCLE)
+    assert ('flip' in kinds(drain(pilot))) == flips
+    assert pilot.flip_still_wanted(0.49, 0.5) == flips
+
+
+def test_a_slow_start_with_no_navdata_and_no_hand_hovers_once_and_lands_nothing():
+    # Started before its driver and sender: 'hand lost for 3.0 s: landing' to a drone
+    # never seen. The state unknown, the hover is what is safe (as for navdata lost).
+    cfg = PilotParams()
+    warned = []
+    pilot = DronePilot(cfg, warn=lambda key, text: warned.append(text))
+    sent = []
+    for i in range(int((cfg.land_after + 1.0) / 0.02)):
+        pilot.watchdog(0.02 * i)
+        sent += drain(pilot)
+    assert sent and all(c.kind == 'twist' and c.twist == (0.0,) * 6 for c in sent), sent
+    assert not any('landing' in text for text in warned), warned
 
 
 def test_a_pilot_that_never_gets_a_hand_hovers_and_lands_a_flying_drone():

@@ -6,7 +6,7 @@ the command queue with ``pop`` and runs ``watchdog``.
 
 Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
 ``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
-``flip_min_altitude`` and the circle's radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
+``flip_min_altitude`` (less FLIP_SINK_S of the sink, when descending) and the circle's radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
 a hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
 recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included). Gesture
 events act only when on time: a stamped event arriving more than ``max_input_age`` later
@@ -76,8 +76,17 @@ FLYING_STATES = (3, 4, 7)            # flying, hovering, goto fix point
 MAX_PALM_M = 1.0      # |palm| component beyond this (m) is not a tracked hand
 AIRBORNE_STATES = (3, 4, 6, 7, 9)    # + taking off, looping
 LANDED = 2
-# Navdata still saying landed this long after a takeoff went in: the firmware refused it.
-TAKEOFF_CONFIRM_S = 5.0
+# Navdata still saying landed this long after a takeoff was queued: the firmware refused
+# it. The node may hold a takeoff up to 5 s (~takeoff_hold) before its driver listens, and
+# the drone reports one within a few seconds of getting it; a land sent to a drone that
+# stayed down is harmless, a takeoff forgotten too soon is not (a fold would not land it).
+TAKEOFF_CONFIRM_S = 10.0
+# A flip loses up to 0.45 m from a hover (flip_min_altitude's floor); a descent carries on
+# through it, so the altitude it is judged by is less this many seconds of the sink (the
+# simulated drone sinking 0.7..1.9 m/s, flipped where this first allows: the hull stays
+# 0.17 m or more above the floor). Sink is measured over NAVDATA_SINK_S of navdata.
+FLIP_SINK_S = 0.9
+NAVDATA_SINK_S = 0.25
 ZERO_TWIST = (0.0,) * 6
 HOVER_REPEAT = 1.0                   # s between hover commands while navdata is stale
 # The recognizer reports circles up to 0.3 m (CircleRules.r_max; people's fitted 0.2 m) in
@@ -247,6 +256,7 @@ class DronePilot:
         self._lock = threading.RLock()     # watchdog_at re-enters it in watchdog
         self.drone_state = None          # navdata state, None until known
         self.altitude = 0.0              # m
+        self._altitudes = collections.deque()   # (time, m) of the last NAVDATA_SINK_S
         self.last_navdata_time = None
         self.navdata_lost_since = None   # set while navdata is stale (watchdog)
         self._landed_for_navdata = False
@@ -278,6 +288,12 @@ class DronePilot:
         with self._lock:
             self.drone_state = int(state)
             self.altitude = float(altd_mm) / 1000.0
+            alts = self._altitudes
+            if alts and now < alts[-1][0]:
+                alts.clear()                    # the clock jumped back
+            alts.append((now, self.altitude))
+            while len(alts) > 2 and now - alts[1][0] >= NAVDATA_SINK_S:
+                alts.popleft()
             first = self.last_navdata_time is None
             self.last_navdata_time = now
             if self.navdata_lost_since is not None:
@@ -309,8 +325,22 @@ class DronePilot:
         flip_min_altitude or higher, the hand is fresh, and no fold or loss came since."""
         with self._lock:
             return (self._navdata_ok(now) and self.drone_state in (3, 4)
-                    and self.altitude >= self.cfg.flip_min_altitude and self._hand_fresh(now)
+                    and self._flip_altitude() >= self.cfg.flip_min_altitude
+                    and self._hand_fresh(now)
                     and (self._stopped_at is None or self._stopped_at < since))
+
+    def sink_rate(self):
+        """How fast the drone descends (m/s, >= 0) by the navdata altitudes of the last
+        NAVDATA_SINK_S (0 with fewer than two)."""
+        alts = self._altitudes
+        if len(alts) < 2 or alts[-1][0] - alts[0][0] <= 0.0:
+            return 0.0
+        return max(0.0, (alts[0][1] - alts[-1][1]) / (alts[-1][0] - alts[0][0]))
+
+    def _flip_altitude(self):
+        """The altitude a flip is judged by: the navdata's, less what a descent carries
+        the drone down through the flip."""
+        return self.altitude - FLIP_SINK_S * self.sink_rate()
 
     def takeoff_still_wanted(self, now):
         """A takeoff held back (its driver not listening yet) may still go: no fold and no
@@ -420,10 +450,11 @@ class DronePilot:
             elif name in ('circle_cw', 'circle_ccw'):
                 radius = (float(value) if isinstance(value, numbers.Real)
                           and not isinstance(value, bool) else math.nan)
-                if not (state in (3, 4) and self.altitude >= self.cfg.flip_min_altitude):
-                    self._warn('circle', '%s: no flip (state %s, altitude %.2f m < %.2f m or '
-                               'not flying)' % (name, state, self.altitude,
-                                                self.cfg.flip_min_altitude))
+                if not (state in (3, 4) and self._flip_altitude() >= self.cfg.flip_min_altitude):
+                    self._warn('circle', '%s: no flip (state %s, altitude %.2f m, sinking %.2f '
+                               'm/s: %.2f m < %.2f m or not flying)'
+                               % (name, state, self.altitude, self.sink_rate(),
+                                  self._flip_altitude(), self.cfg.flip_min_altitude))
                 elif not self._hand_fresh(now):
                     # as for a takeoff: no flip that no hand in view asks for
                     self._warn('circle', '%s: no flip, no fresh Hand input' % name)
@@ -562,7 +593,10 @@ class DronePilot:
             if (self.lost_since is not None and not self._landed_for_loss
                     and now - self.lost_since >= self.cfg.land_after
                     and (self.drone_state in AIRBORNE_STATES
-                         or (self.navdata_lost_since is not None and not self._known_landed()))):
+                         # navdata lost: land unless last seen landed; never seen at all
+                         # (a slow start), the hover was enough, as for navdata lost
+                         or (self.navdata_lost_since is not None and self.drone_state is not None
+                             and not self._known_landed()))):
                 self._landed_for_loss = True
                 self.engaged = False
                 self.reference = None
