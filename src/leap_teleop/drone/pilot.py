@@ -6,7 +6,8 @@ the command queue with ``pop`` and runs ``watchdog``.
 
 Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
 ``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
-``flip_min_altitude`` (less FLIP_SINK_S of the sink, when descending) and the circle's radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
+``flip_min_altitude`` (less FLIP_SINK_S of the sink, when descending) and the circle's
+radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
 a hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
 recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included). Gesture
 events act only when on time: a stamped event arriving more than ``max_input_age`` later
