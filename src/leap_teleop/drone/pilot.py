@@ -571,13 +571,13 @@ class DronePilot:
                 self._stream.reset()
                 self.lost_since = None
                 self._lose(now)
-            # A callback usually sees such a jump first (a Hand message comes every 10 ms):
-            # times kept from the old timeline would hold the landings off for as long as
-            # the jump. They start again from now.
             if self.last_hand_time is None and self.lost_since is None:
                 # No Hand message yet (a pilot restarted beside a flying drone, its sender
                 # down or on another topic): lost from the start, so it hovers, then lands.
                 self._lose(now)
+            # A callback usually sees such a jump first (a Hand message comes every 10 ms):
+            # times kept from the old timeline would hold the landings off for as long as
+            # the jump. They start again from now.
             if self.lost_since is not None and self.lost_since > now:
                 self.lost_since = now
             if self.navdata_lost_since is not None and self.navdata_lost_since > now:
