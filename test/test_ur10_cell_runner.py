@@ -167,6 +167,32 @@ def test_a_stalled_loop_drops_the_oldest_commands(runner, monkeypatch):
     assert not runner.pending
 
 
+@pytest.fixture
+def dual_runner(rejected):
+    r = make(rejected, config='ur10_dual_cell.yaml')
+    yield r
+    r.close()
+
+
+def test_a_stalled_loop_drops_a_later_trajectory_not_a_gripper_goal(dual_runner, monkeypatch):
+    # The oldest command of any arm went: a gripper goal, which the arm node sends once,
+    # dropped for the trajectories streaming after it, and the gripper never closed.
+    runner = dual_runner
+    monkeypatch.setattr(cell_runner, 'MAX_PENDING', 3)
+    other = [a for a in runner.cell.arm_names if a != ARM][0]
+    q = list(HOME_Q)
+    runner.queue(ARM, 'gripper', [(0.1, [0.8], None)], 0.0)
+    runner.queue(other, 'arm', [(0.1, q, None)], 0.0)
+    for i in range(4):
+        runner.queue(ARM, 'arm', [(0.1 * (i + 1), q, None)], 0.0)
+    kinds = [(arm, kind) for arm, kind, *_ in runner.pending]
+    assert kinds == [(ARM, 'gripper'), (other, 'arm'), (ARM, 'arm')] and runner.dropped_commands == 3
+    assert runner.pending[2][2].points[-1][0] == pytest.approx(0.4)     # the newest kept
+    runner.queue(other, 'gripper', [(0.1, [0.8], None)], 0.0)      # none of its own: a trajectory
+    assert [(arm, kind) for arm, kind, *_ in runner.pending] == [
+        (ARM, 'gripper'), (ARM, 'arm'), (other, 'gripper')]
+
+
 def test_ticks_carry_what_is_due_at_its_rate(rejected):
     r = make(rejected, joint_state_rate=120.0, object_pose_rate=30.0, clock_rate=60.0)
     try:

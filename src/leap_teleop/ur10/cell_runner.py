@@ -59,11 +59,12 @@ class CellTick:
 
 class CellRunner:
     """UR10Cell behind one lock. Callbacks `queue` commands (bounded: when the loop stalls,
-    the oldest are dropped); each `step` applies them, steps the physics and says what is
-    due. `reject(arm, kind, why)` hears of a command the cell refused, `warn(arm, kind,
-    what)` of one it takes but that starts over FAR_START_S ahead; `ros_time()` is the
-    clock command stamps are in. command_waits keeps, per arm, how long its commands
-    waited between queue() and the step that applied them (wall time)."""
+    older ones are dropped, the same controller's first: see _droppable); each `step`
+    applies them, steps the physics and says what is due. `reject(arm, kind, why)` hears
+    of a command the cell refused, `warn(arm, kind, what)` of one it takes but that starts
+    over FAR_START_S ahead; `ros_time()` is the clock command stamps are in. command_waits
+    keeps, per arm, how long its commands waited between queue() and the step that applied
+    them (wall time)."""
 
     def __init__(self, p, use_sim_time, ros_time, reject, warn=None):
         from leap_teleop.ur10.cell import UR10Cell  # pybullet: after --help / --urdf
@@ -77,6 +78,7 @@ class CellRunner:
         self.render_lock = threading.Lock()        # one snapshot at a time
         self.renderer = SnapshotRenderer(self.cell.config)
         self.pending = collections.deque()         # validated commands for the loop
+        self._pending_lock = threading.Lock()      # queue() against the loop taking them
         self.dropped_commands = 0
         self.superseded_commands = 0              # replaced by a later one before they began
         self.command_waits = CommandWaits(self.cell.arm_names)
@@ -101,25 +103,33 @@ class CellRunner:
         except TrajectoryError as e:
             self.reject(arm, kind, e)
             return False
-        dropped = len(self.pending) >= MAX_PENDING
-        if dropped:                                # the loop stalled: newer commands win
-            try:
-                self.pending.popleft()
+        with self._pending_lock:
+            dropped = len(self.pending) >= MAX_PENDING
+            if dropped:                            # the loop stalled: newer commands win
+                del self.pending[self._droppable(arm, kind)]
                 self.dropped_commands += 1
-            except IndexError:                     # the loop took them all meanwhile
-                dropped = False
-        self.pending.append((arm, kind, points, stamp, self.command_waits.clock()))
+            self.pending.append((arm, kind, points, stamp, self.command_waits.clock()))
         return dropped
+
+    def _droppable(self, arm, kind):
+        """Where the command to drop for a new one of (arm, kind) sits in the full queue:
+        the oldest of the same arm and controller, else the oldest that a later one of its
+        own replaces, else the oldest trajectory (an arm node sends the next within 8 ms),
+        else the oldest. A gripper goal is sent once, when it changes: dropped for another
+        arm's trajectories, it was lost for good (the cube never released)."""
+        keys = [c[:2] for c in self.pending]
+        if (arm, kind) in keys:
+            return keys.index((arm, kind))
+        return next((i for i, k in enumerate(keys) if k in keys[i + 1:]),
+                    next((i for i, k in enumerate(keys) if k[1] == 'arm'), 0))
 
     def _apply_pending(self):
         """Hand the commands queued before this step to the cell (lock held); those arriving
         meanwhile wait for the next step, so a burst of long commands cannot hold the
         physics (and joint_states) until it ends."""
-        batch = []
-        for _ in range(len(self.pending)):
-            if not self.pending:           # queue() dropped the oldest meanwhile
-                break
-            batch.append(self.pending.popleft())
+        with self._pending_lock:
+            batch = list(self.pending)
+            self.pending.clear()
         # A command that a later one of the batch (same arm and controller) replaces
         # before it begins is not planned (ten 10,000-point ones held the physics for a
         # minute) - unless every such later one is refused: then it runs after all.
@@ -191,7 +201,8 @@ class CellRunner:
 
     def reset(self):
         with self.lock:
-            self.pending.clear()
+            with self._pending_lock:
+                self.pending.clear()
             self.cell.reset()
             self.command_waits.clear()      # waits from before the reset say nothing now
 
