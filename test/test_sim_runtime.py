@@ -25,11 +25,14 @@ class ManualClock:
         self.now += s
 
 
-def test_as_fast_as_possible_needs_sim_time():
-    assert pace_factor(0.0, use_sim_time=True) == (0.0, None)
-    factor, warning = pace_factor(0.0, use_sim_time=False)
-    assert factor == 1.0 and 'without /use_sim_time' in warning
-    assert pace_factor(2.5, use_sim_time=False) == (2.5, None)
+@pytest.mark.parametrize('factor', [0.0, 0.5, 2.5, 4.0])
+def test_any_speed_but_real_time_needs_sim_time(factor):
+    # At 4x without /use_sim_time, the other nodes (wall time) saw the arm move at 4 times
+    # its speed limits; nothing said so.
+    assert pace_factor(factor, use_sim_time=True) == (factor, None)
+    run_at, warning = pace_factor(factor, use_sim_time=False)
+    assert run_at == 1.0 and 'without /use_sim_time' in warning
+    assert pace_factor(1.0, use_sim_time=False) == (1.0, None)
 
 
 def test_pacer_sleeps_until_the_wall_clock_catches_up_with_sim_time():

@@ -49,8 +49,8 @@ RUNNER_PARAMS = {
                                            'loss); 0 = off, as with a live driver', unit='s',
                           ge=0.0, le=60.0),
     'gui': Param(False, 'open the PyBullet GUI window'),
-    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
-                                  '(only sensible with /use_sim_time)', ge=0.0, le=100.0),
+    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
+                                  'than 1 only with /use_sim_time)', ge=0.0, le=100.0),
     'snapshot_dir': Param('', 'where ardrone/snapshot writes PNGs (default ROS_HOME or /tmp)'),
     'snapshot_size': Param([640, 480], 'snapshot width, height', unit='px', length=2,
                            ge=16, le=4096),

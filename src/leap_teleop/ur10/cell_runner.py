@@ -20,8 +20,8 @@ RUNNER_PARAMS = {
     'config': Param(DEFAULT_CELL_CONFIG, 'cell YAML: a path or a file name in config/',
                     empty_ok=False),
     'gui': Param(False, 'open the PyBullet GUI window (needs a display)'),
-    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible '
-                                  '(only with /use_sim_time)', ge=0.0, le=100.0),
+    'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
+                                  'than 1 only with /use_sim_time)', ge=0.0, le=100.0),
     # joint_states feed the arm nodes' joint watchdog: at least 10 Hz.
     'joint_state_rate': Param(125.0, 'joint_states rate per arm (UR CB3 controller)',
                               unit='Hz', ge=10.0, le=1000.0),
