@@ -83,8 +83,8 @@ def test_the_monitors_table_drops_a_node_that_stopped_reporting(monkeypatch):
     status = DiagnosticStatus(name='ur10_1/ur10_arm: teleop', values=[
         KeyValue(k, str(v)) for k, v in arm.diagnostic_values(10.0)])
     now = [10.0]
-    monkeypatch.setattr(rospy, 'get_time', lambda: now[0])
-    monitor = LatencyMonitor(subscribe=False)
+    monkeypatch.setattr(rospy, 'get_time', lambda: 1000.0 - now[0])   # not its clock
+    monitor = LatencyMonitor(subscribe=False, clock=lambda: now[0])
     monitor.on_diagnostics(DiagnosticArray(status=[status]))
     now[0] = 12.0
     assert 'ur10_1/ur10_arm' in monitor.table()
@@ -137,6 +137,30 @@ def test_the_command_prints_the_pilots_row_from_a_running_node():
             stop_spawned(pilot)
     assert p.returncode == 0, p.stderr[-2000:]
     assert 'capture -> stage' in p.stdout and 'drone_pilot' in p.stdout, p.stdout
+
+
+def test_the_table_goes_on_when_the_ros_clock_jumps_back(monkeypatch, capsys):
+    # rospy.sleep raised on a /clock looped back (a bag played again, sim time), which main
+    # took for Ctrl-C: the table stopped silently with status 0.
+    import types
+
+    import rospy
+
+    from leap_teleop.ros import latency_monitor as lm
+
+    def moved_back(*_args):
+        raise rospy.exceptions.ROSTimeMovedBackwardsException(1.0)
+    tables = []
+    heard = types.SimpleNamespace(wait=lambda timeout: True)
+    monkeypatch.setattr(lm, 'master_problem', lambda timeout: ('http://x:1', None))
+    monkeypatch.setattr(rospy, 'init_node', lambda *a, **kw: None)
+    monkeypatch.setattr(rospy, 'sleep', moved_back)
+    monkeypatch.setattr(rospy, 'is_shutdown', lambda: len(tables) >= 3)
+    monkeypatch.setattr(lm.time, 'sleep', lambda s: None)
+    monkeypatch.setattr(lm, 'LatencyMonitor', lambda: types.SimpleNamespace(
+        heard=heard, table=lambda: tables.append(1) or 'capture -> stage'))
+    assert lm.main([]) == 0
+    assert len(tables) == 3 and capsys.readouterr().out.count('capture -> stage') == 3
 
 
 def test_main_takes_its_arguments_without_the_program_name():

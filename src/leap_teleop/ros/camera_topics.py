@@ -47,5 +47,5 @@ def camera_view_publisher(p):
                       lambda frame, img: pub.publish(sensor_conversions.bgr_image_msg(img, frame.timestamp,
                                                                    p['frame_id'])),
                       wanted=lambda: pub.get_num_connections() > 0,
-                      notes=lambda: monitor.board.notes(rospy.get_time()))
+                      notes=monitor.notes)
     return view

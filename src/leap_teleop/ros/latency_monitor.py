@@ -27,14 +27,17 @@ class LatencyMonitor:
     """Subscribes /diagnostics and keeps a LatencyBoard of every node's input ages (also
     used by hand_markers' text marker and the sender's camera overlay)."""
 
-    def __init__(self, subscribe=True):
+    def __init__(self, subscribe=True, clock=time.monotonic):
         self.board = LatencyBoard()
         self.heard = threading.Event()
+        # When a report came is a matter of wall time: a /clock looped back (a bag played
+        # again) kept a node that stopped reporting on the board as long as the bag.
+        self.clock = clock
         self.sub = (rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics,
                                      queue_size=20) if subscribe else None)
 
     def on_diagnostics(self, msg):
-        now = rospy.get_time()
+        now = self.clock()
         for status in msg.status:
             if self.board.on_status(status.name, [(kv.key, kv.value) for kv in status.values],
                                     now):
@@ -42,7 +45,11 @@ class LatencyMonitor:
 
     def table(self):
         # now: a node that stopped reporting drops out instead of showing its last numbers
-        return self.board.table(rospy.get_time())
+        return self.board.table(self.clock())
+
+    def notes(self):
+        """The board's short lines for an overlay or a marker (silent nodes left out)."""
+        return self.board.notes(self.clock())
 
 
 MAX_TIMEOUT_S = 86400.0
@@ -89,13 +96,15 @@ def main(argv=None):
             print('latency_monitor: no node reported an input age on /diagnostics in %g s'
                   % args.timeout, file=sys.stderr)
             return 1
-        rospy.sleep(1.5)     # the updaters publish about once a second: hear them all
+        # Wall-time pacing: rospy.sleep raised on a /clock looped back (a bag played again),
+        # which ended the table silently with status 0.
+        time.sleep(1.5)      # the updaters publish about once a second: hear them all
         while not rospy.is_shutdown():
             print(monitor.table(), flush=True)
             if args.once:
                 return 0
             print()
-            rospy.sleep(1.0)
+            time.sleep(1.0)
     except KeyboardInterrupt:
         pass
     return 0

@@ -63,7 +63,7 @@ class HandMarkersNode:
 
     def on_latency_timer(self, _event):
         now = rospy.get_time()
-        lines = self.latency.board.notes(now)
+        lines = self.latency.notes()
         if lines or self.latency_shown:        # one DELETE once reports stop
             with closed_at_shutdown():         # a last tick can race the shutdown
                 self.pub.publish(MarkerArray([latency_marker(
