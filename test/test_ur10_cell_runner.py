@@ -193,6 +193,23 @@ def test_a_stalled_loop_drops_a_later_trajectory_not_a_gripper_goal(dual_runner,
         (ARM, 'gripper'), (ARM, 'arm'), (other, 'gripper')]
 
 
+def test_a_rate_above_the_physics_rate_is_said_at_start_up(rejected):
+    # ~joint_state_rate took 1000 Hz and gave 240, one per physics step, silently.
+    r = make(rejected, joint_state_rate=1000.0)
+    try:
+        assert r.start_warnings == ["~joint_state_rate 1000 Hz is above the cell's physics_hz "
+                                    "240: published once per physics step, 240 Hz"]
+        ticks = [r.step() for _ in range(240)]
+        assert sum(t.joint_states is not None for t in ticks) == 240
+    finally:
+        r.close()
+    r = make(rejected)
+    try:
+        assert r.start_warnings == []
+    finally:
+        r.close()
+
+
 def test_ticks_carry_what_is_due_at_its_rate(rejected):
     r = make(rejected, joint_state_rate=120.0, object_pose_rate=30.0, clock_rate=60.0)
     try:

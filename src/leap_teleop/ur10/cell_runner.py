@@ -23,13 +23,15 @@ RUNNER_PARAMS = {
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
                                   'than 1 only with /use_sim_time)', ge=0.0, le=100.0),
     # joint_states feed the arm nodes' joint watchdog: at least 10 Hz.
-    'joint_state_rate': Param(125.0, 'joint_states rate per arm (UR CB3 controller)',
+    'joint_state_rate': Param(125.0, 'joint_states rate per arm (UR CB3 controller; at most '
+                                     'the cell\'s physics_hz)',
                               unit='Hz', ge=10.0, le=1000.0),
     # rospy drops the oldest of a subscriber's queue when its writer thread stalls: in
     # alternated soaks with a load burst, 20 lost joint states in all three runs, 100 in none
     'joint_states_queue_size': Param(100, 'joint_states messages queued per subscriber',
                                      ge=1, le=2000),
-    'object_pose_rate': Param(30.0, '~object_poses rate', unit='Hz', gt=0.0, le=1000.0),
+    'object_pose_rate': Param(30.0, '~object_poses rate (at most the cell\'s physics_hz)',
+                              unit='Hz', gt=0.0, le=1000.0),
     'clock_rate': Param(240.0, '/clock rate with /use_sim_time (at most the physics rate)',
                         unit='Hz', ge=10.0, le=10000.0),
     'snapshot_dir': Param('', 'where ~snapshot writes PNGs (default ROS_HOME or /tmp)'),
@@ -86,6 +88,14 @@ class CellRunner:
         self.use_sim_time = use_sim_time
         self.factor, self.pace_warning = pace_factor(float(p['realtime_factor']),
                                                      use_sim_time)
+        # what the node says once at start-up
+        self.start_warnings = [w for w in [self.pace_warning] if w]
+        hz = self.cell.config.physics_hz
+        for name in ('joint_state_rate', 'object_pose_rate', 'clock_rate'):
+            if float(p[name]) > hz:
+                self.start_warnings.append(
+                    '~%s %g Hz is above the cell\'s physics_hz %g: published once per physics '
+                    'step, %g Hz' % (name, float(p[name]), hz, hz))
         t = self.cell.time
         self.joint_states_due = Every(1.0 / float(p['joint_state_rate']), t)
         self.object_poses_due = Every(1.0 / float(p['object_pose_rate']), t)

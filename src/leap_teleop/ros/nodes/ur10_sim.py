@@ -98,8 +98,8 @@ def main(argv=None):
                   'GUI' if node.cell.gui else 'headless',
                   'sim time x%g' % float(p['realtime_factor']) if node.use_sim_time
                   else 'wall time')
-    if node.runner.pace_warning:
-        rospy.logwarn('ur10_sim: %s', node.runner.pace_warning)
+    for warning in node.runner.start_warnings:
+        rospy.logwarn('ur10_sim: %s', warning)
     try:
         with closed_at_shutdown():
             node.runner.run(node.topics.publish, rospy.is_shutdown, lambda lag: node.log.warn(
