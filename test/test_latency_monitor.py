@@ -139,6 +139,20 @@ def test_the_command_prints_the_pilots_row_from_a_running_node():
     assert 'capture -> stage' in p.stdout and 'drone_pilot' in p.stdout, p.stdout
 
 
+def test_a_report_is_stale_only_when_wall_and_ros_time_both_say_so():
+    # Timed on wall time alone, a simulation at 0.1x (reports a second of ROS time apart)
+    # lost its rows; on ROS time alone, a /clock looped back kept a silent node's for ever.
+    board = LatencyBoard()
+    arm = InputAgeWindow()
+    arm.add(10.0, 9.99)
+    board.on_status('ur10_1/ur10_arm: teleop', arm.diagnostic_values(10.0), (100.0, 10.0))
+    assert board.rows((108.0, 10.8))                   # slow simulation: 0.8 s of ROS time
+    assert board.rows((101.0, 2.0))                    # looped back, heard 1 s ago
+    assert not board.rows((108.0, 2.0))                # looped back, silent for 8 s
+    assert not board.rows((108.0, 18.0))               # silent on both clocks
+    assert board.rows((108.0, 14.0)) and not board.rows((108.0, 15.5))
+
+
 def test_the_table_goes_on_when_the_ros_clock_jumps_back(monkeypatch, capsys):
     # rospy.sleep raised on a /clock looped back (a bag played again, sim time), which main
     # took for Ctrl-C: the table stopped silently with status 0.

@@ -113,7 +113,7 @@ def capture(env, timeout):
     rospy.Subscriber(IMAGE_TOPIC, Image, on_image, queue_size=2, buff_size=2 ** 22)
     deadline = time.monotonic() + timeout
     while state['image'] is None and time.monotonic() < deadline:
-        rows = monitor.board.rows(rospy.get_time())
+        rows = monitor.rows()
         if first_heard is None and rows:
             first_heard = time.monotonic()
         if (state['ready_at'] is None and first_heard is not None

@@ -235,7 +235,16 @@ class LatencyBoard:
     def rows(self, now=None):
         """Every row (those not heard for stale_after_s dropped when `now` is given)."""
         return [row for row, heard in self._rows.values()
-                if now is None or now - heard <= self.stale_after_s]
+                if now is None or self._fresh(heard, now)]
+
+    def _fresh(self, heard, now):
+        """Heard within stale_after_s, by one clock (numbers) or by any of several (tuples
+        of their readings, as on_status got them): with wall and ROS time, neither a slow
+        simulation (reports a second of ROS time apart) nor a /clock looped back (a report
+        'heard' in the future) decides alone."""
+        if isinstance(now, tuple):
+            return any(0.0 <= n - h <= self.stale_after_s for n, h in zip(now, heard))
+        return 0.0 <= now - heard <= self.stale_after_s
 
     def table(self, now=None):
         return age_table(self.rows(now))

@@ -27,12 +27,13 @@ class LatencyMonitor:
     """Subscribes /diagnostics and keeps a LatencyBoard of every node's input ages (also
     used by hand_markers' text marker and the sender's camera overlay)."""
 
-    def __init__(self, subscribe=True, clock=time.monotonic):
+    def __init__(self, subscribe=True, clock=None):
         self.board = LatencyBoard()
         self.heard = threading.Event()
-        # When a report came is a matter of wall time: a /clock looped back (a bag played
-        # again) kept a node that stopped reporting on the board as long as the bag.
-        self.clock = clock
+        # Reports are timed on wall and ROS time (LatencyBoard._fresh): on ROS time alone a
+        # /clock looped back (a bag played again) kept a node that stopped reporting on the
+        # board as long as the bag; on wall time alone a slow simulation dropped live ones.
+        self.clock = clock or (lambda: (time.monotonic(), rospy.get_time()))
         self.sub = (rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics,
                                      queue_size=20) if subscribe else None)
 
@@ -50,6 +51,10 @@ class LatencyMonitor:
     def notes(self):
         """The board's short lines for an overlay or a marker (silent nodes left out)."""
         return self.board.notes(self.clock())
+
+    def rows(self):
+        """The board's rows of the nodes still reporting."""
+        return self.board.rows(self.clock())
 
 
 MAX_TIMEOUT_S = 86400.0
