@@ -208,6 +208,13 @@ def test_a_rate_above_the_physics_rate_is_said_at_start_up(rejected):
         assert r.start_warnings == []
     finally:
         r.close()
+    for use_sim_time in (False, True):          # no /clock without sim time: no warning
+        r = make(rejected, use_sim_time=use_sim_time, clock_rate=1000.0)
+        try:
+            assert [w.split()[0] for w in r.start_warnings if w.startswith('~')] == (
+                ['~clock_rate'] if use_sim_time else [])
+        finally:
+            r.close()
 
 
 def test_ticks_carry_what_is_due_at_its_rate(rejected):

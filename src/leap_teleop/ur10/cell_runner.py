@@ -91,7 +91,8 @@ class CellRunner:
         # what the node says once at start-up
         self.start_warnings = [w for w in [self.pace_warning] if w]
         hz = self.cell.config.physics_hz
-        for name in ('joint_state_rate', 'object_pose_rate', 'clock_rate'):
+        for name in ('joint_state_rate', 'object_pose_rate') + (
+                ('clock_rate',) if use_sim_time else ()):     # no /clock without sim time
             if float(p[name]) > hz:
                 self.start_warnings.append(
                     '~%s %g Hz is above the cell\'s physics_hz %g: published once per physics '
