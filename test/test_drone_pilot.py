@@ -187,12 +187,18 @@ def test_a_fold_or_a_lost_hand_withdraws_a_takeoff_not_yet_sent(then):
     assert 'takeoff' not in out and 'land' not in out, out
 
 
-def test_a_fold_before_navdata_reports_the_takeoff_lands():
+def took_off(at):
+    """A pilot whose unfold at `at` (navdata landed, a centred hand) sent its takeoff."""
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)
     pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.01)
-    assert kinds(drain(pilot)) == ['takeoff']                 # sent
+    pilot.on_gesture('unfold', True, at)
+    assert kinds(drain(pilot)) == ['takeoff']
+    return pilot
+
+
+def test_a_fold_before_navdata_reports_the_takeoff_lands():
+    pilot = took_off(0.01)                 # sent
     pilot.on_gesture('fold', True, 0.02)                      # navdata still says landed
     assert kinds(drain(pilot)) == ['land']
     pilot.on_navdata(2, 0, 0.5)                               # landed since: a fold lands nothing
@@ -203,22 +209,14 @@ def test_a_fold_before_navdata_reports_the_takeoff_lands():
 def test_a_fold_lands_a_takeoff_that_navdata_made_before_it_still_shows_landed():
     # Navdata comes every 20 ms: one produced before the driver acted on the takeoff
     # still says landed, and a fold after it sent nothing while the drone took off.
-    pilot = DronePilot(PilotParams())
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.005)
-    assert kinds(drain(pilot)) == ['takeoff']
+    pilot = took_off(0.005)
     pilot.on_navdata(2, 0, 0.01)
     pilot.on_gesture('fold', True, 0.05)
     assert kinds(drain(pilot)) == ['land']
 
 
 def test_a_fold_lands_a_sent_takeoff_when_a_second_one_is_withdrawn():
-    pilot = DronePilot(PilotParams())
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.01)
-    assert kinds(drain(pilot)) == ['takeoff']                 # sent
+    pilot = took_off(0.01)                 # sent
     pilot.on_gesture('unfold', True, 0.02)                    # queued, not sent
     pilot.on_gesture('fold', True, 0.03)
     assert kinds(drain(pilot)) == ['land']
@@ -229,11 +227,7 @@ def test_a_takeoff_navdata_shows_landed_for_long_is_forgotten(landed_for, lands)
     # Held by the node up to ~takeoff_hold (5 s) before its driver listens, a takeoff may
     # reach the drone late: a fold 6 s on still lands it. Landed for longer, the firmware
     # refused it (a low battery): a later fold has nothing to land.
-    pilot = DronePilot(PilotParams())
-    pilot.on_navdata(2, 0, 0.0)
-    pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.0)
-    pilot.on_gesture('unfold', True, 0.01)
-    assert kinds(drain(pilot)) == ['takeoff']
+    pilot = took_off(0.01)
     for i in range(1, int(landed_for / 0.02) + 1):
         pilot.on_navdata(2, 0, 0.02 * i)
         pilot.on_hand(hand((0.0, 0.2, 0.0)), 0.02 * i)
