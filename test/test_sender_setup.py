@@ -210,7 +210,7 @@ def test_a_throttled_sender_still_sends_every_gesture_event_and_every_hand_that_
         (0.0, True), (0.03, True), (0.06, False), (0.07, True)]
 
 
-def test_a_throttled_driver_topic_sends_every_frame_where_a_hand_comes_or_goes():
+def test_a_throttled_driver_topic_sends_every_frame_with_a_gesture_or_a_hand_that_comes_or_goes():
     import types
 
     from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
@@ -224,8 +224,11 @@ def test_a_throttled_driver_topic_sends_every_frame_where_a_hand_comes_or_goes()
     hands = [[types.SimpleNamespace(side='right')]] * 10
     hands[4] = []
     for i, h in enumerate(hands):
-        LeapMotionTopics.on_frame(topics, types.SimpleNamespace(timestamp=0.01 * i, hands=h), {})
-    assert [round(t, 2) for t in built] == [0.0, 0.04, 0.05]
+        # a recording's own gesture on frame 2, the recognizer's event on frame 7
+        frame = types.SimpleNamespace(timestamp=0.01 * i, hands=h, gestures=['keyTap'] * (i == 2))
+        states = {'right': types.SimpleNamespace(events=('circle_cw',) * (i == 7))}
+        LeapMotionTopics.on_frame(topics, frame, states)
+    assert [round(t, 2) for t in built] == [0.0, 0.02, 0.04, 0.05, 0.07]
 
 
 def test_the_leap_rotation_is_a_checked_unit_quaternion():

@@ -65,7 +65,10 @@ class LeapMotionTopics:
 
     def on_frame(self, frame, states):
         sides = tuple(sorted(h.side for h in frame.hands))
-        if not self.throttle.due('frame', frame.timestamp, change=sides != self._sides_sent):
+        # as on the sender's own topics: a hand that comes or goes, or a gesture (the SDK's
+        # in a recording, the recognizer's circle), always goes out whatever ~freq says
+        if not self.throttle.due('frame', frame.timestamp, change=sides != self._sides_sent or bool(
+                frame.gestures) or any(state.events for state in states.values())):
             return
         self._sides_sent = sides
         markers = self._wanted('markers')
