@@ -252,6 +252,23 @@ def test_no_flip_while_the_drone_sinks_through_the_height_a_flip_needs(sink, fli
     assert pilot.flip_still_wanted(0.49, 0.5) == flips
 
 
+def test_a_bound_hover_stops_the_drone_and_makes_the_hand_s_place_neutral():
+    # The binding sent hand_lost: one zero twist, then the hand, still 40 mm forward and
+    # within recapture_beyond of where it was, flew the drone on from the old reference.
+    pilot = airborne(PilotParams(), state=3)
+    drain(pilot)
+    for i in range(10):
+        pilot.on_navdata(3, 1000, 0.02 * i)
+        pilot.on_hand(hand((0.0, 0.2, -0.04)), 0.02 * i)
+    assert twists(drain(pilot))[-1][0] > 0.0                  # forward
+    pilot.on_gesture('hover', True, 0.2)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    for i in range(11, 20):
+        pilot.on_navdata(3, 1000, 0.02 * i)
+        pilot.on_hand(hand((0.0, 0.2, -0.04)), 0.02 * i)
+    assert all(t == (0.0,) * 6 for t in twists(drain(pilot)))
+
+
 def test_a_slow_start_with_no_navdata_and_no_hand_hovers_once_and_lands_nothing():
     # Started before its driver and sender: 'hand lost for 3.0 s: landing' to a drone
     # never seen. The state unknown, the hover is what is safe (as for navdata lost).

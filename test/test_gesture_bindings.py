@@ -103,7 +103,7 @@ def test_events_become_the_bound_drone_actions():
         ('hand_found', True), ('two', True), ('unfold', True),     # takeoff on two's start
         # the raw fold is bound to nothing now: not sent; unfold is the landing
         ('fold', True), ('circle_ccw', True), ('gun', True), ('circle_cw', True),
-        ('open', True), ('hand_lost', True), ('two', False)]
+        ('open', True), ('hover', True), ('two', False)]
     assert out[4].value == 0.07 and out[4].source == 'index' and out[4].center == (1.0, 2.0, 3.0)
     assert out[6].value == BOUND_FLIP_RADIUS_M
     default = Bindings().applier()
@@ -141,7 +141,7 @@ def test_tracker_applies_bindings_to_flags_origin_and_events():
     assert names.count('unfold') == 1
     assert [e.gesture for e in thumb.events] == [] and 'unfold' in [
         e.gesture for s in states[100:] for e in s.events]
-    assert 'hand_lost' in [e.gesture for s in states[80:100] for e in s.events]  # hover
+    assert 'hover' in [e.gesture for s in states[80:100] for e in s.events]
 
 
 def test_default_tracker_is_unchanged():

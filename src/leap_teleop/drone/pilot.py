@@ -5,8 +5,8 @@ Pure logic (no ROS): the node adapter feeds ``on_hand`` / ``on_gesture`` /
 the command queue with ``pop`` and runs ``watchdog``.
 
 Gestures: ``unfold`` -> takeoff (when landed), ``fold`` -> land (when airborne),
-``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying above
-``flip_min_altitude`` (less FLIP_SINK_S of the sink, when descending) and the circle's
+``circle_cw`` / ``circle_ccw`` -> flip (``flip_type``) when flying with the altitude, less
+FLIP_SINK_S of the sink when descending, at ``flip_min_altitude`` or above, and the circle's
 radius is ``flip_min_radius`` .. FLIP_MAX_RADIUS_M:
 a hand-sized circle is meant, while fingertips loop by themselves (on the real Leap
 recordings: 27 fingertip loops of 4-20 mm, clapping and flapping included). Gesture
@@ -97,10 +97,11 @@ FLIP_MAX_RADIUS_M = 0.5
 # is no tracked hand, and near zero length its angles (yaw) are noise.
 UNIT_TOLERANCE = 0.01
 # Events that move the drone toward safety (hover, land): they act however late they come.
-SAFE_EVENTS = ('hand_lost', 'fold')
+SAFE_EVENTS = ('hand_lost', 'hover', 'fold')
 # What a sender's GestureEvent may name: a built-in gesture or event, or a class of a user's
-# pose model (letters, digits, _; at most 64). The pilot acts on unfold, fold, circle_* and
-# hand_lost and passes over the others quietly; a name no sender sends is warned about.
+# pose model (letters, digits, _; at most 64). The pilot acts on unfold, fold, circle_*,
+# hand_lost and hover and passes over the others quietly; a name no sender sends is warned
+# about.
 GESTURE_NAME = re.compile(r'[A-Za-z0-9_]{1,64}')
 # Back from a short loss turned this far (deg) about the vertical from where it was lost,
 # the hand's reference is re-captured, as when it comes back elsewhere (the arm's 0.3 rad).
@@ -404,7 +405,7 @@ class DronePilot:
             state = self.drone_state if self._navdata_ok(now) else None
             if not isinstance(name, str) or not GESTURE_NAME.fullmatch(name):
                 self._warn('gesture_name', 'ignored gesture %r: not one a sender sends (the '
-                           'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost)' % name)
+                           'pilot acts on unfold, fold, circle_cw, circle_ccw, hand_lost, hover)' % name)
                 return
             why = None if name in SAFE_EVENTS else self._stream.judge_beside(stamp, now)
             if why:
@@ -413,6 +414,11 @@ class DronePilot:
                 return
             if name == 'hand_lost':
                 self._lose(now)
+            elif name == 'hover':
+                # A bound hover gesture, the hand still in view: stop, and steer on from
+                # where the hand is next (a hand kept where it was would fly on as before).
+                self._lose(now)
+                self._hand_at_loss = None
             elif name == 'unfold':
                 if self.cfg.mode == 'tilt':
                     self.engaged = True

@@ -24,7 +24,7 @@ Applied on the sender's side (hands.tracker.HandTracker), so the consumers need 
 change: an arm action sets the flag the arm reads (arm -> thumb_up, origin -> rock,
 stop -> fist, gripper -> pinch, pinch_value 0.8 from a gesture other than pinch); a
 drone action emits the event the pilot acts on (takeoff -> unfold, land -> fold,
-flip -> circle_cw / circle_ccw, hover -> hand_lost: the pilot hovers and, in tilt mode,
+flip -> circle_cw / circle_ccw, hover -> hover: the pilot hovers and, in tilt mode,
 takes the hand's place on its next frame as the new neutral point). Raw unfold / fold /
 circle events go out only as the actions they are bound to.
 """
@@ -41,7 +41,8 @@ DEFAULTS = {'arm': {'arm': ('thumb_up',), 'origin': ('rock',), 'stop': ('fist',)
                       'hover': ()}}
 # Names the recognizer or the pilot already use: no user gesture may take one.
 RESERVED = frozenset(HELD_GESTURES + EVENT_GESTURES
-                     + ('circle_cw', 'circle_ccw', 'hand_lost', 'hand_found', 'none', 'thumb'))
+                     + ('circle_cw', 'circle_ccw', 'hand_lost', 'hand_found', 'hover', 'none',
+                        'thumb'))
 # The raw events that command the pilot: they leave only as the actions bound to them.
 _PILOT_EVENTS = {'unfold': 'unfold', 'fold': 'fold', 'circle_cw': 'circle',
                  'circle_ccw': 'circle'}
@@ -202,7 +203,7 @@ def _action_event(action, event):
     if action == 'land':
         return HandEvent('fold')
     if action == 'hover':
-        return HandEvent('hand_lost')
+        return HandEvent('hover')
     if event is not None and event.gesture.startswith('circle_'):
         return HandEvent(event.gesture, True, event.value, event.source, event.center)
     return HandEvent('circle_cw', True, BOUND_FLIP_RADIUS_M)
