@@ -191,6 +191,58 @@ def test_a_glimpse_of_thumbs_up_then_unjudged_frames_does_not_arm(unjudged):
     assert armed([(_thumbs_up, 0.4)])           # a held one still arms
 
 
+def _folds(parts, dt=1 / 120):
+    from leap_teleop.hands.tracker import HandTracker
+    tracker, t, out = HandTracker('right', GestureRecognizer()), 0.0, []
+    for make, seconds in parts:
+        for _ in range(int(round(seconds / dt))):
+            out += [e.gesture for e in tracker.update(make(), t, 0).events
+                    if e.gesture in ('fold', 'unfold')]
+            t += dt
+    return out
+
+
+def _pose(name, confidence=1.0):
+    return lambda: render_hand('right', name, (0.0, 200.0, 0.0), confidence=confidence)
+
+
+@pytest.mark.parametrize('first, second', [('open', 'fist'), ('fist', 'open')])
+def test_a_misread_carried_through_unjudged_frames_is_no_fold(first, second):
+    # A 33 ms misread, then frames too unsure to judge that held it: it was confirmed
+    # through them (the drone landed or took off). Likewise a glimpse of the first shape.
+    a, b = _pose(first), _pose(second)
+    assert _folds([(a, 1.0), (b, 4 / 120), (_pose(first, 0.05), 0.2), (a, 0.5)]) == []
+    assert _folds([(a, 0.1), (_pose(second, 0.05), 0.25), (b, 0.5)]) == []
+    bad = _nan_hand
+    assert _folds([(a, 0.1), (bad, 0.25), (b, 0.5)]) == []
+    # a deliberate change still folds, also through a moment that cannot be judged
+    event = 'fold' if second == 'fist' else 'unfold'
+    assert _folds([(a, 0.4), (b, 0.5)]) == [event]
+    assert _folds([(a, 0.4), (_pose(first, 0.05), 0.1), (b, 0.5)]) == [event]
+
+
+@pytest.mark.parametrize('bound', ['open', 'rock', 'pinch'])
+def test_a_gesture_bound_to_arm_is_not_carried_through_unjudged_frames(bound):
+    # The exemption named thumb_up only: any other gesture bound to arm rode 0.25 s of
+    # unjudged frames, and 0.1 s of it armed the arm (arm_hold_s 0.3 s).
+    from leap_teleop.hands.gestures.bindings import Bindings
+    from leap_teleop.hands.tracker import HandTracker
+    freed = {'rock': 'origin', 'pinch': 'gripper'}
+    data = {'arm': dict({'arm': bound}, **({freed[bound]: []} if bound in freed else {}))}
+
+    def arm_flags(parts, dt=1 / 120):
+        tracker, t, out = HandTracker('right', GestureRecognizer(), bindings=Bindings(data)), 0.0, []
+        for make, seconds in parts:
+            for _ in range(int(round(seconds / dt))):
+                out.append(tracker.update(make(), t, 0).thumb_up)
+                t += dt
+        return out
+
+    glimpse = arm_flags([(_pose(bound), 0.1), (_pose(bound, 0.05), 0.25)])
+    assert any(glimpse[:12]) and not any(glimpse[12:])
+    assert not any(arm_flags([(_pose(bound), 0.1), (_nan_hand, 0.25)])[12:])
+
+
 @pytest.mark.parametrize('scale, shift', [(1e12, 0.0), (1e300, 0.0), (1.7e308, 1e300), (1.0, 1e300)])
 def test_camera_landmarks_at_absurd_coordinates_show_nothing(scale, shift):
     # a real thumbs-up row scaled by 1e300 was still a thumbs-up at p = 1.00

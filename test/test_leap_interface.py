@@ -244,3 +244,16 @@ def test_two_hands_typed_alike_the_followed_one_stays_and_a_new_one_starts_afres
     # With none followed, the most confident of two alike is taken.
     li = LeapInterface(recognizer_factory=per_frame)
     assert li.on_frame(frame(1, a, b))['right'].palm_position[0] == -40.0
+
+
+def test_a_frame_without_a_hand_id_keeps_the_followed_one():
+    # one id-less frame overwrote the id followed: the next, different hand was not seen
+    # as new, and the first hand's open plus its fist made a fold
+    from leap_teleop.hands.tracker import HandTracker
+    tracker, events, t = HandTracker('right', GestureRecognizer()), [], 0.0
+    for pose, hand_id, n in (('open', 5, 120), ('open', 0, 1), ('fist', 7, 60)):
+        for _ in range(n):
+            hand = render_hand('right', pose, (0.0, 200.0, 0.0), hand_id=hand_id)
+            events += [e.gesture for e in tracker.update(hand, t, 0).events]
+            t += 1 / 120
+    assert 'fold' not in events and events.count('hand_lost') == 1

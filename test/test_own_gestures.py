@@ -405,6 +405,7 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--out', '{tmp}/dev.npz'], "--out {tmp}/dev.npz: {tmp}/dev.md is no regular file"),
     (['--label', 'type', '--out', '{tmp}/m.npz'], "--label 'type': the name of a built-in"),
     (['--label', 'thumb_up', '--out', '{tmp}/m.npz'], "--label 'thumb_up': the name of a built-in"),
+    (['--label', 'hover', '--out', '{tmp}/m.npz'], "--label 'hover': the name of a built-in"),
     (['--label', 'caf\u00e9', '--out', '{tmp}/m.npz'], "--label 'caf\u00e9': letters, digits and _ only"),
     (['--label', 'a' * 65, '--out', '{tmp}/m.npz'], "--label '%s': at most 64 characters" % ('a' * 65)),
 ])

@@ -157,7 +157,8 @@ class HandTracker:
             lost = self._lost(timestamp, frame_id)
             self.hand_id = hand.id
             return lost
-        self.hand_id = hand.id
+        if hand.id:                     # an id-less frame keeps the one followed
+            self.hand_id = hand.id
         g = self.recognizer.update(hand, timestamp)
         arm, origin, stop, gripper, gripper_value = self.actions.flags(g)
         events = list(self.actions.events(g.events))

@@ -58,7 +58,9 @@ class BindingError(ValueError):
 
 def _names(value, where):
     if value is None:
-        return ()
+        # A blank value reads as if it kept the default; it would unbind the action.
+        raise BindingError('%s: no gesture given (write [] to leave it unbound, or leave the '
+                           'action out to keep its default)' % where)
     if isinstance(value, str):
         value = [value]
     if not isinstance(value, (list, tuple)) or not all(
@@ -171,6 +173,9 @@ class BoundActions:
                         on = True
                         break
             out.append(on)
+        # The arm's hold counts frames that show its gesture, never one only held through
+        # a frame too unsure to judge (the filter ends a thumbs-up there itself).
+        out[0] = out[0] and g.judged
         if not out[3]:
             value = 0.0
         elif self._gripper_by_pinch and g.pinch:

@@ -28,7 +28,7 @@ MAX_CLASS_NAME = 64        # a name in JSON keys, YAML bindings and the camera o
 # the gestures in its output (fist, open, pinch, rock, thumb and none are the built-in
 # classes: a user's samples may add to them).
 CLASHING_NAMES = frozenset(('thumb_up', 'thumb_down', 'unfold', 'fold', 'circle', 'circle_cw',
-                            'circle_ccw', 'hand_lost', 'hand_found', 'type', 'events',
+                            'circle_ccw', 'hand_lost', 'hand_found', 'hover', 'type', 'events',
                             'pinch_value', 'extended', 'label', 'probability', 'id',
                             'timestamp', 'hands'))
 

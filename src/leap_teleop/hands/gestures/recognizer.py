@@ -87,9 +87,9 @@ class GestureRecognizer:
                              'rock' in active, 'open' in active, extended, [],
                              'thumb_down' in active, label, probability,
                              tuple(sorted(n for n in active if n in self.user_gestures))
-                             if self.user_gestures else ())
+                             if self.user_gestures else (), usable)
         if not stateless:
-            state.events = filt.events(state, prev, timestamp)
+            state.events = filt.events(state, prev, timestamp, usable)
             if self.circles is not None and usable and g is not None:
                 circle = self.circles.update(hand, timestamp, g, extended)
                 if circle is not None:

@@ -7,7 +7,9 @@ held gesture (and of a user's own gestures), unfold (fist -> open) and fold (ope
 Fold and unfold land or launch a drone, so they need a deliberate change: the first shape
 held FOLD_HOLD_S, the second one shown within FOLD_GAP_S of its end and held
 FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes, pinches
-or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears).
+or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears). Both
+holds count judged frames only: a frame too unsure to judge ends the shape for them, so a
+misread carried through such frames never completes a fold.
 """
 import math
 from dataclasses import dataclass, field
@@ -45,6 +47,7 @@ class GestureState:
     label: str = ''                    # the pose model's winning class this frame
     probability: float = 0.0           # ... and its probability
     user: Tuple[str, ...] = ()         # a user's own gestures held now
+    judged: bool = True                # False: a frame too unsure to judge (held state)
 
 
 class HeldFilter:
@@ -104,8 +107,9 @@ class HeldFilter:
             self._count[name] = 0
         return self.active
 
-    def events(self, state, prev, timestamp):
-        """Events of the change from `prev` to `state` (GestureStates) at `timestamp`."""
+    def events(self, state, prev, timestamp, judged=True):
+        """Events of the change from `prev` to `state` (GestureStates) at `timestamp`;
+        judged: the frame was judged (not one whose state is only held)."""
         events = []
         for name in HELD_GESTURES:
             now = getattr(state, name)
@@ -114,10 +118,12 @@ class HeldFilter:
                                            state.pinch_value if name == 'pinch' else 0.0))
         for name in set(state.user) ^ set(prev.user):
             events.append(HandEvent(name, name in state.user))
-        shape = 'fist' if state.fist else 'open' if state.open else None
+        shape = None if not judged else 'fist' if state.fist else 'open' if state.open else None
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
-                self._last_shape, self._last_span = self._shape, (self._shape_since, timestamp)
+                # it ended where it was last judged
+                end = timestamp if judged else self._last_confident
+                self._last_shape, self._last_span = self._shape, (self._shape_since, end)
             self._shape, self._shape_since, self._confirmed = shape, timestamp, False
         if shape is not None and not self._confirmed \
                 and timestamp - self._shape_since >= FOLD_CONFIRM_S - 1e-9:
