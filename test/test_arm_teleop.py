@@ -550,6 +550,19 @@ def test_out_of_order_messages_are_dropped():
     assert t.status.target == before             # the dropped hand moved nothing
 
 
+@pytest.mark.parametrize('stamp', [math.nan, math.inf, -math.inf])
+def test_non_finite_stamp_is_rejected_and_keeps_the_order_check(stamp):
+    t, c = armed_with_origin()
+    now = c.tick()
+    last = now
+    assert t.on_hand(hand(stamp=last), now) is None
+    assert 'not finite' in t.on_hand(hand(stamp=stamp), c.tick(0.001))
+    assert t.status.rejected_inputs == 1
+    # NaN taken as the last stamp would let an older message through
+    assert t.on_hand(hand(stamp=last - 0.05), c.tick(0.001)).startswith('out of order')
+    assert t.status.rejected_inputs == 2
+
+
 def test_proportional_gripper_follows_pinch_value_and_sends_changes_only():
     t, c = armed_with_origin(gripper_mode='proportional')
     assert drive(t, c, hand(pinch=True, pinch_value=0.3)).gripper == pytest.approx(0.3)

@@ -259,6 +259,9 @@ class ArmTeleop:
         elif not (-_TWO_PI <= hand.rotate <= _TWO_PI and -_TWO_PI <= hand.turn <= _TWO_PI
                   and -_TWO_PI <= hand.swing <= _TWO_PI):     # finite, within a turn
             why = 'hand rotation %s is not an angle' % (angles,)
+        elif not math.isfinite(hand.stamp):
+            # NaN fails every order comparison: taken, it would let stale messages through.
+            why = 'stamp %r is not finite' % hand.stamp
         else:
             why = self._stream.check(hand.stamp, now)
         if why:
