@@ -291,6 +291,26 @@ def record_one_second_of(pose, tmp_path, out, *more):
                                  'two', '--realtime', '0', '--out', str(out)] + list(more))
 
 
+def test_record_gestures_refuses_a_label_the_shared_data_gives_a_built_in_class(tmp_path, capsys):
+    assert record_one_second_of('thumbs_up', tmp_path, tmp_path / 'x.jsonl', '--label', 'up') == 2
+    assert "--label 'up': the shared data's name for its built-in class 'thumb'" in capsys.readouterr().err
+
+
+def test_a_new_class_takes_only_shared_rows_that_were_none(tmp_path, leapjs_data):
+    # a user's class named like a shared take moved that take's fists and open hands into it
+    from leap_teleop.hands.gestures.train import training_dataset
+    data = tmp_path / 'data'
+    data.mkdir()
+    (data / 'leapjs').symlink_to(os.path.abspath(leapjs_data))
+    out = tmp_path / 'grab.jsonl'
+    assert record_one_second_of('two', tmp_path, out) == 0
+    before = training_dataset('leap', str(data), [])
+    grab = {c for c, lab in zip(before.y, before.label) if lab == 'grab'}
+    assert grab >= {'fist', 'open'}
+    after = training_dataset('leap', str(data), [(str(out), 'grab')])
+    assert {c for c, lab in zip(after.y, after.label) if lab == 'grab'} >= grab
+
+
 def test_record_gestures_without_a_hand_writes_nothing(tmp_path, capsys):
     out = tmp_path / 'x.jsonl'
     assert record_one_second_of('absent', tmp_path, out) == 1
@@ -406,6 +426,12 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--label', 'type', '--out', '{tmp}/m.npz'], "--label 'type': the name of a built-in"),
     (['--label', 'thumb_up', '--out', '{tmp}/m.npz'], "--label 'thumb_up': the name of a built-in"),
     (['--label', 'hover', '--out', '{tmp}/m.npz'], "--label 'hover': the name of a built-in"),
+    # the shared data's names of built-in classes: the real thumbs-ups left the guarded
+    # class for an unguarded one, the OK signs left pinch
+    (['--label', 'thumbs_up', '--out', '{tmp}/m.npz'],
+     "--label 'thumbs_up': the shared data's name for its built-in class 'thumb'"),
+    (['--label', 'ok', '--out', '{tmp}/m.npz'], "--label 'ok': the shared data's name for its "
+                                                "built-in class 'pinch': add to that class with --label pinch"),
     (['--label', 'caf\u00e9', '--out', '{tmp}/m.npz'], "--label 'caf\u00e9': letters, digits and _ only"),
     (['--label', 'a' * 65, '--out', '{tmp}/m.npz'], "--label '%s': at most 64 characters" % ('a' * 65)),
 ])

@@ -31,6 +31,7 @@ import sys
 from leap_teleop.hands.frame import Frame
 from leap_teleop.hands.gestures.classifier import class_name_problem
 from leap_teleop.hands.gestures.features import normalize_keypoints
+from leap_teleop.hands.gestures.training_set import shared_label_problem
 from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
 from leap_teleop.output_file import output_problem
@@ -51,7 +52,7 @@ class RecordError(ValueError):
 
 
 def check_label(label):
-    problem = class_name_problem(label)
+    problem = class_name_problem(label) or shared_label_problem(label)
     if problem:
         raise RecordError('--label %r: %s' % (label, problem))
     return label

@@ -40,6 +40,7 @@ from leap_teleop.hands.gestures.training_set import (
     add_leapjs_takes,
     add_photos,
     data_terms,
+    shared_label_problem,
 )
 from leap_teleop.output_file import output_problem
 
@@ -242,9 +243,10 @@ def _read_dataset(family, data_dir, adds):
                     add_keypoints(ds, os.path.join(folder, name))
     # A user's new gesture that the shared people also recorded (a V sign is their 'two'
     # or 'peace', trained as none): their rows join the user's class instead of opposing it.
+    # Only rows trained as none: a built-in class keeps its rows (and its guards).
     for _, label in adds:
         for i, lab in enumerate(ds.label):
-            if lab == label:
+            if lab == label and ds.y[i] == 'none':
                 ds.y[i] = label
     for (path, label), person in zip(adds, user_people([p for p, _ in adds])):
         before = len(ds.y)
@@ -381,8 +383,9 @@ def main(argv=None):
             ap.error('--add %s: %s' % (path, 'a folder: name a file' if os.path.isdir(path)
                                        else 'no such file'))
     for label in args.label:
-        if class_name_problem(label):
-            ap.error('--label %r: %s' % (label, class_name_problem(label)))
+        problem = class_name_problem(label) or shared_label_problem(label)
+        if problem:
+            ap.error('--label %r: %s' % (label, problem))
     if args.out is not None:
         problem = model_out_problem(args.out, args.add)
         if problem:

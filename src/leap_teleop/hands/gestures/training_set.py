@@ -26,6 +26,20 @@ JOINT_NOISE_MM = 3.0    # tracker noise on the Leap hands' noisy copies
 TAKE_LABELS = {'thumbs_up': 'thumb', 'thumbs_down': 'thumb', 'open_hand_up': 'open',
                'open_hand_down': 'open', 'open_hand_left': 'open', 'open_hand_right': 'open'}
 
+
+
+def shared_label_problem(label):
+    """Why a user's class may not be named `label` because the shared data files rows of
+    that name under a built-in class (a user's `thumbs_up` would take the real thumbs-ups
+    from the guarded `thumb`), or None."""
+    for labels in (gd.LEAP_LABELS, gd.KEYPOINT_LABELS, gd.PHOTO_LABELS, TAKE_LABELS):
+        cls = labels.get(label)
+        if cls not in (None, 'none', label):      # fist, open, rock add to their class
+            return ('the shared data\'s name for its built-in class %r: add to that class '
+                    'with --label %s, or choose another name' % (cls, cls))
+    return None
+
+
 # Where the fitted data comes from and under what terms (the data folders' READMEs), by
 LEAPJS_PERSON = 'leapjs_takes'       # the person of the shared LeapJS takes (one tracker, one name)
 # the prefix of the people each source adds ('' for the webcam keypoint files' people).
