@@ -160,7 +160,9 @@ def test_target_is_clamped_to_the_workspace_box():
 
 
 def test_joystick_dead_zone_moves_nothing_and_excess_moves_at_capped_speed():
-    t, c = armed_with_origin(mode='joystick', dead_zone=0.03, max_tcp_speed=0.1)
+    # An arm fast enough for the cap (the target leads a slower one by a bounded distance)
+    t, c = armed_with_origin(mode='joystick', dead_zone=0.03, max_tcp_speed=0.1,
+                             max_joint_speed=1.0, max_joint_accel=math.pi)
     for _ in range(50):
         drive(t, c, hand(palm_mm=(20.0, 210.0, 0.0)))      # 22 mm from the origin
     np.testing.assert_allclose(t.status.target, kin.fk(HOME)[:3, 3], atol=1e-12)
@@ -846,6 +848,23 @@ def test_a_joystick_push_out_of_reach_does_not_wind_the_target_up():
     assert np.linalg.norm(np.array(t.status.target) - held_at) < 0.01
     _, q = follow(t, c, hand(palm_mm=(200.0, 0.0, 200.0)), 2, q)
     assert t.status.state == TRACKING
+
+
+def test_joystick_target_stays_near_a_slow_arm_and_the_dead_zone_stops_it():
+    # The target integrated from itself ran 0.24 m ahead of a 0.05 rad/s arm in a 2 s push;
+    # back in the dead zone the arm drove on to it for 5 s.
+    t, c = armed_with_origin(mode='joystick')
+    q = HOME.copy()
+    for _ in range(250):                                   # 100 mm beyond the origin for 2 s
+        _, q = follow(t, c, hand(palm_mm=(0.0, 200.0, -100.0)), 1, q)
+        lead = np.linalg.norm(np.array(t.status.target) - kin.fk(q)[:3, 3])
+        assert lead <= t.p.max_tcp_speed * 0.1 + 0.01, lead
+    released = kin.fk(q)[:3, 3]
+    assert np.linalg.norm(released - kin.fk(HOME)[:3, 3]) > 0.03       # it did move
+    _, q = follow(t, c, hand(), 375, q)                    # 3 s in the dead zone
+    assert t.status.state == TRACKING
+    assert np.linalg.norm(kin.fk(q)[:3, 3] - released) < 0.005
+    assert not t._servo.moving or np.abs(t._servo.state_at(c.t, q)[1]).max() < 1e-9
 
 
 @pytest.mark.parametrize('fields', [dict(palm_mm=(10.0, 200.0)), dict(palm_mm=(10.0, 200.0, 0.0, 5.0)),

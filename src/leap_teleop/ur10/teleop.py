@@ -53,6 +53,9 @@ REANCHOR_TURN_RAD = 0.3
 # stays within it (it falls behind by at most 0.5 s before it starts its count afresh).
 OFF_PLAN_LAG_S = 0.6
 OFF_PLAN_S = 0.25
+# Joystick: the target leads where the arm is commanded to be by at most this much (s) of
+# max_tcp_speed (about the servo's lag while it speeds up).
+JOYSTICK_LEAD_S = 0.1
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -170,6 +173,7 @@ class ArmTeleop:
         self._hand_rot = None
         self._tool_near = (None, None)  # (relative rotation vector, (tilt axis, turn)) last aimed
         self._target = None
+        self._joy_still = False        # joystick: the last target was a dead-zone stop
         self._goal = None              # (time, joint goal) of the last tracked target
         self._last_step = None
         self._gripper_sent = None
@@ -607,6 +611,7 @@ class ArmTeleop:
         self._hand_rot_ref = hand_rot.copy()
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
+        self._joy_still = False
         self._tool_near = (None, None)
         self._goal = None
         self._filter.reset(palm, now)
@@ -639,13 +644,29 @@ class ArmTeleop:
 
     def _joystick(self, offset_mm, dt, now):
         n = float(np.linalg.norm(offset_mm))
-        # After a hold (a stall, a loss) there is no target: it moves on from where the arm
-        # is, not from the origin (that sent the arm back to where rock was shown).
-        base = (self._target if self._target is not None
-                else kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3])
         dead_zone_mm = 1000.0 * self.p.dead_zone
         if n <= dead_zone_mm:
-            return base
+            # Stop where the current plan comes to rest (a target ahead of the arm would
+            # run it on), then stay there while the hand stays in the dead zone.
+            if not self._joy_still or self._target is None:
+                self._joy_still = True
+                return kin.fk(self._servo.rest(self._q))[:3, 3]
+            return self._target
+        self._joy_still = False
+        # From where the arm is commanded to be, leading it by a bounded distance: from the
+        # last target alone it ran ahead of a slow arm without bound. (Not from that pose
+        # alone: the servo's feed-forward of the goal's speed then runs away.) After a hold
+        # (no target) it moves on from the arm, not from the origin; in an IK hold from the
+        # last reachable target (pulled back toward the stopped arm, it crept along the
+        # edge of the reach in holds and restarts).
+        base = kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]
+        if self.status.state == HOLDING and self._target is not None:
+            base = self._target
+        elif self._target is not None:
+            lead = self._target - base
+            d = float(np.linalg.norm(lead))
+            cap = self.p.max_tcp_speed * JOYSTICK_LEAD_S
+            base = self._target if d <= cap else base + lead * (cap / d)
         excess = offset_mm * (1.0 - dead_zone_mm / n)
         v = self._axes @ excess * 0.001 * self.p.joystick_gain
         speed = float(np.linalg.norm(v))
