@@ -298,6 +298,10 @@ def _model_arrays():
     ('106 features', 'a leap model takes 107 features, not 106'),
     ('a class named type', "class 'type': the name of a built-in"),
     ('a class named twice', 'a class named twice'),
+    # a model of a user's classes alone read every hand as one of them (the fist never stopped)
+    ('none of the built-in classes', 'of the classes gun, two, wave, hi, bye, peace lacks the built-in '
+                                     'ones fist, none, open, pinch, rock, thumb'),
+    ('a class named yes', "class 'yes': a bindings YAML reads it as a boolean"),
     ('scalar mean', 'inconsistent model arrays'),
     ('a zero scale', 'inconsistent model arrays'),     # numpy's warnings were two more lines
     ('weights near the float limit', 'weights beyond 1e+06: not a fitted model'),
@@ -326,6 +330,10 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
                           w0=arrays['w0'][:106])
         elif spoil == 'a class named type':
             arrays['classes'] = np.array(['type' if c == 'rock' else c for c in arrays['classes']])
+        elif spoil == 'none of the built-in classes':
+            arrays['classes'] = np.array(['gun', 'two', 'wave', 'hi', 'bye', 'peace'])
+        elif spoil == 'a class named yes':
+            arrays['classes'] = np.array(['yes' if c == 'rock' else c for c in arrays['classes']])
         elif spoil == 'a class named twice':
             arrays['classes'] = np.array(['fist' if c == 'rock' else c for c in arrays['classes']])
         elif spoil == 'scalar mean':

@@ -24,6 +24,8 @@ _KEYS = ('classes', 'family', 'mean', 'scale', 'w0', 'b0', 'w1', 'b1')
 FEATURES_OF = {'leap': LEAP_FEATURES, 'keypoints': KEYPOINT_FEATURES}
 MAX_WEIGHT = 1e6
 MAX_CLASS_NAME = 64        # a name in JSON keys, YAML bindings and the camera overlay
+# The classes the recognizer reads its gestures from (thumb: up or down, judged apart).
+BUILT_IN_CLASSES = ('fist', 'none', 'open', 'pinch', 'rock', 'thumb')
 # Names no class may take: the recognizer's other gestures and events, and the keys beside
 # the gestures in its output (fist, open, pinch, rock, thumb and none are the built-in
 # classes: a user's samples may add to them).
@@ -39,6 +41,9 @@ def class_name_problem(name):
         return 'letters, digits and _ only'
     if len(name) > MAX_CLASS_NAME:
         return 'at most %d characters' % MAX_CLASS_NAME
+    import yaml  # here: recognizing needs numpy only
+    if yaml.safe_load(name) != name:
+        return 'a bindings YAML reads it as a boolean, a null or a number: choose a word'
     if name in CLASHING_NAMES:
         return ('the name of a built-in gesture, event or output key; choose another (thumb, '
                 'fist, open, pinch, rock or none add samples to the built-in classes)')
@@ -72,6 +77,7 @@ class PoseClassifier:
         self.w0, self.b0 = np.asarray(w0, dtype=float), np.asarray(b0, dtype=float)
         self.w1, self.b1 = np.asarray(w1, dtype=float), np.asarray(b1, dtype=float)
         self.card = dict(card or {})
+        self.path = ''                  # the file it was loaded from, if any
         if self.mean.ndim != 1 or self.w0.ndim != 2 or self.w1.ndim != 2 or not self.classes:
             raise ModelError('inconsistent model arrays')
         if len(set(self.classes)) != len(self.classes):
@@ -160,6 +166,7 @@ class PoseClassifier:
         if model.n_features != FEATURES_OF[model.family]:
             raise ModelError('%s: a %s model takes %d features, not %d' % (
                 path, model.family, FEATURES_OF[model.family], model.n_features))
+        model.path = path
         return model
 
 

@@ -13,7 +13,7 @@ landmarks is judged by the keypoint model, any other by the Leap one.
 import math
 
 from leap_teleop.hands.gestures.circles import CircleDetector
-from leap_teleop.hands.gestures.classifier import load_model
+from leap_teleop.hands.gestures.classifier import BUILT_IN_CLASSES, ModelError, load_model
 from leap_teleop.hands.gestures.geometry import hand_geometry, num
 from leap_teleop.hands.gestures.pose import classify_pose
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureState, HeldFilter
@@ -34,6 +34,15 @@ class GestureRecognizer:
         self.stateless = stateless
         self.models = {'leap': load_model(model, 'leap'),
                        'keypoints': load_model(keypoint_model, 'keypoints')}
+        for m in self.models.values():
+            missing = [c for c in BUILT_IN_CLASSES if c not in m.classes]
+            if missing:
+                # Without them every hand reads as one of its own classes: an open hand
+                # arms what a user class is bound to, and the fist never stops.
+                raise ModelError('%s: a %s pose model of the classes %s lacks the built-in ones '
+                                 '%s: retrain it with the shared data (train_gestures --data DIR)'
+                                 % (m.path or 'the model', m.family, ', '.join(m.classes),
+                                    ', '.join(missing)))
         extra = tuple(c for m in self.models.values() for c in m.classes
                       if c not in HELD_GESTURES and c not in ('none', 'thumb'))
         self.user_gestures = tuple(sorted(set(extra)))
