@@ -216,3 +216,26 @@ def test_leap_motion_launch_turns_leap_hands_as_the_driver_and_sender_launch_as_
                                atol=1e-9)
     mine = load_params('leap_motion.launch', ['leap_rotation:=[0, 0, 0, 1]'])[key]
     assert mine == [0, 0, 0, 1]
+
+
+@pytest.mark.parametrize('name, arg, flag', [('replay.launch', 'bag', None),
+                                             ('record.launch', 'output', '-O')])
+def test_rosbag_reads_a_relative_bag_from_where_roslaunch_ran(name, arg, flag, monkeypatch, tmp_path):
+    # rosbag runs in ROS_HOME: bag:=one_arm.bag beside the user was not found
+    import roslaunch.config
+    import roslaunch.xmlloader
+
+    def node_args(value):
+        config = roslaunch.config.ROSLaunchConfig()
+        roslaunch.xmlloader.XmlLoader(resolve_anon=False).load(
+            os.path.join(LAUNCH, name), config, verbose=False,
+            argv=['roslaunch', '%s:=%s' % (arg, value)])
+        (node,) = [n for n in config.nodes if n.package == 'rosbag']
+        return node.args.split()
+
+    monkeypatch.setenv('PWD', str(tmp_path))
+    args = node_args('one_arm.bag')
+    assert str(tmp_path / 'one_arm.bag') in args
+    assert '/abs/two.bag' in node_args('/abs/two.bag')
+    if flag:
+        assert args[args.index(flag) + 1] == str(tmp_path / 'one_arm.bag')

@@ -269,3 +269,33 @@ def test_two_field_limits_name_the_axis_and_the_values():
 def test_a_misspelt_pilot_parameter_is_refused_by_name():
     with pytest.raises(ParamError, match='unknown pilot parameters: dead_zon'):
         PilotParams().update({'dead_zon': 0.2})
+
+
+def test_a_relative_path_is_read_from_where_the_command_ran(tmp_path, monkeypatch):
+    # roslaunch starts nodes in ROS_HOME: video:=clip.mp4 given beside the clip was looked
+    # for there, and the cell config fell back to config/ under the same name
+    from leap_teleop.package_files import user_path
+    shell, ros_home = tmp_path / 'shell', tmp_path / 'ros_home'
+    (shell / 'frames').mkdir(parents=True)
+    ros_home.mkdir()
+    (shell / 'clip.mp4').write_bytes(b'')
+    (shell / 'frames' / 'a.png').write_bytes(b'')
+    (ros_home / 'only_here.yaml').write_text('')
+    monkeypatch.chdir(ros_home)
+    monkeypatch.setenv('PWD', str(shell))
+    assert user_path('clip.mp4') == str(shell / 'clip.mp4')
+    assert user_path('frames/*.png') == str(shell / 'frames/*.png')
+    # what is not there keeps its name: a file of config/, or one beside the node
+    for name in ('ur10_dual_cell.yaml', 'only_here.yaml', 'frames/*.jpg', '', '/abs/x.yaml'):
+        assert user_path(name) == name
+    monkeypatch.setenv('PWD', 'relative/nonsense')
+    assert user_path('clip.mp4') == 'clip.mp4'
+
+
+def test_every_file_parameter_is_declared_a_path():
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    from leap_teleop.ur10.cell_runner import RUNNER_PARAMS
+    files = {'script', 'recording', 'video', 'gesture_model', 'keypoint_model', 'gesture_bindings'}
+    assert {n for n, p in SENDER_PARAMS.items() if p.path} == files
+    assert RUNNER_PARAMS['config'].path
+    assert 'a path (a relative one from where it was launched)' in SENDER_PARAMS['video'].allowed()

@@ -32,7 +32,8 @@ class Param:
     lists the allowed values; `length` fixes a list's length (`min_length` bounds it);
     `item` is a list's item kind ('float', 'int', 'str') or a Param (a list of lists:
     each item is checked against it); `empty_ok=False` refuses ''; `ros_name` wants a
-    legal ROS graph name (a topic: letters, digits, _, / and a leading ~, no //). A single
+    legal ROS graph name (a topic: letters, digits, _, / and a leading ~, no //); `path`
+    marks a file path (the node reads a relative one from where it was launched). A single
     string given for a list of strings is a list of one (`_sides:=right` means ['right']).
     """
 
@@ -40,7 +41,7 @@ class Param:
 
     def __init__(self, default, doc, unit='', kind=None, gt=None, ge=None, lt=None, le=None,
                  choices=None, length=None, min_length=None, item=None, empty_ok=True,
-                 ros_name=False):
+                 ros_name=False, path=False):
         self.default = default
         self.doc = doc
         self.unit = unit
@@ -56,6 +57,7 @@ class Param:
             self.item.unit = self.item.unit or unit
         self.empty_ok = empty_ok
         self.ros_name = ros_name
+        self.path = path
 
     # -- checking -------------------------------------------------------------------------
     def check(self, name, value):
@@ -137,6 +139,7 @@ class Param:
             return 'one of: ' + ', '.join(str(c) if c != '' else "''" for c in self.choices)
         words = {'bool': 'true or false',
                  'str': ('ROS names' if plural else 'a ROS name') if self.ros_name else
+                 'a path (a relative one from where it was launched)' if self.path else
                  'strings' if plural else 'a string',
                  'int': 'integers' if plural else 'an integer',
                  'float': 'finite numbers' if plural else 'a finite number'}[kind]

@@ -16,8 +16,9 @@ LEAP_IN_WORLD_XYZW = (0.5, -0.5, -0.5, 0.5)
 SENDER_PARAMS = {
     'source': Param('scripted', 'hand source', choices=tuple(SOURCES)),
     'script': Param('', 'gesture script YAML for the scripted source '
-                        '(default config/gestures/wave_hello.yaml)'),
-    'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source'),
+                        '(default config/gestures/wave_hello.yaml)', path=True),
+    'recording': Param('', 'LeapJS recording (.json, .json.lz, .json.gz) for the recording source',
+                       path=True),
     'rate': Param(0.0, 'scripted source frame rate; 0 = the script\'s own (video source: pace '
                        'at this many frames/s; 0 = the file\'s own)', unit='Hz',
                   ge=0.0, le=1000.0),
@@ -82,10 +83,11 @@ SENDER_PARAMS = {
                                        '(z +-0.40, y -0.15..0.35, x -0.05..0.45 rad); false: '
                                        'the raw rotation since the origin'),
     'gesture_model': Param('', 'Leap-family pose model (.npz, train_gestures --out); '
-                               'empty = the shipped one'),
-    'keypoint_model': Param('', 'camera keypoint pose model (.npz); empty = the shipped one'),
+                               'empty = the shipped one', path=True),
+    'keypoint_model': Param('', 'camera keypoint pose model (.npz); empty = the shipped one',
+                            path=True),
     'gesture_bindings': Param('', 'gesture -> action bindings YAML (see config/gestures/'
-                                  'bindings/default.yaml); empty = those defaults'),
+                                  'bindings/default.yaml); empty = those defaults', path=True),
     'recognizer_on_frames': Param(3, 'gesture recognizer: frames a held gesture must be seen '
                                      'before it starts', ge=1, le=100),
     'recognizer_off_frames': Param(3, 'gesture recognizer: frames it must be gone before it '

@@ -7,6 +7,7 @@ import time
 
 import rospy
 
+from leap_teleop.package_files import user_path
 from leap_teleop.params import ParamError, check_params, unknown_param_warnings
 from leap_teleop.repeat_limit import RepeatLimit
 from leap_teleop.ros.diagnostics import DIAGNOSTIC_PARAMS
@@ -93,8 +94,12 @@ def forward_library_logs():
 def read_params(params):
     """A dict of every ~param, defaults from the table, each checked against its declaration
     (ParamError names the first bad one)."""
-    return check_params(params, {name: rospy.get_param('~' + name, params[name].default)
-                                 for name in params})
+    p = check_params(params, {name: rospy.get_param('~' + name, params[name].default)
+                              for name in params})
+    for name, declared in params.items():
+        if declared.path:
+            p[name] = user_path(p[name])
+    return p
 
 
 def warn_unknown_params(node, params):

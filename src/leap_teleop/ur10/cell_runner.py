@@ -18,7 +18,7 @@ from leap_teleop.ur10.trajectory import TrajectoryError
 
 RUNNER_PARAMS = {
     'config': Param(DEFAULT_CELL_CONFIG, 'cell YAML: a path or a file name in config/',
-                    empty_ok=False),
+                    empty_ok=False, path=True),
     'gui': Param(False, 'open the PyBullet GUI window (needs a display)'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
                                   'than 1 only with /use_sim_time)', ge=0.0, le=100.0),

@@ -28,7 +28,8 @@ class DeviceParam(Param):
 
 CAMERA_PARAMS = {
     'device': DeviceParam('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
-    'video': Param('', 'video source: a video file, an image, a folder or a glob of images'),
+    'video': Param('', 'video source: a video file, an image, a folder or a glob of images',
+                   path=True),
     'width': Param(640, 'webcam: capture width asked of the device; video: frames are '
                         'letterboxed to width x height (0 = as they come)',
                    unit='px', ge=0, le=7680),
