@@ -239,3 +239,10 @@ def test_rosbag_reads_a_relative_bag_from_where_roslaunch_ran(name, arg, flag, m
     assert '/abs/two.bag' in node_args('/abs/two.bag')
     if flag:
         assert args[args.index(flag) + 1] == str(tmp_path / 'one_arm.bag')
+
+
+def test_the_drone_launch_waits_for_no_hand_its_pilot_may_not_read():
+    # The pilot reads the hand its config's side names; a wait for hand_right never ended
+    # with side: left
+    wait = load_params('ardrone.launch', [])['/leap_sender/wait_topics']
+    assert 'leapmotion/gestures' in wait and not [t for t in wait if 'hand_' in t]
