@@ -299,3 +299,14 @@ def test_every_file_parameter_is_declared_a_path():
     assert {n for n, p in SENDER_PARAMS.items() if p.path} == files
     assert RUNNER_PARAMS['config'].path
     assert 'a path (a relative one from where it was launched)' in SENDER_PARAMS['video'].allowed()
+
+
+def test_a_silence_shorter_than_two_checks_is_refused_and_0_still_means_never():
+    # 0.005 s re-made a healthy 120 Hz stream's connection 4 times a second
+    from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
+    p = HAND_SUBSCRIPTION_PARAMS['resubscribe_silent_after']
+    assert p.check('resubscribe_silent_after', 0) == 0.0
+    assert p.check('resubscribe_silent_after', 0.5) == 0.5
+    for bad in (0.005, 0.25, -1.0):
+        with pytest.raises(ParamError, match=r'allowed: 0 or a finite number >= 0.5 and <= 60 \(s\)'):
+            p.check('resubscribe_silent_after', bad)

@@ -33,7 +33,8 @@ class Param:
     `item` is a list's item kind ('float', 'int', 'str') or a Param (a list of lists:
     each item is checked against it); `empty_ok=False` refuses ''; `ros_name` wants a
     legal ROS graph name (a topic: letters, digits, _, / and a leading ~, no //); `path`
-    marks a file path (the node reads a relative one from where it was launched). A single
+    marks a file path (the node reads a relative one from where it was launched);
+    `or_zero` also allows 0 (an "off") below the bounds. A single
     string given for a list of strings is a list of one (`_sides:=right` means ['right']).
     """
 
@@ -41,7 +42,7 @@ class Param:
 
     def __init__(self, default, doc, unit='', kind=None, gt=None, ge=None, lt=None, le=None,
                  choices=None, length=None, min_length=None, item=None, empty_ok=True,
-                 ros_name=False, path=False):
+                 ros_name=False, path=False, or_zero=False):
         self.default = default
         self.doc = doc
         self.unit = unit
@@ -58,6 +59,7 @@ class Param:
         self.empty_ok = empty_ok
         self.ros_name = ros_name
         self.path = path
+        self.or_zero = or_zero
 
     # -- checking -------------------------------------------------------------------------
     def check(self, name, value):
@@ -114,7 +116,7 @@ class Param:
                 raise ParamError('not finite')
         if self.choices is not None and value not in self.choices:
             raise ParamError('not one of the choices')
-        if kind in ('int', 'float'):
+        if kind in ('int', 'float') and not (self.or_zero and value == 0):
             for bound, ok in ((self.gt, lambda b: value > b), (self.ge, lambda b: value >= b),
                               (self.lt, lambda b: value < b), (self.le, lambda b: value <= b)):
                 if bound is not None and not ok(bound):
@@ -150,6 +152,8 @@ class Param:
                   if b is not None]
         if bounds:
             words += ' ' + ' and '.join(bounds)
+            if self.or_zero:
+                words = '0 or ' + words
         if self.unit:
             words += ' (%s)' % self.unit
         return words

@@ -54,9 +54,11 @@ HAND_SUBSCRIPTION_PARAMS = {
                                     'lasts); also re-establish it after this long connected to '
                                     'no publisher while the master lists one; 0 = never',
                                unit='s', ge=0.0, le=60.0),
+    # At least two checks (0.25 s apart): shorter, a check between two messages of a healthy
+    # stream re-made its connection, losing what was in flight.
     'resubscribe_silent_after': Param(2.0, 're-establish it, once, after this long without any '
                                            'message while a publisher is connected; 0 = never',
-                                      unit='s', ge=0.0, le=60.0),
+                                      unit='s', ge=0.5, le=60.0, or_zero=True),
     'hand_frame': Param('leap_hands', 'frame the hand messages must be in (the sender\'s '
                                       '~frame_id); others are refused with a warning, messages '
                                       'with no frame (the original sender\'s) are taken; '
