@@ -212,6 +212,14 @@ def test_cell_config_scalars_are_checked(key, value):
 
 @pytest.mark.parametrize('spoil, message', [
     (lambda d: d['arms'][0].update(name='bad arm!'), "arms[0].name must be a ROS name"),
+    # misspelt keys were ignored: the arm stood at its default place
+    (lambda d: d['arms'][0].update(base_xzy=d['arms'][0].pop('base_xyz')),
+     "arms[0]: unknown key 'base_xzy' (did you mean base_xyz?) (arm keys: name, base_xyz"),
+    (lambda d: d['arms'][0]['tray'].update(wal=[0.01, 0.04]), "arms[0].tray: unknown key 'wal' (did you mean wall?)"),
+    (lambda d: d['cubes'][0].update(colour=[1, 0, 0, 1]), "cubes[0]: unknown key 'colour'"),
+    (lambda d: d.update(physics=500), "unknown key 'physics' (did you mean physics_hz?) (cell keys"),
+    (lambda d: d['table'].update(hieght=0.8), "table: unknown key 'hieght' (did you mean height?)"),
+    (lambda d: d['camera'].update(fovy=40), "camera: unknown key 'fovy' (did you mean fov?)"),
     (lambda d: d['arms'][0].update(home=[100] * 6), 'ur10_1 home (rad) must be 6 numbers'),
     (lambda d: d['arms'][0]['tray'].update(inner=['abc', 0.2]), 'ur10_1 tray inner must be'),
     (lambda d: d['arms'][0]['tray'].update(wall=[-0.01, -0.04]), 'ur10_1 tray wall must be'),

@@ -4,6 +4,7 @@ Everything a consumer needs to script the cell: where each arm's base is in the 
 its home joints, its tray, and where the cubes start. Poses for IK are in an arm's
 base_link frame; ArmConfig.to_base / to_world convert 4x4 world <-> base poses.
 """
+import difflib
 import functools
 import math
 import os
@@ -178,6 +179,29 @@ CELL_PARAMS = {
 }
 
 
+# The keys each part of a cell YAML may hold: a misspelt one (base_xzy) was ignored, and its
+# default silently used (an arm placed at the origin).
+_KEYS = {'cell': ('arms', 'cubes', 'table', 'camera', 'physics_hz', 'cube_size', 'cube_mass'),
+         'table': ('center', 'size', 'height'),
+         'arm': ('name', 'base_xyz', 'base_rpy', 'home', 'tray'),
+         'tray': ('xyz', 'inner', 'wall'),
+         'cube': ('name', 'xyz', 'rgba', 'arm', 'yaw'),
+         'camera': ('eye', 'target', 'fov')}
+
+
+def _known_keys(entry, kind, where):
+    """ValueError naming a key of `entry` (a dict) that a `kind` part does not have."""
+    if not isinstance(entry, dict):
+        return
+    for key in entry:
+        if key not in _KEYS[kind]:
+            close = difflib.get_close_matches(str(key), _KEYS[kind], n=1)
+            raise ValueError('%sunknown key %r%s (%s keys: %s)'
+                             % (where + ': ' if where else '', key,
+                                ' (did you mean %s?)' % close[0] if close else '', kind,
+                                ', '.join(_KEYS[kind])))
+
+
 def parse_config(data, path=''):
     """CellConfig from the YAML's dict; ValueError, naming the field, on a malformed file."""
     if not isinstance(data, dict) or not isinstance(data.get('arms'), list) or not data['arms']:
@@ -195,7 +219,10 @@ def parse_config(data, path=''):
 
 
 def _parse(data, path):
+    _known_keys(data, 'cell', '')
     table = data.get('table', {})
+    _known_keys(table, 'table', 'table')
+    _known_keys(data.get('camera'), 'camera', 'camera')
     try:
         scalars = check_params(CELL_PARAMS, {k: v for k, v in dict(
             data, table_height=table.get('height', 0.75)).items() if k in CELL_PARAMS})
@@ -208,7 +235,9 @@ def _parse(data, path):
         if not isinstance(name, str) or not ARM_NAME.fullmatch(name):
             raise ValueError('arms[%d].name must be a ROS name (a letter, then letters, digits '
                              'or _), got %r' % (i, name))
+        _known_keys(a, 'arm', 'arms[%d]' % i)
         tray = a.get('tray', {})
+        _known_keys(tray, 'tray', 'arms[%d].tray' % i)
         arms.append(ArmConfig(
             name=name,
             base_xyz=_vec(a.get('base_xyz', [0, 0, height]), 3, name + ' base_xyz'),
@@ -225,6 +254,7 @@ def _parse(data, path):
     cubes = []
     for i, c in enumerate(data.get('cubes') or []):
         what = 'cubes[%d]' % i
+        _known_keys(c, 'cube', what)
         xyz = list(c['xyz'])
         if len(xyz) == 2:
             xyz.append(height + size / 2)
