@@ -246,3 +246,15 @@ def test_the_drone_launch_waits_for_no_hand_its_pilot_may_not_read():
     # with side: left
     wait = load_params('ardrone.launch', [])['/leap_sender/wait_topics']
     assert 'leapmotion/gestures' in wait and not [t for t in wait if 'hand_' in t]
+
+
+def test_rviz_keeps_the_config_files_odom_in_world(tmp_path):
+    # rviz:=true set the arg's default [1, 0, 0] over the file's
+    import yaml
+    config = tmp_path / 'mine.yaml'
+    config.write_text(yaml.safe_dump({'ardrone_sim': {'odom_in_world': [2.0, 0.5, 0.0]}}))
+    params = load_params('ardrone.launch', ['config:=%s' % config, 'rviz:=true'])
+    assert params['/ardrone_sim/odom_in_world'] == [2.0, 0.5, 0.0]
+    params = load_params('ardrone.launch', ['config:=%s' % config, 'rviz:=true',
+                                            'odom_in_world:=[0.0, 1.0, 0.0]'])
+    assert params['/ardrone_sim/odom_in_world'] == [0.0, 1.0, 0.0]
