@@ -28,6 +28,20 @@ def test_rosrun_script_help(script):
     assert 'non-unique' not in run.stdout and 'loop detected' not in run.stderr, run.stderr
 
 
+
+@pytest.mark.parametrize('script, module', [('drone_pilot.py', 'drone_pilot'), ('sender.py', 'sender'),
+                                            ('ur10_arm.py', 'ur10_arm')])
+def test_help_marks_the_parameters_that_change_live(script, module):
+    # --help named a Python constant (RECONFIGURABLE) and marked none of them
+    import importlib
+    live = importlib.import_module('leap_teleop.ros.nodes.' + module).RECONFIGURABLE
+    run = subprocess.run(['rosrun', 'leap_teleop', script, '--help'], stdin=subprocess.DEVNULL,
+                         capture_output=True, text=True, timeout=60)
+    marked = {line.split()[0].lstrip('~') for line in run.stdout.splitlines()
+              if line.startswith('  ~') and line.endswith(' (live)')}
+    assert live and marked == set(live) and 'RECONFIGURABLE' not in run.stdout
+
+
 # A bad ~param ends the node at start-up: exit status 1 and one fatal line naming it.
 BAD_PARAMS = [
     ('sender.py', ['_source:=recording'], 'needs ~recording'),

@@ -147,6 +147,8 @@ class Param:
                  'float': 'finite numbers' if plural else 'a finite number'}[kind]
         if kind == 'str' and not self.empty_ok:
             words += ' (not empty)'
+        elif kind == 'str' and self.ros_name and not plural:
+            words += " or ''"           # '' is the node's default name (see its doc)
         bounds = [op + ' ' + _fmt(b) for op, b in (('>', self.gt), ('>=', self.ge),
                                                   ('<', self.lt), ('<=', self.le))
                   if b is not None]

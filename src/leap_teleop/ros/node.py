@@ -17,16 +17,20 @@ from leap_teleop.ros.signals import init_node
 LIBRARY_PARAMS = DIAGNOSTIC_PARAMS
 
 
-def handle_help(node_name, description, params, argv=None):
-    """Print the node's private parameters and exit when --help / -h is given."""
+def handle_help(node_name, description, params, argv=None, live=()):
+    """Print the node's private parameters (`live`: those dynamic_reconfigure changes while
+    it runs) and exit when --help / -h is given."""
     argv = rospy.myargv(argv if argv is not None else sys.argv)
     if '-h' not in argv and '--help' not in argv:
         return
     print('usage: rosrun leap_teleop %s [_param:=value ...] [topic:=remapped ...]\n' % node_name)
     print(textwrap.fill(description, 88) + '\n')
-    print('private parameters (~name, default, allowed values):')
+    print('private parameters (~name, default, allowed values; live: changes while it runs, '
+          'through dynamic_reconfigure):')
     for name, p in list(params.items()) + list(LIBRARY_PARAMS.items()):
-        print('  ~%-22s %-28r %s\n  %-51s allowed: %s' % (name, p.default, p.doc, '', p.allowed()))
+        print('  ~%-22s %-28r %s%s\n  %-51s allowed: %s' % (name, p.default, p.doc,
+                                                           ' (live)' if name in live else '', '',
+                                                           p.allowed()))
     sys.exit(0)
 
 
@@ -35,7 +39,9 @@ def start_node(script, name, doc, params, make, argv=None, errors=(ValueError, T
     """The start every node shares: --help, init_node, the ~params, then make(p). A bad
     parameter (make raising one of `errors`) ends the node with one fatal log line (plus
     `hint`) and exit status 1, not a traceback. Returns (p, what make returned)."""
-    handle_help(script, doc, params, argv)
+    # the node module's RECONFIGURABLE, as the docs' tables read it
+    live = getattr(sys.modules.get(getattr(make, '__module__', '')), 'RECONFIGURABLE', ())
+    handle_help(script, doc, params, argv, live)
     try:
         init_node(name)
     except OverflowError as e:      # rospy sends _name:=value params over XML-RPC first

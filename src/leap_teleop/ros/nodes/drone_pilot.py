@@ -8,7 +8,7 @@ a worker thread runs the watchdog and publishes (a takeoff or land waits for the
 takeoff at most ~takeoff_hold; the flip call has its own thread, abandoned after
 ~service_timeout; an ending pilot sends a zero twist: the driver holds the last). No navdata
 for ~navdata_timeout: no takeoff, hover, land after ~land_after. Rejections, faults and flip
-outcomes go to /diagnostics; RECONFIGURABLE parameters change live, watchdog times do not.
+outcomes go to /diagnostics; the parameters --help marks live change while it runs.
 """
 import threading
 

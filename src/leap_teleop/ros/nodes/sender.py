@@ -2,7 +2,8 @@
 request the leap_motion driver's interface (DriverHuman raw and low-pass filtered, its RViz
 markers, the old leap and leapros messages).
 
-Publishes once per source frame from the source's thread (event-driven; no polling).
+Publishes once per source frame from the source's thread (event-driven; no polling). The
+parameters --help marks live change while it runs (dynamic_reconfigure).
 """
 import gc
 

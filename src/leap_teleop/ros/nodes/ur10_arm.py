@@ -6,7 +6,7 @@ arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory) and
 loop, which runs at ~rate and right after each new hand message. Every key of
 config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, ...) is
 also a private parameter; the launch files load that file into the node's namespace.
-RECONFIGURABLE of them (gains, dead zone, filter constants, speed limits, the arming hold)
+Those --help marks live (gains, dead zone, filter constants, speed limits, the arming hold)
 can be changed while running with dynamic_reconfigure; the others are start-up only.
 """
 import threading
