@@ -54,3 +54,40 @@ def test_a_master_that_does_not_answer_is_one_warning_naming_the_topics(monkeypa
     (key, line), = log.lines
     assert key == 'type_check'
     assert '/cmd_vel, /ardrone/land' in line and 'connection refused' in line
+
+
+def test_a_long_wait_for_a_reader_becomes_a_warning_that_asks_whether_it_runs(monkeypatch):
+    # A reader that refused its parameters had ended; the sender said only, at INFO level
+    # every 5 s for ever, that it was waiting.
+    import rosgraph
+
+    from leap_teleop.ros import graph
+    clock, said = [0.0], []
+
+    class Master:
+        def __init__(self, _name):
+            pass
+
+        def getSystemState(self):
+            return [[], [('/seen', ['/a'])], []]
+
+    def sleep(dt):
+        clock[0] += 1.0
+        if clock[0] > 40:
+            raise SystemExit
+    monkeypatch.setattr(rosgraph, 'Master', Master)
+    monkeypatch.setattr(rospy, 'get_name', lambda: '/sender')
+    monkeypatch.setattr(rospy, 'get_time', lambda: clock[0])
+    monkeypatch.setattr(rospy, 'sleep', sleep)
+    monkeypatch.setattr(rospy, 'is_shutdown', lambda: False)
+    monkeypatch.setattr(rospy, 'loginfo', lambda fmt, *a: said.append(('info', fmt % a)))
+    monkeypatch.setattr(rospy, 'logwarn', lambda fmt, *a: said.append(('warn', fmt % a)))
+    try:
+        graph.wait_for_subscribers({}, ['/seen', '/unread'], 'sender')
+    except SystemExit:
+        pass
+    assert said[0] == ('info', 'sender: waiting for subscribers on /unread')
+    assert [lv for lv, _ in said] == ['info'] * 5 + ['warn'] * 3
+    assert said[-1][1].startswith('sender: still no subscriber on /unread after 40 s: is the '
+                                  'node that reads it running?')
+    assert graph.wait_for_subscribers({}, ['/seen'], 'sender')

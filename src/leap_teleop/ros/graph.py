@@ -6,13 +6,15 @@ import rosgraph
 import rospy
 
 
-def wait_for_subscribers(own, topics, who, log_every=5.0):
+def wait_for_subscribers(own, topics, who, log_every=5.0, warn_after=30.0):
     """Block until every topic in `topics` (resolved names) has a subscriber; False on
     shutdown. `own` maps this node's resolved topic names to its publishers: those count
     once connected, any other topic once the master lists a subscriber. Logs what it
-    waits for every `log_every` s, prefixed by `who`."""
+    waits for every `log_every` s, prefixed by `who`; after `warn_after` s as a warning
+    that asks whether the reader runs (one that refused a parameter has ended, and its
+    launch goes on without it)."""
     master = rosgraph.Master(rospy.get_name())
-    last_log = rospy.get_time()
+    last_log = start = rospy.get_time()
     while not rospy.is_shutdown():
         others = [t for t in topics if t not in own]
         listened = set()
@@ -25,9 +27,15 @@ def wait_for_subscribers(own, topics, who, log_every=5.0):
                                          else t not in listened)]
         if not waiting:
             return True
-        if rospy.get_time() - last_log >= log_every:
-            last_log = rospy.get_time()
-            rospy.loginfo('%s: waiting for subscribers on %s', who, ', '.join(waiting))
+        now = rospy.get_time()
+        if now - last_log >= log_every:
+            last_log = now
+            if now - start >= warn_after:
+                rospy.logwarn('%s: still no subscriber on %s after %.0f s: is the node that '
+                              'reads it running? (one that refused a parameter has ended: see '
+                              'its FATAL line)', who, ', '.join(waiting), now - start)
+            else:
+                rospy.loginfo('%s: waiting for subscribers on %s', who, ', '.join(waiting))
         rospy.sleep(0.05)
     return False
 
