@@ -11,6 +11,7 @@ from leap_teleop.hands.sender_setup import (
     PeriodThrottle,
     build_source,
     check_outputs,
+    checked_bindings,
     recognizer_factory,
     retune_recognizers,
     retune_sender,
@@ -286,3 +287,26 @@ def test_a_bad_global_filter_cutoff_is_a_bad_parameter(monkeypatch):
     monkeypatch.setattr(rospy, 'get_param', lambda name: -2.0)
     with pytest.raises(ParamError, match='/filter_cutoff'):
         use_driver_globals(params(), SENDER_PARAMS)
+
+
+def test_bindings_are_checked_against_the_model_that_judges_the_sources_hands(tmp_path):
+    # a Leap model's 'two' bound with a webcam source was accepted and never fired
+    import numpy as np
+
+    from leap_teleop.hands.gestures import GestureRecognizer
+    from leap_teleop.hands.gestures.bindings import BindingError
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS
+    with np.load(DEFAULT_MODELS['leap']) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays['classes'] = np.append(arrays['classes'], 'two')
+    arrays['w1'] = np.hstack([arrays['w1'], arrays['w1'][:, :1]])
+    arrays['b1'] = np.append(arrays['b1'], arrays['b1'][0] - 10.0)
+    np.savez(tmp_path / 'two.npz', **arrays)
+    (tmp_path / 'b.yaml').write_text('arm: {arm: two}\n')
+    recognizer = GestureRecognizer(model=str(tmp_path / 'two.npz'))
+    assert recognizer.user_gestures_of == {'leap': ('two',), 'keypoints': ()}
+    bound = params(source='recording', gesture_bindings=str(tmp_path / 'b.yaml'))
+    assert checked_bindings(bound, recognizer).actions['arm']['arm'] == ('two',)
+    with pytest.raises(BindingError, match="unknown gesture 'two' .*: the webcam source's hands are "
+                                           "judged by ~keypoint_model"):
+        checked_bindings(dict(bound, source='webcam'), recognizer)

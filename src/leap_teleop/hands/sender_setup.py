@@ -1,6 +1,7 @@
 """What the sender's checked ~params build, without ROS: the hand source, the gesture
 recognizers and their live retuning, and the original sender's publishing period."""
 from leap_teleop.hands.gestures import GestureRecognizer
+from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.sources import SourceError, make_source
 from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs
 
@@ -70,6 +71,17 @@ def recognizer_factory(p):
                                  off_frames=p['recognizer_off_frames'],
                                  min_confidence=p['recognizer_min_confidence'])
     return make
+
+
+def checked_bindings(p, recognizer):
+    """The ~gesture_bindings, checked against what the source's hands can show: a camera
+    hand is judged by the keypoint model, any other by the Leap one, so a class of the other
+    model never fires (BindingError)."""
+    family = 'keypoints' if p['source'] in CAMERA_SOURCES else 'leap'
+    model = '~keypoint_model' if family == 'keypoints' else '~gesture_model'
+    return load_bindings(p['gesture_bindings']).check(
+        recognizer.user_gestures_of[family],
+        ': the %s source\'s hands are judged by %s' % (p['source'], model))
 
 
 def retune_recognizers(recognizers, changes):

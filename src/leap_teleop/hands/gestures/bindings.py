@@ -111,9 +111,9 @@ class Bindings:
         """Every gesture bound to something."""
         return {g for acts in self.actions.values() for gs in acts.values() for g in gs}
 
-    def check(self, user_gestures=()):
-        """BindingError naming the first bound gesture the recognizer cannot report, or a
-        user gesture that takes a reserved name."""
+    def check(self, user_gestures=(), hint=''):
+        """BindingError naming the first bound gesture the recognizer cannot report (`hint`
+        appended), or a user gesture that takes a reserved name."""
         for g in user_gestures:
             if g in RESERVED:
                 raise BindingError('the gesture model\'s class %r takes the name of a built-in '
@@ -124,8 +124,8 @@ class Bindings:
                 for g in gestures:
                     if g not in known:
                         raise BindingError(
-                            '%s: %s.%s: unknown gesture %r (known: %s)'
-                            % (self.name, section, action, g, ', '.join(sorted(known))))
+                            '%s: %s.%s: unknown gesture %r (known: %s)%s'
+                            % (self.name, section, action, g, ', '.join(sorted(known)), hint))
         return self
 
     def is_default(self):

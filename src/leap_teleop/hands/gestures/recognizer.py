@@ -16,7 +16,7 @@ from leap_teleop.hands.gestures.circles import CircleDetector
 from leap_teleop.hands.gestures.classifier import BUILT_IN_CLASSES, ModelError, load_model
 from leap_teleop.hands.gestures.geometry import hand_geometry, num
 from leap_teleop.hands.gestures.pose import classify_pose
-from leap_teleop.hands.gestures.temporal import HELD_GESTURES, GestureState, HeldFilter
+from leap_teleop.hands.gestures.temporal import GestureState, HeldFilter
 
 MIN_CONFIDENCE = 0.1               # below: the frame does not count (SDK fists go to ~0.15)
 # Minimum time a gesture must be seen before it turns on (besides on_frames).
@@ -43,9 +43,10 @@ class GestureRecognizer:
                                  '%s: retrain it with the shared data (train_gestures --data DIR)'
                                  % (m.path or 'the model', m.family, ', '.join(m.classes),
                                     ', '.join(missing)))
-        extra = tuple(c for m in self.models.values() for c in m.classes
-                      if c not in HELD_GESTURES and c not in ('none', 'thumb'))
-        self.user_gestures = tuple(sorted(set(extra)))
+        # a hand is judged by its family's model only: a class of the other never fires for it
+        self.user_gestures_of = {f: tuple(sorted(c for c in m.classes if c not in BUILT_IN_CLASSES))
+                                 for f, m in self.models.items()}
+        self.user_gestures = tuple(sorted(set().union(*self.user_gestures_of.values())))
         self.filter = HeldFilter(1 if stateless else on_frames, 1 if stateless else off_frames,
                                  {} if stateless else (ON_TIME_S if on_time is None else on_time),
                                  extra=self.user_gestures)

@@ -10,10 +10,15 @@ import gc
 import rospy
 import tf2_ros
 
-from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE, leap_rotation
-from leap_teleop.hands.sender_setup import build_source, check_outputs, recognizer_factory, retune_sender
+from leap_teleop.hands.sender_setup import (
+    build_source,
+    check_outputs,
+    checked_bindings,
+    recognizer_factory,
+    retune_sender,
+)
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
 from leap_teleop.package_files import package_path
@@ -38,7 +43,7 @@ def sender_parts(p):
     use_driver_globals(p, PARAMS)
     p['leap_rotation_xyzw'] = leap_rotation(p['leap_rotation_xyzw'])
     factory = recognizer_factory(p)
-    bindings = load_bindings(p['gesture_bindings']).check(factory().user_gestures)
+    bindings = checked_bindings(p, factory())
     view = camera_view_publisher(p)
     source = build_source(p, rospy.get_time, package_path('config', 'gestures', 'wave_hello.yaml'),
                           lambda: camera_model(p), view.on_image if view is not None else None)
