@@ -57,6 +57,15 @@ def drive(teleop, clock, h, periods=1, q=None):
     return cmd
 
 
+def target_q(t, seed=HOME):
+    """The joints that put the tool on the target (where the goals head)."""
+    return kin.ik_nearest(kin.pose(np.array(t.status.target), np.array(t.status.target_rotation)), seed)
+
+
+def target_rotation(t):
+    return np.array(t.status.target_rotation)
+
+
 def armed_with_origin(mode='imitation', **params):
     t = ArmTeleop(ArmTeleopParams(mode=mode, filter_min_cutoff_hz=0.0, rotation_min_cutoff_hz=0.0, **params))
     c = Clock()
@@ -120,8 +129,14 @@ def test_imitation_maps_palm_offset_through_axis_map_and_scale():
     tcp_ref = kin.fk(HOME)[:3, 3]
     cmd = drive(t, c, hand(palm_mm=(0.0, 250.0, -40.0)))   # up 50 mm, away from user 40 mm
     expected = tcp_ref + np.array([0.08, 0.0, 0.1])        # base x = -leap z, z = leap y
-    np.testing.assert_allclose(kin.fk(cmd.q)[:3, 3], expected, atol=1e-9)
-    np.testing.assert_allclose(kin.fk(cmd.q)[:3, :3], kin.tool_down(), atol=1e-9)
+    np.testing.assert_allclose(t.status.target, expected, atol=1e-9)
+    np.testing.assert_allclose(target_rotation(t), kin.tool_down(), atol=1e-9)
+    # Further than the joints go in one period: the goal is a step along the straight line.
+    goal = kin.fk(cmd.q)
+    np.testing.assert_allclose(goal[:3, :3], kin.tool_down(), atol=1e-9)
+    along = goal[:3, 3] - tcp_ref
+    assert 0.0 < np.linalg.norm(along) < 0.001
+    np.testing.assert_allclose(np.cross(along, expected - tcp_ref), 0.0, atol=1e-9)
 
 
 def check_points(cmd, speed, accel):
@@ -139,14 +154,16 @@ def check_points(cmd, speed, accel):
 
 def test_commands_respect_the_joint_speed_and_acceleration_limits():
     t, c = armed_with_origin(max_joint_speed=0.05, max_joint_accel=0.5)
-    speeds = []
+    speeds, goal = [], HOME
     for _ in range(125):                                  # 1 s toward a far target
         cmd = drive(t, c, hand(palm_mm=(60.0, 200.0, 0.0)))
         check_points(cmd, 0.05, 0.5)
         speeds.append(np.max(np.abs(cmd.points[0][2])))
-        assert np.max(np.abs(cmd.q - HOME)) > 0.01       # the goal: the target's IK
-    # Accelerates at 0.5 rad/s^2 (one horizon ahead) up to 0.05 rad/s, then cruises.
-    assert speeds[0] == pytest.approx(0.5 * t.p.command_horizon)
+        # the goal steps toward the target's IK no faster than the joints go
+        assert np.max(np.abs(cmd.q - goal)) <= 0.05 * 0.008 + 1e-12
+        goal = cmd.q
+    # Accelerates within 0.5 rad/s^2 (one horizon ahead) up to 0.05 rad/s, then cruises.
+    assert 0.0 < speeds[0] <= 0.5 * t.p.command_horizon + 1e-12
     assert speeds[-1] == pytest.approx(0.05)
 
 
@@ -246,8 +263,8 @@ def test_stall_shorter_than_disarm_after_resumes_from_the_current_pose_without_a
     q = HOME.copy()
     cmd, q = follow(t, c, hand(palm_mm=(0.0, 260.0, -60.0)), 60, q)    # moving forward / up
     assert np.max(np.abs(q - HOME)) > 0.05
-    # The sender stalls 0.5 s (< disarm_after) while the arm moves: the arm holds.
-    cmds = stall(t, c, 0.5, q=q)
+    # The sender stalls 0.7 s (< disarm_after) while the arm moves: the arm holds.
+    cmds = stall(t, c, 0.7, q=q)
     holds = [x for x in cmds if sent(x)]
     assert len(holds) == 1 and t.status.state == HOLDING
     q = holds[0].points[-1][1]                 # where the hold comes to rest
@@ -297,7 +314,7 @@ def test_a_small_gap_after_a_stall_keeps_the_origin_and_is_caught_up_within_the_
 
 def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes_to_rest():
     # Taken at the pose passed while braking, the origin was one the arm ran on past and
-    # then drove back to, with the hand still (here 6 mm: the last command's own plan had
+    # then drove back to, with the hand still (here 3 mm: the last command's own plan had
     # braked for most of the stall already).
     t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
     q = HOME.copy()
@@ -314,10 +331,68 @@ def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes
     assert t.status.state == HOLDING
     rest = t._servo.rest(q)
     passing = t._servo.state_at(c.t + 0.008, q)[0]
-    assert np.linalg.norm(kin.fk(rest)[:3, 3] - kin.fk(passing)[:3, 3]) > 0.004
-    follow(t, c, hand(palm_mm=tuple(palm + [0.0, 0.0, -100.0])), 1, q)
+    assert np.linalg.norm(kin.fk(rest)[:3, 3] - kin.fk(passing)[:3, 3]) > 0.002
+    follow(t, c, hand(palm_mm=tuple(palm + [0.0, 100.0, 0.0])), 1, q)       # 0.25 m up
     assert 'origin re-anchored' in t.status.reason
     np.testing.assert_allclose(t._tcp_ref, kin.fk(rest)[:3, 3], atol=1e-9)
+
+
+def _palm_for(t, target):
+    """The palm (mm) whose mapping puts the TCP target at `target`."""
+    return np.array(PALM) + np.linalg.solve(t._axes, np.asarray(target) - t._tcp_ref) / (0.001 * t.p.scale)
+
+
+def _sweep(t, c, q, a, b, periods, then=0):
+    """The hand from where it maps to a to where it maps to b in `periods`, held there
+    `then` more; the joints follow the plan (stamped states). (lowest TCP z, largest tool
+    tilt, q)."""
+    pa, pb = _palm_for(t, a), _palm_for(t, b)
+    zmin, tilt = math.inf, 0.0
+    for k in range(periods + then):
+        palm = pa + (pb - pa) * min(1.0, (k + 1) / periods)
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
+        t.on_joints(q, now)
+        cmd = t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+        for _, qp, _ in cmd.points or ():          # what the controller is sent
+            zmin = min(zmin, kin.fk(qp)[2, 3])
+        pose = kin.fk(q)
+        zmin, tilt = min(zmin, pose[2, 3]), max(tilt, kin.tilt_and_yaw(pose[:3, :3])[0])
+    return zmin, tilt, q
+
+
+def test_a_hand_faster_than_the_joints_is_caught_up_along_its_path_above_the_table():
+    # Each joint ran toward the far goal at its own saturated speed: the hand slid along the
+    # table 3 cm above it (480 mm/s), and the TCP went 18 cm under the table top, tilted.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    a, b = (0.45, 0.16, 0.03), (1.05, 0.16, 0.03)
+    _, _, q = _sweep(t, c, HOME.copy(), kin.fk(HOME)[:3, 3], a, 300, then=200)
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], a, atol=1e-3)
+    zmin, tilt, q = _sweep(t, c, q, a, b, 62, then=600)
+    assert t.status.state == TRACKING and t.status.ik_failures == 0
+    assert zmin > 0.015 and tilt < 0.05, (zmin, tilt)        # the box's floor is 0
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=1e-3)
+
+
+def test_a_far_catch_up_after_a_joint_state_stall_is_stepped_not_refused_as_another_configuration():
+    # The base had to turn 1.57 rad (> MAX_GOAL_JUMP) to where the hand went during the stall:
+    # 'only another arm configuration reaches', held for good, 125 IK failures a second.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    a, b = (0.6, -0.6, 0.3), (0.6, 0.6, 0.3)
+    _, _, q = _sweep(t, c, HOME.copy(), kin.fk(HOME)[:3, 3], a, 300, then=200)
+    pa, pb = _palm_for(t, a), _palm_for(t, b)
+    for k in range(188):                                  # 1.5 s without joint states
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(pa + (pb - pa) * min(1.0, (k + 1) / 94)), stamp=now), now)
+        if k == 0:
+            t.on_joints(q, now)
+        t.step(now)
+    assert 'no joint states' in t.status.reason
+    zmin, tilt, q = _sweep(t, c, q, b, b, 1, then=500)   # states back, the hand still
+    assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=1e-3)
+    assert zmin > 0.28 and tilt < 0.05, (zmin, tilt)
 
 
 def test_a_thumbs_up_is_held_only_while_it_is_seen():
@@ -585,10 +660,11 @@ def test_a_grasp_waits_until_the_tool_is_where_the_hand_put_it():
     cmds = _pinch_far_away(t, c, 60)
     assert [cmd.gripper for cmd in cmds] == [None] * 60 and cmds[-1].q is not None
     # It gets there: the grasp goes in that period, once.
-    cmds = _pinch_far_away(t, c, 3, q=cmds[-1].q)
+    there = target_q(t)
+    cmds = _pinch_far_away(t, c, 3, q=there)
     assert [cmd.gripper for cmd in cmds] == [pytest.approx(0.43), None, None]
     # Letting go waits the same way for the tool.
-    cmds = [drive(t, c, hand(palm_mm=PALM), q=cmds[-1].q) for _ in range(3)]
+    cmds = [drive(t, c, hand(palm_mm=PALM), q=there) for _ in range(3)]
     assert [cmd.gripper for cmd in cmds] == [None] * 3
     assert drive(t, c, hand(palm_mm=PALM), q=HOME).gripper == 0.0
 
@@ -648,9 +724,12 @@ def test_fuzzed_input_never_leaves_the_limits(palm, pinch_value, flags, mode):
         assert np.all(np.isfinite(cmd.q))
         assert np.all(cmd.q <= kin.JOINT_UPPER) and np.all(cmd.q >= kin.JOINT_LOWER)
         check_points(cmd, t.p.max_joint_speed, kin.MAX_JOINT_ACCEL[0])
-        tcp = kin.fk(cmd.q)[:3, 3]
-        assert np.all(tcp >= np.array(t.p.workspace_min) - 1e-6)
-        assert np.all(tcp <= np.array(t.p.workspace_max) + 1e-6)
+        lo, hi = np.array(t.p.workspace_min) - 1e-6, np.array(t.p.workspace_max) + 1e-6
+        # the goal, and every point the controller is sent on the way to it
+        for q in [cmd.q] + [q for _, q, _ in cmd.points]:
+            pose = kin.fk(q)
+            assert np.all(pose[:3, 3] >= lo) and np.all(pose[:3, 3] <= hi)
+            assert kin.tilt_and_yaw(pose[:3, :3])[0] <= t.p.max_tool_tilt + 1e-6
     if cmd.gripper is not None:
         assert 0.0 <= cmd.gripper <= 0.8
 
@@ -664,9 +743,8 @@ def _rotated(t, c, **angles):
 def test_yaw_mode_turns_the_tool_about_the_vertical_with_the_hand(side_sign):
     # Both hands use the same code: only the angle's sign differs between the two runs.
     t, c = armed_with_origin(orientation='yaw', orientation_scale=1.0)
-    cmd = _rotated(t, c, turn=-0.5 * side_sign, rotate=0.3, swing=0.2)
-    R = kin.fk(cmd.q)[:3, :3]
-    tilt, yaw = kin.tilt_and_yaw(R)
+    _rotated(t, c, turn=-0.5 * side_sign, rotate=0.3, swing=0.2)
+    tilt, yaw = kin.tilt_and_yaw(target_rotation(t))
     # Leap y maps to base z; a hand turning right (+turn) turns the tool clockwise.
     assert yaw == pytest.approx(0.5 * side_sign, abs=1e-9)
     assert tilt == pytest.approx(0.0, abs=1e-9)      # roll and pitch ignored
@@ -718,11 +796,14 @@ def test_a_stream_back_from_a_stall_at_older_stamps_disarms(older_by, disarmed):
 def test_full_mode_follows_the_palm_through_the_axis_map_and_scale():
     t, c = armed_with_origin(orientation='full', orientation_scale=0.5)
     cmd = _rotated(t, c, swing=0.4)                  # pitch up about Leap x
-    R = kin.fk(cmd.q)[:3, :3]
     # Leap x maps to base -y: the tool turns by -0.2 rad about base y, from pointing down.
     expected = kin.rotation_from_vector([0.0, -0.2, 0.0]) @ kin.fk(HOME)[:3, :3]
-    np.testing.assert_allclose(R, expected, atol=1e-9)
+    np.testing.assert_allclose(target_rotation(t), expected, atol=1e-9)
+    np.testing.assert_allclose(t.status.target, kin.fk(HOME)[:3, 3], atol=1e-9)
+    # the goal turns toward it about the same axis, in place
     np.testing.assert_allclose(kin.fk(cmd.q)[:3, 3], kin.fk(HOME)[:3, 3], atol=1e-9)
+    turned = kin.rotation_vector(kin.fk(cmd.q)[:3, :3] @ kin.fk(HOME)[:3, :3].T)
+    assert -0.2 < turned[1] < 0.0 and abs(turned[0]) < 1e-9 and abs(turned[2]) < 1e-9
 
 
 def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
@@ -730,8 +811,10 @@ def test_full_mode_clamps_tilt_and_turn_like_the_workspace():
     cmd = _rotated(t, c, swing=1.2, turn=-1.0)
     tilt, yaw = kin.tilt_and_yaw(np.asarray(t.status.target_rotation))
     assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
-    tilt, yaw = kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])
+    tilt, yaw = kin.tilt_and_yaw(kin.fk(target_q(t))[:3, :3])
     assert tilt == pytest.approx(0.3, abs=1e-9) and yaw == pytest.approx(0.4, abs=1e-9)
+    tilt, yaw = kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])         # a step toward it
+    assert 0.0 < tilt < 0.3 and 0.0 < yaw < 0.4
 
 
 @pytest.mark.parametrize('axis', [(0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (1.0, 0.0, 1.0)],
@@ -800,8 +883,8 @@ def test_orientation_is_captured_at_the_rock():
     cmd = drive(t, c, hand(turn=-0.6))
     # The tool keeps the yaw it had at the rock; the hand's turn counts from there.
     assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.6, abs=1e-6)
-    cmd = drive(t, c, hand(turn=-0.8))
-    assert kin.tilt_and_yaw(kin.fk(cmd.q)[:3, :3])[1] == pytest.approx(0.8, abs=1e-6)
+    drive(t, c, hand(turn=-0.8))
+    assert kin.tilt_and_yaw(target_rotation(t))[1] == pytest.approx(0.8, abs=1e-6)
 
 
 def test_fixed_mode_ignores_the_hand_rotation():

@@ -12,11 +12,13 @@ workspace. Unlike the original: the input is smoothed by One Euro filters (posit
 rotation vector) and validated (out-of-order and late messages are dropped and counted,
 see input_check), the target is clamped to a workspace box, motion is commanded by a
 joint servo with speed and acceleration limits whose trajectories keep the velocity
-continuous (servo.py), IK failures hold the arm instead of raising, stale input holds at
-once and resumes from the current pose when fresh input returns within disarm_after (the
-origin is re-anchored when the hand moved more than reanchor_beyond meanwhile, so nothing
-jumps; a smaller gap is caught up within the servo's limits), while a longer silence, a
-lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold
+continuous (servo.py), a target further than the joints go in one period is approached in
+steps along the straight TCP line (the arm catches up along the hand's path, inside the
+box), IK failures and other arm configurations hold the arm instead of raising, stale
+input holds at once and resumes from the current pose when fresh input returns within
+disarm_after (the origin is re-anchored when the hand moved more than reanchor_beyond
+meanwhile, so nothing jumps; a smaller gap is caught up within the servo's limits), while a
+longer silence, a lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold
 without commanding anything; states back within joint_loss_after resume on the same
 origin (the hand's input never stopped), caught up within the servo's limits; a longer
 loss or the clock jumping back (a simulator restart) disarms without commanding the old
@@ -37,8 +39,17 @@ from leap_teleop.ur10.teleop_params import TELEOP_PARAMS, ArmTeleopParams  # noq
 
 DISARMED, ARMED, TRACKING, HOLDING = 'disarmed', 'armed', 'tracking', 'holding'
 # While tracking, an IK answer this far (rad, any joint) from the last goal is another
-# arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead.
+# arm configuration (elbow, shoulder or wrist flip), not the hand's motion: hold instead
+# (unless it keeps the configuration, see _same_configuration: then it is caught up in
+# steps, and only steps, far below this, are sent).
 MAX_GOAL_JUMP = 1.0
+# Catch-up: a step whose joints need between this much and all of the period's allowance
+# ends the search for it (shorter ones are taken when nothing longer is found).
+CATCH_UP_ENOUGH = 0.95
+# A stepped goal slows down to the target at this much of the acceleration limit: the servo
+# follows it a little late and must still stop there (at the full limit it overran a 5 cm
+# step by 12 mm).
+CATCH_UP_DECEL = 0.25
 # Joint states back after a stall further than this (rad) outside where the robot could
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
@@ -69,6 +80,28 @@ def _within(v, limit):
         x, y, z = v.tolist()
         return -limit <= x <= limit and -limit <= y <= limit and -limit <= z <= limit
     return bool(np.isfinite(v).all()) and not (np.abs(v) > limit).any()
+
+
+def _joint_time(q, ref, speed):
+    """Seconds the joints need from ref to q at their speed limits (lists of floats)."""
+    return max([abs(a - b) / v for a, b, v in zip(q, ref, speed)])
+
+
+def _branch(q):
+    """(shoulder, elbow, wrist) sides of the arm configuration of joints q (the IK's
+    2 x 2 x 2 solutions); the shoulder's: the wrist centre's side of the base axis in the
+    arm's plane."""
+    q2, q3, q4, q5 = q[1], q[2], q[3], q[4]
+    reach = kin.A2 * math.cos(q2) + kin.A3 * math.cos(q2 + q3) + kin.D5 * math.sin(q2 + q3 + q4)
+    return reach > 0.0, math.sin(q3) > 0.0, math.sin(q5) > 0.0
+
+
+def _same_configuration(q, ref):
+    """q is reached from ref without a flip: near (crossing a singularity on the way), or
+    on the same branch with no joint turning half a turn or more (the nearest copy within
+    the limits went the other way round a joint limit)."""
+    diff = max([abs(a - b) for a, b in zip(q, ref)])
+    return diff <= MAX_GOAL_JUMP or (diff < math.pi and _branch(q) == _branch(ref))
 
 
 def _joints_plausible(q):
@@ -175,6 +208,9 @@ class ArmTeleop:
         self._target = None
         self._joy_still = False        # joystick: the last target was a dead-zone stop
         self._goal = None              # (time, joint goal) of the last tracked target
+        self._goal_rate = 0.0          # its last step / (max_joint_speed x the period)
+        self._catching_up = False      # the goal is a step toward the target
+        self._last_reach = None        # (time, the target's IK) the period before
         self._last_step = None
         self._gripper_sent = None
         self._thumb_up_since = None       # (capture stamp, receipt) of the current thumbs-up's start
@@ -504,14 +540,7 @@ class ArmTeleop:
         cmd.gripper = self._gripper_command(hand, now)
         self.status.target = tuple(target.tolist())
         self.status.target_rotation = tuple(map(tuple, rotation.tolist()))
-        seed = self._goal[1] if self._goal is not None else self._servo.state_at(now, self._q)[0]
-        q = kin.ik_nearest(kin.pose(target, rotation), seed,
-                           lower=self._ik_limits[0], upper=self._ik_limits[1])
-        why = 'no IK solution within the joint limits for'
-        # Against the seed, whether it is the last goal or (after a hold) where the arm is:
-        # against the last goal alone, the period after a hold took the other configuration.
-        if q is not None and float(np.abs(q - seed).max()) > MAX_GOAL_JUMP:
-            q, why = None, 'only another arm configuration reaches'
+        q, why = self._next_goal(target, rotation, now, dt)
         if q is None:
             self.status.ik_failures += 1
             if self.p.mode != 'imitation' and reachable is not None:
@@ -534,6 +563,80 @@ class ArmTeleop:
         cmd.stamp = now + self.p.command_lead
         cmd.points = self._servo.track(cmd.stamp, self._q, q, goal_velocity)
         return cmd
+
+    def _next_goal(self, target, rotation, now, dt):
+        """(joint goal, None) for this period, or (None, why not). The target's IK when the
+        joints reach it from the last goal within about one period at their speed limits;
+        else a step toward it along the TCP's straight line from the last goal, as far as
+        the joints allow (their speed, ramped by the acceleration limit): a far goal ran
+        every joint at its own saturated speed, the TCP off the hand's path (under the
+        table, out of the box, the tool tilted)."""
+        lo, hi = self._ik_limits
+        if self._goal is not None:
+            seed, rate = self._goal[1].tolist(), self._goal_rate
+        else:
+            # After a hold, from where the arm is commanded to be (against the last goal
+            # alone, the period after a hold took the other configuration).
+            seed, v = (x.tolist() for x in self._servo.state_at(now, self._q))
+            if not self._servo.moving:     # it has just come to rest: the servo goes on
+                seed = self._q.tolist()    # from the measured joints
+            rate = None
+        q = kin.ik_nearest(kin.pose(target, rotation), seed, lower=lo, upper=hi)
+        if q is None:
+            return None, 'no IK solution within the joint limits for'
+        speed = self._servo.max_speed.tolist()
+        period = min(max(dt, 1e-3), self.p.command_horizon)
+        q_list = q.tolist()
+        need = _joint_time(q_list, seed, speed)
+        # How fast the target's IK moves (normalised like the rate): a goal that follows it
+        # closes the gap on top of that.
+        last = self._last_reach
+        self._last_reach = (now, q_list)
+        moving = 0.0
+        if last is not None and now > last[0]:
+            moving = _joint_time(q_list, last[1], speed) / (now - last[0])
+        if rate is None:
+            rate = _joint_time(v, [0.0] * 6, speed)
+        # Normalised acceleration: the speed limit gained per second (the bottleneck joint's).
+        accel = min([a / w for a, w in zip(self._servo.max_accel.tolist(), speed)])
+        # Speed up within the acceleration limit, and slow down to stop at the target (a
+        # goal stopped at speed is overrun by the servo's braking distance).
+        rate = min(1.0, rate + accel * period,
+                   moving + math.sqrt(2.0 * CATCH_UP_DECEL * accel * need))
+        if need <= period and (not self._catching_up or need <= rate * period):
+            # Within one period (a catch-up: within the slowed-down step): as it is.
+            self._catching_up = False
+            self._goal_rate = need / period
+            return q, None
+        if not _same_configuration(q_list, seed):
+            return None, 'only another arm configuration reaches'
+        self._catching_up = True
+        reach = max(rate, 1e-3) * period
+        start = kin.fk(seed)
+        p0, r0 = start[:3, 3], start[:3, :3]
+        turn = kin.rotation_vector(r0.T @ rotation)
+        f, best, best_f = reach / need, None, 0.0
+        for _ in range(3):
+            step = kin.pose(p0 + f * (target - p0), r0 @ kin.rotation_from_vector(f * turn))
+            qs = kin.ik_nearest(step, seed, lower=lo, upper=hi)
+            d = math.inf if qs is None else _joint_time(qs.tolist(), seed, speed)
+            if d <= reach:
+                if f > best_f:
+                    best, best_f, best_d = qs, f, d
+                if d >= CATCH_UP_ENOUGH * reach:
+                    break
+                f = min(1.0, 0.99 * f * reach / max(d, 1e-12))
+            elif d < 4.0 * reach:
+                f *= 0.99 * reach / d
+            else:
+                # Past a singularity or a configuration boundary the IK moves on fast
+                # or jumps: back off toward the last goal.
+                f *= 0.5 if d == math.inf else min(0.5, reach / d)
+        if best is None:
+            return None, 'no IK solution within the joint limits on the way to'
+        # A step within the window counts as the full rate (else the ramp stalls below it).
+        self._goal_rate = rate if best_d >= CATCH_UP_ENOUGH * reach else best_d / period
+        return best, None
 
     def _off_plan(self, now):
         """The measured joints have stayed off the servo's plan for OFF_PLAN_S; judged only
