@@ -1041,3 +1041,21 @@ def test_a_palm_that_is_no_vector_is_refused(palm):
     t, c = armed_with_origin()
     now = c.tick()
     assert 'is not a trackable hand' in t.on_hand(hand(palm_mm=palm, stamp=now), now)
+
+
+def test_joint_states_back_without_a_receipt_time_after_a_stall_do_not_raise():
+    # on_joints(q) without `now` after stamped states, during a joint stall: step() raised
+    # TypeError computing how long the states had been away
+    t, c = armed_with_origin()
+    now = c.tick()
+    t.on_joints(HOME, now)
+    for _ in range(80):                                   # 0.64 s without joint states
+        now = c.tick()
+        t.on_hand(hand(stamp=now), now)
+        t.step(now)
+    assert 'no joint states' in t.status.reason
+    t.on_joints(HOME)
+    now = c.tick()
+    t.on_hand(hand(stamp=now), now)
+    t.step(now)
+    assert t.status.state == TRACKING and 'back' in t.status.reason, t.status.reason

@@ -502,7 +502,8 @@ class ArmTeleop:
         if self._stalled is not None:
             what, since = self._stalled
             fresh = self._hand_rx if what == 'hand input' else self._joints_rx
-            back = '%s back after %.2f s' % (what, fresh - since)
+            # joint states given without their receipt time carry no duration
+            back = '%s back' % what + (' after %.2f s' % (fresh - since) if fresh is not None else '')
             # A hand silent during a joint stall was not followed either, whichever stalled first.
             hand_stalled = what == 'hand input' or self._hand_silent is not None
             self._stalled = self._hand_silent = None
