@@ -219,6 +219,8 @@ def test_a_misread_carried_through_unjudged_frames_is_no_fold(first, second):
     event = 'fold' if second == 'fist' else 'unfold'
     assert _folds([(a, 0.4), (b, 0.5)]) == [event]
     assert _folds([(a, 0.4), (_pose(first, 0.05), 0.1), (b, 0.5)]) == [event]
+    # one such frame inside the first shape's hold does not split it (a split left 0.2 s)
+    assert _folds([(a, 0.4), (_pose(first, 0.05), 1 / 120), (a, 0.2), (b, 0.5)]) == [event]
 
 
 @pytest.mark.parametrize('bound', ['open', 'rock', 'pinch'])

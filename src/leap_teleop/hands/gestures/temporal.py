@@ -8,8 +8,9 @@ Fold and unfold land or launch a drone, so they need a deliberate change: the fi
 held FOLD_HOLD_S, the second one shown within FOLD_GAP_S of its end and held
 FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes, pinches
 or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears). Both
-holds count judged frames only: a frame too unsure to judge ends the shape for them, so a
-misread carried through such frames never completes a fold.
+holds count the time of judged frames only: frames too unsure to judge neither end a shape
+nor add to its hold, so a misread carried through them never completes a fold, and one such
+frame inside a deliberate hold does not split it.
 """
 import math
 from dataclasses import dataclass, field
@@ -68,9 +69,13 @@ class HeldFilter:
         self._last_confident = -math.inf
         self._shape = None              # 'fist' / 'open' held now, or None
         self._shape_since = 0.0
+        self._shape_held = 0.0          # ... judged frames' time in it
+        self._shape_seen = 0.0          # ... its last judged frame
+        self._judged_before = False     # the frame before this one was judged
         self._confirmed = False         # ... held FOLD_CONFIRM_S (a fold / unfold judged)
-        self._last_shape = None         # the last confirmed one that ended, its span
-        self._last_span = (0.0, 0.0)
+        self._last_shape = None         # the last confirmed one that ended: its hold, its end
+        self._last_held = 0.0
+        self._last_end = 0.0
 
     def update(self, raw, timestamp):
         """Feed one usable frame's decisions {gesture: bool}; the set of active ones."""
@@ -118,19 +123,24 @@ class HeldFilter:
                                            state.pinch_value if name == 'pinch' else 0.0))
         for name in set(state.user) ^ set(prev.user):
             events.append(HandEvent(name, name in state.user))
-        shape = None if not judged else 'fist' if state.fist else 'open' if state.open else None
+        judged_before, self._judged_before = self._judged_before, judged
+        if not judged:              # held state only: the shapes wait for a judged frame
+            return events
+        shape = 'fist' if state.fist else 'open' if state.open else None
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
-                # it ended where it was last judged
-                end = timestamp if judged else self._last_confident
-                self._last_shape, self._last_span = self._shape, (self._shape_since, end)
-            self._shape, self._shape_since, self._confirmed = shape, timestamp, False
+                self._last_shape, self._last_held = self._shape, self._shape_held
+                self._last_end = timestamp if judged_before else self._shape_seen
+            self._shape, self._shape_since, self._shape_held = shape, timestamp, 0.0
+            self._confirmed = False
+        elif judged_before:         # not the time across frames that could not be judged
+            self._shape_held += timestamp - self._shape_seen
+        self._shape_seen = timestamp
         if shape is not None and not self._confirmed \
-                and timestamp - self._shape_since >= FOLD_CONFIRM_S - 1e-9:
+                and self._shape_held >= FOLD_CONFIRM_S - 1e-9:
             self._confirmed = True
-            start, end = self._last_span
-            if self._last_shape not in (None, shape) and end - start >= FOLD_HOLD_S - 1e-9 \
-                    and self._shape_since - end <= FOLD_GAP_S:
+            if self._last_shape not in (None, shape) and self._last_held >= FOLD_HOLD_S - 1e-9 \
+                    and self._shape_since - self._last_end <= FOLD_GAP_S:
                 events.append(HandEvent('unfold' if shape == 'open' else 'fold'))
             self._last_shape = None
         return events
