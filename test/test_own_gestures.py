@@ -426,6 +426,7 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--label', 'type', '--out', '{tmp}/m.npz'], "--label 'type': the name of a built-in"),
     (['--label', 'thumb_up', '--out', '{tmp}/m.npz'], "--label 'thumb_up': the name of a built-in"),
     (['--label', 'hover', '--out', '{tmp}/m.npz'], "--label 'hover': the name of a built-in"),
+    (['--label', 'yes', '--out', '{tmp}/m.npz'], "--label 'yes': a bindings YAML reads it as a boolean"),
     # the shared data's names of built-in classes: the real thumbs-ups left the guarded
     # class for an unguarded one, the OK signs left pinch
     (['--label', 'thumbs_up', '--out', '{tmp}/m.npz'],

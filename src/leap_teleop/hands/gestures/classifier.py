@@ -35,15 +35,18 @@ CLASHING_NAMES = frozenset(('thumb_up', 'thumb_down', 'unfold', 'fold', 'circle'
                             'timestamp', 'hands'))
 
 
-def class_name_problem(name):
-    """Why `name` cannot name a class of a pose model, or None."""
+def class_name_problem(name, new=False):
+    """Why `name` cannot name a class of a pose model, or None; `new`: a label about to be
+    recorded or trained (models made before that rule still load)."""
     if not re.fullmatch(r'[A-Za-z0-9_]+', name or ''):
         return 'letters, digits and _ only'
     if len(name) > MAX_CLASS_NAME:
         return 'at most %d characters' % MAX_CLASS_NAME
-    import yaml  # here: recognizing needs numpy only
-    if yaml.safe_load(name) != name:
-        return 'a bindings YAML reads it as a boolean, a null or a number: choose a word'
+    if new:
+        import yaml  # here: recognizing needs numpy only
+        if yaml.safe_load(name) != name:
+            return ('a bindings YAML reads it as a boolean, a null or a number unless '
+                    'quoted: choose a word')
     if name in CLASHING_NAMES:
         return ('the name of a built-in gesture, event or output key; choose another (thumb, '
                 'fist, open, pinch, rock or none add samples to the built-in classes)')

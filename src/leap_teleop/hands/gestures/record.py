@@ -52,7 +52,7 @@ class RecordError(ValueError):
 
 
 def check_label(label):
-    problem = class_name_problem(label) or shared_label_problem(label)
+    problem = class_name_problem(label, new=True) or shared_label_problem(label)
     if problem:
         raise RecordError('--label %r: %s' % (label, problem))
     return label

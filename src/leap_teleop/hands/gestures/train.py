@@ -383,7 +383,7 @@ def main(argv=None):
             ap.error('--add %s: %s' % (path, 'a folder: name a file' if os.path.isdir(path)
                                        else 'no such file'))
     for label in args.label:
-        problem = class_name_problem(label) or shared_label_problem(label)
+        problem = class_name_problem(label, new=True) or shared_label_problem(label)
         if problem:
             ap.error('--label %r: %s' % (label, problem))
     if args.out is not None:
