@@ -1059,3 +1059,18 @@ def test_joint_states_back_without_a_receipt_time_after_a_stall_do_not_raise():
     t.on_hand(hand(stamp=now), now)
     t.step(now)
     assert t.status.state == TRACKING and 'back' in t.status.reason, t.status.reason
+
+
+def test_a_fast_hand_turn_in_yaw_mode_is_caught_up_not_held_as_another_configuration():
+    # The wrist lagged the turn; the target's IK nearest that lagging goal took the flipped
+    # shoulder (its largest joint move the smaller), refused for good as another configuration.
+    t, c = armed_with_origin(orientation='yaw', max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    for k in range(500):                                   # slowly to one turn limit
+        _, q = follow(t, c, hand(turn=1.6 * min(1.0, (k + 1) / 250)), 1, q)
+    states = set()
+    for k in range(560):                                   # to the other in 0.5 s, then still
+        _, q = follow(t, c, hand(turn=1.6 - 3.2 * min(1.0, (k + 1) / 62)), 1, q)
+        states.add(t.status.state)
+    assert states == {TRACKING} and t.status.ik_failures == 0, t.status.reason
+    assert kin.rotation_error(kin.fk(q)[:3, :3], target_rotation(t)) < 0.01

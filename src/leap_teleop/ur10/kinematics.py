@@ -331,9 +331,10 @@ def _limit_list(limit):
     return np.broadcast_to(limit, (6,)).tolist()
 
 
-def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
-    """The IK solution within the joint limits nearest to q_ref (max-abs joint distance);
-    None when the pose is unreachable or no solution fits the limits. Never raises."""
+def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER, accept=None):
+    """The IK solution within the joint limits nearest to q_ref (max-abs joint distance),
+    among those `accept(q list)` takes when given; None when the pose is unreachable or no
+    solution fits. Never raises."""
     try:
         ref = np.asarray(q_ref, dtype=float).reshape(6).tolist()
         if not all(map(math.isfinite, ref)):
@@ -371,7 +372,8 @@ def ik_nearest(T, q_ref, tcp=True, lower=JOINT_LOWER, upper=JOINT_UPPER):
             out[j] = v
             j += 1
         else:
-            best, best_d = out, d
+            if accept is None or accept(out):
+                best, best_d = out, d
     return None if best is None else np.array(best)
 
 

@@ -610,7 +610,16 @@ class ArmTeleop:
             self._goal_rate = need / period
             return q, None
         if not _same_configuration(q_list, seed):
-            return None, 'only another arm configuration reaches'
+            # The nearest solution by its largest joint move may flip a branch that a
+            # lagging wrist's long way round outweighs (a fast hand turn): the same branch's.
+            branch = _branch(seed)
+            q = kin.ik_nearest(kin.pose(target, rotation), seed, lower=lo, upper=hi,
+                               accept=lambda c: _branch(c) == branch)
+            if q is None or not _same_configuration(q.tolist(), seed):
+                return None, 'only another arm configuration reaches'
+            q_list = q.tolist()
+            need = _joint_time(q_list, seed, speed)
+            self._last_reach = (now, q_list)
         self._catching_up = True
         reach = max(rate, 1e-3) * period
         start = kin.fk(seed)
