@@ -1074,3 +1074,22 @@ def test_a_fast_hand_turn_in_yaw_mode_is_caught_up_not_held_as_another_configura
         states.add(t.status.state)
     assert states == {TRACKING} and t.status.ik_failures == 0, t.status.reason
     assert kin.rotation_error(kin.fk(q)[:3, :3], target_rotation(t)) < 0.01
+
+
+def test_an_acceleration_lowered_live_mid_catch_up_does_not_overrun_the_target():
+    # The servo braked at the new, lower limit at once: each joint ran v^2/2a past its goal,
+    # the TCP 0.23 m past the target and 0.58 m off the line.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    a, b = np.array([0.45, 0.16, 0.3]), np.array([1.05, 0.16, 0.3])
+    _, _, q = _sweep(t, c, HOME.copy(), kin.fk(HOME)[:3, 3], a, 300, then=200)
+    pb = _palm_for(t, b)
+    start, furthest = kin.fk(q)[:3, 3], 0.0
+    for k in range(1200):
+        if k == 56:                                       # 0.45 s into the catch-up
+            t.retune({'max_joint_accel': 0.3})
+        _, q = follow(t, c, hand(palm_mm=tuple(pb)), 1, q)
+        x = kin.fk(q)[:3, 3]
+        furthest = max(furthest, float(np.dot(x - start, b - start) / np.dot(b - start, b - start)))
+    assert furthest < 1.01, furthest                       # 6 mm past the target at most
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=2e-3)
+    assert np.allclose(t._servo.max_accel, 0.3)            # and the lower limit applies at rest

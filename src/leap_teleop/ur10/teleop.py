@@ -67,6 +67,8 @@ OFF_PLAN_S = 0.25
 # Joystick: the target leads where the arm is commanded to be by at most this much (s) of
 # max_tcp_speed (about the servo's lag while it speeds up).
 JOYSTICK_LEAD_S = 0.1
+# A max_joint_accel lowered live applies once every joint can stop within this at it.
+LOWER_ACCEL_STOP_S = 0.1
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -211,6 +213,7 @@ class ArmTeleop:
         self._goal_rate = 0.0          # its last step / (max_joint_speed x the period)
         self._catching_up = False      # the goal is a step toward the target
         self._last_reach = None        # (time, the target's IK) the period before
+        self._lower_accel = None       # a max_joint_accel lowered live, not applied yet
         self._last_step = None
         self._gripper_sent = None
         self._thumb_up_since = None       # (capture stamp, receipt) of the current thumbs-up's start
@@ -239,7 +242,13 @@ class ArmTeleop:
             filt.beta = getattr(p, prefix + 'beta')
             filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
         self._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
-        self._servo.max_accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
+        accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
+        if self._servo.moving and float(accel.max()) < float(self._servo.max_accel.max()):
+            # Braking at a lowered limit mid-motion runs each joint past its goal by v^2/2a
+            # (0.23 m off a catch-up): it applies once the joints can stop at it quickly.
+            self._lower_accel = accel
+        else:
+            self._servo.max_accel, self._lower_accel = accel, None
         self._servo.gain = float(p.servo_gain)
         self._servo.lead = float(p.servo_lead)
 
@@ -374,6 +383,10 @@ class ArmTeleop:
 
     def step(self, now):
         """One control period: the command to send (possibly empty)."""
+        if self._lower_accel is not None and self._q is not None:
+            v = self._servo.state_at(now, self._q)[1]
+            if float(np.abs(v).max()) <= float(self._lower_accel.min()) * LOWER_ACCEL_STOP_S:
+                self._servo.max_accel, self._lower_accel = self._lower_accel, None
         cmd = self._step(now)
         if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
             self.status.input_stamp = cmd.input_stamp

@@ -66,7 +66,9 @@ TELEOP_PARAMS = {
                              le=float(min(kin.MAX_JOINT_SPEED))),
     'max_joint_accel': Param(0.5, 'every joint accelerates at most this much while tracking; '
                                   'a hold (stall, fist, lost hand, IK failure) brakes at the '
-                                  'UR10\'s own limit, to stop as soon as it can', unit='rad/s^2',
+                                  'UR10\'s own limit, to stop as soon as it can (lowered live, '
+                                  'it applies once every joint can stop within 0.1 s at it)',
+                             unit='rad/s^2',
                              gt=0.0, le=float(min(kin.MAX_JOINT_ACCEL))),
     'servo_gain': Param(10.0, 'joint error -> velocity correction on top of the goal\'s own '
                               'velocity', unit='1/s', gt=0.0, le=100.0),
