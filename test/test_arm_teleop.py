@@ -362,16 +362,19 @@ def _sweep(t, c, q, a, b, periods, then=0):
     return zmin, tilt, q
 
 
-def test_a_hand_faster_than_the_joints_is_caught_up_along_its_path_above_the_table():
+@pytest.mark.parametrize('accel, periods', [(math.pi, 62), (0.5, 150), (0.3, 150)])
+def test_a_hand_faster_than_the_joints_is_caught_up_along_its_path_above_the_table(accel, periods):
     # Each joint ran toward the far goal at its own saturated speed: the hand slid along the
     # table 3 cm above it (480 mm/s), and the TCP went 18 cm under the table top, tilted.
-    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    # With the acceleration far below the speed the goals, each within a period, ran away
+    # from the servo: 13 cm under the table at 0.5 rad/s^2.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=accel)
     a, b = (0.45, 0.16, 0.03), (1.05, 0.16, 0.03)
-    _, _, q = _sweep(t, c, HOME.copy(), kin.fk(HOME)[:3, 3], a, 300, then=200)
+    _, _, q = _sweep(t, c, HOME.copy(), kin.fk(HOME)[:3, 3], a, 300, then=600)
     np.testing.assert_allclose(kin.fk(q)[:3, 3], a, atol=1e-3)
-    zmin, tilt, q = _sweep(t, c, q, a, b, 62, then=600)
+    zmin, tilt, q = _sweep(t, c, q, a, b, periods, then=1200)
     assert t.status.state == TRACKING and t.status.ik_failures == 0
-    assert zmin > 0.015 and tilt < 0.05, (zmin, tilt)        # the box's floor is 0
+    assert zmin > (0.015 if accel == math.pi else 0.005) and tilt < 0.05, (zmin, tilt)   # the box floor: 0
     np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=1e-3)
 
 

@@ -69,6 +69,8 @@ OFF_PLAN_S = 0.25
 JOYSTICK_LEAD_S = 0.1
 # A max_joint_accel lowered live applies once every joint can stop within this at it.
 LOWER_ACCEL_STOP_S = 0.1
+# The servo's commanded state this many periods of travel behind the goal: it lags.
+SERVO_LAG_PERIODS = 3.0
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -617,7 +619,15 @@ class ArmTeleop:
         # goal stopped at speed is overrun by the servo's braking distance).
         rate = min(1.0, rate + accel * period,
                    moving + math.sqrt(2.0 * CATCH_UP_DECEL * accel * need))
-        if need <= period and (not self._catching_up or need <= rate * period):
+        lagging = False
+        if self._goal is not None and self._servo.moving:
+            # Goals each within a period can still run away from a servo bound by its
+            # acceleration: while it lags, the goal moves on no faster than it does.
+            sq, sv = (x.tolist() for x in self._servo.state_at(now, self._q))
+            if _joint_time(seed, sq, speed) > SERVO_LAG_PERIODS * period:
+                lagging = True
+                rate = min(rate, _joint_time(sv, [0.0] * 6, speed) + accel * period)
+        if not lagging and need <= period and (not self._catching_up or need <= rate * period):
             # Within one period (a catch-up: within the slowed-down step): as it is.
             self._catching_up = False
             self._goal_rate = need / period
@@ -638,6 +648,9 @@ class ArmTeleop:
         start = kin.fk(seed)
         p0, r0 = start[:3, 3], start[:3, :3]
         turn = kin.rotation_vector(r0.T @ rotation)
+        if need <= reach:           # lagging, the target within this step: it is the goal
+            self._goal_rate = need / period
+            return q, None
         f, best, best_f = reach / need, None, 0.0
         for _ in range(3):
             step = kin.pose(p0 + f * (target - p0), r0 @ kin.rotation_from_vector(f * turn))
