@@ -256,3 +256,18 @@ def test_camera_landmarks_at_absurd_coordinates_show_nothing(scale, shift):
     assert np.isfinite(far).all() and np.abs(far).max() > gd.MAX_KEYPOINT
     assert keypoint_features(far) is None and not keypoint_features_rows(far[None])[1].any()
     assert shown(rec.update(TrackedHand('right', image_landmarks=far), 0.0)) == []
+
+
+def test_a_hold_counts_each_judged_frames_own_interval():
+    # An unsure frame took the time on both sides of it from the hold: with one frame in
+    # four unsure (60 Hz) a fold needed 0.62 s of open hand; and the first shape's hold ended
+    # at its last frame, so 0.3 s of it at 30 Hz was no longer enough.
+    def stream(dt, unsure_every, open_s, fist_s=0.5):
+        out, k = [], 0
+        for pose, seconds in (('open', open_s), ('fist', fist_s)):
+            for _ in range(int(round(seconds / dt))):
+                k += 1
+                out.append((_pose(pose, 0.05 if unsure_every and k % unsure_every == 0 else 1.0), dt))
+        return out
+    assert _folds(stream(1 / 60, 4, 0.45), dt=1 / 60) == ['fold']
+    assert _folds(stream(1 / 30, 0, 0.3), dt=1 / 30) == ['fold']

@@ -8,9 +8,9 @@ Fold and unfold land or launch a drone, so they need a deliberate change: the fi
 held FOLD_HOLD_S, the second one shown within FOLD_GAP_S of its end and held
 FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes, pinches
 or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears). Both
-holds count the time of judged frames only: frames too unsure to judge neither end a shape
-nor add to its hold, so a misread carried through them never completes a fold, and one such
-frame inside a deliberate hold does not split it.
+holds count judged frames only, each with its own frame interval: frames too unsure to
+judge neither end a shape nor add to its hold, so a misread carried through them never
+completes a fold, and one such frame inside a deliberate hold does not split it.
 """
 import math
 from dataclasses import dataclass, field
@@ -21,6 +21,7 @@ HOLD_LOW_CONFIDENCE_S = 0.25       # held gestures survive this long on unusable
 FOLD_HOLD_S = 0.3
 FOLD_GAP_S = 0.5
 FOLD_CONFIRM_S = 0.15
+FOLD_FRAME_CREDIT_S = 0.25          # the most one frame adds to a hold (5 Hz video adds 0.2)
 
 
 @dataclass
@@ -72,6 +73,7 @@ class HeldFilter:
         self._shape_held = 0.0          # ... judged frames' time in it
         self._shape_seen = 0.0          # ... its last judged frame
         self._judged_before = False     # the frame before this one was judged
+        self._frame_t = None            # the frame before this one, judged or not
         self._confirmed = False         # ... held FOLD_CONFIRM_S (a fold / unfold judged)
         self._last_shape = None         # the last confirmed one that ended: its hold, its end
         self._last_held = 0.0
@@ -124,17 +126,24 @@ class HeldFilter:
         for name in set(state.user) ^ set(prev.user):
             events.append(HandEvent(name, name in state.user))
         judged_before, self._judged_before = self._judged_before, judged
+        # A judged frame counts its own interval (capped: a stalled stream's gap is no hold);
+        # an unsure frame counts nothing.
+        frame_dt = (0.0 if self._frame_t is None
+                    else min(max(timestamp - self._frame_t, 0.0), FOLD_FRAME_CREDIT_S))
+        self._frame_t = timestamp
         if not judged:              # held state only: the shapes wait for a judged frame
             return events
         shape = 'fist' if state.fist else 'open' if state.open else None
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
-                self._last_shape, self._last_held = self._shape, self._shape_held
+                # ... up to the frame that ends it, when that one follows a judged frame
+                self._last_shape = self._shape
+                self._last_held = self._shape_held + (frame_dt if judged_before else 0.0)
                 self._last_end = timestamp if judged_before else self._shape_seen
             self._shape, self._shape_since, self._shape_held = shape, timestamp, 0.0
             self._confirmed = False
-        elif judged_before:         # not the time across frames that could not be judged
-            self._shape_held += timestamp - self._shape_seen
+        else:
+            self._shape_held += frame_dt
         self._shape_seen = timestamp
         if shape is not None and not self._confirmed \
                 and self._shape_held >= FOLD_CONFIRM_S - 1e-9:
