@@ -1096,3 +1096,19 @@ def test_an_acceleration_lowered_live_mid_catch_up_does_not_overrun_the_target()
     assert furthest < 1.01, furthest                       # 6 mm past the target at most
     np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=2e-3)
     assert np.allclose(t._servo.max_accel, 0.3)            # and the lower limit applies at rest
+
+
+def test_a_wrist_lagging_a_turn_by_half_a_turn_turns_the_tool_the_hands_way():
+    # At the real robot's 0.05 rad/s the wrist fell more than pi behind a quick turn from one
+    # tool-turn limit to the other; the solution nearest the lagging goal turned the tool
+    # 3.08 rad the other way round, through the far side, outside max_tool_turn.
+    t, c = armed_with_origin(orientation='yaw')
+    q = HOME.copy()
+    for k in range(5000):                                  # slowly to one turn limit
+        _, q = follow(t, c, hand(turn=1.6 * min(1.0, (k + 1) / 2500)), 1, q)
+    start, seen = q[5], []
+    for k in range(11000):                                 # to the other in 1 s, then still
+        _, q = follow(t, c, hand(turn=1.6 - 3.2 * min(1.0, (k + 1) / 125)), 1, q)
+        seen.append(q[5] - start)
+    assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason
+    assert max(seen) < 0.01 and min(seen) == pytest.approx(-3.2, abs=0.01)   # the hand's way only

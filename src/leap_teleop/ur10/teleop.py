@@ -597,16 +597,23 @@ class ArmTeleop:
             if not self._servo.moving:     # it has just come to rest: the servo goes on
                 seed = self._q.tolist()    # from the measured joints
             rate = None
-        q = kin.ik_nearest(kin.pose(target, rotation), seed, lower=lo, upper=hi)
+        # The target's IK follows its own of the period before (the hand moves on
+        # continuously): nearest a goal that lags a fast wrist turn by half a turn, it took
+        # the flipped shoulder, or the wrist's other way round.
+        last = self._last_reach if self._goal is not None else None
+        q = kin.ik_nearest(kin.pose(target, rotation), seed if last is None else last[1],
+                           lower=lo, upper=hi)
         if q is None:
             return None, 'no IK solution within the joint limits for'
         speed = self._servo.max_speed.tolist()
         period = min(max(dt, 1e-3), self.p.command_horizon)
         q_list = q.tolist()
+        if last is not None and max([abs(a - b) for a, b in zip(q_list, last[1])]) >= math.pi:
+            # half a turn in one period: the nearest copy within the limits went round
+            return None, 'only another arm configuration reaches'
         need = _joint_time(q_list, seed, speed)
         # How fast the target's IK moves (normalised like the rate): a goal that follows it
         # closes the gap on top of that.
-        last = self._last_reach
         self._last_reach = (now, q_list)
         moving = 0.0
         if last is not None and now > last[0]:
@@ -632,9 +639,19 @@ class ArmTeleop:
             self._catching_up = False
             self._goal_rate = need / period
             return q, None
-        if not _same_configuration(q_list, seed):
-            # The nearest solution by its largest joint move may flip a branch that a
-            # lagging wrist's long way round outweighs (a fast hand turn): the same branch's.
+        self._catching_up = True
+        reach = max(rate, 1e-3) * period
+        if _branch(q_list) == _branch(seed):
+            if max([abs(a - b) for a, b in zip(q_list, seed)]) >= math.pi:
+                # A joint half a turn or more behind (a wrist lagging a fast turn): the TCP's
+                # rotation, taken the short way, would turn the tool against the hand. A
+                # straight line in joint space turns it the hand's way.
+                f = min(1.0, reach / need)
+                self._goal_rate = rate if f < 1.0 else need / period
+                return np.asarray(seed) + f * (q - np.asarray(seed)), None
+        elif not _same_configuration(q_list, seed):
+            # The target moved on to another branch while the arm lags on its own (past a
+            # singularity): the arm's branch if it reaches the target, else a hold.
             branch = _branch(seed)
             q = kin.ik_nearest(kin.pose(target, rotation), seed, lower=lo, upper=hi,
                                accept=lambda c: _branch(c) == branch)
@@ -642,9 +659,6 @@ class ArmTeleop:
                 return None, 'only another arm configuration reaches'
             q_list = q.tolist()
             need = _joint_time(q_list, seed, speed)
-            self._last_reach = (now, q_list)
-        self._catching_up = True
-        reach = max(rate, 1e-3) * period
         start = kin.fk(seed)
         p0, r0 = start[:3, 3], start[:3, :3]
         turn = kin.rotation_vector(r0.T @ rotation)
