@@ -1112,3 +1112,16 @@ def test_a_wrist_lagging_a_turn_by_half_a_turn_turns_the_tool_the_hands_way():
         seen.append(q[5] - start)
     assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason
     assert max(seen) < 0.01 and min(seen) == pytest.approx(-3.2, abs=0.01)   # the hand's way only
+
+
+def test_an_acceleration_lowered_live_applies_within_a_second_while_the_hand_keeps_moving():
+    # Deferred until the joints could stop quickly, it never applied under a circling hand.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    for k in range(500):
+        if k == 125:
+            t.retune({'max_joint_accel': 0.5})
+        a = 2 * math.pi * 0.5 * k * 0.008
+        _, q = follow(t, c, hand(palm_mm=(40 * math.cos(a), 200.0, 40 * math.sin(a))), 1, q)
+        if k == 255:                                      # 1.04 s after
+            assert np.allclose(t._servo.max_accel, 0.5)

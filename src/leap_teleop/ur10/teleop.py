@@ -67,8 +67,10 @@ OFF_PLAN_S = 0.25
 # Joystick: the target leads where the arm is commanded to be by at most this much (s) of
 # max_tcp_speed (about the servo's lag while it speeds up).
 JOYSTICK_LEAD_S = 0.1
-# A max_joint_accel lowered live applies once every joint can stop within this at it.
+# A max_joint_accel lowered live comes down over LOWER_ACCEL_RAMP_S, at once when every
+# joint can stop within LOWER_ACCEL_STOP_S at it.
 LOWER_ACCEL_STOP_S = 0.1
+LOWER_ACCEL_RAMP_S = 1.0
 # The servo's commanded state this many periods of travel behind the goal: it lags.
 SERVO_LAG_PERIODS = 3.0
 _TWO_PI = 2 * math.pi
@@ -246,9 +248,10 @@ class ArmTeleop:
         self._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
         accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
         if self._servo.moving and float(accel.max()) < float(self._servo.max_accel.max()):
-            # Braking at a lowered limit mid-motion runs each joint past its goal by v^2/2a
-            # (0.23 m off a catch-up): it applies once the joints can stop at it quickly.
-            self._lower_accel = accel
+            # Braking at a lowered limit at once mid-motion runs each joint past its goal by
+            # v^2/2a (0.23 m off a catch-up): it comes down over LOWER_ACCEL_RAMP_S, or at
+            # once when the joints can stop at it quickly.
+            self._lower_accel = (self._servo.max_accel.copy(), accel, None)
         else:
             self._servo.max_accel, self._lower_accel = accel, None
         self._servo.gain = float(p.servo_gain)
@@ -386,9 +389,15 @@ class ArmTeleop:
     def step(self, now):
         """One control period: the command to send (possibly empty)."""
         if self._lower_accel is not None and self._q is not None:
+            old, new, since = self._lower_accel
+            if since is None:
+                since, self._lower_accel = now, (old, new, now)
             v = self._servo.state_at(now, self._q)[1]
-            if float(np.abs(v).max()) <= float(self._lower_accel.min()) * LOWER_ACCEL_STOP_S:
-                self._servo.max_accel, self._lower_accel = self._lower_accel, None
+            ramp = (now - since) / LOWER_ACCEL_RAMP_S
+            if ramp >= 1.0 or float(np.abs(v).max()) <= float(new.min()) * LOWER_ACCEL_STOP_S:
+                self._servo.max_accel, self._lower_accel = new, None
+            else:
+                self._servo.max_accel = old + (new - old) * ramp
         cmd = self._step(now)
         if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
             self.status.input_stamp = cmd.input_stamp

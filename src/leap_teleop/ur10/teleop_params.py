@@ -67,7 +67,8 @@ TELEOP_PARAMS = {
     'max_joint_accel': Param(0.5, 'every joint accelerates at most this much while tracking; '
                                   'a hold (stall, fist, lost hand, IK failure) brakes at the '
                                   'UR10\'s own limit, to stop as soon as it can (lowered live, '
-                                  'it applies once every joint can stop within 0.1 s at it)',
+                                  'it comes down over 1 s, at once when every joint can stop '
+                                  'within 0.1 s at it)',
                              unit='rad/s^2',
                              gt=0.0, le=float(min(kin.MAX_JOINT_ACCEL))),
     'servo_gain': Param(10.0, 'joint error -> velocity correction on top of the goal\'s own '
