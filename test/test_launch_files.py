@@ -258,3 +258,15 @@ def test_rviz_keeps_the_config_files_odom_in_world(tmp_path):
     params = load_params('ardrone.launch', ['config:=%s' % config, 'rviz:=true',
                                             'odom_in_world:=[0.0, 1.0, 0.0]'])
     assert params['/ardrone_sim/odom_in_world'] == [0.0, 1.0, 0.0]
+
+
+@pytest.mark.parametrize('name, node_type', [('sender.launch', 'sender.py'), ('ur10_arm.launch', 'ur10_arm.py')])
+def test_a_respawned_node_waits_before_it_starts_again(name, node_type):
+    # respawn:=true with a refused parameter restarted the node about once a second, for ever
+    import roslaunch.config
+    import roslaunch.xmlloader
+    config = roslaunch.config.ROSLaunchConfig()
+    roslaunch.xmlloader.XmlLoader(resolve_anon=False).load(
+        os.path.join(LAUNCH, name), config, verbose=False, argv=['roslaunch', 'respawn:=true'])
+    (node,) = [n for n in config.nodes if n.type == node_type]
+    assert node.respawn and node.respawn_delay == 3.0
