@@ -271,3 +271,13 @@ def test_a_hold_counts_each_judged_frames_own_interval():
         return out
     assert _folds(stream(1 / 60, 4, 0.45), dt=1 / 60) == ['fold']
     assert _folds(stream(1 / 30, 0, 0.3), dt=1 / 30) == ['fold']
+
+
+@pytest.mark.parametrize('first, misread', [('fist', 'open'), ('open', 'fist')])
+def test_a_misread_with_every_other_frame_unsure_is_no_fold(first, misread):
+    # An unsure frame reset the misread shape's off-count, so with every second frame
+    # unsure it never turned off and, with the hold counting judged frames, it folded.
+    dt = 1 / 60
+    parts = [(_pose(first), 1.0), (_pose(misread), 3 * dt)]
+    parts += [(_pose(first, 0.05 if k % 2 else 1.0), dt) for k in range(60)]
+    assert _folds(parts, dt=dt) == []

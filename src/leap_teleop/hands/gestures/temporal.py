@@ -111,7 +111,10 @@ class HeldFilter:
             self.active.clear()
         self.active.discard('thumb_up')
         for name in self.names:
-            self._count[name] = 0
+            # a gesture turning on starts again; one turning off goes on turning off (an
+            # unsure frame every other one kept a misread shape on for good)
+            if name not in self.active:
+                self._count[name] = 0
         return self.active
 
     def events(self, state, prev, timestamp, judged=True):
