@@ -247,7 +247,9 @@ class ArmTeleop:
             filt.d_cutoff_hz = getattr(p, prefix + 'd_cutoff_hz')
         self._servo.max_speed = np.minimum(p.max_joint_speed, kin.MAX_JOINT_SPEED)
         accel = np.minimum(p.max_joint_accel, kin.MAX_JOINT_ACCEL)
-        if self._servo.moving and float(accel.max()) < float(self._servo.max_accel.max()):
+        if 'max_joint_accel' not in changes:
+            pass                    # another parameter: a ramp under way goes on
+        elif self._servo.moving and float(accel.max()) < float(self._servo.max_accel.max()):
             # Braking at a lowered limit at once mid-motion runs each joint past its goal by
             # v^2/2a (0.23 m off a catch-up): it comes down over LOWER_ACCEL_RAMP_S, or at
             # once when the joints can stop at it quickly.
