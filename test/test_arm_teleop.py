@@ -1127,3 +1127,25 @@ def test_an_acceleration_lowered_live_applies_within_a_second_while_the_hand_kee
         _, q = follow(t, c, hand(palm_mm=(40 * math.cos(a), 200.0, 40 * math.sin(a))), 1, q)
         if k == 255:                                      # 1.04 s after
             assert np.allclose(t._servo.max_accel, 0.5)
+
+
+@pytest.mark.parametrize('speed, accel', [(1.0, math.pi), (0.05, 0.5)])
+def test_a_sideways_sweep_with_a_full_turn_keeps_the_tcp_on_its_line(speed, accel):
+    # A wrist lagging the turn once stepped the whole arm along a joint-space line: the base
+    # swung the TCP in an arc, 0.24 m off the line and 5 cm under the table (sim limits).
+    t, c = armed_with_origin(orientation='yaw', max_joint_speed=speed, max_joint_accel=accel)
+    a, b = np.array([0.9, -0.8, 0.03]), np.array([0.9, 0.8, 0.03])
+    pa, pb = _palm_for(t, a), _palm_for(t, b)
+    q = HOME.copy()
+    for k in range(int(40 / speed) * 125):                 # to a, turned to one limit, slowly
+        s = min(1.0, (k + 1) / (20 / speed * 125))
+        _, q = follow(t, c, hand(palm_mm=tuple(pa), turn=-1.6 * s), 1, q)
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], a, atol=2e-3)
+    off, zmin = 0.0, math.inf
+    for k in range(int(120 / speed * 1.0) + 1250):        # to b and the other limit in 0.5 s
+        s = min(1.0, (k + 1) / 62)
+        _, q = follow(t, c, hand(palm_mm=tuple(pa + (pb - pa) * s), turn=-1.6 + 3.2 * s), 1, q)
+        x = kin.fk(q)[:3, 3]
+        off, zmin = max(off, float(np.linalg.norm((x - a)[[0, 2]]))), min(zmin, float(x[2]))
+    assert off < 0.02 and zmin > 0.02, (off, zmin)
+    assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason

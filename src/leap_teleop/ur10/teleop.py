@@ -374,7 +374,7 @@ class ArmTeleop:
         if self.status.state != DISARMED:
             self._set(DISARMED, reason)
             self.status.origin_set = False
-            self._palm_ref = self._tcp_ref = self._target = None
+            self._palm_ref = self._tcp_ref = self._target = self._last_reach = None
         return ArmCommand()
 
     def _disarm(self, reason, now):
@@ -385,7 +385,7 @@ class ArmTeleop:
         self._thumb_up_since = None           # re-arming needs a thumbs-up held anew
         self._set(DISARMED, reason)
         self.status.origin_set = False
-        self._palm_ref = self._tcp_ref = self._target = None
+        self._palm_ref = self._tcp_ref = self._target = self._last_reach = None
         return self._hold(now) if was_moving else ArmCommand()
 
     def step(self, now):
@@ -611,7 +611,8 @@ class ArmTeleop:
         # The target's IK follows its own of the period before (the hand moves on
         # continuously): nearest a goal that lags a fast wrist turn by half a turn, it took
         # the flipped shoulder, or the wrist's other way round.
-        last = self._last_reach if self._goal is not None else None
+        # Kept across holds that keep the origin (after a stall the wrist is as far behind).
+        last = self._last_reach
         q = kin.ik_nearest(kin.pose(target, rotation), seed if last is None else last[1],
                            lower=lo, upper=hi)
         if q is None:
@@ -619,7 +620,8 @@ class ArmTeleop:
         speed = self._servo.max_speed.tolist()
         period = min(max(dt, 1e-3), self.p.command_horizon)
         q_list = q.tolist()
-        if last is not None and max([abs(a - b) for a, b in zip(q_list, last[1])]) >= math.pi:
+        if last is not None and now - last[0] <= 3.0 * period \
+                and max([abs(a - b) for a, b in zip(q_list, last[1])]) >= math.pi:
             # half a turn in one period: the nearest copy within the limits went round
             return None, 'only another arm configuration reaches'
         need = _joint_time(q_list, seed, speed)
@@ -652,15 +654,12 @@ class ArmTeleop:
             return q, None
         self._catching_up = True
         reach = max(rate, 1e-3) * period
-        if _branch(q_list) == _branch(seed):
-            if max([abs(a - b) for a, b in zip(q_list, seed)]) >= math.pi:
-                # A joint half a turn or more behind (a wrist lagging a fast turn): the TCP's
-                # rotation, taken the short way, would turn the tool against the hand. A
-                # straight line in joint space turns it the hand's way.
-                f = min(1.0, reach / need)
-                self._goal_rate = rate if f < 1.0 else need / period
-                return np.asarray(seed) + f * (q - np.asarray(seed)), None
-        elif not _same_configuration(q_list, seed):
+        # A joint a quarter turn or more behind (a wrist lagging a fast turn): the tool's
+        # rotation on the way is the joints' straight line's, which turns it the hand's
+        # way; the short way round, past half a turn, turned it against the hand.
+        joint_turn = (_branch(q_list) == _branch(seed)
+                      and max([abs(a - b) for a, b in zip(q_list, seed)]) >= 0.5 * math.pi)
+        if not joint_turn and not _same_configuration(q_list, seed):
             # The target moved on to another branch while the arm lags on its own (past a
             # singularity): the arm's branch if it reaches the target, else a hold.
             branch = _branch(seed)
@@ -677,9 +676,16 @@ class ArmTeleop:
             self._goal_rate = need / period
             return q, None
         f, best, best_f = reach / need, None, 0.0
+        q_seed = np.asarray(seed)
         for _ in range(3):
-            step = kin.pose(p0 + f * (target - p0), r0 @ kin.rotation_from_vector(f * turn))
-            qs = kin.ik_nearest(step, seed, lower=lo, upper=hi)
+            # the position always on the straight TCP line
+            if joint_turn:
+                q_on = q_seed + f * (q - q_seed)
+                step = kin.pose(p0 + f * (target - p0), kin.fk(q_on)[:3, :3])
+                qs = kin.ik_nearest(step, q_on, lower=lo, upper=hi)
+            else:
+                step = kin.pose(p0 + f * (target - p0), r0 @ kin.rotation_from_vector(f * turn))
+                qs = kin.ik_nearest(step, seed, lower=lo, upper=hi)
             d = math.inf if qs is None else _joint_time(qs.tolist(), seed, speed)
             if d <= reach:
                 if f > best_f:
@@ -777,7 +783,7 @@ class ArmTeleop:
         self._target = self._tcp_ref.copy()
         self._joy_still = False
         self._tool_near = (None, None)
-        self._goal = None
+        self._goal = self._last_reach = None
         self._filter.reset(palm, now)
         self._rotation_filter.reset(hand_rot, now)
         self.status.origin_set = True
