@@ -1149,3 +1149,27 @@ def test_a_sideways_sweep_with_a_full_turn_keeps_the_tcp_on_its_line(speed, acce
         off, zmin = max(off, float(np.linalg.norm((x - a)[[0, 2]]))), min(zmin, float(x[2]))
     assert off < 0.02 and zmin > 0.02, (off, zmin)
     assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason
+
+
+def test_after_an_ik_hold_the_tool_turns_the_hands_way():
+    # The last reachable target's IK seeded the target's after an out-of-reach hold during
+    # which the hand turned: wrist 3 headed for +4.68 rad, past max_tool_turn, not -1.6.
+    t, c = armed_with_origin(orientation='yaw')
+    q, start = HOME.copy(), HOME[5]
+    home = np.array(PALM)
+    corner = np.array([1.45, 1.2, -0.3])                 # beyond the box's corner
+    far = home + np.linalg.solve(t._axes, corner - t._tcp_ref) / (0.001 * t.p.scale)
+    for k in range(62):                                   # a quick turn, the wrist lagging
+        _, q = follow(t, c, hand(turn=1.6 * (k + 1) / 62), 1, q)
+    for k in range(25):
+        _, q = follow(t, c, hand(turn=1.6, palm_mm=tuple(home + (k + 1) / 25 * (far - home))), 1, q)
+    assert t.status.state == HOLDING
+    for k in range(125):                                  # turning the other way, out of reach
+        _, q = follow(t, c, hand(turn=1.6 - 3.2 * (k + 1) / 125, palm_mm=tuple(far)), 1, q)
+    for k in range(25):
+        _, q = follow(t, c, hand(turn=-1.6, palm_mm=tuple(far + (k + 1) / 25 * (home - far))), 1, q)
+    seen = []
+    for _ in range(10000):
+        _, q = follow(t, c, hand(turn=-1.6), 1, q)
+        seen.append(q[5] - start)
+    assert max(np.abs(seen)) < 1.65 and seen[-1] == pytest.approx(-1.6, abs=0.01)

@@ -616,6 +616,8 @@ class ArmTeleop:
         q = kin.ik_nearest(kin.pose(target, rotation), seed if last is None else last[1],
                            lower=lo, upper=hi)
         if q is None:
+            # the hand goes on turning out of reach: that IK says nothing of it any more
+            self._last_reach = None
             return None, 'no IK solution within the joint limits for'
         speed = self._servo.max_speed.tolist()
         period = min(max(dt, 1e-3), self.p.command_horizon)
