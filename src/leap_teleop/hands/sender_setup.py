@@ -3,7 +3,7 @@ recognizers and their live retuning, and the original sender's publishing period
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.sources import SourceError, make_source
-from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs
+from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs, source_family
 
 # The sender's output topic parameters; a side's own ones end in _<side>.
 OUTPUT_TOPICS = ('leapcobot_topic_right', 'leapcobot_topic_left', 'hand_topic_right',
@@ -77,7 +77,7 @@ def checked_bindings(p, recognizer):
     """The ~gesture_bindings, checked against what the source's hands can show: a camera
     hand is judged by the keypoint model, any other by the Leap one, so a class of the other
     model never fires (BindingError)."""
-    family = 'keypoints' if p['source'] in CAMERA_SOURCES else 'leap'
+    family = source_family(p['source'])
     model = '~keypoint_model' if family == 'keypoints' else '~gesture_model'
     return load_bindings(p['gesture_bindings']).check(
         recognizer.user_gestures_of[family],

@@ -33,7 +33,7 @@ from leap_teleop.hands.gestures.classifier import class_name_problem
 from leap_teleop.hands.gestures.features import normalize_keypoints
 from leap_teleop.hands.gestures.training_set import shared_label_problem
 from leap_teleop.hands.sources import SourceError, add_source_arguments, leapjs, source_from_args
-from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES
+from leap_teleop.hands.sources.camera_params import source_family
 from leap_teleop.output_file import output_problem
 
 MAX_SESSIONS = 99      # NAME.csv, NAME_2.csv, ... NAME_99.csv
@@ -202,7 +202,7 @@ def main(argv=None):
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
-    family = 'keypoints' if args.source in CAMERA_SOURCES else 'leap'
+    family = source_family(args.source)
     try:
         check_label(args.label)
         if not (math.isfinite(args.seconds) and 0.0 < args.seconds <= 3600.0):

@@ -6,6 +6,14 @@ from leap_teleop.hands.sources.landmarks import DEFAULT_CAMERA_POSITION_MM, DEFA
 from leap_teleop.params import Param, ParamError
 
 CAMERA_SOURCES = ('webcam', 'video')
+
+
+def source_family(source):
+    """The pose model family that judges a source's hands: 'keypoints' for a camera
+    source, 'leap' for any other."""
+    return 'keypoints' if source in CAMERA_SOURCES else 'leap'
+
+
 # Per axis: a hand up to 1 m from a camera placed this far from the device stays within
 # the 2000 mm the tracker takes a palm from (tracker.MAX_PALM_MM); further, every hand
 # would be refused as a tracking error.
