@@ -270,3 +270,29 @@ def test_a_respawned_node_waits_before_it_starts_again(name, node_type):
         os.path.join(LAUNCH, name), config, verbose=False, argv=['roslaunch', 'respawn:=true'])
     (node,) = [n for n in config.nodes if n.type == node_type]
     assert node.respawn and node.respawn_delay == 3.0
+
+
+def resolved(params, node, key, default):
+    """A node's topic parameter as rospy resolves it (relative to the node's namespace)."""
+    value = params.get(node + '/' + key, default)
+    return value if value.startswith('/') else node.rsplit('/', 1)[0] + '/' + value
+
+
+@pytest.mark.parametrize('ns, argv', [
+    ('', []),
+    # Included inside a namespace, the pilots read absolute topics the sender did not publish.
+    ('team', ['hand_topic_right:=/team/leapmotion/hand_right', 'hand_topic_left:=/team/leapmotion/hand_left',
+              'gesture_topic:=/team/leapmotion/gestures'])])
+def test_the_dual_drone_pilots_read_the_topics_the_sender_publishes(ns, argv, tmp_path):
+    wrapper = tmp_path / 'wrapper.launch'
+    args = ''.join('<arg name="%s" value="%s"/>' % tuple(a.split(':=')) for a in argv)
+    wrapper.write_text('<launch><group ns="%s"><include file="%s">%s</include></group></launch>'
+                       % (ns or '/', os.path.join(LAUNCH, 'ardrone_dual.launch'), args))
+    params = load_params(str(wrapper), [])
+    sender = '/%sleap_sender' % (ns + '/' if ns else '')
+    for drone, side in (('drone1', 'right'), ('drone2', 'left')):
+        pilot = sender.replace('leap_sender', drone + '/drone_pilot')
+        assert resolved(params, pilot, 'hand_topic', '') == resolved(
+            params, sender, 'hand_topic_' + side, 'leapmotion/hand_' + side)
+        assert resolved(params, pilot, 'gesture_topic', '') == resolved(
+            params, sender, 'gesture_topic', 'leapmotion/gestures')
