@@ -1151,6 +1151,25 @@ def test_a_sideways_sweep_with_a_full_turn_keeps_the_tcp_on_its_line(speed, acce
     assert t.status.state == TRACKING and t.status.ik_failures == 0, t.status.reason
 
 
+def test_after_a_joint_state_stall_the_tool_turns_the_hands_way():
+    # The hand turned +1.6 -> -1.6 rad during a 0.6 s joint-state stall: after it the
+    # target's IK was taken nearest the lagging wrist, a turn away: +4.68 rad, the wrong way.
+    t, c = armed_with_origin(orientation='yaw', max_tool_turn=1.6)   # the real arm's limits
+    q, start = HOME.copy(), HOME[5]
+    seen = []
+    for k in range(16500):                                # slowly to +1.6, then a quick turn
+        now = c.tick()
+        turn = 1.6 * min(1.0, (k + 1) / 3750) if k < 7500 else 1.6 - 3.2 * min(1.0, (k - 7499) / 62)
+        t.on_hand(hand(turn=turn, stamp=now), now)
+        if not 7500 <= k < 7575:                          # joint states stall for 0.6 s
+            t.on_joints(q, now)
+        t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+        seen.append(q[5] - start)
+    assert t.status.state == TRACKING and t.status.ik_failures == 0
+    assert max(np.abs(seen)) < 1.65 and seen[-1] == pytest.approx(-1.6, abs=0.01)
+
+
 def test_after_an_ik_hold_the_tool_turns_the_hands_way():
     # The last reachable target's IK seeded the target's after an out-of-reach hold during
     # which the hand turned: wrist 3 headed for +4.68 rad, past max_tool_turn, not -1.6.
