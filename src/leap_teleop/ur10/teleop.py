@@ -102,11 +102,15 @@ def _branch(q):
     return reach > 0.0, math.sin(q3) > 0.0, math.sin(q5) > 0.0
 
 
+def _largest_joint_move(q, ref):
+    return max([abs(a - b) for a, b in zip(q, ref)])
+
+
 def _same_configuration(q, ref):
     """q is reached from ref without a flip: near (crossing a singularity on the way), or
     on the same branch with no joint turning half a turn or more (the nearest copy within
     the limits went the other way round a joint limit)."""
-    diff = max([abs(a - b) for a, b in zip(q, ref)])
+    diff = _largest_joint_move(q, ref)
     return diff <= MAX_GOAL_JUMP or (diff < math.pi and _branch(q) == _branch(ref))
 
 
@@ -623,7 +627,7 @@ class ArmTeleop:
         period = min(max(dt, 1e-3), self.p.command_horizon)
         q_list = q.tolist()
         if last is not None and now - last[0] <= 3.0 * period \
-                and max([abs(a - b) for a, b in zip(q_list, last[1])]) >= math.pi:
+                and _largest_joint_move(q_list, last[1]) >= math.pi:
             # half a turn in one period: the nearest copy within the limits went round
             return None, 'only another arm configuration reaches'
         need = _joint_time(q_list, seed, speed)
@@ -660,7 +664,7 @@ class ArmTeleop:
         # rotation on the way is the joints' straight line's, which turns it the hand's
         # way; the short way round, past half a turn, turned it against the hand.
         joint_turn = (_branch(q_list) == _branch(seed)
-                      and max([abs(a - b) for a, b in zip(q_list, seed)]) >= 0.5 * math.pi)
+                      and _largest_joint_move(q_list, seed) >= 0.5 * math.pi)
         if not joint_turn and not _same_configuration(q_list, seed):
             # The target moved on to another branch while the arm lags on its own (past a
             # singularity): the arm's branch if it reaches the target, else a hold.
