@@ -19,7 +19,9 @@ class LowPass:
         self._state = {}
 
     def set_cutoff(self, cutoff):
-        """ValueError unless cutoff is a finite number > 0; the history is kept."""
+        """ValueError unless cutoff is a finite number > 0. Each key's next sample starts the
+        new filter from the old one's last output (the old history under the new
+        coefficients rang, 5x the hand's own steps)."""
         c = float(cutoff)
         if not (math.isfinite(c) and c > 0.0):
             raise ValueError('cutoff must be a finite number > 0, got %r' % (cutoff,))
@@ -42,12 +44,16 @@ class LowPass:
         """The filtered copy of `values` (any shape of floats) for `key`. A key whose shape
         changes starts over."""
         x = np.asarray(values, dtype=float)
+        coefficients = self._coefficients       # read once: a live change may come meanwhile
         st = self._state.get(key)
         if st is None or st[0].shape != x.shape:
-            self._state[key] = [x.copy(), x.copy(), x.copy(), x.copy()]    # x1, x2, y1, y2
+            # x1, x2, y1, y2, and the coefficients they were filtered with
+            self._state[key] = [x.copy(), x.copy(), x.copy(), x.copy(), coefficients]
             return x.copy()
-        x1, x2, y1, y2 = st
-        b, a1, a2 = self._coefficients
+        x1, x2, y1, y2, used = st
+        if used is not coefficients:            # the cut-off changed: at rest where it was
+            x1 = x2 = y2 = y1
+        b, a1, a2 = coefficients
         y = b * (x + 2.0 * x1 + x2) - a1 * y1 - a2 * y2
-        self._state[key] = [x, x1, y, y1]
+        self._state[key] = [x, x1, y, y1, coefficients]
         return y
