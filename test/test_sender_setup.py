@@ -211,25 +211,39 @@ def test_a_throttled_sender_still_sends_every_gesture_event_and_every_hand_that_
         (0.0, True), (0.03, True), (0.06, False), (0.07, True)]
 
 
-def test_a_throttled_driver_topic_sends_every_frame_with_a_gesture_or_a_hand_that_comes_or_goes():
+def test_the_driver_topics_carry_every_frame_whatever_freq():
+    # ~freq (the old sender's throttle) thinned the driver's topics too, which the driver
+    # publishes per frame: its filter then ran on the thinned stream and lagged more.
     import types
 
     from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
     built = []
     topics = types.SimpleNamespace(
-        throttle=PeriodThrottle(0.25), _sides_sent=None, pubs={'raw': types.SimpleNamespace(
-            publish=lambda msg: None)}, _wanted=lambda kind: kind == 'raw',
+        pubs={'raw': types.SimpleNamespace(publish=lambda msg: None)}, _wanted=lambda kind: kind == 'raw',
         lowpass=types.SimpleNamespace(reset=lambda: None),
         builder=types.SimpleNamespace(human_msgs=lambda frame, states, raw, lowpass: (
             built.append(frame.timestamp), (None, None))[1]))
-    hands = [[types.SimpleNamespace(side='right')]] * 10
-    hands[4] = []
-    for i, h in enumerate(hands):
-        # a recording's own gesture on frame 2, the recognizer's event on frame 7
-        frame = types.SimpleNamespace(timestamp=0.01 * i, hands=h, gestures=['keyTap'] * (i == 2))
-        states = {'right': types.SimpleNamespace(events=('circle_cw',) * (i == 7))}
-        LeapMotionTopics.on_frame(topics, frame, states)
-    assert [round(t, 2) for t in built] == [0.0, 0.02, 0.04, 0.05, 0.07]
+    for i in range(10):
+        frame = types.SimpleNamespace(timestamp=0.01 * i, hands=[types.SimpleNamespace(side='right')],
+                                      gestures=[])
+        LeapMotionTopics.on_frame(topics, frame, {'right': types.SimpleNamespace(events=())})
+    assert len(built) == 10
+
+
+@pytest.mark.parametrize('fps', [110.0, 120.0, 200.0])
+def test_the_period_throttle_keeps_the_originals_rate(fps):
+    # The first frame a period after the last one sent: freq 0.01 halved 110-120 Hz to
+    # 55-60 Hz, where the original's sleep of 0.01 s gave about 100 Hz.
+    t = PeriodThrottle(0.01)
+    sent = [k / fps for k in range(int(10 * fps)) if t.due('right', k / fps)]
+    assert len(sent) == pytest.approx(1000, abs=2)
+    assert max(b - a for a, b in zip(sent, sent[1:])) <= 0.01 + 1.0 / fps + 1e-9
+
+
+def test_the_period_throttle_after_a_gap_starts_its_schedule_again():
+    t = PeriodThrottle(0.1)
+    stamps = [0.0, 0.1, 0.2, 1.05, 1.1, 1.16, 1.2, 1.26]     # frames lost between 0.2 and 1.05
+    assert [ts for ts in stamps if t.due('right', ts)] == [0.0, 0.1, 0.2, 1.05, 1.16, 1.26]
 
 
 def test_the_leap_rotation_is_a_checked_unit_quaternion():

@@ -24,9 +24,11 @@ SENDER_PARAMS = {
                   ge=0.0, le=1000.0),
     'loop': Param(False, 'restart the script / recording when it ends'),
     'realtime': Param(True, 'pace frames at their recorded / scripted timing'),
-    'freq': Param(0.0, 'the original sender\'s period; > 0 throttles publishing to at '
-                       'most one frame per period (a frame with gesture events, or where a '
-                       'hand comes or goes, always goes out); 0 = every frame', unit='s',
+    'freq': Param(0.0, 'the original sender\'s period; > 0 throttles its topics (leapcobot, Hand, '
+                       'leapros, leap) to one frame per period on a steady '
+                       'schedule (a frame with gesture events, or where a hand comes or goes, '
+                       'always goes out; the leap_motion driver\'s topics carry every frame); '
+                       '0 = every frame', unit='s',
                   ge=0.0, le=10.0),
     'sides': Param(['right', 'left'], 'hands to publish (one side: right, or [right])',
                    min_length=1, choices=('right', 'left')),

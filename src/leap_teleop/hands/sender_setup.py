@@ -105,13 +105,16 @@ def retune_sender(recognizers, lowpass, changes):
 
 
 class PeriodThrottle:
-    """The original sender's ~freq: at most one frame per `period` (s, by frame timestamp)
-    for each key; a period of 0 lets every frame through. A stamp before the last one sent
-    (a /clock that restarts, a looped bag) starts afresh: it goes out."""
+    """The original sender's ~freq: one frame per `period` (s, by frame timestamp) for
+    each key, on a schedule that keeps its phase, so the rate is 1 / period as the
+    original's sleep gave (the first frame a period after the last one sent halved a
+    110 Hz stream to 55 Hz at 0.01 s); a period of 0 lets every frame through. A stamp
+    before the last one sent (a /clock that restarts, a looped bag) starts afresh: it
+    goes out."""
 
     def __init__(self, period):
         self.period = float(period)
-        self._last = {}
+        self._sent = {}         # key: (stamp of the last frame sent, when the next is due)
 
     def due(self, key, timestamp, change=False):
         """True when a frame of `key` stamped `timestamp` goes out (and counts as sent);
@@ -119,10 +122,13 @@ class PeriodThrottle:
         hand-less frame between a recording's passes) would never reach the consumers."""
         if self.period <= 0:
             return True
-        last = self._last.get(key)
+        sent = self._sent.get(key)
         # Time gone back: measured from the old stamps, nothing went out until the clock
         # had passed them again.
-        if not change and last is not None and 0 <= timestamp - last < self.period:
-            return False
-        self._last[key] = timestamp
+        if not change and sent is not None and sent[0] <= timestamp < sent[1] - 1e-6:
+            return False        # (1e-6: the schedule's sums of periods round)
+        next_due = timestamp + self.period
+        if not change and sent is not None and sent[0] <= timestamp < sent[1] + self.period:
+            next_due = sent[1] + self.period        # on schedule; after a gap, from now
+        self._sent[key] = (timestamp, next_due)
         return True

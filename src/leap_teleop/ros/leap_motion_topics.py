@@ -4,7 +4,6 @@ import rospy
 from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.control.lowpass import LowPass
-from leap_teleop.hands.sender_setup import PeriodThrottle
 from leap_teleop.msg import DriverHuman
 from leap_teleop.params import ParamError
 from leap_teleop.ros import hand_conversions
@@ -49,8 +48,6 @@ class LeapMotionTopics:
     def __init__(self, p, queue_size):
         self.builder = hand_conversions.DriverHumanBuilder(p['frame_id'])
         self.lowpass = LowPass(p['filter_cutoff'])
-        self.throttle = PeriodThrottle(p['freq'])
-        self._sides_sent = None         # the hands of the last frame sent
         self.pubs = {}
         for kind, topic, msg_type in (('raw', p['human_topic'], DriverHuman),
                                       ('filtered', p['filtered_human_topic'], DriverHuman),
@@ -64,13 +61,8 @@ class LeapMotionTopics:
         return pub is not None and pub.get_num_connections() > 0
 
     def on_frame(self, frame, states):
-        sides = tuple(sorted(h.side for h in frame.hands))
-        # as on the sender's own topics: a hand that comes or goes, or a gesture (the SDK's
-        # in a recording, the recognizer's circle), always goes out whatever ~freq says
-        if not self.throttle.due('frame', frame.timestamp, change=sides != self._sides_sent or bool(
-                frame.gestures) or any(state.events for state in states.values())):
-            return
-        self._sides_sent = sides
+        # Every frame, whatever ~freq (the old sender's throttle): the driver publishes each
+        # one, and its filter's cut-off is relative to the frame rate.
         markers = self._wanted('markers')
         filtered = self._wanted('filtered') or (markers and 'filtered' in self.pubs)
         raw = self._wanted('raw') or (markers and not filtered)
