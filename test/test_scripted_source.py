@@ -82,7 +82,46 @@ def test_loop_restarts_and_stop_ends_it():
         got.append(f)
         if len(got) == 35:
             src.stop()
-    assert len(got) == 35 and all(f.hand('right') is not None for f in got)
+    # 10 frames a pass, then one without hands
+    assert len(got) == 35 and [k for k, f in enumerate(got) if f.hand('right') is None] == [10, 21, 32]
+
+
+def test_a_looped_script_loses_the_hand_between_passes_and_starts_a_new_session():
+    # The hand ids are fixed: with no frame between passes the tracker followed one hand
+    # jumping 150 mm back from the script's end to its start, with its origin kept.
+    from leap_teleop.hands.tracker import HandTracker
+    script = GestureScript({'rate_hz': 100, 'hands': {'right': [
+        {'pose': 'thumbs_up', 'palm': [0, 200, 0], 'duration': 0.5},
+        {'pose': 'rock', 'duration': 0.3},
+        {'pose': 'open', 'palm': [150, 200, 0], 'duration': 0.7}]}})
+    src = ScriptedSource(script, realtime=False, loop=True, clock=lambda: 1000.0)
+    n = 150
+    tracker, states, frames_ = HandTracker('right'), [], []
+    for f in src.frames():
+        states.append(tracker.update(f.hand('right'), f.timestamp, f.id))
+        frames_.append(f)
+        if len(states) == 2 * n + 2:
+            break
+    src.stop()
+    end, seam, again = states[n - 1], states[n], states[n + 1]
+    assert end.present and end.origin_set and end.palm_position[0] == pytest.approx(150, abs=3)
+    assert not seam.present and not seam.origin_set and [e.gesture for e in seam.events] == ['hand_lost']
+    assert again.present and not again.origin_set and again.palm_position[0] == pytest.approx(0, abs=1)
+    assert [e.gesture for e in again.events][:1] == ['hand_found']
+    # one frame period apart, ids and stamps going on
+    assert [f.id for f in frames_] == list(range(1, 2 * n + 3))
+    np.testing.assert_allclose(np.diff([f.timestamp for f in frames_]), 0.01, atol=1e-9)
+
+    # a script that starts without the hand loses it anyway: its passes follow on directly
+    src = ScriptedSource(GestureScript(SCRIPT), realtime=False, loop=True)
+    got = []
+    for f in src.frames():
+        got.append(f)
+        if len(got) == 402:
+            break
+    src.stop()
+    assert got[200].hand('right') is None and got[200].hand('left') is not None
+    assert got[400].hand('left') is not None
 
 
 @pytest.mark.parametrize('bad, message', [

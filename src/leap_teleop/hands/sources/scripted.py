@@ -20,6 +20,9 @@ previous segment ended to `palm` (mm, Leap axes) and the orientation to `rpy`; a
 that appears (first segment, or after `absent`) appears at its `palm` and `rpy`.
 `circle` moves the palm once round a horizontal circle of `radius` mm instead.
 A hand whose segments are over is absent. Poses: absent and rendered_hand.POSES.
+
+Looped (loop=True), a script with a hand at both its ends plays one frame without hands
+between passes, so that each pass is a new session for the trackers.
 """
 import math
 import time
@@ -209,11 +212,19 @@ class ScriptedSource(HandSource):
     def frames(self):
         period = 1.0 / self.rate_hz
         n_frames = max(1, int(round(self.script.duration * self.rate_hz)))
+        # A looped pass whose hand is there at both ends of the script ends with one
+        # hand-less frame (as a looped recording does): the hand ids are fixed, so without
+        # it a tracker would follow one hand jumping from the end to the start, keeping
+        # its origin. A script that starts or ends without it loses the hand anyway.
+        seam = self.loop and any(
+            self.script.hand_at(side, 0.0) is not None
+            and self.script.hand_at(side, (n_frames - 1) * period) is not None for side in SIDES)
+        per_pass = n_frames + 1 if seam else n_frames
         t0_wall, t0_mono = self._clock(), time.monotonic()
         k = 0
         while not self.stopped:
-            i = k % n_frames if self.loop else k
-            if i >= n_frames and not self.loop:
+            i = k % per_pass
+            if k >= per_pass and not self.loop:
                 return
             if self.realtime:
                 delay = t0_mono + k * period - time.monotonic()
@@ -221,7 +232,7 @@ class ScriptedSource(HandSource):
                     time.sleep(delay)
             script_t = i * period
             hands = []
-            for side in SIDES:
+            for side in SIDES if i < n_frames else ():
                 hand = self.script.hand_at(side, script_t)
                 if hand is not None:
                     if self.noise_mm > 0:
