@@ -385,6 +385,21 @@ def test_annotated_view_draws_the_latency_notes_bottom_left(detections):
     assert len(rows) and rows.min() > height // 2 and cols.min() < width // 10  # bottom left
 
 
+def test_a_failing_latency_note_draws_the_view_without_it_and_does_not_raise():
+    # The notes come from other nodes' /diagnostics on the hand source's thread: an error
+    # there ended the source, and the sender with it.
+    def broken():
+        raise TypeError('must be real number, not NoneType')
+    published = []
+    view = CameraView(False, lambda frame, img: published.append(img), notes=broken)
+
+    class F:
+        id, timestamp = 3, 1.0
+    view.on_image(F, np.zeros((48, 64, 3), np.uint8), [])
+    view.on_frame(F, {})
+    assert len(published) == 1
+
+
 def test_record_frames_and_bag_from_camera_footage(tmp_path):
     """record_frames and recording_to_bag take the video source like any other."""
     import rosbag

@@ -153,6 +153,28 @@ def test_a_report_is_stale_only_when_wall_and_ros_time_both_say_so():
     assert board.rows((108.0, 14.0)) and not board.rows((108.0, 15.5))
 
 
+def test_a_report_on_a_stopped_ros_clock_drops_out_within_a_minute_of_wall_time():
+    # A bag at its end or a paused simulator: ROS time stood still, so every report stayed
+    # "heard 0 s ago" and the last figures were shown for ever.
+    board = LatencyBoard()
+    arm = InputAgeWindow()
+    arm.add(10.0, 9.99)
+    board.on_status('ur10_1/ur10_arm: teleop', arm.diagnostic_values(10.0), (100.0, 120.0))
+    assert board.rows((130.0, 120.0))                  # a slow simulation: still shown
+    assert not board.rows((170.0, 120.0))              # the clock stopped: gone
+
+
+@pytest.mark.parametrize('p99', [None, 'n/a', 'inf', 'nan'])
+def test_a_status_with_one_figure_is_a_line_not_a_crash(p99):
+    # p50 without p99 raised TypeError in the camera overlay (ending the sender's hand
+    # source) and in hand_markers' timer (ending its thread)
+    board = LatencyBoard()
+    values = [('input age p50 (ms)', '3.1'), ('input age samples', '20')]
+    values += [] if p99 is None else [('input age p99 (ms)', p99)]
+    assert board.on_status('ur10_1/ur10_arm: teleop', values, 1.0)
+    assert board.notes(1.0) == ['capture -> stage, p50 / p99:', 'ur10_1/ur10_arm command: 3.1 / n/a ms']
+
+
 def test_the_table_goes_on_when_the_ros_clock_jumps_back(monkeypatch, capsys):
     # rospy.sleep raised on a /clock looped back (a bag played again, sim time), which main
     # took for Ctrl-C: the table stopped silently with status 0.

@@ -213,6 +213,10 @@ def node_name(status_name):
     return status_name.split(': ', 1)[0]
 
 
+# A report heard by ROS time only stays on the board this long by wall time.
+STOPPED_CLOCK_S = 60.0
+
+
 class LatencyBoard:
     """The latest row of each (node, stage), as heard on /diagnostics, for a table, an
     overlay or a marker. on_status() and the readers may run on different threads: each
@@ -238,12 +242,16 @@ class LatencyBoard:
                 if now is None or self._fresh(heard, now)]
 
     def _fresh(self, heard, now):
-        """Heard within stale_after_s, by one clock (numbers) or by any of several (tuples
-        of their readings, as on_status got them): with wall and ROS time, neither a slow
-        simulation (reports a second of ROS time apart) nor a /clock looped back (a report
-        'heard' in the future) decides alone."""
+        """Heard within stale_after_s, by one clock (numbers) or, for tuples of readings
+        (wall time first, as on_status got them), by wall time or by another clock within
+        STOPPED_CLOCK_S of wall time: neither a slow simulation (reports a second of ROS
+        time apart) nor a /clock looped back (a report 'heard' in the future) decides
+        alone, and a /clock that stopped (a bag at its end, a paused simulator) keeps the
+        last figures for a minute, not for ever."""
         if isinstance(now, tuple):
-            return any(0.0 <= n - h <= self.stale_after_s for n, h in zip(now, heard))
+            wall = now[0] - heard[0]
+            return 0.0 <= wall <= self.stale_after_s or (wall <= STOPPED_CLOCK_S and any(
+                0.0 <= n - h <= self.stale_after_s for n, h in zip(now[1:], heard[1:])))
         return 0.0 <= now - heard <= self.stale_after_s
 
     def table(self, now=None):
@@ -255,10 +263,11 @@ class LatencyBoard:
         for name, stage, p50, p99, n in sorted(self.rows(now), key=_path_order):
             if stage not in stages:
                 continue
-            if p50 is None:
+            if p50 is None and p99 is None:
                 lines.append('%s %s: no samples' % (node_name(name), stage))
-            else:
-                lines.append('%s %s: %.1f / %.1f ms' % (node_name(name), stage, p50, p99))
+            else:       # another node's status may carry one figure only, or 'n/a'
+                lines.append('%s %s: %s / %s ms' % (node_name(name), stage, *(
+                    'n/a' if x is None else '%.1f' % x for x in (p50, p99))))
         return lines
 
     def notes(self, now=None):

@@ -3,6 +3,7 @@ its side, the gestures the recognizer holds for it, the processed frame rate and
 given, the pipeline's latency lines (capture -> published, capture -> command) drawn on
 the image (ros.sensor_conversions.bgr_image_msg makes it a message).
 """
+import logging
 import time
 
 import numpy as np
@@ -14,6 +15,7 @@ from leap_teleop.hands.sources.landmarks import hand_side
 HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
                     (5, 9), (9, 10), (10, 11), (11, 12), (9, 13), (13, 14), (14, 15),
                     (15, 16), (13, 17), (17, 18), (18, 19), (19, 20), (0, 17))
+log = logging.getLogger(__name__)
 SIDE_COLOURS = {'right': (60, 180, 255), 'left': (255, 160, 60)}      # BGR
 FPS_SMOOTHING = 0.1
 
@@ -97,5 +99,9 @@ class CameraView:
         pending, self._pending = self._pending, None
         if pending is None or pending[0] != frame.id or not self.wanted():
             return
-        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps,
-                                 self.notes()))
+        try:
+            notes = self.notes()
+        except Exception as e:  # noqa: BLE001 - the overlay's text must not end the hand source
+            log.warning('camera view: no latency lines: %s', e)
+            notes = ()
+        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps, notes))

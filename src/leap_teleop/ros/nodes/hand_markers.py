@@ -63,7 +63,11 @@ class HandMarkersNode:
 
     def on_latency_timer(self, _event):
         now = rospy.get_time()
-        lines = self.latency.notes()
+        try:                # an exception would end the timer's thread for good
+            lines = self.latency.notes()
+        except Exception as e:  # noqa: BLE001 - logged; the next tick tries again
+            rospy.logwarn_throttle(10.0, 'hand_markers: no latency text: %s' % e)
+            return
         if lines or self.latency_shown:        # one DELETE once reports stop
             with closed_at_shutdown():         # a last tick can race the shutdown
                 self.pub.publish(MarkerArray([latency_marker(
