@@ -393,10 +393,10 @@ def test_a_failing_latency_note_draws_the_view_without_it_and_does_not_raise():
     published = []
     view = CameraView(False, lambda frame, img: published.append(img), notes=broken)
 
-    class F:
+    class ViewedFrame:
         id, timestamp = 3, 1.0
-    view.on_image(F, np.zeros((48, 64, 3), np.uint8), [])
-    view.on_frame(F, {})
+    view.on_image(ViewedFrame, np.zeros((48, 64, 3), np.uint8), [])
+    view.on_frame(ViewedFrame, {})
     assert len(published) == 1
 
 
