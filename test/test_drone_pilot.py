@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from leap_teleop.drone.pilot import (
+    PILOT_PARAMS,
     TAKEOFF_CONFIRM_S,
     Command,
     CommandQueue,
@@ -710,6 +711,33 @@ def test_bad_config_rejected():
         PilotParams().update({'mode': 'joystick'})
     with pytest.raises(ValueError):
         PilotParams().update({'flip_type': 25})
+
+
+@pytest.mark.parametrize('key, value', [('hand_timeout', 0.005), ('hand_timeout', 0.01),
+                                        ('navdata_timeout', 0.01), ('navdata_timeout', 0.02)])
+def test_timeouts_within_a_message_interval_are_refused(key, value):
+    # Below the Hand (~10 ms) or navdata (20 ms) interval every gap between two messages
+    # was a loss: cmd_vel went forward / hover / forward at the Hand rate.
+    with pytest.raises(ValueError, match=key):
+        PilotParams().update({key: value})
+
+
+def test_the_shortest_timeouts_accepted_steer_steadily_between_messages():
+    cfg = PilotParams().update({'hand_timeout': PILOT_PARAMS['hand_timeout'].ge,
+                                'navdata_timeout': PILOT_PARAMS['navdata_timeout'].ge})
+    warned = []
+    pilot = airborne(cfg)
+    pilot._warn = lambda key, text: warned.append(key)
+    drain(pilot)
+    sent = []
+    for i in range(1, 101):         # Hand at 100 Hz, navdata at 50 Hz, the watchdog between
+        t = 0.01 * i
+        if i % 2 == 0:
+            pilot.on_navdata(3, 1000, t)
+        pilot.on_hand(hand((0.0, 0.2, -0.08)), t)
+        pilot.watchdog(t + 0.009)
+        sent += twists(drain(pilot))
+    assert len(sent) == 100 and all(tw[0] > 0.0 for tw in sent) and warned == []
 
 
 @pytest.mark.parametrize('mode', ['tilt', 'paper'])

@@ -282,6 +282,8 @@ class DronePilot:
         self._last_twist_out = None      # monotonic time of the last twist published
         self._last_twist_sent = None     # and its values
         self._zero_sent = False
+        # A stream silent for hand_timeout is a lost hand: back, it is judged afresh (and may
+        # be a session played again). The bound keeps that above the Hand interval.
         self._stream = InputStream(self.cfg.max_input_age, self.cfg.hand_timeout)
         self.rejected_inputs = 0         # bad or late Hand messages and gesture events
 

@@ -24,8 +24,10 @@ PILOT_PARAMS = {
     'flip_min_altitude': Param(0.6, 'no flip below this altitude', unit='m', ge=0.5, le=10.0),
     'flip_min_radius': Param(0.025, 'no flip on a smaller circle (fingertip loops are 4-20 '
                                     'mm)', unit='m', ge=0.0, le=0.5),
-    'hand_timeout': Param(0.15, 'no Hand message this long = hand lost (hover)', unit='s',
-                          gt=0.0, le=10.0),
+    # Lower bounds above the message intervals (Hand ~10 ms, navdata 20 ms at 50 Hz): below
+    # them every ordinary gap is a loss, and the drone hovers between each two commands.
+    'hand_timeout': Param(0.15, 'no Hand message this long = hand lost (hover); above the '
+                                'Hand interval', unit='s', ge=0.05, le=10.0),
     'land_after': Param(3.0, 'lost hand or navdata this long -> land', unit='s',
                         gt=0.0, le=120.0),
     'disarm_after': Param(1.0, 'lost hand this long -> steering off until a new unfold; back '
@@ -37,7 +39,8 @@ PILOT_PARAMS = {
                                     'the reference is kept (0: always re-captured)',
                               unit='m', ge=0.0, le=1.0),
     'navdata_timeout': Param(0.5, 'no navdata this long = drone state unknown: no takeoff, '
-                                  'hover, then land', unit='s', gt=0.0, le=10.0),
+                                  'hover, then land; above the navdata interval', unit='s',
+                             ge=0.1, le=10.0),
     'dead_zone': Param(0.03, 'tilt: horizontal palm dead zone', unit='m', ge=0.0, le=0.5),
     'full_scale': Param(0.10, 'tilt: offset beyond the dead zone for full tilt', unit='m',
                         gt=0.0, le=1.0),
