@@ -49,11 +49,32 @@ class HandTopics:
                         if p['leapros_topic'] else None)
         self.leap = (rospy.Publisher(p['leap_topic'], leap, queue_size=q)
                      if p['leap_topic'] else None)
+        self._classic_last = None       # (state, hand) last present on leapros_side
         # On the source's thread, which can outlive the node's shutdown by a frame.
         interface.add_hand_listener(quiet_at_shutdown(self.on_hand))
         self.driver = LeapMotionTopics(p, q)
         if self.driver.pubs:
             interface.add_listener(quiet_at_shutdown(self.driver.on_frame))
+
+    def _publish_classic(self, state, hand):
+        """The old sender's leapros / leap of one side: while the hand is away, its last
+        pose with this frame's stamp, as the classic sender went on publishing what it had
+        last seen (its consumers saw the palm drop to the device and zero directions)."""
+        if state.present:
+            self._classic_last = (state, hand)
+            now = None
+        elif self._classic_last is not None:
+            now, (state, hand) = state, self._classic_last
+        else:
+            now = None
+        frame_id = self.p['frame_id']
+        for pub, msg in ((self.leapros, lambda: hand_conversions.to_leapros(state, hand, frame_id)),
+                         (self.leap, lambda: hand_conversions.to_leap(state, frame_id))):
+            if pub is not None:
+                msg = msg()
+                if now is not None:
+                    msg.header.stamp = rospy.Time.from_sec(now.timestamp)
+                pub.publish(msg)
 
     def wait_for_subscribers(self, topics=()):
         """Block until every topic in `topics` (default: every leapcobot topic) has a
@@ -92,11 +113,7 @@ class HandTopics:
         for kind, msg in hand_conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
-        if side == self.leapros_side:
-            if self.leapros is not None:
-                self.leapros.publish(hand_conversions.to_leapros(state, frame.hand(side),
-                                                            self.p['frame_id']))
-            if self.leap is not None:
-                self.leap.publish(hand_conversions.to_leap(state, self.p['frame_id']))
+        if side == self.leapros_side and (self.leapros is not None or self.leap is not None):
+            self._publish_classic(state, frame.hand(side))
         self.ages.add('published', self.clock(), frame.timestamp)
         self.published += 1
