@@ -270,6 +270,26 @@ def test_a_bound_hover_stops_the_drone_and_makes_the_hand_s_place_neutral():
     assert all(t == (0.0,) * 6 for t in twists(drain(pilot)))
 
 
+def test_a_bound_hover_in_paper_mode_hovers_until_the_capture_pose_again():
+    # The paper reference was kept: the next Hand message sent the twist from before the
+    # hover (a flat palm sinking at full rate), so the hover lasted one cmd_vel.
+    pilot = DronePilot(PilotParams(mode='paper', navdata_timeout=10.0))
+    pilot.on_navdata(3, 1000, 0.0)
+    tilted = dict(normal=(0.6, -0.8, 0.0), direction=(0.0, 0.6, -0.8))
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), **tilted), 0.0)     # captures
+    for i in range(1, 10):
+        pilot.on_hand(hand((0.0, 0.2, -0.09)), 0.02 * i)
+    assert twists(drain(pilot))[-1][2] == -1.0                          # flat: sinking
+    pilot.on_gesture('hover', True, 0.19)
+    assert twists(drain(pilot)) == [(0.0,) * 6]
+    for i in range(10, 60):
+        pilot.on_hand(hand((0.0, 0.2, -0.09)), 0.02 * i)
+    assert drain(pilot) == [] and pilot.paper_ref is None
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.09), **tilted), 1.2)  # the capture pose
+    (t,) = twists(drain(pilot))
+    assert t[:2] == (0.0, 0.0) and t[3:5] == pytest.approx((-90.0, 0.0))
+
+
 def test_a_slow_start_with_no_navdata_and_no_hand_hovers_once_and_lands_nothing():
     # Started before its driver and sender: 'hand lost for 3.0 s: landing' to a drone
     # never seen. The state unknown, the hover is what is safe (as for navdata lost).

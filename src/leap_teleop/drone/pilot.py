@@ -39,8 +39,8 @@ Modes:
   linear.z = palm normal y (about -1 for a flat palm: that drone sinks unless
   the palm is tilted), angular.x = init_x, angular.y = init_y (raw mm: any non-zero
   value disables the driver's auto-hover; the driver clamps them), angular.z = 0.
-  Nothing is sent before the first capture. The linear ones are clamped to [-1, 1] here,
-  as the driver would.
+  Nothing is sent before the first capture, nor after a ``hover`` event until the next.
+  The linear ones are clamped to [-1, 1] here, as the driver would.
 
 Safety added in both modes: hand twists are only sent while fresh navdata (no older
 than ``navdata_timeout``) says the drone flies or hovers, and a takeoff only while it
@@ -419,8 +419,10 @@ class DronePilot:
             elif name == 'hover':
                 # A bound hover gesture, the hand still in view: stop, and steer on from
                 # where the hand is next (a hand kept where it was would fly on as before).
+                # Paper mode has no neutral of its own: it waits for the capture pose.
                 self._lose(now)
                 self._hand_at_loss = None
+                self.paper_ref = None
             elif name == 'unfold':
                 if self.cfg.mode == 'tilt':
                     self.engaged = True
