@@ -235,6 +235,32 @@ def test_a_stamp_days_ahead_or_a_second_take_is_a_break_not_the_end(tmp_path):
     assert len(list(src.frames())) == 43 and time.monotonic() - t0 < 2.0
 
 
+@pytest.mark.parametrize('meta, rate_hz', [({'frameRate': '1.1e+2'}, 110.0), (None, 100.0),
+                                           ({'frameRate': 'nan'}, 100.0), ({'frameRate': 1e9}, 100.0)])
+@pytest.mark.parametrize('stamps', ['one', 'back'])
+def test_a_take_whose_stamps_do_not_advance_is_spaced_by_its_frame_rate(tmp_path, caplog, meta,
+                                                                         rate_hz, stamps):
+    # All frames with one stamp were played at once, in 0 s with one stamp (frame-counting
+    # gesture filters fired, the consumers got the whole take in an instant); going back,
+    # every frame was a break with a hand-less frame between.
+    frames = _frames(30, 10000)
+    for k, f in enumerate(frames):
+        f['timestamp'] = 0 if stamps == 'one' else 10 ** 6 - k * 10000
+    path = _write(tmp_path, 'r.json', frames, meta)
+    src = make_source('recording', path=path, realtime=False, clock=lambda: 1000.0)
+    got = list(src.frames())
+    assert len(got) == 30 and all(f.hands for f in got) and src.breaks == 0
+    assert np.allclose(np.diff([f.timestamp for f in got]), 1 / rate_hz)
+    assert src.rate_hz == pytest.approx(rate_hz) and src.duration == pytest.approx(29 / rate_hz)
+    said = [r.getMessage() for r in caplog.records if 'do not advance' in r.getMessage()]
+    assert len(said) == 1 and ('%g frames/s' % rate_hz) in said[0]
+    if meta is None:
+        # and in real time it takes its 0.29 s
+        src = make_source('recording', path=path, realtime=True)
+        t0 = time.monotonic()
+        assert len(list(src.frames())) == 30 and 0.25 < time.monotonic() - t0 < 2.0
+
+
 def test_bad_single_frames_are_skipped_and_counted(tmp_path):
     frames = _frames(10)
     frames[3] = 'garbage'

@@ -10,6 +10,10 @@ At each break and between loop passes comes one frame without hands, then play g
 each one frame period after the last: with the same hand ids the trackers would otherwise
 follow one hand that jumps in a frame, keeping its origin; this way it is lost, and the
 next part is a new session.
+
+A file whose stamps mostly do not advance (all one stamp, or going back) has no usable
+timing: its frames are spaced by its metadata.frameRate (else DEFAULT_RATE_HZ), with a
+warning, rather than played all at once.
 """
 import logging
 import math
@@ -21,6 +25,20 @@ from leap_teleop.hands.sources.source import HandSource, SourceError
 
 log = logging.getLogger(__name__)
 MAX_GAP_S = 2.0     # s between two frames: longer (or back) is a break in the recording
+DEFAULT_RATE_HZ = 100.0     # a file without usable timing nor a usable metadata.frameRate
+RATE_RANGE_HZ = (1.0, 1000.0)   # a metadata.frameRate outside is not believed
+
+
+def file_frame_rate(metadata):
+    """(Hz, where from): the recording's metadata.frameRate (LeapJS writes it, maybe as
+    text, e.g. '1.1e+2'), when a number in RATE_RANGE_HZ; else DEFAULT_RATE_HZ."""
+    try:
+        rate = float(metadata.get('frameRate'))
+    except (TypeError, ValueError, OverflowError):
+        rate = math.nan
+    if RATE_RANGE_HZ[0] <= rate <= RATE_RANGE_HZ[1]:      # NaN compares false
+        return rate, 'its metadata.frameRate'
+    return DEFAULT_RATE_HZ, 'the default; no usable metadata.frameRate'
 
 
 class RecordingSource(HandSource):
@@ -52,6 +70,16 @@ class RecordingSource(HandSource):
         # (seconds since the first frame, Frame); a Frame of None is a hand-less one
         self._frames = [(0.0, usable[0])]
         self.breaks = 0
+        if 2 * len(regular) < len(steps):
+            # Mostly one stamp (an exporter that wrote 0, a counter that did not advance)
+            # or going back: played as recorded, the whole take came at once with one
+            # stamp, or as a break at every frame.
+            rate, why = file_frame_rate(self.metadata)
+            log.warning('recording %s: its timestamps do not advance (%d of %d steps between '
+                        'frames are not forward in time); played at %g frames/s (%s)',
+                        self.path, len(steps) - len(regular), len(steps), rate, why)
+            self._frames = [(k / rate, frame) for k, frame in enumerate(usable)]
+            steps = []
         for step, frame in zip(steps, usable[1:]):
             if not 0 <= step <= MAX_GAP_S:
                 self.breaks += 1
