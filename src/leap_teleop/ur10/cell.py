@@ -133,6 +133,7 @@ class UR10Cell:
         self.reset()
         try:
             self._check_arms_apart()
+            self._check_cubes_clear()
         except ValueError:
             self.close()
             raise
@@ -148,6 +149,35 @@ class UR10Cell:
                                      '(bases at %s and %s): place them further apart'
                                      % (self.config.path, a.cfg.name, b.cfg.name,
                                         a.cfg.base_xyz.tolist(), b.cfg.base_xyz.tolist()))
+
+    def _check_cubes_clear(self):
+        """ValueError naming the first cube that starts inside an arm at its home pose, a
+        tray (its floor or a wall) or another cube: the solver would throw it at the first
+        steps (out of an upper arm at 2.35 m/s). The config refuses one inside the table."""
+        c, path = self.client, self.config.path
+        tolerance = 1e-3 * self.config.cube_size     # resting contact reads ~0, not inside
+        others = [(a.body, "arm %s's " % name) for name, a in self.arms.items()]
+        others += [(body, "arm %s's tray" % name) for name, body in self.trays.items()]
+        others += [(body, 'cube %r' % name) for name, body in self.cubes.items()]
+        for cube in self.config.cubes:
+            body = self.cubes[cube.name]
+            for other, what in others:
+                if other == body:
+                    continue
+                deep = [cp for cp in p.getClosestPoints(body, other, 0.0, physicsClientId=c)
+                        if cp[8] < -tolerance]
+                if not deep:
+                    continue
+                if other in self._arm_bodies:
+                    link = deep[0][4]
+                    name = (p.getJointInfo(other, link, physicsClientId=c)[12] if link >= 0
+                            else p.getBodyInfo(other, physicsClientId=c)[0]).decode()
+                    arm = next(a for a in self.arms.values() if a.body == other)
+                    what += name[len(arm.cfg.prefix):] if name.startswith(arm.cfg.prefix) else name
+                    what += ' at its home pose'
+                raise ValueError('cell config %s: cube %r at %s starts inside %s (%.1f mm deep): '
+                                 'move it clear' % (path, cube.name, np.round(cube.xyz, 3).tolist(),
+                                                    what, -1000 * min(cp[8] for cp in deep)))
 
     def _cap_arm_speed(self, arm):
         """Cap each arm motor at the joint's speed limit. PyBullet keeps a motor's

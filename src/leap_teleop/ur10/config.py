@@ -259,7 +259,7 @@ def _parse(data, path):
         _known_keys(c, 'cube', what)
         xyz = list(c['xyz'])
         if len(xyz) == 2:
-            xyz.append(height + size / 2)
+            xyz.append(_rest_z(xyz, arms, height) + size / 2)
         arm = str(c.get('arm', ''))
         if arm and arm not in names:
             raise ValueError('%s.arm: no arm %r (arms: %s)' % (what, arm, ', '.join(names)))
@@ -288,6 +288,22 @@ def _parse(data, path):
 
 # The table top is a slab this thick (m) whose top is at the table height.
 TABLE_THICKNESS = 0.05
+
+
+def _rest_z(xy, arms, table_height):
+    """z a cube given as [x, y] rests on: the floor of a tray whose footprint holds that
+    point (a cube at table height sat 1 cm inside it and was thrown up), else the table."""
+    try:
+        x, y = (float(v) for v in xy)
+    except (TypeError, ValueError):
+        return table_height          # _vec names the bad entry
+    z = table_height
+    for a in arms:
+        t = a.tray
+        if (abs(x - t.xyz[0]) < t.inner[0] / 2 + t.wall[0]
+                and abs(y - t.xyz[1]) < t.inner[1] / 2 + t.wall[0]):
+            z = max(z, t.floor_z)
+    return z
 
 
 def _check_cubes(cubes, table_height, size, table_center, table_size):
