@@ -153,6 +153,26 @@ def test_move_is_stretched_to_the_speed_limits_and_reaches_the_target(cell):
     assert worst <= 1.0 + 1e-3, worst
 
 
+def test_the_tool_driven_into_the_table_keeps_every_joint_within_its_speed_limit():
+    # Before, the blocked tool spun wrist_3 at 5.6 rad/s against its pi: the motors' speed
+    # cap bounds their target only, not what contact forces do to the joint.
+    cell = UR10Cell('ur10_cell.yaml', visuals=False)
+    try:
+        arm = cell.config.arm(ARM)
+
+        def q_at(xyz, ref):
+            return kin.ik_nearest(kin.pose(arm.point_to_base(np.array(xyz)), kin.tool_down()), ref)
+        above = q_at([0.6, -0.4, 0.85], cell.joint_state(ARM)[0])
+        cell.run(cell.move_to(ARM, above, 2.0) - cell.time + 0.3)
+        below = q_at([0.6, -0.4, 0.55], above)     # 20 cm into the table top
+        cell.command_arm(ARM, [(1.0, below, None), (2.0, below, None), (3.0, above, None)])
+        worst = follow(cell, ARM, 3.5)
+        assert cell.tcp_pose(ARM)[2, 3] > 0.84        # back above the table
+        assert worst <= 1.0 + 1e-3, worst
+    finally:
+        cell.close()
+
+
 def test_slow_trajectory_keeps_its_timing(cell):
     q0 = cell.joint_state(ARM)[0]
     mid = q0 + np.array([0.2, 0.1, -0.1, 0.1, 0.1, 0.2])

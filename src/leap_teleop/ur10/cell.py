@@ -3,7 +3,7 @@
 Plain Python (no ROS). Time is simulated time: step() advances the physics by one
 1/physics_hz step and every arm's trajectory follower with it. Arms are driven by
 PyBullet position control (the desired position now + the desired motion over the step
-as feed-forward velocity, motor speed capped at the UR10 limits), fingers by
+as feed-forward velocity, motor and joint speed capped at the UR10 limits), fingers by
 force-limited position control.
 
 Grasping is by contact only: when both fingers of a closing gripper touch the same cube,
@@ -183,13 +183,16 @@ class UR10Cell:
         """Cap each arm motor at the joint's speed limit. PyBullet keeps a motor's
         maxVelocity until it is set again and only the one-joint call sets it, so it is set
         here once (holding home, as step() does after a reset) and the per-step array call
-        leaves it in place."""
+        leaves it in place. That caps the motor's target only: contact and coupling forces
+        (the tool driven into the table) spun wrist_3 at 5.6 rad/s against its 3.14. The
+        joint's maxJointVelocity clamps its speed in the solver, whatever drives it."""
         for j, q, fj, vmax in zip(arm.arm_joints, arm.cfg.home, _ARM_FORCES,
                                   kin.MAX_JOINT_SPEED):
             p.setJointMotorControl2(arm.body, j, p.POSITION_CONTROL, targetPosition=float(q),
                                     targetVelocity=0.0, force=fj,
                                     positionGain=ARM_POSITION_GAIN, velocityGain=1.0,
                                     maxVelocity=float(vmax), physicsClientId=self.client)
+            p.changeDynamics(arm.body, j, maxJointVelocity=float(vmax), physicsClientId=self.client)
 
     def _skip_untouchable_pairs(self, arm):
         """No collision checks between the static scene (floor, table, trays) and the arm
