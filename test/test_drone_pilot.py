@@ -154,6 +154,23 @@ def test_raising_or_rolling_the_hand_turns_nothing_even_past_upright(axis):
     assert yaw_commands(pilot, hands) == [0.0] * len(hands)
 
 
+@pytest.mark.parametrize('raised, rolled', [(30, 60), (30, 90), (45, 90), (45, 135), (30, 170),
+                                            (50, -120)])
+def test_a_hand_raised_and_rolled_with_its_fingers_ahead_turns_nothing(raised, rolled):
+    # Raised, then rolled about its fingers (forearm pronation): the fingers still point
+    # straight ahead, yet the twist of the whole rotation about the vertical yawed the
+    # drone (45 deg up, palm sideways: 0.67 of full rate; more roll: full rate).
+    pilot = airborne(PilotParams())
+    path = [rotation((1.0, 0.0, 0.0), deg) for deg in range(0, raised + 1)]
+    sign = 1 if rolled > 0 else -1
+    path += [path[-1] @ rotation((0.0, 0.0, 1.0), sign * deg) for deg in range(0, abs(rolled) + 1)]
+    # Then turned left by 40 deg about the vertical: the same command as a flat hand's.
+    turned = [rotation((0.0, 1.0, 0.0), deg) @ path[-1] for deg in range(1, 41)]
+    commands = yaw_commands(pilot, [oriented(R) for R in path + turned])
+    assert commands[:len(path)] == [0.0] * len(path)
+    assert commands[-1] == pytest.approx(25.0 / 45.0)
+
+
 def test_an_unfold_shown_upright_steers_by_the_turn_from_it():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)

@@ -27,7 +27,9 @@ Modes:
   beyond ``dead_zone`` maps linearly to a command reaching 1 at ``dead_zone +
   full_scale``: away from the user (-Leap z) -> forward (linear.x), to the left
   (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
-  left about the vertical -> yaw left (angular.z; raising or rolling it turns nothing).
+  left about the vertical -> yaw left (angular.z: the change of the fingers' heading, so
+  raising or rolling the hand, or both, turns nothing; fingers near vertical have none,
+  and there the axis across the palm gives it).
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -108,6 +110,10 @@ GESTURE_NAME = re.compile(r'[A-Za-z0-9_]{1,64}')
 RECAPTURE_TURN_DEG = 17.0
 # What a flip call returns when, the service there at last, the flip is no longer wanted.
 FLIP_NOT_CALLED = 'not called'
+# Fingers this near vertical (deg) have no heading: within the first, the hand's heading is
+# that of the axis across its palm; from the second on, all the fingers' (sideways tracking
+# jitter of 0.6 deg then moves it by 1.2 deg at most).
+NEAR_VERTICAL_DEG = (10.0, 30.0)
 
 
 @dataclass
@@ -152,17 +158,36 @@ def hand_axes(normal, direction):
     return ((c[0], n[0], d[0]), (c[1], n[1], d[1]), (c[2], n[2], d[2]))
 
 
+def _nearest_turn(angle, near, period):
+    """`angle` plus the whole number of `period`s (deg) that brings it nearest `near`."""
+    return angle + period * round((near - angle) / period)
+
+
+def hand_heading(axes, near=None):
+    """The heading (deg, as the Leap yaw counts: positive with the fingers turned to +x) of
+    a hand's orientation (hand_axes): its fingers' heading, the Leap yaw, which raising the
+    hand or rolling it about its fingers leaves as it is. Within NEAR_VERTICAL_DEG of
+    vertical the fingers have no heading: it passes over smoothly to that of the axis
+    across the palm (there rolling the hand is turning it). Fingers raised past vertical
+    point backwards: their heading is taken, up to a half turn, nearest `near` (the
+    reading before; None: the fingers' own), and the palm's up to a full turn."""
+    (cx, _, dx), _, (cz, _, dz) = axes
+    fingers = math.degrees(math.atan2(dx, -dz))
+    across = math.degrees(math.atan2(cz, cx))
+    lo, hi = (math.sin(math.radians(a)) for a in NEAR_VERTICAL_DEG)
+    weight = min(1.0, max(0.0, (math.hypot(dx, dz) - lo) / (hi - lo)))
+    if near is None:
+        near = fingers if weight > 0.0 else across
+    fingers = _nearest_turn(fingers, near, 180.0)
+    across = _nearest_turn(across, near, 360.0)
+    return across + weight * _nearest_turn(fingers - across, 0.0, 360.0)
+
+
 def turn_about_vertical(before, after):
-    """How far (deg, as the Leap yaw counts: positive with the fingers turning to +x) the
-    hand turned about the vertical from orientation `before` to `after` (hand_axes): the
-    twist part of the rotation between them. Unlike the difference of two yaws it is
-    defined for a hand raised upright or past it (their direction has no heading) and
-    unmoved by raising or rolling the hand; only a half turn about a level axis leaves
-    it undefined (0 there)."""
-    # R = after * before^T; the twist about y of R is 2 atan2(R02 - R20, 1 + trace R).
-    r = [[sum(after[i][k] * before[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
-    twist = 2.0 * math.atan2(r[0][2] - r[2][0], 1.0 + r[0][0] + r[1][1] + r[2][2])
-    return -math.degrees(twist)
+    """How far (deg, as the Leap yaw counts) the hand turned about the vertical from
+    orientation `before` to `after` (hand_axes): the change of its hand_heading."""
+    start = hand_heading(before)
+    return hand_heading(after, start) - start
 
 
 def paper_twist(palm_mm, normal, init_x, init_y, scale=3000.0):
@@ -274,7 +299,7 @@ class DronePilot:
         self._takeoffs_unconfirmed = 0
         self._takeoff_queued_at = None
         self._stopped_at = None          # when the last fold or loss came
-        self.reference = None            # tilt: (palm xyz m, hand_axes or None)
+        self.reference = None            # tilt: (palm xyz m, hand_heading or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
@@ -504,7 +529,8 @@ class DronePilot:
                 and abs(turn_about_vertical(before, after)) > RECAPTURE_TURN_DEG)
 
     def _capture(self, hand):
-        self.reference = (tuple(hand.palm), hand_axes(hand.normal, hand.direction))
+        axes = hand_axes(hand.normal, hand.direction)
+        self.reference = (tuple(hand.palm), None if axes is None else hand_heading(axes))
         self._last_turn = 0.0
 
     def _twist(self, hand):
@@ -523,15 +549,15 @@ class DronePilot:
             return tuple(max(-1.0, min(1.0, v)) for v in t[:3]) + t[3:]
         if not self.engaged or self.reference is None:
             return None
-        ref, axes_ref = self.reference
+        ref, heading_ref = self.reference
         d = [hand.palm[i] - ref[i] for i in range(3)]
         axes = hand_axes(hand.normal, hand.direction)
-        if axes_ref is None:                # captured from a hand with no orientation
-            self.reference = (ref, axes)
-            axes_ref = axes
-        dyaw = 0.0 if axes is None else turn_about_vertical(axes_ref, axes)
+        if heading_ref is None and axes is not None:    # captured with no orientation
+            heading_ref = hand_heading(axes)
+            self.reference = (ref, heading_ref)
         # On from the last turn (a hand turned half round keeps its side, at full rate).
-        dyaw += 360.0 * round((self._last_turn - dyaw) / 360.0)
+        dyaw = 0.0 if axes is None else (
+            hand_heading(axes, heading_ref + self._last_turn) - heading_ref)
         self._last_turn = dyaw
         cap = min(abs(cfg.max_cmd), 1.0)
         return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
