@@ -292,6 +292,27 @@ def test_link_loss_landing_when_enabled(drone):
     assert drone.state == ds.LANDED
 
 
+@pytest.mark.parametrize('link_timeout', [1.0, 2.0])
+def test_a_link_timeout_lands_neither_a_takeoff_nor_a_flip_nobody_steers(link_timeout):
+    # A pilot sends no cmd_vel while its drone takes off (2 s) or flips (1.8 s): at the
+    # firmware's 2 s or less every takeoff (below 1.8 s, every flip) became a landing.
+    d = ArDroneSim({'link_timeout': link_timeout}, warn=lambda key, text: None)
+    try:
+        assert d.takeoff()                      # no command at all while taking off
+        while d.state == ds.TAKING_OFF and d.time < 4.0:
+            d.step()
+        assert d.state == ds.HOVERING
+        d.set_cmd_vel()
+        d.advance(0.5)
+        assert d.flight_animation(ds.FLIP_RIGHT, 0)
+        d.advance(2.5)                          # nothing sent through the flip
+        assert ds.LANDING not in states(d) and d.flip_count == 1
+        d.advance(link_timeout + 0.5)           # silent on after it: lost
+        assert states(d)[-1] == ds.LANDING
+    finally:
+        d.close()
+
+
 def test_params_validated():
     with pytest.raises(ValueError):
         ArDroneSim({'altitude_min': 5000.0})

@@ -27,7 +27,8 @@ emulated onboard controller:
   drains with thrust-weighted flight time (lands at 0, refuses takeoff below
   ``battery_takeoff_min``), and an optional link-loss landing (``link_timeout``, off by
   default: the real driver re-sends the last command continuously, so the firmware's
-  2 s no-input landing only happens when the driver itself dies).
+  2 s no-input landing only happens when the driver itself dies; time taking off or
+  flipping does not count, as no pilot steers then).
 
 World frame: x forward and y left of the start pose, z up (the driver's ``odom``).
 Navdata follows the driver's conversions: rotX/rotY/rotZ ROS roll/pitch/yaw in degrees,
@@ -473,6 +474,10 @@ class ArDroneSim:
             return
         if self.state == UNKNOWN and self._at_rest_on_ground():
             self._set_state(LANDED)         # down after an emergency left in the air
+        if self.state in (TAKING_OFF, LOOPING):
+            # The firmware ignores steering then, so a pilot sends none (a takeoff takes 2 s,
+            # a flip 1.8 s): the link-loss clock starts again when they end.
+            self.last_input_time = self.time
         if self.airborne and self.state != LANDING:
             if self.battery <= 0.0:
                 self._warn('battery', 'battery empty: landing')

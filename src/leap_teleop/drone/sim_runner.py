@@ -46,7 +46,8 @@ RUNNER_PARAMS = {
     'battery_flight_time': Param(_D.battery_flight_time, 'hover time on a full battery',
                                  unit='s', gt=0.0, le=100000.0),
     'link_timeout': Param(_D.link_timeout, 'no command this long -> land (firmware link '
-                                           'loss); 0 = off, as with a live driver', unit='s',
+                                           'loss; time taking off or flipping does not '
+                                           'count); 0 = off, as with a live driver', unit='s',
                           ge=0.0, le=60.0),
     'gui': Param(False, 'open the PyBullet GUI window'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
