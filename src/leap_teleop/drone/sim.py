@@ -478,15 +478,20 @@ class ArDroneSim:
             # The firmware ignores steering then, so a pilot sends none (a takeoff takes 2 s,
             # a flip 1.8 s): the link-loss clock starts again when they end.
             self.last_input_time = self.time
-        if self.airborne and self.state != LANDING:
+        if self.airborne and self.state != LANDING and not self._land_after_flip:
+            why = None
             if self.battery <= 0.0:
-                self._warn('battery', 'battery empty: landing')
-                self._anim = None
-                self._set_state(LANDING)
+                why = ('battery', 'battery empty: landing')
             elif p.link_timeout > 0 and self.time - self.last_input_time > p.link_timeout:
-                self._warn('link', 'no input for %.1f s: landing (link loss)', p.link_timeout)
-                self._anim = None
-                self._set_state(LANDING)
+                why = ('link', 'no input for %.1f s: landing (link loss)' % p.link_timeout)
+            if why is not None:
+                self._warn(*why)
+                if self.state == LOOPING:
+                    # As a land(): cut short upside down it fell into the floor at 4 m/s.
+                    self._land_after_flip = True
+                else:
+                    self._anim = None
+                    self._set_state(LANDING)
         if self.state in (FLYING, HOVERING):
             self._set_state(HOVERING if self.auto_hover else FLYING)
 
