@@ -84,6 +84,21 @@ def test_calibration_must_have_the_cameras_size():
         'distortion_model is 100000 characters')
 
 
+@pytest.mark.parametrize('model, n, error', [
+    ('plumb_bob', 5, ''), ('plumb_bob', 0, ''), ('rational_polynomial', 8, ''),
+    ('equidistant', 4, ''), ('', 14, ''), ('my_model', 12, ''),
+    ('plumb_bob', 3, 'D has 3 numbers: plumb_bob takes 5 (or none)'),
+    ('plumb_bob', 8, 'D has 8 numbers: plumb_bob takes 5 (or none)'),
+    ('equidistant', 7, 'D has 7 numbers: equidistant takes 4 (or none)'),
+    ('rational_polynomial', 13, 'D has 13 numbers: rational_polynomial takes 8 (or none)'),
+    ('no_such_model', 2, 'D has 2 numbers: a distortion model takes 0, 4, 5, 8, 12, 14')])
+def test_a_calibration_s_distortion_has_a_model_s_length(model, n, error):
+    # Any length up to 14 was taken and published again on camera_info, where a
+    # rectifying consumer (OpenCV: 4, 5, 8, 12 or 14) failed on it.
+    K = [500.0, 0, 320, 0, 500.0, 180, 0, 0, 1]
+    assert calibration_error('front', 640, 360, K, [0.01] * n, None, None, model) == error
+
+
 def test_readings_say_each_state_change_once(runner):
     first = runner.read()
     assert first.new_state == 'landed' and runner.read().new_state == ''

@@ -126,10 +126,17 @@ def sensor_readings(nav, altitude):
             'magZ': -400, 'pressure': int(101325 - 12.0 * altitude), 'temp': 25}
 
 
+# Distortion vector lengths a consumer can rectify with (OpenCV's: 4, 5, 8, 12, 14; none
+# = no distortion), and those of the models ROS names (sensor_msgs/distortion_models.h).
+DISTORTION_LENGTHS = (0, 4, 5, 8, 12, 14)
+ROS_DISTORTION_MODELS = {'plumb_bob': 5, 'rational_polynomial': 8, 'equidistant': 4}
+
+
 def calibration_error(name, width, height, K=None, D=(), R=None, P=None, model=''):
     """'' when a calibration of width x height fits camera `name`, else why not (like
     camera_info_manager, any calibration of the camera's size is taken, if its numbers are
-    finite, its focal lengths positive and its distortion one of a known model's length)."""
+    finite, its focal lengths positive and its distortion one of a known model's length:
+    DISTORTION_LENGTHS, or for a model ROS names, that model's, or none)."""
     spec = cameras.CAMERAS[name]
     if (width, height) != (spec.width, spec.height):
         return '%s camera is %dx%d, got %dx%d' % (name, spec.width, spec.height, width, height)
@@ -143,6 +150,12 @@ def calibration_error(name, width, height, K=None, D=(), R=None, P=None, model='
         return 'D must be at most 14 numbers, got %d' % len(D)
     if not all(math.isfinite(v) for v in D):
         return 'D must be finite numbers'
+    wanted = ROS_DISTORTION_MODELS.get(model)
+    if wanted is not None and len(D) not in (0, wanted):
+        return 'D has %d numbers: %s takes %d (or none)' % (len(D), model, wanted)
+    if len(D) not in DISTORTION_LENGTHS:
+        return 'D has %d numbers: a distortion model takes %s' % (
+            len(D), ', '.join(map(str, DISTORTION_LENGTHS)))
     if len(model) > 64:
         return 'distortion_model is %d characters: no model is named so' % len(model)
     return ''

@@ -30,7 +30,8 @@ class DroneCameraTopics:
                               lambda req, n=name: self.on_set_camera_info(n, req))
 
     def on_set_camera_info(self, name, req):
-        """Any calibration of the camera's size is kept for this run (the lens stays ideal)."""
+        """A calibration calibration_error takes is kept for this run (the lens stays
+        ideal); any other is refused with its reason."""
         info = req.camera_info
         error = calibration_error(name, info.width, info.height, info.K, info.D, info.R, info.P,
                                   info.distortion_model)
