@@ -134,6 +134,24 @@ def test_realtime_pacing_loop_and_clock_mapping(tmp_path):
     assert got[31].hands[0].palm_position[0] == pytest.approx(0.0)
 
 
+def test_realtime_play_follows_a_caller_clock_faster_than_real_time(tmp_path):
+    # Under /use_sim_time with a simulator at 3x real time the stamps advanced at the
+    # recorded pace, falling behind the graph's clock: the arm refused every frame as late.
+    path = _write(tmp_path, 'r.json', _frames(40, 10000))    # 0.39 s
+    t0 = time.monotonic()
+
+    def sim_clock():
+        return 1000.0 + 3.0 * (time.monotonic() - t0)
+    stamps, lags = [], []
+    for f in make_source('recording', path=path, realtime=True, clock=sim_clock).frames():
+        lags.append(sim_clock() - f.timestamp)
+        stamps.append(f.timestamp)
+    assert len(stamps) == 40 and all(b > a for a, b in zip(stamps, stamps[1:]))
+    assert 0.0 <= min(lags) and max(lags) < 0.1
+    # played at the recorded pace all the same
+    assert time.monotonic() - t0 > 0.35
+
+
 def test_a_looped_take_or_a_break_loses_the_hand_and_starts_a_new_session(tmp_path):
     # The same hand ids in every pass: without a frame between them the tracker followed
     # one hand jumping 150 mm back in a frame, with its origin kept.
@@ -328,7 +346,9 @@ class V:
         self.x, self.y, self.z = x, y, z
 
 
-def _fake_leap_v2():
+def _fake_leap_v2(device_us=None):
+    """device_us(i): frame i's device timestamp (us); by default 120 Hz ones, though the
+    fake device runs at 200 frames a second."""
     Leap = types.ModuleType('Leap')
 
     class Bone:
@@ -364,7 +384,7 @@ def _fake_leap_v2():
     class FakeFrame:
         def __init__(self, i):
             self.id = i
-            self.timestamp = 1_000_000 + i * 8333
+            self.timestamp = device_us(i) if device_us else 1_000_000 + i * 8333
             self.hands = [FakeHand(render_hand('right', 'fist', (0, 200, 0))),
                           FakeHand(render_hand('left', 'open', (-50, 200, 0)))]
 
@@ -399,7 +419,7 @@ def _fake_leap_v2():
     return Leap
 
 
-def _fake_leapc():
+def _fake_leapc(device_us=None):
     leap = types.ModuleType('leap')
 
     class HandType:
@@ -450,7 +470,8 @@ def _fake_leapc():
                             time.sleep(0.005)
                             i += 1
                             ev = types.SimpleNamespace(
-                                tracking_frame_id=i, timestamp=2_000_000 + i * 8333,
+                                tracking_frame_id=i,
+                                timestamp=device_us(i) if device_us else 2_000_000 + i * 8333,
                                 hands=[hand(render_hand('right', 'thumbs_up', (0, 210, 0)))])
                             for listener in conn.listeners:
                                 listener.on_tracking_event(ev)
@@ -489,6 +510,55 @@ def test_leap_v2_backend_with_a_fake_sdk(monkeypatch):
     for fr in frames:
         li.on_frame(fr)
     assert li.get_right_hand_fist() and li.get_left_hand_open()
+
+
+@pytest.mark.parametrize('name, module, fake', [('leap', 'Leap', _fake_leap_v2),
+                                                ('leapc', 'leap', _fake_leapc)])
+def test_a_device_keeps_delivering_under_a_sim_clock_faster_than_real_time(monkeypatch, name,
+                                                                           module, fake):
+    # The sender stamps on rospy.get_time; under /use_sim_time with a simulator at 2x real
+    # time, device frames mapped onto that clock fell behind it and, after 0.25 s, every one
+    # was dropped as old: the sender published nothing.
+    monkeypatch.setitem(sys.modules, module, fake(lambda i: int(time.monotonic() * 1e6)))
+    t0 = time.monotonic()
+
+    def sim_clock():
+        return 1000.0 + 2.0 * (time.monotonic() - t0)
+    src = make_source(name, clock=sim_clock)
+    late, lags, stamps = 0, [], []
+    timer = threading.Timer(1.5, src.stop)    # stops it even when nothing comes
+    timer.start()
+    for f in src.frames():
+        lags.append(sim_clock() - f.timestamp)
+        stamps.append(f.timestamp)
+        late += time.monotonic() - t0 > 1.0
+    timer.cancel()
+    assert late > 20                          # still delivering after a second
+    assert max(lags) < 0.25 and min(lags) >= 0.0     # stamped on the sim clock, not ahead
+    assert all(b > a for a, b in zip(stamps, stamps[1:]))
+
+
+def test_a_device_queue_ages_on_the_monotonic_clock_and_stamps_on_the_callers():
+    from types import SimpleNamespace
+
+    from leap_teleop.hands.sources.device_queue import PushQueue
+    mono, sim = [50.0], [1000.0]
+    pq = PushQueue(lambda: sim[0], monotonic=lambda: mono[0])
+    got = []
+    for i in range(1200):                     # 10 s of a 120 Hz device, the sim at 3x
+        mono[0] += 1 / 120
+        sim[0] += 3 / 120
+        pq.put(SimpleNamespace(id=i, timestamp=pq.stamp(mono[0] * 1e6 - 2000)))
+        if i % 2:                             # the consumer takes two at a time
+            got += [pq.get(0.0), pq.get(0.0)]
+    assert [f.id for f in got] == list(range(1200)) and pq.dropped == 0
+    # each stamped on the sim clock less its age (0, or one frame when taken late)
+    lags = [sim[0] - f.timestamp for f in got[-2:]]
+    assert lags == pytest.approx([1 / 120, 0.0])
+    # and a frame older than max_age by the monotonic clock is dropped, whatever the sim's
+    pq.put(SimpleNamespace(id=-1, timestamp=pq.stamp(mono[0] * 1e6)))
+    mono[0] += 0.3
+    assert pq.get(0.0) is None and pq.dropped == 1
 
 
 def test_leapc_backend_with_a_fake_sdk(monkeypatch):

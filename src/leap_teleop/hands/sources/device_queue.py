@@ -1,5 +1,10 @@
 """What the device-driven sources share: frames pushed from the SDK's thread into a
-short queue that keeps the newest, stamped on the caller's clock, pulled by frames()."""
+short queue that keeps the newest, stamped on the caller's clock, pulled by frames().
+
+The device's frames are mapped and aged on a monotonic clock, and stamped on the caller's
+clock only when released: under /use_sim_time the caller's clock may run faster than the
+device's (a simulator faster than real time), and mapped onto it the frames fell behind
+and were all dropped as old."""
 import collections
 import logging
 import math
@@ -32,31 +37,39 @@ def attr(obj, name, default=None):
 class PushQueue:
     """Frames from an SDK callback thread to the consumer, newest first in importance: a
     short queue (`maxsize` frames, ~67 ms at 120 Hz) whose oldest frame is dropped when
-    the consumer falls behind, and frames older than `max_age` s (by their stamp, on the
-    caller's clock) are dropped when read. After any stall the consumer gets the newest
-    frames, never a backlog; `dropped` counts what it never saw."""
+    the consumer falls behind, and frames older than `max_age` s (by their capture time,
+    on the `monotonic` clock) are dropped when read. After any stall the consumer gets the
+    newest frames, never a backlog; `dropped` counts what it never saw.
 
-    def __init__(self, clock, maxsize=8, max_age=0.25, leak=1e-3):
+    `monotonic` (time.monotonic for a device) maps the device's time and ages frames;
+    get() stamps a frame on `clock` as it releases it: clock() then, less the frame's age.
+    With `monotonic` None, `clock` does both (a clock that runs at the device's pace)."""
+
+    def __init__(self, clock, maxsize=8, max_age=0.25, leak=1e-3, monotonic=None):
         self.frames = collections.deque()
         self.maxsize = maxsize
         self.max_age = max_age
         self.clock = clock
+        self._mono = monotonic or clock
+        # the last stamp released on `clock`: none is before the queue was made (frames
+        # come only after it), nor before the one released before it
+        self._last_out = clock() if monotonic else None
         self.dropped = 0
         self._cond = threading.Condition()
-        self._offset = None          # clock - device time of the least-delayed frame
+        self._offset = None          # monotonic - device time of the least-delayed frame
         self._last_dev = None
         self._last_now = None
         self._leak = leak            # s per s the offset may drift (device vs host clock)
 
     def stamp(self, device_us):
-        """Map a device timestamp (us) onto the clock, keeping the device's spacing. Late
-        frames move the mapping only slowly (it absorbs clock drift), so a backlog
-        delivered late keeps its capture time and reads as old; a frame less delayed than
-        every one before becomes the reference at once (a late start-up burst taken as the
-        reference stamped every later frame up to 0.15 s ahead of its capture, for good),
-        so no stamp is later than its arrival; a device clock that jumps back (device
-        restart) or an absurd offset re-syncs."""
-        now = self.clock()
+        """Map a device timestamp (us) onto the monotonic clock, keeping the device's
+        spacing. Late frames move the mapping only slowly (it absorbs clock drift), so a
+        backlog delivered late keeps its capture time and reads as old; a frame less
+        delayed than every one before becomes the reference at once (a late start-up burst
+        taken as the reference stamped every later frame up to 0.15 s ahead of its
+        capture, for good), so no stamp is later than its arrival; a device clock that
+        jumps back (device restart) or an absurd offset re-syncs."""
+        now = self._mono()
         try:
             dev = float(device_us) * 1e-6
         except (TypeError, ValueError):
@@ -82,8 +95,9 @@ class PushQueue:
 
     def put_converted(self, source_name, convert):
         """From the SDK's thread: put the Frame of convert() -> (frame id, device timestamp
-        us, hands), stamped on the caller's clock. A frame that fails to convert is dropped
-        with a warning: an exception must never kill the SDK's thread."""
+        us, hands), its capture time on the monotonic clock until get() stamps it. A frame
+        that fails to convert is dropped with a warning: an exception must never kill the
+        SDK's thread."""
         try:
             frame_id, device_us, hands = convert()
             self.put(Frame(id=int(frame_id or 0), timestamp=self.stamp(device_us), hands=hands))
@@ -91,16 +105,19 @@ class PushQueue:
             log.warning('%s source: dropped a frame that failed to convert: %s', source_name, e)
 
     def get(self, timeout=0.1):
-        """The oldest frame not older than max_age, or None after `timeout` s."""
+        """The oldest frame not older than max_age, stamped on the caller's clock, or None
+        after `timeout` s."""
         with self._cond:
             deadline = None
             while True:
                 while self.frames:
                     frame = self.frames.popleft()
                     stamp = getattr(frame, 'timestamp', None)
-                    if (stamp is None or self.max_age is None
-                            or self.clock() - stamp <= self.max_age):
+                    if stamp is None:
                         return frame
+                    age = self._mono() - stamp
+                    if self.max_age is None or age <= self.max_age:
+                        return self._release(frame, age)
                     self._count_drop(1)
                 if deadline is None:
                     deadline = time.monotonic() + timeout
@@ -108,6 +125,21 @@ class PushQueue:
                 if left <= 0:
                     return None
                 self._cond.wait(left)
+
+    def _release(self, frame, age):
+        """The frame, stamped on the caller's clock: now on it, less the frame's age."""
+        if self._mono is self.clock:
+            return frame
+        now = self.clock()
+        stamp = now - max(age, 0.0)
+        last = self._last_out
+        # The caller's clock may step coarser than the device (a /clock tick): stamps keep
+        # going forward, unless that clock itself went back (a simulator restarted).
+        if last is not None and stamp <= last <= now:
+            stamp = min(last + 1e-6, now)
+        self._last_out = stamp
+        frame.timestamp = stamp
+        return frame
 
     def __len__(self):
         return len(self.frames)

@@ -79,7 +79,7 @@ class LeapSdkSource(HandSource):
 
     def frames(self):
         Leap = self.Leap
-        pq = PushQueue(self._clock)
+        pq = PushQueue(self._clock, monotonic=time.monotonic)
 
         class SdkFrameListener(Leap.Listener):
             def on_frame(listener, controller):

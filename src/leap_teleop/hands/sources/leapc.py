@@ -71,7 +71,7 @@ class LeapCSource(HandSource):
 
     def frames(self):
         leap = self.leap
-        pq = PushQueue(self._clock)
+        pq = PushQueue(self._clock, monotonic=time.monotonic)
 
         class LeapCFrameListener(leap.Listener):
             def on_tracking_event(listener, event):

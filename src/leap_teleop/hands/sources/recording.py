@@ -2,9 +2,12 @@
 
 Frames are stamped on the caller's clock: stamp = clock() at start + (ts - ts0), where ts
 is the recorded Leap timestamp (time going back, or stopping for over MAX_GAP_S, is a
-break); realtime=True also paces them at that timing, otherwise they come as fast as the
-consumer takes them. loop=True replays forever, each pass continuing the stamps where the
-previous one ended.
+break); realtime=True also paces them at that timing (on a monotonic clock), and a frame
+released when the caller's clock is further on gets that clock's time instead: under
+/use_sim_time with a simulator faster than real time, stamps follow the simulator's clock
+(at the recorded spacing they fell behind it, and consumers refused them as late).
+Otherwise they come as fast as the consumer takes them. loop=True replays forever, each
+pass continuing the stamps where the previous one ended.
 
 At each break and between loop passes comes one frame without hands, then play goes on,
 each one frame period after the last: with the same hand ids the trackers would otherwise
@@ -106,6 +109,7 @@ class RecordingSource(HandSource):
         start_stamp = self._clock()
         start_mono = time.monotonic()
         offset = 0.0                 # recorded seconds of the passes already played
+        last = -math.inf             # the last stamp given
         seam = [(self._frames[-1][0] + period, None)]    # between passes: no hand
         while not self.stopped:
             for ts, f in self._frames + seam if self.loop else self._frames:
@@ -117,12 +121,16 @@ class RecordingSource(HandSource):
                     while delay > 0 and not self.stopped:
                         time.sleep(min(delay, 0.05))
                         delay = start_mono + rel - time.monotonic()
+                stamp = start_stamp + rel
+                if self.realtime:           # never behind the caller's clock, always forward
+                    stamp = max(stamp, self._clock(), last + 1e-6)
+                last = stamp
                 # A fresh Frame per pass; its Hands are shared between loop passes
                 # (read-only, as every source's are).
                 if f is None:
-                    yield Frame(0, start_stamp + rel)
+                    yield Frame(0, stamp)
                 else:
-                    yield Frame(f.id, start_stamp + rel, f.hands, f.gestures)
+                    yield Frame(f.id, stamp, f.hands, f.gestures)
             if not self.loop:
                 return
             offset += seam[0][0] + period
