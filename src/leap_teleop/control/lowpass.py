@@ -19,17 +19,18 @@ class LowPass:
         self._state = {}
 
     def set_cutoff(self, cutoff):
-        """ValueError unless cutoff is a finite number > 0. Each key's next sample starts the
-        new filter from the old one's last output (the old history under the new
-        coefficients rang, 5x the hand's own steps)."""
+        """ValueError unless cutoff is a finite number > 0. A lower cutoff (less smoothing)
+        starts each key's next sample from the old filter's last output, at rest: the old
+        history under the lighter coefficients rang, 5x the hand's own steps. A higher one
+        keeps the history (smooth as it is; at rest it stalled a moving hand)."""
         c = float(cutoff)
         if not (math.isfinite(c) and c > 0.0):
             raise ValueError('cutoff must be a finite number > 0, got %r' % (cutoff,))
         gain = 1.0 + c * c + math.sqrt(2.0) * c
-        # One assignment (b on x[n] + 2 x[n-1] + x[n-2], a1 on y[n-1], a2 on y[n-2]): a
+        # One assignment (c, b on x[n] + 2 x[n-1] + x[n-2], a1 on y[n-1], a2 on y[n-2]): a
         # live change comes on another thread than the frames, and a frame filtered with a
         # new b and old a's has a gain other than 1.
-        self._coefficients = (1.0 / gain, (2.0 - 2.0 * c * c) / gain,
+        self._coefficients = (c, 1.0 / gain, (2.0 - 2.0 * c * c) / gain,
                               (1.0 - math.sqrt(2.0) * c + c * c) / gain)
         self.cutoff = c
 
@@ -51,9 +52,9 @@ class LowPass:
             self._state[key] = [x.copy(), x.copy(), x.copy(), x.copy(), coefficients]
             return x.copy()
         x1, x2, y1, y2, used = st
-        if used is not coefficients:            # the cut-off changed: at rest where it was
-            x1 = x2 = y2 = y1
-        b, a1, a2 = coefficients
+        if used is not coefficients and coefficients[0] < used[0]:
+            x1 = x2 = y2 = y1       # a lighter filter: at rest where the old one was
+        _, b, a1, a2 = coefficients
         y = b * (x + 2.0 * x1 + x2) - a1 * y1 - a2 * y2
         self._state[key] = [x, x1, y, y1, coefficients]
         return y
