@@ -211,28 +211,39 @@ def test_a_throttled_sender_still_sends_every_gesture_event_and_every_hand_that_
         (0.0, True), (0.03, True), (0.06, False), (0.07, True)]
 
 
-def test_leapros_and_leap_keep_the_last_pose_while_their_hand_is_away():
+@pytest.mark.parametrize('freq', [0.0, 0.1])
+def test_leapros_and_leap_keep_the_last_pose_seen_while_their_hand_is_away(freq):
     # The classic sender went on publishing the pose it had last seen; here the palm dropped
-    # to (0, 0, 0) at the device, with zero directions, the moment the hand left.
+    # to (0, 0, 0) at the device, with zero directions, the moment the hand left; and with
+    # ~freq the pose held was the last one sent, up to a period old.
     import types
 
     from leap_teleop.hands.tracker import HandState
+    from leap_teleop.ros import hand_conversions
     from leap_teleop.ros.hand_topics import HandTopics
     sent = []
     pub = types.SimpleNamespace(publish=sent.append)
-    topics = types.SimpleNamespace(p={'frame_id': 'leap'}, leapros=pub, leap=pub, _classic_last=None)
-    states = [HandState('right', False, 0.0, 0),
-              HandState('right', True, 0.01, 1, palm_position=(20.0, 220.0, 30.0),
-                        direction=(0.0, 0.0, -1.0), palm_normal=(0.0, -1.0, 0.0)),
-              HandState('right', False, 0.02, 2), HandState('right', False, 0.03, 3)]
+    topics = types.SimpleNamespace(
+        pubs={'right': {'leapcobot': pub, 'hand': pub, 'gesture': pub}},
+        ages=types.SimpleNamespace(add=lambda *a: None), clock=lambda: 0.0,
+        throttle=PeriodThrottle(freq), _present_sent={}, p={'frame_id': 'leap'},
+        _leapcobot={'right': hand_conversions.LEAPCOBOT_TYPES['right']()}, published=0,
+        leapros_side='right', leapros=pub, leap=pub, _classic_last=None)
+    topics._publish_classic = lambda state: HandTopics._publish_classic(topics, state)
+    states = [HandState('right', False, 0.0, 0)]
+    states += [HandState('right', True, 0.01 * k, k, palm_position=(20.0, 200.0 + k, 30.0),
+                         direction=(0.0, 0.0, -1.0), palm_normal=(0.0, -1.0, 0.0)) for k in range(1, 6)]
+    states += [HandState('right', False, 0.06, 6), HandState('right', False, 0.2, 7)]
     for state in states:
-        HandTopics._publish_classic(topics, state, None)
+        HandTopics.on_hand(topics, types.SimpleNamespace(timestamp=state.timestamp, hand=lambda side: None),
+                           state)
     leapros = [m for m in sent if type(m).__name__ == 'leapros']
     old = [m for m in sent if type(m).__name__ == 'leap']
-    assert [round(m.header.stamp.to_sec(), 2) for m in leapros] == [0.0, 0.01, 0.02, 0.03]
-    assert [m.palmpos.y for m in leapros] == [0.0, 220.0, 220.0, 220.0]     # none seen yet: 0
-    assert [tuple(m.normal.__getstate__()) for m in leapros[2:]] == [(0.0, -1.0, 0.0)] * 2
-    assert [m.hand_palm_pos[1] for m in old[1:]] == [220.0] * 3
+    assert leapros[0].palmpos.y == 0.0                               # none seen yet: the header only
+    away = [m for m in leapros if m.header.stamp.to_sec() >= 0.06]
+    assert [m.palmpos.y for m in away] == [205.0] * len(away) and len(away) >= 1
+    assert [tuple(m.normal.__getstate__()) for m in away] == [(0.0, -1.0, 0.0)] * len(away)
+    assert old[-1].hand_palm_pos[1] == 205.0
 
 
 def test_the_driver_topics_carry_every_frame_whatever_freq():

@@ -56,24 +56,18 @@ class HandTopics:
         if self.driver.pubs:
             interface.add_listener(quiet_at_shutdown(self.driver.on_frame))
 
-    def _publish_classic(self, state, hand):
-        """The old sender's leapros / leap of one side: while the hand is away, its last
-        pose with this frame's stamp, as the classic sender went on publishing what it had
-        last seen (its consumers saw the palm drop to the device and zero directions)."""
-        if state.present:
-            self._classic_last = (state, hand)
-            now = None
-        elif self._classic_last is not None:
-            now, (state, hand) = state, self._classic_last
-        else:
-            now = None
+    def _publish_classic(self, state):
+        """The old sender's leapros / leap of one side: the last pose seen (on_hand keeps
+        it), with this frame's stamp, also while the hand is away, as the classic sender
+        went on publishing what it had last seen (its consumers saw the palm drop to the
+        device and zero directions); before any, only the header."""
+        last, hand = self._classic_last or (state, None)
         frame_id = self.p['frame_id']
-        for pub, msg in ((self.leapros, lambda: hand_conversions.to_leapros(state, hand, frame_id)),
-                         (self.leap, lambda: hand_conversions.to_leap(state, frame_id))):
+        for pub, msg in ((self.leapros, lambda: hand_conversions.to_leapros(last, hand, frame_id)),
+                         (self.leap, lambda: hand_conversions.to_leap(last, frame_id))):
             if pub is not None:
                 msg = msg()
-                if now is not None:
-                    msg.header.stamp = rospy.Time.from_sec(now.timestamp)
+                msg.header.stamp = rospy.Time.from_sec(state.timestamp)
                 pub.publish(msg)
 
     def wait_for_subscribers(self, topics=()):
@@ -104,6 +98,9 @@ class HandTopics:
         if pubs is None:
             return
         self.ages.add('recognized', self.clock(), frame.timestamp)
+        classic = side == self.leapros_side and (self.leapros is not None or self.leap is not None)
+        if classic and state.present:       # the last pose seen, sent or not (~freq)
+            self._classic_last = (state, frame.hand(side))
         # a frame with gesture events (edges: a fold, a lost hand) or a hand that came or
         # went always goes out, whatever ~freq says
         if not self.throttle.due(side, frame.timestamp, change=bool(state.events) or (
@@ -113,7 +110,7 @@ class HandTopics:
         for kind, msg in hand_conversions.hand_messages(state, self.p['frame_id'],
                                                    self._leapcobot[side]):
             pubs[kind].publish(msg)
-        if side == self.leapros_side and (self.leapros is not None or self.leap is not None):
-            self._publish_classic(state, frame.hand(side))
+        if classic:
+            self._publish_classic(state)
         self.ages.add('published', self.clock(), frame.timestamp)
         self.published += 1
