@@ -703,6 +703,14 @@ def test_bad_parameters_are_refused(bad):
         ArmTeleopParams(**bad).validate()
 
 
+@pytest.mark.parametrize('name, value', [('input_timeout', 0.01), ('joint_timeout', 0.005)])
+def test_a_watchdog_shorter_than_a_message_interval_is_refused_by_name(name, value):
+    # input_timeout 0.005 s made every gap between 120 Hz frames a stall (the arm held and
+    # resumed each frame).
+    with pytest.raises(ValueError, match=name + r'.*>= 0\.05\b'):
+        ArmTeleopParams.from_dict({name: value})
+
+
 def test_an_unknown_parameter_is_refused_by_name():
     with pytest.raises(ValueError, match='unknown arm teleop parameters: speed'):
         ArmTeleopParams.from_dict({'speed': 1})

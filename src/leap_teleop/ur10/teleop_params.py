@@ -87,8 +87,10 @@ TELEOP_PARAMS = {
                                'it continues the last one exactly, a later one joins it '
                                'faster than max_joint_accel', unit='s', ge=0.0, le=0.05),
     'min_duration': Param(0.05, 'shortest hold trajectory sent', unit='s', gt=0.0, le=5.0),
+    # Lower bounds well above a message interval: below it every ordinary gap between
+    # two frames (or joint states) is a stall, and the arm stops and starts each message.
     'input_timeout': Param(0.2, 'no hand input this long -> hold (watchdog); fresh input '
-                                'resumes from the current pose', unit='s', gt=0.0, le=10.0),
+                                'resumes from the current pose', unit='s', ge=0.05, le=10.0),
     'disarm_after': Param(1.0, 'no hand input this long -> disarm (a new thumbs-up needed); '
                                'at least input_timeout', unit='s', gt=0.0, le=10.0),
     'gripper_mode': Param('binary', 'binary (closed while pinching) or proportional',
@@ -111,7 +113,7 @@ TELEOP_PARAMS = {
                                   'the hand-to-arm mapping is kept', unit='m', ge=0.0, le=2.0),
     'joint_timeout': Param(0.5, 'no joint states this long -> hold (commands stop); fresh '
                                 'states resume from the current pose', unit='s',
-                           gt=0.0, le=10.0),
+                           ge=0.05, le=10.0),
     'joint_loss_after': Param(3.0, 'no joint states this long -> disarm and forget the robot '
                                    '(gone or restarted); at least joint_timeout', unit='s',
                               gt=0.0, le=30.0),
