@@ -25,7 +25,8 @@ change: an arm action sets the flag the arm reads (arm -> thumb_up, origin -> ro
 stop -> fist, gripper -> pinch, pinch_value 0.8 from a gesture other than pinch); a
 drone action emits the event the pilot acts on (takeoff -> unfold, land -> fold,
 flip -> circle_cw / circle_ccw, hover -> hover: the pilot hovers and, in tilt mode,
-takes the hand's place on its next frame as the new neutral point). Raw unfold / fold /
+takes the hand's place on its next frame as the new neutral point; in paper mode it hovers
+until the capture pose is shown again). Raw unfold / fold /
 circle events go out only as the actions they are bound to.
 """
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES, HandEvent
