@@ -30,6 +30,144 @@ VELOCITY_SMOOTHING = 0.5            # weight of the newest finite difference
 # A frame the detector fails on is skipped (no hands: downstream holds, as for a lost
 # hand) with a warning; this many failures in a row end the source.
 MAX_DETECTOR_FAILURES = 30
+# Between two images a hand moves at most this many hand sizes (the diagonal of its
+# landmarks' box in the image) and is still the same hand: a fast hand moves about a
+# third of its size per frame at 30 frames/s; two hands side by side are further apart
+# than that from where the other was, and the nearest pairs are matched first.
+MATCH_MAX_SIZES = 1.5
+# Images in a row whose reading disagrees with a followed hand's side before it changes
+# side: a single hand's side read wrongly for 6 images in a row on the shared palm clip.
+SIDE_SWITCH_FRAMES = 8
+
+
+class _Track:
+    __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'against', 'published')
+
+
+def image_place(hand):
+    """(centre, size) of a hand in the image: its landmarks' mean and box diagonal, in
+    pixels; from the palm position (mm) when it has no image landmarks."""
+    px = getattr(hand, 'image_landmarks', None)
+    if px is not None:
+        px = np.asarray(px, dtype=float)[:, :2]
+        if px.size and np.all(np.isfinite(px)):
+            size = float(np.linalg.norm(px.max(axis=0) - px.min(axis=0)))
+            return px.mean(axis=0), max(size, 1.0)
+    return np.asarray(hand.palm_position, dtype=float)[:2], 200.0
+
+
+class HandTracks:
+    """Camera hands from image to image: each physical hand keeps its id, and its side.
+
+    The detector reads each image afresh, the side of each hand too, and a side can be
+    misread for a few images (a right hand's shape read as a left one's). Ids given by side
+    handed one hand's id to the other when both were misread or one took the other's side:
+    the tracker followed the other hand, 0.9 m away, with its origin kept. Here a hand is
+    followed by where it is in the image: each image's hands are matched to the last
+    image's, nearest first, within MATCH_MAX_SIZES of the hand's size in the image. A
+    followed hand keeps its id, and its side until SIDE_SWITCH_FRAMES images in a row read
+    the other side; it then changes side with a new id (a new session on that side). A
+    hand that matches none (another hand, one back after an image without it) is new."""
+
+    def __init__(self):
+        self._tracks = []
+        self._next_id = 1
+        self._unrelated = False
+
+    def forget(self):
+        """The next image is unrelated to the last (a cut): new ids, no velocity."""
+        self._tracks = []
+        self._unrelated = False
+
+    def forget_motion(self):
+        """The next image is a separate photo: no velocity, and its hands are matched by
+        side (their place says nothing), so each side's hand keeps its id."""
+        for tr in self._tracks:
+            tr.t, tr.palm, tr.velocity = None, None, np.zeros(3)
+        self._unrelated = True
+
+    def _new_id(self):
+        self._next_id += 1
+        return self._next_id - 1
+
+    def _pairs(self, hands):
+        """[(track or None, hand)]: the last image's tracks matched to these hands."""
+        places = [image_place(h) for h in hands]
+        candidates = []
+        for i, tr in enumerate(self._tracks):
+            for j, hand in enumerate(hands):
+                if self._unrelated:
+                    if hand.side == tr.side:
+                        candidates.append((-float(hand.confidence or 0.0), i, j))
+                    continue
+                centre, size = places[j]
+                d = float(np.linalg.norm(centre - tr.centre)) / max(size, tr.size)
+                if d <= MATCH_MAX_SIZES:
+                    candidates.append((d, i, j))
+        track_of = {}
+        used = set()
+        for _, i, j in sorted(candidates):
+            if i not in used and j not in track_of:
+                used.add(i)
+                track_of[j] = self._tracks[i]
+        return [(track_of.get(j), hand, places[j]) for j, hand in enumerate(hands)]
+
+    def update(self, hands, t, as_side=None):
+        """Hands of one image (their side as read in it), at time t -> the hands to
+        publish: at most one per side, with ids, sides and palm velocities that follow
+        the hands. as_side(hand, side) gives a hand read as the other side (its normal
+        and thumb depend on it), or None when unusable; by default the side is changed
+        on the hand itself."""
+        pairs = self._pairs(hands)
+        # Sides held by a hand published on them in the last image.
+        taken = {tr.side for tr, hand, _ in pairs
+                 if tr is not None and tr.published and (hand.side == tr.side
+                                                         or tr.against + 1 < SIDE_SWITCH_FRAMES)}
+        tracks, out = [], []
+        for tr, hand, (centre, size) in pairs:
+            if tr is None:
+                tr = _Track()
+                tr.id, tr.side, tr.published = self._new_id(), hand.side, False
+                tr.t, tr.palm, tr.velocity, tr.against = None, None, np.zeros(3), 0
+            elif hand.side == tr.side or self._unrelated:
+                tr.against = 0
+            else:
+                tr.against += 1
+                # Read so for long enough; or a hand not published (another one holds
+                # its side) read as a side no other hand holds: two hands in view are
+                # mostly a left and a right one.
+                if tr.against >= SIDE_SWITCH_FRAMES or not tr.published and hand.side not in taken:
+                    tr.id, tr.side, tr.published = self._new_id(), hand.side, False
+                    tr.t, tr.palm, tr.velocity, tr.against = None, None, np.zeros(3), 0
+                else:
+                    hand = as_side(hand, tr.side) if as_side else _with_side(hand, tr.side)
+                    if hand is None:
+                        continue                            # lost with its side
+            velocity = tr.velocity
+            if tr.t is not None and t - tr.t > 0:
+                velocity = ((1 - VELOCITY_SMOOTHING) * tr.velocity
+                            + VELOCITY_SMOOTHING * (hand.palm_position - tr.palm) / (t - tr.t))
+            hand.palm_velocity = velocity
+            hand.id = tr.id
+            tr.t, tr.palm, tr.velocity, tr.centre, tr.size = t, hand.palm_position, velocity, centre, size
+            tracks.append(tr)
+            out.append((tr, hand))
+        self._tracks = tracks
+        self._unrelated = False
+        # One per side: the hand published on it in the last image, else the most confident.
+        chosen = {}
+        for tr, hand in out:
+            rank = (tr.published, float(hand.confidence or 0.0))
+            if hand.side not in chosen or rank > chosen[hand.side][0]:
+                chosen[hand.side] = (rank, tr, hand)
+        for tr in tracks:
+            tr.published = any(c[1] is tr for c in chosen.values())
+        return [chosen[s][2] for s in ('right', 'left') if s in chosen]
+
+
+def _with_side(hand, side):
+    hand.side = side
+    return hand
 
 
 class CameraSource(HandSource):
@@ -80,8 +218,7 @@ class CameraSource(HandSource):
         self.rate_hz = media.fps
         self._first_media = media
         self._cameras = {}
-        self._last = {}                  # side -> (t, palm, velocity, id)
-        self._next_id = 1
+        self._tracks = HandTracks()      # ids and sides that follow the hands
         self.frames_processed = 0
         self.dropped = 0
 
@@ -119,47 +256,31 @@ class CameraSource(HandSource):
         return canvas, (scale, pad_x, pad_y, out_w, out_h)
 
     def hands_of(self, landmarks, cam, t):
-        """Hands (one per side, the most confident) from detector landmarks at time t,
-        found in an image seen by CameraModel cam."""
-        by_side = {}
+        """Hands (one per side) from detector landmarks at time t, found in an image seen
+        by CameraModel cam: each followed from image to image (HandTracks), keeping its
+        id and its side through a few images whose side reads otherwise."""
+        hands, lm_of = [], {}
         for lm in landmarks:
-            hand = hand_from_landmarks(lm, cam, self.mirrored, self.palm_length_mm,
-                                       self.camera_position_mm)
-            if hand is None:
-                continue
-            other = by_side.get(hand.side)
-            if other is None or hand.confidence > other.confidence:
-                by_side[hand.side] = hand
-        for side in [s for s in self._last if s not in by_side]:
-            del self._last[side]          # lost: a new id and no velocity when it returns
-        for side, hand in by_side.items():
-            last = self._last.get(side)
-            velocity = np.zeros(3)
-            if last is None:
-                hand_id = self._next_id
-                self._next_id += 1
-            else:
-                t0, p0, v0, hand_id = last
-                dt = t - t0 if t0 is not None else 0.0
-                velocity = v0
-                if dt > 0:
-                    velocity = ((1 - VELOCITY_SMOOTHING) * v0
-                                + VELOCITY_SMOOTHING * (hand.palm_position - p0) / dt)
-            hand.palm_velocity = velocity
-            hand.id = hand_id
-            self._last[side] = (t, hand.palm_position, velocity, hand_id)
-        return [by_side[s] for s in ('right', 'left') if s in by_side]
+            hand = self._hand(lm, cam)
+            if hand is not None:
+                hands.append(hand)
+                lm_of[id(hand)] = lm
+        return self._tracks.update(hands, t, lambda hand, side: self._hand(lm_of[id(hand)], cam, side))
+
+    def _hand(self, lm, cam, side=None):
+        return hand_from_landmarks(lm, cam, self.mirrored, self.palm_length_mm,
+                                   self.camera_position_mm, side=side)
 
     def forget_hands(self):
         """Treat the next image as unrelated to the last: new hand ids, no velocity (a
         cut in a video)."""
-        self._last.clear()
+        self._tracks.forget()
 
     def forget_motion(self):
         """No velocity from the last image to the next (separate photos), the same hand
-        ids: a new id would read as the hand lost and found again, every other photo."""
-        for side, (_t, _p, _v, hand_id) in self._last.items():
-            self._last[side] = (None, None, np.zeros(3), hand_id)
+        ids for each side: a new id would read as the hand lost and found again, every
+        other photo."""
+        self._tracks.forget_motion()
 
     def prepare(self, bgr):
         """A captured image as the detector sees it: (processed BGR, RGB, its CameraModel)

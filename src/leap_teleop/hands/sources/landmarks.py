@@ -284,8 +284,9 @@ def palm_centre(joints):
 
 def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_LENGTH_MM,
                         camera_position_mm=DEFAULT_CAMERA_POSITION_MM, hand_id=0,
-                        velocity=None):
-    """A TrackedHand (mm, Leap axes) from HandLandmarks seen by `camera`; None when unusable."""
+                        velocity=None, side=None):
+    """A TrackedHand (mm, Leap axes) from HandLandmarks seen by `camera`; None when unusable.
+    side: the person's hand to read it as (a followed hand's), else hand_side's."""
     world = np.asarray(lm.world, dtype=float)
     image = np.asarray(lm.image, dtype=float)
     if world.shape != (N_LANDMARKS, 3) or image.shape != (N_LANDMARKS, 3) \
@@ -301,7 +302,7 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
     if not np.all(np.isfinite(t)):
         return None
     rot = camera_to_leap(mirrored)
-    side = hand_side(lm, mirrored)
+    side = side if side in ('right', 'left') else hand_side(lm, mirrored)
     placed = join_touching_tips(shape_cam + t, pixels, camera, palm_length_mm)
     joints = placed @ rot.T + np.asarray(camera_position_mm, dtype=float)
     normal, direction = hand_basis(joints, side)
