@@ -365,6 +365,31 @@ def test_annotated_view_names_a_hand_by_the_side_it_is_published_as(hands_json):
     assert ink(SIDE_COLOURS[side]) > 100 and ink(SIDE_COLOURS[other]) == 0
 
 
+def test_annotated_view_names_a_hand_held_on_its_side_by_the_published_side(hands_json):
+    # The camera source holds a followed hand's side through a few images read otherwise;
+    # the view drew it by the image's reading, so it showed a side nobody published.
+    import types
+
+    from leap_teleop.hands.camera_view import SIDE_COLOURS
+    from leap_teleop.hands.frame import TrackedHand
+    from leap_teleop.hands.sources.landmarks import hand_side
+    entry = hands_json['images']['pointing__fp__nocurl.jpg']
+    lm = HandLandmarks.from_dict(entry['hands'][0])
+    w, h = entry['width'], entry['height']
+    read = hand_side(lm, False)
+    held = 'right' if read == 'left' else 'left'
+    published = []
+    view = CameraView(False, lambda frame, img: published.append(img))
+    frame = types.SimpleNamespace(id=4, timestamp=1.0, hands=[
+        TrackedHand(side=held, image_landmarks=np.asarray(lm.image)[:, :2] * (w, h))])
+    view.on_image(frame, np.zeros((h, w, 3), np.uint8), [lm])
+    view.on_frame(frame, {})
+
+    def ink(colour):
+        return int(np.all(published[0] == colour, axis=2).sum())
+    assert ink(SIDE_COLOURS[held]) > 100 and ink(SIDE_COLOURS[read]) == 0
+
+
 def test_annotated_view_draws_the_latency_notes_bottom_left(detections):
     width, height, found = detections['thumbs_up__mps__hand_thumb_up.jpg']
     bgr = np.zeros((height, width, 3), np.uint8)

@@ -27,17 +27,36 @@ def held_gestures(state):
     return [g for g in HELD_GESTURES if getattr(state, g, False) is True]
 
 
-def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=()):
+def published_sides(landmarks, hands, width, height):
+    """The side each detected hand (HandLandmarks) is published as: that of the frame's
+    hand drawn from the same landmarks (the camera source may hold a side the image reads
+    otherwise for a few images), else as the landmarks read (hand_side)."""
+    sides = []
+    for lm in landmarks:
+        centre = np.asarray(lm.image, dtype=float)[:, :2].mean(axis=0) * (width, height)
+        best, side = 2.0, None          # px: the same landmarks, not a neighbour
+        for hand in hands:
+            px = getattr(hand, 'image_landmarks', None)
+            if px is not None and len(px):
+                d = float(np.linalg.norm(np.asarray(px, dtype=float)[:, :2].mean(axis=0) - centre))
+                if d < best:
+                    best, side = d, hand.side
+        sides.append(side)
+    return sides
+
+
+def draw(bgr, landmarks, mirrored, states=None, fps=None, notes=(), sides=None):
     """A copy of bgr with every hand drawn. landmarks: HandLandmarks list as detected in
     this image; states: {side: HandState} (gestures), optional; fps: shown top left;
-    notes: lines of text shown bottom left (the latency)."""
+    notes: lines of text shown bottom left (the latency); sides: the side each hand is
+    published as (published_sides; None, or a None in it: as its landmarks read)."""
     import cv2
     out = bgr.copy()
     h, w = out.shape[:2]
     thick = max(1, round(min(w, h) / 240))
-    for lm in landmarks:
-        # as the camera source decides it (chirality first): the side its hand is published as
-        side = hand_side(lm, mirrored)
+    for k, lm in enumerate(landmarks):
+        # the side its hand is published as; else as the camera source reads it (chirality first)
+        side = (sides[k] if sides is not None and k < len(sides) else None) or hand_side(lm, mirrored)
         colour = SIDE_COLOURS[side]
         pts = np.round(lm.image[:, :2] * (w, h)).astype(int)
         for a, b in HAND_CONNECTIONS:
@@ -104,4 +123,7 @@ class CameraView:
         except Exception as e:  # noqa: BLE001 - the overlay's text must not end the hand source
             log.warning('camera view: no latency lines: %s', e)
             notes = ()
-        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps, notes))
+        h, w = pending[1].shape[:2]
+        sides = published_sides(pending[2], getattr(frame, 'hands', ()), w, h)
+        self.publish(frame, draw(pending[1], pending[2], self.mirrored, states, self.fps, notes,
+                                 sides))
