@@ -185,6 +185,30 @@ def test_an_unfold_shown_upright_steers_by_the_turn_from_it():
     assert commands == pytest.approx([0.0, 25.0 / 45.0, 25.0 / 45.0], abs=0.02)
 
 
+@pytest.mark.parametrize('raised', [103, 105, 108])
+def test_an_unfold_shown_just_past_upright_and_held_still_turns_nothing(raised):
+    # Fingers 13-18 deg past vertical: the same pose read as 28-75 deg of turn from itself
+    # (its heading taken from the fingers', which are ambiguous by a half turn there).
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    held = rotation((1.0, 0.0, 0.0), raised)
+    pilot.on_hand(oriented(held), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    lowered = [rotation((1.0, 0.0, 0.0), deg) for deg in range(raised, -1, -1)]
+    assert yaw_commands(pilot, [oriented(held)] * 50 + [oriented(R) for R in lowered]) == pytest.approx(
+        [0.0] * (50 + len(lowered)))
+
+
+def test_a_frame_without_an_orientation_keeps_the_side_of_a_turn_past_90_deg():
+    # One frame whose normal lies along its direction reset the turn: the next frame read
+    # a level hand turned 120 deg a half turn off, and the drone yawed full rate the other way.
+    pilot = airborne(PilotParams())
+    turned = [oriented(rotation((0.0, 1.0, 0.0), deg)) for deg in range(0, 121)]
+    odd = PilotInput(True, (0.0, 0.2, 0.0), (0.0, 0.0, -1.0), (0.0, 0.0, -1.0), 0.0)
+    commands = yaw_commands(pilot, turned + [odd] + [turned[-1]] * 5)
+    assert commands[len(turned) - 1] == pytest.approx(1.0) and commands[-1] == pytest.approx(1.0)
+
+
 def test_a_hand_turned_half_round_keeps_its_side():
     pilot = airborne(PilotParams())
     commands = yaw_commands(pilot, [oriented(rotation((0.0, 1.0, 0.0), deg))

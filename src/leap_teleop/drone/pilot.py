@@ -28,8 +28,9 @@ Modes:
   full_scale``: away from the user (-Leap z) -> forward (linear.x), to the left
   (-Leap x) -> left (linear.y), up (+Leap y) -> climb (linear.z); turning the hand
   left about the vertical -> yaw left (angular.z: the change of the fingers' heading, so
-  raising or rolling the hand, or both, turns nothing; fingers near vertical have none,
-  and there the axis across the palm gives it).
+  raising or rolling the hand, or both, turns nothing while the fingers point more than
+  30 deg from vertical; nearer vertical they have none, and the axis across the palm
+  gives it: there rolling the hand turns the drone).
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -170,14 +171,16 @@ def hand_heading(axes, near=None):
     vertical the fingers have no heading: it passes over smoothly to that of the axis
     across the palm (there rolling the hand is turning it). Fingers raised past vertical
     point backwards: their heading is taken, up to a half turn, nearest `near` (the
-    reading before; None: the fingers' own), and the palm's up to a full turn."""
+    reading before; None: the palm's, which has no half-turn ambiguity: from the fingers'
+    own, the same pose read twice could differ by up to 75 deg), and the palm's up to a
+    full turn."""
     (cx, _, dx), _, (cz, _, dz) = axes
     fingers = math.degrees(math.atan2(dx, -dz))
     across = math.degrees(math.atan2(cz, cx))
     lo, hi = (math.sin(math.radians(a)) for a in NEAR_VERTICAL_DEG)
     weight = min(1.0, max(0.0, (math.hypot(dx, dz) - lo) / (hi - lo)))
     if near is None:
-        near = fingers if weight > 0.0 else across
+        near = across
     fingers = _nearest_turn(fingers, near, 180.0)
     across = _nearest_turn(across, near, 360.0)
     return across + weight * _nearest_turn(fingers - across, 0.0, 360.0)
@@ -555,10 +558,12 @@ class DronePilot:
         if heading_ref is None and axes is not None:    # captured with no orientation
             heading_ref = hand_heading(axes)
             self.reference = (ref, heading_ref)
-        # On from the last turn (a hand turned half round keeps its side, at full rate).
-        dyaw = 0.0 if axes is None else (
-            hand_heading(axes, heading_ref + self._last_turn) - heading_ref)
-        self._last_turn = dyaw
+        # On from the last turn (a hand turned half round keeps its side, at full rate);
+        # a frame without an orientation turns nothing and leaves the last turn as it was
+        # (reset, the next frame read a hand turned past 90 deg a half turn off).
+        dyaw = 0.0
+        if axes is not None:
+            dyaw = self._last_turn = hand_heading(axes, heading_ref + self._last_turn) - heading_ref
         cap = min(abs(cfg.max_cmd), 1.0)
         return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
                 -shaped(d[0], cfg.dead_zone, cfg.full_scale, cap),
