@@ -51,6 +51,17 @@ def test_a_cube_given_x_y_over_a_tray_rests_on_the_tray_floor():
     assert cfg.cube('b').xyz[2] == pytest.approx(cfg.table_height + cfg.cube_size / 2)
 
 
+def test_a_cube_given_x_y_over_a_tray_lower_than_the_table_rests_on_its_floor():
+    # A tray beside the table, lower than it: the table's height won and the cube fell 14 cm.
+    data = cell_data()
+    data['arms'][0]['tray']['xyz'] = [0.45, 1.3, 0.6]
+    data['cubes'] = [{'name': 'a', 'xyz': [0.45, 1.3]}]
+    cfg = parse_config(data, 'cell.yaml')
+    tray = cfg.arm('ur10_1').tray
+    assert tray.floor_z < cfg.table_height
+    assert cfg.cube('a').xyz[2] == pytest.approx(tray.floor_z + cfg.cube_size / 2)
+
+
 @pytest.mark.integration
 @pytest.mark.parametrize('cubes, inside', [
     ([{'name': 'a', 'xyz': [0.0, 0.17, 0.90]}], "arm ur10_1's upper_arm_link at its home pose"),

@@ -297,13 +297,12 @@ def _rest_z(xy, arms, table_height):
         x, y = (float(v) for v in xy)
     except (TypeError, ValueError):
         return table_height          # _vec names the bad entry
-    z = table_height
-    for a in arms:
-        t = a.tray
-        if (abs(x - t.xyz[0]) < t.inner[0] / 2 + t.wall[0]
-                and abs(y - t.xyz[1]) < t.inner[1] / 2 + t.wall[0]):
-            z = max(z, t.floor_z)
-    return z
+    floors = [a.tray.floor_z for a in arms
+              if abs(x - a.tray.xyz[0]) < a.tray.inner[0] / 2 + a.tray.wall[0]
+              and abs(y - a.tray.xyz[1]) < a.tray.inner[1] / 2 + a.tray.wall[0]]
+    # a tray's floor even when it stands lower than the table, beside it (the table's
+    # height there dropped the cube 14 cm into the tray)
+    return max(floors) if floors else table_height
 
 
 def _check_cubes(cubes, table_height, size, table_center, table_size):
