@@ -75,6 +75,17 @@ def test_each_run_writes_a_fresh_file(tmp_path):
     assert results['_failed'] == {} and results['_run']['modules'] == []
 
 
+@pytest.mark.parametrize('rtf', ['0.2', '11', 'nan'])
+def test_a_soak_refuses_a_real_time_factor_its_timeouts_cannot_follow(rtf, capsys, monkeypatch):
+    # --rtf 0.2 scaled the arm's input_timeout to 0.04 s, under its 0.05 s floor: the arm
+    # nodes refused it and the soak's graph never started.
+    from tools import soak
+    monkeypatch.setattr(soak, 'run', lambda *a, **k: pytest.fail('ran'))
+    with pytest.raises(SystemExit) as e:
+        soak.main(['--rtf', rtf])
+    assert e.value.code == 2 and '--rtf must be between 0.25 and 10' in capsys.readouterr().err
+
+
 @pytest.mark.parametrize('outcome', ['measured', 'raised'])
 def test_each_soak_writes_a_fresh_file_of_its_own(tmp_path, monkeypatch, outcome):
     from tools import soak

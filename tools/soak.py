@@ -641,7 +641,7 @@ def main(argv=None):
     # Faster than real time, the graph alone keeps two cores near saturation (x1.2 of
     # the x1.5 asked): real time leaves it the margin a robot's computer would have.
     ap.add_argument('--rtf', type=float, default=1.0,
-                    help='sim time / wall time target (default real time)')
+                    help='sim time / wall time target, 0.25-10 (default real time)')
     ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
                     '(default the scripts\' 120)')
     ap.add_argument('--player-queue', type=int, default=2000,
@@ -661,7 +661,9 @@ def main(argv=None):
                          'nodes\' default; 0 = never)')
     ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
-    for name, value, lo, hi in (('--player-queue', args.player_queue, 1, 100000),
+    # --rtf: below 0.25 its sim-second timeouts fall under the nodes' floors (0.05 s).
+    for name, value, lo, hi in (('--rtf', args.rtf, 0.25, 10.0),
+                                ('--player-queue', args.player_queue, 1, 100000),
                                 ('--hand-queue', args.hand_queue, 1, 2000),
                                 ('--command-queue', args.command_queue, 1, 2000),
                                 ('--joint-states-queue', args.joint_states_queue, 1, 2000),
