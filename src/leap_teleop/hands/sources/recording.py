@@ -2,12 +2,14 @@
 
 Frames are stamped on the caller's clock: stamp = clock() at start + (ts - ts0), where ts
 is the recorded Leap timestamp (time going back, or stopping for over MAX_GAP_S, is a
-break); realtime=True also paces them at that timing (on a monotonic clock), and a frame
-released when the caller's clock is further on gets that clock's time instead: under
-/use_sim_time with a simulator faster than real time, stamps follow the simulator's clock
-(at the recorded spacing they fell behind it, and consumers refused them as late).
-Otherwise they come as fast as the consumer takes them. loop=True replays forever, each
-pass continuing the stamps where the previous one ended.
+break); realtime=True also paces them at that timing (on a monotonic clock), and adds how
+far the caller's clock has run ahead of real time since the start (the most seen yet, so
+never behind the recorded timing): under /use_sim_time with a simulator faster than real
+time the stamps follow its clock (at the recorded timing they fell behind it, and consumers
+refused them as late), while in real time they are the recorded timing exactly, so frames
+released late (a consumer that stalled) keep their lateness. Otherwise they come as fast
+as the consumer takes them. loop=True replays forever, each pass continuing the stamps
+where the previous one ended.
 
 At each break and between loop passes comes one frame without hands, then play goes on,
 each one frame period after the last: with the same hand ids the trackers would otherwise
@@ -106,9 +108,12 @@ class RecordingSource(HandSource):
 
     def frames(self):
         period = 1.0 / self.rate_hz if self.rate_hz else 0.01
+        # The caller's clock read before the monotonic one, here and below: a pause between
+        # the two reads can only make its lead look smaller, never latch a false one.
         start_stamp = self._clock()
         start_mono = time.monotonic()
         offset = 0.0                 # recorded seconds of the passes already played
+        lead = 0.0                   # s the caller's clock has run ahead of real time
         last = -math.inf             # the last stamp given
         seam = [(self._frames[-1][0] + period, None)]    # between passes: no hand
         while not self.stopped:
@@ -122,8 +127,12 @@ class RecordingSource(HandSource):
                         time.sleep(min(delay, 0.05))
                         delay = start_mono + rel - time.monotonic()
                 stamp = start_stamp + rel
-                if self.realtime:           # never behind the caller's clock, always forward
-                    stamp = max(stamp, self._clock(), last + 1e-6)
+                if self.realtime:
+                    # Shifted by the lead, not stamped at release: release times carry the
+                    # pacing's jitter, and a backlog released at once got stamps us apart.
+                    ahead = self._clock() - start_stamp
+                    lead = max(lead, ahead - (time.monotonic() - start_mono))
+                    stamp = max(stamp + lead, last + 1e-6)
                 last = stamp
                 # A fresh Frame per pass; its Hands are shared between loop passes
                 # (read-only, as every source's are).
