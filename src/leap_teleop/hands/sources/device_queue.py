@@ -2,9 +2,10 @@
 short queue that keeps the newest, stamped on the caller's clock, pulled by frames().
 
 The device's frames are mapped and aged on a monotonic clock, and stamped on the caller's
-clock only when released: under /use_sim_time the caller's clock may run faster than the
-device's (a simulator faster than real time), and mapped onto it the frames fell behind
-and were all dropped as old."""
+clock with the device's timing, shifted by how far that clock has run ahead of real time:
+under /use_sim_time the caller's clock may run faster than the device's (a simulator
+faster than real time), and mapped onto it the frames fell behind and were all dropped
+as old."""
 import collections
 import logging
 import math
@@ -41,9 +42,12 @@ class PushQueue:
     on the `monotonic` clock) are dropped when read. After any stall the consumer gets the
     newest frames, never a backlog; `dropped` counts what it never saw.
 
-    `monotonic` (time.monotonic for a device) maps the device's time and ages frames;
-    get() stamps a frame on `clock` as it releases it: clock() then, less the frame's age.
-    With `monotonic` None, `clock` does both (a clock that runs at the device's pace)."""
+    `monotonic` (time.monotonic for a device) maps the device's time and ages frames; as
+    a frame arrives (put) it is given its stamp on `clock`: its monotonic time, shifted by
+    how far `clock` has run ahead of real time (the most seen yet), never after clock()
+    then (a clock slower than real time, or paused, is followed), and going forward; get()
+    hands it on with that stamp. With `monotonic` None, `clock` does both (a clock that
+    runs at the device's pace)."""
 
     def __init__(self, clock, maxsize=8, max_age=0.25, leak=1e-3, monotonic=None):
         self.frames = collections.deque()
@@ -51,9 +55,14 @@ class PushQueue:
         self.max_age = max_age
         self.clock = clock
         self._mono = monotonic or clock
-        # the last stamp released on `clock`: none is before the queue was made (frames
-        # come only after it), nor before the one released before it
-        self._last_out = clock() if monotonic else None
+        # `clock` read before the monotonic clock, here and in _on_clock: a pause between
+        # the two reads can only make its lead look smaller, never latch a false one.
+        self._base = (clock(), monotonic()) if monotonic else None
+        self._lead = 0.0             # s `clock` has run ahead of real time since _base
+        self._last_clock = self._base[0] if monotonic else None
+        # the last stamp given on `clock`: none is before the queue was made (frames
+        # come only after it), nor before the one given before it
+        self._last_out = self._last_clock
         self.dropped = 0
         self._cond = threading.Condition()
         self._offset = None          # monotonic - device time of the least-delayed frame
@@ -86,18 +95,41 @@ class PushQueue:
         return self._offset + dev
 
     def put(self, frame):
+        """Queue a frame as it arrives; its timestamp is on the monotonic clock (stamp())."""
         with self._cond:
+            stamp = getattr(frame, 'timestamp', None)
+            on_clock = None if stamp is None or self._base is None else self._on_clock(stamp)
             if len(self.frames) >= self.maxsize:
                 self.frames.popleft()
                 self._count_drop(1)
-            self.frames.append(frame)
+            self.frames.append((frame, on_clock))
             self._cond.notify()
+
+    def _on_clock(self, mono_stamp):
+        """The stamp on `clock` of a frame arriving now, captured at `mono_stamp` on the
+        monotonic clock. The lead is measured at arrival: measured at release, frames
+        released together got one lead and, under a 3x clock, alternating spacings."""
+        now = self.clock()
+        mono = self._mono()
+        if now < self._last_clock:           # that clock went back (a simulator restarted)
+            self._base, self._lead = (now, mono), 0.0
+        self._last_clock = now
+        clock0, mono0 = self._base
+        self._lead = max(self._lead, (now - clock0) - (mono - mono0))
+        stamp = min(clock0 + (mono_stamp - mono0) + self._lead, now)
+        last = self._last_out
+        # The caller's clock may step coarser than the device (a /clock tick): stamps keep
+        # going forward, unless that clock itself went back.
+        if last is not None and stamp <= last <= now:
+            stamp = min(last + 1e-6, now)
+        self._last_out = stamp
+        return stamp
 
     def put_converted(self, source_name, convert):
         """From the SDK's thread: put the Frame of convert() -> (frame id, device timestamp
-        us, hands), its capture time on the monotonic clock until get() stamps it. A frame
-        that fails to convert is dropped with a warning: an exception must never kill the
-        SDK's thread."""
+        us, hands), its capture time on the monotonic clock until get() hands it on with
+        its stamp on the caller's clock. A frame that fails to convert is dropped with a
+        warning: an exception must never kill the SDK's thread."""
         try:
             frame_id, device_us, hands = convert()
             self.put(Frame(id=int(frame_id or 0), timestamp=self.stamp(device_us), hands=hands))
@@ -111,13 +143,14 @@ class PushQueue:
             deadline = None
             while True:
                 while self.frames:
-                    frame = self.frames.popleft()
+                    frame, on_clock = self.frames.popleft()
                     stamp = getattr(frame, 'timestamp', None)
                     if stamp is None:
                         return frame
-                    age = self._mono() - stamp
-                    if self.max_age is None or age <= self.max_age:
-                        return self._release(frame, age)
+                    if self.max_age is None or self._mono() - stamp <= self.max_age:
+                        if on_clock is not None:
+                            frame.timestamp = on_clock
+                        return frame
                     self._count_drop(1)
                 if deadline is None:
                     deadline = time.monotonic() + timeout
@@ -125,21 +158,6 @@ class PushQueue:
                 if left <= 0:
                     return None
                 self._cond.wait(left)
-
-    def _release(self, frame, age):
-        """The frame, stamped on the caller's clock: now on it, less the frame's age."""
-        if self._mono is self.clock:
-            return frame
-        now = self.clock()
-        stamp = now - max(age, 0.0)
-        last = self._last_out
-        # The caller's clock may step coarser than the device (a /clock tick): stamps keep
-        # going forward, unless that clock itself went back (a simulator restarted).
-        if last is not None and stamp <= last <= now:
-            stamp = min(last + 1e-6, now)
-        self._last_out = stamp
-        frame.timestamp = stamp
-        return frame
 
     def __len__(self):
         return len(self.frames)
