@@ -21,8 +21,10 @@ that appears (first segment, or after `absent`) appears at its `palm` and `rpy`.
 `circle` moves the palm once round a horizontal circle of `radius` mm instead.
 A hand whose segments are over is absent. Poses: absent and rendered_hand.POSES.
 
-Looped (loop=True), a script with a hand at both its ends plays one frame without hands
-between passes, so that each pass is a new session for the trackers.
+Looped (loop=True), a script whose hand jumps from its end to its start (its palm by over
+SEAM_MAX_MM, or its palm normal or direction by over SEAM_MAX_DEG) plays one frame without
+hands between passes, so that each pass is a new session for the trackers. A script that
+ends where it starts loops with its hands kept.
 """
 import math
 import time
@@ -39,6 +41,12 @@ DEFAULT_PALM = (0.0, 200.0, 0.0)
 # keeps in real time on 2 cores (10 kHz ran at a third of it).
 MAX_RATE_HZ = 1000.0
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
+# A looped hand moving more than this from the script's end to its start is lost between
+# passes. A script that closes its loop ends one frame's motion short of its start (0.43
+# mm for two_hands_steady.yaml); 10 mm in a frame is a brisk hand (1.2 m/s at 120 Hz),
+# while the jumps worth a new session are a script's travel, tens of mm and more.
+SEAM_MAX_MM = 10.0
+SEAM_MAX_DEG = 10.0     # the same for the palm's normal or direction: a quick wrist turn
 
 
 def _vector(value, what, n=3, bound=1e5):
@@ -212,13 +220,11 @@ class ScriptedSource(HandSource):
     def frames(self):
         period = 1.0 / self.rate_hz
         n_frames = max(1, int(round(self.script.duration * self.rate_hz)))
-        # A looped pass whose hand is there at both ends of the script ends with one
+        # A looped pass whose hand jumps from the script's end to its start ends with one
         # hand-less frame (as a looped recording does): the hand ids are fixed, so without
-        # it a tracker would follow one hand jumping from the end to the start, keeping
-        # its origin. A script that starts or ends without it loses the hand anyway.
-        seam = self.loop and any(
-            self.script.hand_at(side, 0.0) is not None
-            and self.script.hand_at(side, (n_frames - 1) * period) is not None for side in SIDES)
+        # it a tracker would follow the jump, keeping its origin. A script that starts or
+        # ends without the hand loses it anyway; one that ends where it starts keeps it.
+        seam = self.loop and self._seam_jumps((n_frames - 1) * period)
         per_pass = n_frames + 1 if seam else n_frames
         t0_wall, t0_mono = self._clock(), time.monotonic()
         k = 0
@@ -244,3 +250,18 @@ class ScriptedSource(HandSource):
             stamp = self._clock() if self.realtime else t0_wall + k * period
             yield Frame(id=k + 1, timestamp=stamp, hands=hands)
             k += 1
+
+    def _seam_jumps(self, end_t):
+        """Whether a hand there at both ends of the script jumps from its last frame (at
+        end_t) to its first."""
+        for side in SIDES:
+            end, start = self.script.hand_at(side, end_t), self.script.hand_at(side, 0.0)
+            if end is None or start is None:
+                continue
+            if np.linalg.norm(end.palm_position - start.palm_position) > SEAM_MAX_MM:
+                return True
+            for a, b in ((end.palm_normal, start.palm_normal), (end.direction, start.direction)):
+                cos = np.dot(a, b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-12)
+                if math.degrees(math.acos(min(1.0, max(-1.0, cos)))) > SEAM_MAX_DEG:
+                    return True
+        return False
