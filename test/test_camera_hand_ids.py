@@ -1,9 +1,17 @@
 """Camera hands keep their ids and sides from image to image (camera.HandTracks through
 CameraSource.hands_of), on synthetic landmark frames: no MediaPipe, no shared data."""
+import dataclasses
+
 import numpy as np
 import pytest
 
-from leap_teleop.hands.sources.camera import SIDE_SWITCH_FRAMES, CameraSource, HandTracks
+from leap_teleop.hands.sources.camera import (
+    MATCH_MAX_SIZES,
+    SIDE_SWITCH_FRAMES,
+    CameraSource,
+    HandTracks,
+    image_place,
+)
 from leap_teleop.hands.sources.landmarks import (
     DEFAULT_CAMERA_POSITION_MM,
     CameraModel,
@@ -11,7 +19,7 @@ from leap_teleop.hands.sources.landmarks import (
     chirality,
     project,
 )
-from leap_teleop.hands.tracker import HandTracker
+from leap_teleop.hands.tracker import HandTracker, hand_angles
 
 CAM = CameraModel.from_hfov(640, 480, 60.0)
 # A flat open hand, fingers up, in the camera's axes (x right, y down), metres: its
@@ -25,18 +33,20 @@ FLAT_HAND = np.array([
     (0.026, -0.04, 0.0), (0.029, -0.059, 0.0), (0.031, -0.073, 0.0), (0.033, -0.085, 0.0)])
 
 
-def landmarks(side, x_mm, score=0.95, misread=False):
+def landmarks(side, x_mm, score=0.95, misread=False, y_mm=0.0, z_mm=500.0, mirrored=False):
     """HandLandmarks of a person's `side` hand, its centre x_mm right of the camera's axis
-    in the image (500 mm away), as a plain camera sees it; misread: labelled the other."""
+    in the image (and y_mm down, z_mm away), as a plain camera sees it; misread: labelled
+    the other; mirrored: a left hand is the right one's mirror image, as a real one is."""
     assert abs(chirality(FLAT_HAND)) < 1e-9
-    shape = FLAT_HAND * (95.0 / np.linalg.norm(FLAT_HAND[9] - FLAT_HAND[0]))
-    px = project(shape + np.array([x_mm, 0.0, 500.0]), CAM)
+    world = FLAT_HAND * (np.array([-1.0, 1.0, 1.0]) if mirrored and side == 'left' else 1.0)
+    shape = world * (95.0 / np.linalg.norm(FLAT_HAND[9] - FLAT_HAND[0]))
+    px = project(shape + np.array([x_mm, y_mm, z_mm]), CAM)
     image = np.column_stack((px[:, 0] / CAM.width, px[:, 1] / CAM.height, np.zeros(21)))
     # MediaPipe labels as if the image were mirrored: a plain image's right hand is 'Left'
     label = {'right': 'Left', 'left': 'Right'}[side]
     if misread:
         label = 'Right' if label == 'Left' else 'Left'
-    return HandLandmarks(image, FLAT_HAND, label, score)
+    return HandLandmarks(image, world, label, score)
 
 
 def camera_source():
@@ -134,3 +144,142 @@ def test_separate_photos_keep_each_sides_id_and_a_cut_starts_afresh(forget, same
     getattr(src, forget)()
     photo = src.hands_of([landmarks('right', 250)], CAM, 0.1)[0]     # far from the last
     assert (photo.id == first.id) == same_id and not np.any(photo.palm_velocity)
+
+
+def sessions(out, side):
+    """A HandTracker of `side` through the published hands, its origin set in the first
+    image (as a rock gesture would): [(state, session events)] per image."""
+    tracker, states = HandTracker(side), []
+    for k, hands in enumerate(out):
+        state = tracker.update(hands.get(side), k / 30, k + 1)
+        if k == 0:
+            tracker._origin_angles = hand_angles(state.palm_normal, state.direction)
+            tracker.state = state = dataclasses.replace(state, origin_set=True,
+                                                        origin_palm=state.palm_position)
+        states.append((state, [e.gesture for e in state.events
+                               if e.gesture in ('hand_lost', 'hand_found')]))
+    return states
+
+
+@pytest.mark.parametrize('step, gap', [(10, 0), (20, 0), (40, 0), (40, 20), (60, 0), (60, 20), (90, 0)])
+def test_crossing_hands_each_stay_on_their_side_with_their_id(step, gap):
+    # Both read right in every image; they cross (at gap 0 in the same place): matched by
+    # place alone, each side's track took the other hand there, with its id and origin,
+    # read as the wrong side (palm 20-270 mm off, normal flipped) for 7 images.
+    frames, true_x = [], []
+    for k in range(int(600 / step)):
+        xr, xl = -300 + step * k, 300 - step * k        # image x: the right hand moves right
+        frames.append([landmarks('right', xr, y_mm=-gap / 2, mirrored=True),
+                       landmarks('left', xl, y_mm=gap / 2, mirrored=True)])
+        true_x.append({'right': -xr, 'left': -xl})      # Leap x is the image's -x here
+    out = run(camera_source(), frames)
+    for side in ('right', 'left'):
+        assert len({hands[side].id for hands in out}) == 1, side
+        palm_x = np.array([hands[side].palm_position[0] for hands in out])
+        assert np.allclose(palm_x, [x[side] for x in true_x], atol=5), side
+        assert all(hands[side].palm_normal[2] > 0.9 for hands in out), side    # facing the camera
+        assert all(not events and state.origin_set for state, events in sessions(out, side)[1:]), side
+
+
+def test_a_hand_passing_in_front_of_the_other_keeps_its_side_and_the_covered_one_comes_back_new():
+    # The right hand passes 10 cm in front of the still left one, 2 cm higher; the left one
+    # is not detected while it is covered by the other's middle.
+    frames, covered = [], []
+    for k in range(13):
+        xr = -240 + 40 * k
+        covered.append(abs(xr) < 100)
+        right = landmarks('right', xr, y_mm=-20, z_mm=400, mirrored=True)
+        frames.append([right] if covered[-1] else [right, landmarks('left', 0, mirrored=True)])
+    out = run(camera_source(), frames)
+    assert len({hands['right'].id for hands in out}) == 1
+    assert all(abs(hands['right'].palm_position[0] - (240 - 40 * k)) < 5 for k, hands in enumerate(out))
+    assert all(('left' in hands) != gone for hands, gone in zip(out, covered))
+    assert all(abs(hands['left'].palm_position[0]) < 5 for hands in out if 'left' in hands)
+    left = sessions(out, 'left')
+    assert [events for _, events in left[1:] if events] == [['hand_lost'], ['hand_found']]
+    # and passing in front while both are detected, the other one moving too: matched by
+    # place alone, the sides swapped hands as they passed
+    frames = [[landmarks('right', -240 + 40 * k, y_mm=-20, z_mm=400, mirrored=True),
+               landmarks('left', 120 - 40 * k, mirrored=True)] for k in range(13)]
+    out = run(camera_source(), frames)
+    for side in ('right', 'left'):
+        assert len({hands[side].id for hands in out}) == 1, side
+    assert all(abs(hands['left'].palm_position[0] - (40 * k - 120)) < 5 for k, hands in enumerate(out))
+
+
+@pytest.mark.parametrize('gap', [0, 20, 60, 220])
+def test_a_hand_leaving_and_the_other_in_its_place_is_a_new_hand_on_its_side(gap):
+    # The right hand leaves and in the next image the left one is in view gap mm beyond
+    # where it was: matched by place, it was published as the right hand for 7 images,
+    # with its id and origin (a palm jump up to 270 mm, flipped normal, no hand_lost).
+    frames = [[landmarks('right', -100 + 5 * k, mirrored=True)] for k in range(6)]
+    frames += [[landmarks('left', -75 + gap + 5 * k, mirrored=True)] for k in range(10)]
+    out = run(camera_source(), frames)
+    assert all(list(hands) == ['right'] for hands in out[:6])
+    assert all(list(hands) == ['left'] for hands in out[6:])
+    right, left = sessions(out, 'right'), sessions(out, 'left')
+    assert right[6][1] == ['hand_lost'] and left[6][1] == ['hand_found']
+    assert not np.any(out[6]['left'].palm_velocity)
+
+
+@pytest.mark.parametrize('jump_sizes, same_hand', [(0.35, True), (0.65, False)])
+def test_a_hand_further_than_the_bound_from_its_prediction_is_a_new_hand(jump_sizes, same_hand):
+    # A hand moving steadily 20 mm an image, then in one image `jump_sizes` hand sizes
+    # beyond where it was heading: beyond MATCH_MAX_SIZES its side starts a new session.
+    size_mm = image_place(camera_source().hands_of([landmarks('right', 0)], CAM, 0.0)[0])[1] \
+        / CAM.fx * 500.0
+    xs = [-200 + 20 * k for k in range(8)]
+    xs.append(xs[-1] + 20 + jump_sizes * size_mm)
+    xs += [xs[-1] + 20 * k for k in range(1, 4)]
+    out = run(camera_source(), [[landmarks('right', x)] for x in xs])
+    assert (MATCH_MAX_SIZES > jump_sizes) == same_hand
+    assert (out[8]['right'].id == out[7]['right'].id) == same_hand
+    assert out[9]['right'].id == out[8]['right'].id
+    events = [e for _, e in sessions(out, 'right')]
+    assert events[8] == ([] if same_hand else ['hand_lost'])
+
+
+def test_no_side_keeps_its_id_beyond_the_bound_from_its_prediction():
+    # Two hands wandering about, each missed or misread now and then: whenever a side's
+    # hand keeps its id, it is within half a hand size of where it was predicted to be.
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(40):
+        src, xs = camera_source(), rng.uniform(-250, 250, 2)
+        for k in range(40):
+            xs = xs + rng.normal(0, 40, 2)
+            lms = [landmarks(side, x, misread=rng.random() < 0.3, y_mm=rng.normal(0, 20), mirrored=True)
+                   for side, x in zip(('right', 'left'), xs) if rng.random() < 0.9]
+            t = k / 30
+            predicted = {tr.id: (tr.centre + getattr(tr, 'image_velocity', 0.0) * (t - tr.t)
+                                 if tr.t is not None else tr.centre, tr.size) for tr in src._tracks._tracks}
+            for hand in src.hands_of(lms, CAM, t):
+                if hand.id in predicted:
+                    centre, size = image_place(hand)
+                    place, last_size = predicted[hand.id]
+                    assert np.linalg.norm(centre - place) <= 0.5 * max(size, last_size) + 1e-6
+                    checked += 1
+    assert checked > 1000
+
+
+@pytest.mark.parametrize('apart_mm', [80, 150])
+def test_two_hands_misread_together_near_each_other_do_not_jump(apart_mm):
+    # Both read as the other side for 6 images while close: each side keeps its own hand.
+    frames = [[landmarks('right', -apart_mm / 2 - 2 * k, misread=8 <= k < 14, mirrored=True),
+               landmarks('left', apart_mm / 2 + 2 * k, misread=8 <= k < 14, mirrored=True)]
+              for k in range(20)]
+    out = run(camera_source(), frames)
+    for side, sign in (('right', 1), ('left', -1)):
+        assert len({hands[side].id for hands in out}) == 1, side
+        palms = np.array([hands[side].palm_position for hands in out])
+        assert np.all(sign * palms[:, 0] > 0), side
+        assert np.max(np.linalg.norm(np.diff(palms, axis=0), axis=1)) < 5, side
+
+
+@pytest.mark.parametrize('step', [0, 20, 40])
+def test_one_moving_hand_misread_for_seven_images_keeps_its_side_and_id(step):
+    frames = [[landmarks('right', -150 + step * k, misread=5 <= k < 5 + SIDE_SWITCH_FRAMES - 1)]
+              for k in range(20)]
+    out = run(camera_source(), frames)
+    assert all(list(hands) == ['right'] for hands in out)
+    assert len({hands['right'].id for hands in out}) == 1

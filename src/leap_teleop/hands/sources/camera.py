@@ -30,18 +30,36 @@ VELOCITY_SMOOTHING = 0.5            # weight of the newest finite difference
 # A frame the detector fails on is skipped (no hands: downstream holds, as for a lost
 # hand) with a warning; this many failures in a row end the source.
 MAX_DETECTOR_FAILURES = 30
-# Between two images a hand moves at most this many hand sizes (the diagonal of its
-# landmarks' box in the image) and is still the same hand: a fast hand moves about a
-# third of its size per frame at 30 frames/s; two hands side by side are further apart
-# than that from where the other was, and the nearest pairs are matched first.
-MATCH_MAX_SIZES = 1.5
+# A hand is the last image's hand only within this many hand sizes (the diagonal of its
+# landmarks' box in the image) of where that one was predicted to be (last place + image
+# velocity x dt); else it is a new hand (new id, new session), so a side's palm never
+# jumps further with its session kept. On the shared clips a followed hand is at most 0.18
+# sizes off its prediction; a hand setting off at 1.8 m/s 0.5 m away, 0.31.
+MATCH_MAX_SIZES = 0.5
+# A hand read as the other side keeps its followed hand's side (a misread) only within
+# this many sizes of the prediction: a misread hand on the shared clips is within 0.05 of
+# it; the other hand in view 6 cm from where one left, 0.34. Further, it is a new hand on
+# the side it is read as.
+HOLD_MAX_SIZES = 0.25
+# ... and only when its shape in the image (landmarks about their centre, in hand sizes)
+# is within this of the followed hand's: from one image to the next a hand's changes by
+# 0.04 at most when misread, 0.12 when closing into a fist, on the shared clips; the
+# mirror-image hand (the other one) in its place is 0.24 off.
+HOLD_SHAPE_MAX = 0.15
+# Cost, in hand sizes off the prediction, of matching a hand to a followed hand of the
+# other side: two hands near each other (crossing, one passing in front of the other) go
+# by their reading unless their places tell them apart by more.
+SIDE_DISAGREE_COST = 0.25
 # Images in a row whose reading disagrees with a followed hand's side before it changes
 # side: a single hand's side read wrongly for 6 images in a row on the shared palm clip.
 SIDE_SWITCH_FRAMES = 8
+# More hands than this in one image are matched greedily (the exact search grows fast).
+EXACT_MATCH_MAX_HANDS = 4
 
 
 class _Track:
-    __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'against', 'published')
+    __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'shape',
+                 'image_velocity', 'against', 'published')
 
 
 def image_place(hand):
@@ -56,18 +74,64 @@ def image_place(hand):
     return np.asarray(hand.palm_position, dtype=float)[:2], 200.0
 
 
+def image_shape(hand, centre, size):
+    """The hand's landmarks about their centre, in hand sizes; None without landmarks."""
+    px = getattr(hand, 'image_landmarks', None)
+    if px is None:
+        return None
+    px = np.asarray(px, dtype=float)[:, :2]
+    return (px - centre) / size if px.size and np.all(np.isfinite(px)) else None
+
+
+def _same_shape(a, b):
+    """Much the same shape in the image (or not known)."""
+    return a is None or b is None or a.shape != b.shape or \
+        float(np.mean(np.linalg.norm(a - b, axis=1))) <= HOLD_SHAPE_MAX
+
+
+def _best_assignment(costs, n_hands, n_tracks):
+    """{hand: track} of the most pairs, then the lowest total cost, among the allowed
+    pairs costs[(track, hand)]."""
+    if n_hands > EXACT_MATCH_MAX_HANDS:
+        track_of, used = {}, set()
+        for (i, j), _ in sorted(costs.items(), key=lambda kv: kv[1]):
+            if i not in used and j not in track_of:
+                used.add(i)
+                track_of[j] = i
+        return track_of
+    best = []                            # [(rank, {hand: track})]
+
+    def search(j, used, chosen, total):
+        if j == n_hands:
+            rank = (-len(chosen), total)
+            if not best or rank < best[0][0]:
+                best[:] = [(rank, dict(chosen))]
+            return
+        for i in range(n_tracks):
+            if i not in used and (i, j) in costs:
+                chosen[j] = i
+                search(j + 1, used | {i}, chosen, total + costs[(i, j)])
+                del chosen[j]
+        search(j + 1, used, chosen, total)
+    search(0, frozenset(), {}, 0.0)
+    return best[0][1]
+
+
 class HandTracks:
     """Camera hands from image to image: each physical hand keeps its id, and its side.
 
     The detector reads each image afresh, the side of each hand too, and a side can be
     misread for a few images (a right hand's shape read as a left one's). Ids given by side
-    handed one hand's id to the other when both were misread or one took the other's side:
-    the tracker followed the other hand, 0.9 m away, with its origin kept. Here a hand is
-    followed by where it is in the image: each image's hands are matched to the last
-    image's, nearest first, within MATCH_MAX_SIZES of the hand's size in the image. A
-    followed hand keeps its id, and its side until SIDE_SWITCH_FRAMES images in a row read
-    the other side; it then changes side with a new id (a new session on that side). A
-    hand that matches none (another hand, one back after an image without it) is new."""
+    handed one hand's id to the other when both were misread. Here a hand is followed by
+    where it is in the image: each image's hands are matched to the last image's at the
+    lowest total cost, the distance from where each was predicted to be (last place + image
+    velocity x dt, in hand sizes) plus SIDE_DISAGREE_COST for a hand read as the other side:
+    crossing hands keep their own, and near each other the reading decides. A hand further
+    than MATCH_MAX_SIZES from every prediction is new (new id, new session), so a side's
+    palm never jumps with its session kept. A followed hand keeps its id, and its side
+    against the reading when it is the same hand misread (within HOLD_MAX_SIZES, much the
+    same shape), until SIDE_SWITCH_FRAMES images in a row read the other side; it then
+    changes side with a new id."""
 
     def __init__(self):
         self._tracks = []
@@ -84,33 +148,35 @@ class HandTracks:
         side (their place says nothing), so each side's hand keeps its id."""
         for tr in self._tracks:
             tr.t, tr.palm, tr.velocity = None, None, np.zeros(3)
+            tr.image_velocity = np.zeros(2)
         self._unrelated = True
 
     def _new_id(self):
         self._next_id += 1
         return self._next_id - 1
 
-    def _pairs(self, hands):
-        """[(track or None, hand)]: the last image's tracks matched to these hands."""
+    def _pairs(self, hands, t):
+        """[(track or None, hand, place)]: the last image's tracks matched to these hands."""
         places = [image_place(h) for h in hands]
-        candidates = []
+        costs = {}
         for i, tr in enumerate(self._tracks):
             for j, hand in enumerate(hands):
+                agree = hand.side == tr.side
                 if self._unrelated:
-                    if hand.side == tr.side:
-                        candidates.append((-float(hand.confidence or 0.0), i, j))
+                    if agree:                    # the most confident first
+                        costs[(i, j)] = -float(hand.confidence or 0.0)
                     continue
                 centre, size = places[j]
-                d = float(np.linalg.norm(centre - tr.centre)) / max(size, tr.size)
-                if d <= MATCH_MAX_SIZES:
-                    candidates.append((d, i, j))
-        track_of = {}
-        used = set()
-        for _, i, j in sorted(candidates):
-            if i not in used and j not in track_of:
-                used.add(i)
-                track_of[j] = self._tracks[i]
-        return [(track_of.get(j), hand, places[j]) for j, hand in enumerate(hands)]
+                predicted = tr.centre
+                if tr.t is not None and t - tr.t > 0:
+                    predicted = tr.centre + tr.image_velocity * (t - tr.t)
+                d = float(np.linalg.norm(centre - predicted)) / max(size, tr.size)
+                if agree and d <= MATCH_MAX_SIZES or not agree and d <= HOLD_MAX_SIZES \
+                        and _same_shape(image_shape(hand, centre, size), tr.shape):
+                    costs[(i, j)] = d + (0.0 if agree else SIDE_DISAGREE_COST)
+        track_of = _best_assignment(costs, len(hands), len(self._tracks))
+        return [(self._tracks[track_of[j]] if j in track_of else None, hand, places[j])
+                for j, hand in enumerate(hands)]
 
     def update(self, hands, t, as_side=None):
         """Hands of one image (their side as read in it), at time t -> the hands to
@@ -118,7 +184,7 @@ class HandTracks:
         the hands. as_side(hand, side) gives a hand read as the other side (its normal
         and thumb depend on it), or None when unusable; by default the side is changed
         on the hand itself."""
-        pairs = self._pairs(hands)
+        pairs = self._pairs(hands, t)
         # Sides held by a hand published on them in the last image.
         taken = {tr.side for tr, hand, _ in pairs
                  if tr is not None and tr.published and (hand.side == tr.side
@@ -126,9 +192,7 @@ class HandTracks:
         tracks, out = [], []
         for tr, hand, (centre, size) in pairs:
             if tr is None:
-                tr = _Track()
-                tr.id, tr.side, tr.published = self._new_id(), hand.side, False
-                tr.t, tr.palm, tr.velocity, tr.against = None, None, np.zeros(3), 0
+                tr = self._start(hand)
             elif hand.side == tr.side or self._unrelated:
                 tr.against = 0
             else:
@@ -137,19 +201,21 @@ class HandTracks:
                 # its side) read as a side no other hand holds: two hands in view are
                 # mostly a left and a right one.
                 if tr.against >= SIDE_SWITCH_FRAMES or not tr.published and hand.side not in taken:
-                    tr.id, tr.side, tr.published = self._new_id(), hand.side, False
-                    tr.t, tr.palm, tr.velocity, tr.against = None, None, np.zeros(3), 0
+                    tr = self._start(hand)
                 else:
                     hand = as_side(hand, tr.side) if as_side else _with_side(hand, tr.side)
                     if hand is None:
                         continue                            # lost with its side
-            velocity = tr.velocity
+            velocity, image_velocity = tr.velocity, tr.image_velocity
             if tr.t is not None and t - tr.t > 0:
                 velocity = ((1 - VELOCITY_SMOOTHING) * tr.velocity
                             + VELOCITY_SMOOTHING * (hand.palm_position - tr.palm) / (t - tr.t))
+                image_velocity = ((1 - VELOCITY_SMOOTHING) * tr.image_velocity
+                                  + VELOCITY_SMOOTHING * (centre - tr.centre) / (t - tr.t))
             hand.palm_velocity = velocity
             hand.id = tr.id
             tr.t, tr.palm, tr.velocity, tr.centre, tr.size = t, hand.palm_position, velocity, centre, size
+            tr.image_velocity, tr.shape = image_velocity, image_shape(hand, centre, size)
             tracks.append(tr)
             out.append((tr, hand))
         self._tracks = tracks
@@ -163,6 +229,13 @@ class HandTracks:
         for tr in tracks:
             tr.published = any(c[1] is tr for c in chosen.values())
         return [chosen[s][2] for s in ('right', 'left') if s in chosen]
+
+    def _start(self, hand):
+        """A new track for a hand seen first now (or on a new side): new id, no velocity."""
+        tr = _Track()
+        tr.id, tr.side, tr.published, tr.against = self._new_id(), hand.side, False, 0
+        tr.t, tr.palm, tr.velocity, tr.image_velocity = None, None, np.zeros(3), np.zeros(2)
+        return tr
 
 
 def _with_side(hand, side):
