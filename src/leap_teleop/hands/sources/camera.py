@@ -55,11 +55,20 @@ SIDE_DISAGREE_COST = 0.25
 SIDE_SWITCH_FRAMES = 8
 # More hands than this in one image are matched greedily (the exact search grows fast).
 EXACT_MATCH_MAX_HANDS = 4
+# A hand matched to none, read as the side of the one followed hand of that side matched to
+# none, is still that hand within this many sizes of its last place, when no other followed
+# hand was that near: a hand faster than its prediction (a track starts with no velocity, and
+# one that stops is overshot), which got a new session every image from 1.35 m/s at 15
+# images/s. Another hand near where one vanished is still new.
+LONE_MATCH_MAX_SIZES = 1.5
+# A followed hand keeps its side against the reading only once its side was read this many
+# images: a track started by one misread image held the wrong side against 7 right ones.
+HOLD_AFTER_IMAGES = 3
 
 
 class _Track:
     __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'shape',
-                 'image_velocity', 'against', 'published')
+                 'image_velocity', 'against', 'published', 'agreed')
 
 
 def image_place(hand):
@@ -128,9 +137,11 @@ class HandTracks:
     velocity x dt, in hand sizes) plus SIDE_DISAGREE_COST for a hand read as the other side:
     crossing hands keep their own, and near each other the reading decides. A hand further
     than MATCH_MAX_SIZES from every prediction is new (new id, new session), so a side's
-    palm never jumps with its session kept. A followed hand keeps its id, and its side
-    against the reading when it is the same hand misread (within HOLD_MAX_SIZES, much the
-    same shape), until SIDE_SWITCH_FRAMES images in a row read the other side; it then
+    palm never jumps with its session kept, unless it is the lone hand of its side near
+    where that side's hand was (LONE_MATCH_MAX_SIZES): a hand faster than predicted. A
+    followed hand keeps its id, and, once its side was read HOLD_AFTER_IMAGES images, its
+    side against the reading when it is the same hand misread (within HOLD_MAX_SIZES, much
+    the same shape), until SIDE_SWITCH_FRAMES images in a row read the other side; it then
     changes side with a new id."""
 
     def __init__(self):
@@ -175,8 +186,26 @@ class HandTracks:
                         and _same_shape(image_shape(hand, centre, size), tr.shape):
                     costs[(i, j)] = d + (0.0 if agree else SIDE_DISAGREE_COST)
         track_of = _best_assignment(costs, len(hands), len(self._tracks))
+        if not self._unrelated:
+            self._lone_matches(hands, places, track_of)
         return [(self._tracks[track_of[j]] if j in track_of else None, hand, places[j])
                 for j, hand in enumerate(hands)]
+
+    def _lone_matches(self, hands, places, track_of):
+        """Add to track_of each hand matched to none that is the one unmatched followed hand
+        of its side, within LONE_MATCH_MAX_SIZES of that hand's last place, with no other
+        followed hand as near (LONE_MATCH_MAX_SIZES)."""
+        free = [i for i in range(len(self._tracks)) if i not in track_of.values()]
+        for j, hand in enumerate(hands):
+            same = [i for i in free if self._tracks[i].side == hand.side]
+            if j in track_of or len(same) != 1:
+                continue
+            centre, size = places[j]
+            near = [i for i, tr in enumerate(self._tracks)
+                    if np.linalg.norm(centre - tr.centre) / max(size, tr.size) <= LONE_MATCH_MAX_SIZES]
+            if near == same:
+                track_of[j] = same[0]
+                free.remove(same[0])
 
     def update(self, hands, t, as_side=None):
         """Hands of one image (their side as read in it), at time t -> the hands to
@@ -187,20 +216,22 @@ class HandTracks:
         pairs = self._pairs(hands, t)
         # Sides held by a hand published on them in the last image.
         taken = {tr.side for tr, hand, _ in pairs
-                 if tr is not None and tr.published and (hand.side == tr.side
-                                                         or tr.against + 1 < SIDE_SWITCH_FRAMES)}
+                 if tr is not None and tr.published and (hand.side == tr.side or (
+                     tr.against + 1 < SIDE_SWITCH_FRAMES and tr.agreed >= HOLD_AFTER_IMAGES))}
         tracks, out = [], []
         for tr, hand, (centre, size) in pairs:
             if tr is None:
                 tr = self._start(hand)
             elif hand.side == tr.side or self._unrelated:
                 tr.against = 0
+                tr.agreed += 1
             else:
                 tr.against += 1
                 # Read so for long enough; or a hand not published (another one holds
                 # its side) read as a side no other hand holds: two hands in view are
                 # mostly a left and a right one.
-                if tr.against >= SIDE_SWITCH_FRAMES or not tr.published and hand.side not in taken:
+                if tr.against >= SIDE_SWITCH_FRAMES or tr.agreed < HOLD_AFTER_IMAGES or (
+                        not tr.published and hand.side not in taken):
                     tr = self._start(hand)
                 else:
                     hand = as_side(hand, tr.side) if as_side else _with_side(hand, tr.side)
@@ -233,7 +264,7 @@ class HandTracks:
     def _start(self, hand):
         """A new track for a hand seen first now (or on a new side): new id, no velocity."""
         tr = _Track()
-        tr.id, tr.side, tr.published, tr.against = self._new_id(), hand.side, False, 0
+        tr.id, tr.side, tr.published, tr.against, tr.agreed = self._new_id(), hand.side, False, 0, 1
         tr.t, tr.palm, tr.velocity, tr.image_velocity = None, None, np.zeros(3), np.zeros(2)
         return tr
 
