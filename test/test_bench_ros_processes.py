@@ -75,15 +75,26 @@ def test_each_run_writes_a_fresh_file(tmp_path):
     assert results['_failed'] == {} and results['_run']['modules'] == []
 
 
-@pytest.mark.parametrize('rtf', ['0.2', '11', 'nan'])
-def test_a_soak_refuses_a_real_time_factor_its_timeouts_cannot_follow(rtf, capsys, monkeypatch):
+@pytest.mark.parametrize('argv, why', [
+    (['--rtf', '0.2'], '--rtf must be between 0.25 and 10'), (['--rtf', 'nan'], '--rtf must be between'),
+    (['--rtf', '0.3'], '--rtf 0.3 gives ~hand_timeout = 0.045'),
+    (['--rtf', '8'], '--rtf 8 gives ~resubscribe_silent_after = 64'),
+    (['--resubscribe-after', '40', '--rtf', '2'], '--rtf 2 gives ~resubscribe_after = 80')])
+def test_a_soak_refuses_a_real_time_factor_its_timeouts_cannot_follow(argv, why, capsys, monkeypatch):
     # --rtf 0.2 scaled the arm's input_timeout to 0.04 s, under its 0.05 s floor: the arm
-    # nodes refused it and the soak's graph never started.
+    # nodes refused it and the soak's graph never started (and 0.3 the pilot's, 8 the
+    # consumers' resubscribe_silent_after).
     from tools import soak
     monkeypatch.setattr(soak, 'run', lambda *a, **k: pytest.fail('ran'))
     with pytest.raises(SystemExit) as e:
-        soak.main(['--rtf', rtf])
-    assert e.value.code == 2 and '--rtf must be between 0.25 and 10' in capsys.readouterr().err
+        soak.main(argv)
+    assert e.value.code == 2 and why in capsys.readouterr().err
+
+
+def test_every_real_time_factor_the_soak_takes_gives_timeouts_the_nodes_take():
+    from tools import soak
+    for rtf in (0.34, 0.5, 1.0, 2.0, 7.0):
+        assert soak.timeouts_problem(rtf, 0.5) is None, rtf
 
 
 @pytest.mark.parametrize('outcome', ['measured', 'raised'])

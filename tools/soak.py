@@ -335,6 +335,34 @@ def _per_consumer(by_status):
             if name.startswith(c + ':')}
 
 
+def scaled_timeouts(rtf, resubscribe_after):
+    """The graph's timeouts in sim seconds for a real-time factor: {launch key: (table,
+    its parameter, value)}, with the declared table that checks each."""
+    from leap_teleop.control.stream_health import HAND_SUBSCRIPTION_PARAMS
+    from leap_teleop.drone.pilot_params import PILOT_PARAMS
+    from leap_teleop.ur10.teleop_params import TELEOP_PARAMS
+    return {'input_timeout': (TELEOP_PARAMS, 'input_timeout', 0.2 * rtf),
+            'disarm_after': (TELEOP_PARAMS, 'disarm_after', 1.0 * rtf),
+            'max_age': (TELEOP_PARAMS, 'max_input_age', 0.25 * rtf),
+            'hand_timeout': (PILOT_PARAMS, 'hand_timeout', 0.15 * rtf),
+            'navdata_timeout': (PILOT_PARAMS, 'navdata_timeout', 0.5 * rtf),
+            'land_after': (PILOT_PARAMS, 'land_after', 3.0 * rtf),
+            'resubscribe_after': (HAND_SUBSCRIPTION_PARAMS, 'resubscribe_after', resubscribe_after * rtf),
+            # longer than the pause between two cycles
+            'resubscribe_silent_after': (HAND_SUBSCRIPTION_PARAMS, 'resubscribe_silent_after', 8.0 * rtf)}
+
+
+def timeouts_problem(rtf, resubscribe_after):
+    """One line naming a scaled timeout the nodes would refuse (None when all pass): the
+    graph would not start."""
+    for table, name, value in scaled_timeouts(rtf, resubscribe_after).values():
+        try:
+            table[name].check(name, value)
+        except ValueError as e:
+            return '--rtf %g gives %s' % (rtf, e)
+    return None
+
+
 def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500,
         command_queue=50, joint_states_queue=100, burst_minutes=0.0, burst_hogs=2,
         resubscribe_after=0.5):
@@ -351,13 +379,8 @@ def run(minutes, rtf, rate_hz=None, log=print, player_queue=2000, hand_queue=500
         log_dir = tempfile.mkdtemp(prefix='soak_logs_')
         env = dict(env, ROS_LOG_DIR=log_dir)
         with tempfile.NamedTemporaryFile('w', suffix='.launch', delete=False) as f:
-            f.write(LAUNCH.format(rtf=rtf, input_timeout=0.2 * rtf, max_age=0.25 * rtf,
-                                  hand_timeout=0.15 * rtf, disarm_after=1.0 * rtf,
-                                  navdata_timeout=0.5 * rtf, land_after=3.0 * rtf,
-                                  resubscribe_after=resubscribe_after * rtf,
-                                  # longer than the pause between two cycles
-                                  resubscribe_silent_after=8.0 * rtf,
-                                  hand_queue_size=hand_queue,
+            timeouts = {key: value for key, (_, _, value) in scaled_timeouts(rtf, resubscribe_after).items()}
+            f.write(LAUNCH.format(rtf=rtf, **timeouts, hand_queue_size=hand_queue,
                                   command_queue_size=command_queue,
                                   joint_states_queue_size=joint_states_queue))
             launch_file = f.name
@@ -641,7 +664,7 @@ def main(argv=None):
     # Faster than real time, the graph alone keeps two cores near saturation (x1.2 of
     # the x1.5 asked): real time leaves it the margin a robot's computer would have.
     ap.add_argument('--rtf', type=float, default=1.0,
-                    help='sim time / wall time target, 0.25-10 (default real time)')
+                    help='sim time / wall time target, 0.25-10 within the timeouts\' bounds (default real time)')
     ap.add_argument('--rate', type=float, default=None, help='hand frame rate, Hz '
                     '(default the scripts\' 120)')
     ap.add_argument('--player-queue', type=int, default=2000,
@@ -661,7 +684,6 @@ def main(argv=None):
                          'nodes\' default; 0 = never)')
     ap.add_argument('--out', default='soak_results.json')
     args = ap.parse_args(argv)
-    # --rtf: below 0.25 its sim-second timeouts fall under the nodes' floors (0.05 s).
     for name, value, lo, hi in (('--rtf', args.rtf, 0.25, 10.0),
                                 ('--player-queue', args.player_queue, 1, 100000),
                                 ('--hand-queue', args.hand_queue, 1, 2000),
@@ -672,6 +694,10 @@ def main(argv=None):
                                 ('--resubscribe-after', args.resubscribe_after, 0.0, 60.0)):
         if not lo <= value <= hi:
             ap.error('%s must be between %g and %g, not %g' % (name, lo, hi, value))
+    # the graph's timeouts are sim seconds, scaled by --rtf: each within its node's bounds
+    problem = timeouts_problem(args.rtf, args.resubscribe_after)
+    if problem:
+        ap.error(problem)
     run_info = {'started': utc_now(), 'minutes': args.minutes, 'rtf': args.rtf,
                 'rate_hz': args.rate, 'player_queue': args.player_queue,
                 'hand_queue': args.hand_queue, 'command_queue': args.command_queue,
