@@ -1,15 +1,15 @@
-"""Camera hands keep their ids and sides from image to image (camera.HandTracks through
+"""Camera hands keep their ids and sides from image to image (hand_tracks.HandTracks through
 CameraSource.hands_of), on synthetic landmark frames: no MediaPipe, no shared data."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from leap_teleop.hands.sources.camera import (
+from leap_teleop.hands.sources.camera import CameraSource
+from leap_teleop.hands.sources.hand_tracks import (
     LONE_MATCH_MAX_SIZES,
     MATCH_MAX_SIZES,
     SIDE_SWITCH_FRAMES,
-    CameraSource,
     HandTracks,
     image_place,
 )
