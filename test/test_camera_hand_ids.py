@@ -288,6 +288,39 @@ def test_one_misread_image_off_course_is_the_wrong_side_for_that_image_only():
     assert all('right' in hands for hands in out[11:])
 
 
+@pytest.mark.parametrize('order', ['other first', 'own first'])
+def test_a_fast_hand_does_not_lose_its_session_to_another_hand_near_it(order):
+    # The lone rule checked only the hands followed so far: another hand read as the same
+    # side, new in the same image near the fast hand's last place, took the session
+    # whenever the detector listed it first, with the origin kept.
+    src, out = camera_source(), []
+    for k in range(9):
+        own = landmarks('right', -100 + 110 * max(0, k - 4))
+        other = landmarks('right', -250)
+        lms = [own] if k < 5 else ([other, own] if order == 'other first' else [own, other])
+        out.append({h.side: h for h in src.hands_of(lms, CAM, k / 30)})
+    kept = [k for k in range(5, 9) if out[k]['right'].id == out[4]['right'].id]
+    # a session kept is the moving hand's (it moves right), never the other's (at the left)
+    assert all(out[k]['right'].palm_position[0] > out[4]['right'].palm_position[0] for k in kept)
+
+
+@pytest.mark.parametrize('x_mm, z_mm', [(330, 1300), (230, 900), (120, 250)])
+def test_a_same_side_hand_at_another_depth_where_one_vanished_is_a_new_session(x_mm, z_mm):
+    # Within 1.5 hand sizes in the image, a hand 0.4-0.8 m further or 0.25 m nearer kept
+    # the vanished hand's session: palm jumps of 333-908 mm with the origin kept.
+    frames = [[landmarks('right', -100)]] * 5 + [[landmarks('right', x_mm, z_mm=z_mm)]] * 3
+    out = run(camera_source(), frames)
+    assert out[5]['right'].id != out[4]['right'].id
+
+
+@pytest.mark.parametrize('every', [2, 3])
+def test_a_hand_misread_every_few_images_keeps_one_id_and_its_side(every):
+    frames = [[landmarks('right', -150 + 5 * k, misread=k % every == 1)] for k in range(60)]
+    out = run(camera_source(), frames)
+    assert {hands['right'].id for hands in out} == {out[0]['right'].id}
+    assert not any('left' in hands for hands in out)
+
+
 @pytest.mark.parametrize('apart_mm', [80, 150])
 def test_two_hands_misread_together_near_each_other_do_not_jump(apart_mm):
     # Both read as the other side for 6 images while close: each side keeps its own hand.

@@ -35,14 +35,15 @@ EXACT_MATCH_MAX_HANDS = 4
 # one that stops is overshot), which got a new session every image from 1.35 m/s at 15
 # images/s. Another hand near where one vanished is still new.
 LONE_MATCH_MAX_SIZES = 1.5
-# A followed hand keeps its side against the reading only once its side was read this many
-# images: a track started by one misread image held the wrong side against 7 right ones.
-HOLD_AFTER_IMAGES = 3
+LONE_SIZE_RATIO = 1.25      # ... and its size in the image within this ratio (its depth)
+# Images a new hand's side must be read again before it is held against the reading, when
+# it started where the other side's hand vanished (that hand, misread)
+CONFIRM_IMAGES = 2
 
 
 class _Track:
     __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'shape',
-                 'image_velocity', 'against', 'published', 'agreed')
+                 'image_velocity', 'against', 'published', 'unconfirmed')
 
 
 def image_place(hand):
@@ -112,11 +113,11 @@ class HandTracks:
     crossing hands keep their own, and near each other the reading decides. A hand further
     than MATCH_MAX_SIZES from every prediction is new (new id, new session), so a side's
     palm never jumps with its session kept, unless it is the lone hand of its side near
-    where that side's hand was (LONE_MATCH_MAX_SIZES): a hand faster than predicted. A
-    followed hand keeps its id, and, once its side was read HOLD_AFTER_IMAGES images, its
-    side against the reading when it is the same hand misread (within HOLD_MAX_SIZES, much
-    the same shape), until SIDE_SWITCH_FRAMES images in a row read the other side; it then
-    changes side with a new id."""
+    where that side's hand was, alike in size and shape (LONE_MATCH_MAX_SIZES): a hand
+    faster than predicted. A followed hand keeps its id, and its side against the reading
+    when it is the same hand misread (within HOLD_MAX_SIZES, much the same shape), until
+    SIDE_SWITCH_FRAMES images in a row read the other side; it then changes side with a
+    new id."""
 
     def __init__(self):
         self._tracks = []
@@ -175,9 +176,18 @@ class HandTracks:
             if j in track_of or len(same) != 1:
                 continue
             centre, size = places[j]
-            near = [i for i, tr in enumerate(self._tracks)
-                    if np.linalg.norm(centre - tr.centre) / max(size, tr.size) <= LONE_MATCH_MAX_SIZES]
-            if near == same:
+            tr = self._tracks[same[0]]
+
+            def within(c, s, t):
+                return np.linalg.norm(c - t.centre) / min(s, t.size) <= LONE_MATCH_MAX_SIZES
+            near = [i for i, t in enumerate(self._tracks) if within(centre, size, t)]
+            # no other hand of this image near that place either (first in the detector's
+            # order took a session while its hand was still in view), and the same size
+            # (depth) and shape: the place in the image alone gave a hand 1.3 m away the
+            # session of one at 0.5 m
+            others = [k for k, (c, s) in enumerate(places) if k != j and within(c, s, tr)]
+            if near == same and not others and max(size, tr.size) <= LONE_SIZE_RATIO * min(size, tr.size) \
+                    and _same_shape(image_shape(hand, centre, size), tr.shape):
                 track_of[j] = same[0]
                 free.remove(same[0])
 
@@ -190,21 +200,29 @@ class HandTracks:
         pairs = self._pairs(hands, t)
         # Sides held by a hand published on them in the last image.
         taken = {tr.side for tr, hand, _ in pairs
-                 if tr is not None and tr.published and (hand.side == tr.side or (
-                     tr.against + 1 < SIDE_SWITCH_FRAMES and tr.agreed >= HOLD_AFTER_IMAGES))}
+                 if tr is not None and tr.published and (hand.side == tr.side
+                                                         or tr.against + 1 < SIDE_SWITCH_FRAMES)}
+        matched = {id(tr) for tr, _, _ in pairs if tr is not None}
         tracks, out = [], []
         for tr, hand, (centre, size) in pairs:
             if tr is None:
                 tr = self._start(hand)
+                # Where the other side's hand vanished this image: maybe that hand misread
+                # off its course (a jerk, a quick roll); its side is held only once read
+                # again (held at once, it kept the wrong side against 7 right readings).
+                tr.unconfirmed = CONFIRM_IMAGES if any(
+                    o.side != hand.side and id(o) not in matched
+                    and np.linalg.norm(centre - o.centre) / min(size, o.size) <= LONE_MATCH_MAX_SIZES
+                    for o in self._tracks) else 0
             elif hand.side == tr.side or self._unrelated:
                 tr.against = 0
-                tr.agreed += 1
+                tr.unconfirmed = max(0, tr.unconfirmed - 1)
             else:
                 tr.against += 1
                 # Read so for long enough; or a hand not published (another one holds
                 # its side) read as a side no other hand holds: two hands in view are
                 # mostly a left and a right one.
-                if tr.against >= SIDE_SWITCH_FRAMES or tr.agreed < HOLD_AFTER_IMAGES or (
+                if tr.against >= SIDE_SWITCH_FRAMES or tr.unconfirmed or (
                         not tr.published and hand.side not in taken):
                     tr = self._start(hand)
                 else:
@@ -238,7 +256,7 @@ class HandTracks:
     def _start(self, hand):
         """A new track for a hand seen first now (or on a new side): new id, no velocity."""
         tr = _Track()
-        tr.id, tr.side, tr.published, tr.against, tr.agreed = self._new_id(), hand.side, False, 0, 1
+        tr.id, tr.side, tr.published, tr.against, tr.unconfirmed = self._new_id(), hand.side, False, 0, 0
         tr.t, tr.palm, tr.velocity, tr.image_velocity = None, None, np.zeros(3), np.zeros(2)
         return tr
 
