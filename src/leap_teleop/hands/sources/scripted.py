@@ -43,7 +43,7 @@ MAX_RATE_HZ = 1000.0
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
 # A looped hand moving more than this from the script's end to its start is lost between
 # passes. A script that closes its loop ends one frame's motion short of its start (0.43
-# mm for two_hands_steady.yaml); 10 mm in a frame is a brisk hand (1.2 m/s at 120 Hz),
+# mm for the shipped two-hand steady script); 10 mm in a frame is a brisk hand (1.2 m/s at 120 Hz),
 # while the jumps worth a new session are a script's travel, tens of mm and more.
 SEAM_MAX_MM = 10.0
 SEAM_MAX_DEG = 10.0     # the same for the palm's normal or direction: a quick wrist turn
