@@ -321,26 +321,6 @@ def test_a_hand_misread_every_few_images_keeps_one_id_and_its_side(every):
     assert not any('left' in hands for hands in out)
 
 
-def test_a_hand_misread_as_it_appears_is_on_the_wrong_side_two_images_at_most():
-    # Trusted at once, a hand misread in its first image held the wrong side against the
-    # 7 right readings after it.
-    out = run(camera_source(), [[landmarks('right', -150, misread=k == 0)] for k in range(16)])
-    assert [k for k, hands in enumerate(out) if 'left' in hands] == [0, 1]
-
-
-def test_two_hands_one_misread_as_they_appear_do_not_stay_crossed():
-    # Both hands coming into view, the right one misread in its first 2 images (and both
-    # misread now and then while apart): each arm followed the other hand for up to 31 images.
-    mis_r, mis_l = {0, 1, 9, 10, 11}, {6, 7, 8}
-    frames = [[landmarks('right', -250 + 15 * k, misread=k in mis_r),
-               landmarks('left', 250 - 15 * k, misread=k in mis_l)] for k in range(16)]
-    out = run(camera_source(), frames)
-    # the right hand is at the person's right (Leap x > 0) all along: where the left side
-    # shows a hand there, it shows the right hand
-    crossed = [k for k, hands in enumerate(out) if 'left' in hands and hands['left'].palm_position[0] > 0]
-    assert crossed and max(crossed) <= 3
-
-
 @pytest.mark.parametrize('apart_mm', [80, 150])
 def test_two_hands_misread_together_near_each_other_do_not_jump(apart_mm):
     # Both read as the other side for 6 images while close: each side keeps its own hand.

@@ -39,12 +39,11 @@ LONE_SIZE_RATIO = 1.25      # ... and its size in the image within this ratio (i
 # Images a new hand's side must be read again before it is held against the reading, when
 # it started where the other side's hand vanished (that hand, misread)
 CONFIRM_IMAGES = 2
-YOUNG_IMAGES = 3
 
 
 class _Track:
     __slots__ = ('id', 'side', 't', 'palm', 'velocity', 'centre', 'size', 'shape',
-                 'image_velocity', 'against', 'published', 'unconfirmed', 'agreed', 'disagreed')
+                 'image_velocity', 'against', 'published', 'unconfirmed')
 
 
 def image_place(hand):
@@ -218,25 +217,14 @@ class HandTracks:
             elif hand.side == tr.side or self._unrelated:
                 tr.against = 0
                 tr.unconfirmed = max(0, tr.unconfirmed - 1)
-                tr.agreed += 1
             else:
                 tr.against += 1
-                tr.disagreed += 1
-                # A young hand (its side read fewer than YOUNG_IMAGES times) keeps its side
-                # only while read so at least as often as the other: one misread as it
-                # appeared held the wrong side against 7 right readings (two hands: both
-                # arms crossed for 31 images).
-                young = tr.agreed < YOUNG_IMAGES and tr.disagreed > tr.agreed
                 # Read so for long enough; or a hand not published (another one holds
                 # its side) read as a side no other hand holds: two hands in view are
                 # mostly a left and a right one.
-                if tr.against >= SIDE_SWITCH_FRAMES or tr.unconfirmed or young or (
+                if tr.against >= SIDE_SWITCH_FRAMES or tr.unconfirmed or (
                         not tr.published and hand.side not in taken):
-                    doubtful, tr = tr, self._start(hand)
-                    if doubtful.unconfirmed or young:
-                        # its side still in doubt either way: the new one's too
-                        tr.unconfirmed = CONFIRM_IMAGES if doubtful.unconfirmed else 0
-                        tr.agreed, tr.disagreed = doubtful.disagreed, doubtful.agreed
+                    tr = self._start(hand)
                 else:
                     hand = as_side(hand, tr.side) if as_side else _with_side(hand, tr.side)
                     if hand is None:
@@ -269,7 +257,6 @@ class HandTracks:
         """A new track for a hand seen first now (or on a new side): new id, no velocity."""
         tr = _Track()
         tr.id, tr.side, tr.published, tr.against, tr.unconfirmed = self._new_id(), hand.side, False, 0, 0
-        tr.agreed, tr.disagreed = 1, 0
         tr.t, tr.palm, tr.velocity, tr.image_velocity = None, None, np.zeros(3), np.zeros(2)
         return tr
 
