@@ -66,13 +66,34 @@ def test_each_module_runs_in_a_fresh_interpreter_of_its_own(tmp_path, monkeypatc
     assert [marker for _, marker in runs] == ['0', '0']     # nothing of the parent's
 
 
-def test_each_run_writes_a_fresh_file(tmp_path):
+def test_each_run_writes_a_fresh_file(tmp_path, monkeypatch):
     out = tmp_path / 'bench_results.json'
     out.write_text(json.dumps({'stale.figure': 42.0}))
-    assert bench_main.main(['--only', 'no_such_area', '--out', str(out)]) == 0
+    monkeypatch.setattr(bench_main, 'discover', lambda: ['bench_quiet'])
+    monkeypatch.setattr(bench_main, 'collect', lambda modules: ({'quiet.figure': 1.0}, {}, {}))
+    assert bench_main.main(['--only', 'quiet', '--out', str(out)]) == 0
     results = json.loads(out.read_text())
-    assert 'stale.figure' not in results
-    assert results['_failed'] == {} and results['_run']['modules'] == []
+    assert 'stale.figure' not in results and results['quiet.figure'] == 1.0
+    assert results['_failed'] == {} and results['_run']['modules'] == ['bench_quiet']
+
+
+@pytest.mark.parametrize('only', [['no_such_area'], ['gesture', 'gestures'], []])
+def test_an_unknown_or_empty_only_is_refused_before_anything_runs(only, tmp_path, capsys):
+    out = tmp_path / 'bench_results.json'
+    out.write_text(json.dumps({'earlier.figure': 42.0}))
+    with pytest.raises(SystemExit) as stop:
+        bench_main.main(['--only', *only, '--out', str(out)])
+    assert stop.value.code == 2
+    assert json.loads(out.read_text()) == {'earlier.figure': 42.0}
+    if only:
+        assert 'no benchmark %s (areas: ' % only[-1] in capsys.readouterr().err
+
+
+def test_only_takes_the_module_name_too(monkeypatch, tmp_path):
+    ran = []
+    monkeypatch.setattr(bench_main, 'collect', lambda modules: (ran.extend(modules), ({}, {}, {}))[1])
+    assert bench_main.main(['--only', 'bench_gesture', 'drone', '--out', str(tmp_path / 'r.json')]) == 0
+    assert ran == ['bench_drone', 'bench_gesture']
 
 
 @pytest.mark.parametrize('argv, why', [

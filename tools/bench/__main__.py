@@ -54,13 +54,19 @@ def collect(modules, load=fresh_process_module):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument('--only', nargs='*', default=None,
-                    help='areas to run (module names without bench_), default all')
+    ap.add_argument('--only', nargs='+', default=None, metavar='AREA',
+                    help='areas to run (module names, with or without bench_), default all')
     ap.add_argument('--out', default='bench_results.json')
     args = ap.parse_args(argv)
     modules = discover()
     if args.only:
-        modules = [m for m in modules if m[len('bench_'):] in args.only]
+        wanted = {a if a.startswith('bench_') else 'bench_' + a for a in args.only}
+        unknown = sorted(wanted.difference(modules))
+        if unknown:     # before anything runs or the results file is replaced
+            ap.error('--only: no benchmark %s (areas: %s)' % (
+                ', '.join(u[len('bench_'):] for u in unknown),
+                ', '.join(m[len('bench_'):] for m in modules)))
+        modules = [m for m in modules if m in wanted]
     started = utc_now()
     figures, sources, failed = collect(modules)
     width = max([len(k) for k in figures] or [10])
