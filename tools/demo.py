@@ -11,6 +11,7 @@ usage: python -m tools.demo [--gui 0|1] [--out demo_output] [--tasks ur10,drone]
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -206,6 +207,19 @@ def evaluate_drone(mon):
     return {'drone_flight': result}
 
 
+TASKS = ('ur10', 'drone')
+# What a run writes in --out; only these go before a run, whatever else the folder holds.
+OUTPUT_NAME = re.compile(r'(summary\.json|roslaunch\.log|(ur10|drone)\.gif|ur10_\d{3,}\.png'
+                         r'|drone_flight\.png|rotated_grasp\.png)$')
+
+
+def clear_earlier_outputs(out):
+    """Remove an earlier run's outputs from `out` (a frame count may have shrunk)."""
+    for name in os.listdir(out):
+        if OUTPUT_NAME.match(name):
+            os.unlink(os.path.join(out, name))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('--gui', type=int, default=0, help='1: open the PyBullet windows')
@@ -213,11 +227,13 @@ def main(argv=None):
     ap.add_argument('--tasks', default='ur10,drone')
     args = ap.parse_args(argv)
     tasks = [t for t in args.tasks.split(',') if t]
+    unknown = sorted(set(tasks) - set(TASKS))
+    if unknown or not tasks:        # before the folder is touched or a graph starts
+        ap.error('--tasks: %s (tasks: %s, comma-separated)'
+                 % ('no task %s' % ', '.join(unknown) if unknown else 'no task given', ','.join(TASKS)))
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
-    for name in os.listdir(out):
-        if name.endswith(('.png', '.gif', '.json', '.log')):
-            os.unlink(os.path.join(out, name))
+    clear_earlier_outputs(out)
     gui = bool(args.gui) and bool(os.environ.get('DISPLAY'))
     if args.gui and not gui:
         say('GUI=1 but no DISPLAY: running headless')
