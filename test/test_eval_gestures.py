@@ -185,3 +185,26 @@ def test_shared_data_without_the_people_is_one_line_not_a_traceback(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ['evaluate: no leap_people or keypoints or leapjs or strokes folder in %s '
                    '(--shared-data)' % tmp_path]
+
+
+def test_a_wrong_photo_folder_is_refused_before_any_fitting(tmp_path, capsys, leapjs_data, monkeypatch):
+    # It was found only after the minutes of the people part, whose figures were then lost.
+    from tools.evaluation import people
+    monkeypatch.setattr(people, 'run', lambda *a, **k: pytest.fail('the people part ran'))
+    monkeypatch.setattr(evaluate, 'evaluate', lambda *a, **k: pytest.fail('the takes ran'))
+    assert evaluate.main(['--data', leapjs_data, '--hands-data', str(tmp_path / 'nowhere'),
+                          '--out', str(tmp_path / 'e.json')]) == 2
+    assert capsys.readouterr().err.strip() == 'evaluate: no hand photos at %s (--hands-data)' % (
+        tmp_path / 'nowhere')
+
+
+def test_a_run_that_stops_leaves_no_earlier_results_behind(tmp_path, leapjs_data, monkeypatch):
+    out = tmp_path / 'eval_results.json'
+    out.write_text('{"people": "from an earlier run"}')
+
+    def stops(*a, **k):
+        raise RuntimeError('stopped halfway')
+    monkeypatch.setattr(evaluate, 'evaluate', stops)
+    with pytest.raises(RuntimeError):
+        evaluate.main(['--data', leapjs_data, '--no-people', '--no-photos', '--out', str(out)])
+    assert not out.exists()

@@ -331,13 +331,25 @@ def main(argv=None):
             print('evaluate: no %s folder in %s (--shared-data)' % (' or '.join(missing), shared),
                   file=sys.stderr)
             return 2
+    # Every input is checked before the minutes of fitting that would otherwise be lost.
+    missing = [take for take in dict.fromkeys(list(LEAPJS_LABELS) + list(EVERY_TAKE))
+               if find_take(args.data, take) is None]
+    if missing:             # a partial table would read as a result
+        print('evaluate: takes missing from %s: %s' % (args.data, ', '.join(missing)), file=sys.stderr)
+        return 2
+    if not args.no_photos and not os.path.isdir(args.hands_data):
+        print('evaluate: no hand photos at %s (--hands-data)' % args.hands_data, file=sys.stderr)
+        return 2
+    # From here a run that stops leaves no earlier run's figures behind to read as its own.
+    if os.path.exists(args.out):
+        os.remove(args.out)
     results = {}
     if not args.no_people:
         from tools.evaluation import people as evaluate_people
         results['people'] = evaluate_people.run(shared)
         evaluate_people.print_tables(results['people'])
     results.update(evaluate(args.data))
-    if results['missing_takes']:             # a partial table would read as a result
+    if results['missing_takes']:             # gone since the check above
         print('evaluate: takes missing from %s: %s' % (args.data, ', '.join(results['missing_takes'])),
               file=sys.stderr)
         return 2
@@ -353,9 +365,6 @@ def main(argv=None):
     evaluate_invariance.print_table(results['invariance'])
     if not args.no_photos:
         from tools.evaluation import photo_views as evaluate_photo_views
-        if not os.path.isdir(args.hands_data):
-            print('evaluate: no hand photos at %s' % args.hands_data, file=sys.stderr)
-            return 2
         results['photo_views'] = evaluate_photo_views.run(args.hands_data)
         evaluate_photo_views.print_table(results['photo_views'])
     write_json(args.out, results)
