@@ -77,6 +77,40 @@ def test_the_diagnostics_timer_updates_on_after_the_clock_jumps_back(sim_time):
     assert len(after) >= 6 and all(t < 60 for t in after)
 
 
+class Published:
+    """Stands in for an Updater's /diagnostics publisher (no master): the report times."""
+
+    def __init__(self):
+        self.stamps = []
+
+    def publish(self, msg):
+        self.stamps.append(msg.header.stamp.to_sec())
+
+
+@pytest.mark.parametrize('back_to', [50.0, 0.0])     # a looped bag; a simulator started again
+def test_the_diagnostics_report_on_after_the_clock_jumps_back(sim_time, monkeypatch, back_to):
+    """The real Updater, called every 0.25 s of sim time as update_every and the control
+    loops do: the library's update() waited for /clock to pass the last report again."""
+    from leap_teleop.ros.diagnostics import FixedPeriodUpdater
+    published = Published()
+    monkeypatch.setattr(rospy, 'Publisher', lambda *args, **kwargs: published)
+    updater = FixedPeriodUpdater(1.0)
+    updater.setHardwareID('hw')
+    updater.add('task', lambda stat: stat.summary(0, 'fine'))
+
+    def run(start, end):
+        for i in range(int((end - start) / 0.25) + 1):
+            sim_time(start + 0.25 * i)
+            updater.update()
+    run(100.0, 106.0)
+    before = len(published.stamps)
+    run(back_to, back_to + 6.0)
+    after = published.stamps[before:]
+    assert before >= 5
+    assert 5 <= len(after) <= 7 and all(back_to <= t <= back_to + 6.0 for t in after), after
+    assert all(b - a >= updater.period for a, b in zip(after, after[1:])), after
+
+
 def test_the_hand_markers_latency_text_goes_on_after_the_clock_jumps_back(sim_time, monkeypatch):
     from leap_teleop.params import check_params
     from leap_teleop.ros.graph import TopicTypeWatch

@@ -38,9 +38,10 @@ def diagnostics_updater(hardware_id, task, report, input_age=None):
 
 
 class FixedPeriodUpdater(diagnostic_updater.Updater):
-    """An Updater whose period is the one checked at start-up. The library's re-reads
-    ~diagnostic_period four times a second on the caller's thread (a control loop, the
-    pilot's watchdog): a master call there, and a bad value set later raised out of it."""
+    """An Updater whose period is the one checked at start-up, and that reports on after
+    ROS time jumps back. The library's re-reads ~diagnostic_period four times a second on
+    the caller's thread (a control loop, the pilot's watchdog): a master call there, and a
+    bad value set later raised out of it."""
 
     def __init__(self, period_s):
         super().__init__()
@@ -48,6 +49,15 @@ class FixedPeriodUpdater(diagnostic_updater.Updater):
 
     def _check_diagnostic_period(self):
         pass
+
+    def update(self):
+        """Publishes once ~diagnostic_period has passed since the last report, and at once
+        when ROS time went back before it: the library's waited for /clock to pass the last
+        report again (never, with a looped bag)."""
+        if rospy.Time.now() < self.last_time:
+            self.force_update()     # also restarts the period from now
+        else:
+            super().update()
 
 
 def update_every(updater, period_s=0.25):
