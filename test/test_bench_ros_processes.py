@@ -201,6 +201,20 @@ def test_a_lost_reply_weighs_in_the_tail():
     assert _p99_ms(times, lost=2) == math.inf
 
 
+def test_the_arms_lost_replies_are_its_own_not_the_bare_echos(monkeypatch):
+    import contextlib
+
+    from tools.bench import bench_arm, ros_processes
+    monkeypatch.setattr(ros_processes, 'ros_master', contextlib.contextmanager(lambda: (yield {})))
+    monkeypatch.setattr(ros_processes, 'spawn_node', lambda env, args: None)
+    monkeypatch.setattr(ros_processes, 'stop_spawned', lambda proc: None)
+    rounds = {'arm': [[0.002] * 150] * 4, 'bare': [[0.001] * 147] * 4}
+    monkeypatch.setattr(bench_arm, '_round_trips', lambda env, r, c: {
+        'rounds': rounds, 'lost': {'arm': 0, 'bare': 3}, 'count': 150})
+    figures = bench_arm._latency(rounds=4)
+    assert figures['arm.latency_replies_lost'] == 0 and figures['arm.bare_echo_replies_lost'] == 3
+
+
 def test_a_spawned_node_that_writes_much_to_stderr_does_not_block():
     # A pipe nobody drains fills after 64 KiB and blocks the writer at its next line.
     import subprocess
