@@ -57,13 +57,14 @@ def test_temporal_filter_needs_consistent_frames_and_emits_start_stop():
     rec = GestureRecognizer(on_frames=3, off_frames=3)
     fist = render_hand('right', 'fist', (0, 200, 0))
     opn = render_hand('right', 'open', (0, 200, 0))
-    states = feed(rec, [fist] * 5)
-    assert [s.fist for s in states] == [False, False, True, True, True]
+    # continuous stamps: a gap in the stream would end the fist before the unfold
+    states = feed(rec, [fist] * 40)
+    assert [s.fist for s in states[:5]] == [False, False, True, True, True]
     assert [(e.gesture, e.active) for e in states[2].events] == [('fist', True)]
     # A 2-frame blip of open does not switch anything (hysteresis / off filter).
-    states = feed(rec, [opn, opn, fist, fist], t0=1.0)
+    states = feed(rec, [opn, opn, fist, fist], t0=40 / 120.0)
     assert all(s.fist and not s.open for s in states)
-    states = feed(rec, [opn] * 40, t0=2.0)
+    states = feed(rec, [opn] * 40, t0=44 / 120.0)
     assert [s.fist for s in states[:4]] == [True, True, False, False]
     events = [(e.gesture, e.active) for e in states[2].events]
     assert ('fist', False) in events and ('open', True) in events
@@ -103,6 +104,23 @@ def test_fold_and_unfold_need_the_first_shape_held():
     rec = GestureRecognizer()
     names = [e.gesture for s in feed(rec, [fist] * 60 + [opn] * 40) for e in s.events]
     assert names.count('unfold') == 1
+
+
+@pytest.mark.parametrize('gap', [0.6, 2.0, 600.0, -60.0])
+@pytest.mark.parametrize('first,second,event', [('fist', 'open', 'unfold'), ('open', 'fist', 'fold')])
+def test_a_stall_or_rewind_in_the_stream_does_not_bridge_fold_and_unfold(gap, first, second, event):
+    # The filter holds the first shape for a few frames after the gap, so its end used to
+    # be measured right where the second one starts, whatever the gap's length.
+    a = render_hand('right', first, (0, 200, 0))
+    b = render_hand('right', second, (0, 200, 0))
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [a] * 120) for e in s.events]
+    names += [e.gesture for s in feed(rec, [b] * 60, t0=119 / 120.0 + gap) for e in s.events]
+    assert event not in names
+    # the same shapes without the gap: the event
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [a] * 120 + [b] * 60) for e in s.events]
+    assert names.count(event) == 1
 
 
 def test_low_confidence_frames_do_not_turn_gestures_on():

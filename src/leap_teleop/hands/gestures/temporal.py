@@ -10,7 +10,9 @@ FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes,
 or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears). Both
 holds count judged frames only, each with its own frame interval: frames too unsure to
 judge neither end a shape nor add to its hold, so a misread carried through them never
-completes a fold, and one such frame inside a deliberate hold does not split it.
+completes a fold, and one such frame inside a deliberate hold does not split it. A frame
+interval longer than FOLD_GAP_S (a stalled stream) or a stamp going back ends both shapes:
+what came before it never pairs with what comes after.
 """
 import math
 from dataclasses import dataclass, field
@@ -129,6 +131,10 @@ class HeldFilter:
         for name in set(state.user) ^ set(prev.user):
             events.append(HandEvent(name, name in state.user))
         judged_before, self._judged_before = self._judged_before, judged
+        if self._frame_t is not None and not 0.0 <= timestamp - self._frame_t <= FOLD_GAP_S:
+            # A stalled stream or a rewound stamp: no shape spans it (the filter still holds
+            # the one before for a few frames, which would measure the gap as none).
+            self._shape, self._confirmed, self._last_shape = None, False, None
         # A judged frame counts its own interval (capped: a stalled stream's gap is no hold);
         # an unsure frame counts nothing.
         frame_dt = (0.0 if self._frame_t is None
