@@ -155,6 +155,24 @@ def _circle_events(radius, duration, direction, noise=0.0, seed=0):
     return out
 
 
+@pytest.mark.parametrize('jump', [1e170, -1e170, 1e6, -50.0])
+def test_a_huge_stamp_jump_restarts_the_circle_detector(jump):
+    # A pointing hand's tip speed over a finite but huge interval overflowed (OverflowError).
+    rec = GestureRecognizer()
+    for i, t in enumerate([1.0, 1.016, 1.0 + jump, 1.016 + jump]):
+        rec.update(render_hand('right', 'point', (10.0 * i, 200, 0)), t)
+    # a circle drawn after a jump is found as usual
+    sc = GestureScript({'rate_hz': 120, 'hands': {'right': [
+        {'pose': 'open', 'duration': 0.3},
+        {'pose': 'open', 'circle': {'radius': 60, 'direction': 'cw'}, 'duration': 1.0},
+        {'pose': 'open', 'duration': 0.5}]}})
+    rec, names = GestureRecognizer(), []
+    for k, f in enumerate(ScriptedSource(sc, realtime=False).frames()):
+        t = f.timestamp + (0.0 if k < 10 or abs(jump) > 1e9 else jump)
+        names += [e.gesture for e in rec.update(f.hand('right'), t).events if e.gesture.startswith('circle')]
+    assert names == ['circle_cw']
+
+
 @pytest.mark.parametrize('radius,duration', [(40, 1.5), (60, 1.0), (120, 1.5)])
 @pytest.mark.parametrize('direction', ['cw', 'ccw'])
 def test_scripted_palm_circle_fires_one_event_with_direction(radius, duration, direction):

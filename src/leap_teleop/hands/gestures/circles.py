@@ -417,6 +417,7 @@ class CircleDetector:
 
     def reset(self):
         self._last_event = -math.inf
+        self._t = None                          # the last frame's stamp
         self._forget_palm()
         self._forget_tip()
 
@@ -461,7 +462,8 @@ class CircleDetector:
         if prev is not None and timestamp > prev[0]:
             pt = prev[1]
             d2 = (tip[0] - pt[0]) ** 2 + (tip[1] - pt[1]) ** 2 + (tip[2] - pt[2]) ** 2
-            if d2 > (self._tip_v_max * (timestamp - prev[0])) ** 2:
+            reach = self._tip_v_max * (timestamp - prev[0])      # (`**` raises on overflow)
+            if d2 > reach * reach:
                 self._tip_fast_at = timestamp
         # Smoothed like the palm: frame-to-frame jitter of a few mm zig-zags a small
         # circle's path and reads it as not round.
@@ -486,6 +488,11 @@ class CircleDetector:
         # finger, and keeps its circle when the pose reads a frame or two as not
         # pointing: 3 % of such frames lost 6 of the 7 people's circles without it);
         # the index tip while pointing (index_draws).
+        if self._t is not None and not 0.0 <= timestamp - self._t <= self._normal_span:
+            # A pause longer than any circle, or a stamp going back: start again (no path,
+            # smoothing or speed spans it).
+            self.reset()
+        self._t = timestamp
         found = self._palm(timestamp, geometry)
         if index_draws(extended):
             tip = self._tip(hand, timestamp, geometry)
