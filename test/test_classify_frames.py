@@ -512,3 +512,40 @@ def test_a_model_made_before_the_yaml_word_rule_still_loads(tmp_path):
     arrays['b1'] = np.append(arrays['b1'], arrays['b1'][0] - 10.0)
     np.savez(tmp_path / 'old.npz', **arrays)
     assert 'yes' in load_model(str(tmp_path / 'old.npz'), 'leap').classes
+
+
+def _one_side_frames(kind):
+    """Right hands only, 120 frames at 120 Hz. 'swap': id 1 (fist) for 0.5 s, then at once
+    another hand, id 7 (open). 'order': two hands typed right, id 1 a steady fist and id 2
+    a steady open hand, listed in the other order from 0.5 s on."""
+    frames = []
+    for i in range(120):
+        if kind == 'swap':
+            hands = [render_hand('right', 'fist', (0, 200, 0), hand_id=1) if i < 60 else
+                     render_hand('right', 'open', (120, 200, 0), hand_id=7)]
+        else:
+            a = render_hand('right', 'fist', (0, 200, 0), hand_id=1)
+            b = render_hand('right', 'open', (150, 200, 0), hand_id=2)
+            hands = [a, b] if i < 60 else [b, a]
+        frames.append(Frame(i + 1, 1.0 + i / 120.0, hands))
+    return frames
+
+
+@pytest.mark.parametrize('kind', ['swap', 'order'])
+def test_a_side_follows_one_hand_by_its_id_as_the_sender_does(kind):
+    # One recognizer per side fed whichever hand came first: one hand's fist and another's
+    # open hand made an unfold that neither hand made (and the sender does not report).
+    from leap_teleop.hands.leap_interface import LeapInterface
+    classifier, live = FrameClassifier(), LeapInterface(source=None)
+    for frame in _one_side_frames(kind):
+        out = classifier.classify_frame(frame, frame.id, None)
+        state = live.on_frame(frame)['right']
+        assert not any(e in ('fold', 'unfold') for h in out['hands'] for e in h['events'])
+        by_id = dict(zip((h.id for h in frame.hands), out['hands']))
+        if kind == 'order':         # id 1 is followed throughout; id 2 judged on its own
+            assert by_id[2]['open'] and not by_id[2]['fist']
+            assert by_id[1]['fist'] == state.fist and state.fist == (frame.id >= 3)
+        elif frame.id == 61:        # the new hand is judged from the next frame on
+            assert not by_id[7]['open'] and not by_id[7]['fist'] and not state.present
+        elif frame.id > 61:
+            assert by_id[7]['open'] == (frame.id >= 64)

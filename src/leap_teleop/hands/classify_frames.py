@@ -58,7 +58,10 @@ is held.
 
 --stateless classifies every frame on its own (no temporal filter, no events): for
 snapshot data whose frames are unrelated. Otherwise frames are a stream: a gesture
-turns on after 3 consistent frames and off after 3, per hand side.
+turns on after 3 consistent frames and off after 3, per hand side, following one hand by
+its id as the sender does: of two hands typed alike, the one followed (else the more
+confident) carries the side's gestures and the other is judged on its own, and a hand of
+another id taking the side starts afresh (every gesture false on that frame).
 """
 import argparse
 import itertools
@@ -68,22 +71,26 @@ import sys
 import zlib
 
 from leap_teleop.hands.frame import Frame, TrackedHand
-from leap_teleop.hands.gestures import GestureRecognizer, ModelError
+from leap_teleop.hands.gestures import GestureRecognizer, GestureState, ModelError
 from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.sources import SourceError, leapjs
 from leap_teleop.output_file import output_problem
 
 
 class FrameClassifier:
-    """Frames -> output dicts, keeping one recognizer per hand side. model /
-    keypoint_model: pose model paths (None: the shipped ones); their own classes show as
-    one more key each, true while held."""
+    """Frames -> output dicts, keeping one recognizer per hand side that follows one hand
+    by its id, as the sender does (LeapInterface / HandTracker): of two hands of a side,
+    the one followed, else the more confident (on a tie the first listed) carries the
+    side's state, the other is judged on its own; another id taking the side starts it
+    again, from the next frame. model / keypoint_model: pose model paths (None: the
+    shipped ones); their own classes show as one more key each, true while held."""
 
     def __init__(self, stateless=False, model=None, keypoint_model=None):
         self.stateless = stateless
         self.models = {'model': model, 'keypoint_model': keypoint_model}
         self.user_gestures = self._recognizer(stateless).user_gestures
         self.recognizers = {}
+        self.followed = {}              # side -> the id of the hand followed (0: none known)
 
     def _recognizer(self, stateless):
         return GestureRecognizer(stateless=stateless, **self.models)
@@ -104,20 +111,43 @@ class FrameClassifier:
     def classify_frame(self, frame, fid, ts):
         """A Frame -> output dict (id and timestamp as given)."""
         t = frame.timestamp if math.isfinite(frame.timestamp) else None
-        hands, seen = [], set()
+        t = t if t is not None else math.nan
+        chosen = {}
+        for hand in frame.hands:        # on a tie the first listed stays
+            if hand.side not in chosen or self._rank(hand) > self._rank(chosen[hand.side]):
+                chosen[hand.side] = hand
+        hands = []
         for hand in frame.hands:
-            rec = self.recognizers.get(hand.side)
-            if rec is None:
-                rec = self.recognizers[hand.side] = self._recognizer(self.stateless)
-            if hand.side in seen:       # a second hand of one side: judge it on its own
-                rec = self._recognizer(True)
-            seen.add(hand.side)
-            state = rec.update(hand, t if t is not None else math.nan)
+            if chosen[hand.side] is not hand:   # another hand of the side: judged on its own
+                state = self._recognizer(True).update(hand, t)
+            else:
+                state = self._followed_state(hand, t)
             hands.append(hand_output(hand.side, state, self.user_gestures))
         for side, rec in self.recognizers.items():
-            if side not in seen:
+            if side not in chosen:
                 rec.reset()
+                self.followed.pop(side, None)
         return {'id': fid, 'timestamp': ts, 'hands': hands}
+
+    def _rank(self, hand):
+        followed = bool(self.followed.get(hand.side)) and hand.id == self.followed[hand.side]
+        c = hand.confidence
+        return followed, float(c) if isinstance(c, (int, float)) and c == c else 0.0
+
+    def _followed_state(self, hand, t):
+        rec = self.recognizers.get(hand.side)
+        if rec is None:
+            rec = self.recognizers[hand.side] = self._recognizer(self.stateless)
+        followed = self.followed.get(hand.side)
+        if not self.stateless and hand.id and followed and hand.id != followed:
+            # Another hand took the side: nothing of the one before carries over, and
+            # this one is judged from the next frame (the sender reports the side lost).
+            rec.reset()
+            self.followed[hand.side] = hand.id
+            return GestureState(judged=False)
+        if hand.id:                     # an id-less hand keeps the one followed
+            self.followed[hand.side] = hand.id
+        return rec.update(hand, t)
 
 
 def hand_output(side, state, user_gestures=()):
