@@ -311,6 +311,10 @@ def _model_arrays():
     ('a header of a format numpy does not write', 'mean.npy is .npy format 9.0'),
     # json's RecursionError was a traceback
     ('a card nested 100000 deep', 'cannot read a pose model (maximum recursion depth'),
+    # zipfile's and zlib's own errors were tracebacks (or blamed the input file)
+    ('a compression zipfile does not read', 'cannot read a pose model (That compression method'),
+    ('compressed data damaged', 'cannot read a pose model ('),
+    ('a password-protected member', 'cannot read a pose model ('),
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -342,7 +346,16 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
             arrays['scale'] = arrays['scale'] * 1e-120
         elif spoil == 'a card nested 100000 deep':
             arrays['card'] = np.array('[' * 100000 + ']' * 100000)
-        np.savez(bad, **arrays)
+        (np.savez_compressed if 'compressed' in spoil else np.savez)(bad, **arrays)
+        data = bytearray(bad.read_bytes())
+        central = data.rfind(b'PK\x01\x02')          # the last member's central directory entry
+        if spoil == 'a compression zipfile does not read':
+            data[central + 10] = 9                      # its method: deflate64
+        elif spoil == 'compressed data damaged':
+            data[400] ^= 0xff
+        elif spoil == 'a password-protected member':
+            data[central + 8] |= 1                      # its flags: encrypted
+        bad.write_bytes(bytes(data))
         if 'header' in spoil:
             import io
             import zipfile

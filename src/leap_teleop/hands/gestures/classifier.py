@@ -11,6 +11,7 @@ import math
 import os
 import re
 import zipfile
+import zlib
 
 import numpy as np
 
@@ -154,9 +155,11 @@ class PoseClassifier:
                     raise ModelError('%s: its card is not a JSON object' % path)
                 model = cls(np.atleast_1d(z['classes']).tolist(), str(z['family']), z['mean'],
                             z['scale'], z['w0'], z['b0'], z['w1'], z['b1'], card)
-        # a card of deeply nested JSON raises RecursionError; arrays too big to hold, MemoryError
+        # a card of deeply nested JSON raises RecursionError; arrays too big to hold,
+        # MemoryError; a damaged zip, zlib.error (bad deflate data), NotImplementedError (a
+        # compression zipfile cannot read) or RuntimeError (a password-protected member)
         except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile,
-                RecursionError, MemoryError) as e:
+                RecursionError, MemoryError, NotImplementedError, RuntimeError, zlib.error) as e:
             if isinstance(e, ModelError):
                 if str(e).startswith(str(path)):
                     raise
