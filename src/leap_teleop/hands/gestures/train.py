@@ -20,9 +20,12 @@ the figures, with the worst person, into the model's card.
 import argparse
 import collections
 import datetime
+import gzip
+import hashlib
 import os
 import sys
 import time
+import zlib
 
 import numpy as np
 
@@ -271,6 +274,35 @@ def user_people(paths):
     return out
 
 
+def _content_digest(path):
+    """A digest of a file's content, unpacked when gzipped (a take and its gzipped copy are
+    one take), or None when it cannot be read (reading it for the fit says why)."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, 'rb') as f:
+            packed = f.read(2) == b'\x1f\x8b'
+        with gzip.open(path, 'rb') if packed else open(path, 'rb') as f:
+            for block in iter(lambda: f.read(1 << 20), b''):
+                digest.update(block)
+    except (OSError, EOFError, zlib.error):
+        return None
+    return digest.digest()
+
+
+def same_recording(paths):
+    """(earlier, later): the first --add file that is, or holds the same content as, an
+    earlier one, or None. Each file is one person held out in turn: a copy left in the
+    fit would score that person on rows it was fitted on."""
+    digests = []
+    for k, path in enumerate(paths):
+        digest = _content_digest(path)
+        for earlier, seen in zip(paths[:k], digests):
+            if os.path.samefile(path, earlier) or (digest is not None and digest == seen):
+                return earlier, path
+        digests.append(digest)
+    return None
+
+
 def file_family(path):
     return 'keypoints' if path.lower().endswith('.csv') else 'leap'
 
@@ -382,6 +414,9 @@ def main(argv=None):
         if not os.path.isfile(path):
             ap.error('--add %s: %s' % (path, 'a folder: name a file' if os.path.isdir(path)
                                        else 'no such file'))
+    same = same_recording(args.add)
+    if same:
+        ap.error('--add %s: the same recording as --add %s (give a second session)' % same[::-1])
     for label in args.label:
         problem = class_name_problem(label, new=True) or shared_label_problem(label)
         if problem:

@@ -1,0 +1,46 @@
+"""train_gestures' checks of its --add files before the fit (which takes minutes)."""
+import gzip
+import shutil
+
+import pytest
+
+from leap_teleop.hands.gestures import train as train_gestures
+
+
+def _refusal(tmp_path, monkeypatch, capsys, args):
+    monkeypatch.setattr(train_gestures, 'train',
+                        lambda *a, **k: pytest.fail('fitted before checking the arguments'))
+    with pytest.raises(SystemExit) as stop:
+        train_gestures.main(args + ['--out', str(tmp_path / 'm.npz'), '--no-report'])
+    assert stop.value.code == 2
+    return capsys.readouterr().err.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize('how', ['the same path', 'a link', 'a copy', 'a gzipped copy'])
+def test_the_same_recording_given_twice_is_refused(tmp_path, monkeypatch, capsys, how):
+    # Each --add file is one person, held out in turn: a copy of it left in the fit scored
+    # that person on the very rows it was fitted on.
+    first = tmp_path / 'two.jsonl'
+    first.write_text('{"person": "me", "label": "two", "frame": {}}\n' * 3)
+    (tmp_path / 'session2').mkdir()
+    second = tmp_path / 'session2' / 'two.jsonl'
+    if how == 'the same path':
+        second = first
+    elif how == 'a link':
+        second.symlink_to(first)
+    elif how == 'a copy':
+        shutil.copy(first, second)
+    else:
+        second = tmp_path / 'session2' / 'two.jsonl.gz'
+        second.write_bytes(gzip.compress(first.read_bytes()))
+    line = _refusal(tmp_path, monkeypatch, capsys,
+                    ['--add', str(first), '--label', 'two', '--add', str(second), '--label', 'two'])
+    assert line.endswith('error: --add %s: the same recording as --add %s (give a second session)'
+                         % (second, first)), line
+
+
+def test_two_sessions_of_one_gesture_pass_the_check(tmp_path):
+    a, b = tmp_path / 'a.jsonl', tmp_path / 'b.jsonl'
+    a.write_text('{"person": "me", "label": "two", "frame": {"id": 1}}\n')
+    b.write_text('{"person": "me", "label": "two", "frame": {"id": 2}}\n')
+    assert train_gestures.same_recording([str(a), str(b)]) is None
