@@ -16,7 +16,9 @@ HUGE = '1' + '0' * 400
 BAD_FILES = [(None, 'cannot read (No such file or directory)'),
              (b'\xff\xfe hands: {}', 'not UTF-8 text'),
              (b'a: [1,\n', 'not valid YAML (line 2: '),
-             (DEEP.encode(), 'nested too deeply')]
+             (DEEP.encode(), 'nested too deeply'),
+             # PyYAML kept the last one: the first was dropped without a word
+             (b'a: 1\nb:\n  c: 2\n  c: 3\n', "'c' given twice (lines 3 and 4)")]
 
 
 @pytest.mark.parametrize('load, error, what', [
@@ -48,3 +50,24 @@ def test_integers_of_hundreds_of_digits_are_refused_by_name(tmp_path):
     cell.write_text(base.replace('base_xyz: [0.0, 0.0, 0.75]', 'base_xyz: [%s, 0.0, 0.75]' % HUGE))
     with pytest.raises(CellConfigError, match='base_xyz must be 3 numbers'):
         read_cell_config(str(cell))
+
+
+@pytest.mark.parametrize('text, line', [
+    # a section widened at the top, then the docs' example form appended lower down
+    ('arm:\n  stop: [fist, open]\ndrone:\n  hover: open\narm: {arm: rock, origin: []}\n',
+     "'arm' given twice (lines 1 and 5)"),
+    ('arm:\n  stop: [fist, open]\n  gripper: pinch\n  stop: fist\n', "'stop' given twice (lines 2 and 4)"),
+])
+def test_a_bindings_yaml_naming_a_section_or_action_twice_is_refused(tmp_path, text, line):
+    path = tmp_path / 'mine.yaml'
+    path.write_text(text)
+    with pytest.raises(BindingError) as e:
+        load_bindings(str(path))
+    assert str(e.value) == 'gesture bindings %s: %s' % (path, line)
+
+
+def test_a_merge_key_may_still_be_overridden(tmp_path):
+    path = tmp_path / 'mine.yaml'
+    path.write_text('base: &b {stop: fist, gripper: pinch}\narm:\n  <<: *b\n  stop: [fist, open]\n')
+    from leap_teleop.yaml_file import load_yaml_file
+    assert load_yaml_file(str(path), 'x')['arm'] == {'stop': ['fist', 'open'], 'gripper': 'pinch'}
