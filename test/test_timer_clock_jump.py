@@ -111,6 +111,42 @@ def test_the_diagnostics_report_on_after_the_clock_jumps_back(sim_time, monkeypa
     assert all(b - a >= updater.period for a, b in zip(after, after[1:])), after
 
 
+def test_waiting_for_subscribers_waits_on_after_the_clock_jumps_back(sim_time, monkeypatch):
+    """The sender's ~wait_for_subscribers under sim time: rospy.sleep raised
+    ROSTimeMovedBackwardsException out of it when /clock jumped back (a simulator started
+    again), which ended the sender before its source started."""
+    import threading
+
+    from leap_teleop.ros.graph import wait_for_subscribers
+    said, jumped, done = [], threading.Event(), threading.Event()
+    monkeypatch.setattr(rospy, 'loginfo', lambda fmt, *a: said.append((jumped.is_set(), fmt % a)))
+
+    class OwnPublisher:
+        def get_num_connections(self):
+            return int(rospy.get_time() >= 6.0 and jumped.is_set())     # a reader 1 s after the jump
+
+    def clock():        # runs until the wait is over: rospy.sleep waits for sim time
+        run_clock(sim_time, 100.0, 101.0, step=0.01)
+        jumped.set()
+        t = 5.0
+        while not done.is_set() and t < 30.0:
+            sim_time(t)
+            time.sleep(0.01)
+            t += 0.01
+    ticking = threading.Thread(target=clock, daemon=True)
+    ticking.start()
+    try:
+        assert wait_for_subscribers({'/leapmotion/data_right': OwnPublisher()}, ['/leapmotion/data_right'],
+                                    'sender', log_every=0.2)
+    except rospy.ROSTimeMovedBackwardsException as e:     # a KeyboardInterrupt: would end pytest
+        pytest.fail('raised out of the wait: %r' % e)
+    finally:
+        done.set()
+        ticking.join(10.0)
+    assert sum(after for after, _ in said) >= 3, said     # and it says so on
+    assert said[-1][1] == 'sender: waiting for subscribers on /leapmotion/data_right'
+
+
 def test_the_hand_markers_latency_text_goes_on_after_the_clock_jumps_back(sim_time, monkeypatch):
     from leap_teleop.params import check_params
     from leap_teleop.ros.graph import TopicTypeWatch

@@ -36,7 +36,12 @@ def wait_for_subscribers(own, topics, who, log_every=5.0, warn_after=30.0):
                               'its FATAL line)', who, ', '.join(waiting), now - start)
             else:
                 rospy.loginfo('%s: waiting for subscribers on %s', who, ', '.join(waiting))
-        rospy.sleep(0.05)
+        try:
+            rospy.sleep(0.05)
+        except rospy.ROSTimeMovedBackwardsException:
+            # /clock jumped back (a simulator started again): wait on, the time waited kept
+            back = now - rospy.get_time()
+            start, last_log = start - back, last_log - back
     return False
 
 

@@ -6,6 +6,7 @@ Publishes once per source frame from the source's thread (event-driven; no polli
 parameters --help marks live change while it runs (dynamic_reconfigure).
 """
 import gc
+import time
 
 import rospy
 import tf2_ros
@@ -103,7 +104,7 @@ def main(argv=None):
     if ended_by_itself(interface):
         rospy.loginfo('sender: source ended after %d frames', interface.frames_seen)
         if p['shutdown_on_end']:
-            rospy.sleep(0.5)   # let subscribers drain the last frames
+            time.sleep(0.5)     # subscribers drain the last frames (wall time: a /clock gone back raised)
             rospy.signal_shutdown('source ended')
         else:
             rospy.spin()
