@@ -1,5 +1,6 @@
 """Smoothing and motion of the arm teleop: the One Euro filter, the joint servo and the
 trajectory follower it feeds (no ROS, no physics)."""
+import copy
 import math
 
 import numpy as np
@@ -291,6 +292,54 @@ def test_servo_stops_by_itself_when_commands_stop():
     follower.sample(follower.end_time + 0.01)
     np.testing.assert_array_equal(follower.qd, np.zeros(6))
     np.testing.assert_allclose(follower.q, q2)      # (from rest: stretched in time)
+
+
+def _points_peak_accel(q, v, points):
+    """Peak |acceleration| per joint of the cubics a controller runs from (q, v) through
+    the points (each cubic's acceleration is linear in time: at its ends)."""
+    peak, t = np.zeros(len(q)), 0.0
+    for tp, qp, vp in points:
+        T = tp - t
+        for s in (0.0, 1.0):
+            a = ((12 * s - 6) * q + (6 * s - 4) * T * v + (6 - 12 * s) * qp
+                 + (6 * s - 2) * T * vp) / (T * T)
+            peak = np.maximum(peak, np.abs(a))
+        t, q, v = tp, np.asarray(qp), np.asarray(vp)
+    return peak
+
+
+@pytest.mark.parametrize('reach_fast', [False, True])
+def test_servo_brakes_within_its_acceleration_short_of_a_joint_limit(reach_fast):
+    # Wrist 3 runs into its +2pi limit (its goal moves there and stops on it) while the
+    # base turns faster: every point stays inside the limit, no point on it still moves,
+    # and the controller's cubics through them keep to max_accel (a point clipped to the
+    # limit with its velocity kept asked for 27 rad/s^2). Holds on the way too (braking
+    # every joint over the slowest one's time ran it past the limit).
+    a, upper = math.pi, kin.JOINT_UPPER[5]
+    servo = JointServo(np.full(6, 1.0), np.full(6, a), horizon=0.024, gain=10.0,
+                       lower=kin.JOINT_LOWER, upper=kin.JOINT_UPPER, reach_fast=reach_fast)
+    q = kin.HOME_Q.copy()
+    q[5] = upper - 0.4
+    goal, holds = q.copy(), 0
+    for k in range(200):
+        t = k * 0.008
+        goal = goal + np.array([0.008, 0.0, 0.0, 0.0, 0.0, 0.006])
+        goal[5] = min(goal[5], upper)
+        state = servo.state_at(t, q)
+        if k % 10 == 5:
+            hold = copy.deepcopy(servo)
+            points = hold.stop(t, q, 0.05, np.full(6, a))
+            # planned to stop there, not clipped to it
+            assert hold.rest(q)[5] <= upper and points[-1][1][5] == pytest.approx(hold.rest(q)[5], abs=1e-12), k
+            assert np.max(_points_peak_accel(*state, points)) <= a * (1 + 1e-6), k
+            holds += 1
+        points = servo.track(t, q, goal, np.array([1.0, 0, 0, 0, 0, 0.75]))
+        assert servo.rest(q)[5] <= upper and points[-1][1][5] == pytest.approx(servo.rest(q)[5], abs=1e-12), k
+        for _, pq, pv in points:
+            assert pq[5] < upper or pv[5] <= 0.0
+        assert np.max(_points_peak_accel(*state, points)) <= a * (1 + 1e-6), k
+        q = servo.state_at(t + 0.008, q)[0]
+    assert q[5] == pytest.approx(upper, abs=1e-3) and holds == 20
 
 
 @pytest.mark.slow

@@ -13,7 +13,10 @@ second point brings the joints to rest with the same deceleration bound. So:
 * if commands stop (the node dies) the robot decelerates to rest by itself.
 
 The correction is min(gain * |e|, sqrt(2 a |e|)): proportional near the goal and no faster
-than it can still stop at the goal with the acceleration limit. With a `lead`, the error is
+than it can still stop at the goal with the acceleration limit. With joint limits, a joint
+heading for one goes no faster than its plan still comes to rest short of it: no point
+is ever past a limit (a point clipped to it while moving on is one the controller can
+only follow by going beyond and back). With a `lead`, the error is
 taken to the goal extrapolated that far ahead along its own velocity: the joints, which
 need time to change speed within the acceleration bound, start toward where the goal is
 heading instead of where it was (a short prediction; 0 = none). With `reach_fast`, the
@@ -144,29 +147,99 @@ class JointServo:
         return None if self.lower is None else (_floats(self.lower, n), _floats(self.upper, n))
 
     @staticmethod
-    def _clip(q, limits):
-        """np.minimum(np.maximum(q, lower), upper) (np.clip's values) as an array."""
+    def _inside(q, v, limits):
+        """q (and v when given) as arrays, q clipped to the limits (NaN to the lower one)
+        and the velocity of each clipped joint 0. A last resort: plans stop short of them."""
+        if limits is not None:
+            for x, lo, hi in zip(q, *limits):
+                if not lo < x < hi:
+                    break
+            else:
+                limits = None
         if limits is None:
-            return np.array(q)
-        return np.array([m if (m := x if x > lo else lo) < hi else hi
-                         for x, lo, hi in zip(q, *limits)])
+            return np.array(q) if v is None else (np.array(q), np.array(v))
+        q, v = list(q), None if v is None else list(v)
+        for j, (x, lo, hi) in enumerate(zip(q, *limits)):
+            y = m if (m := x if x > lo else lo) < hi else hi
+            if y != x:                                      # (NaN too)
+                q[j] = y
+                if v is not None:
+                    v[j] = 0.0
+        return np.array(q) if v is None else (np.array(q), np.array(v))
 
-    def _plan_points(self, now, q, v, vA, h, t1=None):
+    def _plan_points(self, now, q, v, vA, h, t1=None, limits=None, accel=None, t_stop=None):
         """Plan (q, v) at now -> vA at now + t1 (constant acceleration; t1 = h when not
-        given) -> (qA, vA) at now + h -> rest; its trajectory points. q, v, vA: lists."""
+        given) -> (qA, vA) at now + h -> rest at accel (default max_accel; t_stop: its
+        time when known); its trajectory points. q, v, vA: lists."""
         t1 = h if t1 is None or t1 > h - 1e-9 else t1
         n = len(q)
         q1 = [x + 0.5 * (u + w) * t1 for x, u, w in zip(q, v, vA)]
         qA = [y + w * (h - t1) for y, w in zip(q1, vA)]
-        t_stop = max([abs(w) / a for w, a in zip(vA, _floats(self.max_accel, n))])
+        if t_stop is None:
+            t_stop = max([abs(w) / a for w, a in zip(vA, accel or _floats(self.max_accel, n))])
         self._plan = (now, tuple(q), tuple(v), tuple(vA), max(t1, 1e-9), h, t_stop)
-        limits = self._limits(n)
-        points = [(t1, self._clip(q1, limits), np.array(vA))] if t1 < h else []
+        limits = limits or self._limits(n)
+        points = [(t1, *self._inside(q1, vA, limits))] if t1 < h else []
         if t_stop <= 1e-9:
-            return points + [(h, self._clip(qA, limits), np.zeros(n))]
+            return points + [(h, self._inside(qA, None, limits), np.zeros(n))]
         qS = [y + 0.5 * w * t_stop for y, w in zip(qA, vA)]
-        return points + [(h, self._clip(qA, limits), np.array(vA)),
-                         (h + t_stop, self._clip(qS, limits), np.zeros(n))]
+        return points + [(h, *self._inside(qA, vA, limits)),
+                         (h + t_stop, self._inside(qS, None, limits), np.zeros(n))]
+
+    def _short_of_limits(self, q, v, vA, accel, limits, h):
+        """vA (changed in place) slowed down, by at most a * h, where the plan would come
+        to rest past a joint limit; returns the plan's t_stop (None when it changed).
+        Every joint brakes over the slowest one's t_stop, to q + (v + vA) h / 2 +
+        vA t_stop / 2 (t1 = h; with reach_fast at most q + vA h + vA t_stop / 2 once
+        |vA| > |v|); slowing joints down never lengthens t_stop. A joint that cannot slow
+        down enough for it (another one sped up) has every joint brake harder, to a t_stop
+        it can take."""
+        t_stop = max([abs(w) / a for w, a in zip(vA, accel)])
+        fast = self.reach_fast
+        allow, j, same = math.inf, 0, True
+        for x, u, w, a, lo, hi in zip(q, v, vA, accel, *limits):
+            if w > 0.0:
+                room = hi - x
+            elif w < 0.0:
+                room, u, w = x - lo, -u, -w
+            else:
+                j += 1
+                continue
+            cap = (2.0 * room - u * h) / (h + t_stop)
+            if fast and cap > u:
+                cap = 2.0 * room / (2.0 * h + t_stop)
+            if w > cap:
+                slowest = u - a * h
+                if cap < slowest and slowest > 0.0:
+                    t = (2.0 * room - (u + slowest) * h) / slowest
+                    allow = t if t < allow else allow
+                    w = slowest
+                elif cap > 0.0:
+                    w = cap
+                elif u * h > 2.0 * room:
+                    # Even at rest by the horizon it would pass the limit (a plan braked
+                    # faster than over a horizon): it turns back within it, at u^2 h /
+                    # (2 (u - w)) from x.
+                    w = u - u * u * h / (2.0 * room) if room > 0.0 else slowest
+                    w = w if w > slowest else slowest
+                else:
+                    w = 0.0
+                vA[j] = w if vA[j] > 0.0 else -w
+                same = False
+            j += 1
+        if same:
+            return t_stop
+        if allow < t_stop:
+            allow = allow if allow > 0.0 else 0.0
+            j = 0
+            for u, w, a in zip(v, vA, accel):
+                top = a * allow
+                if w > top:
+                    vA[j] = top if top > u - a * h else u - a * h
+                elif w < -top:
+                    vA[j] = -top if -top < u + a * h else u + a * h
+                j += 1
+        return None
 
     def track(self, now, q_measured, goal, goal_velocity=None):
         """Trajectory points [(time_from_start, q, qd)] heading for `goal`, from now."""
@@ -174,8 +247,9 @@ class JointServo:
         n = len(q)
         ff = [0.0] * n if goal_velocity is None else _floats(goal_velocity, n)
         lead, gain, horizon = self.lead, self.gain, self.horizon
+        accel = _floats(self.max_accel, n)
         vA, j = [0.0] * n, 0
-        for g, f, x, u, a, top in zip(_floats(goal, n), ff, q, v, _floats(self.max_accel, n),
+        for g, f, x, u, a, top in zip(_floats(goal, n), ff, q, v, accel,
                                       _floats(self.max_speed, n)):
             # e = goal + ff * lead - q; correction = np.sign(e) * np.minimum(gain * |e|,
             # np.sqrt(2 a |e|)); v_des = clip(ff + correction, -max_speed, max_speed);
@@ -192,14 +266,16 @@ class JointServo:
             dv = dv if dv > -step else -step
             vA[j] = u + (dv if dv < step else step)
             j += 1
+        limits = self._limits(n)
+        t_stop = None if limits is None else self._short_of_limits(q, v, vA, accel, limits,
+                                                                   horizon)
         t1 = None
         if self.reach_fast:
             # Reach vA as soon as the acceleration bound allows (every joint together),
             # then hold it to the horizon: the velocity lags the goal's by ~t1/2 instead
             # of horizon/2. A short first segment (>= 1 ms) keeps the points apart.
-            t1 = max(max([abs(w - u) / a for w, u, a in zip(vA, v, _floats(self.max_accel, n))]),
-                     1e-3)
-        return self._plan_points(now, q, v, vA, horizon, t1)
+            t1 = max(max([abs(w - u) / a for w, u, a in zip(vA, v, accel)]), 1e-3)
+        return self._plan_points(now, q, v, vA, horizon, t1, limits, accel, t_stop)
 
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):
         """Points that bring the joints to rest as fast as the acceleration limit
@@ -209,7 +285,18 @@ class JointServo:
         n = len(q)
         accel = _floats(self.max_accel if max_accel is None else max_accel, n)
         t_stop = max([abs(u) / a for u, a in zip(v, accel)])
+        limits = self._limits(n)
         if t_stop <= 1e-9:
             self._plan = None
-            return [(min_duration, self._clip(q, self._limits(n)), np.zeros(n))]
-        return self._plan_points(now, q, v, [0.0] * n, t_stop)
+            return [(min_duration, self._inside(q, None, limits), np.zeros(n))]
+        if limits is not None:
+            # Every joint brakes over the slowest one's t_stop: one that would come to rest
+            # past a limit so stops first, at the full deceleration, and the others slow
+            # down at it meanwhile (which only shortens their way; the total time stays).
+            t1 = max([abs(u) / a for x, u, a, lo, hi in zip(q, v, accel, *limits)
+                      if not lo - x <= 0.5 * u * t_stop <= hi - x] or [0.0])
+            if t1 > 0.0:
+                vA = [u - a * t1 if u > a * t1 else u + a * t1 if u < -a * t1 else 0.0
+                      for u, a in zip(v, accel)]
+                return self._plan_points(now, q, v, vA, t1, None, limits, accel)
+        return self._plan_points(now, q, v, [0.0] * n, t_stop, None, limits)
