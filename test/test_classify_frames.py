@@ -562,3 +562,26 @@ def test_a_side_follows_one_hand_by_its_id_as_the_sender_does(kind):
             assert not by_id[7]['open'] and not by_id[7]['fist'] and not state.present
         elif frame.id > 61:
             assert by_id[7]['open'] == (frame.id >= 64)
+
+
+def test_a_keypoint_row_s_pinch_value_is_measured_from_its_landmarks(tmp_path, capsys):
+    # A row holds no pinch strength: the dataclass default 0.0 was taken as one, and every
+    # OK sign read pinch_value 0.0 ("barely pinching").
+    import numpy as np
+
+    from leap_teleop.hands.gestures import datasets as gesture_data
+    from leap_teleop.hands.gestures.pose import image_pinch_strength
+    path = os.path.join(KEYPOINTS, 'kinivi.csv')
+    _, labels, xy = gesture_data.read_keypoints(path)
+    lines = run_main(['--keypoints', path], capsys)
+    pinches = [(o['hands'][0]['pinch_value'], row) for o, row in zip(lines, xy) if o['hands'][0]['pinch']]
+    assert len(pinches) >= 100
+    values = np.array([v for v, _ in pinches])
+    assert values.min() > 0.5 and values.max() <= 0.8     # tips touching: a firm pinch
+    for value, row in pinches[:20]:
+        assert value == pytest.approx(min(max(image_pinch_strength(row) - 0.2, 0.0), 0.8), abs=1e-4)
+    # tips apart read as no strength; what cannot be measured as a pinch (as before)
+    apart = np.array(xy[0], float)
+    apart[4] = apart[0] + 5 * (apart[9] - apart[0])
+    assert image_pinch_strength(apart) == 0.0
+    assert image_pinch_strength(np.zeros((21, 2))) == 1.0

@@ -8,8 +8,9 @@ usage: python -m leap_teleop.hands.classify_frames [INPUT] [--stateless] [--out 
 --keypoints FILE.csv reads webcam hand keypoints: the community's keypoint.csv (a class
 id then 42 numbers, x0 y0 .. x20 y20, no header; the id is ignored) or the shared
 files' form with a header (person,label,source_label,x0,...,y20). Each row is one hand
-judged on its own by the keypoint model (a left hand is a mirrored right one: no side):
-one line per row, {"id": ROW, "timestamp": null, "hands": [{"type": null, "fist": ...}]}.
+judged on its own by the keypoint model (a left hand is a mirrored right one: no side;
+its pinch strength measured from the landmarks, as the camera source does): one line
+per row, {"id": ROW, "timestamp": null, "hands": [{"type": null, "fist": ...}]}.
 
 INPUT may also be camera footage, told by its file extension: a video (.mp4, .avi, .mov,
 .mkv, .webm, ...; one line per video frame, timestamps from the video's start) or
@@ -165,7 +166,8 @@ def keypoint_lines(path, classifier):
     """Output dicts of a keypoint CSV, one per row, as the rows are read."""
     rec = classifier._recognizer(True)
     for i, (_, _, _, pts) in enumerate(gesture_data.iter_keypoints(path)):
-        hand = TrackedHand(side='right', image_landmarks=pts)
+        # a row holds no pinch strength: not known (0.0 read as "barely pinching")
+        hand = TrackedHand(side='right', image_landmarks=pts, pinch_strength=math.nan)
         yield {'id': i, 'timestamp': None,
                'hands': [hand_output(None, rec.update(hand, 0.0), classifier.user_gestures)]}
 
