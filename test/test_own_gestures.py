@@ -616,8 +616,17 @@ def test_the_card_counts_the_samples_fitted_and_a_file_of_no_hand_is_refused(tmp
     opens = tmp_path / 'opens.jsonl'
     opens.write_text(''.join(json.dumps({'person': 'me', 'label': 'open', 'frame': leapjs_dict(i, 'open')})
                              + '\n' for i in range(30)))
+    # a few shared poses: a model without the built-in classes is refused
+    shared = tmp_path / 'shared' / 'leap_people'
+    shared.mkdir(parents=True)
+    with gzip.open(gti_path(), 'rt') as f, gzip.open(shared / 'gti_dev.jsonl.gz', 'wt') as out:
+        for k, line in enumerate(f):
+            if k >= 3000:
+                break
+            if k % 10 == 0:
+                out.write(line)
     model = tmp_path / 'm.npz'
-    assert train_gestures.main(['--data', str(nodata), '--add', str(mixed), '--label', 'two',
+    assert train_gestures.main(['--data', str(shared.parent), '--add', str(mixed), '--label', 'two',
                                 '--add', str(opens), '--label', 'wave', '--out', str(model),
                                 '--no-report']) == 0
     assert 'mixed.jsonl (30 hands)' in open(tmp_path / 'm.md').read()

@@ -44,3 +44,26 @@ def test_two_sessions_of_one_gesture_pass_the_check(tmp_path):
     a.write_text('{"person": "me", "label": "two", "frame": {"id": 1}}\n')
     b.write_text('{"person": "me", "label": "two", "frame": {"id": 2}}\n')
     assert train_gestures.same_recording([str(a), str(b)]) is None
+
+
+@pytest.mark.parametrize('labels', [['two'], ['two', 'gun'], ['two', 'gun', 'wave']])
+def test_no_shared_data_is_refused_whatever_the_number_of_labels(tmp_path, capsys, labels):
+    # With two labels of a user's own, the fit went on and wrote a model of their classes
+    # alone, which every consumer refuses.
+    import json
+
+    from leap_teleop.hands.frame import Frame
+    from leap_teleop.hands.rendered_hand import render_hand
+    from leap_teleop.hands.sources import leapjs
+    args = []
+    for label in labels:
+        path = tmp_path / (label + '.jsonl')
+        path.write_text(''.join(json.dumps({'person': 'me', 'label': label, 'frame': leapjs.frame_to_dict(
+            Frame(i, i / 60.0, [render_hand('right', 'two', (i, 200, 0))]))}) + '\n' for i in range(20)))
+        args += ['--add', str(path), '--label', label]
+    (tmp_path / 'empty').mkdir()
+    with pytest.raises(SystemExit) as stop:
+        train_gestures.main(['--data', str(tmp_path / 'empty')] + args
+                            + ['--out', str(tmp_path / 'm.npz'), '--no-report'])
+    assert 'is the shared data at %s?' % (tmp_path / 'empty') in str(stop.value.code)
+    assert not (tmp_path / 'm.npz').exists()

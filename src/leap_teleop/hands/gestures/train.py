@@ -30,7 +30,13 @@ import zlib
 import numpy as np
 
 from leap_teleop.hands.gestures import datasets as gd
-from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS, PoseClassifier, class_name_problem, is_model_file
+from leap_teleop.hands.gestures.classifier import (
+    BUILT_IN_CLASSES,
+    DEFAULT_MODELS,
+    PoseClassifier,
+    class_name_problem,
+    is_model_file,
+)
 from leap_teleop.hands.gestures.training_set import (
     JOINT_NOISE_MM,
     KEYPOINT_NOISE,
@@ -346,6 +352,11 @@ def train(family, data_dir, adds=(), report=True, log=print):
     if len(set(y)) < 2:
         raise SystemExit('train_gestures: fewer than two classes of %s data (is the shared '
                          'data at %s?)' % (family, data_dir))
+    missing = [c for c in BUILT_IN_CLASSES if c not in set(y.tolist())]
+    if missing:
+        # every consumer refuses a model without them (it reads every hand as a user's class)
+        raise SystemExit('train_gestures: no %s rows of the built-in classes %s (is the shared '
+                         'data at %s?)' % (family, ', '.join(missing), data_dir))
     card = {'family': family, 'fitted_on': ds.sources,
             'data_terms': data_terms(family, set(persons.tolist())),
             'people': sorted(set(persons.tolist())),
