@@ -1,8 +1,13 @@
 """The arm node's loop without ROS: callbacks wake the step at once, changes are applied
 between steps, and the status goes out on a change (logged) or at its rate."""
+import math
 import threading
 import time
 
+import numpy as np
+import pytest
+
+from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.kinematics import HOME_Q
 from leap_teleop.ur10.teleop import DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleopParams
 from leap_teleop.ur10.teleop_runner import HAND_SLACK, ArmTeleopRunner, StatusReporter
@@ -121,3 +126,26 @@ def test_a_hand_stream_near_the_rate_steps_once_per_hand():
     assert 10 <= during <= 11 + late, (during, late)
     # hands stop: the timer steps at the rate again (0.5 s: the first 150 ms, then 100)
     assert 2 <= after <= 5, after
+
+
+@pytest.mark.parametrize('command_horizon, rate', [(0.004, 125.0), (0.024, 20.0)])
+def test_commands_last_until_the_next_step_whatever_the_command_horizon(command_horizon, rate):
+    # The hand steps 40 mm (0.1 m of TCP) and holds, the loop steps at its rate. Each
+    # command gains a * horizon of speed and brakes to rest after it: shorter than the
+    # period, the arm moved 7.6 (4 ms at 125 Hz) or 41 mm (24 ms at 20 Hz) in 2 s.
+    params = ArmTeleopParams(max_joint_speed=1.0, max_joint_accel=math.pi,
+                             command_horizon=command_horizon, filter_min_cutoff_hz=0.0)
+    teleop = ArmTeleopRunner(params, rate=rate).teleop
+    now, q, start = 100.0, HOME_Q.copy(), kin.fk(HOME_Q)[:3, 3]
+    for k in range(int(2.5 * rate)):
+        now += 1.0 / rate
+        flags = {'thumb_up': True} if k < 0.4 * rate else {'rock': True} if k < 0.5 * rate else {}
+        palm = (0.0, 200.0, 0.0 if k < 0.5 * rate else -40.0)
+        teleop.on_hand(ArmInput(present=True, palm_mm=palm, stamp=now, **flags), now)
+        q = teleop._servo.state_at(now, q)[0]            # a controller following it
+        teleop.on_joints(q, now)
+        teleop.step(now)
+    assert teleop.status.state == TRACKING
+    target = np.array(teleop.status.target)
+    assert np.linalg.norm(target - start) == pytest.approx(0.1, abs=1e-6)
+    assert np.linalg.norm(kin.fk(q)[:3, 3] - target) < 0.002

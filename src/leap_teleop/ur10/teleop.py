@@ -173,7 +173,10 @@ class ArmTeleopStatus:
 
 
 class ArmTeleop:
-    def __init__(self, params=None):
+    def __init__(self, params=None, step_interval=0.0):
+        """step_interval: the longest time the loop that steps it leaves between two steps;
+        every command is planned over at least that (up to command_horizon's bound): a
+        shorter one, braked to rest before the next, moved the arm in short pulses."""
         self.p = params or ArmTeleopParams()
         self.p.validate()
         self._axes = np.asarray(self.p.axis_map, dtype=float)
@@ -192,8 +195,10 @@ class ArmTeleop:
         self._rotation_filter = OneEuroFilter(self.p.rotation_min_cutoff_hz,
                                               self.p.rotation_beta, self.p.rotation_d_cutoff_hz)
         speed = np.minimum(self.p.max_joint_speed, kin.MAX_JOINT_SPEED)
+        horizon = min(max(self.p.command_horizon, float(step_interval)),
+                      TELEOP_PARAMS['command_horizon'].le)
         self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
-                                 self.p.command_horizon, self.p.servo_gain,
+                                 horizon, self.p.servo_gain,
                                  kin.JOINT_LOWER, kin.JOINT_UPPER, self.p.servo_lead,
                                  self.p.servo_reach_fast)
         self.status = ArmTeleopStatus()
@@ -624,7 +629,7 @@ class ArmTeleop:
             self._last_reach = None
             return None, 'no IK solution within the joint limits for'
         speed = self._servo.max_speed.tolist()
-        period = min(max(dt, 1e-3), self.p.command_horizon)
+        period = min(max(dt, 1e-3), self._servo.horizon)
         q_list = q.tolist()
         if last is not None and now - last[0] <= 3.0 * period \
                 and _largest_joint_move(q_list, last[1]) >= math.pi:

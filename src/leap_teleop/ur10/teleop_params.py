@@ -80,8 +80,10 @@ TELEOP_PARAMS = {
                                      'acceleration bound allows, then holds it to the '
                                      'horizon (else: evenly over the horizon)'),
     'command_horizon': Param(0.024, 'time of each trajectory\'s first point (with its '
-                                    'velocity; the second is rest)', unit='s',
-                             ge=0.004, le=0.5),
+                                    'velocity; the second is rest); ur10_arm takes at least '
+                                    '1.5 periods of ~rate, the longest its loop waits between '
+                                    'two commands, so that each lasts until the next',
+                             unit='s', ge=0.004, le=0.5),
     'command_lead': Param(0.0, 'each trajectory starts this far after it is planned (its '
                                'header stamp): a command that reaches the controller within '
                                'it continues the last one exactly, a later one joins it '

@@ -13,8 +13,9 @@ class ArmTeleopRunner:
     """One arm's ArmTeleop, fed by on_hand / on_joints from any thread and stepped by run()."""
 
     def __init__(self, params, rate):
-        self.teleop = ArmTeleop(params)
         self.period = 1.0 / float(rate)
+        # the longest the loop waits between two steps (after a hand: HAND_SLACK periods)
+        self.teleop = ArmTeleop(params, HAND_SLACK * self.period)
         self.lock = threading.Lock()
         self.wake = threading.Event()
 
