@@ -294,6 +294,22 @@ def test_servo_stops_by_itself_when_commands_stop():
     np.testing.assert_allclose(follower.q, q2)      # (from rest: stretched in time)
 
 
+@pytest.mark.parametrize('speed', [0.05, 1e-6])
+def test_a_hold_from_motion_lasts_min_duration_too(speed):
+    # It lasted |v| / a: 16 ms at the real robot's 0.05 rad/s whatever min_duration said,
+    # nanoseconds from a nearly still arm.
+    servo = JointServo(np.full(6, speed), np.full(6, 0.5), horizon=0.024)
+    q = kin.HOME_Q.copy()
+    for k in range(200):
+        servo.track(k * 0.008, q, kin.HOME_Q + 1.0)
+    rest = servo.stop(200 * 0.008, q, 0.05, np.full(6, math.pi))[-1][1]
+    points = servo.stop(200 * 0.008, q, 1.0, np.full(6, math.pi))
+    assert points[0][0] == pytest.approx(speed / math.pi) and np.all(points[0][2] == 0.0)
+    assert points[-1][0] == 1.0 and np.all(points[-1][2] == 0.0)
+    np.testing.assert_array_equal(points[-1][1], rest)              # staying where it stopped
+    np.testing.assert_array_equal(points[-1][1], points[-2][1])
+
+
 def _points_peak_accel(q, v, points):
     """Peak |acceleration| per joint of the cubics a controller runs from (q, v) through
     the points (each cubic's acceleration is linear in time: at its ends)."""

@@ -280,7 +280,7 @@ class JointServo:
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):
         """Points that bring the joints to rest as fast as the acceleration limit
         (max_accel, default the servo's) allows: a hold where the commanded motion can
-        stop, never a jump back."""
+        stop, never a jump back; at rest there until min_duration at the least."""
         q, v = self._state(now, q_measured)
         n = len(q)
         accel = _floats(self.max_accel if max_accel is None else max_accel, n)
@@ -289,14 +289,20 @@ class JointServo:
         if t_stop <= 1e-9:
             self._plan = None
             return [(min_duration, self._inside(q, None, limits), np.zeros(n))]
+        t1 = 0.0
         if limits is not None:
             # Every joint brakes over the slowest one's t_stop: one that would come to rest
             # past a limit so stops first, at the full deceleration, and the others slow
             # down at it meanwhile (which only shortens their way; the total time stays).
             t1 = max([abs(u) / a for x, u, a, lo, hi in zip(q, v, accel, *limits)
                       if not lo - x <= 0.5 * u * t_stop <= hi - x] or [0.0])
-            if t1 > 0.0:
-                vA = [u - a * t1 if u > a * t1 else u + a * t1 if u < -a * t1 else 0.0
-                      for u, a in zip(v, accel)]
-                return self._plan_points(now, q, v, vA, t1, None, limits, accel)
-        return self._plan_points(now, q, v, [0.0] * n, t_stop, None, limits)
+        if t1 > 0.0:
+            vA = [u - a * t1 if u > a * t1 else u + a * t1 if u < -a * t1 else 0.0
+                  for u, a in zip(v, accel)]
+            points = self._plan_points(now, q, v, vA, t1, None, limits, accel)
+        else:
+            points = self._plan_points(now, q, v, [0.0] * n, t_stop, None, limits)
+        if points[-1][0] < min_duration:
+            # it lasted |v| / a: 16 ms at 0.05 rad/s, nanoseconds from a nearly still arm
+            points.append((min_duration, points[-1][1].copy(), np.zeros(n)))
+        return points

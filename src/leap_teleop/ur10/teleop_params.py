@@ -88,7 +88,9 @@ TELEOP_PARAMS = {
                                'header stamp): a command that reaches the controller within '
                                'it continues the last one exactly, a later one joins it '
                                'faster than max_joint_accel', unit='s', ge=0.0, le=0.05),
-    'min_duration': Param(0.05, 'shortest hold trajectory sent', unit='s', gt=0.0, le=5.0),
+    'min_duration': Param(0.05, 'shortest hold trajectory sent: a hold from motion comes to '
+                                'rest as fast as it can and stays there until then', unit='s',
+                          gt=0.0, le=5.0),
     # Lower bounds well above a message interval: below it every ordinary gap between
     # two frames (or joint states) is a stall, and the arm stops and starts each message.
     'input_timeout': Param(0.2, 'no hand input this long -> hold (watchdog); fresh input '
