@@ -147,6 +147,27 @@ def test_waiting_for_subscribers_waits_on_after_the_clock_jumps_back(sim_time, m
     assert said[-1][1] == 'sender: waiting for subscribers on /leapmotion/data_right'
 
 
+def test_a_shutdown_while_waiting_for_subscribers_under_sim_time_is_false_not_a_traceback(monkeypatch):
+    # Under sim time rospy.sleep raises ROSInterruptException on Ctrl-C: the sender ended
+    # with a traceback and status 1 (under wall time the loop sees is_shutdown and ends).
+    from leap_teleop.ros.graph import wait_for_subscribers
+
+    class Unheard:
+        def get_num_connections(self):
+            return 0
+
+    def interrupted(_):
+        raise rospy.ROSInterruptException('ROS shutdown request')
+    monkeypatch.setattr(rospy, 'sleep', interrupted)
+    monkeypatch.setattr(rospy, 'get_time', lambda: 1.0)
+    try:
+        stopped = wait_for_subscribers({'/leapmotion/data_right': Unheard()}, ['/leapmotion/data_right'],
+                                       'sender')
+    except rospy.ROSInterruptException as e:     # a KeyboardInterrupt: would end pytest
+        pytest.fail('raised out of the wait: %r' % e)
+    assert stopped is False
+
+
 def test_the_hand_markers_latency_text_goes_on_after_the_clock_jumps_back(sim_time, monkeypatch):
     from leap_teleop.params import check_params
     from leap_teleop.ros.graph import TopicTypeWatch

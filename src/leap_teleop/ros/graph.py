@@ -42,6 +42,8 @@ def wait_for_subscribers(own, topics, who, log_every=5.0, warn_after=30.0):
             # /clock jumped back (a simulator started again): wait on, the time waited kept
             back = now - rospy.get_time()
             start, last_log = start - back, last_log - back
+        except rospy.ROSInterruptException:     # shut down while sim time waits: no traceback
+            return False
     return False
 
 
