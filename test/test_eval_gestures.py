@@ -192,10 +192,10 @@ def test_a_wrong_photo_folder_is_refused_before_any_fitting(tmp_path, capsys, le
     from tools.evaluation import people
     monkeypatch.setattr(people, 'run', lambda *a, **k: pytest.fail('the people part ran'))
     monkeypatch.setattr(evaluate, 'evaluate', lambda *a, **k: pytest.fail('the takes ran'))
-    assert evaluate.main(['--data', leapjs_data, '--hands-data', str(tmp_path / 'nowhere'),
-                          '--out', str(tmp_path / 'e.json')]) == 2
-    assert capsys.readouterr().err.strip() == 'evaluate: no hand photos at %s (--hands-data)' % (
-        tmp_path / 'nowhere')
+    for folder in (tmp_path / 'nowhere', tmp_path):       # none, or a folder of no labelled photo
+        assert evaluate.main(['--data', leapjs_data, '--hands-data', str(folder),
+                              '--out', str(tmp_path / 'e.json')]) == 2
+        assert capsys.readouterr().err.strip() == 'evaluate: no hand photos at %s (--hands-data)' % folder
 
 
 def test_a_run_that_stops_leaves_no_earlier_results_behind(tmp_path, leapjs_data, monkeypatch):

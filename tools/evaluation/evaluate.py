@@ -337,9 +337,11 @@ def main(argv=None):
     if missing:             # a partial table would read as a result
         print('evaluate: takes missing from %s: %s' % (args.data, ', '.join(missing)), file=sys.stderr)
         return 2
-    if not args.no_photos and not os.path.isdir(args.hands_data):
-        print('evaluate: no hand photos at %s (--hands-data)' % args.hands_data, file=sys.stderr)
-        return 2
+    if not args.no_photos:
+        from tools.evaluation.photo_views import photo_names
+        if not os.path.isdir(args.hands_data) or not photo_names(args.hands_data):
+            print('evaluate: no hand photos at %s (--hands-data)' % args.hands_data, file=sys.stderr)
+            return 2
     # From here a run that stops leaves no earlier run's figures behind to read as its own.
     if os.path.exists(args.out):
         os.remove(args.out)
