@@ -123,6 +123,40 @@ def test_a_stall_or_rewind_in_the_stream_does_not_bridge_fold_and_unfold(gap, fi
     assert names.count(event) == 1
 
 
+@pytest.mark.parametrize('spacing', [0.2, 0.533, 0.667, 0.833])
+def test_a_sim_clock_running_fast_spaces_frames_without_stalling_fold_and_unfold(spacing):
+    # A 15 fps webcam under a x8 clock, 30 fps at x20, the Leap at x100: frames stamped
+    # more than 0.5 s apart, evenly; each one was taken for a stall, so the drone never
+    # landed or took off. At such spacings (and 5 fps video) the few frames the filter
+    # holds a shape over a stall made a first shape of their own.
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    opn = render_hand('right', 'open', (0, 200, 0))
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [fist] * 15 + [opn] * 15 + [fist] * 15, dt=spacing)
+             for e in s.events]
+    assert names.count('unfold') == 1 and names.count('fold') == 1
+    # ... and a stall in such a stream still ends the shapes
+    rec = GestureRecognizer()
+    names = [e.gesture for s in feed(rec, [fist] * 15, dt=spacing) for e in s.events]
+    names += [e.gesture for s in feed(rec, [opn] * 15, t0=14 * spacing + 10 * spacing, dt=spacing)
+              for e in s.events]
+    assert 'unfold' not in names
+
+
+def test_a_clock_that_speeds_up_is_followed_and_a_stall_after_it_still_counts():
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    opn = render_hand('right', 'open', (0, 200, 0))
+    rec = GestureRecognizer()
+    feed(rec, [fist] * 120)                     # real time, 120 Hz
+    names = [e.gesture for s in feed(rec, [opn] * 60 + [fist] * 15 + [opn] * 15, t0=1.0, dt=0.6)
+             for e in s.events]                 # then x72: the first frames read as stalls
+    assert [n for n in names if n in ('fold', 'unfold')] == ['fold', 'unfold']
+    t = 1.0 + 89 * 0.6
+    names = [e.gesture for s in feed(rec, [fist] * 10, t0=t + 0.6, dt=0.6) for e in s.events]
+    names += [e.gesture for s in feed(rec, [opn] * 15, t0=t + 0.6 * 9 + 30.0, dt=0.6) for e in s.events]
+    assert 'unfold' not in names
+
+
 def test_low_confidence_frames_do_not_turn_gestures_on():
     fist = render_hand('right', 'fist', (0, 200, 0), confidence=0.05)
     states = feed(GestureRecognizer(), [fist] * 20)

@@ -99,7 +99,8 @@ class GestureRecognizer:
                              tuple(sorted(n for n in active if n in self.user_gestures))
                              if self.user_gestures else (), usable)
         if not stateless:
-            state.events = filt.events(state, prev, timestamp, usable)
+            shown = None if not usable else 'fist' if raw.get('fist') else 'open' if raw.get('open') else None
+            state.events = filt.events(state, prev, timestamp, usable, shown)
             if self.circles is not None and usable and g is not None:
                 circle = self.circles.update(hand, timestamp, g, extended)
                 if circle is not None:

@@ -10,9 +10,10 @@ FOLD_CONFIRM_S (a fist or an open hand misread for a moment while a hand swipes,
 or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appears). Both
 holds count judged frames only, each with its own frame interval: frames too unsure to
 judge neither end a shape nor add to its hold, so a misread carried through them never
-completes a fold, and one such frame inside a deliberate hold does not split it. A frame
-interval longer than FOLD_GAP_S (a stalled stream) or a stamp going back ends both shapes:
-what came before it never pairs with what comes after.
+completes a fold, and one such frame inside a deliberate hold does not split it. A stalled
+stream (a frame interval longer than FOLD_GAP_S and STALL_FACTOR times the stream's usual
+one, so a sim clock running fast spaces frames wider without stalling them) or a stamp
+going back ends both shapes: what came before it never pairs with what comes after.
 """
 import math
 from dataclasses import dataclass, field
@@ -24,6 +25,7 @@ FOLD_HOLD_S = 0.3
 FOLD_GAP_S = 0.5
 FOLD_CONFIRM_S = 0.15
 FOLD_FRAME_CREDIT_S = 0.25          # the most one frame adds to a hold (5 Hz video adds 0.2)
+STALL_FACTOR = 4.0                  # a frame interval this many usual ones (and > FOLD_GAP_S): a stall
 
 
 @dataclass
@@ -76,6 +78,8 @@ class HeldFilter:
         self._shape_seen = 0.0          # ... its last judged frame
         self._judged_before = False     # the frame before this one was judged
         self._frame_t = None            # the frame before this one, judged or not
+        self._usual_dt = None           # the stream's usual frame interval (a slow average)
+        self._stale_shape = None        # the shape the filter holds over a stall, until it changes
         self._confirmed = False         # ... held FOLD_CONFIRM_S (a fold / unfold judged)
         self._last_shape = None         # the last confirmed one that ended: its hold, its end
         self._last_held = 0.0
@@ -119,9 +123,20 @@ class HeldFilter:
                 self._count[name] = 0
         return self.active
 
-    def events(self, state, prev, timestamp, judged=True):
+    def _stalled(self, dt):
+        """Whether a frame interval dt breaks the stream; learns the usual interval. A
+        stall moves the average by at most a tenth of it, so stalls stay stalls, while
+        a clock that speeds up is followed within tens of frames."""
+        usual = self._usual_dt
+        stalled = dt < 0.0 or (dt > FOLD_GAP_S and (usual is None or dt > STALL_FACTOR * usual))
+        if dt >= 0.0:
+            self._usual_dt = dt if usual is None else usual + 0.1 * (min(dt, 2.0 * usual + 1e-3) - usual)
+        return stalled
+
+    def events(self, state, prev, timestamp, judged=True, raw_shape=None):
         """Events of the change from `prev` to `state` (GestureStates) at `timestamp`;
-        judged: the frame was judged (not one whose state is only held)."""
+        judged: the frame was judged (not one whose state is only held); raw_shape: the
+        shape ('fist', 'open' or None) this frame shows before the filter."""
         events = []
         for name in HELD_GESTURES:
             now = getattr(state, name)
@@ -131,7 +146,8 @@ class HeldFilter:
         for name in set(state.user) ^ set(prev.user):
             events.append(HandEvent(name, name in state.user))
         judged_before, self._judged_before = self._judged_before, judged
-        if self._frame_t is not None and not 0.0 <= timestamp - self._frame_t <= FOLD_GAP_S:
+        stalled = self._frame_t is not None and self._stalled(timestamp - self._frame_t)
+        if stalled:
             # A stalled stream or a rewound stamp: no shape spans it (the filter still holds
             # the one before for a few frames, which would measure the gap as none).
             self._shape, self._confirmed, self._last_shape = None, False, None
@@ -143,6 +159,14 @@ class HeldFilter:
         if not judged:              # held state only: the shapes wait for a judged frame
             return events
         shape = 'fist' if state.fist else 'open' if state.open else None
+        if stalled:
+            self._stale_shape = shape
+        elif shape != self._stale_shape:
+            self._stale_shape = None
+        if shape is not None and shape == self._stale_shape and raw_shape != shape:
+            # held over the stall by the filter, not seen: no hold (at 5 fps or under a fast
+            # sim clock the filter's few frames would make a first shape of their own)
+            frame_dt = 0.0
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
                 # ... up to the frame that ends it, when that one follows a judged frame
