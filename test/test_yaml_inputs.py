@@ -71,3 +71,30 @@ def test_a_merge_key_may_still_be_overridden(tmp_path):
     path.write_text('base: &b {stop: fist, gripper: pinch}\narm:\n  <<: *b\n  stop: [fist, open]\n')
     from leap_teleop.yaml_file import load_yaml_file
     assert load_yaml_file(str(path), 'x')['arm'] == {'stop': ['fist', 'open'], 'gripper': 'pinch'}
+
+
+@pytest.mark.parametrize('text, want', [
+    # a merge source that overrides a merged key itself, used by a mapping read first
+    ('a: &a {x: 1, y: 2}\ndefs:\n  b: &b\n    <<: *a\n    x: 5\nuse:\n  <<: *b\n',
+     {'a': {'x': 1, 'y': 2}, 'defs': {'b': {'x': 5, 'y': 2}}, 'use': {'x': 5, 'y': 2}}),
+    ('common: &c\n  stop: fist\n  gripper: pinch\nprofiles:\n  careful: &k\n    <<: *c\n    stop: [fist, open]\n'
+     'arm:\n  <<: *k\n  arm: rock\n',
+     {'common': {'stop': 'fist', 'gripper': 'pinch'},
+      'profiles': {'careful': {'stop': ['fist', 'open'], 'gripper': 'pinch'}},
+      'arm': {'stop': ['fist', 'open'], 'gripper': 'pinch', 'arm': 'rock'}}),
+])
+def test_a_merge_override_reads_as_pyyaml_reads_it_wherever_its_source_sits(tmp_path, text, want):
+    # The duplicate check ran on a source PyYAML had already rewritten with its merged keys,
+    # and refused a key the file gives once.
+    from leap_teleop.yaml_file import load_yaml_file
+    path = tmp_path / 'mine.yaml'
+    path.write_text(text)
+    assert load_yaml_file(str(path), 'x') == want
+
+
+def test_a_key_given_twice_inside_a_merge_source_is_still_refused(tmp_path):
+    from leap_teleop.yaml_file import YamlFileError, load_yaml_file
+    path = tmp_path / 'mine.yaml'
+    path.write_text('a: &a {x: 1, x: 2}\nb: {<<: *a}\n')
+    with pytest.raises(YamlFileError, match="'x' given twice"):
+        load_yaml_file(str(path), 'x')

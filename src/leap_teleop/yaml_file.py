@@ -19,8 +19,12 @@ class _UniqueKeyLoader(yaml.SafeLoader):
     """safe_load's loader, refusing a key given twice in one mapping (a merge key `<<`
     may still be overridden: that is what it is for)."""
 
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
+    def flatten_mapping(self, node):
+        # Each mapping's own keys, once, before flattening writes the merged ones into it
+        # (a merge source is flattened when first used, which may be before its own turn).
+        checked = self.__dict__.setdefault('_checked', set())
+        if id(node) not in checked:
+            checked.add(id(node))
             seen = {}
             for key_node, _ in node.value:
                 if key_node.tag == 'tag:yaml.org,2002:merge':
@@ -32,7 +36,7 @@ class _UniqueKeyLoader(yaml.SafeLoader):
                     continue
                 if first is not key_node.start_mark:
                     raise _DuplicateKey(key, first, key_node.start_mark)
-        return super().construct_mapping(node, deep)
+        super().flatten_mapping(node)
 
 
 def load_yaml_file(path, what):
