@@ -315,6 +315,7 @@ def _model_arrays():
     ('a compression zipfile does not read', 'cannot read a pose model (That compression method'),
     ('compressed data damaged', 'cannot read a pose model ('),
     ('a password-protected member', 'cannot read a pose model ('),
+    ('LZMA data damaged (a model re-zipped by hand)', 'cannot read a pose model ('),
 ])
 def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, message):
     import numpy as np
@@ -356,6 +357,16 @@ def test_a_bad_model_file_is_one_clear_error_before_any_frame(tmp_path, spoil, m
         elif spoil == 'a password-protected member':
             data[central + 8] |= 1                      # its flags: encrypted
         bad.write_bytes(bytes(data))
+        if 'LZMA' in spoil:
+            import zipfile
+            with zipfile.ZipFile(bad) as z:
+                members = {n: z.read(n) for n in z.namelist()}
+            with zipfile.ZipFile(bad, 'w', zipfile.ZIP_LZMA) as z:
+                for n, data in members.items():
+                    z.writestr(n, data)
+            data = bytearray(bad.read_bytes())
+            data[400] ^= 0x55
+            bad.write_bytes(bytes(data))
         if 'header' in spoil:
             import io
             import zipfile

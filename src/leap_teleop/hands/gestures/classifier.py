@@ -7,6 +7,7 @@ The model file is a .npz of arrays (loaded with allow_pickle=False): `classes` (
 (a JSON string: what it was fitted on and how it scored on people it never saw).
 """
 import json
+import lzma
 import math
 import os
 import re
@@ -156,10 +157,12 @@ class PoseClassifier:
                 model = cls(np.atleast_1d(z['classes']).tolist(), str(z['family']), z['mean'],
                             z['scale'], z['w0'], z['b0'], z['w1'], z['b1'], card)
         # a card of deeply nested JSON raises RecursionError; arrays too big to hold,
-        # MemoryError; a damaged zip, zlib.error (bad deflate data), NotImplementedError (a
-        # compression zipfile cannot read) or RuntimeError (a password-protected member)
+        # MemoryError; a damaged zip, zlib.error or lzma.LZMAError (bad deflate or LZMA data),
+        # NotImplementedError (a compression zipfile cannot read) or RuntimeError (a
+        # password-protected member)
         except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile,
-                RecursionError, MemoryError, NotImplementedError, RuntimeError, zlib.error) as e:
+                RecursionError, MemoryError, NotImplementedError, RuntimeError, zlib.error,
+                lzma.LZMAError) as e:
             if isinstance(e, ModelError):
                 if str(e).startswith(str(path)):
                     raise
