@@ -418,7 +418,7 @@ def test_train_gestures_names_a_malformed_file(tmp_path, capsys):
     (['--out', '{tmp}'], '--out {tmp}: a folder'),
     (['--family', 'keypoints', '--out', '{tmp}/m.npz'],
      '--family keypoints: the --add files are Leap poses'),
-    (['--family', 'all'], '--family all: the --add files are Leap poses'),
+    (['--family', 'all', '--out', '{tmp}/m.npz'], '--family all: the --add files are Leap poses'),
     # an empty --out once meant "the shipped model", refitted over without a word
     (['--out', ''], "--out '': name the model file"),
     (['--out', '{tmp}/m.md'], "--out {tmp}/m.md: a model file ends in .npz"),

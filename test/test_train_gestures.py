@@ -67,3 +67,14 @@ def test_no_shared_data_is_refused_whatever_the_number_of_labels(tmp_path, capsy
                             + ['--out', str(tmp_path / 'm.npz'), '--no-report'])
     assert 'is the shared data at %s?' % (tmp_path / 'empty') in str(stop.value.code)
     assert not (tmp_path / 'm.npz').exists()
+
+
+def test_your_own_samples_need_an_out_of_your_own(tmp_path, capsys, monkeypatch):
+    # Without --out a retrain with --add rewrote the shipped model the sender loads.
+    monkeypatch.setattr(train_gestures, 'train', lambda *a, **k: pytest.fail('fitted'))
+    samples = tmp_path / 'two.jsonl'
+    samples.write_text('{"person": "me", "label": "two", "frame": {"id": 1}}\n')
+    with pytest.raises(SystemExit) as stop:
+        train_gestures.main(['--add', str(samples), '--label', 'two', '--no-report'])
+    assert stop.value.code == 2
+    assert '--add needs --out MODEL' in capsys.readouterr().err

@@ -414,13 +414,17 @@ def main(argv=None):
                     help="a user's samples (repeatable, each followed by --label)")
     ap.add_argument('--label', action='append', default=[], metavar='NAME',
                     help='the class of the preceding --add file')
-    ap.add_argument('--out', default=None, help='model file (default: the shipped one)')
+    ap.add_argument('--out', default=None,
+                    help='model file (default, without --add only: the shipped one)')
     ap.add_argument('--no-report', action='store_true', help='skip leave-one-person-out')
     if argv is None:
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
     if len(args.add) != len(args.label):
         ap.error('every --add FILE needs its --label NAME')
+    if args.add and args.out is None:
+        # a model with a user's samples is theirs: it must not replace the shipped one in place
+        ap.error('--add needs --out MODEL (a file of your own; the shipped model stays as it is)')
     for path in args.add:
         if not os.path.isfile(path):
             ap.error('--add %s: %s' % (path, 'a folder: name a file' if os.path.isdir(path)
