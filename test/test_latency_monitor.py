@@ -253,3 +253,27 @@ def test_a_master_that_does_not_answer_is_given_up_after_the_timeout(monkeypatch
         assert time.monotonic() - start < 5.0
     assert capsys.readouterr().err.startswith('latency_monitor: no ROS master at %s' % uri)
     assert socket.getdefaulttimeout() is None     # the check's timeout is not left behind
+
+
+def test_a_master_that_comes_up_within_the_timeout_is_waited_for(monkeypatch):
+    # Started beside a roslaunch, the monitor gave up in 0.7 s on a master that came up
+    # in 3, though --timeout promises to wait for it.
+    import rospy
+
+    import leap_teleop.ros.latency_monitor as lm
+    asked = []
+
+    def master_problem(timeout):
+        asked.append(time.monotonic())
+        return 'http://x:1', ('Connection refused' if len(asked) < 3 else None)
+
+    class Reached(Exception):
+        pass
+
+    def init_node(*_a, **_k):
+        raise Reached()
+    monkeypatch.setattr(lm, 'master_problem', master_problem)
+    monkeypatch.setattr(rospy, 'init_node', init_node)
+    with pytest.raises(Reached):
+        lm.main(['--once', '--timeout', '10'])
+    assert len(asked) == 3 and asked[-1] - asked[0] < 5.0
