@@ -217,3 +217,12 @@ def test_links_between_the_pages_reach_a_file_and_heading():
                     headings = re.findall(r'^#+ (.+)$', re.sub(r'```.*?```', '', f.read(),
                                                                   flags=re.S), re.M)
                 assert fragment in {anchor(h) for h in headings}, (path, target)
+
+
+def test_the_troubleshooting_quotes_the_lines_a_missing_sdk_prints():
+    # It quoted a line a missing SDK never prints, so a search for the printed one failed.
+    from leap_teleop.hands.sources import leap_sdk, leapc
+    readme = open(os.path.join(ROOT, 'README.md')).read()
+    for hint in (leap_sdk.INSTALL_HINT, leapc.INSTALL_HINT):
+        quoted = hint.split(' (import')[0]
+        assert ' '.join(quoted.split()) in ' '.join(readme.split()), quoted
