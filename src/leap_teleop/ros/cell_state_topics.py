@@ -1,6 +1,9 @@
 """The simulated UR10 cell's state, each tick it is due: every arm's joint_states (in the
-arm's namespace), the cubes on ~object_poses and /clock in sim time; and the watches on
-its command topics' types."""
+arm's namespace), the cubes on ~object_poses and /clock in sim time; the watches on its
+command topics' types; and the watch for a second /clock (both simulators use it)."""
+import threading
+
+import rosgraph
 import rospy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -24,6 +27,47 @@ def command_type_watch(config, log):
     return watch
 
 
+class ClockRivalWatch:
+    """Logs one error per other node that publishes /clock beside a simulator that is the
+    clock under /use_sim_time (a bag played with --clock, another simulator): ROS time then
+    jumps between the two and nothing that waits on it moves, with no other word of the
+    cause. Asks the master every `period` wall s on a thread of its own: the lookup blocks,
+    and it must never hold the physics loop."""
+
+    def __init__(self, who, period=2.0, start=True):
+        self.who, self.period = who, period
+        self.reported = set()
+        self._stop = threading.Event()
+        self.thread = None
+        if start:
+            self.thread = threading.Thread(target=self._run, name='clock_rival_watch', daemon=True)
+            self.thread.start()
+
+    def check(self):
+        """The other /clock publishers not reported before (each is logged once)."""
+        me = rospy.get_name()
+        try:
+            published = rosgraph.Master(me).getSystemState()[0]
+        except Exception:       # the master gone or busy: ask again next period
+            return []
+        new = sorted({n for topic, nodes in published if topic == '/clock'
+                      for n in nodes if n != me} - self.reported)
+        if new:
+            self.reported.update(new)
+            rospy.logerr('%s: %s also publish%s /clock: under /use_sim_time this simulator is the '
+                         'clock, so ROS time jumps between the two and the robots do not move; run '
+                         'the other without a clock (replay.launch: leave use_sim_time false)',
+                         self.who, ', '.join(new), 'es' if len(new) == 1 else '')
+        return new
+
+    def _run(self):
+        while not self._stop.wait(self.period) and not rospy.is_shutdown():
+            self.check()
+
+    def stop(self):
+        self._stop.set()
+
+
 class CellStateTopics:
     """The publishers of a CellTick for `config`'s arms (joint_states queued
     `joint_states_queue_size` per subscriber)."""
@@ -31,6 +75,7 @@ class CellStateTopics:
     def __init__(self, config, joint_states_queue_size, use_sim_time):
         self.config, self.use_sim_time = config, use_sim_time
         self.clock = rospy.Publisher('/clock', Clock, queue_size=10) if use_sim_time else None
+        self.clock_watch = ClockRivalWatch('ur10_sim') if use_sim_time else None
         self.joint_states = {a.name: rospy.Publisher(a.name + '/joint_states', JointState,
                                                      queue_size=joint_states_queue_size)
                              for a in config.arms}

@@ -1,7 +1,8 @@
 """The simulated drone's state on the ardrone_autonomy driver's topics, every loop tick:
 ardrone/navdata, mag, navdata_altitude (with ~enable_navdata_altitude), imu and odometry,
-TF odom -> base (and the static camera frames), /clock in sim time; and two extras: the
-flown path (ardrone/path, bounded) and the latched drone body of markers."""
+TF odom -> base (and the static camera frames), /clock in sim time (watched for a second
+publisher); and two extras: the flown path (ardrone/path, bounded) and the latched drone
+body of markers."""
 import rospy
 import tf2_ros
 from geometry_msgs.msg import Vector3Stamped
@@ -12,6 +13,7 @@ from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim_runner import static_frames
 from leap_teleop.msg import Navdata, navdata_altitude
+from leap_teleop.ros.cell_state_topics import ClockRivalWatch
 from leap_teleop.ros.drone_conversions import DroneMessages
 from leap_teleop.ros.markers import PathTrail, drone_markers
 from leap_teleop.ros.sensor_conversions import transform_msg
@@ -31,6 +33,7 @@ class DroneStateTopics:
         self.pubs = {name: pub('ardrone/' + name, kind, queue_size=25) for name, kind in
                      STATE_TOPICS if name != 'navdata_altitude' or p['enable_navdata_altitude']}
         self.clock = pub('/clock', Clock, queue_size=10) if use_sim_time else None
+        self.clock_watch = ClockRivalWatch('ardrone_sim') if use_sim_time else None
         self.tf = tf2_ros.TransformBroadcaster()
         self.static_tf = tf2_ros.StaticTransformBroadcaster()
         self.static_tf.sendTransform([transform_msg(*f, stamp=rospy.Time.now()) for f in
