@@ -149,3 +149,29 @@ def test_commands_last_until_the_next_step_whatever_the_command_horizon(command_
     target = np.array(teleop.status.target)
     assert np.linalg.norm(target - start) == pytest.approx(0.1, abs=1e-6)
     assert np.linalg.norm(kin.fk(q)[:3, 3] - target) < 0.002
+
+
+@pytest.mark.parametrize('rate', [10.0, 20.0])
+def test_a_slow_loop_woken_by_a_fast_hand_plans_over_the_steps_it_takes(rate):
+    # A 120 Hz hand wakes a step every 8 ms: every command planned over 1.5 periods of a
+    # slow ~rate (150 ms at 10 Hz) ramped the velocity over that long, and a 100 mm step
+    # overshot by 11 mm, crossing the target four times (1.2 mm at ~rate 125 Hz).
+    def overshoot(loop_rate):
+        params = ArmTeleopParams(max_joint_speed=1.0, max_joint_accel=math.pi, filter_min_cutoff_hz=0.0)
+        teleop = ArmTeleopRunner(params, rate=loop_rate).teleop
+        now, q, start = 100.0, HOME_Q.copy(), kin.fk(HOME_Q)[:3, 3]
+        reach = []
+        for k in range(360):                    # 3 s of hand frames at 120 Hz, a step after each
+            now += 1.0 / 120.0
+            flags = {'thumb_up': True} if k < 48 else {'rock': True} if k < 60 else {}
+            palm = (0.0, 200.0, 0.0 if k < 60 else -40.0)
+            teleop.on_hand(ArmInput(present=True, palm_mm=palm, stamp=now, **flags), now)
+            q = teleop._servo.state_at(now, q)[0]
+            teleop.on_joints(q, now)
+            teleop.step(now)
+            if k >= 60:
+                target = np.array(teleop.status.target)
+                direction = (target - start) / np.linalg.norm(target - start)
+                reach.append(float(np.dot(kin.fk(q)[:3, 3] - start, direction)))
+        return max(reach) - 0.1
+    assert overshoot(rate) <= overshoot(125.0) + 1e-4

@@ -24,6 +24,7 @@ origin (the hand's input never stopped), caught up within the servo's limits; a 
 loss or the clock jumping back (a simulator restart) disarms without commanding the old
 pose. Every state change says why.
 """
+import collections
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -73,6 +74,9 @@ LOWER_ACCEL_STOP_S = 0.1
 LOWER_ACCEL_RAMP_S = 1.0
 # The servo's commanded state this many periods of travel behind the goal: it lags.
 SERVO_LAG_PERIODS = 3.0
+# The step intervals a command's horizon follows: the loop's own period and a hand's wake-ups
+# alternate within it.
+STEP_WINDOW_S = 0.25
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -174,9 +178,11 @@ class ArmTeleopStatus:
 
 class ArmTeleop:
     def __init__(self, params=None, step_interval=0.0):
-        """step_interval: the longest time the loop that steps it leaves between two steps;
-        every command is planned over at least that (up to command_horizon's bound): a
-        shorter one, braked to rest before the next, moved the arm in short pulses."""
+        """step_interval: the longest time the loop that steps it leaves between two steps.
+        Every command is planned over at least 1.5 times the longest step interval of the
+        last STEP_WINDOW_S, up to that (and command_horizon's bound): a shorter horizon,
+        braked to rest before the next command, moved the arm in short pulses, while a
+        longer one than the steps need (a slow loop woken by a fast hand) overshoots."""
         self.p = params or ArmTeleopParams()
         self.p.validate()
         self._axes = np.asarray(self.p.axis_map, dtype=float)
@@ -195,10 +201,11 @@ class ArmTeleop:
         self._rotation_filter = OneEuroFilter(self.p.rotation_min_cutoff_hz,
                                               self.p.rotation_beta, self.p.rotation_d_cutoff_hz)
         speed = np.minimum(self.p.max_joint_speed, kin.MAX_JOINT_SPEED)
-        horizon = min(max(self.p.command_horizon, float(step_interval)),
-                      TELEOP_PARAMS['command_horizon'].le)
+        self._longest_horizon = min(max(self.p.command_horizon, float(step_interval)),
+                                    TELEOP_PARAMS['command_horizon'].le)
+        self._step_intervals = collections.deque()     # (when, interval) of the recent steps
         self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
-                                 horizon, self.p.servo_gain,
+                                 self.p.command_horizon, self.p.servo_gain,
                                  kin.JOINT_LOWER, kin.JOINT_UPPER, self.p.servo_lead,
                                  self.p.servo_reach_fast)
         self.status = ArmTeleopStatus()
@@ -456,10 +463,22 @@ class ArmTeleop:
                       % (self.p.joint_timeout, self.p.joint_loss_after))
         return ArmCommand()
 
+    def _step_horizon(self, now, dt):
+        """The servo's horizon for this step: 1.5 times the longest step interval of the
+        last STEP_WINDOW_S, between command_horizon and the longest the loop allows."""
+        recent = self._step_intervals
+        recent.append((now, dt))
+        while recent[0][0] < now - STEP_WINDOW_S:
+            recent.popleft()
+        longest = max(d for _, d in recent)
+        return min(max(self.p.command_horizon, 1.5 * longest), self._longest_horizon)
+
     def _step(self, now):
         jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
         self._last_step = now
+        if self._longest_horizon > self.p.command_horizon:
+            self._servo.horizon = self._step_horizon(now, dt)
         if jumped_back:
             return self._lose_robot('the clock jumped back (simulation restarted?)')
         if self._joints_rx is not None and now - self._joints_rx > self.p.joint_timeout:

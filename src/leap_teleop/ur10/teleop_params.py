@@ -81,8 +81,9 @@ TELEOP_PARAMS = {
                                      'horizon (else: evenly over the horizon)'),
     'command_horizon': Param(0.024, 'time of each trajectory\'s first point (with its '
                                     'velocity; the second is rest); ur10_arm takes at least '
-                                    '1.5 periods of ~rate, the longest its loop waits between '
-                                    'two commands, so that each lasts until the next',
+                                    '1.5 times its longest step interval of the last 0.25 s '
+                                    '(at most 1.5 periods of ~rate), so that each command '
+                                    'lasts until the next',
                              unit='s', ge=0.004, le=0.5),
     'command_lead': Param(0.0, 'each trajectory starts this far after it is planned (its '
                                'header stamp): a command that reaches the controller within '
