@@ -86,11 +86,11 @@ def run_launches(tmp_path, launches, check_args, timeout, others=(), env=None,
 CASES = [
     ('ur10_single', [['ur10_single.launch']],
      ['--cube', 'ur10_1:cube_red'], 120),
-    # The left hand drives the arm: its leapcobotleft reaches the arm, which arms on the
-    # thumbs-up (the dual session's left hand; the cube is the other cell's). The check
-    # must not subscribe to the hand topic: the sender would take it for the arm.
-    ('ur10_single_hand_left', [['ur10_single.launch', 'hand:=left',
-                                'script:=' + os.path.join(GESTURES, 'ur10_pick_place_dual.yaml')]],
+    # The left hand drives the arm, as README shows it (no script: the launch picks
+    # ur10_pick_place_dual.yaml, whose left hand there is; its cube is the other cell's): its
+    # leapcobotleft reaches the arm, which arms on the thumbs-up. The check must not
+    # subscribe to the hand topic: the sender would take it for the arm.
+    ('ur10_single_hand_left', [['ur10_single.launch', 'hand:=left']],
      ['--armed', 'ur10_1'], 90),
     # ur10_dual.launch with its defaults is the demo's arm half: test_demo.py runs it (and
     # test_the_demo_runs_ur10_dual_launch_with_its_defaults keeps it so).
@@ -226,6 +226,25 @@ def test_documented_arg_values_parse(launch, args, nodes):
                 verbose=False)
     names = {rosgraph.names.ns_join(n.namespace, n.name) for n in config.nodes}
     assert nodes <= names, sorted(names)
+
+
+@pytest.mark.parametrize('hand', ['right', 'left'])
+def test_ur10_single_plays_a_script_with_the_hand_it_drives(hand):
+    # With hand:=left it played the one-arm session, which has only a right hand: the
+    # sender published no left hand and the arm never armed.
+    import roslaunch.config
+    import roslaunch.xmlloader
+
+    from leap_teleop.hands.sources.scripted import GestureScript
+    config = roslaunch.config.ROSLaunchConfig()
+    loader = roslaunch.xmlloader.XmlLoader(resolve_anon=False)
+    loader.ignore_unset_args = False
+    loader.load(os.path.join(ROOT, 'launch', 'ur10_single.launch'), config,
+                argv=['roslaunch', 'hand:=' + hand], verbose=False)
+    params = {k: v.value for k, v in config.params.items()}
+    assert params['/leap_sender/sides'] == [hand]
+    script = GestureScript.load(params['/leap_sender/script'])
+    assert script.has_hand(hand), script.name
 
 
 @pytest.fixture(scope='module')

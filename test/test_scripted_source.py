@@ -212,3 +212,26 @@ def test_shipped_scripts_load():
     assert scripts
     for path in scripts:
         assert GestureScript.load(path).duration > 1.0, path
+
+
+def test_a_side_to_publish_without_a_hand_in_the_script_is_one_warning(caplog):
+    # ur10_single.launch hand:=left once played a script with only a right hand: the sender
+    # published no left hand for 20 s and the arm waited for a thumbs-up, with no word why.
+    script = GestureScript({'hands': {'right': [{'pose': 'fist', 'duration': 0.1}],
+                                      'left': [{'pose': 'absent', 'duration': 0.1}]}},
+                           name='one_hand.yaml')
+    with caplog.at_level('WARNING', logger='leap_teleop.hands.sources.scripted'):
+        source = ScriptedSource(script, realtime=False, sides=['left'])
+        list(source.frames())
+    (line,) = [r.getMessage() for r in caplog.records]
+    assert line.startswith('scripted source: one_hand.yaml has no left hand')
+    assert 'sides: left' in line
+
+
+def test_sides_the_script_has_or_none_given_are_no_warning(caplog):
+    with caplog.at_level('WARNING', logger='leap_teleop.hands.sources.scripted'):
+        ScriptedSource(GestureScript(SCRIPT), realtime=False, sides=['right', 'left'])
+        ScriptedSource(GestureScript({'hands': {'right': []}}), realtime=False)
+    assert caplog.records == []
+    assert GestureScript(SCRIPT).has_hand('left')
+    assert not GestureScript({'hands': {'right': []}}).has_hand('right')

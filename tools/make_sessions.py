@@ -111,10 +111,10 @@ USED_BY = {
         '#   test/test_replay_remap.py, test/test_two_hosts.py, test/ur10_teleop_single.test,\n'
         '#   tools/bench/bench_arm_motion.py, tools/make_sessions.py'),
     'ur10_pick_place_dual.yaml': (
-        'launch/demo.launch, launch/ur10_dual.launch, test/test_arm_closed_loop.py,\n'
-        '#   test/test_bag_tools.py, test/test_launch_smoke.py, test/test_readme_commands.py,\n'
-        '#   test/test_record_replay.py, test/ur10_teleop_dual.test, tools/demo.py,\n'
-        '#   tools/make_sessions.py, tools/soak.py'),
+        'launch/demo.launch, launch/ur10_dual.launch, launch/ur10_single.launch,\n'
+        '#   test/test_arm_closed_loop.py, test/test_bag_tools.py, test/test_launch_smoke.py,\n'
+        '#   test/test_readme_commands.py, test/test_record_replay.py, test/ur10_teleop_dual.test,\n'
+        '#   tools/demo.py, tools/make_sessions.py, tools/soak.py'),
     'ur10_pick_place_rotated.yaml': (
         'test/test_arm_closed_loop.py, test/ur10_teleop_rotated.test, tools/make_sessions.py,\n'
         '#   tools/rotated_task.py'),

@@ -26,6 +26,7 @@ SEAM_MAX_MM, or its palm normal or direction by over SEAM_MAX_DEG) plays one fra
 hands between passes, so that each pass is a new session for the trackers. A script that
 ends where it starts loops with its hands kept.
 """
+import logging
 import math
 import time
 
@@ -35,6 +36,8 @@ from leap_teleop.hands.frame import SIDES, Frame
 from leap_teleop.hands.rendered_hand import POSES, render_hand, rpy_to_basis
 from leap_teleop.hands.sources.source import HandSource, SourceError
 from leap_teleop.yaml_file import YamlFileError, load_yaml_file
+
+log = logging.getLogger(__name__)
 
 DEFAULT_PALM = (0.0, 200.0, 0.0)
 # Frames a second a script may ask for: the sender's ~rate bound, and a rate the renderer
@@ -180,6 +183,10 @@ class GestureScript:
         self._last_basis[side] = (key, basis)
         return basis
 
+    def has_hand(self, side):
+        """Whether `side`'s hand shows at some time of the script."""
+        return any(seg.pose != 'absent' for seg in self.segments.get(side, ()))
+
     def hand_at(self, side, t):
         """The Hand of `side` at script time t (s), or None when absent."""
         for seg in self.segments.get(side, ()):
@@ -201,13 +208,21 @@ class GestureScript:
 
 
 class ScriptedSource(HandSource):
-    """Renders a GestureScript at rate_hz, paced in real time unless realtime=False."""
+    """Renders a GestureScript at rate_hz, paced in real time unless realtime=False.
+    `sides`: the sides its reader publishes (None: not known); one warning names those
+    the script has no hand of, which would publish nothing, with no other word."""
 
     def __init__(self, script, rate_hz=None, realtime=True, loop=False, noise_mm=None,
-                 seed=None, clock=time.time):
+                 seed=None, clock=time.time, sides=None):
         if not isinstance(script, GestureScript):
             script = GestureScript.load(script)
         self.script = script
+        missing = [side for side in sides or () if not script.has_hand(side)]
+        if missing:
+            log.warning('scripted source: %s has no %s hand, so no %s hand is published '
+                        '(sides: %s); give it a "%s:" list of segments or pick a script '
+                        'that has one', script.name, ' or '.join(missing), ' or '.join(missing),
+                        ', '.join(sides), missing[0])
         self.rate_hz = float(rate_hz or script.rate_hz)
         if not (0 < self.rate_hz <= MAX_RATE_HZ):
             raise SourceError('rate_hz must be in (0, %g], got %r' % (MAX_RATE_HZ, rate_hz))
