@@ -919,3 +919,56 @@ def test_the_worker_runs_until_stopped_and_paces_twists_at_the_rate():
     assert sent[2][0] - sent[1][0] >= 1 / 20.0 - 0.005        # the second twist waited its slot
     # Stopped while flying backwards: the last word is a hover (the driver holds the last).
     assert sent[2][2][0] < -0.5 and sent[3][2] == (0.0,) * 6, sent
+
+
+# -- what a normal session logs -----------------------------------------------------------
+def run_ticks(pilot, t0, t1, navdata=None, hands=False, dt=0.02):
+    """Watchdog ticks from t0 to t1; navdata (state, altitude mm) and a centred hand at
+    each tick when given."""
+    for i in range(int(round((t1 - t0) / dt))):
+        t = t0 + i * dt
+        if navdata is not None:
+            pilot.on_navdata(*navdata, t)
+        if hands:
+            pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), stamp=t), t)
+        pilot.watchdog(t)
+        drain(pilot)
+
+
+def test_a_normal_start_and_end_on_the_ground_say_nothing():
+    # Every start warned 'no navdata yet: drone state unknown, hovering' and 'navdata
+    # arrived after 0.11 s', and the end of a session 'no Hand message for 0.15 s:
+    # hovering', all while the drone sat landed.
+    warned = []
+    pilot = DronePilot(PilotParams(), warn=lambda key, text: warned.append(text))
+    run_ticks(pilot, 0.0, 0.12)                               # the driver not up yet
+    run_ticks(pilot, 0.12, 2.0, navdata=(2, 0), hands=True)   # a session on the ground
+    run_ticks(pilot, 2.0, 3.0, navdata=(2, 0))                # the hands stop
+    assert warned == []
+
+
+def test_navdata_late_past_its_timeout_at_start_is_one_warning_and_its_arrival_another():
+    warned = []
+    cfg = PilotParams()
+    pilot = DronePilot(cfg, warn=lambda key, text: warned.append(text))
+    run_ticks(pilot, 0.0, cfg.navdata_timeout + 0.1)
+    assert warned == ['no navdata yet: drone state unknown, hovering']
+    run_ticks(pilot, 1.0, 1.1, navdata=(2, 0))
+    assert warned[1:] == ['navdata arrived after 1.00 s']
+
+
+def test_losses_in_flight_still_say_hovering_and_navdata_lost_on_the_ground_says_landed():
+    warned = []
+    pilot = airborne(PilotParams())
+    pilot._warn = lambda key, text: warned.append(text)
+    run_ticks(pilot, 0.0, 1.0, navdata=(3, 1000), hands=True)
+    run_ticks(pilot, 1.0, 1.3, navdata=(3, 1000))
+    assert [w for w in warned if w.startswith('no Hand message')] == [
+        'no Hand message for 0.16 s: hovering']
+    run_ticks(pilot, 1.3, 2.0)
+    assert warned[-1] == 'no navdata for 0.52 s: drone state unknown, hovering'
+    warned.clear()
+    landed = DronePilot(PilotParams(), warn=lambda key, text: warned.append(text))
+    run_ticks(landed, 0.0, 1.0, navdata=(2, 0))
+    run_ticks(landed, 1.0, 1.6)
+    assert warned == ['no navdata for 0.52 s: drone state unknown, last seen landed']

@@ -289,6 +289,7 @@ class DronePilot:
         self._altitudes = collections.deque()   # (time, m) of the last NAVDATA_SINK_S
         self.last_navdata_time = None
         self.navdata_lost_since = None   # set while navdata is stale (watchdog)
+        self._navdata_lost_said = False  # and whether that was warned about
         self._landed_for_navdata = False
         self._last_hover = None          # when the navdata watchdog last sent a hover
         self.last_hand_time = None
@@ -328,10 +329,11 @@ class DronePilot:
                 alts.popleft()
             first = self.last_navdata_time is None
             self.last_navdata_time = now
-            if self.navdata_lost_since is not None:
+            if self.navdata_lost_since is not None and self._navdata_lost_said:
                 self._warn('navdata_back', 'navdata %s after %.2f s' % (
                     'arrived' if first else 'back', now - self.navdata_lost_since))
             self.navdata_lost_since = None
+            self._navdata_lost_said = False
             self._landed_for_navdata = False
             # Only navdata that shows the drone off the ground confirms a takeoff: one made
             # before the driver acted on it still says landed. A takeoff the firmware
@@ -627,8 +629,11 @@ class DronePilot:
                 self._stopped_at = now
             if (self.hand_present and self.last_hand_time is not None
                     and now - self.last_hand_time > self.cfg.hand_timeout):
-                self._warn('stale', 'no Hand message for %.2f s: hovering'
-                           % (now - self.last_hand_time))
+                # On the ground a stream that ends (a script, a take) is the normal end of
+                # a session: nothing hovers, nothing to say.
+                if not self._known_landed():
+                    self._warn('stale', 'no Hand message for %.2f s: hovering'
+                               % (now - self.last_hand_time))
                 self._lose(self.last_hand_time + self.cfg.hand_timeout)
             self._disengage_after_loss(now)
             self._navdata_watchdog(now)
@@ -678,7 +683,13 @@ class DronePilot:
         if self.navdata_lost_since is None:
             self.navdata_lost_since = now
             self._last_hover = None
-            self._warn('navdata', '%s: drone state unknown, hovering' % self._no_navdata(now))
+        # At start-up the driver's first navdata comes a moment after the pilot's first
+        # tick: said only once it is navdata_timeout late, as a lost stream is.
+        if not self._navdata_lost_said and (self.last_navdata_time is not None or
+                                            now - self.navdata_lost_since >= self.cfg.navdata_timeout):
+            self._navdata_lost_said = True
+            self._warn('navdata', '%s: drone state unknown, %s' % (
+                self._no_navdata(now), 'last seen landed' if self._known_landed() else 'hovering'))
         if self._known_landed() or self._landed_for_navdata:
             return
         if self._last_hover is None or not 0.0 <= now - self._last_hover < HOVER_REPEAT:
