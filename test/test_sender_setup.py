@@ -37,6 +37,15 @@ def test_the_scripted_source_defaults_to_the_given_script_and_runs_on_the_clock(
     assert type(other).__name__ == 'ScriptedSource'
 
 
+def test_a_scripted_source_is_told_the_sides_the_sender_publishes(caplog):
+    # A script with no hand of a published side plays nothing there, with no word: the
+    # source warns, once it knows the sides.
+    single = os.path.join(ROOT, 'config', 'gestures', 'ur10_pick_place_single.yaml')
+    with caplog.at_level('WARNING'):
+        build_source(params(script=single, sides=['left'], realtime=False), lambda: 0.0, WAVE)
+    assert any('has no left hand' in r.getMessage() for r in caplog.records), caplog.records
+
+
 @pytest.mark.parametrize('name, module, fake', [('leap', 'Leap', _fake_leap_v2),
                                                 ('leapc', 'leap', _fake_leapc)])
 def test_a_device_source_stamps_its_frames_on_the_senders_clock(name, module, fake, monkeypatch):

@@ -52,7 +52,7 @@ def build_source(p, clock, default_script, camera_model=lambda: None, on_image=N
     if name == 'scripted':
         return make_source('scripted', script=p['script'] or default_script,
                            rate_hz=p['rate'] or None, loop=p['loop'], realtime=p['realtime'],
-                           clock=clock)
+                           clock=clock, sides=p['sides'])
     if name == 'recording':
         if not p['recording']:
             raise SourceError('~source recording needs ~recording:=PATH to a LeapJS file')
