@@ -157,6 +157,36 @@ def test_a_clock_that_speeds_up_is_followed_and_a_stall_after_it_still_counts():
     assert 'unfold' not in names
 
 
+def test_a_clock_that_stood_still_leaves_fold_and_unfold_working_when_it_runs_again():
+    # Equal stamps (a paused simulator) pulled the usual frame interval to nothing, and
+    # every frame after was a stall for seconds: a landing asked for did nothing.
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    opn = render_hand('right', 'open', (0, 200, 0))
+    rec = GestureRecognizer()
+    spacing = 8 / 15.0                          # a 15 fps webcam under a x8 clock
+    feed(rec, [fist] * 20, dt=spacing)
+    t = 19 * spacing
+    feed(rec, [fist] * 150, t0=t, dt=0.0)       # 10 s of a still clock
+    names = [e.gesture for s in feed(rec, [fist] * 3 + [opn] * 15, t0=t + spacing, dt=spacing)
+             for e in s.events]
+    assert names.count('unfold') == 1
+
+
+def test_dropped_frames_do_not_stretch_what_a_stall_is():
+    # 5 fps video dropping a few frames (three gaps of 0.6 s) then a 0.9 s pause between a
+    # fist and an open hand: an average of the intervals grew with the drops and took the
+    # pause for the stream's pace, so the drone took off.
+    fist = render_hand('right', 'fist', (0, 200, 0))
+    opn = render_hand('right', 'open', (0, 200, 0))
+    stamps = [0.2 * k for k in range(16)] + [3.0 + 0.6 * k for k in range(1, 4)]
+    stamps += [stamps[-1] + 0.2 * k for k in range(1, 8)]
+    rec = GestureRecognizer()
+    names = [e.gesture for t in stamps for e in rec.update(fist, t).events]
+    t = stamps[-1] + 0.9
+    names += [e.gesture for k in range(15) for e in rec.update(opn, t + 0.2 * k).events]
+    assert 'unfold' not in names
+
+
 def test_low_confidence_frames_do_not_turn_gestures_on():
     fist = render_hand('right', 'fist', (0, 200, 0), confidence=0.05)
     states = feed(GestureRecognizer(), [fist] * 20)

@@ -11,10 +11,11 @@ or turns is no fold; the event comes FOLD_CONFIRM_S after the second shape appea
 holds count judged frames only, each with its own frame interval: frames too unsure to
 judge neither end a shape nor add to its hold, so a misread carried through them never
 completes a fold, and one such frame inside a deliberate hold does not split it. A stalled
-stream (a frame interval longer than FOLD_GAP_S and STALL_FACTOR times the stream's usual
-one, so a sim clock running fast spaces frames wider without stalling them) or a stamp
+stream (a frame interval longer than FOLD_GAP_S and STALL_FACTOR times the median of the
+stream's recent ones, so a sim clock running fast spaces frames wider without stalling them) or a stamp
 going back ends both shapes: what came before it never pairs with what comes after.
 """
+import collections
 import math
 from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
@@ -26,6 +27,7 @@ FOLD_GAP_S = 0.5
 FOLD_CONFIRM_S = 0.15
 FOLD_FRAME_CREDIT_S = 0.25          # the most one frame adds to a hold (5 Hz video adds 0.2)
 STALL_FACTOR = 4.0                  # a frame interval this many usual ones (and > FOLD_GAP_S): a stall
+STALL_WINDOW = 16                   # the recent frame intervals the usual one is the median of
 
 
 @dataclass
@@ -78,7 +80,7 @@ class HeldFilter:
         self._shape_seen = 0.0          # ... its last judged frame
         self._judged_before = False     # the frame before this one was judged
         self._frame_t = None            # the frame before this one, judged or not
-        self._usual_dt = None           # the stream's usual frame interval (a slow average)
+        self._intervals = collections.deque(maxlen=STALL_WINDOW)   # the recent frame intervals > 0
         self._stale_shape = None        # the shape the filter holds over a stall, until it changes
         self._confirmed = False         # ... held FOLD_CONFIRM_S (a fold / unfold judged)
         self._last_shape = None         # the last confirmed one that ended: its hold, its end
@@ -124,13 +126,17 @@ class HeldFilter:
         return self.active
 
     def _stalled(self, dt):
-        """Whether a frame interval dt breaks the stream; learns the usual interval. A
-        stall moves the average by at most a tenth of it, so stalls stay stalls, while
-        a clock that speeds up is followed within tens of frames."""
-        usual = self._usual_dt
-        stalled = dt < 0.0 or (dt > FOLD_GAP_S and (usual is None or dt > STALL_FACTOR * usual))
-        if dt >= 0.0:
-            self._usual_dt = dt if usual is None else usual + 0.1 * (min(dt, 2.0 * usual + 1e-3) - usual)
+        """Whether a frame interval dt breaks the stream: back in time, or longer than
+        FOLD_GAP_S and STALL_FACTOR times the median of the recent ones. A median, so
+        dropped frames or a stall do not stretch it, nor a stopped clock's equal stamps
+        (not counted) shrink it; a clock that speeds up is followed within
+        STALL_WINDOW / 2 frames."""
+        recent = self._intervals
+        stalled = dt < 0.0
+        if dt > FOLD_GAP_S:             # rare: only then the median
+            stalled = not recent or dt > STALL_FACTOR * sorted(recent)[len(recent) // 2]
+        if dt > 0.0:
+            recent.append(dt)
         return stalled
 
     def events(self, state, prev, timestamp, judged=True, raw_shape=None):
