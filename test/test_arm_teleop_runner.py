@@ -175,3 +175,18 @@ def test_a_slow_loop_woken_by_a_fast_hand_plans_over_the_steps_it_takes(rate):
                 reach.append(float(np.dot(kin.fk(q)[:3, 3] - start, direction)))
         return max(reach) - 0.1
     assert overshoot(rate) <= overshoot(125.0) + 1e-4
+
+
+def test_the_step_intervals_kept_stay_few_after_the_clock_jumps_back_or_stands_still():
+    # After a simulator restart (or on a stopped clock) none aged out: one more a step,
+    # all scanned every step.
+    teleop = ArmTeleopRunner(ArmTeleopParams(), rate=20.0).teleop
+    q, now = HOME_Q.copy(), 3600.0
+    for now in (3600.0 + 0.05 * k for k in range(100)):
+        teleop.on_joints(q, now)
+        teleop.step(now)
+    for k in range(2000):                       # /clock back to 0, then a stopped clock
+        now = min(k / 130.0, 5.0)
+        teleop.on_joints(q, now)
+        teleop.step(now)
+    assert len(teleop._step_intervals) <= 256

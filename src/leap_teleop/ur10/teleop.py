@@ -77,6 +77,7 @@ SERVO_LAG_PERIODS = 3.0
 # The step intervals a command's horizon follows: the loop's own period and a hand's wake-ups
 # alternate within it.
 STEP_WINDOW_S = 0.25
+STEP_WINDOW_MAX = 256              # ... at most this many (0.25 s of 1000 Hz steps)
 _TWO_PI = 2 * math.pi
 # Joint states this far outside the limits are corrupt, not rounding (as floats: checked
 # on every state; NaN fails the comparisons, infinities the bounds).
@@ -203,7 +204,8 @@ class ArmTeleop:
         speed = np.minimum(self.p.max_joint_speed, kin.MAX_JOINT_SPEED)
         self._longest_horizon = min(max(self.p.command_horizon, float(step_interval)),
                                     TELEOP_PARAMS['command_horizon'].le)
-        self._step_intervals = collections.deque()     # (when, interval) of the recent steps
+        # (when, interval) of the recent steps; bounded: a stopped clock never ages them out
+        self._step_intervals = collections.deque(maxlen=STEP_WINDOW_MAX)
         self._servo = JointServo(speed, np.minimum(self.p.max_joint_accel, kin.MAX_JOINT_ACCEL),
                                  self.p.command_horizon, self.p.servo_gain,
                                  kin.JOINT_LOWER, kin.JOINT_UPPER, self.p.servo_lead,
@@ -477,6 +479,8 @@ class ArmTeleop:
         jumped_back = self._last_step is not None and now < self._last_step - 1e-6
         dt = 0.0 if self._last_step is None else max(0.0, now - self._last_step)
         self._last_step = now
+        if jumped_back:
+            self._step_intervals.clear()        # stamped on a clock that is gone
         if self._longest_horizon > self.p.command_horizon:
             self._servo.horizon = self._step_horizon(now, dt)
         if jumped_back:
