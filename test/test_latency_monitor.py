@@ -277,3 +277,15 @@ def test_a_master_that_comes_up_within_the_timeout_is_waited_for(monkeypatch):
     with pytest.raises(Reached):
         lm.main(['--once', '--timeout', '10'])
     assert len(asked) == 3 and asked[-1] - asked[0] < 5.0
+
+
+def test_ctrl_c_while_waiting_for_the_master_is_no_traceback(monkeypatch, no_init_node):
+    import leap_teleop.ros.latency_monitor as lm
+
+    def interrupted(timeout):
+        raise KeyboardInterrupt()
+    monkeypatch.setattr(lm, 'master_problem', interrupted)
+    try:
+        assert lm.main(['--once', '--timeout', '10']) == 1
+    except KeyboardInterrupt:
+        pytest.fail('Ctrl-C while waiting for the master raised out of main')

@@ -90,11 +90,14 @@ def main(argv=None):
         ap.error('--timeout must be a number of seconds > 0 and <= %g, got %s'
                  % (MAX_TIMEOUT_S, args.timeout))
     deadline = time.monotonic() + args.timeout
-    while True:         # started beside a roslaunch, the master may come up a moment later
-        uri, why = master_problem(max(0.1, min(2.0, deadline - time.monotonic())))
-        if not why or uri == '?' or time.monotonic() + 0.5 > deadline:
-            break
-        time.sleep(0.5)
+    try:
+        while True:     # started beside a roslaunch, the master may come up a moment later
+            uri, why = master_problem(max(0.1, min(2.0, deadline - time.monotonic())))
+            if not why or uri == '?' or time.monotonic() + 0.5 > deadline:
+                break
+            time.sleep(0.5)
+    except KeyboardInterrupt:           # Ctrl-C while waiting: no traceback
+        return 1
     if why:
         print('latency_monitor: no ROS master at %s (%s)' % (uri, why), file=sys.stderr)
         return 1
