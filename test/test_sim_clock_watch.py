@@ -97,3 +97,15 @@ def test_both_simulators_watch_only_when_they_are_the_clock(monkeypatch):
         cell_state_topics.CellStateTopics(config, 5, use_sim_time)
         drone_state_topics.DroneStateTopics(p, frames, None, use_sim_time)
     assert made == ['ur10_sim', 'ardrone_sim']
+
+
+def test_a_simulator_whose_clock_is_renamed_watches_that_name(monkeypatch):
+    # The soak renames the drone simulator's clock (/drone/sim_clock): it named the arm
+    # simulator on /clock as a rival, falsely.
+    publishers = [('/clock', ['/ur10_sim']), ('/drone/sim_clock', ['/ardrone_sim'])]
+    errors = fake_graph(monkeypatch, publishers, me='/ardrone_sim')
+    monkeypatch.setattr(rospy, 'resolve_name', lambda name: '/drone/sim_clock' if name == '/clock' else name)
+    assert ClockRivalWatch('ardrone_sim', start=False).check() == [] and errors == []
+    publishers.append(('/drone/sim_clock', ['/ardrone_sim', '/gesture_player']))
+    assert ClockRivalWatch('ardrone_sim', start=False).check() == ['/gesture_player']
+    assert errors[0].startswith('ardrone_sim: /gesture_player also publishes /drone/sim_clock')

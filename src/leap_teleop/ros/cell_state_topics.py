@@ -46,18 +46,19 @@ class ClockRivalWatch:
     def check(self):
         """The other /clock publishers not reported before (each is logged once)."""
         me = rospy.get_name()
+        clock = rospy.resolve_name('/clock')    # where this node's clock goes (remapped or not)
         try:
             published = rosgraph.Master(me).getSystemState()[0]
         except Exception:       # the master gone or busy: ask again next period
             return []
-        new = sorted({n for topic, nodes in published if topic == '/clock'
+        new = sorted({n for topic, nodes in published if topic == clock
                       for n in nodes if n != me} - self.reported)
         if new:
             self.reported.update(new)
-            rospy.logerr('%s: %s also publish%s /clock: under /use_sim_time this simulator is the '
+            rospy.logerr('%s: %s also publish%s %s: under /use_sim_time this simulator is the '
                          'clock, so ROS time jumps between the two and the robots do not move; run '
                          'the other without a clock (replay.launch: leave use_sim_time false)',
-                         self.who, ', '.join(new), 'es' if len(new) == 1 else '')
+                         self.who, ', '.join(new), 'es' if len(new) == 1 else '', clock)
         return new
 
     def _run(self):
