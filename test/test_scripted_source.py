@@ -232,6 +232,9 @@ def test_sides_the_script_has_or_none_given_are_no_warning(caplog):
     with caplog.at_level('WARNING', logger='leap_teleop.hands.sources.scripted'):
         ScriptedSource(GestureScript(SCRIPT), realtime=False, sides=['right', 'left'])
         ScriptedSource(GestureScript({'hands': {'right': []}}), realtime=False)
+        # a one-handed script under the default of both sides (ardrone.launch's flight)
+        one_hand = GestureScript({'hands': {'right': [{'pose': 'open', 'duration': 0.1}]}})
+        ScriptedSource(one_hand, realtime=False, sides=['right', 'left'])
     assert caplog.records == []
     assert GestureScript(SCRIPT).has_hand('left')
     assert not GestureScript({'hands': {'right': []}}).has_hand('right')

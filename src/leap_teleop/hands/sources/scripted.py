@@ -209,16 +209,18 @@ class GestureScript:
 
 class ScriptedSource(HandSource):
     """Renders a GestureScript at rate_hz, paced in real time unless realtime=False.
-    `sides`: the sides its reader publishes (None: not known); one warning names those
-    the script has no hand of, which would publish nothing, with no other word."""
+    `sides`: the sides its reader publishes (None: not known); a script with a hand of
+    none of them, which would publish nothing with no other word, is one warning."""
 
     def __init__(self, script, rate_hz=None, realtime=True, loop=False, noise_mm=None,
                  seed=None, clock=time.time, sides=None):
         if not isinstance(script, GestureScript):
             script = GestureScript.load(script)
         self.script = script
+        # only when it plays none of them: a one-handed script beside a default of both
+        # sides (ardrone.launch's flight) is as meant
         missing = [side for side in sides or () if not script.has_hand(side)]
-        if missing:
+        if sides and len(missing) == len(sides):
             log.warning('scripted source: %s has no %s hand, so no %s hand is published '
                         '(sides: %s); give it a "%s:" list of segments or pick a script '
                         'that has one', script.name, ' or '.join(missing), ' or '.join(missing),
