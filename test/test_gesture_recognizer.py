@@ -187,6 +187,16 @@ def test_dropped_frames_do_not_stretch_what_a_stall_is():
     assert 'unfold' not in names
 
 
+def test_a_pause_after_few_frames_of_a_dropping_stream_is_still_a_stall():
+    # 5 fps dropping half its frames: four intervals known, the upper median of them one
+    # of the drops' (0.617 s): a fist, 2.2 s without a frame, then an open hand took off.
+    hands = {c: render_hand('right', p, (0, 200, 0)) for c, p in (('P', 'point'), ('F', 'fist'), ('O', 'open'))}
+    frames = [('P', 0.199), ('P', 0.651), ('F', 1.383), ('F', 2.0), ('F', 2.397), ('O', 4.593),
+              ('O', 4.852), ('O', 5.011), ('O', 5.225)]
+    rec = GestureRecognizer()
+    assert 'unfold' not in [e.gesture for c, t in frames for e in rec.update(hands[c], t).events]
+
+
 def test_low_confidence_frames_do_not_turn_gestures_on():
     fist = render_hand('right', 'fist', (0, 200, 0), confidence=0.05)
     states = feed(GestureRecognizer(), [fist] * 20)

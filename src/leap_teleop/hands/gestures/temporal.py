@@ -127,14 +127,15 @@ class HeldFilter:
 
     def _stalled(self, dt):
         """Whether a frame interval dt breaks the stream: back in time, or longer than
-        FOLD_GAP_S and STALL_FACTOR times the median of the recent ones. A median, so
-        dropped frames or a stall do not stretch it, nor a stopped clock's equal stamps
-        (not counted) shrink it; a clock that speeds up is followed within
-        STALL_WINDOW / 2 frames."""
+        FOLD_GAP_S and STALL_FACTOR times the median of the recent ones (any such interval
+        before STALL_WINDOW / 4 of them are known). A median, so dropped frames or a stall
+        do not stretch it, nor a stopped clock's equal stamps (not counted) shrink it; a
+        clock that speeds up is followed within STALL_WINDOW / 2 frames."""
         recent = self._intervals
         stalled = dt < 0.0
-        if dt > FOLD_GAP_S:             # rare: only then the median
-            stalled = not recent or dt > STALL_FACTOR * sorted(recent)[len(recent) // 2]
+        if dt > FOLD_GAP_S:             # rare: only then the median (the lower middle one)
+            stalled = len(recent) < STALL_WINDOW // 4 or \
+                dt > STALL_FACTOR * sorted(recent)[(len(recent) - 1) // 2]
         if dt > 0.0:
             recent.append(dt)
         return stalled
