@@ -37,12 +37,13 @@ def test_the_scripted_source_defaults_to_the_given_script_and_runs_on_the_clock(
     assert type(other).__name__ == 'ScriptedSource'
 
 
-def test_a_scripted_source_is_told_the_sides_the_sender_publishes(caplog):
+def test_a_scripted_source_is_told_the_sides_the_sender_publishes(caplog, tmp_path):
     # A script with no hand of a published side plays nothing there, with no word: the
     # source warns, once it knows the sides.
-    single = os.path.join(ROOT, 'config', 'gestures', 'ur10_pick_place_single.yaml')
+    single = tmp_path / 'right_only.yaml'
+    single.write_text('hands:\n  right:\n    - {pose: open, duration: 1.0}\n')
     with caplog.at_level('WARNING'):
-        build_source(params(script=single, sides=['left'], realtime=False), lambda: 0.0, WAVE)
+        build_source(params(script=str(single), sides=['left'], realtime=False), lambda: 0.0, WAVE)
     assert any('has no left hand' in r.getMessage() for r in caplog.records), caplog.records
 
 
