@@ -481,10 +481,9 @@ class ArmTeleop:
         self._last_step = now
         if jumped_back:
             self._step_intervals.clear()        # stamped on a clock that is gone
+            return self._lose_robot('the clock jumped back (simulation restarted?)')
         if self._longest_horizon > self.p.command_horizon:
             self._servo.horizon = self._step_horizon(now, dt)
-        if jumped_back:
-            return self._lose_robot('the clock jumped back (simulation restarted?)')
         if self._joints_rx is not None and now - self._joints_rx > self.p.joint_timeout:
             return self._joints_stalled(now)
         if self._stalled is not None and self._stalled[0] == 'joint states':

@@ -12,8 +12,9 @@ holds count judged frames only, each with its own frame interval: frames too uns
 judge neither end a shape nor add to its hold, so a misread carried through them never
 completes a fold, and one such frame inside a deliberate hold does not split it. A stalled
 stream (a frame interval longer than FOLD_GAP_S and STALL_FACTOR times the median of the
-stream's recent ones, so a sim clock running fast spaces frames wider without stalling them) or a stamp
-going back ends both shapes: what came before it never pairs with what comes after.
+stream's recent ones, so a sim clock running fast spaces frames wider without stalling
+them) or a stamp going back ends both shapes: what came before it never pairs with what
+comes after.
 """
 import collections
 import math
