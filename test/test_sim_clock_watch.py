@@ -8,7 +8,7 @@ import rosgraph
 import rospy
 
 from leap_teleop.ros import cell_state_topics, drone_state_topics
-from leap_teleop.ros.cell_state_topics import ClockRivalWatch
+from leap_teleop.ros.graph import ClockRivalWatch
 from leap_teleop.ur10.config import load_config
 
 

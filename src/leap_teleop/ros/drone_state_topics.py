@@ -13,8 +13,8 @@ from visualization_msgs.msg import MarkerArray
 
 from leap_teleop.drone.sim_runner import static_frames
 from leap_teleop.msg import Navdata, navdata_altitude
-from leap_teleop.ros.cell_state_topics import ClockRivalWatch
 from leap_teleop.ros.drone_conversions import DroneMessages
+from leap_teleop.ros.graph import ClockRivalWatch
 from leap_teleop.ros.markers import PathTrail, drone_markers
 from leap_teleop.ros.sensor_conversions import transform_msg
 

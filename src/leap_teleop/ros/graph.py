@@ -1,5 +1,6 @@
 """Questions a node asks about the ROS graph."""
 import collections
+import threading
 import time
 
 import rosgraph
@@ -103,3 +104,45 @@ class TopicTypeWatch:
                 self.log.warn('type_check:' + w.topic, '%s: %s carries %s, but %s reads %s: %s',
                               self.who, w.topic, got, w.reader, w.want, w.hint)
         return {w.topic: published.get(w.topic) for w in topics}
+
+
+class ClockRivalWatch:
+    """Logs one error per other node that publishes /clock beside a simulator that is the
+    clock under /use_sim_time (a bag played with --clock, another simulator): ROS time then
+    jumps between the two and nothing that waits on it moves, with no other word of the
+    cause. Asks the master every `period` wall s on a thread of its own: the lookup blocks,
+    and it must never hold the physics loop."""
+
+    def __init__(self, who, period=2.0, start=True):
+        self.who, self.period = who, period
+        self.reported = set()
+        self._stop = threading.Event()
+        self.thread = None
+        if start:
+            self.thread = threading.Thread(target=self._run, name='clock_rival_watch', daemon=True)
+            self.thread.start()
+
+    def check(self):
+        """The other /clock publishers not reported before (each is logged once)."""
+        me = rospy.get_name()
+        clock = rospy.resolve_name('/clock')    # where this node's clock goes (remapped or not)
+        try:
+            published = rosgraph.Master(me).getSystemState()[0]
+        except Exception:       # the master gone or busy: ask again next period
+            return []
+        new = sorted({n for topic, nodes in published if topic == clock
+                      for n in nodes if n != me} - self.reported)
+        if new:
+            self.reported.update(new)
+            rospy.logerr('%s: %s also publish%s %s: under /use_sim_time this simulator is the '
+                         'clock, so ROS time jumps between the two and the robots do not move; run '
+                         'the other without a clock (replay.launch: leave use_sim_time false)',
+                         self.who, ', '.join(new), 'es' if len(new) == 1 else '', clock)
+        return new
+
+    def _run(self):
+        while not self._stop.wait(self.period) and not rospy.is_shutdown():
+            self.check()
+
+    def stop(self):
+        self._stop.set()
