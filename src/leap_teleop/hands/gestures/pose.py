@@ -28,7 +28,7 @@ import numpy as np
 from leap_teleop.hands.gestures.features import keypoint_features, leap_features, mirror_keypoints
 from leap_teleop.hands.gestures.geometry import num
 from leap_teleop.hands.gestures.temporal import HELD_GESTURES
-from leap_teleop.hands.sources.landmarks import FINGERTIPS, MIDDLE_MCP, PINCH_GAP_FRACTION, THUMB_TIP, WRIST
+from leap_teleop.hands.sources.landmarks import MIDDLE_MCP, WRIST, gap_pinch_strength
 
 PINCH_THRESHOLD = 0.2   # original: pinch when strength > 0.2; pinch_value = strength - 0.2
 # Geometric pinch strength from the thumb-index tip gap (palm widths): 1 at 0.35, 0 at 1.1.
@@ -66,19 +66,16 @@ def geometric_pinch_strength(gap):
 
 
 def image_pinch_strength(xy):
-    """0..1 from the picture's landmarks, as the camera source measures it in 3-D: the thumb
-    tip to the nearest fingertip over the palm's length (wrist to middle knuckle), 1 at
-    PINCH_GAP_FRACTION[0] or less, 0 at [1] or more; 1.0 when that cannot be measured."""
+    """0..1 from the picture's landmarks, as the camera source measures it in 3-D, over the
+    palm's length in the picture (wrist to middle knuckle); 1.0 when that cannot be measured."""
     try:
-        xy = np.asarray(xy, dtype=float)
+        xy = np.asarray(xy, dtype=float)[:, :2]
         palm = float(np.hypot(*(xy[MIDDLE_MCP] - xy[WRIST])))
-        gap = min(float(np.hypot(*(xy[THUMB_TIP] - xy[j]))) for j in FINGERTIPS) / palm
-    except (TypeError, ValueError, IndexError, ZeroDivisionError):
+        if not (_isfinite(palm) and palm > 0.0) or not np.isfinite(xy).all():
+            return 1.0
+        return gap_pinch_strength(xy, palm)
+    except (TypeError, ValueError, IndexError):
         return 1.0
-    if not _isfinite(gap):
-        return 1.0
-    g0, g1 = PINCH_GAP_FRACTION
-    return min(max((g1 - gap) / (g1 - g0), 0.0), 1.0)
 
 
 def thumb_up_score(g, hand):

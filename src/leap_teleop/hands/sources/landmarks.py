@@ -326,14 +326,21 @@ def hand_from_landmarks(lm, camera, mirrored=False, palm_length_mm=DEFAULT_PALM_
                               mcp=mcp, pip=pip, dip=dip))
     lo, hi = GRAB_FLEX_DEG
     grab = float(np.mean(np.clip((np.array(flex) - lo) / (hi - lo), 0.0, 1.0)))
-    gap = min(np.linalg.norm(joints[4] - joints[j]) for j in (8, 12, 16, 20)) / palm_length_mm
-    g0, g1 = PINCH_GAP_FRACTION
-    pinch = float(min(max((g1 - gap) / (g1 - g0), 0.0), 1.0))
+    pinch = gap_pinch_strength(joints, palm_length_mm)
     return TrackedHand(side=side, palm_position=palm_centre(joints),
                 palm_velocity=np.zeros(3) if velocity is None else np.asarray(velocity, float),
                 palm_normal=normal, direction=direction, grab_strength=grab,
                 pinch_strength=pinch, confidence=float(min(max(lm.score, 0.0), 1.0)),
                 fingers=tuple(fingers), id=int(hand_id), image_landmarks=pixels)
+
+
+def gap_pinch_strength(points, palm):
+    """Pinch strength 0..1 of 21 landmarks (3-D in the world, or 2-D in the picture): the
+    thumb tip's gap to the nearest fingertip over `palm` (a length in the same units), 1 at
+    PINCH_GAP_FRACTION[0] or less, 0 at [1] or more."""
+    gap = min(np.linalg.norm(points[THUMB_TIP] - points[j]) for j in FINGERTIPS) / palm
+    g0, g1 = PINCH_GAP_FRACTION
+    return float(min(max((g1 - gap) / (g1 - g0), 0.0), 1.0))
 
 
 def reprojection_rms_px(lm, camera, palm_length_mm=DEFAULT_PALM_LENGTH_MM):
