@@ -188,7 +188,7 @@ def test_the_table_goes_on_when_the_ros_clock_jumps_back(monkeypatch, capsys):
         raise rospy.exceptions.ROSTimeMovedBackwardsException(1.0)
     tables = []
     heard = types.SimpleNamespace(wait=lambda timeout: True)
-    monkeypatch.setattr(lm, 'master_problem', lambda timeout: ('http://x:1', None))
+    monkeypatch.setattr(lm, 'master_problem', lambda timeout: ('http://x:1', None, False))
     monkeypatch.setattr(rospy, 'init_node', lambda *a, **kw: None)
     monkeypatch.setattr(rospy, 'sleep', moved_back)
     monkeypatch.setattr(rospy, 'is_shutdown', lambda: len(tables) >= 3)
@@ -255,6 +255,32 @@ def test_a_master_that_does_not_answer_is_given_up_after_the_timeout(monkeypatch
     assert socket.getdefaulttimeout() is None     # the check's timeout is not left behind
 
 
+def test_a_web_server_that_is_not_a_master_is_given_up_at_once(monkeypatch, capsys, no_init_node):
+    # It answers, so waiting for it to become a master cannot help: the monitor used to
+    # ask it again every 0.5 s for the whole timeout.
+    import http.server
+    import threading
+
+    from leap_teleop.ros.latency_monitor import main
+
+    class Quiet(http.server.BaseHTTPRequestHandler):
+        def log_message(self, *_args):
+            pass
+    server = http.server.HTTPServer(('127.0.0.1', 0), Quiet)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        uri = 'http://127.0.0.1:%d' % server.server_address[1]
+        monkeypatch.setenv('ROS_MASTER_URI', uri)
+        start = time.monotonic()
+        assert main(['--once', '--timeout', '20']) == 1
+        assert time.monotonic() - start < 5.0
+    finally:
+        server.shutdown()
+        server.server_close()
+    err = capsys.readouterr().err
+    assert err.startswith('latency_monitor: no ROS master at %s (HTTP 501' % uri) and err.count('\n') == 1
+
+
 def test_a_master_that_comes_up_within_the_timeout_is_waited_for(monkeypatch):
     # Started beside a roslaunch, the monitor gave up in 0.7 s on a master that came up
     # in 3, though --timeout promises to wait for it.
@@ -265,7 +291,7 @@ def test_a_master_that_comes_up_within_the_timeout_is_waited_for(monkeypatch):
 
     def master_problem(timeout):
         asked.append(time.monotonic())
-        return 'http://x:1', ('Connection refused' if len(asked) < 3 else None)
+        return 'http://x:1', ('Connection refused' if len(asked) < 3 else None), True
 
     class Reached(Exception):
         pass

@@ -61,20 +61,21 @@ MAX_TIMEOUT_S = 86400.0
 
 
 def master_problem(timeout):
-    """(master URI, why it does not answer or None). rospy.init_node would retry forever."""
+    """(master URI, why it does not answer or None, whether waiting can help).
+    rospy.init_node would retry forever."""
     try:
         uri = rosgraph.get_master_uri()
     except ValueError as e:           # a malformed __master:= remapping
-        return '?', str(e)
+        return '?', str(e), False
     old = socket.getdefaulttimeout()
     socket.setdefaulttimeout(timeout)  # a host that drops packets would block the call for minutes
     try:
         rosgraph.Master('/latency_monitor', master_uri=uri).getPid()
-        return uri, None
+        return uri, None, False
     except xmlrpc.client.ProtocolError as e:      # an HTTP server that is not a master
-        return uri, 'HTTP %s %s' % (e.errcode, e.errmsg)
+        return uri, 'HTTP %s %s' % (e.errcode, e.errmsg), False
     except (OSError, ValueError, xmlrpc.client.Error, rosgraph.MasterException) as e:
-        return uri, getattr(e, 'strerror', None) or str(e) or type(e).__name__
+        return uri, getattr(e, 'strerror', None) or str(e) or type(e).__name__, True
     finally:
         socket.setdefaulttimeout(old)
 
@@ -92,8 +93,8 @@ def main(argv=None):
     deadline = time.monotonic() + args.timeout
     try:
         while True:     # started beside a roslaunch, the master may come up a moment later
-            uri, why = master_problem(max(0.1, min(2.0, deadline - time.monotonic())))
-            if not why or uri == '?' or time.monotonic() + 0.5 > deadline:
+            uri, why, may_come_up = master_problem(max(0.1, min(2.0, deadline - time.monotonic())))
+            if not why or not may_come_up or time.monotonic() + 0.5 > deadline:
                 break
             time.sleep(0.5)
     except KeyboardInterrupt:           # Ctrl-C while waiting: no traceback
