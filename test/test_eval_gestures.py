@@ -198,6 +198,22 @@ def test_a_wrong_photo_folder_is_refused_before_any_fitting(tmp_path, capsys, le
         assert capsys.readouterr().err.strip() == 'evaluate: no hand photos at %s (--hands-data)' % folder
 
 
+def test_a_damaged_photo_is_refused_before_any_fitting(tmp_path, capsys, leapjs_data, monkeypatch):
+    # It stopped the run only when the photos came, after the minutes of the rest.
+    from tools.evaluation import people
+    monkeypatch.setattr(people, 'run', lambda *a, **k: pytest.fail('the people part ran'))
+    monkeypatch.setattr(evaluate, 'evaluate', lambda *a, **k: pytest.fail('the takes ran'))
+    photos = tmp_path / 'hands'
+    photos.mkdir()
+    os.symlink(os.path.join(datasets.HANDS_DATA, 'open_palm__gestia__palm_open.jpg'),
+               str(photos / 'open_palm__gestia__palm_open.jpg'))
+    (photos / 'fist__gestia__fist.jpg').write_bytes(b'\xff\xd8 not a whole jpeg')
+    assert evaluate.main(['--data', leapjs_data, '--hands-data', str(photos),
+                          '--out', str(tmp_path / 'e.json')]) == 2
+    assert capsys.readouterr().err.strip() == ('evaluate: cannot read these photos in %s: '
+                                               'fist__gestia__fist.jpg' % photos)
+
+
 def test_a_run_that_stops_leaves_no_earlier_results_behind(tmp_path, leapjs_data, monkeypatch):
     out = tmp_path / 'eval_results.json'
     out.write_text('{"people": "from an earlier run"}')

@@ -43,3 +43,14 @@ def test_main_prints_and_writes_the_table(tmp_path, capsys):
     assert r['cases'] >= 30 and r['cases'] % 2 == 0 and r['fraction'] >= 0.9, r
     assert r['false_thumb_up'] == 0
     assert 'fist' in capsys.readouterr().out
+
+
+def test_a_missing_or_damaged_photo_is_one_line_before_any_view(tmp_path, capsys, monkeypatch):
+    # Both stopped the run with a FileNotFoundError traceback, a damaged one only when reached.
+    monkeypatch.setattr(views, 'run', lambda *a, **k: pytest.fail('the views ran'))
+    (tmp_path / 'fist__x__bad.jpg').write_bytes(b'\xff\xd8 not a whole jpeg')
+    os.symlink(os.path.join(HANDS_DATA, 'fist__htj__22.jpg'), str(tmp_path / 'fist__htj__22.jpg'))
+    assert views.main(['--data', str(tmp_path)]) == 2
+    assert capsys.readouterr().err == 'evaluate_photo_views: cannot read: fist__x__bad.jpg in %s\n' % tmp_path
+    assert views.main(['--data', str(tmp_path), '--photos', 'fist__htj__22.jpg,nope.jpg']) == 2
+    assert capsys.readouterr().err == 'evaluate_photo_views: no such photo: nope.jpg in %s\n' % tmp_path

@@ -338,9 +338,14 @@ def main(argv=None):
         print('evaluate: takes missing from %s: %s' % (args.data, ', '.join(missing)), file=sys.stderr)
         return 2
     if not args.no_photos:
-        from tools.evaluation.photo_views import photo_names
+        from tools.evaluation.photo_views import photo_names, unreadable_photos
         if not os.path.isdir(args.hands_data) or not photo_names(args.hands_data):
             print('evaluate: no hand photos at %s (--hands-data)' % args.hands_data, file=sys.stderr)
+            return 2
+        damaged = unreadable_photos(args.hands_data, photo_names(args.hands_data))
+        if damaged:
+            print('evaluate: cannot read these photos in %s: %s' % (args.hands_data, ', '.join(damaged)),
+                  file=sys.stderr)
             return 2
     # From here a run that stops leaves no earlier run's figures behind to read as its own.
     if os.path.exists(args.out):

@@ -62,6 +62,12 @@ def photo_names(data_dir):
                   and n.lower().endswith(('.jpg', '.jpeg', '.png')))
 
 
+def unreadable_photos(data_dir, names):
+    """The photos among names that OpenCV cannot decode (damaged or not an image)."""
+    import cv2
+    return [n for n in names if cv2.imread(os.path.join(data_dir, n), cv2.IMREAD_COLOR) is None]
+
+
 def label_of(name):
     return name.split('__')[0]
 
@@ -278,7 +284,15 @@ def main(argv=None):
     if not os.path.isdir(args.data):
         print('evaluate_photo_views: no photo folder at %s' % args.data, file=sys.stderr)
         return 2
-    names = [n for n in args.photos.split(',') if n] or None
+    names = [n for n in args.photos.split(',') if n] or photo_names(args.data)
+    missing = [n for n in names if not os.path.isfile(os.path.join(args.data, n))]
+    damaged = unreadable_photos(args.data, [n for n in names if n not in missing])
+    if missing or damaged or not names:
+        print('evaluate_photo_views: %s in %s' % (
+            '; '.join(what + ': ' + ', '.join(ns) for what, ns in (('no such photo', missing),
+                                                                   ('cannot read', damaged)) if ns)
+            or 'no labelled hand photos', args.data), file=sys.stderr)
+        return 2
     res = run(args.data, names)
     print_table(res)
     if args.out:
