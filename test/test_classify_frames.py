@@ -575,6 +575,28 @@ def test_a_side_follows_one_hand_by_its_id_as_the_sender_does(kind):
             assert by_id[7]['open'] == (frame.id >= 64)
 
 
+def test_a_hand_that_cannot_be_placed_counts_as_gone_as_in_the_sender():
+    # classify_frames judged it anyway, so a fist, one frame with a NaN palm, then an open
+    # hand made an unfold there that the sender (which reports the hand lost) never sends.
+    import dataclasses
+
+    from leap_teleop.hands.leap_interface import LeapInterface
+    classifier, live = FrameClassifier(), LeapInterface(source=None)
+    for i in range(180):
+        pose = 'fist' if i < 90 else 'open'
+        hand = render_hand('right', pose, (0, 200, 0), hand_id=1)
+        if i == 90:
+            hand = dataclasses.replace(hand, palm_position=(float('nan'), 200.0, 0.0))
+        frame = Frame(i + 1, 1.0 + i / 120.0, [hand])
+        out = classifier.classify_frame(frame, frame.id, None)['hands'][0]
+        state = live.on_frame(frame)['right']
+        assert not any(e.gesture in ('fold', 'unfold') for e in state.events)
+        assert not any(e in ('fold', 'unfold') for e in out['events']), i
+        if i == 90:
+            assert not state.present and not any(out[k] for k in ('fist', 'open', 'pinch', 'rock'))
+    assert out['open'] and state.open
+
+
 def test_a_keypoint_row_s_pinch_value_is_measured_from_its_landmarks(tmp_path, capsys):
     # A row holds no pinch strength: the dataclass default 0.0 was taken as one, and every
     # OK sign read pinch_value 0.0 ("barely pinching").

@@ -75,6 +75,7 @@ from leap_teleop.hands.frame import Frame, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer, GestureState, ModelError
 from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.sources import SourceError, leapjs
+from leap_teleop.hands.tracker import hand_placement
 from leap_teleop.output_file import output_problem
 
 
@@ -113,13 +114,18 @@ class FrameClassifier:
         """A Frame -> output dict (id and timestamp as given)."""
         t = frame.timestamp if math.isfinite(frame.timestamp) else None
         t = t if t is not None else math.nan
+        # A hand that cannot be placed counts as gone, as in the sender: judged as nothing,
+        # and its side starts anew (no fist before it makes an unfold after it).
+        placed = [hand for hand in frame.hands if hand_placement(hand) is not None]
         chosen = {}
-        for hand in frame.hands:        # on a tie the first listed stays
+        for hand in placed:             # on a tie the first listed stays
             if hand.side not in chosen or self._rank(hand) > self._rank(chosen[hand.side]):
                 chosen[hand.side] = hand
         hands = []
         for hand in frame.hands:
-            if chosen[hand.side] is not hand:   # another hand of the side: judged on its own
+            if not any(hand is h for h in placed):
+                state = GestureState(judged=False)
+            elif chosen[hand.side] is not hand:   # another hand of the side: judged on its own
                 state = self._recognizer(True).update(hand, t)
             else:
                 state = self._followed_state(hand, t)

@@ -98,6 +98,18 @@ def _unit_tuple(v):
     return (v[0] / n, v[1] / n, v[2] / n)
 
 
+def hand_placement(hand):
+    """(palm, palm normal, direction) as plain tuples, the last two of length 1; None for
+    a hand that cannot be placed (not finite, a palm beyond MAX_PALM_MM, a vector of no
+    length): treated as gone, by the sender and classify_frames alike."""
+    palm = _finite_tuple(hand.palm_position, MAX_PALM_MM)
+    normal = _unit_tuple(hand.palm_normal)
+    direction = _unit_tuple(hand.direction)
+    if palm is None or normal is None or direction is None:
+        return None
+    return palm, normal, direction
+
+
 def _unit_interval(x):
     try:
         x = float(x)
@@ -137,10 +149,8 @@ class HandTracker:
         """Advance with this frame's hand of our side (None when absent)."""
         if hand is None:
             return self._lost(timestamp, frame_id)
-        palm = _finite_tuple(hand.palm_position, MAX_PALM_MM)
-        normal = _unit_tuple(hand.palm_normal)
-        direction = _unit_tuple(hand.direction)
-        if palm is None or normal is None or direction is None:
+        placed = hand_placement(hand)
+        if placed is None:
             # A hand we cannot place is treated as gone: consumers hold still.
             self.rejected_frames += 1
             if self.rejected_frames in (1, 10, 100) or self.rejected_frames % 1000 == 0:
@@ -148,6 +158,7 @@ class HandTracker:
                             'palm (|p| > %g mm) or a palm normal or direction of no length',
                             self.side, self.rejected_frames, MAX_PALM_MM)
             return self._lost(timestamp, frame_id)
+        palm, normal, direction = placed
         was_present = self.state.present
         if was_present and hand.id != self.hand_id and hand.id and self.hand_id:
             # Another hand took this side (the SDK re-found one, or typed two alike): the
