@@ -380,6 +380,39 @@ def test_the_clock_jumping_back_under_a_loss_still_lands(lost):
     assert landed_at is not None and 5.0 < landed_at <= 5.0 + 3.0 + 0.02, landed_at
 
 
+@pytest.mark.parametrize('first', ['hand', 'watchdog'])
+def test_a_session_played_again_hovers_and_needs_a_new_unfold(first):
+    # A bag looped with its clock: /clock and the Hand stamps go back 40 s, and the new
+    # pass shows the hand 100 mm forward of the old unfold. Whichever saw the jump first,
+    # the pilot steered on from the old session's reference (linear.x 0.7, no hover).
+    warned = []
+    pilot = DronePilot(PilotParams(), warn=lambda key, text: warned.append(text))
+
+    def stamped(z, t):
+        return PilotInput(True, (0.0, 0.2, z), FLAT['normal'], FLAT['direction'], t)
+    pilot.on_navdata(2, 0, 10.0)
+    pilot.on_hand(stamped(0.0, 10.0), 10.0)
+    pilot.on_gesture('unfold', True, 10.0, stamp=10.0)
+    for t in np.arange(10.01, 50.0, 0.01):
+        pilot.on_navdata(3, 1000, t)
+        pilot.on_hand(stamped(0.0, t), t)
+        pilot.watchdog(t)
+    drain(pilot)
+    if first == 'watchdog':
+        pilot.watchdog(10.0)
+    for t in np.arange(10.0, 10.3, 0.01):
+        pilot.on_navdata(3, 1000, t)
+        pilot.on_hand(stamped(-0.1, t), t)
+        pilot.watchdog(t + 0.001)
+    sent = twists(drain(pilot))
+    assert sent and all(tw == (0.0,) * 6 for tw in sent), sent
+    assert not pilot.engaged and any('older stamps' in w for w in warned), warned
+    assert not any('-' in w.split('no navdata for ')[-1][:1] for w in warned), warned
+    pilot.on_gesture('unfold', True, 10.3, stamp=10.3)   # this session's own unfold steers
+    pilot.on_hand(stamped(-0.2, 10.31), 10.31)
+    assert twists(drain(pilot))[-1][0] > 0.0
+
+
 def test_a_takeoff_navdata_never_confirmed_still_lands_across_a_clock_jump():
     # The takeoff's time was moved to the jump's 'now' while the last navdata's stayed on
     # the old timeline: compared, the takeoff looked older than the navdata saying landed,

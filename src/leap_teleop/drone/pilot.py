@@ -411,9 +411,12 @@ class DronePilot:
                 self._warn('hand', 'ignored a Hand message: %s' % why)
                 return why
             self.last_hand_time = now
-            if not hand.present:
+            if not hand.present or (self.hand_present and self._stream.rewound):
+                # A stream stamped before the last one ended (a session played again, its
+                # clock gone back with it): the old session's hand is lost.
                 self._lose(now)
-                return
+                if not hand.present:
+                    return
             if not self.hand_present:
                 self._disengage_after_loss(now, self._stream.rewound)
                 self.hand_present = True
@@ -576,6 +579,8 @@ class DronePilot:
     def _no_navdata(self, now):
         if self.last_navdata_time is None:
             return 'no navdata yet'
+        if now < self.last_navdata_time:
+            return 'no navdata since the clock jumped back'
         return 'no navdata for %.2f s' % (now - self.last_navdata_time)
 
     # -- watchdog ----------------------------------------------------------------------
@@ -610,8 +615,9 @@ class DronePilot:
             if self.last_hand_time is not None and now < self.last_hand_time - 1e-6:
                 # The clock jumped back (a /clock publisher restarted): the hand is stale.
                 self._warn('clock', 'the clock jumped back: hovering')
+                # The stream is kept: the next Hand message starts a new one there, and
+                # says whether its stamps went back too (another session: a new unfold).
                 self.last_hand_time = None
-                self._stream.reset()
                 self.lost_since = None
                 self._lose(now)
             if self.last_hand_time is None and self.lost_since is None:
