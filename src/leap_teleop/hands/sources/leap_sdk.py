@@ -19,7 +19,7 @@ INSTALL_HINT = ('the "leap" source needs the Leap Motion SDK v2 Python binding (
 def _import():
     try:
         import Leap
-    except ImportError as e:
+    except Exception as e:      # a SWIG binding may fail to load with other errors
         raise SourceError('%s (%s)' % (INSTALL_HINT, e))
     return Leap
 
@@ -90,8 +90,13 @@ class LeapSdkSource(HandSource):
                 pq.put_converted('leap', convert)
 
         listener = SdkFrameListener()
-        controller = Leap.Controller()
-        controller.add_listener(listener)
+        try:
+            controller = Leap.Controller()
+            controller.add_listener(listener)
+        except Exception as e:      # the binding's own error: one line, not a traceback
+            raise SourceError('leap source: cannot start the Leap Motion controller (is the '
+                              'Leap service installed and running?): %s: %s'
+                              % (type(e).__name__, e)) from None
         try:
             yield from wait_loop(self, pq)
         finally:

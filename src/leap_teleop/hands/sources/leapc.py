@@ -3,8 +3,10 @@ leap.Listener.on_tracking_event).
 
 The bindings are not on PyPI: build them from Ultraleap's leapc-python-bindings against
 an installed Gemini (5.x) service. The import is optional: without it, constructing the
-source raises SourceError saying what to install.
+source raises SourceError saying what to install; a service that does not answer ends
+frames() with a SourceError saying so.
 """
+import contextlib
 import time
 
 from leap_teleop.hands.frame import Finger, TrackedHand, measured
@@ -15,12 +17,16 @@ INSTALL_HINT = ('the "leapc" source needs Ultraleap\'s LeapC Python bindings (im
                 'install the Ultraleap Gemini hand-tracking service, then build and pip '
                 'install leapc-python-bindings (leapc-cffi and leap); or use source:=leap '
                 '(SDK v2), recording or scripted')
+CONNECT_HINT = ('leapc source: cannot connect to the Ultraleap hand-tracking service (is it '
+                'installed and running?): %s: %s')
 
 
 def _import():
     try:
         import leap
-    except ImportError as e:
+    # Not only ImportError: the bindings raise a plain Exception when the service's
+    # leapc_cffi folder is not where they look.
+    except Exception as e:
         raise SourceError('%s (%s)' % (INSTALL_HINT, e))
     return leap
 
@@ -79,12 +85,18 @@ class LeapCSource(HandSource):
                     attr(event, 'tracking_frame_id'), attr(event, 'timestamp'),
                     [convert_hand(leap, h) for h in attr(event, 'hands') or ()]))
 
-        connection = leap.Connection()
-        connection.add_listener(LeapCFrameListener())
-        with connection.open():
-            mode = getattr(getattr(leap, 'TrackingMode', None), 'Desktop', None)
-            if mode is not None and hasattr(connection, 'set_tracking_mode'):
-                connection.set_tracking_mode(mode)
+        with contextlib.ExitStack() as opened:
+            # The bindings' own errors (open() times out when the service does not answer)
+            # are the device's state, not a bug: one line, not a traceback.
+            try:
+                connection = leap.Connection()
+                connection.add_listener(LeapCFrameListener())
+                opened.enter_context(connection.open())
+                mode = getattr(getattr(leap, 'TrackingMode', None), 'Desktop', None)
+                if mode is not None and hasattr(connection, 'set_tracking_mode'):
+                    connection.set_tracking_mode(mode)
+            except Exception as e:
+                raise SourceError(CONNECT_HINT % (type(e).__name__, e)) from None
             yield from wait_loop(self, pq)
 
 
