@@ -99,3 +99,62 @@ def test_camera_loop_replaces_a_dead_renderer():
     finally:
         loop.stop()
     assert errors and loop.renderer is not first and len(got) > n + 1
+
+
+CAMERA_SHAPES = {n: (c.height, c.width, 3) for n, c in cameras.CAMERAS.items()}
+
+
+class _LateFirstRenderer:
+    """A stand-in renderer process whose first answer (scene set-up) comes too late: the
+    request times out and its answer is read as the answer to the next request."""
+    made, timeouts = [], []
+
+    def __init__(self):
+        self.pending = None                 # the late answer still in the pipe
+        self.proc = object()
+        _LateFirstRenderer.made.append(self)
+
+    def render(self, pos, quat, names, timeout=10.0):
+        shows = pos[0]
+        _LateFirstRenderer.timeouts.append(timeout)
+        if len(_LateFirstRenderer.made) == 1 and self.pending is None:
+            self.pending = shows
+            raise RuntimeError('camera renderer did not answer in %.0f s' % timeout)
+        if self.pending is not None:
+            shows, self.pending = self.pending, shows
+        return {n: np.full(CAMERA_SHAPES[n], int(shows), np.uint8) for n in names}   # shows its pose
+
+    def close(self, wait=5.0):
+        self.proc = None
+
+
+def test_camera_loop_replaces_a_renderer_whose_first_frame_timed_out(monkeypatch):
+    # The first answer, late, paired with the second request: every image after it showed
+    # the pose of the request before, under the newer pose's stamp, for the whole run.
+    _LateFirstRenderer.made.clear()
+    _LateFirstRenderer.timeouts.clear()
+    monkeypatch.setattr(cameras, 'RendererProcess', _LateFirstRenderer)
+    monkeypatch.setattr(cameras.CameraLoop, 'RESTART_WAIT', 0.0, raising=False)
+    asked, got, errors = [0], [], []
+
+    def pose():
+        asked[0] += 1
+        return (float(asked[0]), 0.0, 1.0), _yaw_quat(0.0), asked[0]
+    loop = cameras.CameraLoop({'bottom': 20.0}, pose,
+                              lambda name, rgb, ctx: got.append((ctx, int(rgb[0, 0, 0]))),
+                              errors.append)
+    loop.start()
+    try:
+        assert loop.ready.wait(10.0)
+        import time
+        deadline = time.monotonic() + 10.0
+        while time.monotonic() < deadline and len(got) < 3:
+            time.sleep(0.02)
+    finally:
+        loop.stop()
+    assert len(errors) == 1 and len(got) >= 3
+    assert all(stamp == shows for stamp, shows in got), got
+    assert len(_LateFirstRenderer.made) == 2 and _LateFirstRenderer.made[0].proc is None
+    # each renderer's first answer is given its start-up time, the others a frame's
+    start, frame = cameras.CameraLoop.START_TIMEOUT, cameras.CameraLoop.FRAME_TIMEOUT
+    assert _LateFirstRenderer.timeouts[:3] == [start, start, frame]

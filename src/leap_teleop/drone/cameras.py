@@ -296,7 +296,15 @@ class CameraLoop:
     rate is 0 is never rendered; a late frame is not made up for (no bursts). The
     renderer works at most `max_duty` of the time (after a render of d seconds it rests
     d * (1 / max_duty - 1)): on a loaded machine the rates drop instead of the cameras
-    taking a whole core from the flight and everything else."""
+    taking a whole core from the flight and everything else.
+
+    A renderer that fails or does not answer in time is replaced: its late answer would
+    pair with the next request (no request ids), each image then showing the pose before."""
+
+    # A renderer's first answer also waits for its start (importing PyBullet, building the
+    # scene: seconds on a loaded machine).
+    START_TIMEOUT, FRAME_TIMEOUT = 30.0, 10.0
+    RESTART_WAIT = 1.0                 # s between a failed renderer and the next
 
     def __init__(self, rates, get_pose, deliver, on_error=None, max_duty=0.5):
         self.max_duty = max_duty
@@ -304,6 +312,7 @@ class CameraLoop:
         self.get_pose, self.deliver, self.on_error = get_pose, deliver, on_error
         self.frames = {name: 0 for name in self.rates}
         self.renderer = None
+        self._answered = False             # the renderer has answered once (it is up)
         self.thread = None
         self.ready = threading.Event()     # set once the renderer has drawn a first frame
         self._stop = threading.Event()
@@ -326,13 +335,27 @@ class CameraLoop:
     def stopping(self):
         return self._stop.is_set()
 
+    def _render(self, pos, quat, names):
+        """The images, or None when the renderer failed (reported, then replaced)."""
+        timeout = self.FRAME_TIMEOUT if self._answered else self.START_TIMEOUT
+        try:
+            images = self.renderer.render(pos, quat, names, timeout=timeout)
+        except (RuntimeError, OSError, EOFError) as e:
+            if self._stop.is_set():
+                return None
+            if self.on_error is not None:
+                self.on_error(e)
+            self.renderer.close()
+            if not self._stop.wait(self.RESTART_WAIT):
+                self.renderer = RendererProcess()
+                self._answered = False
+            return None
+        self._answered = True
+        return images
+
     def _run(self):
         pos, quat, _ = self.get_pose()
-        try:                           # the first frame sets the renderer up: not counted
-            self.renderer.render(pos, quat, list(self.rates))
-        except (RuntimeError, OSError, EOFError) as e:
-            if self.on_error is not None and not self._stop.is_set():
-                self.on_error(e)
+        self._render(pos, quat, list(self.rates))     # sets the renderer up: not counted
         self.ready.set()
         due = {name: time.monotonic() for name in self.rates}
         while not self._stop.is_set():
@@ -345,17 +368,8 @@ class CameraLoop:
                 due[n] = max(due[n] + 1.0 / self.rates[n], now)
             pos, quat, context = self.get_pose()
             started = time.monotonic()
-            try:
-                images = self.renderer.render(pos, quat, names)
-            except (RuntimeError, OSError, EOFError) as e:
-                if self._stop.is_set():
-                    return
-                if self.on_error is not None:
-                    self.on_error(e)
-                # A late answer would pair with the next request: start a fresh renderer.
-                self.renderer.close()
-                self._stop.wait(1.0)
-                self.renderer = RendererProcess()
+            images = self._render(pos, quat, names)
+            if images is None:
                 continue
             for name, rgb in images.items():
                 self.frames[name] += 1
