@@ -46,6 +46,24 @@ def test_takeoff_climbs_to_about_1m_and_hovers(drone):
     assert nav['az'] == pytest.approx(1.0, abs=0.05)       # specific force in g
 
 
+@pytest.mark.parametrize('values', [{'takeoff_altitude': 0.03}, {'takeoff_altitude': 0.08},
+                                    {'altitude_max': 90.0}])
+def test_a_takeoff_that_would_end_below_the_floor_is_refused(values):
+    # 0.03 m: 'hovering' at 1 mm on the floor; up to altitude_min + 0.03 m: held below it
+    with pytest.raises(ValueError, match='at least altitude_min'):
+        ArDroneSim(values)
+
+
+def test_a_takeoff_to_the_lowest_level_taken_hovers_above_the_floor():
+    d = ArDroneSim({'takeoff_altitude': 0.1}, warn=lambda key, text: None)
+    try:
+        fly(d)
+        d.advance(2.0)
+        assert d.state == ds.HOVERING and d.navdata()['altd'] >= d.p.altitude_min + 20
+    finally:
+        d.close()
+
+
 def test_land_sequence_and_motors_off(drone):
     fly(drone)
     assert drone.land()

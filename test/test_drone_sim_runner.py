@@ -162,6 +162,12 @@ def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
     # published at 100 Hz and 200 Hz
     ({'looprate': 80.0, 'physics_rate': 200.0}, r'~looprate 80 Hz must be ~physics_rate 200 Hz'),
     ({'looprate': 1000.0, 'physics_rate': 200.0}, r'~looprate 1000 Hz must be'),
+    # a takeoff ending below the floor kept in flight, or at once on the ground
+    ({'takeoff_altitude': 0.08}, r'~takeoff_altitude 0.08 m: allowed 0.1 \.\. 10 m with '
+                                 r'~altitude_min 50 mm'),
+    ({'takeoff_altitude': 0.3, 'altitude_min': 300.0}, r'~takeoff_altitude 0.3 m: allowed 0.35'),
+    ({'altitude_max': 80.0}, r'~altitude_max 80 mm: a takeoff levels off at the ceiling, which '
+                             r'must be at least 100 mm'),
 ])
 def test_parameters_that_cannot_go_together_are_refused(values, message):
     # each was taken: an empty flight band, a transform from a frame to itself
@@ -176,3 +182,11 @@ def test_parameters_that_go_together_are_taken():
     check_combinations(params(world_frame='odom', tf_prefix='drone1'))
     check_combinations(params(looprate=200.0 / 3.0, physics_rate=200.0))
     check_combinations(params(looprate=5.0, physics_rate=2000.0))
+    check_combinations(params(takeoff_altitude=0.12, altitude_min=70.0))   # just: 0.07 + 0.05
+    check_combinations(params(takeoff_altitude=0.05, altitude_min=0.0, altitude_max=50.0))
+
+
+def test_a_takeoff_altitude_at_the_floor_is_refused_alone():
+    # 0.03 m ended the takeoff at once: 'hovering' on the floor, motors at hover thrust
+    with pytest.raises(ValueError, match=r'~takeoff_altitude = 0\.03: .*>= 0\.05'):
+        params(takeoff_altitude=0.03)

@@ -84,6 +84,11 @@ CAMERA_FRONT, CAMERA_BOTTOM = 0, 1    # AR.Drone 2.0 video channels
 
 # The LEDs blink at a few Hz; far faster is no animation the firmware shows.
 MAX_LED_HZ = 100.0
+# A takeoff ends within TAKEOFF_DONE_WITHIN of its level, and that level (the ceiling when it
+# is lower) is at least TAKEOFF_ABOVE_FLOOR above altitude_min: else it ended at once on the
+# ground ('hovering' at 1 mm, motors running) or held below the floor kept in flight.
+TAKEOFF_DONE_WITHIN = 0.03          # m
+TAKEOFF_ABOVE_FLOOR = 0.05          # m
 
 
 @dataclass
@@ -119,6 +124,11 @@ class DroneParams:
             raise ValueError('euler_angle_max, control_vz_max and control_yaw must be > 0')
         if not 0 <= self.altitude_min < self.altitude_max:
             raise ValueError('need 0 <= altitude_min < altitude_max (mm)')
+        level = min(self.takeoff_altitude, self.altitude_max / 1000.0)
+        if not level >= self.altitude_min / 1000.0 + TAKEOFF_ABOVE_FLOOR - 1e-9:
+            raise ValueError('takeoff_altitude and altitude_max must be at least altitude_min '
+                             '+ %g mm (a takeoff levels off at the lower of the two)'
+                             % (TAKEOFF_ABOVE_FLOOR * 1000))
         if self.physics_rate < 50:
             raise ValueError('physics_rate must be >= 50 Hz')
         return self
@@ -555,7 +565,7 @@ class ArDroneSim:
         if self.state == TAKING_OFF:
             target = min(p.takeoff_altitude, p.altitude_max / 1000.0)
             vz = _clamp(1.5 * (target - self.altitude) + 0.1, 0.0, min(vz_max, 0.8))
-            if self.altitude > target - 0.03 and abs(self.vel[2]) < 0.15:
+            if self.altitude > target - TAKEOFF_DONE_WITHIN and abs(self.vel[2]) < 0.15:
                 self._alt_hold = self.altitude
                 self._pos_hold = None
                 self._set_state(HOVERING)

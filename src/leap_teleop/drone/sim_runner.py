@@ -12,6 +12,7 @@ from leap_teleop.drone import cameras
 from leap_teleop.drone.sim import (
     CAMERA_FRONT,
     STATE_NAMES,
+    TAKEOFF_ABOVE_FLOOR,
     ArDroneSim,
     DroneParams,
     animation_duration_error,
@@ -39,8 +40,9 @@ RUNNER_PARAMS = {
                           unit='mm', ge=0.0, le=100000.0),
     'looprate': Param(50.0, 'navdata / imu / odometry / TF rate (driver)', unit='Hz',
                       ge=5.0, le=1000.0),
-    'takeoff_altitude': Param(_D.takeoff_altitude, 'where a takeoff levels off', unit='m',
-                              gt=0.0, le=10.0),
+    'takeoff_altitude': Param(_D.takeoff_altitude, 'where a takeoff levels off (at least '
+                                                   '~altitude_min + %g m)' % TAKEOFF_ABOVE_FLOOR,
+                              unit='m', ge=TAKEOFF_ABOVE_FLOOR, le=10.0),
     'physics_rate': Param(_D.physics_rate, 'physics and onboard controller rate', unit='Hz',
                           ge=50.0, le=2000.0),
     'battery_flight_time': Param(_D.battery_flight_time, 'hover time on a full battery',
@@ -185,6 +187,17 @@ def check_combinations(p):
     if p['altitude_min'] >= p['altitude_max']:
         raise ValueError('~altitude_min %g mm must be below ~altitude_max %g mm'
                          % (p['altitude_min'], p['altitude_max']))
+    # A takeoff ends just below its level, which must be above the floor kept in flight.
+    lowest = p['altitude_min'] / 1000.0 + TAKEOFF_ABOVE_FLOOR
+    if p['takeoff_altitude'] < lowest - 1e-9:           # 0.07 + 0.05 > 0.12 in floats
+        raise ValueError('~takeoff_altitude %g m: allowed %g .. %g m with ~altitude_min %g mm '
+                         '(at least %g m above it)' % (
+                             p['takeoff_altitude'], lowest, RUNNER_PARAMS['takeoff_altitude'].le,
+                             p['altitude_min'], TAKEOFF_ABOVE_FLOOR))
+    if p['altitude_max'] / 1000.0 < lowest - 1e-9:
+        raise ValueError('~altitude_max %g mm: a takeoff levels off at the ceiling, which must '
+                         'be at least %g mm with ~altitude_min %g mm'
+                         % (p['altitude_max'], lowest * 1000.0, p['altitude_min']))
     frames = DroneFrames(p['tf_prefix'], p['base_frame'], p['odom_frame'])
     if frames.base == frames.odom:
         raise ValueError('~base_frame and ~odom_frame are both %r: odometry needs two frames'
