@@ -87,7 +87,9 @@ def joint_order(names, expected, prefix):
         raise CommandError('no joint_names')
     index = {}
     for i, name in enumerate(names):
-        bare = name[len(prefix):] if prefix and name.startswith(prefix) else name
+        # A bare name first: an arm called 'wrist' has the prefix 'wrist_', which the bare
+        # 'wrist_1_joint' starts with ('<prefix>x' names a joint only where 'x' does not).
+        bare = name if name in expected or not (prefix and name.startswith(prefix)) else name[len(prefix):]
         if bare not in expected:
             raise CommandError('unknown joint %r (expected %s, optionally prefixed %r)'
                                % (name, ', '.join(expected), prefix))
