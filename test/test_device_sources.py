@@ -43,7 +43,8 @@ def _stand_in(tmp_path, monkeypatch, name, body):
     pkg = tmp_path / 'stand_in' / name
     pkg.mkdir(parents=True)
     (pkg / '__init__.py').write_text(textwrap.dedent(body))
-    monkeypatch.delitem(sys.modules, name, raising=False)
+    monkeypatch.setitem(sys.modules, name, None)    # so that the undo removes what it imported
+    monkeypatch.delitem(sys.modules, name)
     monkeypatch.syspath_prepend(str(tmp_path / 'stand_in'))
 
 
