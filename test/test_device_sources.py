@@ -9,7 +9,7 @@ import pytest
 from leap_teleop.hands import record_frames
 from leap_teleop.hands.gestures import record as record_gestures
 from leap_teleop.hands.leap_interface import LeapInterface
-from leap_teleop.hands.sources import SourceError, make_source
+from leap_teleop.hands.sources import HandSource, SourceError, make_source
 
 # ultraleap/leapc-python-bindings' leap/__init__.py, reduced to its check for the service's
 # leapc_cffi folder: a plain Exception, not an ImportError
@@ -100,3 +100,21 @@ def test_leap_v2_whose_controller_fails_ends_in_one_line(tmp_path, monkeypatch):
     with pytest.raises(SourceError, match=r'^leap source: cannot start the Leap Motion controller '
                                           r'.*: RuntimeError: cannot reach the Leap service$'):
         list(make_source('leap').frames())
+
+
+class _Empty(HandSource):
+    """A source that ends before its first frame (a folder of unreadable images, Ctrl-C
+    before a device delivered)."""
+
+    def frames(self):
+        return iter(())
+
+
+def test_a_take_without_frames_writes_nothing_and_says_so(tmp_path, monkeypatch, capsys):
+    # Before: 'wrote 0 frames', status 0, and a file every reader refuses.
+    out = tmp_path / 'take.json'
+    assert record_frames.record(_Empty(), str(out)) == 0 and not out.exists()
+    monkeypatch.setattr(record_frames, 'source_from_args', lambda args: _Empty())
+    assert record_frames.main([str(out), '--source', 'video', '--video', str(tmp_path / 'imgs')]) == 1
+    assert capsys.readouterr().err == 'record_frames: no frame from the source: nothing written\n'
+    assert not out.exists()

@@ -8,7 +8,8 @@ usage: rosrun leap_teleop record_frames OUT.json[.gz|.lz]
 
 Compression follows the file name: .json.gz (gzip), .json.lz (LZString base64, the
 LeapJS original) or plain .json. Stops at --duration seconds, --frames frames, the end
-of a finite source, Ctrl-C or a source that fails; the file holds every frame taken.
+of a finite source, Ctrl-C or a source that fails; the file holds every frame taken (no
+frame taken: no file, status 1).
 """
 import argparse
 import math
@@ -22,7 +23,7 @@ from leap_teleop.output_file import output_problem
 def record(source, out, duration=None, max_frames=None, metadata=None):
     """Pull frames from `source` into `out`; returns the number of frames written. A source
     that fails mid-take still has the frames before it written, then its SourceError
-    (saying so) raised."""
+    (saying so) raised. No frame: nothing is written (no reader takes an empty file)."""
     frames = []
     failed = None
     t0 = time.monotonic()
@@ -44,7 +45,8 @@ def record(source, out, duration=None, max_frames=None, metadata=None):
             raise failed
         _save(out, frames, metadata)
         raise SourceError('%s (the %d frames before it are in %s)' % (failed, len(frames), out))
-    _save(out, frames, metadata)
+    if frames:
+        _save(out, frames, metadata)
     return len(frames)
 
 
@@ -100,6 +102,9 @@ def main(argv=None):
         n = record(source, args.out, args.duration or None, args.frames or None, meta)
     except (OSError, SourceError) as e:
         print('record_frames: %s' % e, file=sys.stderr)
+        return 1
+    if not n:
+        print('record_frames: no frame from the source: nothing written', file=sys.stderr)
         return 1
     print('record_frames: wrote %d frames to %s' % (n, args.out))
     return 0
