@@ -118,3 +118,18 @@ def test_a_take_without_frames_writes_nothing_and_says_so(tmp_path, monkeypatch,
     assert record_frames.main([str(out), '--source', 'video', '--video', str(tmp_path / 'imgs')]) == 1
     assert capsys.readouterr().err == 'record_frames: no frame from the source: nothing written\n'
     assert not out.exists()
+
+
+def test_an_lz_take_without_lzstring_is_refused_before_recording(tmp_path, monkeypatch, capsys):
+    # Before: found only when saving, after the whole take, which was then lost.
+    monkeypatch.setitem(sys.modules, 'lzstring', None)          # not installed
+
+    def no_source(args):
+        raise AssertionError('the source was started')
+    monkeypatch.setattr(record_frames, 'source_from_args', no_source)
+    out = tmp_path / 'take.json.lz'
+    assert record_frames.main([str(out), '--source', 'scripted', '--script', 'any.yaml']) == 2
+    assert capsys.readouterr().err == (
+        'record_frames: output %s: writing .json.lz needs the PyPI package lzstring (pip install '
+        'lzstring); or name it .json or .json.gz\n' % out)
+    assert not out.exists()

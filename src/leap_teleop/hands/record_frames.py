@@ -67,6 +67,12 @@ def argument_problem(args):
     """What is wrong with the output file or the limits, in one line, or None."""
     if not args.out.endswith(OUT_ENDINGS):
         return 'output %s: name it .json, .json.gz or .json.lz' % args.out
+    if args.out.endswith('.lz'):    # leapjs imports it only to save, after the take
+        try:
+            import lzstring  # noqa: F401
+        except ImportError:
+            return ('output %s: writing .json.lz needs the PyPI package lzstring (pip install '
+                    'lzstring); or name it .json or .json.gz' % args.out)
     problem = output_problem(args.out, [args.recording, args.script, args.video])
     if problem:
         return 'output %s: %s' % (args.out, problem)
