@@ -94,3 +94,41 @@ def test_device_frames_are_never_stamped_after_the_callers_clock(rate, restart_a
     assert all(b >= a for a, b in zip(after, after[1:]))
     if restart_at:     # after the restart, the device's timing again
         np.testing.assert_allclose(np.diff(after), 3 / 120, atol=1e-9)
+
+
+def _slow_run(path, clocks, n=30):
+    """(stamp, the caller's clock right after the frame's release) of a recording played
+    in real time on a clock that `clocks(t)` gives after t real seconds."""
+    t0 = time.monotonic()
+
+    def clock():
+        return clocks(time.monotonic() - t0)
+    got = []
+    source = make_source('recording', path=path, realtime=True, clock=clock)
+    for f in source.frames():
+        got.append((f.timestamp, clock()))
+        if len(got) == n:
+            source.stop()
+    return got
+
+
+@pytest.mark.parametrize('rate', [0.5, 0.0])
+def test_a_recording_is_never_stamped_after_a_slower_callers_clock(tmp_path, rate):
+    # Before: shifted by the lead only, the stamps ran ahead of a clock at half real time
+    # by half the time played (+2 s after 4 s), and the stage ages read negative.
+    path = _recording(tmp_path, 30, 0.01)
+    got = _slow_run(path, lambda t: 1000.0 + rate * t)
+    assert len(got) == 30
+    assert all(stamp <= after for stamp, after in got), max(s - a for s, a in got)
+    stamps = [s for s, _ in got]
+    assert all(b >= a for a, b in zip(stamps, stamps[1:]))
+
+
+def test_a_recording_follows_a_callers_clock_that_goes_back(tmp_path):
+    # a simulator restarted from 0 at 0.1 s: its time again, at the recorded spacing
+    path = _recording(tmp_path, 30, 0.01)
+    got = _slow_run(path, lambda t: 1000.0 + t if t < 0.1 else t - 0.1)
+    assert all(stamp <= after for stamp, after in got)
+    after = [s for s, _ in got if s < 500.0]
+    assert len(after) >= 15
+    np.testing.assert_allclose(np.diff(after[1:]), 0.01, atol=2e-3)

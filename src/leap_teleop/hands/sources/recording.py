@@ -7,9 +7,12 @@ far the caller's clock has run ahead of real time since the start (the most seen
 never behind the recorded timing): under /use_sim_time with a simulator faster than real
 time the stamps follow its clock (at the recorded timing they fell behind it, and consumers
 refused them as late), while in real time they are the recorded timing exactly, so frames
-released late (a consumer that stalled) keep their lateness. Otherwise they come as fast
-as the consumer takes them. loop=True replays forever, each pass continuing the stamps
-where the previous one ended.
+released late (a consumer that stalled) keep their lateness. They are never stamped after
+the caller's clock's time at their release: under a clock slower than real time (a
+simulator at a realtime_factor under 1, or one that falls behind) or a stopped one, a frame
+is stamped with that time; a clock that goes back (a simulator restarted) is followed from
+there. Otherwise they come as fast as the consumer takes them. loop=True replays forever,
+each pass continuing the stamps where the previous one ended.
 
 At each break and between loop passes comes one frame without hands, then play goes on,
 each one frame period after the last: with the same hand ids the trackers would otherwise
@@ -115,6 +118,7 @@ class RecordingSource(HandSource):
         offset = 0.0                 # recorded seconds of the passes already played
         lead = 0.0                   # s the caller's clock has run ahead of real time
         last = -math.inf             # the last stamp given
+        base = last_clock = start_stamp     # the stamp of recorded time 0; the clock's last read
         seam = [(self._frames[-1][0] + period, None)]    # between passes: no hand
         while not self.stopped:
             for ts, f in self._frames + seam if self.loop else self._frames:
@@ -126,13 +130,20 @@ class RecordingSource(HandSource):
                     while delay > 0 and not self.stopped:
                         time.sleep(min(delay, 0.05))
                         delay = start_mono + rel - time.monotonic()
-                stamp = start_stamp + rel
-                if self.realtime:
+                if not self.realtime:
+                    stamp = start_stamp + rel
+                else:
                     # Shifted by the lead, not stamped at release: release times carry the
                     # pacing's jitter, and a backlog released at once got stamps us apart.
-                    ahead = self._clock() - start_stamp
-                    lead = max(lead, ahead - (time.monotonic() - start_mono))
-                    stamp = max(stamp + lead, last + 1e-6)
+                    now = self._clock()
+                    elapsed = time.monotonic() - start_mono
+                    if now < last_clock:    # that clock went back (a simulator restarted)
+                        base, lead, last = now - elapsed, 0.0, -math.inf
+                    last_clock = now
+                    lead = max(lead, now - base - elapsed)
+                    # Never after that clock's time: one slower than real time (a simulator
+                    # at a realtime_factor under 1, or behind) would read ever more ahead.
+                    stamp = min(max(base + rel + lead, last + 1e-6), now)
                 last = stamp
                 # A fresh Frame per pass; its Hands are shared between loop passes
                 # (read-only, as every source's are).
