@@ -106,6 +106,23 @@ def test_leapros_has_the_classic_drivers_units_and_angles():
     assert (msg.index_metacarpal.x, msg.index_metacarpal.y, msg.index_metacarpal.z) == (0, 0, 0)
 
 
+def test_leapros_leaves_a_joint_beyond_any_hands_reach_at_zero():
+    # Before: a corrupt recording's 1e30 mm knuckle went out as is, while the tracker drops
+    # such a tip and the driver's Human the whole skeleton.
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    hand.fingers[1].mcp = [1e30, 200.0, -20.0]
+    hand.fingers[2].dip = [-7e300, 200.0, -60.0]
+    hand.fingers[3].pip = [0.0, math.nan, -40.0]
+    hand.fingers[4].pip = [0.0, 2000.0, -2000.0]                # at the bound: kept
+    msg = hand_conversions.to_leapros(states(hand)['right'], hand)
+    for name in ('index_proximal', 'middle_distal', 'ring_intermediate'):
+        p = getattr(msg, name)
+        assert (p.x, p.y, p.z) == (0, 0, 0), name
+    assert (msg.pinky_intermediate.y, msg.pinky_intermediate.z) == (2000.0, -2000.0)
+    assert msg.index_intermediate.z == pytest.approx(hand.fingers[1].pip[2])     # the rest stays
+    assert msg.middle_proximal.z == pytest.approx(hand.fingers[2].mcp[2])
+
+
 def test_leapros_of_an_absent_hand_is_all_zero_but_the_header():
     msg = hand_conversions.to_leapros(states()['right'])
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)

@@ -9,7 +9,7 @@ from geometry_msgs.msg import Point, Vector3
 
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
-from leap_teleop.hands.tracker import hand_angles
+from leap_teleop.hands.tracker import MAX_PALM_MM, hand_angles
 from leap_teleop.msg import (
     DriverBone,
     DriverFinger,
@@ -99,8 +99,9 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     """The classic leap_motion/leapros message for one side, in that driver's units: Leap
     axes, millimetres, ypr in degrees as (yaw, pitch, roll) of classic_ypr. Finger tips come from the state; bone bases
     (proximal = knuckle, intermediate, distal) from `hand` (a hands.frame.TrackedHand) where
-    its source tracks joints; a metacarpal base and anything untracked stays 0. A frame
-    without the hand gives a message with only the header set."""
+    its source tracks joints; a metacarpal base and anything untracked stays 0, as does a
+    joint beyond tracker.MAX_PALM_MM (a tracking error, as the tracker takes such a tip). A
+    frame without the hand gives a message with only the header set."""
     msg = _header(leapros(), state, frame_id)
     if not state.present:
         return msg
@@ -115,8 +116,11 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
         if i < len(fingers):
             for bone, joint in _LEAPROS_BONES:
                 xyz = getattr(fingers[i], joint)
-                if xyz is not None and all(math.isfinite(float(v)) for v in xyz):
-                    setattr(msg, '%s_%s' % (name, bone), Point(*(float(v) for v in xyz)))
+                if xyz is None:
+                    continue
+                xyz = [float(v) for v in xyz]
+                if all(abs(v) <= MAX_PALM_MM for v in xyz):      # NaN compares false
+                    setattr(msg, '%s_%s' % (name, bone), Point(*xyz))
     return msg
 
 
