@@ -318,7 +318,10 @@ def test_battery_drains_and_empty_battery_lands(drone):
     assert not drone.takeoff()
 
 
-def test_link_loss_landing_when_enabled(drone):
+def test_link_loss_landing_when_enabled_lands_a_quiet_hover_and_says_why(drone, warnings):
+    # The simulator sees only the pilot's commands: a pilot hovering without sending (as
+    # drone_pilot does with the hand lost) is taken for a lost link. That landing was
+    # explained as 'link loss' alone, as if the link had broken.
     fly(drone)
     drone.p.link_timeout = 2.0
     drone.set_cmd_vel(0, 0, 0, 0, 0, 0)
@@ -326,6 +329,9 @@ def test_link_loss_landing_when_enabled(drone):
     assert drone.state == ds.HOVERING
     drone.advance(5.0)
     assert drone.state == ds.LANDED
+    said = [text for key, text in warnings if key == 'link']
+    assert len(said) == 1 and 'link_timeout' in said[0] and 'hovering without sending' in said[0]
+    assert '0 turns it off' in said[0]
 
 
 @pytest.mark.parametrize('link_timeout', [1.0, 2.0])

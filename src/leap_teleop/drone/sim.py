@@ -27,8 +27,12 @@ emulated onboard controller:
   drains with thrust-weighted flight time (lands at 0, refuses takeoff below
   ``battery_takeoff_min``), and an optional link-loss landing (``link_timeout``, off by
   default: the real driver re-sends the last command continuously, so the firmware's
-  2 s no-input landing only happens when the driver itself dies; time taking off or
-  flipping does not count, as no pilot steers then).
+  2 s no-input landing only happens when the driver or its WiFi is gone; time taking off
+  or flipping does not count, as no pilot steers then). Here driver and firmware are one
+  process: all the simulator sees is the pilot's commands, and a pilot that hovers sends
+  none (drone_pilot with the hand lost, until its land_after; in paper mode after a hover;
+  in tilt mode once disengaged). That silence cannot be told from a dead pilot's, so with
+  ``link_timeout`` shorter than it those hovers land too: keep it 0 with drone_pilot.
 
 World frame: x forward and y left of the start pose, z up (the driver's ``odom``).
 Navdata follows the driver's conversions: rotX/rotY/rotZ ROS roll/pitch/yaw in degrees,
@@ -110,7 +114,7 @@ class DroneParams:
     physics_rate: float = 200.0          # Hz, also the onboard controller's rate
     battery_flight_time: float = 720.0   # s of hover on a full battery
     battery_takeoff_min: float = 10.0    # percent
-    link_timeout: float = 0.0            # s without any command -> land; 0 = off
+    link_timeout: float = 0.0            # s without any command (a quiet pilot's too) -> land; 0 = off
     flip_rate: float = 20.0              # rad/s spin rate of a flip
 
     def update(self, values):
@@ -493,7 +497,8 @@ class ArDroneSim:
             if self.battery <= 0.0:
                 why = ('battery', 'battery empty: landing')
             elif p.link_timeout > 0 and self.time - self.last_input_time > p.link_timeout:
-                why = ('link', 'no input for %.1f s: landing (link loss)' % p.link_timeout)
+                why = ('link', 'no input for %.1f s: landing (link_timeout: a pilot hovering '
+                       'without sending looks like a lost link; 0 turns it off)' % p.link_timeout)
             if why is not None:
                 self._warn(*why)
                 if self.state == LOOPING:

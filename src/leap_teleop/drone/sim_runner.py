@@ -49,8 +49,10 @@ RUNNER_PARAMS = {
                                  unit='s', gt=0.0, le=100000.0),
     'link_timeout': Param(_D.link_timeout, 'no command this long -> land (firmware link '
                                            'loss; time taking off or flipping does not '
-                                           'count); 0 = off, as with a live driver', unit='s',
-                          ge=0.0, le=60.0),
+                                           'count; a pilot hovering without sending, as '
+                                           'drone_pilot does with the hand lost or in paper '
+                                           'mode, is taken for a lost link); 0 = off, as with '
+                                           'a live driver', unit='s', ge=0.0, le=60.0),
     'gui': Param(False, 'open the PyBullet GUI window'),
     'realtime_factor': Param(1.0, 'sim speed vs wall time; 0 = as fast as possible (other '
                                   'than 1 only with /use_sim_time)', ge=0.0, le=100.0),
