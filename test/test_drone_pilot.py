@@ -171,6 +171,43 @@ def test_a_hand_raised_and_rolled_with_its_fingers_ahead_turns_nothing(raised, r
     assert commands[-1] == pytest.approx(25.0 / 45.0)
 
 
+@pytest.mark.parametrize('raised', [0, 40, 135], ids=['flat', 'raised', 'past_upright'])
+def test_a_turn_too_fast_to_follow_is_read_the_right_way_and_the_neutral_kept(raised):
+    # A 5 fps camera, or a stall in a Leap stream: the fingers turn 60..120 deg between two
+    # frames. Read by the half turn, a right turn of 95 deg read as a left one of 85, and
+    # every reading after followed it: the hand held straight ahead again yawed the drone at
+    # full rate. Raised (40 deg) or past upright (135 deg), the same turn about the vertical.
+    lift = rotation((1.0, 0.0, 0.0), raised)
+    path = [rotation((1.0, 0.0, 0.0), deg) for deg in range(0, raised + 1)]   # raised slowly
+    pilot = airborne(PilotParams())
+    drain(pilot)
+
+    def turned(deg):                    # the Leap yaw counts a right turn (+x) positive
+        return rotation((0.0, 1.0, 0.0), -deg) @ lift
+    swing = [turned(0), turned(-60), turned(40)] + [turned(40)] * 10 \
+        + [turned(40 - 2 * k) for k in range(21)] + [turned(0)] * 10
+    commands = yaw_commands(pilot, [oriented(R) for R in path + swing])[len(path):]
+    assert commands[1] == pytest.approx(1.0)           # -60: left at full rate
+    assert commands[2] == pytest.approx(-25.0 / 45.0)  # +40: right, as a slow turn gives
+    assert commands[-1] == 0.0                         # straight ahead: the neutral again
+    # One step of 130 deg (level both times: not the fingers passing vertical) too.
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    commands = yaw_commands(pilot, [oriented(R) for R in path + [turned(-65), turned(65), turned(0)]])
+    assert commands[-3:] == [pytest.approx(1.0), pytest.approx(-1.0), 0.0]
+
+
+def test_a_fast_turn_from_upright_cannot_be_told_and_turns_nothing():
+    # Fingers near vertical have no heading of their own: which half turn a 90 deg step
+    # from there was is unknown, so the yaw starts afresh from that frame.
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    path = [rotation((1.0, 0.0, 0.0), deg) for deg in range(0, 81)]       # nearly upright
+    flick = rotation((0.0, 1.0, 0.0), -90) @ rotation((1.0, 0.0, 0.0), 40)
+    commands = yaw_commands(pilot, [oriented(R) for R in path + [flick] * 5])
+    assert commands[-5:] == [0.0] * 5
+
+
 def test_an_unfold_shown_upright_steers_by_the_turn_from_it():
     pilot = DronePilot(PilotParams())
     pilot.on_navdata(2, 0, 0.0)

@@ -30,7 +30,9 @@ Modes:
   left about the vertical -> yaw left (angular.z: the change of the fingers' heading, so
   raising or rolling the hand, or both, turns nothing while the fingers point more than
   30 deg from vertical; nearer vertical they have none, and the axis across the palm
-  gives it: there rolling the hand turns the drone).
+  gives it: there rolling the hand turns the drone). A turn of more than
+  MAX_HEADING_STEP_DEG between two frames (a slow camera, a stall) is read by the whole
+  turn while the fingers stay level; from near vertical it starts the yaw afresh.
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -115,6 +117,13 @@ FLIP_NOT_CALLED = 'not called'
 # that of the axis across its palm; from the second on, all the fingers' (sideways tracking
 # jitter of 0.6 deg then moves it by 1.2 deg at most).
 NEAR_VERTICAL_DEG = (10.0, 30.0)
+# Level fingers whose heading moved further than this (deg) since the reading before turned
+# too fast to follow by continuity (300 deg/s at 5 fps, never at a Leap's rate): a turn of
+# 95 deg reads like one of -85 with the fingers raised past vertical, and that guess kept the
+# drone turning at full rate with the hand straight ahead. Level at both readings, they cannot
+# have passed vertical: the step is read by the whole turn; from near vertical the yaw starts
+# afresh.
+MAX_HEADING_STEP_DEG = 60.0
 
 
 @dataclass
@@ -184,6 +193,15 @@ def hand_heading(axes, near=None):
     fingers = _nearest_turn(fingers, near, 180.0)
     across = _nearest_turn(across, near, 360.0)
     return across + weight * _nearest_turn(fingers - across, 0.0, 360.0)
+
+
+def fingers_heading(axes):
+    """The heading (deg) of a hand's fingers (hand_axes), as the Leap yaw; None when they
+    are too near vertical to have one of their own (NEAR_VERTICAL_DEG)."""
+    (_, _, dx), _, (_, _, dz) = axes
+    if math.hypot(dx, dz) < math.sin(math.radians(NEAR_VERTICAL_DEG[1])):
+        return None
+    return math.degrees(math.atan2(dx, -dz))
 
 
 def turn_about_vertical(before, after):
@@ -305,6 +323,7 @@ class DronePilot:
         self._stopped_at = None          # when the last fold or loss came
         self.reference = None            # tilt: (palm xyz m, hand_heading or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
+        self._fingers_before = None      # tilt: fingers_heading at that turn's reading
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
         self._hand_at_loss = None        # the last hand before the latest loss
@@ -540,6 +559,7 @@ class DronePilot:
         axes = hand_axes(hand.normal, hand.direction)
         self.reference = (tuple(hand.palm), None if axes is None else hand_heading(axes))
         self._last_turn = 0.0
+        self._fingers_before = None
 
     def _twist(self, hand):
         cfg = self.cfg
@@ -568,6 +588,16 @@ class DronePilot:
         # (reset, the next frame read a hand turned past 90 deg a half turn off).
         dyaw = 0.0
         if axes is not None:
+            fingers, before = fingers_heading(axes), self._fingers_before
+            if fingers is not None and before is not None:
+                step = _nearest_turn(fingers - before, 0.0, 360.0)
+                if abs(step) > MAX_HEADING_STEP_DEG:
+                    self._last_turn += step
+            elif fingers is not None and abs(_nearest_turn(
+                    fingers - heading_ref - self._last_turn, 0.0, 180.0)) > MAX_HEADING_STEP_DEG:
+                heading_ref, self._last_turn = hand_heading(axes), 0.0
+                self.reference = (ref, heading_ref)
+            self._fingers_before = fingers
             dyaw = self._last_turn = hand_heading(axes, heading_ref + self._last_turn) - heading_ref
         cap = min(abs(cfg.max_cmd), 1.0)
         return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
