@@ -312,6 +312,34 @@ def test_a_small_gap_after_a_stall_keeps_the_origin_and_is_caught_up_within_the_
     check_points(cmd, t.p.max_joint_speed, t.p.max_joint_accel)
 
 
+@pytest.mark.parametrize('moved_mm, kept', [(0.0, True), (30.0, True), (60.0, False)])
+def test_a_stall_while_the_arm_lags_re_anchors_only_when_the_hand_moved_meanwhile(moved_mm, kept):
+    # At the real robot's 0.05 rad/s the arm lags the hand by more than reanchor_beyond:
+    # that lag, not the hand's motion, re-anchored a short stall, and the arm then stopped
+    # that far short of where the hand put it for the rest of the session.
+    t, c = armed_with_origin()
+    q = HOME.copy()
+    palm = np.array(PALM) + [0.0, 0.0, -80.0]                 # 0.2 m of target forward
+    _, q = follow(t, c, hand(palm_mm=tuple(palm)), 40, q)
+    palm_ref, tcp_ref = t._palm_ref.copy(), t._tcp_ref.copy()
+    holds = [x for x in stall(t, c, 0.3, q=q) if sent(x)]
+    assert len(holds) == 1 and t.status.state == HOLDING
+    q = holds[0].points[-1][1]
+    want = tcp_ref + t._axes @ (palm - palm_ref) * 0.001 * t.p.scale
+    assert np.linalg.norm(want - kin.fk(q)[:3, 3]) > 1.5 * t.p.reanchor_beyond      # it lags
+    back = palm + [moved_mm, 0.0, 0.0]          # 2.5 x: 0, 75 and 150 mm of target sideways
+    follow(t, c, hand(palm_mm=tuple(back)), 1, q)
+    assert t.status.state == TRACKING
+    if kept:
+        assert 'same origin' in t.status.reason, t.status.reason
+        np.testing.assert_allclose(t._palm_ref, palm_ref)
+        np.testing.assert_allclose(t.status.target, tcp_ref + t._axes @ (back - palm_ref) * 0.001 * t.p.scale,
+                                   atol=1e-9)
+    else:
+        assert 'origin re-anchored' in t.status.reason, t.status.reason
+        np.testing.assert_allclose(t._tcp_ref, kin.fk(q)[:3, 3], atol=1e-9)     # the hold's rest
+
+
 def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes_to_rest():
     # Taken at the pose passed while braking, the origin was one the arm ran on past and
     # then drove back to, with the hand still (here 3 mm: the last command's own plan had

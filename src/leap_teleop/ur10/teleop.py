@@ -16,8 +16,9 @@ continuous (servo.py), a target further than the joints go in one period is appr
 steps along the straight TCP line (the arm catches up along the hand's path, inside the
 box), IK failures and other arm configurations hold the arm instead of raising, stale
 input holds at once and resumes from the current pose when fresh input returns within
-disarm_after (the origin is re-anchored when the hand moved more than reanchor_beyond
-meanwhile, so nothing jumps; a smaller gap is caught up within the servo's limits), while a
+disarm_after (the origin is re-anchored when the hand itself moved the target more than
+reanchor_beyond meanwhile, so nothing jumps; else the mapping stays and the arm catches up
+within the servo's limits, also with what it lagged behind before the stall), while a
 longer silence, a lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold
 without commanding anything; states back within joint_loss_after resume on the same
 origin (the hand's input never stopped), caught up within the servo's limits; a longer
@@ -55,8 +56,8 @@ CATCH_UP_DECEL = 0.25
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
 RESUME_TOLERANCE = 0.02
-# After a hand-input stall, a hand turned further than this (rad) from where the old
-# mapping holds the tool re-anchors the origin, as reanchor_beyond does for its position.
+# After a hand-input stall, a hand that turned the tool's target further than this (rad)
+# meanwhile re-anchors the origin, as reanchor_beyond does for its position.
 REANCHOR_TURN_RAD = 0.3
 # A robot whose joints stay further from the plan than this much of its motion at
 # max_joint_speed (plus RESUME_TOLERANCE) for OFF_PLAN_S does not follow its commands (a
@@ -240,8 +241,9 @@ class ArmTeleop:
         self._gripper_sent = None
         self._thumb_up_since = None       # (capture stamp, receipt) of the current thumbs-up's start
         self._stalled = None              # holding: (what stalled, when it last came)
-        # The hand input fell silent during the current stall (when it last came), whatever
-        # else stalled with it: its return re-anchors as after a hand stall alone.
+        # The hand input fell silent during the current stall (its last message before the
+        # silence), whatever else stalled with it: its return re-anchors as after a hand
+        # stall alone.
         self._hand_silent = None
         self._off_plan_since = None       # when the joints were first seen off the plan
         self._slower_since = (0.0, -math.inf)   # (max_joint_speed before, when it was lowered)
@@ -439,7 +441,7 @@ class ArmTeleop:
             return self._disarm('fist' if hand.present else 'hand left the sensor', now)
         if hand is None or now - self._hand_rx > self.p.input_timeout:
             if self._hand_silent is None:
-                self._hand_silent = self._hand_rx
+                self._hand_silent = self._hand
             if hand is None or now - self._hand_rx > self.p.disarm_after:
                 self._stalled = self._stalled or ('joint states', self._joints_rx)   # no hold
                 return self._disarm('no hand input for %.2f s (watchdog)' % self.p.disarm_after,
@@ -516,7 +518,7 @@ class ArmTeleop:
                 return self._disarm('no hand input for %.2f s (watchdog)'
                                     % self.p.disarm_after, now)
             if self._hand_silent is None:
-                self._hand_silent = self._hand_rx
+                self._hand_silent = self._hand
             if self._stalled is not None:     # the hold was sent: nothing moves meanwhile
                 return ArmCommand()
             # A stall: stop at once, but stay armed for a while in case input resumes.
@@ -562,14 +564,20 @@ class ArmTeleop:
             # joint states given without their receipt time carry no duration
             back = '%s back' % what + (' after %.2f s' % (fresh - since) if fresh is not None else '')
             # A hand silent during a joint stall was not followed either, whichever stalled first.
-            hand_stalled = what == 'hand input' or self._hand_silent is not None
+            silent = self._hand_silent
+            hand_stalled = what == 'hand input' or silent is not None
             self._stalled = self._hand_silent = None
             if self._palm_ref is not None:
                 # After a joint-state stall alone the hand's input never stopped: the mapping
                 # the operator followed stays, and the servo catches up within its limits.
+                # So does a hand back within reanchor_beyond of where it fell silent: the
+                # arm's lag behind it is caught up as before the stall (re-anchored on that
+                # lag, the arm stayed short of the hand's place for the rest of the session).
                 gap = self._resume_gap(palm)
-                turn = self._resume_turn(hand_rot) if hand_stalled else 0.0
-                if hand_stalled and (gap > self.p.reanchor_beyond or turn > REANCHOR_TURN_RAD):
+                moved = turned = 0.0
+                if silent is not None:
+                    moved, turned = self._moved_while_silent(silent, palm, hand_rot)
+                if hand_stalled and (moved > self.p.reanchor_beyond or turned > REANCHOR_TURN_RAD):
                     # Re-anchor: the hand where it is now maps to the pose the arm holds
                     # (where its hold comes to rest: one still braking would be driven back).
                     self._set_origin(palm, hand_rot, now, at_rest=True)
@@ -771,36 +779,50 @@ class ArmTeleop:
         key = (mode, hand.rotate, hand.turn, hand.swing)
         if key == self._hand_rot_key:
             return self._hand_rot
-        # Nearest the last one: a palm turned up from the rock passes pi, where the plain
-        # rotation vector flips its axis and the filter would sweep the tool through it.
-        if mode == 'fixed':
-            hand_rot = np.zeros(3)
-        elif mode == 'yaw':     # the turn about the vertical alone
-            hand_rot = kin.rotation_vector_near(ori.hand_rotation(0.0, hand.turn, 0.0),
-                                                self._hand_rot)
-        else:
-            hand_rot = kin.rotation_vector_near(
-                ori.hand_rotation(hand.rotate, hand.turn, hand.swing), self._hand_rot)
+        hand_rot = self._rotation_of(hand, self._hand_rot)
         hand_rot.flags.writeable = False
         self._hand_rot_key, self._hand_rot = key, hand_rot
         return hand_rot
+
+    def _rotation_of(self, hand, near):
+        """The hand's rotation vector in the orientation mode, nearest `near`: a palm turned
+        up from the rock passes pi, where the plain rotation vector flips its axis and the
+        filter would sweep the tool through it."""
+        mode = self.p.orientation
+        if mode == 'fixed':
+            return np.zeros(3)
+        if mode == 'yaw':     # the turn about the vertical alone
+            return kin.rotation_vector_near(ori.hand_rotation(0.0, hand.turn, 0.0), near)
+        return kin.rotation_vector_near(ori.hand_rotation(hand.rotate, hand.turn, hand.swing), near)
+
+    def _mapped_target(self, palm):
+        """The TCP target the origin maps palm to (in the box)."""
+        return np.minimum(np.maximum(
+            self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
+            self._lo), self._hi)
 
     def _resume_gap(self, palm):
         """How far (m) the old origin would put the target from where the arm comes to rest;
         joystick mode has no such target (its origin is the dead zone's centre): infinite."""
         if self.p.mode != 'imitation':
             return math.inf
-        target = np.minimum(np.maximum(
-            self._tcp_ref + self._axes @ (palm - self._palm_ref) * 0.001 * self.p.scale,
-            self._lo), self._hi)
-        return float(np.linalg.norm(target - kin.fk(self._servo.rest(self._q))[:3, 3]))
+        return float(np.linalg.norm(self._mapped_target(palm)
+                                    - kin.fk(self._servo.rest(self._q))[:3, 3]))
 
-    def _resume_turn(self, hand_rot):
-        """How far (rad) the old origin would turn the tool from where the arm holds it."""
+    def _moved_while_silent(self, last, palm, hand_rot):
+        """(m, rad) the hand moved the target and turned the tool's target between `last`,
+        its message before a silence, and palm / hand_rot now, through the old origin;
+        joystick mode (its origin is the dead zone's centre): an infinite move. The arm's
+        lag behind the target does not count: resuming it is what the arm was doing."""
+        if self.p.mode != 'imitation':
+            return math.inf, 0.0
+        before = np.asarray(last.palm_mm, dtype=float)
+        moved = float(np.linalg.norm(self._mapped_target(palm) - self._mapped_target(before)))
         if self.p.orientation == 'fixed':
-            return 0.0
-        held = kin.fk(self._servo.rest(self._q))[:3, :3]
-        return float(kin.rotation_error(held, self._tool_rotation(hand_rot)))
+            return moved, 0.0
+        turned = kin.rotation_error(self._tool_rotation(self._rotation_of(last, hand_rot)),
+                                    self._tool_rotation(hand_rot))
+        return moved, float(turned)
 
     def _set_origin(self, palm, hand_rot, now, at_rest=False):
         """The hand at palm / hand_rot maps to the tool's pose now (at_rest: where the arm's
