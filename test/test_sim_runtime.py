@@ -110,4 +110,50 @@ def test_snapshot_path_prefers_the_folder_then_ros_home(tmp_path, monkeypatch):
     assert snapshot_path('', 'ur10_sim', 1.0) == os.path.join(str(tmp_path), 'ros_home',
                                                               'ur10_sim_0001.000.png')
     monkeypatch.delenv('ROS_HOME')
-    assert os.path.dirname(snapshot_path('', 'x', 0.0)) == '/tmp'
+    name = 'test_sim_runtime_%d' % os.getpid()
+    path = snapshot_path('', name, 0.0)
+    try:
+        assert os.path.dirname(path) == '/tmp'
+    finally:
+        os.remove(path)
+
+
+def test_a_snapshot_never_takes_the_name_of_an_earlier_one(tmp_path):
+    # Named by sim time alone, a picture replaced an earlier run's taken at the same sim
+    # time (each run starts at 0), or one taken in the same physics step.
+    earlier = tmp_path / 'ur10_sim_0002.000.png'
+    earlier.write_bytes(b'an earlier run')
+    paths = [snapshot_path(str(tmp_path), 'ur10_sim', 2.0) for _ in range(3)]
+    assert [os.path.basename(p) for p in paths] == [
+        'ur10_sim_0002.000_1.png', 'ur10_sim_0002.000_2.png', 'ur10_sim_0002.000_3.png']
+    assert earlier.read_bytes() == b'an earlier run'
+    assert all(os.path.exists(p) for p in paths)     # each name is taken once returned
+
+
+def test_callers_at_the_same_time_get_names_of_their_own(tmp_path):
+    import threading
+    paths, start = [], threading.Barrier(8)
+
+    def take():
+        start.wait()
+        paths.append(snapshot_path(str(tmp_path), 'ardrone', 0.5))
+    threads = [threading.Thread(target=take) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(set(paths)) == 8 and str(tmp_path / 'ardrone_0000.500.png') in paths
+
+
+def test_a_name_whose_picture_never_came_is_given_back(tmp_path):
+    from leap_teleop.sim_runtime import release_snapshot_path
+    path = snapshot_path(str(tmp_path), 'ur10_sim', 1.0)
+    release_snapshot_path(path)                      # nothing written: no empty file left
+    assert not os.path.exists(path)
+    written = snapshot_path(str(tmp_path), 'ur10_sim', 1.0)
+    assert written == path
+    with open(written, 'wb') as f:
+        f.write(b'\x89PNG')
+    release_snapshot_path(written)                   # a picture in it is kept
+    assert os.path.exists(written)
+    release_snapshot_path(str(tmp_path / 'never_there.png'))

@@ -250,6 +250,38 @@ def test_run_publishes_every_step_until_stopped(runner):
     assert len(ticks) == 48 and ticks[-1].time == pytest.approx(0.2)
 
 
+def test_snapshots_in_one_step_or_a_later_run_never_replace_a_picture(rejected, tmp_path):
+    # Named by sim time alone, the second picture of a step, or one a later run took at the
+    # same sim time (each run starts at 0), replaced the first; both answers named one file.
+    import os
+    folder = tmp_path / 'snaps'
+    paths = []
+    for _ in range(2):                                       # two runs of the simulator
+        r = make(rejected, snapshot_dir=str(folder), snapshot_size=[32, 24])
+        try:
+            for _ in range(2):
+                r.step()
+            paths += [r.snapshot(), r.snapshot()]            # twice in one step
+        finally:
+            r.close()
+    assert len(set(paths)) == 4 and sorted(os.listdir(folder)) == sorted(map(os.path.basename, paths))
+    assert paths[0] == str(folder / 'ur10_sim_0000.008.png')
+    for path in paths:
+        with open(path, 'rb') as f:
+            assert f.read(8) == b'\x89PNG\r\n\x1a\n'
+
+
+def test_a_failed_snapshot_leaves_no_empty_file(runner, tmp_path, monkeypatch):
+    runner.p['snapshot_dir'] = str(tmp_path)
+
+    def fails(*_args):
+        raise RuntimeError('renderer gone')
+    monkeypatch.setattr(runner.renderer, 'render', fails)
+    with pytest.raises(RuntimeError, match='renderer gone'):
+        runner.snapshot()
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_urdf_from_args_is_the_arms_description():
     arm = load_config('ur10_dual_cell').arm('ur10_2')
     text = urdf_from_args(['--urdf', 'ur10_2', '--config', 'ur10_dual_cell'])

@@ -1,5 +1,6 @@
 """How both simulator nodes run their physics loop, without ROS: pacing to the wall clock,
 sim-time schedules for what they publish, and where their snapshots go."""
+import itertools
 import os
 import time
 
@@ -86,7 +87,28 @@ class SendGate:
 
 def snapshot_path(folder, name, sim_time):
     """Where a snapshot taken at `sim_time` goes: `folder`, else ROS_HOME, else /tmp
-    (created when missing), as NAME_<sim time>.png."""
+    (created when missing), as NAME_<sim time>.png, or NAME_<sim time>_<n>.png when that
+    name is taken: sim time starts at 0 again with each run of a simulator, and two pictures
+    can fall in one step. The name is reserved as an empty file that the picture then
+    fills, so callers at the same time never share one and no file is ever replaced;
+    release_snapshot_path(path) when the picture could not be taken. OSError when the
+    folder cannot be written."""
     folder = folder or os.environ.get('ROS_HOME') or '/tmp'
     os.makedirs(folder, exist_ok=True)
-    return os.path.join(folder, '%s_%08.3f.png' % (name, sim_time))
+    stem = os.path.join(folder, '%s_%08.3f' % (name, sim_time))
+    for n in itertools.count():
+        path = '%s_%d.png' % (stem, n) if n else stem + '.png'
+        try:
+            with open(path, 'xb'):
+                return path
+        except FileExistsError:
+            continue
+
+
+def release_snapshot_path(path):
+    """Remove the file snapshot_path reserved when no picture was written to it."""
+    try:
+        if os.path.getsize(path) == 0:
+            os.remove(path)
+    except OSError:          # gone already, or not ours to remove: nothing to give back
+        pass

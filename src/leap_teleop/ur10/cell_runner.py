@@ -9,7 +9,14 @@ from dataclasses import dataclass
 
 from leap_teleop.control.input_age import CommandWaits
 from leap_teleop.params import Param
-from leap_teleop.sim_runtime import MAX_LAG_S, Every, RealtimePacer, pace_factor, snapshot_path
+from leap_teleop.sim_runtime import (
+    MAX_LAG_S,
+    Every,
+    RealtimePacer,
+    pace_factor,
+    release_snapshot_path,
+    snapshot_path,
+)
 from leap_teleop.ur10.config import DEFAULT_CELL_CONFIG, read_cell_config
 from leap_teleop.ur10.kinematics import JOINT_NAMES
 from leap_teleop.ur10.model import GRIPPER_JOINT
@@ -244,8 +251,12 @@ class CellRunner:
         with self.lock:
             t, state = self.cell.time, self.cell.pose_state()
         path = snapshot_path(self.p['snapshot_dir'], 'ur10_sim', t)
-        with self.render_lock:
-            self.renderer.render(state, path, w, h, SNAPSHOT_TIMEOUT)
+        try:
+            with self.render_lock:
+                self.renderer.render(state, path, w, h, SNAPSHOT_TIMEOUT)
+        except BaseException:
+            release_snapshot_path(path)          # no empty file for a failed picture
+            raise
         return path
 
     def close(self):
