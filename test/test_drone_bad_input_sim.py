@@ -1,5 +1,6 @@
 """ardrone_sim against bad input: absurd animation durations, out-of-range cmd_vel, and
 the type watches on both drone nodes' inputs (no ROS master)."""
+import math
 import types
 
 import pytest
@@ -114,3 +115,28 @@ def test_the_drone_nodes_watch_the_types_on_their_inputs(monkeypatch):
                                         'type_check:/leapmotion/gestures']
     assert ('carries std_msgs/String, but the pilot reads leap_teleop/GestureEvent' in said[1][1]
             and 'publish the sender\'s GestureEvent there' in said[1][1])
+
+
+def test_the_python_api_never_raises_on_numbers_too_big_for_a_float(hovering):
+    # ArDroneSim promises never to raise on bad input: inf as a camera channel and ints
+    # beyond a float (as a cmd_vel component or an animation's duration) raised
+    # OverflowError. ROS's message types cannot carry them; library users can.
+    runner, warnings = hovering
+    d = runner.sim
+    huge = 10 ** 400
+    calls = [
+        (d.set_camera_channel, (math.inf,)), (d.set_camera_channel, (-math.inf,)),
+        (d.set_cmd_vel, (huge, 0, 0, 0, 0, 0)), (d.set_cmd_vel, (0, 0, 0, 0, 0, -huge)),
+        (d.flight_animation, (3, huge)), (d.flight_animation, (3, 2 ** 32)),    # uint32 ms
+        (d.set_led_animation, (1, 2.0, huge)), (d.set_led_animation, (1, 2.0, 256)),   # uint8 s
+    ]
+    for fn, args in calls:
+        assert fn(*args) is False, (fn.__name__, args)      # refused with a warning
+        d.advance(2.1)                                       # past the warnings' rate limit
+    assert [key for key, _ in warnings] == ['camera', 'camera', 'cmd_vel', 'cmd_vel', 'anim',
+                                            'anim', 'led', 'led']
+    assert d.state == ds.HOVERING and d.cmd == (0.0,) * 6 and d.led_animation is None
+    assert d.camera_channel == ds.CAMERA_FRONT
+    # the largest values the driver's services carry still go
+    assert d.set_led_animation(1, 2.0, 255)
+    assert d.flight_animation(ds.FLIP_RIGHT, 2 ** 32 - 1)

@@ -88,6 +88,9 @@ CAMERA_FRONT, CAMERA_BOTTOM = 0, 1    # AR.Drone 2.0 video channels
 
 # The LEDs blink at a few Hz; far faster is no animation the firmware shows.
 MAX_LED_HZ = 100.0
+# The longest durations the driver's services carry (FlightAnim's uint32 ms, LedAnim's
+# uint8 s): longer ones, only possible through this API, overflowed a float.
+MAX_FLIGHT_DURATION_MS, MAX_LED_DURATION_S = 2 ** 32 - 1, 255
 # A takeoff ends within TAKEOFF_DONE_WITHIN of its level, and that level (the ceiling when it
 # is lower) is at least TAKEOFF_ABOVE_FLOOR above altitude_min: else it ended at once on the
 # ground ('hovering' at 1 mm, motors running) or held below the floor kept in flight.
@@ -145,7 +148,7 @@ def _clamp(x, lo, hi):
 def _finite(x):
     try:
         x = float(x)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):   # an int beyond a float: infinite
         return None
     return x if math.isfinite(x) else None
 
@@ -357,6 +360,10 @@ class ArDroneSim:
             self._warn('anim', 'flight animation refused: bad type %r or duration %r',
                        anim_type, duration_ms)
             return False
+        if duration_ms > MAX_FLIGHT_DURATION_MS:
+            self._warn('anim', 'flight animation refused: a duration beyond %d ms',
+                       MAX_FLIGHT_DURATION_MS)
+            return False
         if not 0 <= anim_type < len(ANIMATION_NAMES):
             self._warn('anim', 'flight animation refused: type %d is not in 0..19', anim_type)
             return False
@@ -384,8 +391,9 @@ class ArDroneSim:
         return True
 
     def set_led_animation(self, anim_type, freq, duration_s):
-        """ardrone/setledanimation. True when the type is one of the firmware's 0..13 and
-        the frequency a positive number of Hz (up to MAX_LED_HZ)."""
+        """ardrone/setledanimation. True when the type is one of the firmware's 0..13, the
+        frequency a positive number of Hz (up to MAX_LED_HZ) and the duration at most
+        MAX_LED_DURATION_S."""
         try:
             anim_type, freq, duration_s = int(anim_type), float(freq), int(duration_s)
         except (TypeError, ValueError, OverflowError):
@@ -398,6 +406,9 @@ class ArDroneSim:
         if not 0.0 < freq <= MAX_LED_HZ:                  # NaN fails too
             self._warn('led', 'LED animation ignored: frequency %r Hz is not in (0, %g]',
                        freq, MAX_LED_HZ)
+            return False
+        if duration_s > MAX_LED_DURATION_S:
+            self._warn('led', 'LED animation ignored: a duration beyond %d s', MAX_LED_DURATION_S)
             return False
         self.led_animation = (LED_ANIMATION_NAMES[anim_type], freq, self.time + max(0, duration_s))
         return True
@@ -412,7 +423,7 @@ class ArDroneSim:
         channel is taken modulo 2."""
         try:
             self.camera_channel = int(channel) % 2
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):     # OverflowError: inf
             self._warn('camera', 'camera channel ignored: %r', channel)
             return False
         return True
