@@ -805,6 +805,35 @@ def test_a_hand_back_from_a_stall_turned_far_re_anchors_the_origin(turn, kept):
     assert jump == pytest.approx(turn if kept else 0.0, abs=1e-6)
 
 
+@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+def test_max_tool_turn_stays_measured_from_the_yaw_at_the_rock_across_re_anchors(orientation):
+    # Each re-anchoring stall re-centred the clamp on the tool's yaw then: three stalls
+    # with the hand turned on past it turned the tool 2 rad from its yaw at the rock.
+    t, c = armed_with_origin(orientation=orientation, orientation_scale=1.0, max_tool_turn=0.5,
+                             max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    yaw_rock = kin.tilt_and_yaw(kin.fk(q)[:3, :3])[1]
+    palm, turn = np.array(PALM), 0.0
+    for k in range(3):
+        for _ in range(80):                    # the hand turns 0.8 rad on, the tool to the clamp
+            turn += 0.01
+            _, q = follow(t, c, hand(palm_mm=tuple(palm), turn=turn), 1, q)
+        _, q = follow(t, c, hand(palm_mm=tuple(palm), turn=turn), 150, q)
+        yaw = kin.tilt_and_yaw(kin.fk(q)[:3, :3])[1]
+        assert abs(wrap_angle(yaw - yaw_rock)) == pytest.approx(0.5, abs=2e-3), (k, yaw - yaw_rock)
+        held = [x for x in stall(t, c, 0.5, q=q) if sent(x)]
+        q = held[0].points[-1][1]
+        palm = palm + [50.0 if k % 2 == 0 else -50.0, 0.0, 0.0]    # 0.125 m of target
+        _, q = follow(t, c, hand(palm_mm=tuple(palm), turn=turn), 1, q)
+        assert 'origin re-anchored' in t.status.reason, t.status.reason
+        # Nothing jumps: the tool's target is where the hold put it.
+        assert kin.rotation_error(target_rotation(t), kin.fk(held[0].points[-1][1])[:3, :3]) < 1e-6
+    # Turning back turns the tool back at once, from the clamp.
+    _, q = follow(t, c, hand(palm_mm=tuple(palm), turn=turn - 0.2), 150, q)
+    yaw = kin.tilt_and_yaw(kin.fk(q)[:3, :3])[1]
+    assert abs(wrap_angle(yaw - yaw_rock)) == pytest.approx(0.3, abs=2e-3)
+
+
 @pytest.mark.parametrize('older_by, disarmed', [(5.0, True), (0.5, True), (-0.3, False)])
 def test_a_stream_back_from_a_stall_at_older_stamps_disarms(older_by, disarmed):
     # A bag played again after a 0.32 s silence: its hand was taken as the same session's,

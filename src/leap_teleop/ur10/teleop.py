@@ -7,8 +7,8 @@ Modes: imitation (TCP follows the palm's offset from the origin, scaled) and joy
 excess). Orientation modes: fixed (tool pointing down, turned by tool_yaw), yaw (the
 tool's yaw follows the hand's turn about the vertical), full (the tool turns as the palm
 does); the hand's rotation since the origin goes through the same axis map as positions,
-is scaled, and the tool's tilt from vertical and turn from the origin are clamped like the
-workspace. Unlike the original: the input is smoothed by One Euro filters (position and
+is scaled, and the tool's tilt from vertical and turn from its yaw at the rock (kept across
+re-anchors) are clamped like the workspace. Unlike the original: the input is smoothed by One Euro filters (position and
 rotation vector) and validated (out-of-order and late messages are dropped and counted,
 see input_check), the target is clamped to a workspace box, motion is commanded by a
 joint servo with speed and acceleration limits whose trajectories keep the velocity
@@ -580,7 +580,7 @@ class ArmTeleop:
                 if hand_stalled and (moved > self.p.reanchor_beyond or turned > REANCHOR_TURN_RAD):
                     # Re-anchor: the hand where it is now maps to the pose the arm holds
                     # (where its hold comes to rest: one still braking would be driven back).
-                    self._set_origin(palm, hand_rot, now, at_rest=True)
+                    self._set_origin(palm, hand_rot, now, at_rest=True, reanchor=True)
                     self._set(TRACKING, back + ': origin re-anchored')
                 else:
                     # The servo catches up within its limits; the mapping stays.
@@ -824,15 +824,23 @@ class ArmTeleop:
                                     self._tool_rotation(hand_rot))
         return moved, float(turned)
 
-    def _set_origin(self, palm, hand_rot, now, at_rest=False):
+    def _set_origin(self, palm, hand_rot, now, at_rest=False, reanchor=False):
         """The hand at palm / hand_rot maps to the tool's pose now (at_rest: where the arm's
-        last plan comes to rest)."""
+        last plan comes to rest). A re-anchor keeps the yaw at the rock, which max_tool_turn
+        is measured from (re-centred there, each stall let the tool turn another
+        max_tool_turn on)."""
         self._palm_ref = palm.copy()
         tool = kin.fk(self._servo.rest(self._q) if at_rest else self._servo.state_at(now, self._q)[0])
         self._tcp_ref = tool[:3, 3].copy()
         self._tool_ref = tool[:3, :3].copy()
-        self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
-        self._turn_ref = 0.0
+        if reanchor:
+            # Yaw mode: the held tool's turn from the rock's yaw (within half a turn of it:
+            # max_tool_turn is at most pi); full mode measures from _yaw_ref itself.
+            self._turn_ref = math.remainder(kin.tilt_and_yaw(self._tool_ref)[1] - self._yaw_ref,
+                                            _TWO_PI)
+        else:
+            self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
+            self._turn_ref = 0.0
         self._hand_rot_ref = hand_rot.copy()
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
