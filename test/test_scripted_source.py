@@ -190,6 +190,27 @@ def test_invalid_scripts_are_rejected_with_a_clear_message(bad, message):
         GestureScript(bad)
 
 
+def test_a_misspelt_top_level_or_circle_key_is_refused_by_name(tmp_path):
+    # Before: dropped without a word, the default played: `rate: 30` at 120 Hz, a ccw
+    # circle given as `dir: ccw` went cw.
+    top = tmp_path / 'top.yaml'
+    top.write_text('rate: 30\nnoise_mn: 5\nhands:\n  right:\n    - {pose: open, duration: 1.0}\n')
+    with pytest.raises(SourceError) as e:
+        GestureScript.load(top)
+    assert str(e.value) == ("%s: unknown keys ['noise_mn', 'rate']; known: ['hands', 'noise_mm', "
+                            "'rate_hz', 'seed']" % top)
+    circle = tmp_path / 'circle.yaml'
+    circle.write_text('hands:\n  right:\n    - {pose: open, duration: 1.0, '
+                      'circle: {radius: 60, turn: 3, dir: ccw}}\n')
+    with pytest.raises(SourceError) as e:
+        GestureScript.load(circle)
+    assert str(e.value) == ("%s: hands.right[0].circle: unknown keys ['dir', 'turn']; known: "
+                            "['direction', 'radius', 'turns']" % circle)
+    # keys that are not text are named too (they could not be sorted with the others)
+    with pytest.raises(SourceError, match=r"hands.right\[0\]: unknown keys \[1, 'speed'\]"):
+        GestureScript({'hands': {'right': [{'pose': 'open', 1: 2, 'speed': 3}]}})
+
+
 def test_unreadable_files_and_unknown_sources_fail_clearly(tmp_path):
     bad = tmp_path / 'bad.yaml'
     bad.write_text('hands: [unclosed')

@@ -1,6 +1,6 @@
 """Scripted gestures: a YAML script of poses and palm waypoints rendered into frames.
 
-Script format (all keys but `hands` optional)::
+Script format (all keys but `hands` optional; a key not shown here is refused by name)::
 
     rate_hz: 120            # frames per second
     noise_mm: 0.0           # std. dev. of Gaussian palm noise
@@ -43,7 +43,9 @@ DEFAULT_PALM = (0.0, 200.0, 0.0)
 # Frames a second a script may ask for: the sender's ~rate bound, and a rate the renderer
 # keeps in real time on 2 cores (10 kHz ran at a third of it).
 MAX_RATE_HZ = 1000.0
+_TOP_KEYS = {'rate_hz', 'noise_mm', 'seed', 'hands'}
 _SEGMENT_KEYS = {'pose', 'duration', 'palm', 'rpy', 'value', 'circle', 'confidence'}
+_CIRCLE_KEYS = {'radius', 'turns', 'direction'}
 # A looped hand moving more than this from the script's end to its start is lost between
 # passes. A script that closes its loop ends one frame's motion short of its start (0.43
 # mm for the shipped two-hand steady script); 10 mm in a frame is a brisk hand (1.2 m/s at 120 Hz),
@@ -60,6 +62,15 @@ def _vector(value, what, n=3, bound=1e5):
     if not np.all(np.abs(arr) <= bound):         # NaN compares false
         raise SourceError('%s must be finite, within +-%g, got %r' % (what, bound, value))
     return arr
+
+
+def _known_keys(mapping, known, where):
+    """SourceError naming any key of `mapping` not in `known`: a misspelt key would
+    otherwise be dropped and its default played without a word."""
+    unknown = set(mapping) - known
+    if unknown:     # key=str: YAML keys may be numbers too
+        raise SourceError('%s: unknown keys %s; known: %s'
+                          % (where, sorted(unknown, key=str), sorted(known)))
 
 
 def _number(value, what, lo, hi):
@@ -86,6 +97,7 @@ class GestureScript:
             raise SourceError('%s: a gesture script is a mapping with a "hands" mapping '
                               '(right: [...], left: [...])' % name)
         self.name = name
+        _known_keys(data, _TOP_KEYS, name)
         self.rate_hz = _number(data.get('rate_hz', 120.0), name + ': rate_hz', 1e-3,
                                MAX_RATE_HZ)
         self.noise_mm = _number(data.get('noise_mm', 0.0), name + ': noise_mm', 0.0, 999.0)
@@ -112,10 +124,7 @@ class GestureScript:
             here = '%s[%d]' % (where, i)
             if not isinstance(raw, dict):
                 raise SourceError('%s must be a mapping, got %r' % (here, raw))
-            unknown = set(raw) - _SEGMENT_KEYS
-            if unknown:
-                raise SourceError('%s: unknown keys %s; known: %s'
-                                  % (here, sorted(unknown), sorted(_SEGMENT_KEYS)))
+            _known_keys(raw, _SEGMENT_KEYS, here)
             seg = _Segment()
             seg.pose = raw.get('pose', 'open')
             if not isinstance(seg.pose, str) or (seg.pose != 'absent' and seg.pose not in POSES):
@@ -142,6 +151,7 @@ class GestureScript:
                 c = raw['circle']
                 if not isinstance(c, dict):
                     raise SourceError('%s.circle needs a positive radius (mm)' % here)
+                _known_keys(c, _CIRCLE_KEYS, here + '.circle')
                 radius = _number(c.get('radius', 0), here + '.circle.radius (mm)', 1e-3, 1e4)
                 turns = _number(c.get('turns', 1.0), here + '.circle.turns', 0.0, 1e3)
                 direction = c.get('direction', 'cw')
