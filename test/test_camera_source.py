@@ -295,6 +295,40 @@ def test_clip_open_hand_rising():
     assert ys[-25:].mean() - ys[:10].mean() > 40.0, (ys[:10].mean(), ys[-25:].mean())
 
 
+def _gestures(interface, frames):
+    """(frame id, side, gesture started) and held (side, gesture, frame id) of frames."""
+    started, held = [], []
+    for frame in frames:
+        for side, state in (interface.on_frame(frame) or {}).items():
+            started += [(frame.id, side, e.gesture) for e in state.events if e.active]
+            held += [(side, g, frame.id) for g in HELD if getattr(state, g)]
+    return started, held
+
+
+def test_camera_footage_recorded_with_record_frames_replays_with_the_same_gestures(tmp_path):
+    # Before: the replay had no picture landmarks and was judged by the Leap pose model:
+    # this clip's thumbs-up held 6 frames instead of 140, and 96 frames of pinch came in.
+    from leap_teleop.hands import record_frames
+    source = make_source('video', path=data(CLIP_FIST_THUMB), realtime=False, clock=lambda: 0.0,
+                         width=640, height=480)
+    live_frames = []
+
+    class Tee:
+        def frames(self):
+            for frame in source.frames():
+                live_frames.append(frame)
+                yield frame
+
+        def stop(self):
+            source.stop()
+    path = str(tmp_path / 'take.json.gz')
+    assert record_frames.record(Tee(), path, metadata={'source': 'video'}) == 195
+    live = _gestures(LeapInterface(), live_frames)
+    replay = _gestures(LeapInterface(), make_source('recording', path=path, realtime=False).frames())
+    assert ('right', 'thumb_up') in {(side, g) for _, side, g in live[0]}
+    assert replay == live
+
+
 def test_classify_frames_reads_images_and_videos(tmp_path):
     env = dict(os.environ, PYTHONWARNINGS='ignore')
     cmd = [sys.executable, '-m', 'leap_teleop.hands.classify_frames']

@@ -750,3 +750,50 @@ def test_a_hand_without_an_id_keeps_its_own_fingers_through_a_recording():
     ids = [{h.side: h.id for h in leapjs.frame_from_dict(leapjs.frame_to_dict(Frame(i, 2.0 + i, hands))).hands}
            for i, hands in enumerate([[left], [right, left], [left, right], [right]])]
     assert ids == [{'left': 2}, {'right': 1, 'left': 2}, {'left': 2, 'right': 1}, {'right': 1}]
+
+
+def _camera_hands():
+    """Camera hands (with their picture landmarks) of a few shared photos."""
+    from leap_teleop.hands.gestures.datasets import HANDS_DATA
+    from leap_teleop.hands.sources.landmarks import CameraModel, HandLandmarks, hand_from_landmarks
+    with open(os.path.join(HANDS_DATA, 'hands.json')) as f:
+        images = json.load(f)['images']
+    hands = []
+    for name in ('fist__htj__22.jpg', 'ok__htj__21.jpg', 'thumbs_up__mps__hand_thumb_up.jpg'):
+        entry = images[name]
+        cam = CameraModel.from_hfov(entry['width'], entry['height'])
+        hands.append(hand_from_landmarks(HandLandmarks.from_dict(entry['hands'][0]), cam, False))
+    return hands
+
+
+@pytest.mark.parametrize('fast', [True, False])
+def test_a_camera_hand_replays_with_its_picture_landmarks(tmp_path, monkeypatch, fast):
+    # Before: the landmarks were not written, and a replayed camera take was judged by the
+    # Leap pose model on its 3-D joints: pinches and fists the take never had.
+    from leap_teleop.hands.gestures import GestureRecognizer
+    if not fast:
+        monkeypatch.setattr(leapjs, '_simdjson', None)
+    hands = _camera_hands()
+    path = _write(tmp_path, 'cam.json.gz', [leapjs.frame_to_dict(Frame(k + 1, 5.0 + k, [hand]))
+                                            for k, hand in enumerate(hands)])
+    replayed = [f.hands[0] for f in make_source('recording', path=path, realtime=False).frames()]
+    assert len(replayed) == len(hands)
+    for hand, again in zip(hands, replayed):
+        np.testing.assert_allclose(again.image_landmarks, hand.image_landmarks, atol=1e-3)
+        live = GestureRecognizer(stateless=True).update(hand, 0.0)
+        replay = GestureRecognizer(stateless=True).update(again, 0.0)
+        assert (replay.label, replay.fist, replay.pinch, replay.thumb_up) == \
+            (live.label, live.fist, live.pinch, live.thumb_up)
+
+
+@pytest.mark.parametrize('value', [None, [], [[1.0, 2.0]] * 20, [[1.0, 2.0]] * 20 + [[1.0, 'x']],
+                                   [[1.0, 2.0]] * 20 + [[1.0, 1e999]], [[1.0, 2.0, 3.0]] * 21,
+                                   [[1.0, True]] * 21, {'x': 1}, 'landmarks'])
+def test_a_hand_without_usable_picture_landmarks_reads_as_a_leap_hand(value):
+    # a LeapJS take has none; a damaged one is no camera hand's
+    d = leapjs.frame_to_dict(Frame(1, 5.0, [render_hand('right', 'open', (0, 200, 0))]))
+    assert 'imageLandmarks' not in d['hands'][0]
+    if value is not None:
+        d['hands'][0]['imageLandmarks'] = value
+    hand = leapjs.frame_from_dict(d).hands[0]
+    assert hand.image_landmarks is None and np.isfinite(hand.palm_position).all()

@@ -26,11 +26,12 @@ INPUT is a LeapJS Playback recording (.json, .json.gz, .json.lz; formatVersion 0
 packed 2; also QuantumLeap's {"frames": N, "data": [...]}, the shared dynamic takes), or
 JSON Lines, plain or gzipped: one LeapJS frame dict per line (fields as in a recording:
 id, timestamp [us], hands[] with id, type, palmPosition, palmNormal, direction,
-grabStrength, pinchStrength, confidence; pointables[] with handId, type 0..4,
-tipPosition, dipPosition, pipPosition, mcpPosition, direction, extended), or one pose
-record per line as the shared static poses and record_gestures write them ({"person":
-..., "label": ..., "frame": FRAME}: FRAME is classified; isolated poses, so give
---stateless). Without INPUT (or with "-") JSON Lines are read from stdin.
+grabStrength, pinchStrength, confidence, and for a camera hand recorded by record_frames
+imageLandmarks, its 21 [x, y] picture landmarks, which make it judged by the keypoint model
+as live; pointables[] with handId, type 0..4, tipPosition, dipPosition, pipPosition,
+mcpPosition, direction, extended), or one pose record per line as the shared static poses
+and record_gestures write them ({"person": ..., "label": ..., "frame": FRAME}: FRAME is
+classified; isolated poses, so give --stateless). Without INPUT (or with "-") JSON Lines are read from stdin.
 
 Output, one line per input frame, in input order:
 

@@ -5,7 +5,9 @@ gzip-compressed JSON (.json.gz) or ``LZString.compressToBase64(json)`` (.json.lz
 formatVersion 0.1 / 1 keeps each frame as the Leap WebSocket frame dict; formatVersion 2
 packs frames as positional arrays whose key list is ``frames[0]``.
 
-Leap timestamps are microseconds; Frame.timestamp is seconds.
+Leap timestamps are microseconds; Frame.timestamp is seconds. A camera source's hand also
+keeps its 21 picture landmarks, ``"imageLandmarks": [[x, y], ...]`` (pixels of the processed
+image, MediaPipe order), a field of this project's that LeapJS ignores.
 """
 import base64
 import gc
@@ -476,7 +478,25 @@ def _hand_from_dict(h, side, pointables, timestamp=math.nan):
                 fingers, hid if hid.__class__ is int else 0,
                 palm_width=measured(h.get('palmWidth')), sphere_radius=measured(h.get('sphereRadius')),
                 sphere_center=measured3(h.get('sphereCenter')),
-                time_visible=_time_visible(h.get('timeVisible'), timestamp))
+                time_visible=_time_visible(h.get('timeVisible'), timestamp),
+                image_landmarks=_image_landmarks(h.get('imageLandmarks')))
+
+
+def _image_landmarks(value):
+    """A camera hand's 21 picture landmarks ((21, 2) pixels) from a hand dict's
+    imageLandmarks (written by frame_to_dict), or None when absent or not 21 pairs of
+    finite numbers (a Leap take, a damaged file): the hand is then judged as a Leap's."""
+    if value is None or value.__class__ is not list or len(value) != 21:
+        return None
+    for pair in value:
+        if pair.__class__ is not list or len(pair) != 2 or not all(
+                v.__class__ in (int, float) for v in pair):
+            return None
+    try:
+        xy = np.array(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):      # an integer beyond any float
+        return None
+    return xy if np.all(np.isfinite(xy)) else None
 
 
 def _list(v, nd=5):
@@ -526,6 +546,11 @@ def frame_to_dict(frame):
                 h[key] = _clean(value)
         if measured3(hand.sphere_center) is not None:
             h['sphereCenter'] = _list(hand.sphere_center)
+        # A camera hand's picture landmarks: the keypoint model judges it by them, live and
+        # replayed alike (without, a replay judged its 3-D joints with the Leap model).
+        xy = _image_landmarks(_as_pairs(getattr(hand, 'image_landmarks', None)))
+        if xy is not None:
+            h['imageLandmarks'] = [[round(float(x), 3), round(float(y), 3)] for x, y in xy]
         hands.append(h)
         for i, f in enumerate(hand.fingers[:5]):
             if f is None or not np.all(np.isfinite(np.asarray(f.tip, dtype=float))):
@@ -545,6 +570,17 @@ def frame_to_dict(frame):
     return {'id': int(frame.id), 'timestamp': int(round(ts * 1e6)) if math.isfinite(ts) else 0,
             'hands': hands, 'pointables': pointables,
             'gestures': [g for g in frame.gestures if isinstance(g, dict)]}
+
+
+def _as_pairs(xy):
+    """(21, 2+) landmarks as a list of [x, y] lists, or None."""
+    if xy is None:
+        return None
+    try:
+        a = np.asarray(xy, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return a[:, :2].tolist() if a.ndim == 2 and a.shape[1] >= 2 else None
 
 
 def _clean(x):
