@@ -247,7 +247,8 @@ def test_still_images_share_no_velocity_and_keep_the_hand_present(tmp_path, hand
 
 def clip_run(name, **kwargs):
     """Per frame (frame id, stamp, {side: HandState}) of a clip played through the
-    video source (letterboxed to 640x480, as fast as possible) and LeapInterface."""
+    video source (images as they come unless kwargs say otherwise, as fast as possible)
+    and LeapInterface."""
     source = make_source('video', path=data(name), realtime=False, clock=lambda: 0.0, **kwargs)
     interface = LeapInterface(source)
     rows = []

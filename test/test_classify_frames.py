@@ -3,6 +3,7 @@ import json
 import os
 import subprocess
 import sys
+import types
 
 import pytest
 from hypothesis import given, settings
@@ -618,3 +619,31 @@ def test_a_keypoint_row_s_pinch_value_is_measured_from_its_landmarks(tmp_path, c
     apart[4] = apart[0] + 5 * (apart[9] - apart[0])
     assert image_pinch_strength(apart) == 0.0
     assert image_pinch_strength(np.zeros((21, 2))) == 1.0
+
+
+def _size_detector(seen):
+    """Stands in for MediaPipe's HandDetector: finds no hand, notes in `seen` the size of
+    each image it is given."""
+    def make(**kwargs):
+        return types.SimpleNamespace(detect=lambda rgb: seen.append(rgb.shape) or [],
+                                     close=lambda: None)
+    return make
+
+
+def test_camera_footage_is_letterboxed_as_the_sender_does(tmp_path, monkeypatch, capsys):
+    # Before: images went to the detector as they came (here 1280x720), while the sender
+    # letterboxes to its ~width x ~height (640x480): a photo read as a fist here and as no
+    # hand in the sender.
+    import cv2
+    import numpy as np
+
+    from leap_teleop.hands.sources import camera
+    from leap_teleop.hands.sources.camera_params import CAMERA_PARAMS
+    seen = []
+    monkeypatch.setattr(camera, 'HandDetector', _size_detector(seen))
+    path = str(tmp_path / 'wide.png')
+    cv2.imwrite(path, np.zeros((720, 1280, 3), np.uint8))
+    assert classify_frames.main([path]) == 0
+    assert json.loads(capsys.readouterr().out)['hands'] == []
+    size = (CAMERA_PARAMS['height'].default, CAMERA_PARAMS['width'].default, 3)
+    assert seen == [size] == [(480, 640, 3)]

@@ -258,10 +258,13 @@ def camera_input(path):
 
 
 def camera_frames(path):
-    """Frames of the hands the camera pipeline finds in a video or images, stamped from
-    the footage's start (kept as Frames: their hands carry the image landmarks)."""
+    """Frames of the hands the camera pipeline finds in a video or images, letterboxed to
+    the sender's default size, stamped from the footage's start (kept as Frames: their
+    hands carry the image landmarks)."""
     from leap_teleop.hands.sources import make_source
-    source = make_source('video', path=path, realtime=False, clock=lambda: 0.0)
+    from leap_teleop.hands.sources.camera_params import DEFAULT_SIZE
+    source = make_source('video', path=path, realtime=False, clock=lambda: 0.0,
+                         width=DEFAULT_SIZE[0], height=DEFAULT_SIZE[1])
     return source.frames()
 
 

@@ -9,6 +9,9 @@ the recognizer saw. Message times are the frames' capture times, starting at --s
 usage: rosrun leap_teleop recording_to_bag RECORDING.json[.lz|.gz] OUT.bag
        python -m leap_teleop.ros.recording_to_bag --script config/gestures/X.yaml OUT.bag
        python -m leap_teleop.ros.recording_to_bag --video CLIP.mp4 OUT.bag   (also images / a glob)
+
+Camera footage goes through the camera source as the sender's defaults run it: images
+letterboxed to 640x480, a 60 deg field of view, a 95 mm palm, a camera that does not mirror.
 """
 import argparse
 import math
@@ -23,6 +26,7 @@ import rospy
 from leap_teleop.hands.frame import SIDES
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sources import SourceError, capture, make_source
+from leap_teleop.hands.sources.camera_params import DEFAULT_SIZE
 from leap_teleop.output_file import output_problem
 from leap_teleop.params import is_ros_name
 from leap_teleop.ros import hand_conversions
@@ -157,8 +161,9 @@ def main(argv=None):
     if problem:
         ap.error('%s: %s' % (args.out, problem))
     try:
-        if args.video:
-            source = make_source('video', path=args.video, realtime=False)
+        if args.video:     # letterboxed as the sender's defaults: the hands it would see
+            source = make_source('video', path=args.video, realtime=False,
+                                 width=DEFAULT_SIZE[0], height=DEFAULT_SIZE[1])
         elif args.script:
             source = make_source('scripted', script=args.script, realtime=False)
         else:

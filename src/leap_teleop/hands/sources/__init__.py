@@ -56,13 +56,18 @@ def source_from_args(args):
         if not args.recording:
             raise SourceError('--source recording needs --recording PATH')
         return make_source('recording', path=args.recording, realtime=args.realtime)
-    if args.source == 'video':
+    if args.source in ('video', 'webcam'):
+        # images letterboxed to the sender's default size: the hands it would see
+        from leap_teleop.hands.sources.camera_params import DEFAULT_SIZE
+        width, height = DEFAULT_SIZE
+        if args.source == 'webcam':
+            return make_source('webcam', device=args.device, mirror=args.mirror, width=width,
+                               height=height)
         if not args.video:
             raise SourceError('--source video needs --video PATH (a video, an image, a folder '
                               'or a glob of images)')
-        return make_source('video', path=args.video, realtime=args.realtime, mirror=args.mirror)
-    if args.source == 'webcam':
-        return make_source('webcam', device=args.device, mirror=args.mirror)
+        return make_source('video', path=args.video, realtime=args.realtime, mirror=args.mirror,
+                           width=width, height=height)
     return make_source(args.source)
 
 

@@ -18,6 +18,10 @@ def source_family(source):
 # the 2000 mm the tracker takes a palm from (tracker.MAX_PALM_MM); further, every hand
 # would be refused as a tracking error.
 MAX_CAMERA_OFFSET_MM = 1000.0
+# The sender's ~width / ~height defaults. The offline tools (classify_frames, record_frames,
+# record_gestures, recording_to_bag --video) letterbox camera images to them too: the
+# landmark model reads an image otherwise, and they would see other hands than the sender.
+DEFAULT_SIZE = (640, 480)
 
 
 class DeviceParam(Param):
@@ -38,10 +42,10 @@ CAMERA_PARAMS = {
     'device': DeviceParam('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
     'video': Param('', 'video source: a video file, an image, a folder or a glob of images',
                    path=True),
-    'width': Param(640, 'webcam: capture width asked of the device; video: frames are '
+    'width': Param(DEFAULT_SIZE[0], 'webcam: capture width asked of the device; video: frames are '
                         'letterboxed to width x height (0 = as they come)',
                    unit='px', ge=0, le=7680),
-    'height': Param(480, 'webcam: capture height; video: see ~width', unit='px', ge=0, le=4320),
+    'height': Param(DEFAULT_SIZE[1], 'webcam: capture height; video: see ~width', unit='px', ge=0, le=4320),
     'camera_fps': Param(30.0, 'webcam: frame rate asked of the device', unit='Hz', gt=0.0,
                         le=240.0),
     'mirror': Param(False, 'camera sources: flip images left-right before processing (a '
