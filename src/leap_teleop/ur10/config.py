@@ -172,10 +172,14 @@ ARM_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 # The cell file's scalars (a physics rate of 0 or NaN would stop or corrupt the simulation).
 # Below 120 Hz the contacts give way: closing fingers sink into a cube and drop it during a
 # lift (60-90 Hz), a cube dropped from 1-2 m passes through the 5 cm table top (60-100 Hz).
+# A cube wider than the open gripper (85 mm) forced its fingers open past their travel when
+# lowered around it (pads sunk into the cube, the knuckle reading below 0), and was still
+# lifted, which a real 2F-85 cannot do.
 CELL_PARAMS = {
     'physics_hz': Param(240.0, 'physics steps per simulated second (grasps and the table hold '
                         'from 120)', unit='Hz', ge=120.0, le=2000.0),
-    'cube_size': Param(0.05, 'cube edge', unit='m', gt=0.0, le=0.5),
+    'cube_size': Param(0.05, 'cube edge (at most 80 mm: the gripper opens 85 mm)', unit='m',
+                       gt=0.0, le=0.08),
     'cube_mass': Param(0.1, 'cube mass', unit='kg', gt=0.0, le=10.0),
     'table_height': Param(0.75, 'z of the table top', unit='m', ge=0.0, le=2.0),
 }
