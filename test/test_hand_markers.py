@@ -304,6 +304,64 @@ def test_node_shows_the_reported_input_ages_as_a_text_marker_then_clears_it():
     assert markers[-1][1] == Marker.DELETE and [m[1] for m in markers].count(Marker.DELETE) == 1
 
 
+class LatencyMarkersSeen:
+    """Stands in for the node's MarkerArray publisher: (wall time, action) of each marker."""
+
+    def __init__(self):
+        self.markers = []
+
+    def publish(self, array):
+        import time
+        self.markers += [(time.monotonic(), m.action) for m in array.markers]
+
+
+@pytest.mark.filterwarnings('ignore:notifyAll:DeprecationWarning')     # rospy's sim-time calls
+def test_the_latency_text_goes_when_the_clock_stopped_with_the_reports(monkeypatch):
+    # Its timer ran on ROS time: with /clock stopped (a paused simulator, a bag at its end)
+    # it never fired again, and RViz expires the marker on ROS time too, so the last
+    # figures stayed above the hands for ever instead of going within STOPPED_CLOCK_S.
+    import time
+
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+    from leap_teleop.control import input_age
+    from leap_teleop.params import check_params
+    from leap_teleop.ros.graph import TopicTypeWatch
+    from leap_teleop.ros.nodes.hand_markers import PARAMS, HandMarkersNode
+    monkeypatch.setattr(TopicTypeWatch, 'check', lambda self, _event=None: None)
+    monkeypatch.setattr(input_age, 'STOPPED_CLOCK_S', 3.0)    # a minute in the node
+    was = rospy.rostime.is_rostime_initialized()
+    rospy.rostime.set_rostime_initialized(True)
+    rospy.rostime._set_rostime(rospy.Time.from_sec(100.0))   # sim time, standing still
+    node = HandMarkersNode(check_params(PARAMS, {}))
+    try:
+        node.pub = published = LatencyMarkersSeen()
+        node.latency.board.stale_after_s = 1.0
+        start = time.monotonic()
+        node.latency.on_diagnostics(DiagnosticArray(status=[DiagnosticStatus(
+            name='ur10_1/ur10_arm: teleop', values=[
+                KeyValue('input age p50 (ms, last 10 s)', '3.1'),
+                KeyValue('input age p99 (ms, last 10 s)', '12.0'),
+                KeyValue('input age samples', '500')])]))
+        while time.monotonic() - start < 8.0 and Marker.DELETE not in [a for _, a in published.markers]:
+            time.sleep(0.1)
+    finally:
+        if hasattr(node, 'closing'):
+            node.closing.set()
+        for timer in (node.timer, node.type_watch.timer):
+            timer.shutdown()
+        for sub in node.subs + [node.latency.sub]:
+            sub.unregister()
+        rospy.rostime.switch_to_wallclock()                 # wakes the timers' threads
+        for timer in (node.timer, node.type_watch.timer):
+            timer.join(5.0)
+        rospy.rostime.set_rostime_initialized(was)
+    actions = [a for _, a in published.markers]
+    assert actions and actions[0] == Marker.ADD, actions
+    assert actions[-1] == Marker.DELETE and actions.count(Marker.DELETE) == 1, actions
+    assert published.markers[-1][0] - start < 3.0 + 1.5     # within the stopped clock's time
+
+
 def test_a_marker_topic_that_is_a_hand_topic_is_refused_at_start_up():
     # Taken before: MarkerArray went out on a Hand topic, and the only sign was rospy's
     # 3,856-character type-mismatch dump.

@@ -9,7 +9,10 @@ deleted when the hand leaves. The frame is the message's (leap_hands; the sender
 publishes the static TF world -> leap_hands). With ~latency_text, a text marker above the
 hands (namespace 'latency', once a second) shows the input ages reported on /diagnostics:
 the sender's capture -> published and each arm's and pilot's capture -> command, p50 / p99.
+A /clock that stopped leaves it a minute at most (it is then refreshed on wall time).
 """
+import threading
+
 import rospy
 from visualization_msgs.msg import MarkerArray
 
@@ -57,23 +60,36 @@ class HandMarkersNode:
         self.p = p
         self.latency_shown = False
         if p['latency_text']:
-            self.latency = LatencyMonitor()
+            self.latency, self.latency_lock = LatencyMonitor(), threading.Lock()
             # reset: survives a /clock jumping back (a looped bag)
             self.timer = rospy.Timer(rospy.Duration(1.0), self.on_latency_timer, reset=True)
+            # A stopped /clock stops that timer and RViz's marker expiry: the text stayed for ever.
+            self.closing = threading.Event()
+            rospy.on_shutdown(self.closing.set)
+            threading.Thread(target=self.while_clock_stopped, daemon=True).start()
+
+    def while_clock_stopped(self):
+        """The latency text each wall second ROS time stands still (till shutdown or time unset)."""
+        last = rospy.get_time()
+        while not self.closing.wait(1.0) and rospy.rostime.is_rostime_initialized():
+            before, last = last, rospy.get_time()
+            if last == before:
+                self.on_latency_timer(None)
 
     def on_latency_timer(self, _event):
-        now = rospy.get_time()
-        try:                # an exception would end the timer's thread for good
-            lines = self.latency.notes()
-        except Exception as e:  # noqa: BLE001 - logged; the next tick tries again
-            rospy.logwarn_throttle(10.0, 'hand_markers: no latency text: %s' % e)
-            return
-        if lines or self.latency_shown:        # one DELETE once reports stop
-            with closed_at_shutdown():         # a last tick can race the shutdown
-                self.pub.publish(MarkerArray([latency_marker(
-                    lines, self.p['latency_frame'], self.p['latency_position'], now,
-                    self.p['scale'])]))
-        self.latency_shown = bool(lines)
+        with self.latency_lock:                # the timer's thread and while_clock_stopped's
+            now = rospy.get_time()
+            try:                # an exception would end the timer's thread for good
+                lines = self.latency.notes()
+            except Exception as e:  # noqa: BLE001 - logged; the next tick tries again
+                rospy.logwarn_throttle(10.0, 'hand_markers: no latency text: %s' % e)
+                return
+            if lines or self.latency_shown:        # one DELETE once reports stop
+                with closed_at_shutdown():         # a last tick can race the shutdown
+                    self.pub.publish(MarkerArray([latency_marker(
+                        lines, self.p['latency_frame'], self.p['latency_position'], now,
+                        self.p['scale'])]))
+            self.latency_shown = bool(lines)
 
     def on_hand(self, msg):
         try:
