@@ -365,6 +365,34 @@ def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes
     np.testing.assert_allclose(t._tcp_ref, kin.fk(rest)[:3, 3], atol=1e-9)
 
 
+def test_a_rock_shown_while_the_arm_moves_sets_the_origin_where_it_comes_to_rest():
+    # Taken at the pose the moving arm passed, the origin was one it ran past (12 mm here)
+    # and then drove back to, with the hand still.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    goal = np.array(PALM) + [120.0, 0.0, 0.0]                 # 0.3 m of target sideways
+    for k in range(31):                                        # there in 0.25 s, then still
+        palm = np.array(PALM) + (goal - PALM) * min(1.0, k / 31.0)
+        _, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+    for k in range(38):                                        # still, the arm catches up
+        _, q = follow(t, c, hand(palm_mm=tuple(goal)), 1, q)
+    assert np.abs(t._servo.state_at(c.t, q)[1]).max() > 0.3    # ... at speed
+    path = [kin.fk(q)[:3, 3]]
+    for k in range(7):                                         # a rock held 56 ms
+        rest = kin.fk(t._servo.rest(q))[:3, 3]
+        _, q = follow(t, c, hand(palm_mm=tuple(goal), rock=True), 1, q)
+        np.testing.assert_allclose(t._tcp_ref, rest, atol=1e-9)
+        path.append(kin.fk(q)[:3, 3])
+    origin = t._tcp_ref.copy()
+    for k in range(150):
+        _, q = follow(t, c, hand(palm_mm=tuple(goal)), 1, q)
+        path.append(kin.fk(q)[:3, 3])
+    way = (origin - path[0]) / np.linalg.norm(origin - path[0])
+    past = max(float((p - origin) @ way) for p in path)
+    assert past < 0.003, past                                  # no run past and back
+    assert np.linalg.norm(path[-1] - origin) < 1e-4
+
+
 def _palm_for(t, target):
     """The palm (mm) whose mapping puts the TCP target at `target`."""
     return np.array(PALM) + np.linalg.solve(t._axes, np.asarray(target) - t._tcp_ref) / (0.001 * t.p.scale)

@@ -1,29 +1,30 @@
 """Hand -> UR10 teleoperation logic, one instance per arm, no ROS.
 
 Protocol (as the original UR10_lm_arm): thumbs-up arms, fist disarms and stops, rock
-stores the origin (palm reference + the TCP's current pose), pinch drives the gripper.
+stores the origin (palm reference + the TCP's pose where the arm comes to rest: it may
+still be moving), pinch drives the gripper.
 Modes: imitation (TCP follows the palm's offset from the origin, scaled) and joystick
 (beyond a dead zone around the origin, the TCP moves at a speed proportional to the
 excess). Orientation modes: fixed (tool pointing down, turned by tool_yaw), yaw (the
 tool's yaw follows the hand's turn about the vertical), full (the tool turns as the palm
-does); the hand's rotation since the origin goes through the same axis map as positions,
-is scaled, and the tool's tilt from vertical and turn from its yaw at the rock (kept across
-re-anchors) are clamped like the workspace. Unlike the original: the input is smoothed by One Euro filters (position and
-rotation vector) and validated (out-of-order and late messages are dropped and counted,
-see input_check), the target is clamped to a workspace box, motion is commanded by a
-joint servo with speed and acceleration limits whose trajectories keep the velocity
-continuous (servo.py), a target further than the joints go in one period is approached in
-steps along the straight TCP line (the arm catches up along the hand's path, inside the
-box), IK failures and other arm configurations hold the arm instead of raising, stale
-input holds at once and resumes from the current pose when fresh input returns within
-disarm_after (the origin is re-anchored when the hand itself moved the target more than
-reanchor_beyond meanwhile, so nothing jumps; else the mapping stays and the arm catches up
-within the servo's limits, also with what it lagged behind before the stall), while a
-longer silence, a lost hand or a fist disarms (watchdog). Stale joint states (a loaded simulator) hold
-without commanding anything; states back within joint_loss_after resume on the same
-origin (the hand's input never stopped), caught up within the servo's limits; a longer
-loss or the clock jumping back (a simulator restart) disarms without commanding the old
-pose. Every state change says why.
+does); the hand's rotation since the origin goes through the same axis map as positions, is
+scaled, and the tool's tilt from vertical and turn from its yaw at the rock (kept across
+re-anchors) are clamped like the workspace. Unlike the original: the input is smoothed by
+One Euro filters (position and rotation vector) and validated (out-of-order and late
+messages are dropped and counted, see input_check), the target is clamped to a workspace
+box, motion is commanded by a joint servo with speed and acceleration limits whose
+trajectories keep the velocity continuous (servo.py), a target further than the joints go
+in one period is approached in steps along the straight TCP line (the arm catches up along
+the hand's path, inside the box), IK failures and other arm configurations hold the arm
+instead of raising, stale input holds at once and resumes from the current pose when fresh
+input returns within disarm_after (the origin is re-anchored when the hand itself moved the
+target more than reanchor_beyond meanwhile, so nothing jumps; else the mapping stays and
+the arm catches up within the servo's limits, also with what it lagged behind before the
+stall), while a longer silence, a lost hand or a fist disarms (watchdog). Stale joint
+states (a loaded simulator) hold without commanding anything; states back within
+joint_loss_after resume on the same origin (the hand's input never stopped), caught up
+within the servo's limits; a longer loss or the clock jumping back (a simulator restart)
+disarms without commanding the old pose. Every state change says why.
 """
 import collections
 import math
@@ -59,6 +60,10 @@ RESUME_TOLERANCE = 0.02
 # After a hand-input stall, a hand that turned the tool's target further than this (rad)
 # meanwhile re-anchors the origin, as reanchor_beyond does for its position.
 REANCHOR_TURN_RAD = 0.3
+# An origin is set where the arm's plan comes to rest; one within this (rad, every joint) of
+# where the plan is now (a rock held at rest: the goal of its last frame) is the pose now,
+# not that pose recomputed with other rounding.
+AT_REST_RAD = 1e-9
 # A robot whose joints stay further from the plan than this much of its motion at
 # max_joint_speed (plus RESUME_TOLERANCE) for OFF_PLAN_S does not follow its commands (a
 # protective stop, a stopped controller): planning on from the plan would ask it for the
@@ -580,7 +585,7 @@ class ArmTeleop:
                 if hand_stalled and (moved > self.p.reanchor_beyond or turned > REANCHOR_TURN_RAD):
                     # Re-anchor: the hand where it is now maps to the pose the arm holds
                     # (where its hold comes to rest: one still braking would be driven back).
-                    self._set_origin(palm, hand_rot, now, at_rest=True, reanchor=True)
+                    self._set_origin(palm, hand_rot, now, reanchor=True)
                     self._set(TRACKING, back + ': origin re-anchored')
                 else:
                     # The servo catches up within its limits; the mapping stays.
@@ -588,6 +593,8 @@ class ArmTeleop:
             else:
                 self._set(ARMED, back + '; show rock to set the origin')
         if hand.rock:
+            # where the arm's plan comes to rest; a held rock sets it every frame, so the
+            # last frame's is where the arm stops
             self._set_origin(palm, hand_rot, now)
         cmd = ArmCommand(input_stamp=hand.stamp)
         if self._palm_ref is None:
@@ -824,13 +831,20 @@ class ArmTeleop:
                                     self._tool_rotation(hand_rot))
         return moved, float(turned)
 
-    def _set_origin(self, palm, hand_rot, now, at_rest=False, reanchor=False):
-        """The hand at palm / hand_rot maps to the tool's pose now (at_rest: where the arm's
-        last plan comes to rest). A re-anchor keeps the yaw at the rock, which max_tool_turn
-        is measured from (re-centred there, each stall let the tool turn another
-        max_tool_turn on)."""
+    def _set_origin(self, palm, hand_rot, now, reanchor=False):
+        """The hand at palm / hand_rot maps to the tool's pose where the arm's last plan
+        comes to rest: taken at the pose passed while it still moves (catching up, or a
+        hold braking after a stall), the origin was one it ran past and drove back to with
+        the hand still. A re-anchor keeps the yaw at the rock, which max_tool_turn is
+        measured from (re-centred there, each stall let the tool turn another max_tool_turn
+        on)."""
         self._palm_ref = palm.copy()
-        tool = kin.fk(self._servo.rest(self._q) if at_rest else self._servo.state_at(now, self._q)[0])
+        q = self._servo.state_at(now, self._q)[0]      # (a plan that has ended is dropped)
+        if self._servo.moving:
+            rest = self._servo.rest(self._q)
+            if float(np.abs(rest - q).max()) > AT_REST_RAD:
+                q = rest
+        tool = kin.fk(q)
         self._tcp_ref = tool[:3, 3].copy()
         self._tool_ref = tool[:3, :3].copy()
         if reanchor:
