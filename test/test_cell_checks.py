@@ -1,6 +1,7 @@
 """Cell configs the physics cannot run soundly are refused at start-up with one line: a
-physics rate below where grasps and the table hold, a cube that starts inside an arm or a
-tray."""
+physics rate below where grasps and the table hold, a cube wider than the open gripper, a
+cube that starts inside an arm, a tray or the floor, an arm that starts inside the table,
+a tray or the floor."""
 import copy
 
 import pytest
@@ -118,6 +119,67 @@ def test_a_cube_starting_inside_an_arm_a_tray_or_a_cube_is_refused_naming_both(c
     line = str(e.value)
     assert '\n' not in line and line.startswith("cell config cell.yaml: cube 'a' at ")
     assert 'starts inside %s' % inside in line
+
+
+@pytest.mark.parametrize('z, where', [(0.0, 'inside'), (0.01, 'inside'), (-1.0, 'under')])
+def test_a_cube_in_or_under_the_floor_is_refused(z, where):
+    # Accepted before: one given z -1 m left the floor at 19 m/s and was 9.6 m up 1 s later.
+    data = cell_data()
+    data['cubes'] = [{'name': 'a', 'xyz': [1.5, 0.0, z]}]
+    with pytest.raises(ValueError) as e:
+        parse_config(data, 'cell.yaml')
+    line = str(e.value)
+    assert '\n' not in line
+    assert line.startswith("cell config cell.yaml: cube 'a' at z %.3f m is %s the floor" % (z, where))
+    assert 'rest it at 0.025 m' in line
+
+
+def test_a_cube_resting_on_the_floor_beside_the_table_is_accepted():
+    data = cell_data()
+    data['cubes'] = [{'name': 'a', 'xyz': [1.5, 0.0, 0.025]}, {'name': 'b', 'xyz': [0.4, 0.0, 0.025]}]
+    assert [c.xyz[2] for c in parse_config(data, 'cell.yaml').cubes] == [0.025, 0.025]  # b: under it
+
+
+@pytest.mark.integration
+@pytest.mark.parametrize('edit, inside', [
+    (lambda arm: arm.update(home=[0.0, -0.3, 1.5708, -1.5708, -1.5708, 0.0]), "the table"),
+    (lambda arm: arm.update(base_xyz=[0.0, 0.0, 0.60]), "the table"),
+    (lambda arm: arm.update(base_xyz=[0.0, 0.0, 0.74]), "the table"),
+    (lambda arm: arm.update(base_xyz=[0.0, 0.0, 0.0]), "the table"),
+    (lambda arm: arm['tray'].update(xyz=[0.0, 0.17, 0.80]), "arm ur10_1's tray"),
+    (lambda arm: arm.update(base_xyz=[1.6, 0.0, -0.3]), "the floor"),
+], ids=['home into the table', 'base 15 cm in the table', 'base 1 cm in the table', 'base under the table',
+        'tray around the upper arm', 'base under the floor'])
+def test_an_arm_starting_inside_the_table_a_tray_or_the_floor_is_refused_naming_both(edit, inside):
+    # Accepted before: the solver pushed the links out while the motors pushed back home,
+    # every joint thrashing at its speed limit for ever, the tool through the table top.
+    from leap_teleop.ur10.cell import UR10Cell
+    data = cell_data()
+    edit(data['arms'][0])
+    data['cubes'] = [{'name': 'a', 'xyz': [0.3, -0.5]}]
+    with pytest.raises(ValueError) as e:
+        UR10Cell(parse_config(data, 'cell.yaml'), visuals=False)
+    line = str(e.value)
+    assert '\n' not in line and line.startswith("cell config cell.yaml: arm ur10_1's "), line
+    assert '_link starts inside %s at its home pose (' % inside in line, line
+
+
+@pytest.mark.integration
+def test_an_arm_standing_on_the_floor_beside_the_table_is_accepted():
+    # Its base rests on the floor as the shipped ones rest on the table.
+    import numpy as np
+
+    from leap_teleop.ur10.cell import UR10Cell
+    data = cell_data()
+    data['arms'][0]['base_xyz'] = [-1.6, 0.0, 0.0]
+    data['arms'][0]['tray']['xyz'] = [-1.6, 1.0, 0.0]
+    data['cubes'] = [{'name': 'a', 'xyz': [0.7, -0.2]}]
+    cell = UR10Cell(parse_config(data, 'cell.yaml'), visuals=False)
+    try:
+        cell.run(0.5)
+        assert np.abs(cell.joint_state('ur10_1')[1]).max() < 1e-3
+    finally:
+        cell.close()
 
 
 @pytest.mark.integration

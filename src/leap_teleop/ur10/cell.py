@@ -49,6 +49,10 @@ CUBE_CHECK_EVERY = 12          # physics steps between those stillness checks (2
 # left out of its collision checks. The table is 0.037 m below it.
 SWEEP_SAMPLES = 180
 SWEEP_CLEARANCE = 0.03
+# How deep (m) an arm link may read inside the floor, the table or a tray at the start
+# and count as resting on it, not inside; base_link's mesh reads 1 mm into what it stands on.
+ARM_CLEAR_TOLERANCE = 1e-4
+BASE_CLEAR_TOLERANCE = 2e-3
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -133,6 +137,7 @@ class UR10Cell:
         self.reset()
         try:
             self._check_arms_apart()
+            self._check_arms_clear()
             self._check_cubes_clear()
         except ValueError:
             self.close()
@@ -150,10 +155,40 @@ class UR10Cell:
                                      % (self.config.path, a.cfg.name, b.cfg.name,
                                         a.cfg.base_xyz.tolist(), b.cfg.base_xyz.tolist()))
 
+    def _link_name(self, arm, link):
+        """An arm's link by name, without the arm's prefix (upper_arm_link)."""
+        name = (p.getJointInfo(arm.body, link, physicsClientId=self.client)[12] if link >= 0
+                else p.getBodyInfo(arm.body, physicsClientId=self.client)[0]).decode()
+        return name[len(arm.cfg.prefix):] if name.startswith(arm.cfg.prefix) else name
+
+    def _check_arms_clear(self):
+        """ValueError naming the first arm whose links start inside the floor, the table or
+        a tray at its home pose (a base set too low, a home pose reaching down, a tray
+        placed around the arm): the solver pushed the links out while the motors pushed
+        back home, every joint thrashing at its speed limit for ever."""
+        c, path = self.client, self.config.path
+        static = [(self.floor, 'the floor', 'move the base or change home'),
+                  (self.table, 'the table', 'move the base or change home')]
+        static += [(body, "arm %s's tray" % name, 'move the tray or the base, or change home')
+                   for name, body in self.trays.items()]
+        for arm in self.arms.values():
+            base_link = p.getJointInfo(arm.body, arm.arm_joints[0], physicsClientId=c)[16]
+            for body, what, fix in static:
+                deep = [cp for cp in p.getClosestPoints(arm.body, body, 0.0, physicsClientId=c)
+                        if cp[8] < -(BASE_CLEAR_TOLERANCE if cp[3] == base_link else ARM_CLEAR_TOLERANCE)]
+                if deep:
+                    cp = min(deep, key=lambda cp: cp[8])
+                    raise ValueError(
+                        "cell config %s: arm %s's %s starts inside %s at its home pose (base_xyz "
+                        '%s, home %s; %.1f mm deep): %s'
+                        % (path, arm.name, self._link_name(arm, cp[3]), what,
+                           np.round(arm.cfg.base_xyz, 3).tolist(), np.round(arm.cfg.home, 4).tolist(),
+                           -1000 * cp[8], fix))
+
     def _check_cubes_clear(self):
         """ValueError naming the first cube that starts inside an arm at its home pose, a
         tray (its floor or a wall) or another cube: the solver would throw it at the first
-        steps (out of an upper arm at 2.35 m/s). The config refuses one inside the table."""
+        steps (out of an upper arm at 2.35 m/s). The config refuses one inside the table or the floor."""
         c, path = self.client, self.config.path
         tolerance = 1e-3 * self.config.cube_size     # resting contact reads ~0, not inside
         others = [(a.body, "arm %s's " % name) for name, a in self.arms.items()]
@@ -169,12 +204,8 @@ class UR10Cell:
                 if not deep:
                     continue
                 if other in self._arm_bodies:
-                    link = deep[0][4]
-                    name = (p.getJointInfo(other, link, physicsClientId=c)[12] if link >= 0
-                            else p.getBodyInfo(other, physicsClientId=c)[0]).decode()
                     arm = next(a for a in self.arms.values() if a.body == other)
-                    what += name[len(arm.cfg.prefix):] if name.startswith(arm.cfg.prefix) else name
-                    what += ' at its home pose'
+                    what += self._link_name(arm, deep[0][4]) + ' at its home pose'
                 raise ValueError('cell config %s: cube %r at %s starts inside %s (%.1f mm deep): '
                                  'move it clear' % (path, cube.name, np.round(cube.xyz, 3).tolist(),
                                                     what, -1000 * min(cp[8] for cp in deep)))

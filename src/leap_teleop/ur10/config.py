@@ -311,14 +311,19 @@ def _rest_z(xy, arms, table_height):
 
 def _check_cubes(cubes, table_height, size, table_center, table_size):
     """ValueError for cubes the physics cannot start from: two of one name (the cell's
-    poses would report one), one inside the table top, two inside each other (both thrown
-    apart at the first step)."""
+    poses would report one), one inside the table top or in or under the floor (one 1 m
+    under it was thrown 9.6 m up), two inside each other (both thrown apart at the first
+    step)."""
     names = [c.name for c in cubes]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise ValueError('cube names must be unique, %s twice' % ', '.join(map(repr, twice)))
     tolerance = 1e-3 * size
     for c in cubes:
+        if c.xyz[2] < size / 2 - tolerance:      # cubes lie on a face: size / 2 above z 0
+            raise ValueError('cube %r at z %.3f m is %s the floor (z 0): rest it at %.3f m or '
+                             'higher' % (c.name, c.xyz[2], 'under' if c.xyz[2] <= -size / 2
+                                         else 'inside', size / 2))
         over_table = bool((np.abs(c.xyz[:2] - table_center) < table_size / 2 + size / 2).all())
         if over_table and (table_height - TABLE_THICKNESS - size / 2 < c.xyz[2]
                            < table_height + size / 2 - tolerance):
