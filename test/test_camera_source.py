@@ -330,6 +330,28 @@ def test_camera_footage_recorded_with_record_frames_replays_with_the_same_gestur
     assert replay == live
 
 
+@pytest.mark.parametrize('width, height', [(0, 480), (640, 0)])
+def test_a_size_with_one_side_0_is_refused_naming_both(width, height):
+    # Before: one of ~width / ~height 0 silently left the other unused (no letterbox).
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    from leap_teleop.hands.sender_setup import build_source
+    from leap_teleop.hands.sources import SourceError
+    from leap_teleop.params import check_params
+    image = data('fist__htj__22.jpg')
+    p = check_params(SENDER_PARAMS, {'source': 'video', 'video': image, 'width': width,
+                                     'height': height})
+    with pytest.raises(SourceError) as e:
+        build_source(p, lambda: 0.0, '')
+    assert str(e.value) == ('~width %d and ~height %d: both more than 0 (the size images are '
+                            'letterboxed to) or both 0 (images as they come)' % (width, height))
+    for name, kwargs in (('video', {'path': image}), ('webcam', {'device': '/dev/none'})):
+        with pytest.raises(SourceError, match='image size %d x %d: both more than 0' % (width, height)):
+            make_source(name, width=width, height=height, **kwargs)
+    source = make_source('video', path=image, width=0, height=0, realtime=False)
+    assert source.size is None
+    source.detector.close()
+
+
 def test_classify_frames_reads_images_and_videos(tmp_path):
     env = dict(os.environ, PYTHONWARNINGS='ignore')
     cmd = [sys.executable, '-m', 'leap_teleop.hands.classify_frames']

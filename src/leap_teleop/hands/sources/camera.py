@@ -33,10 +33,12 @@ MAX_DETECTOR_FAILURES = 30
 class CameraSource(HandSource):
     """Frames from a capture.* media object through the hand detector.
 
-    camera: CameraModel of the processed image, or None to use hfov_deg at whatever size
-    the images come. mirror: flip images left-right before processing (a selfie view);
-    input_mirrored: the images already are mirror images. Either way the hands come out
-    with the person's side and the person's right as +x.
+    width, height: images of another size are letterboxed to it; both 0: as they come
+    (one of them 0 alone is refused). camera: CameraModel of the processed image, or None
+    to use hfov_deg at whatever size the images come. mirror: flip images left-right
+    before processing (a selfie view); input_mirrored: the images already are mirror
+    images. Either way the hands come out with the person's side and the person's right
+    as +x.
     on_image(frame, bgr, landmarks): optional, called after each processed image (for the
     annotated view), on the source's thread.
     """
@@ -57,7 +59,11 @@ class CameraSource(HandSource):
         self.latest_only = bool(latest_only)
         self.pace_hz = float(pace_hz or 0.0)
         self.loop = bool(loop)
-        self.size = (int(width), int(height)) if width and height else None
+        size = (int(width or 0), int(height or 0))
+        if size != (0, 0) and min(size) <= 0:      # one alone was silently unused
+            raise SourceError('image size %d x %d: both more than 0 (the size images are '
+                              'letterboxed to) or both 0 (images as they come)' % size)
+        self.size = size if size != (0, 0) else None
         self.mirrored = bool(mirror) != bool(input_mirrored)
         self.flip = bool(mirror)
         self.camera = camera

@@ -3,6 +3,7 @@ mapping onto make_source('webcam' | 'video', ...) keywords."""
 import numbers
 
 from leap_teleop.hands.sources.landmarks import DEFAULT_CAMERA_POSITION_MM, DEFAULT_HFOV_DEG, DEFAULT_PALM_LENGTH_MM
+from leap_teleop.hands.sources.source import SourceError
 from leap_teleop.params import Param, ParamError
 
 CAMERA_SOURCES = ('webcam', 'video')
@@ -42,10 +43,12 @@ CAMERA_PARAMS = {
     'device': DeviceParam('0', 'webcam source: V4L2 device index or /dev/videoN', empty_ok=False),
     'video': Param('', 'video source: a video file, an image, a folder or a glob of images',
                    path=True),
-    'width': Param(DEFAULT_SIZE[0], 'webcam: capture width asked of the device; video: frames are '
-                        'letterboxed to width x height (0 = as they come)',
+    'width': Param(DEFAULT_SIZE[0], 'camera sources: images are letterboxed to width x height, '
+                                    'keeping their aspect ratio (webcam: also the size asked of '
+                                    'the device); video: 0 with ~height 0 = as they come; one of '
+                                    'the two 0 alone is refused',
                    unit='px', ge=0, le=7680),
-    'height': Param(DEFAULT_SIZE[1], 'webcam: capture height; video: see ~width', unit='px', ge=0, le=4320),
+    'height': Param(DEFAULT_SIZE[1], 'camera sources: see ~width', unit='px', ge=0, le=4320),
     'camera_fps': Param(30.0, 'webcam: frame rate asked of the device', unit='Hz', gt=0.0,
                         le=240.0),
     'mirror': Param(False, 'camera sources: flip images left-right before processing (a '
@@ -89,9 +92,20 @@ CAMERA_PARAMS = {
 }
 
 
+def check_size(p):
+    """SourceError when checked params `p` give ~width or ~height 0 without the other: one
+    alone was silently unused (no letterbox at all)."""
+    if (p['width'] == 0) != (p['height'] == 0):
+        raise SourceError('~width %d and ~height %d: both more than 0 (the size images are '
+                          'letterboxed to) or both 0 (images as they come)'
+                          % (p['width'], p['height']))
+
+
 def camera_source_kwargs(name, p, clock, camera=None, on_image=None):
     """make_source keywords for camera source `name` from checked params `p` (the
-    sender's: CAMERA_PARAMS plus realtime, loop, rate)."""
+    sender's: CAMERA_PARAMS plus realtime, loop, rate); SourceError for a size check_size
+    refuses."""
+    check_size(p)
     common = dict(hfov_deg=p['hfov_deg'], palm_length_mm=p['palm_length_mm'],
                   camera_position_mm=p['camera_position_mm'], max_hands=p['max_hands'],
                   model=p['model'], detect_every=p['detect_every'],
