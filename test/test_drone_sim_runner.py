@@ -1,5 +1,6 @@
 """DroneSimRunner and its helpers: what the ardrone_sim node runs, without a master."""
 import math
+import os
 
 import numpy as np
 import pybullet as pb
@@ -150,6 +151,22 @@ def test_snapshot_is_written_where_asked_and_named_by_sim_time(tmp_path):
         assert path == str(tmp_path / 'shots' / 'ardrone_0000.500.png')
         with open(path, 'rb') as f:
             assert f.read(8) == b'\x89PNG\r\n\x1a\n'
+    finally:
+        r.close()
+
+
+def test_a_failed_snapshot_leaves_no_empty_file(tmp_path):
+    # The name is reserved as an empty file before the picture is drawn: a picture that
+    # could not be drawn left that empty .png behind.
+    r = DroneSimRunner(params(snapshot_dir=str(tmp_path), snapshot_size=[64, 48]), use_sim_time=True)
+
+    def fails(*_args):
+        raise RuntimeError('the renderer process died')
+    try:
+        r.snapshots.take = fails
+        with pytest.raises(RuntimeError):
+            r.snapshot()
+        assert os.listdir(str(tmp_path)) == []
     finally:
         r.close()
 

@@ -18,7 +18,14 @@ from leap_teleop.drone.sim import (
     animation_duration_error,
 )
 from leap_teleop.params import Param
-from leap_teleop.sim_runtime import MAX_LAG_S, RealtimePacer, SendGate, pace_factor, snapshot_path
+from leap_teleop.sim_runtime import (
+    MAX_LAG_S,
+    RealtimePacer,
+    SendGate,
+    pace_factor,
+    release_snapshot_path,
+    snapshot_path,
+)
 
 _D = DroneParams()
 # Default camera rates: what 2 shared cores render (in the camera process) while the
@@ -311,7 +318,11 @@ class DroneSimRunner:
         with self.lock:
             t, pos, quat = self.sim.time, self.sim.pos, self.sim.quat
         path = snapshot_path(self.p['snapshot_dir'], 'ardrone', t)
-        self.snapshots.take(pos, quat, path, w, h, self.sim.p.arm)
+        try:
+            self.snapshots.take(pos, quat, path, w, h, self.sim.p.arm)
+        except BaseException:
+            release_snapshot_path(path)          # no empty file for a failed picture
+            raise
         return path
 
     def close(self):
