@@ -354,6 +354,25 @@ def test_record_gestures_keeps_the_take_when_the_source_fails(tmp_path, monkeypa
     assert len(records) == 270 and records[-1]['label'] == 'wave'
 
 
+class FailsAtOnce(HandSource):
+    def frames(self):
+        raise SourceError('leapc source: cannot connect to the hand-tracking service')
+        yield
+
+
+def test_a_source_that_fails_before_any_frame_is_one_line(tmp_path, monkeypatch, capsys):
+    # The failure was followed by 'no hand in 0 frames: nothing written', as if the take
+    # had been recorded and held no hand.
+    monkeypatch.setattr(record_gestures, 'source_from_args', lambda args: FailsAtOnce())
+    out = tmp_path / 'wave.jsonl'
+    assert record_gestures.main(['--source', 'scripted', '--script', str(tmp_path / 's.yaml'),
+                                 '--label', 'wave', '--out', str(out)]) == 1
+    err = [line for line in capsys.readouterr().err.splitlines() if 'recording' not in line]
+    assert err == ['record_gestures: the scripted source failed after 0.0 of the 10 s asked: '
+                   'leapc source: cannot connect to the hand-tracking service'], err
+    assert not out.exists()
+
+
 class CameraHands(HandSource):
     """Hands as a camera source gives them: with image landmarks (pixels)."""
 

@@ -241,9 +241,10 @@ def main(argv=None):
             'the source ended' if take.ended == 'source ended' else 'interrupted',
             take.seconds, args.seconds), file=sys.stderr)
     if not rows:
-        print('record_gestures: no hand in %d frames: nothing written%s' % (
-            seen, ' (a camera hand needs its image landmarks)' if family == 'keypoints' else ''),
-            file=sys.stderr)
+        if not (failed and seen == 0):      # the failure, said above, is the whole story
+            print('record_gestures: no hand in %d frames: nothing written%s' % (
+                seen, ' (a camera hand needs its image landmarks)' if family == 'keypoints' else ''),
+                file=sys.stderr)
         return 1
     try:
         written = write(out, family, rows)
