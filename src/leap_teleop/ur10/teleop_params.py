@@ -113,9 +113,10 @@ TELEOP_PARAMS = {
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
                                  'best latency', unit='s', gt=0.0, le=10.0),
     'reanchor_beyond': Param(0.1, 'after a hand-input stall, the origin is re-anchored only when the hand '
-                                  'would put the target further than this from where the arm '
-                                  'is; a smaller gap is caught up at the servo\'s limits, so '
-                                  'the hand-to-arm mapping is kept', unit='m', ge=0.0, le=2.0),
+                                  'moved the target further than this during the silence; '
+                                  'else the hand-to-arm mapping is kept and the arm catches up '
+                                  '(its lag from before the stall too) at the servo\'s limits',
+                             unit='m', ge=0.0, le=2.0),
     'joint_timeout': Param(0.5, 'no joint states this long -> hold (commands stop); fresh '
                                 'states resume from the current pose', unit='s',
                            ge=0.05, le=10.0),
