@@ -60,7 +60,8 @@ def test_a_device_source_stamps_its_frames_on_the_senders_clock(name, module, fa
 
 
 @pytest.mark.parametrize('values, says', [({'source': 'recording'}, 'needs ~recording'),
-                                          ({'source': 'video'}, 'needs ~video')])
+                                          ({'source': 'video'}, 'needs ~video'),
+                                          ({'source': 'webcam', 'width': 0}, '~width 0 and ~height 480')])
 def test_a_source_missing_its_file_says_which_parameter(values, says):
     asked = []
     with pytest.raises(SourceError) as e:

@@ -3,7 +3,12 @@ recognizers and their live retuning, and the original sender's publishing period
 from leap_teleop.hands.gestures import GestureRecognizer
 from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.hands.sources import SourceError, make_source
-from leap_teleop.hands.sources.camera_params import CAMERA_SOURCES, camera_source_kwargs, source_family
+from leap_teleop.hands.sources.camera_params import (
+    CAMERA_SOURCES,
+    camera_source_kwargs,
+    check_size,
+    source_family,
+)
 
 # The sender's output topic parameters; a side's own ones end in _<side>.
 OUTPUT_TOPICS = ('leapcobot_topic_right', 'leapcobot_topic_left', 'hand_topic_right',
@@ -47,6 +52,7 @@ def build_source(p, clock, default_script, camera_model=lambda: None, on_image=N
         if name == 'video' and not p['video']:
             raise SourceError('~source video needs ~video:=PATH (a video, an image, a folder '
                               'or a glob of images)')
+        check_size(p)                   # before camera_model(): it may wait for CameraInfo
         return make_source(name, **camera_source_kwargs(name, p, clock, camera_model(),
                                                         on_image))
     if name == 'scripted':
