@@ -389,6 +389,27 @@ class CameraHands(HandSource):
             yield Frame(i, 10.0 + i / 30.0, hands)
 
 
+def test_a_recorded_camera_take_gives_keypoint_rows(tmp_path, capsys):
+    # --source recording was always taken for Leap hands: a camera take recorded with
+    # record_frames (its hands keep their picture's landmarks) gave pose records the
+    # keypoint model that judges such hands never learns from.
+    from leap_teleop.hands.sources import leapjs
+    rng = np.random.default_rng(1)
+    frames = list(CameraHands([rng.uniform(100, 400, (21, 2)) for _ in range(6)]).frames())
+    take = tmp_path / 'cam.json'
+    leapjs.save(str(take), [leapjs.frame_to_dict(f) for f in frames], {})
+    out = tmp_path / 'peace.csv'
+    assert record_gestures.main(['--source', 'recording', '--recording', str(take), '--realtime', '0',
+                                 '--label', 'peace', '--seconds', '0.2', '--out', str(out)]) == 0
+    assert 'wrote 6 keypoint rows' in capsys.readouterr().out
+    persons, labels, xy = gesture_data.read_keypoints(str(out))
+    assert labels == ['peace'] * 6 and len(xy) == 6
+    # asked for a .jsonl, it says the take holds camera hands
+    assert record_gestures.main(['--source', 'recording', '--recording', str(take), '--label', 'peace',
+                                 '--out', str(tmp_path / 'peace.jsonl')]) == 2
+    assert '.csv' in capsys.readouterr().err
+
+
 def test_camera_hands_become_community_normalised_keypoint_rows(tmp_path):
     rng = np.random.default_rng(0)
     pts = [rng.uniform(100, 400, (21, 2)) for _ in range(4)]

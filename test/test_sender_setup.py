@@ -370,3 +370,6 @@ def test_bindings_are_checked_against_the_model_that_judges_the_sources_hands(tm
     with pytest.raises(BindingError, match="unknown gesture 'two' .*: the webcam source's hands are "
                                            "judged by ~keypoint_model"):
         checked_bindings(dict(bound, source='webcam'), recognizer)
+    # a recording of camera hands says so (its hand_family): the keypoint model judges them
+    with pytest.raises(BindingError, match="the recording source's hands are judged by ~keypoint_model"):
+        checked_bindings(bound, recognizer, 'keypoints')

@@ -786,6 +786,17 @@ def test_a_camera_hand_replays_with_its_picture_landmarks(tmp_path, monkeypatch,
             (live.label, live.fist, live.pinch, live.thumb_up)
 
 
+def test_a_recording_says_which_model_judges_its_hands(tmp_path):
+    # The sender checked the bindings of every recording against the Leap model, though a
+    # camera take's hands are judged by the keypoint model.
+    camera = _write(tmp_path, 'cam.json', [leapjs.frame_to_dict(Frame(k + 1, 5.0 + k, [hand]))
+                                           for k, hand in enumerate(_camera_hands())])
+    leap = _write(tmp_path, 'leap.json', [leapjs.frame_to_dict(
+        Frame(k + 1, 5.0 + k, [render_hand('right', 'open', (0, 200, 0))])) for k in range(3)])
+    assert make_source('recording', path=camera, realtime=False).hand_family == 'keypoints'
+    assert make_source('recording', path=leap, realtime=False).hand_family == 'leap'
+
+
 @pytest.mark.parametrize('value', [None, [], [[1.0, 2.0]] * 20, [[1.0, 2.0]] * 20 + [[1.0, 'x']],
                                    [[1.0, 2.0]] * 20 + [[1.0, 1e999]], [[1.0, 2.0, 3.0]] * 21,
                                    [[1.0, True]] * 21, {'x': 1}, 'landmarks'])

@@ -79,11 +79,11 @@ def recognizer_factory(p):
     return make
 
 
-def checked_bindings(p, recognizer):
+def checked_bindings(p, recognizer, family=None):
     """The ~gesture_bindings, checked against what the source's hands can show: a camera
     hand is judged by the keypoint model, any other by the Leap one, so a class of the other
-    model never fires (BindingError)."""
-    family = source_family(p['source'])
+    model never fires (BindingError). `family`: the source's hand_family, when it knows."""
+    family = family or source_family(p['source'])
     model = '~keypoint_model' if family == 'keypoints' else '~gesture_model'
     return load_bindings(p['gesture_bindings']).check(
         recognizer.user_gestures_of[family],

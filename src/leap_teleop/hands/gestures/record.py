@@ -6,7 +6,8 @@ usage: rosrun leap_teleop record_gestures --source SOURCE --label NAME [--second
            [--script YAML] [--recording PATH] [--video PATH] [--device N|/dev/videoN]
            [--mirror] [--realtime 0|1]
 
-SOURCE: leap, leapc, scripted, recording (Leap-family hands: 3-D joints) or webcam,
+SOURCE: leap, leapc, scripted, recording (Leap-family hands: 3-D joints; a recording of
+camera hands, as record_frames keeps them, is camera-family) or webcam,
 video (camera hands: image landmarks). Hold the gesture, moving and turning the hand a
 little, for N seconds (of the source's time: a scripted or recording source with
 --realtime 0 takes no longer than it needs).
@@ -202,8 +203,11 @@ def main(argv=None):
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
-    family = source_family(args.source)
+    source = None
     try:
+        if args.source == 'recording':      # a camera take keeps its hands' picture landmarks
+            source = source_from_args(args)
+        family = (source and source.hand_family) or source_family(args.source)
         check_label(args.label)
         if not (math.isfinite(args.seconds) and 0.0 < args.seconds <= 3600.0):
             raise RecordError('--seconds %g: more than 0, at most 3600' % args.seconds)
@@ -218,7 +222,7 @@ def main(argv=None):
             free = free_session_name(out)
             raise RecordError('--out %s: holds an earlier take; record to another file%s or '
                               'remove it' % (out, ' (e.g. --out %s)' % free if free else ''))
-        source = source_from_args(args)
+        source = source or source_from_args(args)
     except (RecordError, SourceError) as e:
         print('record_gestures: %s' % e, file=sys.stderr)
         return 2

@@ -68,6 +68,9 @@ class RecordingSource(HandSource):
                 self._warn_bad('no usable timestamp')
         if not usable:
             raise SourceError('recording %s has no frame with a usable timestamp' % self.path)
+        # Camera hands keep their picture's landmarks: the keypoint model judges them.
+        self.hand_family = 'keypoints' if any(
+            h.image_landmarks is not None for f in usable for h in f.hands) else 'leap'
         # Time going back, or a silence longer than MAX_GAP_S, is a break (two takes in one
         # file, a corrupt stamp): the next frame follows one frame period later. Measured
         # against the last stamp instead, one stamp days ahead dropped the rest of the take

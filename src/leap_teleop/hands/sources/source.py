@@ -15,6 +15,9 @@ class HandSource(abc.ABC):
 
     #: nominal frames per second, for rate checks; None when unknown
     rate_hz = None
+    #: the pose model family that judges its hands when the source knows it better than
+    #: its name does (a recording of camera hands: 'keypoints'); None: by its name
+    hand_family = None
 
     @abc.abstractmethod
     def frames(self):

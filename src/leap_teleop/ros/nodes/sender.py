@@ -44,10 +44,10 @@ def sender_parts(p):
     use_driver_globals(p, PARAMS)
     p['leap_rotation_xyzw'] = leap_rotation(p['leap_rotation_xyzw'])
     factory = recognizer_factory(p)
-    bindings = checked_bindings(p, factory())
     view = camera_view_publisher(p)
     source = build_source(p, rospy.get_time, package_path('config', 'gestures', 'wave_hello.yaml'),
                           lambda: camera_model(p), view.on_image if view is not None else None)
+    bindings = checked_bindings(p, factory(), source.hand_family)   # a recording knows its hands
     return source, view, factory, bindings
 
 
