@@ -197,15 +197,61 @@ def test_a_turn_too_fast_to_follow_is_read_the_right_way_and_the_neutral_kept(ra
     assert commands[-3:] == [pytest.approx(1.0), pytest.approx(-1.0), 0.0]
 
 
-def test_a_fast_turn_from_upright_cannot_be_told_and_turns_nothing():
-    # Fingers near vertical have no heading of their own: which half turn a 90 deg step
-    # from there was is unknown, so the yaw starts afresh from that frame.
+def hand_pose(turn=0.0, raised=0.0, rolled=0.0):
+    """Rolled about the fingers, raised (fingers up), then turned right about the vertical."""
+    return (rotation((0.0, 1.0, 0.0), -turn) @ rotation((1.0, 0.0, 0.0), raised)
+            @ rotation((0.0, 0.0, 1.0), rolled))
+
+
+@pytest.mark.parametrize('turn, raised', [(70, 30), (-90, 40), (65, 0)])
+def test_a_fast_turn_from_upright_is_read_by_the_hand_s_own_turn(turn, raised):
+    # Fingers near vertical have no heading of their own, so a step from there to level
+    # fingers cannot be followed by their heading: the hand's turn about the vertical between
+    # the two frames tells it. (Reset there instead, the neutral moved: the hand back at
+    # its unfold pose yawed at full rate.)
     pilot = airborne(PilotParams())
     drain(pilot)
-    path = [rotation((1.0, 0.0, 0.0), deg) for deg in range(0, 81)]       # nearly upright
-    flick = rotation((0.0, 1.0, 0.0), -90) @ rotation((1.0, 0.0, 0.0), 40)
-    commands = yaw_commands(pilot, [oriented(R) for R in path + [flick] * 5])
-    assert commands[-5:] == [0.0] * 5
+    up = [hand_pose(raised=deg) for deg in range(0, 81)]                     # nearly upright
+    flick = [hand_pose(turn, raised)] * 3
+    back = [hand_pose(turn * (1 - k / 40), raised + (80 - raised) * k / 40) for k in range(41)]
+    down = [hand_pose(raised=80 - deg) for deg in range(81)] + [hand_pose()] * 5
+    commands = yaw_commands(pilot, [oriented(R) for R in up + flick + back + down])
+    assert commands[len(up)] == pytest.approx(-1.0 if turn > 0 else 1.0)     # right: yaw right
+    assert commands[-1] == 0.0 and max(abs(c) for c in commands[-len(down):]) < 0.2
+
+
+@pytest.mark.parametrize('stall', [False, True])
+def test_a_hand_raised_past_upright_between_two_frames_turns_nothing(stall):
+    # A slow camera, or a stall in a Leap stream over the top of a raise: the fingers go from
+    # 55 deg up to 125 (pointing back) between two frames, a half turn of their heading that
+    # read as a turn at full rate, on after the hand was flat again.
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    raise_ = [hand_pose(raised=deg) for deg in range(0, 56, 5)]
+    over = [hand_pose(raised=125)] * 10 + [hand_pose(turn=3, raised=125)] * 5
+    lower = [hand_pose(turn=-3, raised=125 - 5 * k) for k in range(26)] + [hand_pose()] * 5
+    hands = [oriented(R) for R in raise_ + over + lower]
+    if stall:       # no orientation on the frames between: the same two readings
+        hands[len(raise_):len(raise_)] = [PilotInput(True, (0.0, 0.2, 0.0), (0.0, 0.0, -1.0),
+                                                     (0.0, 0.0, -1.0))] * 3
+    commands = yaw_commands(pilot, hands)
+    assert commands == [0.0] * len(commands), commands
+
+
+@pytest.mark.parametrize('rolled', [100, 150, -150])
+def test_a_palm_rolled_up_and_turned_a_little_turns_a_little(rolled):
+    # Rolled past 90 deg the axis across the palm points back, half a turn from the fingers:
+    # the tie read a whole turn, and a 6 deg turn yawed at full rate the wrong way, on after
+    # the hand was flat and straight ahead again.
+    for turn, want in ((-6, 0.0), (6, 0.0), (20, -5.0 / 45.0), (-20, 5.0 / 45.0)):
+        pilot = airborne(PilotParams())
+        drain(pilot)
+        roll = [hand_pose(rolled=rolled * k / 30) for k in range(31)]
+        turning = [hand_pose(turn=turn * k / 10, rolled=rolled) for k in range(11)]
+        back = [hand_pose(turn=turn * (1 - k / 10), rolled=rolled * (1 - k / 10)) for k in range(11)]
+        commands = yaw_commands(pilot, [oriented(R) for R in roll + turning + back])
+        assert commands[len(roll) + len(turning) - 1] == pytest.approx(want), (turn, commands)
+        assert commands[-1] == 0.0
 
 
 def test_an_unfold_shown_upright_steers_by_the_turn_from_it():
@@ -417,37 +463,68 @@ def test_the_clock_jumping_back_under_a_loss_still_lands(lost):
     assert landed_at is not None and 5.0 < landed_at <= 5.0 + 3.0 + 0.02, landed_at
 
 
+@pytest.mark.parametrize('stamped', [True, False], ids=['stamped', 'unstamped'])
+@pytest.mark.parametrize('absent_first', [False, True], ids=['hand_in_view', 'no_hand_first'])
 @pytest.mark.parametrize('first', ['hand', 'watchdog'])
-def test_a_session_played_again_hovers_and_needs_a_new_unfold(first):
-    # A bag looped with its clock: /clock and the Hand stamps go back 40 s, and the new
-    # pass shows the hand 100 mm forward of the old unfold. Whichever saw the jump first,
-    # the pilot steered on from the old session's reference (linear.x 0.7, no hover).
+def test_a_session_played_again_hovers_and_needs_a_new_unfold(first, absent_first, stamped):
+    # A bag looped with its clock: /clock (and the Hand stamps, if any) go back 40 s, and
+    # the new pass shows the hand 100 mm forward of the old unfold. Whichever saw the jump
+    # first, the pilot steered on from the old session's reference (linear.x 0.7, no
+    # hover); so it did when the new pass began with frames of no hand (the sender sends
+    # one per frame), or with unstamped messages.
     warned = []
     pilot = DronePilot(PilotParams(), warn=lambda key, text: warned.append(text))
 
-    def stamped(z, t):
-        return PilotInput(True, (0.0, 0.2, z), FLAT['normal'], FLAT['direction'], t)
+    def at(z, t, present=True):
+        return PilotInput(present, (0.0, 0.2, z), FLAT['normal'], FLAT['direction'], t if stamped else 0.0)
     pilot.on_navdata(2, 0, 10.0)
-    pilot.on_hand(stamped(0.0, 10.0), 10.0)
-    pilot.on_gesture('unfold', True, 10.0, stamp=10.0)
+    pilot.on_hand(at(0.0, 10.0), 10.0)
+    pilot.on_gesture('unfold', True, 10.0, stamp=10.0 if stamped else 0.0)
     for t in np.arange(10.01, 50.0, 0.01):
         pilot.on_navdata(3, 1000, t)
-        pilot.on_hand(stamped(0.0, t), t)
+        pilot.on_hand(at(0.0, t), t)
         pilot.watchdog(t)
     drain(pilot)
     if first == 'watchdog':
         pilot.watchdog(10.0)
-    for t in np.arange(10.0, 10.3, 0.01):
+    start = 10.0
+    if absent_first:
+        for t in np.arange(10.0, 10.3, 0.01):
+            pilot.on_navdata(3, 1000, t)
+            pilot.on_hand(at(-0.1, t, present=False), t)
+            pilot.watchdog(t + 0.001)
+        start = 10.3
+    for t in np.arange(start, start + 0.3, 0.01):
         pilot.on_navdata(3, 1000, t)
-        pilot.on_hand(stamped(-0.1, t), t)
+        pilot.on_hand(at(-0.1, t), t)
         pilot.watchdog(t + 0.001)
     sent = twists(drain(pilot))
     assert sent and all(tw == (0.0,) * 6 for tw in sent), sent
     assert not pilot.engaged and any('older stamps' in w for w in warned), warned
     assert not any('-' in w.split('no navdata for ')[-1][:1] for w in warned), warned
-    pilot.on_gesture('unfold', True, 10.3, stamp=10.3)   # this session's own unfold steers
-    pilot.on_hand(stamped(-0.2, 10.31), 10.31)
+    t = start + 0.3
+    pilot.on_gesture('unfold', True, t, stamp=t if stamped else 0.0)   # this session's own unfold
+    pilot.on_hand(at(-0.2, t + 0.01), t + 0.01)
     assert twists(drain(pilot))[-1][0] > 0.0
+
+
+@pytest.mark.parametrize('first', ['hand', 'watchdog'])
+def test_a_clock_gone_back_under_stamps_that_did_not_is_a_loss_either_way(first):
+    # /clock restarted under a live sender stamping by another clock: the same session, so
+    # no new unfold, but a lost hand whoever sees it first: back 100 mm forward, the hand
+    # is re-captured where it is. A Hand message seeing it first used to steer on from the
+    # old reference (linear.x 0.7).
+    pilot = airborne(PilotParams())
+    for t in np.arange(100.0, 101.0, 0.01):
+        pilot.on_navdata(3, 1000, t)
+        pilot.on_hand(PilotInput(True, (0.0, 0.2, 0.0), FLAT['normal'], FLAT['direction'], 1e9 + t), t)
+        pilot.watchdog(t)
+    drain(pilot)
+    if first == 'watchdog':
+        pilot.watchdog(5.0)
+    pilot.on_navdata(3, 1000, 5.0)
+    pilot.on_hand(PilotInput(True, (0.0, 0.2, -0.1), FLAT['normal'], FLAT['direction'], 1e9 + 101.0), 5.0)
+    assert twists(drain(pilot))[-1] == (0.0,) * 6 and pilot.engaged
 
 
 def test_a_takeoff_navdata_never_confirmed_still_lands_across_a_clock_jump():

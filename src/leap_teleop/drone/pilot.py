@@ -30,9 +30,10 @@ Modes:
   left about the vertical -> yaw left (angular.z: the change of the fingers' heading, so
   raising or rolling the hand, or both, turns nothing while the fingers point more than
   30 deg from vertical; nearer vertical they have none, and the axis across the palm
-  gives it: there rolling the hand turns the drone). A turn of more than
-  MAX_HEADING_STEP_DEG between two frames (a slow camera, a stall) is read by the whole
-  turn while the fingers stay level; from near vertical it starts the yaw afresh.
+  gives it: there rolling the hand turns the drone). A step of more than
+  MAX_HEADING_STEP_DEG between two frames (a slow camera, a stall) is read by the hand's
+  own turn about the vertical between them, so a fast turn and a raise past vertical are
+  told apart.
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -59,7 +60,9 @@ through a stall gives the command it gave; else re-captured, so nothing jumps); 
 steering is off until a new unfold (tilt) or capture pose (paper); lost for
 ``land_after`` -> land; Hand messages that are non-finite, out of order or late (see
 teleop.input_check) are dropped, counted in ``rejected_inputs`` and do not feed the
-watchdog; the clock jumping back counts as a lost hand. Commands go through a bounded
+watchdog; the clock jumping back counts as a lost hand, and input stamped before it
+stopped (a session played again; unstamped input on a clock gone back alike) needs a new
+unfold. Commands go through a bounded
 FIFO: a twist replaces an unsent twist at the tail (the newer hand state wins, so a hand
 faster than ``rate`` adds no lag); when full, the oldest twist is dropped (takeoff /
 land / flip never are) and a land puts a hover in place of the unsent ones; steering
@@ -117,13 +120,14 @@ FLIP_NOT_CALLED = 'not called'
 # that of the axis across its palm; from the second on, all the fingers' (sideways tracking
 # jitter of 0.6 deg then moves it by 1.2 deg at most).
 NEAR_VERTICAL_DEG = (10.0, 30.0)
-# Level fingers whose heading moved further than this (deg) since the reading before turned
-# too fast to follow by continuity (300 deg/s at 5 fps, never at a Leap's rate): a turn of
-# 95 deg reads like one of -85 with the fingers raised past vertical, and that guess kept the
-# drone turning at full rate with the hand straight ahead. Level at both readings, they cannot
-# have passed vertical: the step is read by the whole turn; from near vertical the yaw starts
-# afresh.
+# Fingers whose heading moved further than this (deg) since the reading before moved too
+# fast to follow by continuity (300 deg/s at 5 fps, never at a Leap's rate): a turn of 95 deg
+# reads like one of -85 with the fingers raised past vertical, and a raise past vertical like
+# a half turn. The hand's own turn about the vertical between the two readings tells which.
 MAX_HEADING_STEP_DEG = 60.0
+# A Hand message whose arrival time is this much before the last one's saw the clock jump
+# back (two connections' callbacks reading the clock a moment apart are not one).
+CLOCK_BACK_S = 0.05
 
 
 @dataclass
@@ -192,7 +196,11 @@ def hand_heading(axes, near=None):
         near = across
     fingers = _nearest_turn(fingers, near, 180.0)
     across = _nearest_turn(across, near, 360.0)
-    return across + weight * _nearest_turn(fingers - across, 0.0, 360.0)
+    # Of the blends that differ by whole turns of the fingers, the one nearest `near`: a palm
+    # rolled past 90 deg puts the across axis half a turn from the fingers, where choosing
+    # by the difference alone tipped either way on rounding and read a whole turn.
+    return min((across + weight * (fingers - across + turn) for turn in (-360.0, 0.0, 360.0)),
+               key=lambda heading: abs(heading - near))
 
 
 def fingers_heading(axes):
@@ -202,6 +210,15 @@ def fingers_heading(axes):
     if math.hypot(dx, dz) < math.sin(math.radians(NEAR_VERTICAL_DEG[1])):
         return None
     return math.degrees(math.atan2(dx, -dz))
+
+
+def turn_between(before, after):
+    """The turn (deg, as the Leap yaw counts) about the vertical of the rotation from hand
+    orientation `before` to `after` (hand_axes): exact for a turn about the vertical
+    composed with a raise, and 0 for a raise or a roll alone."""
+    # rel = after . before^T: the rotation between them, in the Leap's axes
+    rel = [[sum(after[i][k] * before[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    return -math.degrees(math.atan2(rel[0][2] - rel[2][0], rel[0][0] + rel[2][2]))
 
 
 def turn_about_vertical(before, after):
@@ -324,6 +341,8 @@ class DronePilot:
         self.reference = None            # tilt: (palm xyz m, hand_heading or None)
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
         self._fingers_before = None      # tilt: fingers_heading at that turn's reading
+        self._axes_before = None         # tilt: hand_axes at that reading
+        self._clock_went_back = False    # the watchdog saw it before the next Hand message
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
         self._hand_at_loss = None        # the last hand before the latest loss
@@ -429,15 +448,22 @@ class DronePilot:
                 self.rejected_inputs += 1
                 self._warn('hand', 'ignored a Hand message: %s' % why)
                 return why
+            clock_back = self._clock_went_back or (self.last_hand_time is not None
+                                                   and now < self.last_hand_time - CLOCK_BACK_S)
+            self._clock_went_back = False
             self.last_hand_time = now
-            if not hand.present or (self.hand_present and self._stream.rewound):
-                # A stream stamped before the last one ended (a session played again, its
-                # clock gone back with it): the old session's hand is lost.
+            # Stamped before the last stream ended (a session played again), or unstamped on
+            # a clock gone back (nothing else can tell): another session, a new unfold.
+            rewound = self._stream.rewound or (clock_back and not hand.stamp > 0)
+            if not hand.present or clock_back or rewound:
+                # The hand of the old timeline is lost, whatever this message shows.
                 self._lose(now)
-                if not hand.present:
-                    return
+            if rewound:
+                self._disengage_after_loss(now, True)
+            if not hand.present:
+                return
             if not self.hand_present:
-                self._disengage_after_loss(now, self._stream.rewound)
+                self._disengage_after_loss(now)
                 self.hand_present = True
                 self.lost_since = None
                 self._landed_for_loss = False
@@ -559,7 +585,7 @@ class DronePilot:
         axes = hand_axes(hand.normal, hand.direction)
         self.reference = (tuple(hand.palm), None if axes is None else hand_heading(axes))
         self._last_turn = 0.0
-        self._fingers_before = None
+        self._fingers_before = self._axes_before = None
 
     def _twist(self, hand):
         cfg = self.cfg
@@ -588,17 +614,15 @@ class DronePilot:
         # (reset, the next frame read a hand turned past 90 deg a half turn off).
         dyaw = 0.0
         if axes is not None:
+            near = heading_ref + self._last_turn
             fingers, before = fingers_heading(axes), self._fingers_before
-            if fingers is not None and before is not None:
-                step = _nearest_turn(fingers - before, 0.0, 360.0)
-                if abs(step) > MAX_HEADING_STEP_DEG:
-                    self._last_turn += step
-            elif fingers is not None and abs(_nearest_turn(
-                    fingers - heading_ref - self._last_turn, 0.0, 180.0)) > MAX_HEADING_STEP_DEG:
-                heading_ref, self._last_turn = hand_heading(axes), 0.0
-                self.reference = (ref, heading_ref)
-            self._fingers_before = fingers
-            dyaw = self._last_turn = hand_heading(axes, heading_ref + self._last_turn) - heading_ref
+            if fingers is not None and self._axes_before is not None and (
+                    abs(_nearest_turn(fingers - near, 0.0, 180.0)) > MAX_HEADING_STEP_DEG
+                    or (before is not None
+                        and abs(_nearest_turn(fingers - before, 0.0, 360.0)) > MAX_HEADING_STEP_DEG)):
+                near += turn_between(self._axes_before, axes)
+            self._fingers_before, self._axes_before = fingers, axes
+            dyaw = self._last_turn = hand_heading(axes, near) - heading_ref
         cap = min(abs(cfg.max_cmd), 1.0)
         return (-shaped(d[2], cfg.dead_zone, cfg.full_scale, cap),
                 -shaped(d[0], cfg.dead_zone, cfg.full_scale, cap),
@@ -648,6 +672,7 @@ class DronePilot:
                 # The stream is kept: the next Hand message starts a new one there, and
                 # says whether its stamps went back too (another session: a new unfold).
                 self.last_hand_time = None
+                self._clock_went_back = True
                 self.lost_since = None
                 self._lose(now)
             if self.last_hand_time is None and self.lost_since is None:
