@@ -54,3 +54,17 @@ def test_a_missing_or_damaged_photo_is_one_line_before_any_view(tmp_path, capsys
     assert capsys.readouterr().err == 'evaluate_photo_views: cannot read: fist__x__bad.jpg in %s\n' % tmp_path
     assert views.main(['--data', str(tmp_path), '--photos', 'fist__htj__22.jpg,nope.jpg']) == 2
     assert capsys.readouterr().err == 'evaluate_photo_views: no such photo: nope.jpg in %s\n' % tmp_path
+
+
+def test_the_views_are_letterboxed_as_the_sender_letterboxes_them():
+    # The photo table claims classify_frames' image path, which letterboxes to the sender's
+    # 640x480; the views went to the detector at their own size.
+    pipe = views.PhotoPipeline(os.path.join(HANDS_DATA, 'fist__htj__22.jpg'))
+    seen = []
+    pipe.source.detector.detect = lambda rgb: seen.append(rgb.shape[:2]) or []
+    try:
+        bgr = pipe.cv2.imread(os.path.join(HANDS_DATA, 'fist__htj__22.jpg'))
+        pipe.detect(pipe.cv2.resize(bgr, (100, 130)))
+        assert seen == [(480, 640)]
+    finally:
+        pipe.close()

@@ -182,12 +182,14 @@ def _box(landmarks, width, height):
 
 class PhotoPipeline:
     """classify_frames' image path on in-memory images: the video source's preparation
-    and detector, its hands_of conversion, the stateless FrameClassifier."""
+    (letterboxed to the sender's default size) and detector, its hands_of conversion, the
+    stateless FrameClassifier."""
 
     def __init__(self, any_image_path):
         from leap_teleop.hands.sources import make_source
+        from leap_teleop.hands.sources.camera_params import DEFAULT_SIZE
         self.source = make_source('video', path=any_image_path, realtime=False,
-                                  clock=lambda: 0.0)
+                                  clock=lambda: 0.0, width=DEFAULT_SIZE[0], height=DEFAULT_SIZE[1])
         self.cv2 = self.source.cv2
 
     def detect(self, bgr):
