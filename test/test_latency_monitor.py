@@ -255,30 +255,46 @@ def test_a_master_that_does_not_answer_is_given_up_after_the_timeout(monkeypatch
     assert socket.getdefaulttimeout() is None     # the check's timeout is not left behind
 
 
-def test_a_web_server_that_is_not_a_master_is_given_up_at_once(monkeypatch, capsys, no_init_node):
+@pytest.mark.parametrize('server, says', [('http_501', '(HTTP 501'), ('html_200', '(ResponseError'),
+                                           ('xmlrpc_no_getpid', '(<Fault 1')])
+def test_a_server_that_answers_but_is_not_a_master_is_given_up_at_once(server, says, monkeypatch,
+                                                                         capsys, no_init_node):
     # It answers, so waiting for it to become a master cannot help: the monitor used to
     # ask it again every 0.5 s for the whole timeout.
     import http.server
     import threading
+    from xmlrpc.server import SimpleXMLRPCServer
 
     from leap_teleop.ros.latency_monitor import main
 
     class Quiet(http.server.BaseHTTPRequestHandler):
         def log_message(self, *_args):
             pass
-    server = http.server.HTTPServer(('127.0.0.1', 0), Quiet)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
+
+    class Html(Quiet):
+        def do_POST(self):
+            self.rfile.read(int(self.headers.get('Content-Length', 0)))
+            body = b'<html><body>hello</body></html>'
+            self.send_response(200)
+            self.send_header('Content-Length', str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+    if server == 'xmlrpc_no_getpid':
+        srv = SimpleXMLRPCServer(('127.0.0.1', 0), logRequests=False)
+    else:
+        srv = http.server.HTTPServer(('127.0.0.1', 0), Html if server == 'html_200' else Quiet)
+    threading.Thread(target=srv.serve_forever, daemon=True).start()
     try:
-        uri = 'http://127.0.0.1:%d' % server.server_address[1]
+        uri = 'http://127.0.0.1:%d' % srv.server_address[1]
         monkeypatch.setenv('ROS_MASTER_URI', uri)
         start = time.monotonic()
         assert main(['--once', '--timeout', '20']) == 1
         assert time.monotonic() - start < 5.0
     finally:
-        server.shutdown()
-        server.server_close()
+        srv.shutdown()
+        srv.server_close()
     err = capsys.readouterr().err
-    assert err.startswith('latency_monitor: no ROS master at %s (HTTP 501' % uri) and err.count('\n') == 1
+    assert err.startswith('latency_monitor: no ROS master at %s %s' % (uri, says)) and err.count('\n') == 1
 
 
 def test_a_master_that_comes_up_within_the_timeout_is_waited_for(monkeypatch):

@@ -74,8 +74,10 @@ def master_problem(timeout):
         return uri, None, False
     except xmlrpc.client.ProtocolError as e:      # an HTTP server that is not a master
         return uri, 'HTTP %s %s' % (e.errcode, e.errmsg), False
-    except (OSError, ValueError, xmlrpc.client.Error, rosgraph.MasterException) as e:
-        return uri, getattr(e, 'strerror', None) or str(e) or type(e).__name__, True
+    except OSError as e:                            # nothing there yet, or silent: wait
+        return uri, e.strerror or str(e) or type(e).__name__, True
+    except Exception as e:      # it answered, and not as a master does: waiting cannot help
+        return uri, str(e) or type(e).__name__, False
     finally:
         socket.setdefaulttimeout(old)
 
