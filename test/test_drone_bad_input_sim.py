@@ -140,3 +140,22 @@ def test_the_python_api_never_raises_on_numbers_too_big_for_a_float(hovering):
     # the largest values the driver's services carry still go
     assert d.set_led_animation(1, 2.0, 255)
     assert d.flight_animation(ds.FLIP_RIGHT, 2 ** 32 - 1)
+
+
+def test_advance_and_snapshot_refuse_what_they_cannot_do(hovering):
+    # advance(nan / inf / None) raised; a snapshot of a fractional size raised and one of a
+    # negative size ended the whole process (the renderer's allocation failed in C++).
+    runner, warnings = hovering
+    d = runner.sim
+    t = d.time
+    for seconds in (math.nan, math.inf, None, -1.0, True, 1e9):
+        d.advance(seconds)
+        assert d.time == t, seconds
+        d.advance(2.1)                                       # past the warning's rate limit
+        t = d.time
+    assert [key for key, _ in warnings].count('advance') == 6
+    for size in ((64.5, 48), (0, 48), (-1, 48), (64, -5), (64, 10 ** 6)):
+        assert d.snapshot(None, *size) is None, size
+        d.advance(2.1)
+    assert [key for key, _ in warnings].count('snapshot') == 5
+    assert d.snapshot(None, 32, 24).shape == (24, 32, 3)

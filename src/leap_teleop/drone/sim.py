@@ -41,6 +41,7 @@ vx/vy/vz body-frame mm/s, altd mm, ax/ay/az specific force in g (az = +1 at rest
 import collections
 import logging
 import math
+import numbers
 from dataclasses import dataclass, fields
 
 import pybullet as pb
@@ -96,6 +97,8 @@ MAX_FLIGHT_DURATION_MS, MAX_LED_DURATION_S = 2 ** 32 - 1, 255
 # ground ('hovering' at 1 mm, motors running) or held below the floor kept in flight.
 TAKEOFF_DONE_WITHIN = 0.03          # m
 TAKEOFF_ABOVE_FLOOR = 0.05          # m
+MAX_ADVANCE_S = 3600.0              # one advance() call steps at most this much sim time
+MIN_IMAGE_PX, MAX_IMAGE_PX = 16, 4096   # a snapshot's width and height
 
 
 @dataclass
@@ -456,8 +459,13 @@ class ArDroneSim:
 
     # -- stepping -------------------------------------------------------------------
     def advance(self, seconds):
-        """Run the simulation for `seconds` of simulated time."""
-        for _ in range(max(0, int(round(seconds / self.dt)))):
+        """Run the simulation for `seconds` of simulated time (at most MAX_ADVANCE_S a call)."""
+        t = _finite(seconds)
+        if t is None or isinstance(seconds, bool) or not 0.0 <= t <= MAX_ADVANCE_S:
+            self._warn('advance', 'advance(%r) ignored: a number of seconds from 0 to %g',
+                       seconds, MAX_ADVANCE_S)
+            return
+        for _ in range(int(round(t / self.dt))):
             self.step()
 
     def step(self):
@@ -722,6 +730,12 @@ class ArDroneSim:
         simulator that must keep stepping meanwhile copies the pose and has
         `cameras.ChaseSnapshots` draw it instead."""
         from leap_teleop.drone.cameras import chase_view
+        if not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) and MIN_IMAGE_PX <= v <= MAX_IMAGE_PX
+                   for v in (width, height)):
+            # a negative size ended the process (the renderer's allocation failed in C++)
+            self._warn('snapshot', 'snapshot %r x %r ignored: whole pixels from %d to %d',
+                       width, height, MIN_IMAGE_PX, MAX_IMAGE_PX)
+            return None
         self.show_scene()
         img = chase_view(self.client, self.pos, self.yaw, width, height)
         if path:
