@@ -52,8 +52,13 @@ def test_a_missing_or_damaged_photo_is_one_line_before_any_view(tmp_path, capsys
     os.symlink(os.path.join(HANDS_DATA, 'fist__htj__22.jpg'), str(tmp_path / 'fist__htj__22.jpg'))
     assert views.main(['--data', str(tmp_path)]) == 2
     assert capsys.readouterr().err == 'evaluate_photo_views: cannot read: fist__x__bad.jpg in %s\n' % tmp_path
-    assert views.main(['--data', str(tmp_path), '--photos', 'fist__htj__22.jpg,nope.jpg']) == 2
-    assert capsys.readouterr().err == 'evaluate_photo_views: no such photo: nope.jpg in %s\n' % tmp_path
+    assert views.main(['--data', str(tmp_path), '--photos', 'fist__htj__22.jpg,fist__nope.jpg']) == 2
+    assert capsys.readouterr().err == 'evaluate_photo_views: no such photo: fist__nope.jpg in %s\n' % tmp_path
+    # a readable photo whose name carries no label it knows: a KeyError traceback before
+    os.symlink(os.path.join(HANDS_DATA, 'fist__htj__22.jpg'), str(tmp_path / 'fsit__typo.jpg'))
+    assert views.main(['--data', str(tmp_path), '--photos', 'fsit__typo.jpg']) == 2
+    err = capsys.readouterr().err
+    assert err.startswith('evaluate_photo_views: not named LABEL__SOURCE__NAME') and ': fsit__typo.jpg in' in err
 
 
 def test_the_views_are_letterboxed_as_the_sender_letterboxes_them():

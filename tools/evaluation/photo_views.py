@@ -287,12 +287,15 @@ def main(argv=None):
         print('evaluate_photo_views: no photo folder at %s' % args.data, file=sys.stderr)
         return 2
     names = [n for n in args.photos.split(',') if n] or photo_names(args.data)
-    missing = [n for n in names if not os.path.isfile(os.path.join(args.data, n))]
-    damaged = unreadable_photos(args.data, [n for n in names if n not in missing])
-    if missing or damaged or not names:
+    unlabelled = [n for n in names if label_of(n) not in EXPECTED]
+    missing = [n for n in names if n not in unlabelled and not os.path.isfile(os.path.join(args.data, n))]
+    damaged = unreadable_photos(args.data, [n for n in names if n not in missing + unlabelled])
+    if unlabelled or missing or damaged or not names:
         print('evaluate_photo_views: %s in %s' % (
-            '; '.join(what + ': ' + ', '.join(ns) for what, ns in (('no such photo', missing),
-                                                                   ('cannot read', damaged)) if ns)
+            '; '.join(what + ': ' + ', '.join(ns) for what, ns in (
+                ('not named LABEL__SOURCE__NAME with a LABEL of %s' % ', '.join(sorted(EXPECTED)),
+                 unlabelled),
+                ('no such photo', missing), ('cannot read', damaged)) if ns)
             or 'no labelled hand photos', args.data), file=sys.stderr)
         return 2
     res = run(args.data, names)
