@@ -178,8 +178,10 @@ ARM_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 CELL_PARAMS = {
     'physics_hz': Param(240.0, 'physics steps per simulated second (grasps and the table hold '
                         'from 120)', unit='Hz', ge=120.0, le=2000.0),
-    'cube_size': Param(0.05, 'cube edge (at most 80 mm: the gripper opens 85 mm)', unit='m',
-                       gt=0.0, le=0.08),
+    # A cube at any yaw to the fingers (its own, or the tool turned) is up to its diagonal
+    # across them: 60 mm (85 mm diagonal) fits the open gripper's 85 mm whatever the turn.
+    'cube_size': Param(0.05, 'cube edge (at most 60 mm: its diagonal fits the 85 mm open '
+                       'gripper)', unit='m', gt=0.0, le=0.06),
     'cube_mass': Param(0.1, 'cube mass', unit='kg', gt=0.0, le=10.0),
     'table_height': Param(0.75, 'z of the table top', unit='m', ge=0.0, le=2.0),
 }
