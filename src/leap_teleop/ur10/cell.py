@@ -50,9 +50,8 @@ CUBE_CHECK_EVERY = 12          # physics steps between those stillness checks (2
 SWEEP_SAMPLES = 180
 SWEEP_CLEARANCE = 0.03
 # How deep (m) an arm link may read inside the floor, the table or a tray at the start
-# and count as resting on it, not inside; base_link's mesh reads 1 mm into what it stands on.
+# and count as resting on it, not inside.
 ARM_CLEAR_TOLERANCE = 1e-4
-BASE_CLEAR_TOLERANCE = 2e-3
 GRASP_CHECK_EVERY = 4          # physics steps between contact checks (60 Hz at 240 Hz)
 GRASP_LOSS_CHECKS = 3          # consecutive contact-less checks that release a grasp
 PAD_NORMAL_MIN_COS = 0.7       # a pad contact's normal is within ~45 deg of the closing axis
@@ -172,10 +171,12 @@ class UR10Cell:
         static += [(body, "arm %s's tray" % name, 'move the tray or the base, or change home')
                    for name, body in self.trays.items()]
         for arm in self.arms.values():
+            # base_link never collides with the static scene (_skip_untouchable_pairs): a base
+            # set a little into the table stays still, and only the links above it count.
             base_link = p.getJointInfo(arm.body, arm.arm_joints[0], physicsClientId=c)[16]
             for body, what, fix in static:
                 deep = [cp for cp in p.getClosestPoints(arm.body, body, 0.0, physicsClientId=c)
-                        if cp[8] < -(BASE_CLEAR_TOLERANCE if cp[3] == base_link else ARM_CLEAR_TOLERANCE)]
+                        if cp[3] != base_link and cp[8] < -ARM_CLEAR_TOLERANCE]
                 if deep:
                     cp = min(deep, key=lambda cp: cp[8])
                     raise ValueError(
