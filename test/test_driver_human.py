@@ -12,6 +12,7 @@ from leap_teleop.hands.frame import Finger, Frame
 from leap_teleop.hands.gestures import HandEvent
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.rendered_hand import render_hand
+from leap_teleop.hands.sources import leapjs
 from leap_teleop.hands.tracker import HandState
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers
@@ -268,31 +269,76 @@ def test_the_leap_sdks_sizes_and_time_visible_reach_the_driver_hand():
     assert [b.width for b in h.finger_list[0].bone_list] == pytest.approx([0.021, 0.02, 0.019, 0.018])
 
 
-def test_time_visible_and_the_rate_restart_after_a_time_without_subscribers():
+class FakePublisher:
+    """A rospy.Publisher of the driver topics without a master: serialises what it is given
+    (as rospy does with a subscriber) and keeps it; `listening` says whether anyone
+    subscribes."""
+
+    listening = True
+
+    def __init__(self, topic, msg_type, queue_size=None):
+        self.resolved_name = '/' + topic.lstrip('/')
+        self.sent = []
+
+    def get_num_connections(self):
+        return int(self.listening)
+
+    def publish(self, msg):
+        serialized(msg)
+        self.sent.append(msg)
+
+
+def driver_topics(monkeypatch, **topics):
+    """A LeapMotionTopics publishing on FakePublishers: the sender's defaults but `topics`."""
+    import rospy
+
+    from leap_teleop.hands.sender_params import SENDER_PARAMS
+    from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
+    monkeypatch.setattr(rospy, 'Publisher', FakePublisher)
+    p = {name: param.default for name, param in SENDER_PARAMS.items()}
+    p.update(human_topic='', filtered_human_topic='', driver_marker_topic='')
+    p.update(topics)
+    return LeapMotionTopics(p, 1)
+
+
+def test_time_visible_and_the_rate_restart_after_a_time_without_subscribers(monkeypatch):
     # While nobody subscribes the builder sees no frames: a hand that left and came back
     # meanwhile was reported visible since its first appearance, and the rate averaged the gap.
-    import types
-
-    from leap_teleop.control.lowpass import LowPass
-    from leap_teleop.hands.sender_setup import PeriodThrottle
-    from leap_teleop.ros.leap_motion_topics import LeapMotionTopics
-    sent, listening = [], {'on': True}
-    topics = types.SimpleNamespace(
-        throttle=PeriodThrottle(0.0), _sides_sent=None, lowpass=LowPass(4.0),
-        builder=hand_conversions.DriverHumanBuilder(),
-        pubs={'raw': types.SimpleNamespace(publish=sent.append)},
-        _wanted=lambda kind: kind == 'raw' and listening['on'])
+    topics = driver_topics(monkeypatch, human_topic='human')
+    pub = topics.pubs['raw']
     li = LeapInterface()
-    li.add_listener(lambda f, s: LeapMotionTopics.on_frame(topics, f, s))
+    li.add_listener(topics.on_frame)
     for i in range(522):        # 100 Hz; gone 0.1 .. 5.1 s, back unheard until 5.2 s
-        listening['on'] = not 10 <= i < 520
+        pub.listening = not 10 <= i < 520
         hands = [] if 10 <= i < 510 else [render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)]
         li.on_frame(Frame(id=i, timestamp=i / 100.0, hands=hands))
-    first, second = sent[-2:]
+    first, second = pub.sent[-2:]
     assert (first.lmc_frame_id, second.lmc_frame_id) == (520, 521)
     assert first.right_hand.time_visible == 0.0 and first.current_frames_per_second == 0.0
     assert second.right_hand.time_visible == pytest.approx(0.01)
     assert second.current_frames_per_second == pytest.approx(100.0)
+
+
+def test_a_frame_that_cannot_be_serialised_is_dropped_with_a_warning_not_the_sender(monkeypatch):
+    # OverflowError from publish() (a float beyond float32) went up the source's thread and
+    # ended the sender; now that frame's message is dropped, with a rate-limited warning.
+    from leap_teleop.ros import leap_motion_topics
+    topics = driver_topics(monkeypatch, human_topic='human', filtered_human_topic='smooth',
+                           driver_marker_topic='markers')
+    warned = []
+    monkeypatch.setattr(leap_motion_topics.rospy, 'logwarn', lambda fmt, *a: warned.append(fmt % a))
+    li = LeapInterface()
+    li.add_listener(topics.on_frame)
+    for i in range(6):
+        hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)
+        frame = Frame(id=i, timestamp=1.0 + i / 100.0, hands=[hand])
+        # A frame rate beyond float32 (no source's stamps give one) in frames 2 and 3.
+        topics.builder._fps, topics.builder._last_stamp = (1e300 if i in (2, 3) else 0.0), None
+        li.on_frame(frame)
+    for kind in ('raw', 'filtered'):
+        assert [m.lmc_frame_id for m in topics.pubs[kind].sent] == [0, 1, 4, 5], kind
+    assert len(topics.pubs['markers'].sent) == 6
+    assert len(warned) == 2 and 'frame 2 dropped from /human: it cannot be serialised' in warned[0]
 
 
 def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
@@ -341,6 +387,112 @@ def test_recorded_values_of_any_shape_or_size_still_make_a_message():
     assert h.finger_list == []                                       # no usable joints
     assert [(g.lmc_gesture_id, g.gesture_state, g.duration_us) for g in h.gesture_list] == [
         (2, -1, 0), (3, 3, 2 ** 63 - 1), (4, 3, 2 ** 63 - 1), (5, 3, 0)]
+
+
+def test_sizes_and_time_visible_beyond_any_hand_are_unmeasured_from_any_source():
+    # A source's sphere radius (or centre, a width, time visible) of 1e300 was copied into
+    # DriverHand's float32 fields: serialize() raised OverflowError and ended the sender.
+    hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
+    hand.palm_width, hand.sphere_radius, hand.time_visible = 1e300, 1e300, 1e300
+    hand.sphere_center = np.array([0.0, 1e300, 0.0])
+    hand.fingers[1].width, hand.fingers[2].bone_widths = 1e300, (10.0, 1e300, 9.0, 8.0)
+    (raw, smooth), = run([Frame(id=1, timestamp=5.0, hands=[hand])], lowpass=LowPass(4.0))
+    for human in (raw, smooth):
+        assert serialized(human)
+        h = human.right_hand
+        assert (h.palm_width, h.sphere_radius, list(h.sphere_center), h.time_visible) == (0.0, 0.0, [], 0.0)
+        assert h.finger_list[1].width == 0.0
+        assert [b.width for b in h.finger_list[2].bone_list] == pytest.approx([0.01, 0.0, 0.009, 0.008])
+
+
+def test_leapros_and_the_drivers_human_take_one_bound_for_a_joint():
+    # A knuckle between 2000 mm and 1e6 mm was zero in leapros but a 50-500 m bone in the
+    # driver's Human.
+    from leap_teleop.hands.tracker import MAX_PALM_MM
+    for x, kept in ((skeleton.MAX_JOINT, True), (skeleton.MAX_JOINT + 1.0, False), (5e4, False),
+                    (5e5, False)):
+        hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
+        hand.fingers[1].mcp = np.array([x, 200.0, -20.0])
+        s = LeapInterface().on_frame(Frame(id=1, timestamp=1.0, hands=[hand]))['right']
+        leapros = hand_conversions.to_leapros(s, hand)
+        (human, _), = run([Frame(id=1, timestamp=1.0, hands=[hand])])
+        assert (leapros.index_proximal.x == x) is kept, x
+        assert bool(human.right_hand.finger_list) is kept, x
+        if kept:
+            assert human.right_hand.finger_list[1].bone_list[1].bone_start.position.x == x / 1000.0
+    assert skeleton.MAX_JOINT == MAX_PALM_MM        # the tracker's bound of a palm, too
+
+
+def _huge_take():
+    """LeapJS frame dicts of two hands with every field a recording can carry (sizes, sphere,
+    time visible, an SDK gesture), and the path of each number in them."""
+    d = leapjs.frame_to_dict(Frame(id=1, timestamp=5.0, hands=[
+        render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=1),
+        render_hand('left', 'fist', [80.0, 200.0, 0.0], hand_id=2)]))
+    for h in d['hands']:
+        h.update(palmWidth=85.0, sphereRadius=70.0, sphereCenter=[0.0, 180.0, 0.0], timeVisible=1.5)
+    for p in d['pointables']:
+        p.update(width=15.0, length=50.0)
+    d['gestures'] = [{'id': 3, 'type': 'circle', 'state': 'update', 'duration': 1000, 'handIds': [1],
+                      'pointableIds': [11], 'radius': 20.0, 'progress': 1.0, 'center': [0, 200, 0],
+                      'normal': [0, 0, 1]}]
+
+    def paths(obj, prefix=()):
+        items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list) else None
+        if items is not None:
+            for k, v in items:
+                yield from paths(v, prefix + (k,))
+        elif isinstance(obj, (int, float)) and not isinstance(obj, bool) and prefix != ('timestamp',):
+            yield prefix
+    return d, list(paths(d))
+
+
+@pytest.mark.parametrize('huge', [1e300, -1e300, 2 ** 70])
+def test_huge_values_in_any_field_of_a_recording_leave_every_sent_message_serialisable(tmp_path, huge):
+    # Each field of a recorded frame in turn holds a finite value beyond float32 (or an
+    # integer beyond 64 bits), between clean frames, played by the recording source: every
+    # message the sender publishes (leapcobot, Hand, GestureEvent, leapros, leap, the
+    # driver's Human raw and filtered, its markers) must serialise. Sizes did not.
+    import copy
+    import io
+
+    from leap_teleop.hands.sources import make_source
+    base, paths = _huge_take()
+    frames = []
+    for k, path in enumerate(paths):
+        clean, bad = copy.deepcopy(base), copy.deepcopy(base)
+        obj = bad
+        for key in path[:-1]:
+            obj = obj[key]
+        obj[path[-1]] = huge
+        for i, f in enumerate((clean, bad)):
+            f.update(id=2 * k + i + 1, timestamp=5_000_000 + (2 * k + i) * 10_000)
+            frames.append(f)
+    leapjs.save(str(tmp_path / 'huge.json'), frames)
+    source = make_source('recording', path=str(tmp_path / 'huge.json'), realtime=False, clock=lambda: 100.0)
+    builder, lowpass, failed = hand_conversions.DriverHumanBuilder(), LowPass(4.0), set()
+
+    def on_frame(frame, states):
+        raw, smooth = builder.human_msgs(frame, states, lowpass=lowpass)
+        msgs = [('human', raw), ('filtered human', smooth), ('markers', driver_markers(smooth))]
+        for side, state in states.items():
+            msgs += list(hand_conversions.hand_messages(state))
+            msgs += [('leapros', hand_conversions.to_leapros(state, frame.hand(side))),
+                     ('leap', hand_conversions.to_leap(state))]
+        for kind, msg in msgs:
+            try:
+                msg.serialize(io.BytesIO())
+            except Exception as e:
+                failed.add((kind, paths[(frame.id - 1) // 2], type(e).__name__))
+
+    li = LeapInterface()
+    li.add_listener(on_frame)
+    n = 0
+    for frame in source.frames():
+        li.on_frame(frame)
+        n += 1
+    assert n == 2 * len(paths) and source.bad_frames == 0
+    assert not failed, sorted(failed)
 
 
 def test_the_recognizers_circles_are_the_drivers_circle_others_have_no_gesture():

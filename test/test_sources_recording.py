@@ -293,6 +293,31 @@ def test_bad_single_frames_are_skipped_and_counted(tmp_path):
     assert len(got) == 7 and src.bad_frames == 3
 
 
+def test_a_recordings_sizes_and_time_visible_beyond_any_hand_are_unmeasured():
+    # A corrupt sphereRadius (or sphereCenter, width, timeVisible) of 1e300 went on into the
+    # driver's Human's float32 fields and ended the sender; one within bounds (2000 mm, as
+    # a joint; 1e7 s) is kept.
+    d = leapjs.frame_to_dict(Frame(id=1, timestamp=2.0, hands=[
+        render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)]))
+    h, pointables = d['hands'][0], d['pointables']
+    h.update(sphereRadius=1e300, palmWidth=2001.0, sphereCenter=[0.0, 3000.0, 0.0],
+             timeVisible=1e300)
+    pointables[0]['width'], pointables[1]['width'] = 1e300, 2000.0
+    hand = leapjs.frame_from_dict(d).hands[0]
+    assert (hand.sphere_radius, hand.palm_width, hand.sphere_center, hand.time_visible) == (None,) * 4
+    assert (hand.fingers[0].width, hand.fingers[1].width) == (None, 2000.0)
+    h.update(sphereRadius=2000.0, sphereCenter=[-2000.0, 2000.0, 0.0], timeVisible=1e7)
+    hand = leapjs.frame_from_dict(d).hands[0]
+    assert (hand.sphere_radius, hand.time_visible) == (2000.0, 1e7)
+    assert hand.sphere_center.tolist() == [-2000.0, 2000.0, 0.0]
+    # Written as read: another source's value beyond the bounds is left out of a file.
+    hand.sphere_radius, hand.time_visible, hand.fingers[1].width = 1e300, 2e7, 1e39
+    hand.sphere_center = np.array([0.0, 0.0, 1e300])
+    back = leapjs.frame_to_dict(Frame(id=1, timestamp=2.0, hands=[hand]))
+    assert not {'sphereRadius', 'sphereCenter', 'timeVisible'} & set(back['hands'][0])
+    assert 'width' not in back['pointables'][1]
+
+
 def test_recorder_round_trip_from_the_scripted_source(tmp_path):
     script = tmp_path / 's.yaml'
     script.write_text('rate_hz: 100\nhands:\n  right:\n    - {pose: fist, palm: [10, 220, 5], duration: 0.3}\n'

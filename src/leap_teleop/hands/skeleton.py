@@ -1,16 +1,27 @@
-"""Bones from the joints a hand source tracks, in the Leap SDK's bone model. Pure numpy.
+"""Bones from the joints a hand source tracks, in the Leap SDK's bone model, and
+the bounds of a source's joints and sizes. Pure numpy.
 
 Every finger has four bones, wrist to tip: metacarpal, proximal, intermediate, distal. A
 frame.Finger carries the knuckle (mcp), pip, dip and tip joints, so the proximal,
 intermediate and distal bones are known; no source's frames carry the carpal joints, so the
 metacarpal is reported with its start at its end (the knuckle) and length 0 (the Leap's own
 thumb metacarpal has length 0 too). Units follow the input (frames: millimetres).
+
+A joint or size beyond its bound (MAX_JOINT, MAX_SIZE, MAX_TIME_VISIBLE_S) is a tracking
+error or a corrupt recording's value, not a hand: none, and never a message's float32.
 """
 import numpy as np
 
+from leap_teleop.hands.frame import measured, measured3
+
 BONE_NAMES = ('metacarpal', 'proximal', 'intermediate', 'distal')
 FINGER_JOINT_NAMES = ('mcp', 'pip', 'dip', 'tip')
-MAX_JOINT = 1e6
+# mm from the device: the tracker's bound of a palm (tracker.MAX_PALM_MM, kept equal by a
+# test; the recording reader imports this, not the tracker's gesture models). leapros and
+# the driver's Human both take a joint beyond it for none.
+MAX_JOINT = 2000.0
+MAX_SIZE = MAX_JOINT            # mm: a palm, finger or bone width, a sphere's radius
+MAX_TIME_VISIBLE_S = 1e7        # s a hand is tracked (116 days)
 
 
 def hand_joints(hand):
@@ -23,8 +34,8 @@ def hand_joints(hand):
                           dtype=float)
     except (TypeError, ValueError):     # a joint is None or not a 3-vector
         return None
-    # Beyond any tracking volume in any unit (and far inside float32, which bone messages
-    # carry: a joint of 1e300 ended the sender).
+    # Beyond the tracking volume (and far inside float32, which bone messages carry: a joint
+    # of 1e300 ended the sender).
     if joints.shape != (5, 4, 3) or not np.all(np.abs(joints) <= MAX_JOINT):
         return None
     return joints
@@ -35,3 +46,23 @@ def bone_ends(joints):
     as (..., 4, 3) joints (mcp, pip, dip, tip). The metacarpal starts and ends at the mcp."""
     joints = np.asarray(joints, dtype=float)
     return joints[..., [0, 0, 1, 2], :], joints[..., [0, 1, 2, 3], :]
+
+
+def bounded_size(value):
+    """A source's size (mm) as a float; None when absent or not a number in [0, MAX_SIZE]."""
+    x = measured(value)
+    return x if x is not None and x <= MAX_SIZE else None
+
+
+def bounded_point(value):
+    """A source's 3-vector (mm) as a float (3,) array; None when absent, not finite or
+    beyond MAX_JOINT on an axis."""
+    v = measured3(value)
+    return v if v is not None and np.all(np.abs(v) <= MAX_JOINT) else None
+
+
+def bounded_time(value):
+    """A source's time visible (s) as a float; None when absent or not in
+    [0, MAX_TIME_VISIBLE_S]."""
+    x = measured(value)
+    return x if x is not None and x <= MAX_TIME_VISIBLE_S else None

@@ -9,7 +9,7 @@ from geometry_msgs.msg import Point, Vector3
 
 from leap_teleop.hands import skeleton
 from leap_teleop.hands.frame import FINGER_NAMES
-from leap_teleop.hands.tracker import MAX_PALM_MM, hand_angles
+from leap_teleop.hands.tracker import hand_angles
 from leap_teleop.msg import (
     DriverBone,
     DriverFinger,
@@ -100,8 +100,9 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     axes, millimetres, ypr in degrees as (yaw, pitch, roll) of classic_ypr. Finger tips come from the state; bone bases
     (proximal = knuckle, intermediate, distal) from `hand` (a hands.frame.TrackedHand) where
     its source tracks joints; a metacarpal base and anything untracked stays 0, as does a
-    joint beyond tracker.MAX_PALM_MM (a tracking error, as the tracker takes such a tip). A
-    frame without the hand gives a message with only the header set."""
+    joint beyond skeleton.MAX_JOINT (a tracking error, as the tracker takes such a tip; the
+    driver's Human has no bones then). A frame without the hand gives a message with only
+    the header set."""
     msg = _header(leapros(), state, frame_id)
     if not state.present:
         return msg
@@ -119,7 +120,7 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
                 if xyz is None:
                     continue
                 xyz = [float(v) for v in xyz]
-                if all(abs(v) <= MAX_PALM_MM for v in xyz):      # NaN compares false
+                if all(abs(v) <= skeleton.MAX_JOINT for v in xyz):    # NaN compares false
                     setattr(msg, '%s_%s' % (name, bone), Point(*xyz))
     return msg
 
@@ -220,6 +221,17 @@ def _sdk_gesture(g):
     return msg
 
 
+def _bone_widths(widths):
+    """Four bone widths (mm) from a source's bone_widths; 0 (unmeasured) for a missing one
+    or one beyond skeleton.MAX_SIZE."""
+    try:
+        widths = list(() if widths is None else widths)[:4]
+    except TypeError:
+        widths = []
+    widths += [None] * (4 - len(widths))
+    return tuple(skeleton.bounded_size(w) or 0.0 for w in widths)
+
+
 class DriverHumanBuilder:
     """Frames + HandStates -> the leap_motion driver's Human (DriverHuman), metres and
     radians, frame leap_hands. Stateful across frames: each hand's time_visible, the frame
@@ -268,10 +280,10 @@ class DriverHumanBuilder:
             f = DriverFinger(header=header, type=i)
             f.lmc_finger_id = _int32(hand_id * 10 + i)
             source = fingers[i] if i < len(fingers) else None
-            width = getattr(source, 'width', None)
+            width = skeleton.bounded_size(getattr(source, 'width', None))
             if width is not None:
                 f.width = width * MM
-            bone_widths = getattr(source, 'bone_widths', None) or (0.0,) * 4
+            bone_widths = _bone_widths(getattr(source, 'bone_widths', None))
             for b in range(4):
                 bone = DriverBone(header=header, type=b, length=lengths[i][b],
                                   width=bone_widths[b] * MM, center=centers[i][b])
@@ -325,12 +337,16 @@ class DriverHumanBuilder:
         msg.pinch_strength = state.pinch_strength
         msg.palm_velocity = [x * MM for x in state.palm_velocity]
         msg.palm_center = Point(*(float(x) * MM for x in points[0]))
-        if hand.palm_width is not None:
-            msg.palm_width = hand.palm_width * MM
-        if hand.sphere_radius is not None:
-            msg.sphere_radius = hand.sphere_radius * MM
-        if hand.sphere_center is not None:
-            msg.sphere_center = [float(x) * MM for x in hand.sphere_center]
+        # Sizes within skeleton's bounds, whatever the source (a corrupt 1e300 is no float32:
+        # it ended the sender); beyond, unmeasured.
+        palm_width, radius = skeleton.bounded_size(hand.palm_width), skeleton.bounded_size(hand.sphere_radius)
+        center = skeleton.bounded_point(hand.sphere_center)
+        if palm_width is not None:
+            msg.palm_width = palm_width * MM
+        if radius is not None:
+            msg.sphere_radius = radius * MM
+        if center is not None:
+            msg.sphere_center = [float(x) * MM for x in center]
         if len(points) > 1:
             msg.finger_list = self._fingers(header, hand.id, points[1:].reshape(5, 4, 3),
                                             hand.fingers)
@@ -368,10 +384,11 @@ class DriverHumanBuilder:
                 if lowpass is not None:
                     lowpass.reset(side)
                 continue
-            if hand.time_visible is not None:
+            visible = skeleton.bounded_time(hand.time_visible)
+            if visible is not None:
                 # The tracker's own count where the source measures it (the driver passes the
                 # SDK's); kept as the time found, so a frame without one goes on from it.
-                self._found_at[side] = state.timestamp - hand.time_visible
+                self._found_at[side] = state.timestamp - visible
             found = self._found_at.setdefault(side, state.timestamp)
             time_visible = max(state.timestamp - found, 0.0)
             gestures = self._gestures(frame, hand, state)

@@ -1,5 +1,6 @@
 """The leap_motion driver's topics, published by the sender on request: DriverHuman raw and
 low-pass filtered, and its visualizer's RViz markers."""
+import genpy
 import rospy
 from visualization_msgs.msg import MarkerArray
 
@@ -9,6 +10,12 @@ from leap_teleop.params import ParamError
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.markers import driver_markers
 from leap_teleop.ros.node import RateLimitedLog
+
+# What publish() raises for a message that cannot be serialised: a float beyond float32
+# (OverflowError, which rospy passes on), an integer beyond its field (SerializationError,
+# which rospy wraps), a value of the wrong type (ValueError).
+SERIALIZATION_ERRORS = (OverflowError, ValueError, genpy.SerializationError,
+                        rospy.ROSSerializationException)
 
 
 def use_driver_globals(p, table):
@@ -75,12 +82,23 @@ class LeapMotionTopics:
         human, smooth = self.builder.human_msgs(frame, states, raw=raw,
                                                 lowpass=self.lowpass if filtered else None)
         if human is not None and 'raw' in self.pubs:
-            self.pubs['raw'].publish(human)
+            self._publish('raw', human, frame)
         if smooth is not None and 'filtered' in self.pubs:
-            self.pubs['filtered'].publish(smooth)
+            self._publish('filtered', smooth, frame)
         if markers:
             try:
-                self.pubs['markers'].publish(driver_markers(smooth or human))
+                msg = driver_markers(smooth or human)
             except ValueError as e:
                 self.log.warn('markers', 'sender: no driver markers for frame %d: %s',
                               frame.id, e)
+            else:
+                self._publish('markers', msg, frame)
+
+    def _publish(self, kind, msg, frame):
+        """Publish; a message that cannot be serialised (a value no source should give) drops
+        this frame's message with a warning: raised, it ended the sender."""
+        try:
+            self.pubs[kind].publish(msg)
+        except SERIALIZATION_ERRORS as e:
+            self.log.warn('serialize ' + kind, 'sender: frame %d dropped from %s: it cannot be '
+                          'serialised (%s)', frame.id, self.pubs[kind].resolved_name, e)

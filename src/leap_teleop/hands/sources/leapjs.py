@@ -30,7 +30,8 @@ try:                       # faster still for whole recordings (load_frames); op
 except ImportError:        # pragma: no cover
     _simdjson = None
 
-from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand, measured, measured3
+from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
+from leap_teleop.hands.skeleton import bounded_point, bounded_size, bounded_time
 from leap_teleop.hands.sources.source import SourceError
 
 log = logging.getLogger(__name__)
@@ -416,10 +417,11 @@ _FINGER_KEYS = ('tipPosition', 'direction', 'mcpPosition', 'pipPosition', 'dipPo
 
 
 def _time_visible(value, timestamp):
-    """A hand's timeVisible (s); None when absent, or when it is the frame's own timestamp
-    (s, to 6 digits): LeapJS Playback 0.1 recorded that in every other frame, and a hand
-    tracked since the service started is not a case worth keeping it for."""
-    tv = measured(value)
+    """A hand's timeVisible (s); None when absent, beyond skeleton.MAX_TIME_VISIBLE_S, or
+    the frame's own timestamp (s, to 6 digits): LeapJS Playback 0.1 recorded that in every
+    other frame, and a hand tracked since the service started is not a case worth keeping
+    it for."""
+    tv = bounded_time(value)
     if tv is not None and math.isfinite(timestamp) and abs(tv - timestamp) <= 1e-4 * abs(timestamp):
         return None
     return tv
@@ -465,7 +467,7 @@ def _hand_from_dict(h, side, pointables, timestamp=math.nan):
         for i in have:
             ext = by_type[i].get('extended')
             fl[i] = Finger(v[b], v[b + 1], ext if ext.__class__ is bool else None,
-                           v[b + 2], v[b + 3], v[b + 4], measured(by_type[i].get('width')))
+                           v[b + 2], v[b + 3], v[b + 4], bounded_size(by_type[i].get('width')))
             b += 5
         if len(have) < 5:
             missing = np.full(3, math.nan)
@@ -473,11 +475,13 @@ def _hand_from_dict(h, side, pointables, timestamp=math.nan):
         fingers = tuple(fl)
     hid = h.get('id', 0)
     # The SDK's sphere fit and time tracked (protocol 6 frames; later ones drop the sphere).
+    # Bounded as joints are: a corrupt 1e300 went on into the driver's Human's float32 and
+    # ended the sender.
     return TrackedHand(side, v[0], v[1], v[2], v[3], _num(h.get('grabStrength'), math.nan),
                 _num(h.get('pinchStrength'), math.nan), _num(h.get('confidence'), 1.0),
                 fingers, hid if hid.__class__ is int else 0,
-                palm_width=measured(h.get('palmWidth')), sphere_radius=measured(h.get('sphereRadius')),
-                sphere_center=measured3(h.get('sphereCenter')),
+                palm_width=bounded_size(h.get('palmWidth')), sphere_radius=bounded_size(h.get('sphereRadius')),
+                sphere_center=bounded_point(h.get('sphereCenter')),
                 time_visible=_time_visible(h.get('timeVisible'), timestamp),
                 image_landmarks=_image_landmarks(h.get('imageLandmarks')))
 
@@ -539,12 +543,14 @@ def frame_to_dict(frame):
             'stabilizedPalmPosition': _list(hand.palm_position),
             'grabStrength': _clean(hand.grab_strength), 'pinchStrength': _clean(hand.pinch_strength),
             'confidence': _clean(hand.confidence)}
-        # What the source measured, read back as such; left out when it did not.
-        for key, value in (('palmWidth', hand.palm_width), ('sphereRadius', hand.sphere_radius),
-                           ('timeVisible', hand.time_visible)):
-            if measured(value) is not None:
+        # What the source measured, read back as such; left out when it did not, or when
+        # it is beyond what frame_from_dict reads.
+        for key, value, bounded in (('palmWidth', hand.palm_width, bounded_size),
+                                    ('sphereRadius', hand.sphere_radius, bounded_size),
+                                    ('timeVisible', hand.time_visible, bounded_time)):
+            if bounded(value) is not None:
                 h[key] = _clean(value)
-        if measured3(hand.sphere_center) is not None:
+        if bounded_point(hand.sphere_center) is not None:
             h['sphereCenter'] = _list(hand.sphere_center)
         # A camera hand's picture landmarks: the keypoint model judges it by them, live and
         # replayed alike (without, a replay judged its 3-D joints with the Leap model).
@@ -559,7 +565,7 @@ def frame_to_dict(frame):
                  'tipPosition': _list(f.tip), 'direction': _list(f.direction)}
             if f.extended is not None:
                 p['extended'] = bool(f.extended)
-            if measured(f.width) is not None:
+            if bounded_size(f.width) is not None:
                 p['width'] = _clean(f.width)
             for key, value in (('mcpPosition', f.mcp), ('pipPosition', f.pip),
                                ('dipPosition', f.dip)):
