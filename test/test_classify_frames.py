@@ -647,3 +647,29 @@ def test_camera_footage_is_letterboxed_as_the_sender_does(tmp_path, monkeypatch,
     assert json.loads(capsys.readouterr().out)['hands'] == []
     size = (CAMERA_PARAMS['height'].default, CAMERA_PARAMS['width'].default, 3)
     assert seen == [size] == [(480, 640, 3)]
+
+
+def test_a_side_whose_hand_cannot_be_placed_is_lost_not_given_to_the_other_hand():
+    # classify_frames chose among the placeable hands only: one frame with a NaN palm on
+    # the followed hand (id 1, the more confident) gave the side to the other (id 2) for
+    # good, while the sender reports the side lost and follows id 1 again, whose unfold
+    # (a takeoff with the drone bindings) classify_frames then missed.
+    import dataclasses
+
+    from leap_teleop.hands.leap_interface import LeapInterface
+    classifier, live = FrameClassifier(), LeapInterface(source=None)
+    sent, classified = [], []
+    for i in range(200):
+        a = dataclasses.replace(render_hand('right', 'fist' if i < 100 else 'open', (0, 200, 0), hand_id=1),
+                                confidence=0.9)
+        if i == 50:
+            a = dataclasses.replace(a, palm_position=(float('nan'), 200.0, 0.0))
+        b = dataclasses.replace(render_hand('right', 'open', (150, 200, 0), hand_id=2), confidence=0.5)
+        frame = Frame(i + 1, 1.0 + i / 120.0, [a, b])
+        out = classifier.classify_frame(frame, frame.id, None)['hands']
+        state = live.on_frame(frame)['right']
+        sent += [(i, e.gesture) for e in state.events if e.active and e.gesture in ('fold', 'unfold')]
+        classified += [(i, e) for e in out[0]['events'] if e in ('fold', 'unfold')]
+        assert (out[0]['fist'], out[0]['open']) == (state.fist, state.open), i
+        assert classifier.followed.get('right') == live._trackers['right'].hand_id, i
+    assert classified == sent == [(120, 'unfold')]

@@ -84,8 +84,9 @@ class FrameClassifier:
     """Frames -> output dicts, keeping one recognizer per hand side that follows one hand
     by its id, as the sender does (LeapInterface / HandTracker): of two hands of a side,
     the one followed, else the more confident (on a tie the first listed) carries the
-    side's state, the other is judged on its own; another id taking the side starts it
-    again, from the next frame. model / keypoint_model: pose model paths (None: the
+    side's state, the other is judged on its own; when the one chosen cannot be placed the
+    side is lost for that frame; another id taking the side starts it again, from the next
+    frame. model / keypoint_model: pose model paths (None: the
     shipped ones); their own classes show as one more key each, true while held."""
 
     def __init__(self, stateless=False, model=None, keypoint_model=None):
@@ -115,13 +116,17 @@ class FrameClassifier:
         """A Frame -> output dict (id and timestamp as given)."""
         t = frame.timestamp if math.isfinite(frame.timestamp) else None
         t = t if t is not None else math.nan
-        # A hand that cannot be placed counts as gone, as in the sender: judged as nothing,
-        # and its side starts anew (no fist before it makes an unfold after it).
-        placed = [hand for hand in frame.hands if hand_placement(hand) is not None]
+        # The side's hand is chosen among all its hands, then placed, as in the sender
+        # (LeapInterface, then HandTracker): chosen among the placeable ones only, a NaN
+        # palm for a frame moved the side to the other hand for good, while the sender
+        # reports the side lost and follows the same hand again.
         chosen = {}
-        for hand in placed:             # on a tie the first listed stays
+        for hand in frame.hands:        # on a tie the first listed stays
             if hand.side not in chosen or self._rank(hand) > self._rank(chosen[hand.side]):
                 chosen[hand.side] = hand
+        # A hand that cannot be placed counts as gone: judged as nothing, and when it is the
+        # side's, the side starts anew (no fist before it makes an unfold after it).
+        placed = [hand for hand in frame.hands if hand_placement(hand) is not None]
         hands = []
         for hand in frame.hands:
             if not any(hand is h for h in placed):
@@ -132,7 +137,7 @@ class FrameClassifier:
                 state = self._followed_state(hand, t)
             hands.append(hand_output(hand.side, state, self.user_gestures))
         for side, rec in self.recognizers.items():
-            if side not in chosen:
+            if side not in chosen or not any(chosen[side] is h for h in placed):
                 rec.reset()
                 self.followed.pop(side, None)
         return {'id': fid, 'timestamp': ts, 'hands': hands}
