@@ -373,3 +373,87 @@ def test_bindings_are_checked_against_the_model_that_judges_the_sources_hands(tm
     # a recording of camera hands says so (its hand_family): the keypoint model judges them
     with pytest.raises(BindingError, match="the recording source's hands are judged by ~keypoint_model"):
         checked_bindings(bound, recognizer, 'keypoints')
+
+
+def _two_model(tmp_path):
+    """A Leap pose model with one more class, 'two' (the keypoint model has none)."""
+    import numpy as np
+
+    from leap_teleop.hands.gestures.classifier import DEFAULT_MODELS
+    with np.load(DEFAULT_MODELS['leap']) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays['classes'] = np.append(arrays['classes'], 'two')
+    arrays['w1'] = np.hstack([arrays['w1'], arrays['w1'][:, :1]])
+    arrays['b1'] = np.append(arrays['b1'], arrays['b1'][0] - 10.0)
+    np.savez(tmp_path / 'two.npz', **arrays)
+    return str(tmp_path / 'two.npz')
+
+
+def _sender_parts(monkeypatch, values):
+    """The sender's sender_parts without a master; what it built or waited for, in order."""
+    import rospy
+
+    from leap_teleop.hands import sender_setup
+    from leap_teleop.ros.nodes import sender
+    done = []
+    monkeypatch.setattr(rospy, 'has_param', lambda name: False)
+
+    def camera_model(p):
+        done.append('CameraInfo wait')
+        raise SourceError('no sensor_msgs/CameraInfo on /cam/info within 10 s')
+    make_source = sender_setup.make_source
+
+    def built(name, **kwargs):
+        done.append('built ' + name)
+        if name in ('webcam', 'video', 'leap', 'leapc'):
+            raise SourceError('%s: cannot open' % name)
+        return make_source(name, **kwargs)
+    monkeypatch.setattr(sender, 'camera_model', camera_model)
+    monkeypatch.setattr(sender_setup, 'make_source', built)
+    try:
+        return sender.sender_parts(params(**values)), done
+    except (SourceError, ValueError) as e:
+        return e, done
+
+
+@pytest.mark.parametrize('source', ['video', 'webcam', 'scripted', 'leap', 'leapc'])
+def test_bad_bindings_are_refused_before_the_source_is_built_or_waits_for_camera_info(
+        tmp_path, monkeypatch, source):
+    # The check ran after build_source, which waits up to 10 s for ~camera_info_topic: a bad
+    # bindings file was told late, or not at all when the camera failed.
+    from leap_teleop.hands.gestures.bindings import BindingError
+    (tmp_path / 'bad.yaml').write_text('arm: {arm: thumbs_upp}\n')
+    (tmp_path / 'clip.mp4').write_bytes(b'')
+    err, done = _sender_parts(monkeypatch, dict(
+        source=source, video=str(tmp_path / 'clip.mp4'), camera_info_topic='/cam/info',
+        gesture_bindings=str(tmp_path / 'bad.yaml')))
+    assert isinstance(err, BindingError) and "unknown gesture 'thumbs_upp'" in str(err)
+    assert done == []
+
+
+def test_a_recording_is_read_before_its_bindings_are_checked_against_its_own_hands(
+        tmp_path, monkeypatch):
+    # A camera take's hands are keypoints (judged by ~keypoint_model), a Leap take's are
+    # not: only the file tells, and reading it never waits.
+    import numpy as np
+
+    from leap_teleop.hands.frame import Frame
+    from leap_teleop.hands.gestures.bindings import BindingError
+    from leap_teleop.hands.rendered_hand import render_hand
+    from leap_teleop.hands.sources import leapjs
+    (tmp_path / 'b.yaml').write_text('arm: {arm: two}\n')
+    for family in ('leap', 'keypoints'):
+        hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=1)
+        if family == 'keypoints':
+            hand.image_landmarks = np.tile([[320.0, 240.0]], (21, 1)) + np.arange(21)[:, None]
+        path = str(tmp_path / ('%s.json' % family))
+        leapjs.save(path, [leapjs.frame_to_dict(Frame(k + 1, 1.0 + k / 100.0, [hand])) for k in range(5)])
+        got, done = _sender_parts(monkeypatch, dict(
+            source='recording', recording=path, gesture_model=_two_model(tmp_path),
+            gesture_bindings=str(tmp_path / 'b.yaml')))
+        assert done == ['built recording'], family
+        if family == 'leap':
+            source, _, _, bindings = got
+            assert source.hand_family == 'leap' and bindings.actions['arm']['arm'] == ('two',)
+        else:
+            assert isinstance(got, BindingError) and 'judged by ~keypoint_model' in str(got)

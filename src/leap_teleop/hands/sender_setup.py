@@ -67,6 +67,20 @@ def build_source(p, clock, default_script, camera_model=lambda: None, on_image=N
     return make_source(name, clock=clock)      # a device too: sim time under /use_sim_time
 
 
+def source_and_bindings(p, recognizer, clock, default_script, camera_model=lambda: None,
+                        on_image=None):
+    """(source, bindings): build_source and checked_bindings (`recognizer`: one of the
+    factory's), a bad ~gesture_bindings refused before anything can wait (a camera source
+    waits up to 10 s for its CameraInfo, then loads MediaPipe and opens its device): the
+    source's name tells its hand family. A recording's hands are known only from its file
+    (a camera take's are keypoints): it is read first, which never waits."""
+    if p['source'] != 'recording':
+        bindings = checked_bindings(p, recognizer)
+        return build_source(p, clock, default_script, camera_model, on_image), bindings
+    source = build_source(p, clock, default_script, camera_model, on_image)
+    return source, checked_bindings(p, recognizer, source.hand_family)
+
+
 def recognizer_factory(p):
     """A GestureRecognizer per hand with the ~gesture_model / ~keypoint_model (each model
     is loaded once; a bad one raises ModelError, a ValueError)."""

@@ -14,11 +14,10 @@ import tf2_ros
 from leap_teleop.hands.leap_interface import LeapInterface
 from leap_teleop.hands.sender_params import SENDER_PARAMS, SENDER_RECONFIGURABLE, leap_rotation
 from leap_teleop.hands.sender_setup import (
-    build_source,
     check_outputs,
-    checked_bindings,
     recognizer_factory,
     retune_sender,
+    source_and_bindings,
 )
 from leap_teleop.hands.sources import SourceError
 from leap_teleop.hands.tracker import DEAD_BANDS
@@ -45,9 +44,10 @@ def sender_parts(p):
     p['leap_rotation_xyzw'] = leap_rotation(p['leap_rotation_xyzw'])
     factory = recognizer_factory(p)
     view = camera_view_publisher(p)
-    source = build_source(p, rospy.get_time, package_path('config', 'gestures', 'wave_hello.yaml'),
-                          lambda: camera_model(p), view.on_image if view is not None else None)
-    bindings = checked_bindings(p, factory(), source.hand_family)   # a recording knows its hands
+    # bindings checked before a camera's CameraInfo wait; a recording's once read (its hands)
+    source, bindings = source_and_bindings(
+        p, factory(), rospy.get_time, package_path('config', 'gestures', 'wave_hello.yaml'),
+        lambda: camera_model(p), view.on_image if view is not None else None)
     return source, view, factory, bindings
 
 
