@@ -862,6 +862,46 @@ def test_max_tool_turn_stays_measured_from_the_yaw_at_the_rock_across_re_anchors
     assert abs(wrap_angle(yaw - yaw_rock)) == pytest.approx(0.3, abs=2e-3)
 
 
+@pytest.mark.parametrize('mode', ['imitation', 'joystick'])
+@pytest.mark.parametrize('orientation', ['yaw', 'full'])
+@pytest.mark.parametrize('max_turn', [math.pi, math.pi - 0.01])
+def test_a_re_anchor_with_the_tool_held_at_a_max_tool_turn_of_pi_keeps_the_clamps_side(
+        mode, orientation, max_turn):
+    # At pi, the held tool's turn measured nearest 0 came out on the other side of the
+    # clamp: the tool then turned on past it with the hand, and never back.
+    t, c = armed_with_origin(mode=mode, orientation=orientation, orientation_scale=1.0,
+                             max_tool_turn=max_turn, max_joint_speed=1.0, max_joint_accel=math.pi)
+    q = HOME.copy()
+    yaw_rock = kin.tilt_and_yaw(kin.fk(q)[:3, :3])[1]
+    palm, turns = np.array(PALM), [0.0]
+
+    def turn_to(turn, periods, q):
+        for _ in range(periods):
+            _, q = follow(t, c, hand(palm_mm=tuple(palm), turn=turn), 1, q)
+            yaw = kin.tilt_and_yaw(kin.fk(q)[:3, :3])[1] - yaw_rock
+            turns.append(turns[-1] + wrap_angle(yaw - turns[-1]))
+        return q
+
+    hand_turn = 0.0
+    while hand_turn < max_turn + 0.2:           # the hand turns past the clamp
+        hand_turn = min(max_turn + 0.2, hand_turn + 0.01)
+        q = turn_to(hand_turn, 1, q)
+    q = turn_to(hand_turn, 300, q)
+    assert abs(turns[-1]) == pytest.approx(max_turn, abs=2e-3)
+    held = [x for x in stall(t, c, 0.33, q=q) if sent(x)]
+    q = held[0].points[-1][1]
+    if mode == 'imitation':
+        palm = palm + [60.0, 0.0, 0.0]          # 0.15 m of target: a re-anchor
+    q = turn_to(hand_turn, 1, q)
+    assert 'origin re-anchored' in t.status.reason, t.status.reason
+    for k in range(80):                         # the hand turns on: the tool stays at the clamp
+        q = turn_to(hand_turn + 0.01 * (k + 1), 1, q)
+    q = turn_to(hand_turn + 0.8, 150, q)
+    assert abs(turns[-1]) <= max_turn + 2e-3, turns[-1]
+    q = turn_to(hand_turn - 0.4, 300, q)        # and back: it turns back
+    assert abs(turns[-1]) < max_turn - 0.15, turns[-1]
+
+
 @pytest.mark.parametrize('older_by, disarmed', [(5.0, True), (0.5, True), (-0.3, False)])
 def test_a_stream_back_from_a_stall_at_older_stamps_disarms(older_by, disarmed):
     # A bag played again after a 0.32 s silence: its hand was taken as the same session's,

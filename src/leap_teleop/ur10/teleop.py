@@ -234,7 +234,8 @@ class ArmTeleop:
         self._hand_ref_rotation_t = None   # its rotation matrix, transposed
         self._hand_rot_key = None      # (orientation mode, hand angles) of _hand_rot
         self._hand_rot = None
-        self._tool_near = (None, None)  # (relative rotation vector, (tilt axis, turn)) last aimed
+        # (relative rotation vector, (swing or None, turn from _yaw_ref)) last aimed
+        self._tool_near = (None, None)
         self._target = None
         self._joy_still = False        # joystick: the last target was a dead-zone stop
         self._goal = None              # (time, joint goal) of the last tracked target
@@ -847,11 +848,19 @@ class ArmTeleop:
         tool = kin.fk(q)
         self._tcp_ref = tool[:3, 3].copy()
         self._tool_ref = tool[:3, :3].copy()
+        near = (None, None)
         if reanchor:
-            # Yaw mode: the held tool's turn from the rock's yaw (within half a turn of it:
-            # max_tool_turn is at most pi); full mode measures from _yaw_ref itself.
-            self._turn_ref = math.remainder(kin.tilt_and_yaw(self._tool_ref)[1] - self._yaw_ref,
-                                            _TWO_PI)
+            # The held tool's turn from the rock's yaw, taken nearest the last aimed turn
+            # (clamped): at a max_tool_turn of pi, a tool held at the clamp is half a turn
+            # from that yaw, and measured nearest 0 it came out on the clamp's other side.
+            # Yaw mode keeps it as the turn reference; full mode measures from _yaw_ref
+            # itself, nearest the turn it is handed.
+            last = self._tool_near[1]
+            last = 0.0 if last is None else max(-self.p.max_tool_turn,
+                                                min(self.p.max_tool_turn, last[1]))
+            self._turn_ref = last + math.remainder(
+                kin.tilt_and_yaw(self._tool_ref)[1] - self._yaw_ref - last, _TWO_PI)
+            near = (None, (None, last))
         else:
             self._yaw_ref = kin.tilt_and_yaw(self._tool_ref)[1]
             self._turn_ref = 0.0
@@ -859,7 +868,7 @@ class ArmTeleop:
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
         self._target = self._tcp_ref.copy()
         self._joy_still = False
-        self._tool_near = (None, None)
+        self._tool_near = near
         self._goal = self._last_reach = None
         self._filter.reset(palm, now)
         self._rotation_filter.reset(hand_rot, now)
@@ -881,6 +890,7 @@ class ArmTeleop:
             turn = self._turn_ref + float(delta[2]) * self.p.orientation_scale
             R = kin.tool_down(self._yaw_ref + max(-self.p.max_tool_turn,
                                                   min(self.p.max_tool_turn, turn)))
+            near_limit = (None, turn)       # as full mode's: (no swing, the turn)
         else:
             R, near_limit = kin.limit_tool_rotation(
                 kin.rotation_from_vector(delta * self.p.orientation_scale) @ self._tool_ref,
