@@ -365,6 +365,49 @@ def test_a_re_anchor_while_the_hold_still_brakes_maps_the_hand_to_where_it_comes
     np.testing.assert_allclose(t._tcp_ref, kin.fk(rest)[:3, 3], atol=1e-9)
 
 
+def _braked(t, now, q):
+    """The joints at rest braked from the plan's state at `now` at the tracking's
+    acceleration, every joint over the slowest one's time."""
+    qs, v = t._servo.state_at(now, q)
+    return qs + v * (0.5 * float(np.max(np.abs(v) / t._servo.max_accel)))
+
+
+@pytest.mark.parametrize('speed', [0.5, 1.0])
+@pytest.mark.parametrize('mode', ['imitation', 'joystick'])
+def test_an_origin_set_while_the_hold_brakes_is_where_tracking_can_stop(mode, speed):
+    # The hold brakes at the UR10's pi rad/s^2, tracking at max_joint_accel: an origin
+    # where the hold comes to rest (a rock on the return; joystick mode's re-anchor, its
+    # dead zone's stop) was one the arm ran 56-77 mm past, and back to.
+    t, c = armed_with_origin(mode=mode, max_joint_speed=speed, max_joint_accel=0.5)
+    q = HOME.copy()
+    palm = np.array(PALM)
+    for k in range(75):                                       # 0.6 m of target sideways
+        palm = np.array(PALM) + [400.0 * min(k * 0.008, 0.6), 0.0, 0.0]
+        if mode == 'joystick':
+            palm = np.array(PALM) + [100.0, 0.0, 0.0]         # pushed at full speed
+        _, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+    for _ in range(26):                                       # a 0.21 s stall: the hold
+        now = c.tick()
+        t.on_joints(q)
+        t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+    assert t.status.state == HOLDING and t._servo.moving
+    start = kin.fk(q)[:3, 3]
+    rest = kin.fk(_braked(t, c.t + 0.008, q))[:3, 3]
+    _, q = follow(t, c, hand(palm_mm=tuple(palm), rock=mode == 'imitation'), 1, q)
+    assert t.status.reason.endswith('origin set' if mode == 'imitation' else 'origin re-anchored')
+    origin = t._tcp_ref.copy()
+    path = [kin.fk(q)[:3, 3]]
+    for _ in range(250):
+        _, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+        path.append(kin.fk(q)[:3, 3])
+    way = (origin - start) / np.linalg.norm(origin - start)
+    past = max(float((p - origin) @ way) for p in path)
+    assert past < 0.003, past                                  # no run past and back
+    assert np.linalg.norm(path[-1] - origin) < 1e-4
+    np.testing.assert_allclose(origin, rest, atol=1e-9)
+
+
 def test_a_rock_shown_while_the_arm_moves_sets_the_origin_where_it_comes_to_rest():
     # Taken at the pose the moving arm passed, the origin was one it ran past (12 mm here)
     # and then drove back to, with the hand still.
@@ -379,7 +422,7 @@ def test_a_rock_shown_while_the_arm_moves_sets_the_origin_where_it_comes_to_rest
     assert np.abs(t._servo.state_at(c.t, q)[1]).max() > 0.3    # ... at speed
     path = [kin.fk(q)[:3, 3]]
     for k in range(7):                                         # a rock held 56 ms
-        rest = kin.fk(t._servo.rest(q))[:3, 3]
+        rest = kin.fk(_braked(t, c.t + 0.008, q))[:3, 3]
         _, q = follow(t, c, hand(palm_mm=tuple(goal), rock=True), 1, q)
         np.testing.assert_allclose(t._tcp_ref, rest, atol=1e-9)
         path.append(kin.fk(q)[:3, 3])

@@ -833,16 +833,21 @@ class ArmTeleop:
         return moved, float(turned)
 
     def _set_origin(self, palm, hand_rot, now, reanchor=False):
-        """The hand at palm / hand_rot maps to the tool's pose where the arm's last plan
-        comes to rest: taken at the pose passed while it still moves (catching up, or a
-        hold braking after a stall), the origin was one it ran past and drove back to with
-        the hand still. A re-anchor keeps the yaw at the rock, which max_tool_turn is
-        measured from (re-centred there, each stall let the tool turn another max_tool_turn
-        on)."""
+        """The hand at palm / hand_rot maps to the tool's pose where the arm comes to rest
+        braked from now as tracking brakes: taken at the pose passed while it still moves
+        (catching up, or a hold braking after a stall), the origin was one it ran past and
+        drove back to with the hand still. A re-anchor keeps the yaw at the rock, which
+        max_tool_turn is measured from (re-centred there, each stall let the tool turn
+        another max_tool_turn on)."""
         self._palm_ref = palm.copy()
-        q = self._servo.state_at(now, self._q)[0]      # (a plan that has ended is dropped)
+        q, v = self._servo.state_at(now, self._q)      # (a plan that has ended is dropped)
         if self._servo.moving:
-            rest = self._servo.rest(self._q)
+            # Braked from now at the tracking's acceleration, every joint over the slowest
+            # one's time, as the servo brakes: the plan's own rest, a hold's braked at the
+            # UR10's pi rad/s^2, is one a lower max_joint_accel runs past and back to.
+            t_stop = float(np.max(np.abs(v) / self._servo.max_accel))
+            # (braked harder near a joint limit: the servo stops short of it)
+            rest = np.minimum(np.maximum(q + v * (0.5 * t_stop), kin.JOINT_LOWER), kin.JOINT_UPPER)
             if float(np.abs(rest - q).max()) > AT_REST_RAD:
                 q = rest
         tool = kin.fk(q)
@@ -866,8 +871,10 @@ class ArmTeleop:
             self._turn_ref = 0.0
         self._hand_rot_ref = hand_rot.copy()
         self._hand_ref_rotation_t = kin.rotation_from_vector(self._hand_rot_ref).T
+        # Joystick: a hand in the dead zone holds the arm there (the plan's rest, a hold's
+        # braked at pi rad/s^2, was one it ran past and back to)
         self._target = self._tcp_ref.copy()
-        self._joy_still = False
+        self._joy_still = True
         self._tool_near = near
         self._goal = self._last_reach = None
         self._filter.reset(palm, now)
