@@ -14,6 +14,8 @@ from leap_teleop.ur10.teleop import (
     HOLDING,
     OFF_PLAN_LAG_S,
     OFF_PLAN_S,
+    REANCHOR_TURN_RAD,
+    TELEOP_PARAMS,
     TRACKING,
     ArmInput,
     ArmTeleop,
@@ -874,6 +876,14 @@ def test_a_hand_back_from_a_stall_turned_far_re_anchors_the_origin(turn, kept):
                                     else 'origin re-anchored'), t.status.reason
     jump = kin.rotation_error(before, np.array(t.status.target_rotation))
     assert jump == pytest.approx(turn if kept else 0.0, abs=1e-6)
+
+
+def test_reanchor_beyonds_doc_names_all_that_re_anchors():
+    # It said "only when the hand moved the target further than this": a hand still in
+    # joystick mode, or one that turned the tool's target in the yaw or full mode, also
+    # re-anchors (both tested above).
+    doc = TELEOP_PARAMS['reanchor_beyond'].doc
+    assert 'more than %g rad' % REANCHOR_TURN_RAD in doc and 'always in joystick mode' in doc
 
 
 @pytest.mark.parametrize('orientation', ['yaw', 'full'])

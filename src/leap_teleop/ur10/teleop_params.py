@@ -113,7 +113,9 @@ TELEOP_PARAMS = {
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
                                  'best latency', unit='s', gt=0.0, le=10.0),
     'reanchor_beyond': Param(0.1, 'after a hand-input stall, the origin is re-anchored only when the hand '
-                                  'moved the target further than this during the silence; '
+                                  'moved the target further than this (or turned the tool\'s '
+                                  'target more than 0.3 rad, in the yaw and full orientation '
+                                  'modes) during the silence, and always in joystick mode; '
                                   'else the hand-to-arm mapping is kept and the arm catches up '
                                   '(its lag from before the stall too) at the servo\'s limits',
                              unit='m', ge=0.0, le=2.0),
