@@ -341,6 +341,62 @@ def test_a_frame_that_cannot_be_serialised_is_dropped_with_a_warning_not_the_sen
     assert len(warned) == 2 and 'frame 2 dropped from /human: it cannot be serialised' in warned[0]
 
 
+class CapturedConnection:
+    """What rospy's publisher writes to one subscriber's connection, kept in order."""
+
+    endpoint_id = 'captured'
+    cleanup_cb = None
+
+    def __init__(self):
+        self.data = b''
+
+    def set_cleanup_callback(self, cb):
+        self.cleanup_cb = cb
+
+    def fileno(self):
+        return None
+
+    def write_data(self, data):
+        self.data += bytes(data)
+
+    def close(self):
+        pass
+
+
+@pytest.mark.filterwarnings('ignore:The publisher should be created')    # queue_size=None: synchronous
+def test_a_dropped_message_leaves_the_next_ones_whole_on_the_wire(monkeypatch):
+    # rospy serialises into one buffer per publisher and clears it only after a message
+    # went out: the bytes of one that failed half-way went out in front of the next, and
+    # every subscriber's connection was broken for good while the sender ran on.
+    import struct
+
+    import rospy
+    import rospy.topics
+
+    from leap_teleop.ros.hand_conversions import DriverHuman
+    monkeypatch.setattr(rospy.topics, 'is_initialized', lambda: True)
+    real = rospy.Publisher('/captured_human', DriverHuman, queue_size=None)
+    wire = CapturedConnection()
+    real.impl.add_connection(wire)
+    try:
+        topics = driver_topics(monkeypatch, human_topic='human')
+        topics.pubs['raw'] = real
+        li = LeapInterface()
+        li.add_listener(topics.on_frame)
+        for i in range(5):
+            hand = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=5)
+            topics.builder._fps, topics.builder._last_stamp = (1e300 if i == 2 else 0.0), None
+            li.on_frame(Frame(id=i, timestamp=1.0 + i / 100.0, hands=[hand]))
+        data, ids = wire.data, []
+        while data:
+            (size,) = struct.unpack('<I', data[:4])
+            ids.append(DriverHuman().deserialize(data[4:4 + size]).lmc_frame_id)
+            data = data[4 + size:]
+        assert ids == [0, 1, 3, 4]
+    finally:
+        real.unregister()
+
+
 def test_recorded_sdk_gestures_go_to_their_hand_typed_and_staged():
     right = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
     left = render_hand('left', 'open', [50.0, 200.0, 0.0], hand_id=4)

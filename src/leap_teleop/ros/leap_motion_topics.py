@@ -97,8 +97,19 @@ class LeapMotionTopics:
     def _publish(self, kind, msg, frame):
         """Publish; a message that cannot be serialised (a value no source should give) drops
         this frame's message with a warning: raised, it ended the sender."""
+        pub = self.pubs[kind]
         try:
-            self.pubs[kind].publish(msg)
+            pub.publish(msg)
         except SERIALIZATION_ERRORS as e:
+            # rospy clears its publisher's buffer only after a message went out: the failed
+            # one's bytes would go out in front of the next and break every connection.
+            impl = getattr(pub, 'impl', None)
+            if getattr(impl, 'buff', None) is not None:
+                impl.acquire()
+                try:
+                    impl.buff.seek(0)
+                    impl.buff.truncate(0)
+                finally:
+                    impl.release()
             self.log.warn('serialize ' + kind, 'sender: frame %d dropped from %s: it cannot be '
-                          'serialised (%s)', frame.id, self.pubs[kind].resolved_name, e)
+                          'serialised (%s)', frame.id, pub.resolved_name, e)
