@@ -73,3 +73,25 @@ def test_the_views_are_letterboxed_as_the_sender_letterboxes_them():
         assert seen == [(480, 640)]
     finally:
         pipe.close()
+
+
+@pytest.mark.parametrize('name', ['fist__gestia__fist.jpeg', 'fist__fp__fullcurl.jpg', 'fist__htj__22.jpg',
+                                  'thumbs_up__mps__thumbs-up.png'])
+def test_the_hand_box_is_in_the_photo_s_own_pixels(name):
+    # Found on the letterboxed image but scaled by the photo's own size, the box that places
+    # the off-centre crop was off for every photo that is not 4:3, and the crop cut the hand.
+    import json
+
+    import numpy as np
+    with open(os.path.join(HANDS_DATA, 'hands.json')) as f:
+        entry = json.load(f)['images'][name]      # MediaPipe's landmarks on the photo as it is
+    size = np.array([entry['width'], entry['height']])
+    xy = np.concatenate([np.asarray(h['landmarks'])[:, :2] for h in entry['hands']]) * size
+    want = np.array([*xy.min(axis=0), *xy.max(axis=0)])
+    pipe = views.PhotoPipeline(os.path.join(HANDS_DATA, name))
+    try:
+        box = pipe.hand_box(pipe.cv2.imread(os.path.join(HANDS_DATA, name)))
+    finally:
+        pipe.close()
+    assert box is not None
+    assert np.abs(np.array(box) - want).max() < 0.05 * size.max(), (box, want)

@@ -173,13 +173,6 @@ def judge(hands, want):
     return True, false_up
 
 
-def _box(landmarks, width, height):
-    if not landmarks:
-        return None
-    xy = np.concatenate([lm.image[:, :2] for lm in landmarks]) * (width, height)
-    return (*xy.min(axis=0), *xy.max(axis=0))
-
-
 class PhotoPipeline:
     """classify_frames' image path on in-memory images: the video source's preparation
     (letterboxed to the sender's default size) and detector, its hands_of conversion, the
@@ -196,6 +189,20 @@ class PhotoPipeline:
         """(landmarks, CameraModel) of one image."""
         _, rgb, cam = self.source.prepare(bgr)
         return self.source.detector.detect(rgb), cam
+
+    def hand_box(self, bgr):
+        """(x0, y0, x1, y1) around the hands found in bgr, in its own pixels (the detector
+        saw it letterboxed); None when none is found."""
+        found, _ = self.detect(bgr)
+        if not found:
+            return None
+        h, w = bgr.shape[:2]
+        scale, pad_x, pad_y, out_w, out_h = (1.0, 0, 0, w, h)
+        if self.source.size is not None and (w, h) != self.source.size:
+            scale, pad_x, pad_y, out_w, out_h = self.source.letterbox(bgr)[1]
+        xy = np.concatenate([lm.image[:, :2] for lm in found]) * (out_w, out_h)
+        xy = (xy - (pad_x, pad_y)) / scale
+        return (*xy.min(axis=0), *xy.max(axis=0))
 
     def classify(self, landmarks, cam):
         """The classify_frames output hands for these detections."""
@@ -224,10 +231,7 @@ def run(data_dir=datasets.HANDS_DATA, names=None, make_views=views, log=None):
             bgr = cv2.imread(os.path.join(data_dir, name), cv2.IMREAD_COLOR)
             if bgr is None:
                 raise FileNotFoundError('cannot read %s' % os.path.join(data_dir, name))
-            box = None
-            if getattr(make_views, 'uses_box', True):
-                found, _ = pipe.detect(bgr)
-                box = _box(found, bgr.shape[1], bgr.shape[0])
+            box = pipe.hand_box(bgr) if getattr(make_views, 'uses_box', True) else None
             r = per_label.setdefault(label, {'cases': 0, 'right': 0, 'false_thumb_up': 0,
                                              'no_hand': 0, 'failures': []})
             for view, img in make_views(cv2, bgr, label, box):
