@@ -293,6 +293,7 @@ def test_a_hand_stall_overlapping_a_joint_state_stall_re_anchors_on_its_return(h
     a.arm_with_origin()
     for _ in range(5):
         a.period(hand(palm_mm=(0.0, 260.0, 0.0)))
+    before = np.array(a.t.status.target)       # where the hand's last message puts it
     periods = [(True, False)] * 20 + [(False, False)] * 70 if hand_first else \
         [(False, True)] * 20 + [(False, False)] * 70
     for joints, with_hand in periods:
@@ -301,7 +302,8 @@ def test_a_hand_stall_overlapping_a_joint_state_stall_re_anchors_on_its_return(h
     held = kin.fk(a.q)[:3, 3]
     cmd = a.period(hand(palm_mm=(100.0, 260.0, 0.0)))
     assert a.t.status.state == TRACKING and 'origin re-anchored' in a.t.status.reason
-    assert np.linalg.norm(np.array(a.t.status.target) - held) < 1e-3
+    # none of the motion unseen is driven (the arm's lag behind that target is caught up)
+    np.testing.assert_allclose(a.t.status.target, before, atol=1e-9)
     assert np.linalg.norm(kin.fk(cmd.q)[:3, 3] - held) < 1e-3
 
 

@@ -17,10 +17,11 @@ trajectories keep the velocity continuous (servo.py), a target further than the 
 in one period is approached in steps along the straight TCP line (the arm catches up along
 the hand's path, inside the box), IK failures and other arm configurations hold the arm
 instead of raising, stale input holds at once and resumes from the current pose when fresh
-input returns within disarm_after (the origin is re-anchored when the hand itself moved the
-target more than reanchor_beyond meanwhile, so nothing jumps; else the mapping stays and
-the arm catches up within the servo's limits, also with what it lagged behind before the
-stall), while a longer silence, a lost hand or a fist disarms (watchdog). Stale joint
+input returns within disarm_after (when the hand itself moved the target more than
+reanchor_beyond meanwhile, the origin is re-anchored: the hand where it is maps to where
+its last message put the target, so none of the motion unseen is driven; else the mapping
+stays; either way the arm catches up within the servo's limits with what it lagged behind
+before the stall), while a longer silence, a lost hand or a fist disarms (watchdog). Stale joint
 states (a loaded simulator) hold without commanding anything; states back within
 joint_loss_after resume on the same origin (the hand's input never stopped), caught up
 within the servo's limits; a longer loss or the clock jumping back (a simulator restart)
@@ -584,9 +585,12 @@ class ArmTeleop:
                 if silent is not None:
                     moved, turned = self._moved_while_silent(silent, palm, hand_rot)
                 if hand_stalled and (moved > self.p.reanchor_beyond or turned > REANCHOR_TURN_RAD):
-                    # Re-anchor: the hand where it is now maps to the pose the arm holds
-                    # (where its hold comes to rest: one still braking would be driven back).
-                    self._set_origin(palm, hand_rot, now, reanchor=True)
+                    if self.p.mode == 'imitation':
+                        self._skip_unseen(silent, palm, hand_rot, now)
+                    else:
+                        # Joystick: the hand where it is now is the dead zone's centre, and
+                        # the arm stops where it can (a rate command: nothing to catch up).
+                        self._set_origin(palm, hand_rot, now, reanchor=True)
                     self._set(TRACKING, back + ': origin re-anchored')
                 else:
                     # The servo catches up within its limits; the mapping stays.
@@ -831,6 +835,23 @@ class ArmTeleop:
         turned = kin.rotation_error(self._tool_rotation(self._rotation_of(last, hand_rot)),
                                     self._tool_rotation(hand_rot))
         return moved, float(turned)
+
+    def _skip_unseen(self, last, palm, hand_rot, now):
+        """Imitation's re-anchor: the hand at palm / hand_rot maps to where `last`, its
+        message before the silence, put the tool's target, so none of the motion unseen
+        meanwhile is driven, while the arm's lag behind that target is still caught up
+        (mapped to where the hold came to rest, the arm stayed that lag short of the hand
+        for the rest of the session). The tool's references, max_tool_turn's among them,
+        stay as they are."""
+        self._palm_ref = self._palm_ref + (palm - np.asarray(last.palm_mm, dtype=float))
+        if self.p.orientation != 'fixed':
+            # rel = R(hand) R(ref)^T: the new reference gives hand_rot the rotation last had.
+            before = kin.rotation_from_vector(self._rotation_of(last, hand_rot))
+            ref_t = kin.rotation_from_vector(hand_rot).T @ before @ self._hand_ref_rotation_t
+            self._hand_ref_rotation_t = ref_t
+            self._hand_rot_ref = kin.rotation_vector_near(ref_t.T, self._hand_rot_ref)
+        self._filter.reset(palm, now)
+        self._rotation_filter.reset(hand_rot, now)
 
     def _set_origin(self, palm, hand_rot, now, reanchor=False):
         """The hand at palm / hand_rot maps to the tool's pose where the arm comes to rest
