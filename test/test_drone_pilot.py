@@ -220,6 +220,42 @@ def test_a_fast_turn_from_upright_is_read_by_the_hand_s_own_turn(turn, raised):
     assert commands[-1] == 0.0 and max(abs(c) for c in commands[-len(down):]) < 0.2
 
 
+@pytest.mark.parametrize('turn', [100, -100, 150])
+def test_a_turn_too_fast_to_follow_right_after_the_unfold_is_read_the_right_way(turn):
+    # The frame after the capture had no reading before it to judge a step by: a 100 deg
+    # turn there read half a turn off, full rate the wrong way, on after the hand came back.
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    back = [hand_pose(turn * (1 - k / 20)) for k in range(21)] + [hand_pose()] * 3
+    commands = yaw_commands(pilot, [oriented(R) for R in [hand_pose(turn)] * 3 + back])
+    assert commands[0] == pytest.approx(-1.0 if turn > 0 else 1.0)
+    assert commands[-1] == 0.0
+
+
+@pytest.mark.parametrize('path', [
+    [('raised', 85), ('rolled', 120), ('raised', 0), ('rolled', 0)],
+    [('raised', 85), ('rolled', 100), ('raised', 0), ('rolled', 0)],
+    [('rolled', 150), ('raised', 130), ('rolled', 0), ('raised', 0)],
+    [('rolled', 90), ('raised', 130), ('rolled', 0), ('raised', 0)],
+    [('raised', 130), ('rolled', 150), ('raised', 0), ('rolled', 0)],
+], ids=['upright_roll120', 'upright_roll100', 'palm_up_over_the_top', 'palm_side_over_the_top',
+        'over_the_top_roll'])
+def test_a_hand_back_at_its_unfold_pose_turns_nothing_whatever_path_it_took(path):
+    # Slow closed loops of raises and rolls (an upright hand rolled turns the drone) left
+    # the heading read along the way a half or whole turn off: back at the unfold pose, the
+    # drone yawed at full rate.
+    pilot = airborne(PilotParams())
+    drain(pilot)
+    pose, hands = {'raised': 0.0, 'rolled': 0.0}, []
+    for axis, goal in path:
+        start = pose[axis]
+        for k in range(1, 61):                 # 1 deg a frame or so: 60 deg/s at 60 fps
+            pose[axis] = start + (goal - start) * k / 60
+            hands.append(oriented(hand_pose(raised=pose['raised'], rolled=pose['rolled'])))
+    commands = yaw_commands(pilot, hands + [oriented(hand_pose())] * 5)
+    assert commands[-5:] == [0.0] * 5, commands[-70:]
+
+
 @pytest.mark.parametrize('stall', [False, True])
 def test_a_hand_raised_past_upright_between_two_frames_turns_nothing(stall):
     # A slow camera, or a stall in a Leap stream over the top of a raise: the fingers go from

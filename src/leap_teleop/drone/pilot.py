@@ -33,7 +33,9 @@ Modes:
   gives it: there rolling the hand turns the drone). A step of more than
   MAX_HEADING_STEP_DEG between two frames (a slow camera, a stall) is read by the hand's
   own turn about the vertical between them, so a fast turn and a raise past vertical are
-  told apart.
+  told apart; within NEAR_REFERENCE_DEG of the unfold's orientation the turn is read from
+  the rotation since the unfold, so a hand back at its unfold pose turns nothing whatever
+  path it took.
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -125,6 +127,9 @@ NEAR_VERTICAL_DEG = (10.0, 30.0)
 # reads like one of -85 with the fingers raised past vertical, and a raise past vertical like
 # a half turn. The hand's own turn about the vertical between the two readings tells which.
 MAX_HEADING_STEP_DEG = 60.0
+# Within this rotation (deg) of the reference orientation the turn is read from the rotation
+# since the reference, not followed along the path (see DronePilot._twist).
+NEAR_REFERENCE_DEG = 45.0
 # A Hand message whose arrival time is this much before the last one's saw the clock jump
 # back (two connections' callbacks reading the clock a moment apart are not one).
 CLOCK_BACK_S = 0.05
@@ -219,6 +224,12 @@ def turn_between(before, after):
     # rel = after . before^T: the rotation between them, in the Leap's axes
     rel = [[sum(after[i][k] * before[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
     return -math.degrees(math.atan2(rel[0][2] - rel[2][0], rel[0][0] + rel[2][2]))
+
+
+def rotation_deg(before, after):
+    """The angle (deg) of the rotation from hand orientation `before` to `after` (hand_axes)."""
+    trace = sum(after[i][k] * before[i][k] for i in range(3) for k in range(3))
+    return math.degrees(math.acos(max(-1.0, min(1.0, (trace - 1.0) / 2.0))))
 
 
 def turn_about_vertical(before, after):
@@ -342,6 +353,7 @@ class DronePilot:
         self._last_turn = 0.0            # tilt: the last turn about the vertical (deg)
         self._fingers_before = None      # tilt: fingers_heading at that turn's reading
         self._axes_before = None         # tilt: hand_axes at that reading
+        self._axes_ref = None            # tilt: hand_axes at the reference
         self._clock_went_back = False    # the watchdog saw it before the next Hand message
         self.paper_ref = None            # paper: (init_x, init_y) mm
         self._last_hand = None
@@ -585,7 +597,10 @@ class DronePilot:
         axes = hand_axes(hand.normal, hand.direction)
         self.reference = (tuple(hand.palm), None if axes is None else hand_heading(axes))
         self._last_turn = 0.0
-        self._fingers_before = self._axes_before = None
+        # the captured pose is the reading before the next frame's (a first step too long
+        # to follow is judged from it too)
+        self._axes_ref = self._axes_before = axes
+        self._fingers_before = None if axes is None else fingers_heading(axes)
 
     def _twist(self, hand):
         cfg = self.cfg
@@ -609,6 +624,7 @@ class DronePilot:
         if heading_ref is None and axes is not None:    # captured with no orientation
             heading_ref = hand_heading(axes)
             self.reference = (ref, heading_ref)
+            self._axes_ref = axes
         # On from the last turn (a hand turned half round keeps its side, at full rate);
         # a frame without an orientation turns nothing and leaves the last turn as it was
         # (reset, the next frame read a hand turned past 90 deg a half turn off).
@@ -616,7 +632,11 @@ class DronePilot:
         if axes is not None:
             near = heading_ref + self._last_turn
             fingers, before = fingers_heading(axes), self._fingers_before
-            if fingers is not None and self._axes_before is not None and (
+            if self._axes_ref is not None and rotation_deg(self._axes_ref, axes) < NEAR_REFERENCE_DEG:
+                # Near the reference the turn is small whatever path led here (rolls and raises
+                # on the way could leave the reading a half turn off): taken from the rotation.
+                near = heading_ref + turn_between(self._axes_ref, axes)
+            elif fingers is not None and self._axes_before is not None and (
                     abs(_nearest_turn(fingers - near, 0.0, 180.0)) > MAX_HEADING_STEP_DEG
                     or (before is not None
                         and abs(_nearest_turn(fingers - before, 0.0, 360.0)) > MAX_HEADING_STEP_DEG)):
