@@ -1325,6 +1325,29 @@ def test_an_acceleration_lowered_live_mid_catch_up_does_not_overrun_the_target()
     assert np.allclose(t._servo.max_accel, 0.3)            # and the lower limit applies at rest
 
 
+@pytest.mark.parametrize('at_period', [62, 100])
+def test_an_acceleration_lowered_live_mid_sweep_does_not_run_past_its_end(at_period):
+    # During the ramp down the joints kept the sweep's speed (and could gain more at the
+    # ramped limit); when it ended, braking at the new limit ran 0.4 m past the sweep's end
+    # and 0.3 m out of the workspace. Now none speeds up beyond the new limit and none
+    # moves toward its goal faster than it can stop there at it.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    a = kin.fk(HOME)[:3, 3]
+    b = a + np.array([-0.3, 0.0, 0.0])
+    pa, pb = _palm_for(t, a), _palm_for(t, b)
+    q, furthest, lo = HOME.copy(), 0.0, np.array(t.p.workspace_min)
+    for k in range(1500):                                  # 300 mm in 2 s, then held
+        if k == at_period:
+            t.retune({'max_joint_accel': 0.2})
+        palm = pa + (pb - pa) * min(1.0, (k + 1) / 250)
+        _, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
+        x = kin.fk(q)[:3, 3]
+        furthest = max(furthest, float(np.dot(x - a, b - a) / np.dot(b - a, b - a)))
+        assert np.all(x >= lo - 1e-3), (k, x)               # inside the workspace
+    assert furthest < 1.02, furthest                        # 6 mm past the end at most
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=2e-3)
+
+
 def test_a_wrist_lagging_a_turn_by_half_a_turn_turns_the_tool_the_hands_way():
     # At the real robot's 0.05 rad/s the wrist fell more than pi behind a quick turn from one
     # tool-turn limit to the other; the solution nearest the lagging goal turned the tool

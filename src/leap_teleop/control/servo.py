@@ -49,6 +49,10 @@ class JointServo:
         self.lead = float(lead)
         self.reach_fast = bool(reach_fast)
         self.lower, self.upper = lower, upper
+        # A lower bound (per joint or one) for speeding up only, while max_accel still allows
+        # harder braking (a lowered limit coming down): no joint gains a speed it could not
+        # shed at this bound. None: max_accel for both.
+        self.speedup_accel = None
         # (t0, q0, v0, vA, t1, h, t_stop), q0 v0 vA tuples of floats: to vA by t1, on to h,
         # then to rest.
         self._plan = None
@@ -248,23 +252,33 @@ class JointServo:
         ff = [0.0] * n if goal_velocity is None else _floats(goal_velocity, n)
         lead, gain, horizon = self.lead, self.gain, self.horizon
         accel = _floats(self.max_accel, n)
+        up = accel if self.speedup_accel is None else _floats(np.minimum(self.speedup_accel,
+                                                                          self.max_accel), n)
         vA, j = [0.0] * n, 0
-        for g, f, x, u, a, top in zip(_floats(goal, n), ff, q, v, accel,
-                                      _floats(self.max_speed, n)):
+        for g, f, x, u, a, b, top in zip(_floats(goal, n), ff, q, v, accel, up,
+                                         _floats(self.max_speed, n)):
             # e = goal + ff * lead - q; correction = np.sign(e) * np.minimum(gain * |e|,
-            # np.sqrt(2 a |e|)); v_des = clip(ff + correction, -max_speed, max_speed);
-            # vA = v + clip(v_des - v, -a horizon, a horizon)
+            # np.sqrt(2 b |e|)); v_des = clip(ff + correction, -max_speed, max_speed);
+            # vA = v + clip(v_des - v, -a horizon, a horizon), a speed-up at most b horizon
+            # (b = a unless speedup_accel is set)
             e = g + f * lead - x
             mag = abs(e)
-            near, far = gain * mag, math.sqrt(2.0 * a * mag)
+            near, far = gain * mag, math.sqrt(2.0 * b * mag)
             m = near if near < far else far
             v_des = f + (m if e > 0 else -m if e < 0 else 0.0 * m)
+            if b < a:
+                # the goal's own speed included, no faster toward it than b can stop at it
+                # (it may stop at any moment; after the ramp, braking is at b)
+                v_des = min(v_des, far) if e > 0 else max(v_des, -far) if e < 0 else 0.0
             v_des = v_des if v_des > -top else -top
             v_des = v_des if v_des < top else top
             step = a * horizon
             dv = v_des - u
             dv = dv if dv > -step else -step
-            vA[j] = u + (dv if dv < step else step)
+            w = u + (dv if dv < step else step)
+            if b < a and abs(w) > abs(u):           # speeding up: at b only
+                w = max(-abs(u) - b * horizon, min(abs(u) + b * horizon, w))
+            vA[j] = w
             j += 1
         limits = self._limits(n)
         t_stop = None if limits is None else self._short_of_limits(q, v, vA, accel, limits,
@@ -274,7 +288,8 @@ class JointServo:
             # Reach vA as soon as the acceleration bound allows (every joint together),
             # then hold it to the horizon: the velocity lags the goal's by ~t1/2 instead
             # of horizon/2. A short first segment (>= 1 ms) keeps the points apart.
-            t1 = max(max([abs(w - u) / a for w, u, a in zip(vA, v, accel)]), 1e-3)
+            t1 = max(max([abs(w - u) / (b if abs(w) > abs(u) else a)
+                          for w, u, a, b in zip(vA, v, accel, up)]), 1e-3)
         return self._plan_points(now, q, v, vA, horizon, t1, limits, accel, t_stop)
 
     def stop(self, now, q_measured, min_duration=0.05, max_accel=None):

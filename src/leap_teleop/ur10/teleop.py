@@ -280,9 +280,13 @@ class ArmTeleop:
             # Braking at a lowered limit at once mid-motion runs each joint past its goal by
             # v^2/2a (0.23 m off a catch-up): it comes down over LOWER_ACCEL_RAMP_S, or at
             # once when the joints can stop at it quickly.
+            # Meanwhile no joint speeds up beyond the new limit: at the ramped one it gained
+            # speeds the new limit could not shed, and ran hundreds of mm past its goal.
             self._lower_accel = (self._servo.max_accel.copy(), accel, None)
+            self._servo.speedup_accel = accel
         else:
             self._servo.max_accel, self._lower_accel = accel, None
+            self._servo.speedup_accel = None
         self._servo.gain = float(p.servo_gain)
         self._servo.lead = float(p.servo_lead)
 
@@ -425,6 +429,7 @@ class ArmTeleop:
             ramp = (now - since) / LOWER_ACCEL_RAMP_S
             if ramp >= 1.0 or float(np.abs(v).max()) <= float(new.min()) * LOWER_ACCEL_STOP_S:
                 self._servo.max_accel, self._lower_accel = new, None
+                self._servo.speedup_accel = None
             else:
                 self._servo.max_accel = old + (new - old) * ramp
         cmd = self._step(now)
