@@ -24,6 +24,19 @@ def leapjs_data():
 
 
 @pytest.hookimpl(tryfirst=True)
+@pytest.fixture
+def detector_sizes(monkeypatch):
+    """The camera sources' MediaPipe HandDetector replaced by one that finds no hand and
+    notes the shape of each image it is given: the list of those shapes."""
+    import types
+
+    from leap_teleop.hands.sources import camera
+    seen = []
+    monkeypatch.setattr(camera, 'HandDetector', lambda **kwargs: types.SimpleNamespace(
+        detect=lambda rgb: seen.append(rgb.shape) or [], close=lambda: None))
+    return seen
+
+
 def pytest_collection_modifyitems(config, items):
     """Work units for `make test`'s two workers (`--dist loadgroup`): a test file is one
     unit, so its module fixtures are built once, except the rostests, each a unit of its

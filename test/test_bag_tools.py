@@ -4,7 +4,6 @@ sender's topics, one message per frame and side."""
 import os
 import subprocess
 import sys
-import types
 
 import pytest
 import rosbag
@@ -150,27 +149,15 @@ def test_recording_to_bag_help_gives_the_whole_first_paragraph(capsys):
         assert '%s %s' % (option, help_text) in out, out
 
 
-def _size_detector(seen):
-    """Stands in for MediaPipe's HandDetector: finds no hand, notes in `seen` the size of
-    each image it is given."""
-    def make(**kwargs):
-        return types.SimpleNamespace(detect=lambda rgb: seen.append(rgb.shape) or [],
-                                     close=lambda: None)
-    return make
-
-
-def test_recording_to_bag_letterboxes_camera_footage_as_the_sender_does(tmp_path, monkeypatch):
+def test_recording_to_bag_letterboxes_camera_footage_as_the_sender_does(tmp_path, detector_sizes):
     # Before: --video gave the detector the images as they came, while the sender
     # letterboxes them to 640x480: the bag held other hands than the sender publishes.
     import cv2
     import numpy as np
 
-    from leap_teleop.hands.sources import camera
     from leap_teleop.ros import recording_to_bag
-    seen = []
-    monkeypatch.setattr(camera, 'HandDetector', _size_detector(seen))
     image = str(tmp_path / 'wide.png')
     cv2.imwrite(image, np.zeros((720, 1280, 3), np.uint8))
     out = tmp_path / 'x.bag'
     assert recording_to_bag.main(['--video', image, str(out)]) == 0
-    assert seen == [(480, 640, 3)]
+    assert detector_sizes == [(480, 640, 3)]

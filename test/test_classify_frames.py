@@ -3,7 +3,6 @@ import json
 import os
 import subprocess
 import sys
-import types
 
 import pytest
 from hypothesis import given, settings
@@ -621,32 +620,20 @@ def test_a_keypoint_row_s_pinch_value_is_measured_from_its_landmarks(tmp_path, c
     assert image_pinch_strength(np.zeros((21, 2))) == 1.0
 
 
-def _size_detector(seen):
-    """Stands in for MediaPipe's HandDetector: finds no hand, notes in `seen` the size of
-    each image it is given."""
-    def make(**kwargs):
-        return types.SimpleNamespace(detect=lambda rgb: seen.append(rgb.shape) or [],
-                                     close=lambda: None)
-    return make
-
-
-def test_camera_footage_is_letterboxed_as_the_sender_does(tmp_path, monkeypatch, capsys):
+def test_camera_footage_is_letterboxed_as_the_sender_does(tmp_path, detector_sizes, capsys):
     # Before: images went to the detector as they came (here 1280x720), while the sender
     # letterboxes to its ~width x ~height (640x480): a photo read as a fist here and as no
     # hand in the sender.
     import cv2
     import numpy as np
 
-    from leap_teleop.hands.sources import camera
     from leap_teleop.hands.sources.camera_params import CAMERA_PARAMS
-    seen = []
-    monkeypatch.setattr(camera, 'HandDetector', _size_detector(seen))
     path = str(tmp_path / 'wide.png')
     cv2.imwrite(path, np.zeros((720, 1280, 3), np.uint8))
     assert classify_frames.main([path]) == 0
     assert json.loads(capsys.readouterr().out)['hands'] == []
     size = (CAMERA_PARAMS['height'].default, CAMERA_PARAMS['width'].default, 3)
-    assert seen == [size] == [(480, 640, 3)]
+    assert detector_sizes == [size] == [(480, 640, 3)]
 
 
 def test_a_side_whose_hand_cannot_be_placed_is_lost_not_given_to_the_other_hand():

@@ -835,25 +835,13 @@ def test_a_hand_without_usable_picture_landmarks_reads_as_a_leap_hand(value):
     assert hand.image_landmarks is None and np.isfinite(hand.palm_position).all()
 
 
-def _size_detector(seen):
-    """Stands in for MediaPipe's HandDetector: finds no hand, notes in `seen` the size of
-    each image it is given."""
-    def make(**kwargs):
-        return types.SimpleNamespace(detect=lambda rgb: seen.append(rgb.shape) or [],
-                                     close=lambda: None)
-    return make
-
-
-def test_record_frames_letterboxes_camera_footage_as_the_sender_does(tmp_path, monkeypatch, capsys):
+def test_record_frames_letterboxes_camera_footage_as_the_sender_does(tmp_path, detector_sizes, capsys):
     # Before: record_frames and record_gestures (source_from_args) gave the detector the
     # images as they came, while the sender letterboxes them to 640x480: other hands.
     import cv2
 
-    from leap_teleop.hands.sources import camera
-    seen = []
-    monkeypatch.setattr(camera, 'HandDetector', _size_detector(seen))
     image = str(tmp_path / 'wide.png')
     cv2.imwrite(image, np.zeros((720, 1280, 3), np.uint8))
     assert record_frames.main([str(tmp_path / 'take.json'), '--source', 'video', '--video', image,
                                '--realtime', '0']) == 0
-    assert seen == [(480, 640, 3)]
+    assert detector_sizes == [(480, 640, 3)]
