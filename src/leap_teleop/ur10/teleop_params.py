@@ -112,12 +112,12 @@ TELEOP_PARAMS = {
                          gt=0.0, le=2000.0),
     'max_input_age': Param(0.25, 'drop a message arriving this much later than the stream\'s '
                                  'best latency', unit='s', gt=0.0, le=10.0),
-    'reanchor_beyond': Param(0.1, 'after a hand-input stall, the origin is re-anchored only when the hand '
+    'reanchor_beyond': Param(0.1, 'after a hand-input stall, the origin is re-anchored when the hand '
                                   'moved the target further than this (or turned the tool\'s '
                                   'target more than 0.3 rad, in the yaw and full orientation '
-                                  'modes) during the silence, and always in joystick mode; '
-                                  'else the hand-to-arm mapping is kept and the arm catches up '
-                                  '(its lag from before the stall too) at the servo\'s limits',
+                                  'modes) during the silence (what it did unseen is not '
+                                  'driven), and always in joystick mode; either way the arm '
+                                  'catches up its lag from before the stall at the servo\'s limits',
                              unit='m', ge=0.0, le=2.0),
     'joint_timeout': Param(0.5, 'no joint states this long -> hold (commands stop); fresh '
                                 'states resume from the current pose', unit='s',
