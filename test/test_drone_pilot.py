@@ -256,6 +256,23 @@ def test_a_hand_back_at_its_unfold_pose_turns_nothing_whatever_path_it_took(path
     assert commands[-5:] == [0.0] * 5, commands[-70:]
 
 
+@pytest.mark.parametrize('raised, rolled', [(50, 60), (60, 120)])
+def test_an_unfold_shown_steep_and_rolled_reads_the_palm_s_turn_smoothly_when_raised(raised, rolled):
+    # Near vertical the heading is the palm's, legitimately far from the rotation's twist:
+    # taken nearest that twist, raising such a hand from its unfold pose flipped the yaw
+    # from full left to right within half a degree.
+    pilot = DronePilot(PilotParams())
+    pilot.on_navdata(2, 0, 0.0)
+    pilot.on_hand(oriented(hand_pose(raised=raised, rolled=rolled)), 0.0)
+    pilot.on_gesture('unfold', True, 0.0)
+    pilot.on_navdata(4, 1000, 0.0)
+    drain(pilot)
+    steps = [hand_pose(raised=raised + k / 2, rolled=rolled) for k in range(2 * (80 - raised) + 1)]
+    commands = yaw_commands(pilot, [oriented(R) for R in steps])
+    assert max(abs(b - a) for a, b in zip(commands, commands[1:])) < 0.1, commands
+    assert abs(commands[-1]) > 0.8          # upright, rolled: the palm's turn
+
+
 @pytest.mark.parametrize('stall', [False, True])
 def test_a_hand_raised_past_upright_between_two_frames_turns_nothing(stall):
     # A slow camera, or a stall in a Leap stream over the top of a raise: the fingers go from

@@ -33,9 +33,9 @@ Modes:
   gives it: there rolling the hand turns the drone). A step of more than
   MAX_HEADING_STEP_DEG between two frames (a slow camera, a stall) is read by the hand's
   own turn about the vertical between them, so a fast turn and a raise past vertical are
-  told apart; within NEAR_REFERENCE_DEG of the unfold's orientation the turn is read from
-  the rotation since the unfold, so a hand back at its unfold pose turns nothing whatever
-  path it took.
+  told apart; within NEAR_REFERENCE_DEG of an unfold's orientation with the fingers within
+  30 deg of level, then and now, the turn's half turn is read from the rotation since the
+  unfold, so a hand back at such an unfold pose turns nothing whatever path it took.
   Clamped to ``max_cmd``; angular.x / y are zero, so a centred hand is the driver's
   auto-hover.
 - ``paper``: the mapping of the original drone paper (its Algorithm 1, named in the
@@ -127,9 +127,11 @@ NEAR_VERTICAL_DEG = (10.0, 30.0)
 # reads like one of -85 with the fingers raised past vertical, and a raise past vertical like
 # a half turn. The hand's own turn about the vertical between the two readings tells which.
 MAX_HEADING_STEP_DEG = 60.0
-# Within this rotation (deg) of the reference orientation the turn is read from the rotation
-# since the reference, not followed along the path (see DronePilot._twist).
+# Within this rotation (deg) of a reference whose fingers were within LEVEL_SIN (the sine of
+# their raise) of level, and level now, the half turn of the heading is read from the
+# rotation since the reference, not along the path (see DronePilot._twist).
 NEAR_REFERENCE_DEG = 45.0
+LEVEL_SIN = 0.5
 # A Hand message whose arrival time is this much before the last one's saw the clock jump
 # back (two connections' callbacks reading the clock a moment apart are not one).
 CLOCK_BACK_S = 0.05
@@ -632,9 +634,13 @@ class DronePilot:
         if axes is not None:
             near = heading_ref + self._last_turn
             fingers, before = fingers_heading(axes), self._fingers_before
-            if self._axes_ref is not None and rotation_deg(self._axes_ref, axes) < NEAR_REFERENCE_DEG:
-                # Near the reference the turn is small whatever path led here (rolls and raises
-                # on the way could leave the reading a half turn off): taken from the rotation.
+            if (self._axes_ref is not None and abs(self._axes_ref[1][2]) < LEVEL_SIN
+                    and abs(axes[1][2]) < LEVEL_SIN
+                    and rotation_deg(self._axes_ref, axes) < NEAR_REFERENCE_DEG):
+                # Near a reference of level fingers, with the fingers level, the turn is small
+                # whatever path led here (rolls and raises on the way could leave the reading
+                # a half turn off): its half turn is taken from the rotation. (Nearer vertical
+                # the heading is the palm's, legitimately far from that rotation's turn.)
                 near = heading_ref + turn_between(self._axes_ref, axes)
             elif fingers is not None and self._axes_before is not None and (
                     abs(_nearest_turn(fingers - near, 0.0, 180.0)) > MAX_HEADING_STEP_DEG
