@@ -51,8 +51,10 @@ class JointServo:
         self.lower, self.upper = lower, upper
         # A lower bound (per joint or one) for speeding up only, while max_accel still allows
         # harder braking (a lowered limit coming down): no joint gains a speed it could not
-        # shed at this bound. None: max_accel for both.
+        # shed at this bound, nor moves toward its goal faster than it can stop there at it,
+        # the goal's own speed included. None: max_accel for both, and no such cap.
         self.speedup_accel = None
+        self.cap_binding = False    # that cap held a joint back in the last track()
         # (t0, q0, v0, vA, t1, h, t_stop), q0 v0 vA tuples of floats: to vA by t1, on to h,
         # then to rest.
         self._plan = None
@@ -252,9 +254,9 @@ class JointServo:
         ff = [0.0] * n if goal_velocity is None else _floats(goal_velocity, n)
         lead, gain, horizon = self.lead, self.gain, self.horizon
         accel = _floats(self.max_accel, n)
-        up = accel if self.speedup_accel is None else _floats(np.minimum(self.speedup_accel,
-                                                                          self.max_accel), n)
-        vA, j = [0.0] * n, 0
+        capped = self.speedup_accel is not None
+        up = _floats(np.minimum(self.speedup_accel, self.max_accel), n) if capped else accel
+        vA, j, binding = [0.0] * n, 0, False
         for g, f, x, u, a, b, top in zip(_floats(goal, n), ff, q, v, accel, up,
                                          _floats(self.max_speed, n)):
             # e = goal + ff * lead - q; correction = np.sign(e) * np.minimum(gain * |e|,
@@ -266,10 +268,12 @@ class JointServo:
             near, far = gain * mag, math.sqrt(2.0 * b * mag)
             m = near if near < far else far
             v_des = f + (m if e > 0 else -m if e < 0 else 0.0 * m)
-            if b < a:
+            if capped:
                 # the goal's own speed included, no faster toward it than b can stop at it
                 # (it may stop at any moment; after the ramp, braking is at b)
-                v_des = min(v_des, far) if e > 0 else max(v_des, -far) if e < 0 else 0.0
+                held = min(v_des, far) if e > 0 else max(v_des, -far) if e < 0 else 0.0
+                binding = binding or held != v_des
+                v_des = held
             v_des = v_des if v_des > -top else -top
             v_des = v_des if v_des < top else top
             step = a * horizon
@@ -280,6 +284,7 @@ class JointServo:
                 w = max(-abs(u) - b * horizon, min(abs(u) + b * horizon, w))
             vA[j] = w
             j += 1
+        self.cap_binding = binding
         limits = self._limits(n)
         t_stop = None if limits is None else self._short_of_limits(q, v, vA, accel, limits,
                                                                    horizon)

@@ -428,10 +428,13 @@ class ArmTeleop:
             v = self._servo.state_at(now, self._q)[1]
             ramp = (now - since) / LOWER_ACCEL_RAMP_S
             if ramp >= 1.0 or float(np.abs(v).max()) <= float(new.min()) * LOWER_ACCEL_STOP_S:
+                # (the cap on speeds toward the goals stays while it holds a joint back: the
+                # lag it kept, caught up with the goal's own speed on top, overran the goal)
                 self._servo.max_accel, self._lower_accel = new, None
-                self._servo.speedup_accel = None
             else:
                 self._servo.max_accel = old + (new - old) * ramp
+        elif self._servo.speedup_accel is not None and not self._servo.cap_binding:
+            self._servo.speedup_accel = None
         cmd = self._step(now)
         if cmd.input_stamp > 0 and (cmd.points is not None or cmd.gripper is not None):
             self.status.input_stamp = cmd.input_stamp
