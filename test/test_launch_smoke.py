@@ -102,10 +102,11 @@ CASES = [
       '--topic', '/leap_motion/filtered_values:leap_teleop/DriverHuman',
       '--topic', '/leap_motion/visualization_marker_array:visualization_msgs/MarkerArray',
       '--topic', '/leapmotion/data:leap_teleop/leapros'], 60),
-    # Its sender's hands reach both pilots, which command both drones up; both whole
-    # flights through the same launch file are drone_dual.test's.
+    # Its sender's hands reach both pilots, which command both drones up, each pilot's lines
+    # naming its drone; both whole flights through the same launch file are drone_dual.test's.
     ('ardrone_dual', [['ardrone_dual.launch']],
-     ['--topic', '/drone1/ardrone/takeoff:std_msgs/Empty',
+     ['--rosout', 'drone1/drone_pilot: takeoff', '--rosout', 'drone2/drone_pilot: takeoff',
+      '--topic', '/drone1/ardrone/takeoff:std_msgs/Empty',
       '--topic', '/drone2/ardrone/takeoff:std_msgs/Empty',
       '--topic', '/drone1/ardrone/navdata:leap_teleop/Navdata',
       '--topic', '/drone2/ardrone/navdata:leap_teleop/Navdata'], 120),
@@ -148,11 +149,12 @@ def test_an_arm_fed_the_other_hands_type_says_so(tmp_path):
 def test_an_arm_waiting_for_its_joints_names_wrong_types_on_both_inputs(tmp_path):
     # It waits for its joints before it listens to the hand: without the watches, a robot
     # publishing another type there left it waiting with only "waiting for joint_states",
-    # and a hand topic of the other side's type went unnamed until the joints came.
+    # and a hand topic of the other side's type went unnamed until the joints came. Its
+    # lines name the arm's namespace, so the two arms of a dual cell are told apart.
     run_launches(tmp_path, [['ur10_arm.launch']],
-                 ['--rosout', 'ur10_arm: /ur10_1/joint_states carries std_msgs/String, but this '
-                  'arm reads sensor_msgs/JointState',
-                  '--rosout', 'ur10_arm: /leapmotion/data_right carries leap_teleop/leapcobotleft, '
+                 ['--rosout', 'ur10_1/ur10_arm: /ur10_1/joint_states carries std_msgs/String, but '
+                  'this arm reads sensor_msgs/JointState',
+                  '--rosout', 'ur10_1/ur10_arm: /leapmotion/data_right carries leap_teleop/leapcobotleft, '
                   'but this arm (hand right) reads leap_teleop/leapcobotright'], 60,
                  others=[['rostopic', 'pub', '-r', '10', '/ur10_1/joint_states',
                           'std_msgs/String', '{}'],

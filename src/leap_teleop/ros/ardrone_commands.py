@@ -60,7 +60,7 @@ class ArdroneCommands:
                 ('held takeoffs dropped (too late or withdrawn)', self.one_shot.dropped)]
 
     def _publish_one_shot(self, cmd, waited):
-        rospy.loginfo('pilot: %s%s', cmd.kind, '' if waited is None else
+        rospy.loginfo('%s: %s%s', rospy.get_name().lstrip('/'), cmd.kind, '' if waited is None else
                       ' (sent after waiting %.2f s for the driver)' % waited)
         self.one_shot_pubs[cmd.kind].publish(Empty())
         self.input_age.add(rospy.get_time(), cmd.input_stamp)

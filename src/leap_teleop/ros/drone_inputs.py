@@ -1,5 +1,6 @@
 """The drone nodes' subscriptions, each with its type watched: rospy drops a connection of
 another type with a word only in the node's own log file."""
+import rospy
 from geometry_msgs.msg import Twist
 from std_msgs.msg import Empty
 
@@ -10,7 +11,7 @@ from leap_teleop.ros.graph import TopicTypeWatch
 def subscribe_pilot_inputs(hand_topic, gesture_topic, side, on_gesture, on_navdata, log):
     """drone_pilot's GestureEvent topic and ardrone/navdata; its Hand topic (subscribed by its
     HandSubscription) is watched too. Returns the TopicTypeWatch."""
-    watch = TopicTypeWatch('drone_pilot', log)
+    watch = TopicTypeWatch(rospy.get_name().lstrip('/'), log)
     watch.add(hand_topic, Hand, 'the pilot (hand %s)' % side,
               'no hand steers the drone; publish the sender\'s Hand there or set ~hand_topic')
     watch.subscribe(gesture_topic, GestureEvent, on_gesture, 'the pilot',

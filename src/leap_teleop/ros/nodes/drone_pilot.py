@@ -32,14 +32,14 @@ from leap_teleop.ros.signals import closed_at_shutdown
 
 class DronePilotNode:
     def __init__(self, p):
-        self.side = hand_conversions.SIDE_CODES[p['side']]
+        self.side, self.name = hand_conversions.SIDE_CODES[p['side']], rospy.get_name().lstrip('/')
         self.log = RateLimitedLog(2.0)
         self.pilot = DronePilot(PilotParams().update({k: p[k] for k in PILOT_PARAMS}), warn=self.warn)
         self.commands = ArdroneCommands(p['service_timeout'], p['takeoff_hold'], lambda: (
             self.pilot.takeoff_still_wanted(rospy.get_time())), self.warn)
         hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['side'])['hand']
         self.hand_topic = rospy.resolve_name(hand_topic)
-        self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, 'pilot', p,
+        self.hand_sub = HandSubscription(hand_topic, Hand, self.on_hand, self.name, p,
                                          self.pilot.new_input_connection)
         self.type_watch = subscribe_pilot_inputs(hand_topic, p['gesture_topic'], p['side'],
                                                  self.on_gesture, self.on_navdata, self.log)
@@ -48,27 +48,27 @@ class DronePilotNode:
         self.worker = PilotWorker(self.pilot, self.commands.send,
                                   ServiceCall(self.commands.flip, p['service_timeout'], 'flip'),
                                   rospy.get_time, warn=self.warn, extra=self.diagnostics.update,
-                                  info=lambda text: rospy.loginfo('pilot: %s', text),
+                                  info=lambda text: rospy.loginfo('%s: %s', self.name, text),
                                   send_held=self.commands.send_held)
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self.run_worker, name='drone_pilot', daemon=True)
 
     def warn(self, key, text):
-        self.log.warn(key, 'pilot: %s', text)
+        self.log.warn(key, '%s: %s', self.name, text)
 
     # -- callbacks: convert and queue, nothing else -----------------------------------
     def on_hand(self, msg):
         if msg.side != self.side:      # the other hand on this hand's topic: miswired
             self.pilot.rejected_inputs += 1
-            self.log.warn('side', 'pilot: ignored a Hand of side %d on %s (following side %d)',
-                          msg.side, self.hand_topic, self.side)
+            self.log.warn('side', '%s: ignored a Hand of side %d on %s (following side %d)',
+                          self.name, msg.side, self.hand_topic, self.side)
             return 'side %d' % msg.side
         return self.pilot.on_hand(drone_conversions.pilot_input(msg), rospy.get_time())
 
     def on_gesture(self, msg):
         if msg.side not in hand_conversions.SIDE_CODES.values():
-            self.log.warn('gesture_side', 'pilot: ignored GestureEvent %r of side %d (0 right, 1 left)',
-                          msg.gesture, msg.side)
+            self.log.warn('gesture_side', '%s: ignored GestureEvent %r of side %d (0 right, 1 left)',
+                          self.name, msg.gesture, msg.side)
         elif msg.side == self.side:     # the other hand's events share the topic
             self.pilot.on_gesture(msg.gesture, msg.active, rospy.get_time(), msg.value,
                                   msg.header.stamp.to_sec())

@@ -35,7 +35,7 @@ RECONFIGURABLE = ARM_RECONFIGURABLE
 
 class ArmNode:
     def __init__(self, p):
-        self.p = p
+        self.p, self.name = p, rospy.get_name().lstrip('/')     # with the arm's namespace
         params = ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
         self.runner = ArmTeleopRunner(params, p['rate'])
         self.log = RateLimitedLog(2.0)
@@ -44,19 +44,19 @@ class ArmNode:
         self.hand_type = hand_conversions.LEAPCOBOT_TYPES[p['hand']]
         self.topics = ArmCommandTopics(p['joint_prefix'], p['command_queue_size'])
         self.joints_seen = threading.Event()
-        self.type_watch = TopicTypeWatch('ur10_arm', self.log)
+        self.type_watch = TopicTypeWatch(self.name, self.log)
         self.type_watch.subscribe('joint_states', JointState, self.on_joints, 'this arm',
                                   'the arm waits for its joints; publish sensor_msgs/JointState '
                                   'there', queue_size=10)
         self.type_watch.add(self.hand_topic, self.hand_type, 'this arm (hand %s)' % p['hand'],
                             "no hand input arrives; publish the %s hand there or set ~hand_topic / "
                             "the launch file's topic" % p['hand'])
-        self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('ur10_arm: %s', text),
-                                       lambda text: rospy.logwarn('ur10_arm: %s', text))
+        self.reporter = StatusReporter(p['status_rate'], lambda text: rospy.loginfo('%s: %s', self.name, text),
+                                       lambda text: rospy.logwarn('%s: %s', self.name, text))
         self.hand_sub = None            # from wait_for_robot on
         self.diagnostics = diagnostics_updater('ur10_arm_%s' % p['hand'], 'teleop', self.report,
                                                self.topics.input_age)
-        rospy.loginfo('ur10_arm: %s hand on %s drives %s (%s)', p['hand'],
+        rospy.loginfo('%s: %s hand on %s drives %s (%s)', self.name, p['hand'],
                       rospy.resolve_name(self.hand_topic), self.topics.arm.resolved_name,
                       params.summary())
 
@@ -65,7 +65,7 @@ class ArmNode:
         hand = ArmInput.from_leapcobot_dict(hand_conversions.from_leapcobot(msg))
         why = self.runner.on_hand(hand, rospy.get_time())
         if why:
-            self.log.warn('reject', 'ur10_arm: ignored a hand message: %s', why)
+            self.log.warn('reject', '%s: ignored a hand message: %s', self.name, why)
         return why
 
     def on_joints(self, msg):
@@ -74,7 +74,7 @@ class ArmNode:
             if not self.runner.on_joints(q, rospy.get_time(), qd):
                 raise ValueError('non-finite or impossible positions %s' % q)
         except ValueError as e:
-            self.log.warn('joints', 'ur10_arm: ignored a joint_states message: %s', e)
+            self.log.warn('joints', '%s: ignored a joint_states message: %s', self.name, e)
             return
         self.joints_seen.set()
 
@@ -82,9 +82,9 @@ class ArmNode:
         """Listen to the hand only once the robot reports its joints, so no gesture
         (a thumbs-up) is spent while nothing could act on it; a sender started with
         ~wait_for_subscribers then starts its session exactly when the arm is ready."""
-        if not wait_for_first_message(self.joints_seen, 'joint_states', 'ur10_arm'):
+        if not wait_for_first_message(self.joints_seen, 'joint_states', self.name):
             return False
-        self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, 'ur10_arm',
+        self.hand_sub = HandSubscription(self.hand_topic, self.hand_type, self.on_hand, self.name,
                                          self.p, self.runner.new_input_connection)
         return True
 
