@@ -6,6 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from leap_teleop.hands.gestures.bindings import Bindings, load_bindings
 from leap_teleop.hands.tracker import hand_angles, wrap_angle
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import (
@@ -104,6 +105,27 @@ def test_arming_needs_the_thumbs_up_held():
     assert t.status.state == ARMED
     with pytest.raises(ValueError):
         ArmTeleopParams.from_dict({'arm_hold_s': -1.0})
+
+
+def test_the_state_lines_name_the_gestures_the_bindings_chose():
+    # The arm reads flags only; a V sign bound to arm raises the thumb_up flag. Its lines
+    # said "hold the thumbs-up" to someone who had to show a V.
+    words = load_bindings(None).arm_words()
+    assert words == {'arm': 'thumbs-up', 'origin': 'rock', 'stop': 'fist', 'gripper': 'pinch'}
+    assert ArmTeleop().status.reason == 'waiting for thumbs-up'
+    assert Bindings({'arm': {'gripper': []}}).arm_words()['gripper'] == 'no gesture (unbound)'
+    words = Bindings({'arm': {'arm': 'peace', 'origin': ['open', 'thumb_up'],
+                              'stop': 'thumb_down'}}).arm_words()
+    t = ArmTeleop(gesture_words=words)
+    c = Clock()
+    assert t.status.reason == 'waiting for peace'
+    t.on_joints(HOME)
+    drive(t, c, hand(thumb_up=True), periods=5)
+    assert t.status.reason == 'hold the peace'
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS)
+    assert t.status.reason == 'peace; show open or thumbs-up to set the origin'
+    drive(t, c, hand(fist=True))
+    assert t.status.state == DISARMED and t.status.reason == 'thumbs-down'
 
 
 def test_the_thumbs_up_hold_counts_on_the_clock_that_says_less():

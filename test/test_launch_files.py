@@ -88,6 +88,11 @@ def test_the_camera_and_recognition_args_reach_the_senders_parameters(name, tmp_
     assert params['/leap_sender/width'] == 320
     for a in RECOGNITION_ARGS:                     # a user's model and bindings, from any of them
         assert params['/leap_sender/' + a] == '/tmp/mine_' + a
+    # The arms name the bound gestures in their state lines: the same bindings reach them.
+    arms = [k[:-len('hand')] for k in params if k.endswith('/ur10_arm/hand')]
+    assert bool(arms) == name.startswith('ur10_'), (name, arms)
+    for arm in arms:
+        assert params[arm + 'gesture_bindings'] == '/tmp/mine_gesture_bindings', arm
 
 
 @pytest.mark.integration

@@ -57,6 +57,7 @@ BAD_PARAMS = [
     ('ur10_arm.py', ['_dead_zone:=-5'], '~dead_zone = -5: out of range'),
     ('ur10_arm.py', ['_input_timeout:=.nan'], '~input_timeout = nan: not finite'),
     ('ur10_arm.py', ['_workspace_min:=[0, 0]'], '~workspace_min = [0, 0]: 2 items'),
+    ('ur10_arm.py', ['_gesture_bindings:=/no/such/bindings.yaml'], 'bindings.yaml: cannot read'),
     ('hand_markers.py', ['_max_rate:=fast'], "~max_rate = 'fast': not a number"),
     ('hand_markers.py', ['_hand_topics:=[]'], '~hand_topics = []: 0 items'),
     ('hand_markers.py', ['_scale:=0'], '~scale = 0: out of range'),

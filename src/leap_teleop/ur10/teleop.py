@@ -79,6 +79,8 @@ JOYSTICK_LEAD_S = 0.1
 # joint can stop within LOWER_ACCEL_STOP_S at it.
 LOWER_ACCEL_STOP_S = 0.1
 LOWER_ACCEL_RAMP_S = 1.0
+# Per arm action, the gesture behind its flag as the default bindings have it.
+GESTURE_WORDS = {'arm': 'thumbs-up', 'origin': 'rock', 'stop': 'fist', 'gripper': 'pinch'}
 # The servo's commanded state this many periods of travel behind the goal: it lags.
 SERVO_LAG_PERIODS = 3.0
 # The step intervals a command's horizon follows: the loop's own period and a hand's wake-ups
@@ -174,7 +176,7 @@ class ArmCommand:
 @dataclass
 class ArmTeleopStatus:
     state: str = DISARMED
-    reason: str = 'waiting for thumbs-up'
+    reason: str = ''
     origin_set: bool = False
     target: tuple = ()                 # TCP target, base frame, m
     target_rotation: tuple = ()        # tool orientation target (3x3 rows), base frame
@@ -185,14 +187,17 @@ class ArmTeleopStatus:
 
 
 class ArmTeleop:
-    def __init__(self, params=None, step_interval=0.0):
-        """step_interval: the longest time the loop that steps it leaves between two steps.
+    def __init__(self, params=None, step_interval=0.0, gesture_words=None):
+        """gesture_words: per arm action (arm, origin, stop), the gesture the state lines
+        name for it (GESTURE_WORDS where not given) (the sender's bindings decide which gesture raises each flag).
+        step_interval: the longest time the loop that steps it leaves between two steps.
         Every command is planned over at least 1.5 times the longest step interval of the
         last STEP_WINDOW_S, up to that (and command_horizon's bound): a shorter horizon,
         braked to rest before the next command, moved the arm in short pulses, while a
         longer one than the steps need (a slow loop woken by a fast hand) overshoots."""
         self.p = params or ArmTeleopParams()
         self.p.validate()
+        self._words = dict(GESTURE_WORDS, **(gesture_words or {}))
         self._axes = np.asarray(self.p.axis_map, dtype=float)
         self._axes_rotation = ori.axis_rotation(self._axes)
         self._lo = np.asarray(self.p.workspace_min, dtype=float)
@@ -217,7 +222,7 @@ class ArmTeleop:
                                  self.p.command_horizon, self.p.servo_gain,
                                  kin.JOINT_LOWER, kin.JOINT_UPPER, self.p.servo_lead,
                                  self.p.servo_reach_fast)
-        self.status = ArmTeleopStatus()
+        self.status = ArmTeleopStatus(reason='waiting for %s' % self._words['arm'])
         self._hand = None
         self._hand_rx = None
         self._q = None
@@ -453,7 +458,7 @@ class ArmTeleop:
         if (hand is not None and now - self._hand_rx <= self.p.input_timeout
                 and (not hand.present or hand.fist)):
             self._stalled = self._stalled or ('joint states', self._joints_rx)   # no hold
-            return self._disarm('fist' if hand.present else 'hand left the sensor', now)
+            return self._disarm(self._words['stop'] if hand.present else 'hand left the sensor', now)
         if hand is None or now - self._hand_rx > self.p.input_timeout:
             if self._hand_silent is None:
                 self._hand_silent = self._hand
@@ -546,7 +551,8 @@ class ArmTeleop:
         if not hand.present or hand.fist:
             cmd = ArmCommand()
             if self.status.state != DISARMED:
-                cmd = self._disarm('fist' if hand.present else 'hand left the sensor', now)
+                cmd = self._disarm(self._words['stop'] if hand.present else 'hand left the sensor',
+                                   now)
             cmd.input_stamp = hand.stamp
             return cmd
         if self._rewound:
@@ -555,7 +561,7 @@ class ArmTeleop:
             self._rewound = False
             if self.status.state != DISARMED:
                 return self._disarm('the hand input began again at older stamps (a session '
-                                    'played again?): show thumbs-up', now)
+                                    'played again?): show %s' % self._words['arm'], now)
         if self.status.state == DISARMED:
             # A glimpse of a thumbs-up (a hand passing through one) does not arm: it must
             # be held arm_hold_s by the hand's own capture times and by their receipt (a
@@ -566,9 +572,10 @@ class ArmTeleop:
                 if hand.stamp > 0 and since_stamp > 0:
                     held = min(held, hand.stamp - since_stamp)
                 if held >= self.p.arm_hold_s - 1e-9:
-                    self._set(ARMED, 'thumbs-up; show rock to set the origin')
+                    self._set(ARMED, '%s; show %s to set the origin'
+                              % (self._words['arm'], self._words['origin']))
                 else:
-                    self._set(DISARMED, 'hold the thumbs-up')
+                    self._set(DISARMED, 'hold the %s' % self._words['arm'])
             return ArmCommand()
 
         palm = np.asarray(hand.palm_mm, dtype=float)
@@ -604,7 +611,7 @@ class ArmTeleop:
                     # The servo catches up within its limits; the mapping stays.
                     self._set(TRACKING, back + ': same origin, %.3f m to catch up' % gap)
             else:
-                self._set(ARMED, back + '; show rock to set the origin')
+                self._set(ARMED, back + '; show %s to set the origin' % self._words['origin'])
         if hand.rock:
             # where the arm's plan comes to rest; a held rock sets it every frame, so the
             # last frame's is where the arm stops

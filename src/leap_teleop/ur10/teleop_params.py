@@ -139,6 +139,9 @@ ARM_NODE_PARAMS = {
     'rate': Param(125.0, 'control loop rate (it also runs on each new hand message)',
                   unit='Hz', ge=10.0, le=1000.0),
     'joint_prefix': Param('', 'prefix of the joint names in commands and joint_states (e.g. ur10_1_)'),
+    'gesture_bindings': Param('', "the sender's gesture bindings YAML, so the state lines name the "
+                              'gestures that arm, set the origin and stop; empty = the defaults',
+                              path=True),
     'status_rate': Param(10.0, 'ArmStatus publishing rate (also on every change)', unit='Hz',
                          ge=0.1, le=1000.0),
     # 50: in alternated soaks with a load burst, 10 lost commands on the way to a stalled

@@ -12,10 +12,10 @@ HAND_SLACK = 1.5    # periods the timer waits after a step a hand woke
 class ArmTeleopRunner:
     """One arm's ArmTeleop, fed by on_hand / on_joints from any thread and stepped by run()."""
 
-    def __init__(self, params, rate):
+    def __init__(self, params, rate, gesture_words=None):
         self.period = 1.0 / float(rate)
         # the longest the loop waits between two steps (after a hand: HAND_SLACK periods)
-        self.teleop = ArmTeleop(params, HAND_SLACK * self.period)
+        self.teleop = ArmTeleop(params, HAND_SLACK * self.period, gesture_words)
         self.lock = threading.Lock()
         self.wake = threading.Event()
 

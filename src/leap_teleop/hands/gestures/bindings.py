@@ -47,6 +47,7 @@ RESERVED = frozenset(HELD_GESTURES + EVENT_GESTURES
 # The raw events that command the pilot: they leave only as the actions bound to them.
 _PILOT_EVENTS = {'unfold': 'unfold', 'fold': 'fold', 'circle_cw': 'circle',
                  'circle_ccw': 'circle'}
+_WORDS = {'thumb_up': 'thumbs-up', 'thumb_down': 'thumbs-down'}
 GRIPPER_CLOSED = 0.8            # pinch_value while a gesture other than pinch holds the gripper
 # A flip from a held gesture: the circle radius (m) it reports, so the pilot's guard
 # against fingertip loops (flip_min_radius, default 0.025 m) lets a deliberate pose through.
@@ -131,6 +132,12 @@ class Bindings:
 
     def is_default(self):
         return self.actions == DEFAULTS
+
+    def arm_words(self):
+        """Per arm action, its gestures as the arm's state lines name them ('thumbs-up',
+        'peace or thumbs-up', 'no gesture (unbound)'): the arm reads only the flags."""
+        return {a: ' or '.join(_WORDS.get(g, g) for g in gs) or 'no gesture (unbound)'
+                for a, gs in self.actions['arm'].items()}
 
     def applier(self, user_gestures=()):
         """A BoundActions for a recognizer reporting `user_gestures` (checked)."""

@@ -1,19 +1,19 @@
 """ur10_arm: one hand drives one UR10 (the original's UR10_lm_arm).
 
-Subscribes the hand's leapcobot topic and joint_states; publishes
-arm_controller/command and gripper/command (trajectory_msgs/JointTrajectory) and
-~status (ArmStatus) plus diagnostics. Callbacks only store input and wake the control
-loop, which runs at ~rate and right after each new hand message. Every key of
-config/ur10_teleop.yaml (mode, scale, workspace, max_joint_speed, gripper_mode, ...) is
-also a private parameter; the launch files load that file into the node's namespace.
-Those --help marks live (gains, dead zone, filter constants, speed limits, the arming hold)
-can be changed while running with dynamic_reconfigure; the others are start-up only.
+Subscribes the hand's leapcobot topic and joint_states; publishes arm_controller/command and
+gripper/command (trajectory_msgs/JointTrajectory) and ~status (ArmStatus) plus diagnostics.
+Callbacks only store input and wake the control loop, which runs at ~rate and right after
+each new hand message. Every key of config/ur10_teleop.yaml (mode, scale, workspace,
+max_joint_speed, gripper_mode, ...) is also a private parameter; the launch files load that
+file into the node's namespace. Those --help marks live (gains, dead zone, filters, speed
+limits, the arming hold) change while running (dynamic_reconfigure); the rest at start-up.
 """
 import threading
 
 import rospy
 from sensor_msgs.msg import JointState
 
+from leap_teleop.hands.gestures.bindings import load_bindings
 from leap_teleop.package_files import package_path
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ros.arm_topics import ArmCommandTopics
@@ -37,7 +37,7 @@ class ArmNode:
     def __init__(self, p):
         self.p, self.name = p, rospy.get_name().lstrip('/')     # with the arm's namespace
         params = ArmTeleopParams.from_dict({k: p[k] for k in TELEOP_PARAMS})
-        self.runner = ArmTeleopRunner(params, p['rate'])
+        self.runner = ArmTeleopRunner(params, p['rate'], load_bindings(p['gesture_bindings']).arm_words())
         self.log = RateLimitedLog(2.0)
         self.joint_index = JointStateIndex(p['joint_prefix'])
         self.hand_topic = p['hand_topic'] or hand_conversions.default_topics(p['hand'])['leapcobot']
