@@ -224,7 +224,8 @@ def test_leap_motion_launch_turns_leap_hands_as_the_driver_and_sender_launch_as_
 
 
 @pytest.mark.parametrize('name, arg, flag', [('replay.launch', 'bag', None),
-                                             ('record.launch', 'output', '-O')])
+                                             ('record.launch', 'output', '-O'),
+                                             ('record.launch', 'output_prefix', '-o')])
 def test_rosbag_reads_a_relative_bag_from_where_roslaunch_ran(name, arg, flag, monkeypatch, tmp_path):
     # rosbag runs in ROS_HOME: bag:=one_arm.bag beside the user was not found
     import roslaunch.config
