@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from leap_teleop.control.sequence_gaps import SequenceGaps
+from leap_teleop.control.sequence_gaps import RESTART_RUN, SequenceGaps
 from leap_teleop.control.stream_health import RENEW_IN_PLACE_S, StreamHealth
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -479,6 +479,25 @@ def test_sequence_gaps_count_what_each_publisher_sent_that_never_came():
     assert [gaps.add('/player', s) for s in (9, 8, 10)] == [3, 0, 0] and sum(gaps.missed.values()) == 9
     assert gaps.add('/player', 5010) == 4999
     assert gaps.add('/player', 20) == 0 and gaps.add('/player', 22) == 1   # far back: a restart
+
+
+def test_a_short_bag_looping_from_above_1_is_counted_on_every_pass():
+    # A bag recorded after the sender started keeps its numbers (here 5000..7999) and loops
+    # back only 3000: each later pass was taken as stragglers and its losses never counted.
+    gaps = SequenceGaps()
+    lost = set(range(6000, 6100))
+    for _ in range(3):
+        for seq in range(5000, 8000):
+            if seq not in lost or _ != 1:
+                gaps.add('/play', seq)
+    assert gaps.missed['/play'] == 100
+    # An old connection's stragglers among the new one's, however many, stay ignored.
+    gaps = SequenceGaps()
+    for seq in range(100, 200):
+        gaps.add('/pub', seq)
+    assert [gaps.add('/pub', s) for s in range(150, 150 + RESTART_RUN - 1)] == [0] * (RESTART_RUN - 1)
+    assert gaps.add('/pub', 200) == 0 and gaps.add('/pub', 190) == 0 and gaps.add('/pub', 201) == 0
+    assert gaps.missed['/pub'] == 0 and gaps.last['/pub'] == 201
 
 
 def test_a_gap_across_a_reconnection_is_counted_apart_once():

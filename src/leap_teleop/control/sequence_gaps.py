@@ -7,7 +7,9 @@ while others got it: in the publisher's queue, a socket, its own subscription qu
 a connection re-made in between. A number that goes back to 1, or far back, is a
 restarted publisher (or a looping bag): a new count, nothing lost. One that goes back a
 little is a straggler (an old connection's last message, delivered after the new one's
-first): ignored. roscpp keeps the number the message carries, so `rosbag play` shows the
+first): ignored, unless RESTART_RUN numbers climb on from it with none beyond the last
+(a short bag looping from above 1): then that was a restart, and the count goes on from
+there. roscpp keeps the number the message carries, so `rosbag play` shows the
 recording's own gaps, and a publisher that leaves it 0 shows none.
 
 A consumer that drops its connection on purpose (a late or silent stream re-made) loses
@@ -19,6 +21,9 @@ import collections
 
 # Further back than any subscription queue holds (hand_queue_size <= 2000): a new count.
 RESTART_DROP = 4000
+# Numbers climbing this long below the last, with no newer one between (0.4 s at 120 Hz):
+# a new count, not stragglers (an old connection's few, among the new one's).
+RESTART_RUN = 50
 
 
 class SequenceGaps:
@@ -27,6 +32,7 @@ class SequenceGaps:
         self.missed = collections.Counter()     # per publisher: messages missed
         self.missed_across_reconnect = collections.Counter()   # ... of them, by a re-connection
         self._reconnected = set()               # publishers not heard since a re-connection
+        self._back = {}                         # per publisher: (length, last, gaps) of a run below last
 
     def reconnected(self):
         """The consumer re-made its connection: each publisher's next gap is its cost."""
@@ -38,9 +44,10 @@ class SequenceGaps:
         last = self.last.get(publisher)
         if last is not None and seq <= last:
             if seq <= 1 or last - seq > RESTART_DROP:
-                self.last[publisher] = seq          # a restarted publisher
-                self._reconnected.discard(publisher)
-            return 0                                # a repeat or an old connection's straggler
+                self._restart(publisher, seq)
+                return 0
+            return self._below_last(publisher, seq)   # a repeat, a straggler or a restart
+        self._back.pop(publisher, None)
         self.last[publisher] = seq
         if last is None:
             return 0
@@ -51,3 +58,21 @@ class SequenceGaps:
                 self.missed_across_reconnect[publisher] += gap
         self._reconnected.discard(publisher)
         return gap
+
+    def _restart(self, publisher, seq):
+        self.last[publisher] = seq
+        self._reconnected.discard(publisher)
+        self._back.pop(publisher, None)
+
+    def _below_last(self, publisher, seq):
+        run = self._back.get(publisher)
+        if run is None or seq <= run[1]:
+            self._back[publisher] = (1, seq, 0)
+            return 0
+        length, prev, gaps = run[0] + 1, seq, run[2] + seq - run[1] - 1
+        if length < RESTART_RUN:
+            self._back[publisher] = (length, prev, gaps)
+            return 0
+        self._restart(publisher, seq)
+        self.missed[publisher] += gaps          # what the run skipped was lost
+        return gaps
