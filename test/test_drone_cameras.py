@@ -1,5 +1,6 @@
 """The drone's cameras: the AR.Drone 2.0's geometry, rendered views that show motion."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -99,6 +100,26 @@ def test_camera_loop_replaces_a_dead_renderer():
     finally:
         loop.stop()
     assert errors and loop.renderer is not first and len(got) > n + 1
+
+
+def test_camera_loop_stops_at_once_with_its_renderer_stuck():
+    # A renderer stuck (or still starting: its first frame may take 30 s) held the stop
+    # for its whole timeout and then 5 s more: past roslaunch's 15 s before SIGTERM.
+    import signal
+    import time
+    loop = cameras.CameraLoop({'bottom': 20.0}, lambda: ((0.0, 0.0, 1.0), _yaw_quat(0.0), None),
+                              lambda name, rgb, ctx: None)
+    loop.start()
+    try:
+        assert loop.ready.wait(60.0)
+        proc = loop.renderer.proc
+        os.kill(proc.pid, signal.SIGSTOP)
+        time.sleep(0.5)                                   # a frame is asked for and waits
+    finally:
+        started = time.monotonic()
+        loop.stop()
+        took = time.monotonic() - started
+    assert took < 3.0 and not loop.thread.is_alive() and proc.poll() is not None, took
 
 
 CAMERA_SHAPES = {n: (c.height, c.width, 3) for n, c in cameras.CAMERAS.items()}

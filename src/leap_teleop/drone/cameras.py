@@ -226,6 +226,13 @@ class RendererProcess:
             raise PictureError(value)
         return np.frombuffer(value, np.uint8).reshape(height, width, 3)
 
+    def kill(self):
+        """End the process at once, from any thread: a request under way then fails with
+        EOFError instead of waiting out its timeout."""
+        proc = self.proc
+        if proc is not None:
+            proc.kill()
+
     def close(self, wait=5.0):
         """Stop the process: asked to, killed after `wait` s (0 = at once, e.g. while it
         is still busy with a picture nobody waits for)."""
@@ -305,6 +312,10 @@ class CameraLoop:
     # scene: seconds on a loaded machine).
     START_TIMEOUT, FRAME_TIMEOUT = 30.0, 10.0
     RESTART_WAIT = 1.0                 # s between a failed renderer and the next
+    # A frame under way may finish within this at stop; a renderer still starting (its
+    # first answer may take START_TIMEOUT) or stuck is killed: roslaunch's Ctrl-C waits
+    # 15 s before it escalates.
+    STOP_WAIT = 1.0
 
     def __init__(self, rates, get_pose, deliver, on_error=None, max_duty=0.5):
         self.max_duty = max_duty
@@ -327,7 +338,10 @@ class CameraLoop:
     def stop(self):
         self._stop.set()
         if self.thread is not None:
-            self.thread.join(15.0)
+            self.thread.join(self.STOP_WAIT)
+            if self.thread.is_alive() and self.renderer is not None:
+                self.renderer.kill()
+                self.thread.join(5.0)
         if self.renderer is not None:
             self.renderer.close()
 
