@@ -505,3 +505,43 @@ def test_pose_sequences_keep_exclusive_gestures(seq):
         s = rec.update(render_hand('right', pose, (0, 200, 0), n, d, pinch_value=value), i / 100)
         check_state(s)
         assert not (s.fist and s.open) and not (s.fist and s.thumb_up) and not (s.fist and s.pinch)
+
+
+@pytest.mark.parametrize('hz', [30, 120])
+@pytest.mark.parametrize('off_frames', [10, 100])
+def test_a_long_off_filter_smooths_but_never_makes_a_glimpse_a_hold(hz, off_frames):
+    # ~recognizer_off_frames above its default carried a thumbs-up (or a fist) over frames
+    # that did not show it, and the arm's hold and the fold's counted them: a 3-frame
+    # thumbs-up then a pointing hand armed the UR10, a 3-frame misread fist landed the drone.
+    from leap_teleop.ur10 import kinematics as kin
+    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
+    poses = {p: render_hand('right', p, (0.0, 200.0, 0.0), hand_id=5)
+             for p in ('thumbs_up', 'point', 'open', 'fist')}
+
+    def run(parts):
+        tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
+        arm = ArmTeleop()
+        arm.on_joints(kin.HOME_Q.copy())
+        t, events, armed, carried = 0.0, [], False, 0
+        for pose, seconds in parts:
+            for _ in range(round(seconds * hz)):
+                st = tracker.update(poses[pose], t, 0)
+                events += [e.gesture for e in st.events if e.gesture in ('fold', 'unfold')]
+                arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+                                     thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
+                arm.step(100.0 + t)
+                armed = armed or arm.status.state == ARMED
+                carried += bool(getattr(tracker.recognizer._prev, 'unseen', ()))
+                t += 1.0 / hz
+        return events, armed, carried
+
+    glimpse = 3 / hz
+    events, armed, carried = run([('point', 1.0), ('thumbs_up', glimpse), ('point', 3.0)])
+    assert not armed
+    assert carried                                # still held by the filter, not counted
+    events, armed, _ = run([('open', 1.0), ('fist', glimpse), ('open', 2.0)])
+    assert events == [] and not armed
+    # deliberate ones still work: a held thumbs-up arms, fist -> open unfolds, open -> fist folds
+    assert run([('point', 1.0), ('thumbs_up', 0.6), ('point', 1.0)])[1]
+    events, _, _ = run([('open', 1.0), ('fist', 1.0), ('open', 1.0 + off_frames / hz), ('fist', 1.0)])
+    assert events == ['fold', 'unfold', 'fold']

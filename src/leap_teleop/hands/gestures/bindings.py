@@ -165,24 +165,26 @@ class BoundActions:
 
     def flags(self, g):
         """(arm, origin, stop, gripper, gripper_value) of a GestureState."""
+        # The arm's hold counts frames that show its gesture, never one only held through
+        # a frame too unsure to judge (the filter ends a thumbs-up there itself) or carried
+        # by a long off-filter (g.unseen).
         if self.identity:
-            return g.thumb_up, g.rock, g.fist, g.pinch, g.pinch_value if g.pinch else 0.0
+            return (g.thumb_up and 'thumb_up' not in g.unseen, g.rock, g.fist, g.pinch,
+                    g.pinch_value if g.pinch else 0.0)
         user = g.user
         out = []
-        for builtin, own in self._flags:
+        for k, (builtin, own) in enumerate(self._flags):
             on = False
             for n in builtin:
-                if getattr(g, n):
+                if getattr(g, n) and not (k == 0 and n in g.unseen):
                     on = True
                     break
             else:
                 for n in own:
-                    if n in user:
+                    if n in user and not (k == 0 and n in g.unseen):
                         on = True
                         break
             out.append(on)
-        # The arm's hold counts frames that show its gesture, never one only held through
-        # a frame too unsure to judge (the filter ends a thumbs-up there itself).
         out[0] = out[0] and g.judged
         if not out[3]:
             value = 0.0

@@ -99,6 +99,7 @@ class GestureRecognizer:
                              tuple(sorted(n for n in active if n in self.user_gestures))
                              if self.user_gestures else (), usable)
         if not stateless:
+            state.unseen = filt.carried() if usable else ()
             shown = None if not usable else 'fist' if raw.get('fist') else 'open' if raw.get('open') else None
             state.events = filt.events(state, prev, timestamp, usable, shown)
             if self.circles is not None and usable and g is not None:

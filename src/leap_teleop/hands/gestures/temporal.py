@@ -29,6 +29,11 @@ FOLD_CONFIRM_S = 0.15
 FOLD_FRAME_CREDIT_S = 0.25          # the most one frame adds to a hold (5 Hz video adds 0.2)
 STALL_FACTOR = 4.0                  # a frame interval this many usual ones (and > FOLD_GAP_S): a stall
 STALL_WINDOW = 16                   # the recent frame intervals the usual one is the median of
+# A gesture the off-filter still holds counts toward a hold (the arm's, a fold's) for at
+# most this many judged frames after the last that showed it, as the default off_frames
+# (3) holds it: a longer off-filter smooths a flickering pinch, it does not make a glimpse
+# of a thumbs-up an arming hold or a 3-frame misread fist a fold.
+CARRY_CREDIT_FRAMES = 2
 
 
 @dataclass
@@ -57,6 +62,7 @@ class GestureState:
     probability: float = 0.0           # ... and its probability
     user: Tuple[str, ...] = ()         # a user's own gestures held now
     judged: bool = True                # False: a frame too unsure to judge (held state)
+    unseen: Tuple[str, ...] = ()       # held, but not shown for over CARRY_CREDIT_FRAMES: no hold
 
 
 class HeldFilter:
@@ -112,6 +118,11 @@ class HeldFilter:
                 else:
                     active.discard(name)
         return active
+
+    def carried(self):
+        """The held gestures not shown for more than CARRY_CREDIT_FRAMES judged frames."""
+        count = self._count
+        return tuple(n for n in self.active if count[n] > CARRY_CREDIT_FRAMES)
 
     def unusable(self, timestamp):
         """An unusable frame: hold what we had for a moment, then let go; a thumbs-up
@@ -171,9 +182,11 @@ class HeldFilter:
             self._stale_shape = shape
         elif shape != self._stale_shape:
             self._stale_shape = None
-        if shape is not None and shape == self._stale_shape and raw_shape != shape:
+        if shape is not None and raw_shape != shape and (shape == self._stale_shape
+                                                          or shape in state.unseen):
             # held over the stall by the filter, not seen: no hold (at 5 fps or under a fast
-            # sim clock the filter's few frames would make a first shape of their own)
+            # sim clock the filter's few frames would make a first shape of their own); nor
+            # carried by a long off-filter
             frame_dt = 0.0
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
