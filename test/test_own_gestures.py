@@ -331,6 +331,44 @@ def test_record_gestures_says_when_the_source_ends_before_the_time_asked(tmp_pat
         assert 'ended' not in capsys.readouterr().err
 
 
+def record_with_the_other_hand_resting(tmp_path, name, rest_s, *more):
+    """record_gestures' exit code for 1 s of a 30 Hz right hand in a V sign, the left hand
+    resting open beside it for the first `rest_s` seconds."""
+    script = tmp_path / (name + '.yaml')
+    script.write_text(yaml.safe_dump({'rate_hz': 30, 'hands': {
+        'right': [{'pose': 'two', 'palm': [80, 200, 0], 'duration': 1.0}],
+        'left': [{'pose': 'open', 'palm': [-80, 200, 0], 'duration': rest_s}]}}))
+    return record_gestures.main(['--source', 'scripted', '--script', str(script), '--label',
+                                 'two', '--realtime', '0', '--seconds', '1', '--out',
+                                 str(tmp_path / (name + '.jsonl'))] + list(more))
+
+
+def test_record_gestures_skips_frames_showing_both_hands_unless_a_side_is_given(tmp_path, capsys):
+    # With the default --side any, the resting left hand was written as 'two' too: retrained,
+    # the user's open hand read as their class.
+    assert record_with_the_other_hand_resting(tmp_path, 'half', 0.5) == 0
+    captured = capsys.readouterr()
+    assert 'wrote 15 hand poses' in captured.out, captured.out
+    assert captured.err.splitlines()[-1] == (
+        'record_gestures: 15 of the 30 frames showed a left and a right hand and were skipped: '
+        'give --side right|left to record the hand showing the gesture'), captured.err
+    rows = gesture_data.read_pose_lines(str(tmp_path / 'half.jsonl'))
+    assert {gesture_data.first_hand(f).side for _, _, f in rows} == {'right'}
+    # both hands all along: nothing written, and the exit status says so
+    assert record_with_the_other_hand_resting(tmp_path, 'whole', 1.0) == 1
+    err = capsys.readouterr().err
+    assert err.splitlines()[-1] == (
+        'record_gestures: 30 of the 30 frames showed a left and a right hand and were skipped, '
+        'nothing written: give --side right|left to record the hand showing the gesture'), err
+    assert 'no hand in' not in err and not (tmp_path / 'whole.jsonl').exists()
+    # --side right records the gesture's hand on every frame, without a word about the other
+    assert record_with_the_other_hand_resting(tmp_path, 'right', 1.0, '--side', 'right') == 0
+    captured = capsys.readouterr()
+    assert 'wrote 30 hand poses' in captured.out and 'showed a left' not in captured.err
+    rows = gesture_data.read_pose_lines(str(tmp_path / 'right.jsonl'))
+    assert {gesture_data.first_hand(f).side for _, _, f in rows} == {'right'}
+
+
 class FailsNearTheEnd(HandSource):
     """9 s of a right hand at 30 Hz, then the SourceError of an unplugged webcam."""
 
