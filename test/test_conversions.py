@@ -123,6 +123,23 @@ def test_leapros_leaves_a_joint_beyond_any_hands_reach_at_zero():
     assert msg.middle_proximal.z == pytest.approx(hand.fingers[2].mcp[2])
 
 
+def test_leapros_metacarpal_is_the_carpal_joint_where_the_source_measures_it():
+    # The classic sender filled <finger>_metacarpal with bone(TYPE_METACARPAL).prev_joint,
+    # the carpal joint (mm); it was always 0 here, the Leap sources included.
+    hand = render_hand('right', 'open', [12.5, 210.0, -30.0])
+    carpals = [[-40.0 + 20.0 * i, 150.0, 40.0] for i in range(5)]
+    for f, c in zip(hand.fingers, carpals):
+        f.carpal = c
+    hand.fingers[0].carpal = None                               # unmeasured: 0, as before
+    hand.fingers[2].carpal = [0.0, 2001.0, 0.0]                 # beyond any hand: 0
+    hand.fingers[3].carpal = [math.nan, 150.0, 40.0]
+    msg = hand_conversions.to_leapros(states(hand)['right'], hand)
+    got = [(p.x, p.y, p.z) for p in (getattr(msg, name + '_metacarpal') for name in
+                                     ('thumb', 'index', 'middle', 'ring', 'pinky'))]
+    assert got == [(0, 0, 0), tuple(carpals[1]), (0, 0, 0), (0, 0, 0), tuple(carpals[4])]
+    assert msg.index_proximal.z == pytest.approx(hand.fingers[1].mcp[2])      # the rest stays
+
+
 def test_leapros_of_an_absent_hand_is_all_zero_but_the_header():
     msg = hand_conversions.to_leapros(states()['right'])
     assert msg.header.stamp.to_sec() == pytest.approx(1234.5)

@@ -648,3 +648,145 @@ def test_driver_markers_refuse_non_finite_points():
     human.right_hand.finger_list[2].bone_list[3].bone_end.position.x = math.nan
     with pytest.raises(ValueError):
         driver_markers(human)
+
+
+# --- the carpal joint: the metacarpal's base ---------------------------------------------
+CARPAL_OFFSET = np.array([0.0, -20.0, 60.0])      # mm from the knuckle, toward the wrist
+
+
+def _carpal_hand(x=0.0, side='right', hand_id=3):
+    """A hand whose fingers but the thumb have a carpal joint (a Leap's thumb: none apart)."""
+    hand = render_hand(side, 'open', [x, 200.0, 0.0], hand_id=hand_id)
+    for f in hand.fingers[1:]:
+        f.carpal = f.mcp + CARPAL_OFFSET
+    return hand
+
+
+def _bone(bone):
+    s, e = bone.bone_start.position, bone.bone_end.position
+    return np.array([s.x, s.y, s.z]), np.array([e.x, e.y, e.z])
+
+
+def test_the_carpal_joint_starts_the_metacarpal_raw_and_filtered():
+    # The driver's metacarpal runs from the carpal joint (prevJoint) to the knuckle, with its
+    # length; every one here had length 0 where the source measured the carpal joint.
+    hand = _carpal_hand()
+    (raw, smooth), = run([Frame(id=1, timestamp=1.0, hands=[hand])], lowpass=LowPass(4.0))
+    for human in (raw, smooth):
+        fingers = human.right_hand.finger_list
+        for i in (1, 2, 3, 4):
+            start, end = _bone(fingers[i].bone_list[0])
+            np.testing.assert_allclose(start, hand.fingers[i].carpal / 1000.0)
+            np.testing.assert_allclose(end, hand.fingers[i].mcp / 1000.0)
+            assert fingers[i].bone_list[0].length == pytest.approx(np.linalg.norm(CARPAL_OFFSET) / 1000.0)
+            assert fingers[i].length == pytest.approx(sum(b.length for b in fingers[i].bone_list))
+            assert fingers[i].bone_list[0].to_string == 'metacarpal bone length:63.2 mm'
+        # Unknown (the thumb here): as before, the knuckle, length 0.
+        start, end = _bone(fingers[0].bone_list[0])
+        assert start.tolist() == end.tolist() and fingers[0].bone_list[0].length == 0.0
+        assert serialized(human)
+    # The skeleton alone: a hand without carpal joints keeps today's bones exactly.
+    plain = render_hand('right', 'open', [0.0, 200.0, 0.0], hand_id=3)
+    joints = skeleton.hand_joints(plain)
+    for a, b in zip(skeleton.bone_ends(joints), skeleton.bone_ends(joints, skeleton.hand_carpals(plain, joints))):
+        assert np.array_equal(a, b)
+
+
+def test_a_carpal_joint_that_is_no_joint_leaves_that_metacarpal_at_the_knuckle():
+    hand = _carpal_hand()
+    hand.fingers[1].carpal = np.array([0.0, 1e300, 0.0])
+    hand.fingers[2].carpal = np.array([math.nan, 0.0, 0.0])
+    hand.fingers[3].carpal = np.array([skeleton.MAX_JOINT + 1.0, 0.0, 0.0])
+    hand.fingers[4].carpal = [1.0, 2.0]
+    (raw, smooth), = run([Frame(id=1, timestamp=1.0, hands=[hand])], lowpass=LowPass(4.0))
+    for human in (raw, smooth):
+        assert serialized(human)
+        assert [f.bone_list[0].length for f in human.right_hand.finger_list] == [0.0] * 5
+        assert human.right_hand.finger_list[1].bone_list[1].length > 0.0     # the rest stays
+    s = LeapInterface().on_frame(Frame(id=1, timestamp=1.0, hands=[hand]))['right']
+    msg = hand_conversions.to_leapros(s, hand)
+    assert [(p.x, p.y, p.z) for p in (msg.index_metacarpal, msg.middle_metacarpal, msg.ring_metacarpal,
+                                      msg.pinky_metacarpal)] == [(0, 0, 0)] * 4
+
+
+def test_the_filtered_human_low_passes_the_carpal_joints_as_the_others():
+    frames = [Frame(id=i, timestamp=i / 100.0, hands=[_carpal_hand(0.0 if i < 5 else 40.0)])
+              for i in range(40)]
+    raw, smooth = zip(*run(frames, lowpass=LowPass(4.0)))
+    for k in range(40):
+        for i in (1, 4):
+            carpal = _bone(smooth[k].right_hand.finger_list[i].bone_list[0])[0]
+            knuckle = _bone(smooth[k].right_hand.finger_list[i].bone_list[1])[0]
+            raw_carpal = _bone(raw[k].right_hand.finger_list[i].bone_list[0])[0]
+            if k == 6:          # on its way to the hand's new place, behind it (40 mm to go)
+                assert 0.0 < carpal[0] - (raw_carpal[0] - 0.04) < 0.02
+            # moved as its knuckle: the metacarpal keeps its length while it is filtered
+            np.testing.assert_allclose(knuckle - carpal, CARPAL_OFFSET / -1000.0, atol=1e-9)
+    last = _bone(smooth[-1].right_hand.finger_list[2].bone_list[0])[0]
+    np.testing.assert_allclose(last, (frames[-1].hands[0].fingers[2].carpal) / 1000.0, atol=1e-4)
+
+
+def test_the_leap_sdks_carpal_joint_reaches_the_frame_bounded():
+    import types
+
+    from leap_teleop.hands.sources import leap_sdk, leapc
+    ns = types.SimpleNamespace
+    src = render_hand('right', 'open', [0.0, 200.0, 0.0])
+    carpals = [f.mcp + CARPAL_OFFSET for f in src.fingers]
+    carpals[2] = np.array([0.0, 1e300, 0.0])                # beyond any hand: none
+    carpals[3] = np.array([0.0, math.nan, 0.0])
+
+    def sdk_finger(t, f):
+        joints = {0: carpals[t], 1: f.mcp, 2: f.pip, 3: f.dip}
+        return ns(type=t, tip_position=_vec(f.tip), direction=_vec(f.direction), is_extended=True,
+                  width=18.0, bone=lambda kind: ns(prev_joint=_vec(joints[kind]), width=18.0))
+
+    def bone(a, b):
+        return ns(prev_joint=_vec(a), next_joint=_vec(b), width=18.0)
+
+    Leap = ns(Bone=ns(TYPE_METACARPAL=0, TYPE_PROXIMAL=1, TYPE_INTERMEDIATE=2, TYPE_DISTAL=3))
+    sdk = leap_sdk.convert_hand(Leap, ns(
+        is_right=True, id=4, palm_position=_vec(src.palm_position), palm_velocity=_vec((0, 0, 0)),
+        palm_normal=_vec(src.palm_normal), direction=_vec(src.direction), grab_strength=0.0,
+        pinch_strength=0.0, confidence=1.0, fingers=[sdk_finger(t, f) for t, f in enumerate(src.fingers)]))
+    c = leapc.convert_hand(ns(HandType=ns(Left=0, Right=1)), ns(
+        type=1, id=6, grab_strength=0.0, pinch_strength=0.0, confidence=1.0,
+        palm=ns(position=_vec(src.palm_position), velocity=_vec((0, 0, 0)), normal=_vec(src.palm_normal),
+                direction=_vec(src.direction)),
+        digits=[ns(is_extended=True, metacarpal=bone(carpals[t], f.mcp), proximal=bone(f.mcp, f.pip),
+                   intermediate=bone(f.pip, f.dip), distal=bone(f.dip, f.tip))
+                for t, f in enumerate(src.fingers)]))
+    for hand in (sdk, c):
+        got = [f.carpal for f in hand.fingers]
+        assert got[2] is None and got[3] is None
+        for i in (0, 1, 4):
+            np.testing.assert_allclose(got[i], carpals[i])
+        (human, _), = run([Frame(id=1, timestamp=1.0, hands=[hand])])
+        lengths = [f.bone_list[0].length for f in human.right_hand.finger_list]
+        assert lengths[2:4] == [0.0, 0.0]
+        assert lengths[1] == pytest.approx(np.linalg.norm(CARPAL_OFFSET) / 1000.0)
+    # A binding whose metacarpal bone fails keeps the other joints.
+    def failing(t, f):
+        finger = sdk_finger(t, f)
+        inner = finger.bone
+        finger.bone = lambda kind: (_ for _ in ()).throw(RuntimeError('no bone')) if kind == 0 else inner(kind)
+        return finger
+    sdk = leap_sdk.convert_hand(Leap, ns(
+        is_right=True, id=4, palm_position=_vec(src.palm_position), palm_velocity=_vec((0, 0, 0)),
+        palm_normal=_vec(src.palm_normal), direction=_vec(src.direction), grab_strength=0.0,
+        pinch_strength=0.0, confidence=1.0, fingers=[failing(t, f) for t, f in enumerate(src.fingers)]))
+    assert all(f.carpal is None and f.mcp is not None for f in sdk.fingers)
+    assert skeleton.hand_joints(sdk) is not None
+
+
+def test_the_carpal_joint_feeds_no_gesture():
+    # The gesture models were fitted without it: the recognizer's states are the same.
+    from leap_teleop.hands.gestures import GestureRecognizer
+    a, b = GestureRecognizer(), GestureRecognizer()
+    for i in range(30):
+        plain = render_hand('right', 'fist' if i < 15 else 'open', [float(i), 200.0, 0.0], hand_id=3)
+        with_carpals = _carpal_hand(float(i))
+        with_carpals.fingers = tuple(Finger(**{**vars(f), 'carpal': g.carpal})
+                                     for f, g in zip(plain.fingers, with_carpals.fingers))
+        sa, sb = a.update(plain, i / 100.0), b.update(with_carpals, i / 100.0)
+        assert repr(sa) == repr(sb)

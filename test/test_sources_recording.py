@@ -373,6 +373,9 @@ class V:
         self.x, self.y, self.z = x, y, z
 
 
+CARPAL_OFFSET = np.array([0.0, -20.0, 60.0])     # mm: the fake devices' carpal joint from the knuckle
+
+
 def _fake_leap_v2(device_us=None):
     """device_us(i): frame i's device timestamp (us); by default 120 Hz ones, though the
     fake device runs at 200 frames a second."""
@@ -395,7 +398,7 @@ def _fake_leap_v2(device_us=None):
 
         def bone(self, kind):
             p = self._p
-            return Bone(V(*{1: p.mcp, 2: p.pip, 3: p.dip}[kind]))
+            return Bone(V(*{0: p.mcp + CARPAL_OFFSET, 1: p.mcp, 2: p.pip, 3: p.dip}[kind]))
 
     class FakeHand:
         def __init__(self, h):
@@ -462,7 +465,8 @@ def _fake_leapc(device_us=None):
         digits = []
         for f in h.fingers:
             digits.append(types.SimpleNamespace(
-                is_extended=bool(f.extended), proximal=bone(f.mcp, f.pip),
+                is_extended=bool(f.extended), metacarpal=bone(f.mcp + CARPAL_OFFSET, f.mcp),
+                proximal=bone(f.mcp, f.pip),
                 intermediate=bone(f.pip, f.dip), distal=bone(f.dip, f.tip)))
         palm = types.SimpleNamespace(position=V(*h.palm_position), velocity=V(*h.palm_velocity),
                                      normal=V(*h.palm_normal), direction=V(*h.direction))
@@ -618,7 +622,7 @@ def _same_frames(a, b):
                 assert np.array_equal(getattr(h, name), getattr(k, name), equal_nan=True)
             for f, g in zip(h.fingers, k.fingers):
                 assert f.extended == g.extended
-                for name in ('tip', 'direction', 'mcp', 'pip', 'dip'):
+                for name in ('tip', 'direction', 'mcp', 'pip', 'dip', 'carpal'):
                     u, v = getattr(f, name), getattr(g, name)
                     assert (u is None and v is None) or np.array_equal(u, v, equal_nan=True)
 
@@ -637,6 +641,10 @@ def test_load_frames_matches_frame_by_frame_decoding(tmp_path, monkeypatch, fast
     frames[6] = dict(frames[6], hands=[{'type': 'right', 'palmPosition': 'oops'}], pointables=5)
     frames[8] = dict(frames[8], pointables=[dict(p, tipPosition=[1, 2]) for p in frames[8]['pointables']])
     frames[9] = dict(frames[9], hands=[dict(h, palmNormal='abc') for h in frames[9]['hands']])
+    frames[10] = dict(frames[10], pointables=[dict(p, carpPosition=[k, 150.0, 60.0])
+                                              for k, p in enumerate(frames[10]['pointables'])])
+    frames[11] = dict(frames[11], pointables=[dict(p, carpPosition=bad) for p, bad in zip(
+        frames[11]['pointables'], ([1, 2, 3], 3e3, [1, 'x', 3], None, [0, 1e300, 0]))])
     paths = [_write(tmp_path, 'm.json', frames), _write(tmp_path, 'm.json.lz', frames),
              os.path.join(leapjs_data, 'decoded', 'flapping.json.gz'),
              os.path.join(leapjs_data, 'finger-tap-54fps.json.lz')]
@@ -845,3 +853,67 @@ def test_record_frames_letterboxes_camera_footage_as_the_sender_does(tmp_path, d
     assert record_frames.main([str(tmp_path / 'take.json'), '--source', 'video', '--video', image,
                                '--realtime', '0']) == 0
     assert detector_sizes == [(480, 640, 3)]
+
+
+def _with_carpals(hand):
+    for f in hand.fingers:
+        f.carpal = f.mcp + CARPAL_OFFSET
+    return hand
+
+
+def test_the_carpal_joint_is_read_bounded_and_written_back():
+    # LeapJS protocol 6 frames carry each finger's carpal joint (carpPosition): it was
+    # dropped on reading and never written.
+    hand = _with_carpals(render_hand('right', 'open', (0, 200, 0), hand_id=3))
+    d = leapjs.frame_to_dict(Frame(1, 2.0, [hand]))
+    for f, p in zip(hand.fingers, d['pointables']):
+        assert p['carpPosition'] == pytest.approx(f.carpal.tolist(), abs=1e-5)
+    back = leapjs.frame_from_dict(d).hands[0]
+    for f, g in zip(hand.fingers, back.fingers):
+        np.testing.assert_allclose(g.carpal, f.carpal, atol=1e-5)
+    # Sources that do not measure it (scripted, camera, older takes): neither written nor read.
+    plain = leapjs.frame_to_dict(Frame(1, 2.0, [render_hand('right', 'open', (0, 200, 0), hand_id=3)]))
+    assert not any('carpPosition' in p for p in plain['pointables'])
+    assert all(f.carpal is None for f in leapjs.frame_from_dict(plain).hands[0].fingers)
+    # A value that is no joint is dropped for that finger only, as the bounds of the others.
+    for bad in (1e300, [0.0, 2001.0, 0.0], [0.0, -1e300, 0.0], [1, 2], 'abc', [1, 'x', 3],
+                {'x': 1}, [2 ** 70, 0, 0], [10 ** 400, 0, 0], [[1, 2, 3]]):
+        p = d['pointables'][2]
+        p['carpPosition'] = bad
+        fingers = leapjs.frame_from_dict(d).hands[0].fingers
+        assert fingers[2].carpal is None, bad
+        assert fingers[3].carpal is not None and np.allclose(fingers[2].mcp, hand.fingers[2].mcp, atol=1e-5)
+    p['carpPosition'] = [-2000, 2000, 0]                    # at the bound: kept
+    assert leapjs.frame_from_dict(d).hands[0].fingers[2].carpal.tolist() == [-2000.0, 2000.0, 0.0]
+    # Written as read: another source's value beyond the bound is left out of a file.
+    hand.fingers[1].carpal = np.array([0.0, 0.0, 1e300])
+    hand.fingers[2].carpal = np.array([math.nan, 0.0, 0.0])
+    back = leapjs.frame_to_dict(Frame(1, 2.0, [hand]))['pointables']
+    assert ['carpPosition' in p for p in back] == [True, False, False, True, True]
+
+
+def test_the_shared_protocol_6_take_has_every_carpal_joint(leapjs_data):
+    _, frames, _ = leapjs.load_frames(os.path.join(leapjs_data, 'finger-tap-54fps.json.lz'))
+    fingers = [f for frame in frames for h in frame.hands for f in h.fingers]
+    assert len(fingers) == 445 and all(f.carpal is not None for f in fingers)
+    lengths = [np.linalg.norm(f.mcp - f.carpal) for f in fingers]
+    # the thumb's metacarpal has length 0 on a Leap; the others are a palm's length
+    assert max(lengths[0::5]) < 1.0 and 40.0 < min(lengths[4::5]) and max(lengths) < 90.0
+
+
+@pytest.mark.parametrize('name, module, fake', [('leap', 'Leap', _fake_leap_v2),
+                                                ('leapc', 'leap', _fake_leapc)])
+def test_a_take_recorded_from_a_leap_keeps_its_carpal_joints(tmp_path, monkeypatch, name, module, fake):
+    # The Leap SDKs measure each metacarpal's base (bone(TYPE_METACARPAL).prev_joint,
+    # digit.metacarpal.prev_joint): the sources dropped it.
+    monkeypatch.setitem(sys.modules, module, fake())
+    for frame in _take(make_source(name), 3):
+        for f in (f for h in frame.hands for f in h.fingers):
+            np.testing.assert_allclose(f.carpal - f.mcp, CARPAL_OFFSET)
+    out = str(tmp_path / 'take.json.gz')
+    assert record_frames.record(make_source(name), out, max_frames=3) == 3
+    _, frames, errors = leapjs.load_frames(out)
+    assert len(frames) == 3 and not errors
+    for frame in frames:
+        for f in (f for h in frame.hands for f in h.fingers):
+            np.testing.assert_allclose(f.carpal - f.mcp, CARPAL_OFFSET, atol=1e-4)

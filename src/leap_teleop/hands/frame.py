@@ -55,6 +55,9 @@ class Finger:
     # The SDK's sizes where the source measures them (LeapJS: width; the SDKs: bones too).
     width: Optional[float] = None                           # mm
     bone_widths: Optional[Tuple[float, ...]] = None         # mm, metacarpal .. distal
+    # The carpal joint (the metacarpal's base, nearer the wrist) where the source measures
+    # it (the Leap SDKs, LeapJS carpPosition); None for scripted and camera hands.
+    carpal: Optional[np.ndarray] = None                     # mm
 
 
 @dataclass

@@ -3,9 +3,10 @@ the bounds of a source's joints and sizes. Pure numpy.
 
 Every finger has four bones, wrist to tip: metacarpal, proximal, intermediate, distal. A
 frame.Finger carries the knuckle (mcp), pip, dip and tip joints, so the proximal,
-intermediate and distal bones are known; no source's frames carry the carpal joints, so the
-metacarpal is reported with its start at its end (the knuckle) and length 0 (the Leap's own
-thumb metacarpal has length 0 too). Units follow the input (frames: millimetres).
+intermediate and distal bones are known; the metacarpal runs from the carpal joint where the
+source measures it (the Leap SDKs, LeapJS recordings), else it is reported with its start at
+its end (the knuckle) and length 0 (the Leap's own thumb metacarpal has length 0 too). Units
+follow the input (frames: millimetres).
 
 A joint or size beyond its bound (MAX_JOINT, MAX_SIZE, MAX_TIME_VISIBLE_S) is a tracking
 error or a corrupt recording's value, not a hand: none, and never a message's float32.
@@ -41,11 +42,27 @@ def hand_joints(hand):
     return joints
 
 
-def bone_ends(joints):
+def hand_carpals(hand, joints):
+    """(5, 3) float array: each finger's carpal joint where its source measured one within
+    MAX_JOINT, else its knuckle (from `joints`, hand_joints' array), so that metacarpal has
+    length 0 as before."""
+    out = np.array(joints[:, 0, :], dtype=float)
+    for i, f in enumerate(hand.fingers[:5]):
+        carpal = bounded_point(getattr(f, 'carpal', None))
+        if carpal is not None:
+            out[i] = carpal
+    return out
+
+
+def bone_ends(joints, carpals=None):
     """(starts, ends), each (..., 4, 3): the four bones (BONE_NAMES order) of fingers given
-    as (..., 4, 3) joints (mcp, pip, dip, tip). The metacarpal starts and ends at the mcp."""
+    as (..., 4, 3) joints (mcp, pip, dip, tip). The metacarpal starts at `carpals` ((..., 3),
+    hand_carpals') when given, else at the mcp (length 0); it ends at the mcp."""
     joints = np.asarray(joints, dtype=float)
-    return joints[..., [0, 0, 1, 2], :], joints[..., [0, 1, 2, 3], :]
+    starts = joints[..., [0, 0, 1, 2], :]
+    if carpals is not None:
+        starts[..., 0, :] = np.asarray(carpals, dtype=float)
+    return starts, joints[..., [0, 1, 2, 3], :]
 
 
 def bounded_size(value):

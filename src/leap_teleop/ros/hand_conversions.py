@@ -80,8 +80,9 @@ def from_leapcobot(msg):
 
 
 # leapros bone field -> frame.Finger joint: a Leap bone's position is its base (the joint
-# nearer the wrist); the metacarpal's base (the carpal joint) is in no source's frames.
-_LEAPROS_BONES = (('proximal', 'mcp'), ('intermediate', 'pip'), ('distal', 'dip'))
+# nearer the wrist), the metacarpal's the carpal joint (only where the source measures it).
+_LEAPROS_BONES = (('metacarpal', 'carpal'), ('proximal', 'mcp'), ('intermediate', 'pip'),
+                  ('distal', 'dip'))
 
 
 def classic_ypr(normal, direction):
@@ -97,10 +98,11 @@ def classic_ypr(normal, direction):
 
 def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
     """The classic leap_motion/leapros message for one side, in that driver's units: Leap
-    axes, millimetres, ypr in degrees as (yaw, pitch, roll) of classic_ypr. Finger tips come from the state; bone bases
-    (proximal = knuckle, intermediate, distal) from `hand` (a hands.frame.TrackedHand) where
-    its source tracks joints; a metacarpal base and anything untracked stays 0, as does a
-    joint beyond skeleton.MAX_JOINT (a tracking error, as the tracker takes such a tip; the
+    axes, millimetres, ypr in degrees as (yaw, pitch, roll) of classic_ypr. Finger tips come
+    from the state; bone bases (metacarpal = carpal joint, proximal = knuckle, intermediate,
+    distal) from `hand` (a hands.frame.TrackedHand) where its source tracks them; anything
+    untracked stays 0 (the carpal joint of scripted and camera hands), as does a joint
+    beyond skeleton.MAX_JOINT (a tracking error, as the tracker takes such a tip; the
     driver's Human has no bones then). A frame without the hand gives a message with only
     the header set."""
     msg = _header(leapros(), state, frame_id)
@@ -116,11 +118,12 @@ def to_leapros(state, hand=None, frame_id=LEAP_FRAME):
         setattr(msg, name + '_tip', Point(*state.finger_tips[i]))
         if i < len(fingers):
             for bone, joint in _LEAPROS_BONES:
-                xyz = getattr(fingers[i], joint)
+                xyz = getattr(fingers[i], joint, None)
                 if xyz is None:
                     continue
                 xyz = [float(v) for v in xyz]
-                if all(abs(v) <= skeleton.MAX_JOINT for v in xyz):    # NaN compares false
+                # NaN compares false
+                if len(xyz) == 3 and all(abs(v) <= skeleton.MAX_JOINT for v in xyz):
                     setattr(msg, '%s_%s' % (name, bone), Point(*xyz))
     return msg
 
@@ -241,9 +244,10 @@ class DriverHumanBuilder:
     grab / pinch strength, confidence, time_visible, the fingers' bones (skeleton), the
     recognizer's circles as circle gestures. Filled only where the frames carry them: the
     SDK's swipe, key tap, screen tap and circle gestures (recordings), palm_width,
-    sphere_radius, sphere_center, finger and bone widths (0 / empty otherwise), and the
-    SDK's own time_visible (otherwise counted here from when the hand was found). Left
-    empty (no source's frames have them): the metacarpal's base (the bone has length 0),
+    sphere_radius, sphere_center, finger and bone widths (0 / empty otherwise), the
+    metacarpal's base, the carpal joint (the Leap SDKs, LeapJS recordings; otherwise the
+    bone starts at the knuckle, length 0), and the SDK's own time_visible (otherwise
+    counted here from when the hand was found). Left empty (no source's frames have them):
     the arm, bone orientations (identity)."""
 
     def __init__(self, frame_id=LEAP_FRAME):
@@ -268,10 +272,11 @@ class DriverHumanBuilder:
             self._fps = fps if self._fps == 0.0 else 0.9 * self._fps + 0.1 * fps
 
     @staticmethod
-    def _fingers(header, hand_id, joints, fingers=()):
-        """Five DriverFingers from (5, 4, 3) joints in mm (mcp, pip, dip, tip); widths from
+    def _fingers(header, hand_id, joints, fingers=(), carpals=None):
+        """Five DriverFingers from (5, 4, 3) joints in mm (mcp, pip, dip, tip) and (5, 3)
+        carpals (skeleton.hand_carpals; None: each metacarpal has length 0); widths from
         `fingers` (frame.Finger) where the source measured them."""
-        starts, ends = skeleton.bone_ends(joints)
+        starts, ends = skeleton.bone_ends(joints, carpals)
         lengths = (np.linalg.norm(ends - starts, axis=2) * MM).tolist()
         centers = ((starts + ends) * (MM / 2.0)).tolist()
         starts, ends = (starts * MM).tolist(), (ends * MM).tolist()
@@ -321,8 +326,9 @@ class DriverHumanBuilder:
         return out
 
     def _hand(self, msg, hand, state, points, gestures, time_visible):
-        """Fill msg from the state; points: (21, 3) mm, the palm centre then each finger's
-        mcp, pip, dip, tip (or (1, 3): the palm only, when the source tracks no joints)."""
+        """Fill msg from the state; points: (26, 3) mm, the palm centre, each finger's mcp,
+        pip, dip, tip, then each finger's carpal joint (skeleton.hand_carpals) (or (1, 3): the
+        palm only, when the source tracks no joints)."""
         header = msg.header
         msg.lmc_hand_id = _int32(hand.id)
         msg.is_present = True
@@ -348,8 +354,8 @@ class DriverHumanBuilder:
         if center is not None:
             msg.sphere_center = [float(x) * MM for x in center]
         if len(points) > 1:
-            msg.finger_list = self._fingers(header, hand.id, points[1:].reshape(5, 4, 3),
-                                            hand.fingers)
+            msg.finger_list = self._fingers(header, hand.id, points[1:21].reshape(5, 4, 3),
+                                            hand.fingers, points[21:26])
         msg.gesture_list = gestures
         msg.valid_gestures = bool(gestures)
         msg.arm.header = header
@@ -371,8 +377,8 @@ class DriverHumanBuilder:
         """(raw, filtered) DriverHumans of one frame; states: side -> HandState (a
         LeapInterface listener's). raw=False leaves the raw one out (None); `lowpass`
         (lowpass.LowPass, one key per side) makes the filtered one, as the driver's filter
-        node does: the palm centre and every joint low-passed (else None). A side missing
-        from `states`, or not present in its state, is an absent hand."""
+        node does: the palm centre and every joint, carpal joints too, low-passed (else
+        None). A side missing from `states`, or not present in its state, is an absent hand."""
         self._rate(frame.timestamp)
         out = [self._message(frame) if raw else None,
                self._message(frame) if lowpass is not None else None]
@@ -395,7 +401,9 @@ class DriverHumanBuilder:
             joints = skeleton.hand_joints(hand)
             points = np.asarray(state.palm_position, dtype=float).reshape(1, 3)
             if joints is not None:
-                points = np.concatenate([points, joints.reshape(20, 3)])
+                # Unmeasured carpal joints are the knuckles: filtered alike, length 0 still.
+                points = np.concatenate([points, joints.reshape(20, 3),
+                                         skeleton.hand_carpals(hand, joints)])
             for msg, pts in ((out[0], points),
                              (out[1], lowpass(side, points) if lowpass is not None else None)):
                 if msg is None:

@@ -7,6 +7,7 @@ optional: without it, constructing the source raises SourceError saying what to 
 import time
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, TrackedHand, measured, measured3
+from leap_teleop.hands.skeleton import bounded_point
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
@@ -45,6 +46,10 @@ def convert_hand(Leap, h):
                 joints['dip'] = xyz(bone(Leap.Bone.TYPE_DISTAL).prev_joint)
             except Exception:       # a binding without bones: tip and direction only
                 joints = {}
+            try:                    # the carpal joint: bounded, never at the joints' cost
+                joints['carpal'] = bounded_point(bone(Leap.Bone.TYPE_METACARPAL).prev_joint)
+            except Exception:
+                pass
         widths = None
         if bone is not None:
             try:

@@ -10,6 +10,7 @@ import contextlib
 import time
 
 from leap_teleop.hands.frame import Finger, TrackedHand, measured
+from leap_teleop.hands.skeleton import bounded_point
 from leap_teleop.hands.sources.device_queue import PushQueue, attr, wait_loop, xyz
 from leap_teleop.hands.sources.source import HandSource, SourceError
 
@@ -54,7 +55,8 @@ def convert_hand(leap, h):
                               extended=bool(attr(d, 'is_extended')),
                               mcp=xyz(attr(prox, 'prev_joint')),
                               pip=xyz(attr(inter, 'prev_joint')), dip=dip,
-                              bone_widths=None if None in widths else widths))
+                              bone_widths=None if None in widths else widths,
+                              carpal=bounded_point(attr(attr(d, 'metacarpal'), 'prev_joint'))))
     visible_us = measured(attr(h, 'visible_time'))      # LeapC: microseconds
     return TrackedHand(side=_side(leap, attr(h, 'type')), palm_position=xyz(attr(palm, 'position')),
                 palm_velocity=xyz(attr(palm, 'velocity')), palm_normal=xyz(attr(palm, 'normal')),

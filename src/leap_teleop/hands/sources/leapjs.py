@@ -31,7 +31,7 @@ except ImportError:        # pragma: no cover
     _simdjson = None
 
 from leap_teleop.hands.frame import FINGER_NAMES, Finger, Frame, TrackedHand
-from leap_teleop.hands.skeleton import bounded_point, bounded_size, bounded_time
+from leap_teleop.hands.skeleton import MAX_JOINT, bounded_point, bounded_size, bounded_time
 from leap_teleop.hands.sources.source import SourceError
 
 log = logging.getLogger(__name__)
@@ -469,6 +469,7 @@ def _hand_from_dict(h, side, pointables, timestamp=math.nan):
             fl[i] = Finger(v[b], v[b + 1], ext if ext.__class__ is bool else None,
                            v[b + 2], v[b + 3], v[b + 4], bounded_size(by_type[i].get('width')))
             b += 5
+        _carpals(fl, have, [by_type[i].get('carpPosition') for i in have])
         if len(have) < 5:
             missing = np.full(3, math.nan)
             fl = [f if f is not None else Finger(tip=missing, direction=missing) for f in fl]
@@ -484,6 +485,26 @@ def _hand_from_dict(h, side, pointables, timestamp=math.nan):
                 sphere_center=bounded_point(h.get('sphereCenter')),
                 time_visible=_time_visible(h.get('timeVisible'), timestamp),
                 image_landmarks=_image_landmarks(h.get('imageLandmarks')))
+
+
+def _carpals(fingers, have, carps):
+    """Set fingers[i].carpal (i in have) from its carpPosition (protocol 6 frames), bounded
+    as a joint. Optional, so read apart from _hand_from_dict's rows (a take without it stays
+    on that fast path); all five in one numpy call when well-formed (per finger it tripled
+    the cost of a frame)."""
+    if carps.count(None) == len(carps):
+        return
+    try:
+        if set(map(len, carps)) != _LEN3 or set(map(type, carps)) != _LIST:
+            raise ValueError
+        arr = np.fromiter(_chain(carps), float, 3 * len(carps)).reshape(-1, 3)
+        kept = np.all(np.abs(arr) <= MAX_JOINT, axis=1)       # NaN compares false
+        for i, row, ok in zip(have, arr, kept.tolist()):
+            if ok:
+                fingers[i].carpal = row
+    except (TypeError, ValueError, OverflowError):
+        for i, carp in zip(have, carps):
+            fingers[i].carpal = bounded_point(carp)
 
 
 def _image_landmarks(value):
@@ -571,6 +592,9 @@ def frame_to_dict(frame):
                                ('dipPosition', f.dip)):
                 if value is not None and np.all(np.isfinite(np.asarray(value, dtype=float))):
                     p[key] = _list(value)
+            carpal = bounded_point(getattr(f, 'carpal', None))
+            if carpal is not None:
+                p['carpPosition'] = _list(carpal)
             pointables.append(p)
     ts = frame.timestamp
     return {'id': int(frame.id), 'timestamp': int(round(ts * 1e6)) if math.isfinite(ts) else 0,
