@@ -280,9 +280,13 @@ def check_hand(test_hand, src, tol_m=1e-6, tol_unit=1e-6):
             assert b['length'] == pytest.approx(length, abs=1e-5)
             np.testing.assert_allclose(b['center'], (np.asarray(start) + np.asarray(end)) / 2000.0,
                                        atol=1e-5)
-        # The metacarpal: no source has its base; it is the knuckle, length 0.
-        assert bones[0]['length'] == 0.0
+        # The metacarpal ends at the knuckle; it starts at the carpal joint where the source
+        # measures it (the Leap sources, protocol-6 takes), else at the knuckle (length 0).
         np.testing.assert_allclose(bones[0]['end'], np.asarray(sf.mcp) / 1000.0, atol=tol_m)
+        base = sf.mcp if sf.carpal is None else sf.carpal
+        np.testing.assert_allclose(bones[0]['start'], np.asarray(base) / 1000.0, atol=tol_m)
+        assert bones[0]['length'] == pytest.approx(
+            np.linalg.norm(np.asarray(sf.mcp) - np.asarray(base)) / 1000.0, abs=1e-5)
         assert f['length'] == pytest.approx(sum(b['length'] for b in bones), abs=1e-5)
 
 
