@@ -559,7 +559,7 @@ def test_train_gestures_refuses_a_file_with_no_hand_and_keeps_same_named_files_a
     (b'\xff\xfe not text\n', 'cannot read on after 0 pose records'),
     (gzip.compress(b'{"person": "a", "label": "b", "frame": {}}\n' * 2000, mtime=0)[:300],
      'cannot read on after'),
-    (b'{"person": "a", "label": "b", "frame": {"hands": [{"type": "right", "id": [1], '
+    (b'{"person": "a", "label": "wave", "frame": {"hands": [{"type": "right", "id": [1], '
      b'"grabStrength": 1' + b'0' * 400 + b'}], "pointables": [{"handId": {"a": 1}}]}}\n',
      'no hand in it'),
 ], ids=['not UTF-8', 'a gzip cut short', 'unhashable ids and a 400-digit integer'])
@@ -704,10 +704,13 @@ def test_the_card_counts_the_samples_fitted_and_a_file_of_no_hand_is_refused(tmp
             if k % 10 == 0:
                 out.write(line)
     model = tmp_path / 'm.npz'
+    # the open hands, labelled open, taken as wave with --id (a label of their own: refused)
     assert train_gestures.main(['--data', str(shared.parent), '--add', str(mixed), '--label', 'two',
-                                '--add', str(opens), '--label', 'wave', '--out', str(model),
+                                '--add', str(opens), '--id', 'open', '--label', 'wave', '--out', str(model),
                                 '--no-report']) == 0
-    assert 'mixed.jsonl (30 hands)' in open(tmp_path / 'm.md').read()
+    card = open(tmp_path / 'm.md').read()
+    assert 'mixed.jsonl (30 hands)' in card and 'opens.jsonl (30 hands)' in card
+    assert '--add %s --id open --label wave --out' % opens in card
     # keypoints: a file whose rows hold no hand is refused by name, not fitted on noise
     rows = [','.join(['1'] + ['%.3f' % v for v in np.random.default_rng(k).uniform(0, 1, 42)])
             for k in range(20)]

@@ -78,3 +78,74 @@ def test_your_own_samples_need_an_out_of_your_own(tmp_path, capsys, monkeypatch)
         train_gestures.main(['--add', str(samples), '--label', 'two', '--no-report'])
     assert stop.value.code == 2
     assert '--add needs --out MODEL' in capsys.readouterr().err
+
+
+def _keypoint_csv(path, ids, header=False):
+    """A keypoint CSV of one row per id (the community's headerless form, or the shared
+    form with a header, the id as the row's label)."""
+    import numpy as np
+    rng = np.random.default_rng(0)
+    rows = ['person,label,source_label,' + ','.join('%s%d' % (a, i) for i in range(21) for a in 'xy')] if header else []
+    for k, cls in enumerate(ids):
+        values = ','.join('%.3f' % v for v in rng.uniform(-1, 1, 42))
+        rows.append('me,%s,%s,%s' % (cls, cls, values) if header else '%s,%s' % (cls, values))
+    path.write_text('\n'.join(rows) + '\n')
+    return str(path)
+
+
+def _pose_records(path, labels):
+    import json
+
+    from leap_teleop.hands.frame import Frame
+    from leap_teleop.hands.rendered_hand import render_hand
+    from leap_teleop.hands.sources import leapjs
+    path.write_text(''.join(json.dumps({'person': 'me', 'label': lab, 'frame': leapjs.frame_to_dict(
+        Frame(i, i / 60.0, [render_hand('right', 'two', (i, 200, 0))]))}) + '\n' for i, lab in enumerate(labels)))
+    return str(path)
+
+
+def test_a_file_of_several_classes_or_another_label_is_refused_with_label(tmp_path, monkeypatch, capsys):
+    # --label relabelled every row: a community keypoint.csv (ids 0 open, 1 close, 2 pointer,
+    # then the user's 3) turned every open hand and fist of it into the user's class.
+    community = _keypoint_csv(tmp_path / 'keypoint.csv', ['0', '1', '2', '10', '3', '1', '0'])
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', community, '--label', 'peace'])
+    assert line.endswith('error: --add %s holds rows of 5 classes (ids 0, 1, 2, 3, 10): --label peace '
+                         'would make every one peace; give --id ID after --add to take the rows of one'
+                         % community), line
+    shared_form = _keypoint_csv(tmp_path / 'mine.csv', ['peace', 'fist'], header=True)
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', shared_form, '--label', 'peace'])
+    assert '--add %s holds rows of 2 classes (labels fist, peace)' % shared_form in line, line
+    # one label, not NAME: the rows say what they are
+    other = _keypoint_csv(tmp_path / 'wave.csv', ['wave'] * 3, header=True)
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', other, '--label', 'peace'])
+    assert line.endswith('error: --add %s labels its rows wave, not peace: give --label wave, or --id wave '
+                         '--label peace to take them as peace' % other), line
+    poses = _pose_records(tmp_path / 'two.jsonl', ['two', 'two', 'open'])
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', poses, '--label', 'two'])
+    assert '--add %s holds rows of 2 classes (labels open, two)' % poses in line, line
+    # an id no row has, and an --id before any --add
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', community, '--id', '7', '--label', 'peace'])
+    assert line.endswith('error: --add %s --id 7: no row has that id (ids 0, 1, 2, 3, 10)' % community), line
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--id', '3', '--add', community, '--label', 'peace'])
+    assert line.endswith('error: --id 3: give it after the --add FILE whose rows it picks'), line
+
+
+def test_one_class_of_a_file_is_taken_with_id(tmp_path, monkeypatch):
+    from leap_teleop.hands.gestures import training_set
+    community = _keypoint_csv(tmp_path / 'keypoint.csv', ['0', '3', '1', '3', '3'])
+    poses = _pose_records(tmp_path / 'two.jsonl', ['two', 'open', 'two'])
+    fits = []
+    monkeypatch.setattr(train_gestures, 'train', lambda family, data, adds, **k: fits.append(adds) or 1 / 0)
+    with pytest.raises(ZeroDivisionError):      # the fit was reached
+        train_gestures.main(['--add', community, '--label', 'peace', '--id', '3', '--out',
+                             str(tmp_path / 'm.npz'), '--no-report'])
+    with pytest.raises(ZeroDivisionError):
+        train_gestures.main(['--add', poses, '--id', 'two', '--label', 'victory', '--out',
+                             str(tmp_path / 'm.npz'), '--no-report'])
+    assert fits == [[(community, 'peace', '3')], [(poses, 'victory', 'two')]]
+    ds = training_set.Dataset('keypoints')
+    training_set.add_keypoints(ds, community, label='peace', person='user:k', take='3')
+    assert set(ds.y) == {'peace'} and len(ds.y) == 3 * 2 * 2       # 3 rows, a copy each, mirrored
+    ds = training_set.Dataset('leap')
+    training_set.add_leap_poses(ds, poses, label='victory', person='user:p', take='two')
+    assert set(ds.y) == {'victory'} and ds.sources == ['two.jsonl (2 hands)']

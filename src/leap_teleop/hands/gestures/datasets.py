@@ -236,7 +236,7 @@ def iter_keypoints(path, label=None, person=None):
                 if not row or not ''.join(row).strip():
                     continue
                 # the header: the first row that is not blank (an editor may add blank lines)
-                if header is None and n_rows == 0 and row[0].strip() == 'person':
+                if header is None and n_rows == 0 and _is_keypoint_header(row):
                     header = row
                     continue
                 p, lab, src, xy = _keypoint_row(path, n, row, header is not None, default_person)
@@ -245,6 +245,23 @@ def iter_keypoints(path, label=None, person=None):
     except UNREADABLE as e:
         raise DataError('%s: cannot read on after %d keypoint rows (%s)'
                         % (path, n_rows, e)) from None
+
+
+def _is_keypoint_header(row):
+    return row[0].strip() == 'person'
+
+
+def keypoint_labels_named(path):
+    """Whether a keypoint CSV is the shared form, whose header names a label column, rather
+    than the community's headerless one (a class id per row)."""
+    try:
+        with open_text(path, newline='') as f:
+            for row in csv.reader(f):
+                if row and ''.join(row).strip():
+                    return _is_keypoint_header(row)
+    except UNREADABLE as e:
+        raise DataError('%s: cannot read it (%s)' % (path, e)) from None
+    return False
 
 
 def _keypoint_row(path, n, row, with_header, default_person):

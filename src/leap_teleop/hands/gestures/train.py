@@ -2,15 +2,17 @@
 arrays with a model card.
 
 usage: python -m leap_teleop.hands.gestures.train [--family leap|keypoints|all]
-           [--data DIR] [--add FILE --label NAME ...] [--out MODEL] [--no-report]
-       rosrun leap_teleop train_gestures --add FILE --label NAME --out MODEL
+           [--data DIR] [--add FILE [--id ID] --label NAME ...] [--out MODEL] [--no-report]
+       rosrun leap_teleop train_gestures --add FILE [--id ID] --label NAME --out MODEL
 
 Without --add it refits the shipped models (make train) from the shared, people-split
 data: Leap frames of 12 people (static poses) and 2 people (dynamic takes) for the Leap
 model, 8 people's webcam keypoints for the keypoint model. With --add FILE --label NAME
 (repeatable) the user's samples join as one more person each file, class NAME: FILE is
 record_gestures' output or a shared-format file (.jsonl[.gz] Leap poses, .csv keypoints)
-or a community keypoint.csv whose rows are all NAME; the family follows FILE.
+or a community keypoint.csv whose rows are all NAME; the family follows FILE. A FILE whose
+rows carry several classes (a community keypoint.csv's ids, or labels), or a label other
+than NAME, is refused: --id ID after it takes the rows of that id (or label) alone.
 
 Fitting is deterministic (fixed seed, one thread). Before the final fit it runs
 leave-one-person-out (fit on all people but one, score that one, for each; a user's
@@ -48,6 +50,7 @@ from leap_teleop.hands.gestures.training_set import (
     add_leap_views,
     add_leapjs_takes,
     add_photos,
+    added_file_problem,
     data_terms,
     shared_label_problem,
 )
@@ -223,7 +226,9 @@ def report_people(shared):
 
 
 def training_dataset(family, data_dir, adds):
-    """The Dataset of `family` from the shared data (when there) plus the user's files."""
+    """The Dataset of `family` from the shared data (when there) plus the user's files:
+    adds, [(path, label)] or [(path, label, id)] (the file's rows of that id alone)."""
+    adds = [tuple(add) + (None,) * (3 - len(add)) for add in adds]
     with gd.paused_gc():
         return _read_dataset(family, data_dir, adds)
 
@@ -253,16 +258,16 @@ def _read_dataset(family, data_dir, adds):
     # A user's new gesture that the shared people also recorded (a V sign is their 'two'
     # or 'peace', trained as none): their rows join the user's class instead of opposing it.
     # Only rows trained as none: a built-in class keeps its rows (and its guards).
-    for _, label in adds:
+    for _, label, _ in adds:
         for i, lab in enumerate(ds.label):
             if lab == label and ds.y[i] == 'none':
                 ds.y[i] = label
-    for (path, label), person in zip(adds, user_people([p for p, _ in adds])):
+    for (path, label, take), person in zip(adds, user_people([p for p, _, _ in adds])):
         before = len(ds.y)
         if file_family(path) == 'keypoints':
-            add_keypoints(ds, path, label=label, person=person)
+            add_keypoints(ds, path, label=label, person=person, take=take)
         else:
-            add_leap_poses(ds, path, label=label, person=person)
+            add_leap_poses(ds, path, label=label, person=person, take=take)
         if len(ds.y) == before:
             raise gd.DataError('--add %s: no hand in it' % path)
     return ds
@@ -347,6 +352,7 @@ def model_out_problem(out, adds):
 def train(family, data_dir, adds=(), report=True, log=print):
     """(model, card) fitted on every person, the card holding the LOPO figures."""
     t0 = time.time()
+    adds = [tuple(add) + (None,) * (3 - len(add)) for add in adds]
     ds = training_dataset(family, data_dir, adds)
     x, y, persons, labels = ds.arrays()
     if len(set(y)) < 2:
@@ -371,7 +377,8 @@ def train(family, data_dir, adds=(), report=True, log=print):
                         'each row also as its mirror image, and turned with %g of '
                         'landmark noise' % KEYPOINT_NOISE),
             'command': 'python -m leap_teleop.hands.gestures.train --family %s%s' % (
-                family, ''.join(' --add %s --label %s' % (path, label) for path, label in adds)),
+                family, ''.join(' --add %s%s --label %s' % (path, '' if take is None else ' --id %s' % take,
+                                                            label) for path, label, take in adds)),
             'date': datetime.date.today().isoformat()}
     users = sorted(p for p in set(persons.tolist()) if p.startswith('user:'))
     shared = sorted(p for p in set(persons.tolist()) if not p.startswith('user:'))
@@ -404,6 +411,20 @@ def train(family, data_dir, adds=(), report=True, log=print):
     return model, card
 
 
+class _IdOfLastAdd(argparse.Action):
+    """--id ID: {index of the --add it follows: ID}."""
+
+    def __call__(self, parser, namespace, value, option_string=None):
+        ids = dict(getattr(namespace, self.dest) or {})
+        k = len(getattr(namespace, 'add', None) or []) - 1
+        if k < 0:
+            parser.error('--id %s: give it after the --add FILE whose rows it picks' % value)
+        if k in ids:
+            parser.error('--id %s: --add %s has its --id already' % (value, namespace.add[k]))
+        ids[k] = value
+        setattr(namespace, self.dest, ids)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=' '.join(__doc__.split('\n\n')[0].split()))
     ap.add_argument('--family', choices=('leap', 'keypoints', 'all'), default=None,
@@ -412,6 +433,10 @@ def main(argv=None):
                     help='the shared data folder (default %(default)s)')
     ap.add_argument('--add', action='append', default=[], metavar='FILE',
                     help="a user's samples (repeatable, each followed by --label)")
+    ap.add_argument('--id', action=_IdOfLastAdd, default={}, metavar='ID', dest='ids',
+                    help="after --add FILE: take only FILE's rows of this class id (a community "
+                         'keypoint.csv) or label (a file with a header, pose records); a file of '
+                         'several classes is refused without it')
     ap.add_argument('--label', action='append', default=[], metavar='NAME',
                     help='the class of the preceding --add file')
     ap.add_argument('--out', default=None,
@@ -440,7 +465,7 @@ def main(argv=None):
         problem = model_out_problem(args.out, args.add)
         if problem:
             ap.error('--out %s: %s' % (args.out or "''", problem))
-    adds = list(zip(args.add, args.label))
+    adds = [(path, label, args.ids.get(k)) for k, (path, label) in enumerate(zip(args.add, args.label))]
     families = {file_family(p) for p in args.add}
     if len(families) > 1:
         ap.error('--add files of one family at a time (Leap .jsonl or keypoint .csv)')
@@ -458,6 +483,14 @@ def main(argv=None):
         problem = model_out_problem(DEFAULT_MODELS[fam], args.add)
         if problem:
             ap.error('--out %s: %s' % (DEFAULT_MODELS[fam], problem))
+    for path, label, take in adds:
+        try:
+            problem = added_file_problem(path, file_family(path), label, take)
+        except gd.DataError as e:
+            print('train_gestures: %s' % e, file=sys.stderr)
+            return 2
+        if problem:
+            ap.error('--add %s' % problem)
     for fam in todo:
         try:
             model, card = train(fam, args.data, adds, report=not args.no_report)

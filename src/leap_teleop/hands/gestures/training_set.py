@@ -3,6 +3,7 @@ files) as feature rows with their class, person and source label, plus the copie
 teach invariance (tracker noise on Leap joints, turned and noisy keypoints, Leap hands
 seen as a webcam would). Each source adds whole people, so the fit can be judged on
 people it never saw (train)."""
+import collections
 import dataclasses
 import os
 
@@ -148,10 +149,13 @@ def noisy_hand(hand, sigma, rng):
     return dataclasses.replace(hand, fingers=tuple(fingers))
 
 
-def add_leap_poses(ds, path, label_map=None, label=None, person=None):
-    """Rows of a Leap pose file; `label` overrides every row's (a user's file)."""
+def add_leap_poses(ds, path, label_map=None, label=None, person=None, take=None):
+    """Rows of a Leap pose file; `label` overrides every row's (a user's file); `take`, when
+    given, keeps only the rows the file labels so."""
     n = 0
     for p, lab, frame in gd.read_pose_lines(path):
+        if take is not None and lab != take:
+            continue
         hand = gd.first_hand(frame)
         cls = label if label is not None else (label_map or gd.LEAP_LABELS).get(lab)
         if hand is None or cls is None:
@@ -248,9 +252,16 @@ def add_keypoint_rows(ds, rows):
             ds.add(x[j] if ok[j] else None, cls, person, label, augmented=augmented, group=group)
 
 
-def add_keypoints(ds, path, label=None, person=None):
+def add_keypoints(ds, path, label=None, person=None, take=None):
+    """Rows of a keypoint CSV; `label` overrides every row's (a user's file); `take`, when
+    given, keeps only the rows of that class id (headerless form) or label (header form)."""
     sources = []
-    persons, labels, xy = gd.read_keypoints(path, label=label, person=person, sources=sources)
+    persons, labels, xy = gd.read_keypoints(path, label=label if take is None else None,
+                                            person=person, sources=sources)
+    if take is not None:
+        kept = [i for i, lab in enumerate(labels) if lab == take]
+        persons, sources, xy = [persons[i] for i in kept], [sources[i] for i in kept], xy[kept]
+        labels = [labels[i] if label is None else label for i in kept]
     # a row without features (all its landmarks on one spot) is no hand; its noisy copies
     # would have features, of noise alone
     _, whole = keypoint_features_rows(np.reshape(np.asarray(xy, dtype=float), (-1, 21, 2)))
@@ -274,6 +285,54 @@ def add_keypoints(ds, path, label=None, person=None):
     ds.sources.append('%s (%d rows%s%s)' % (
         os.path.basename(path), n, ', %d mislabelled left out' % skipped if skipped else '',
         ', %d without a hand left out' % no_hand if no_hand else ''))
+
+
+def file_classes(path, family):
+    """(Counter of the classes a user's file gives its rows, whether they are names): the
+    label of each pose record or of each row of a keypoint CSV with the shared header, the
+    class id of each row of the community's headerless keypoint.csv. DataError for a file
+    that cannot be read."""
+    if family == 'keypoints':
+        counts = collections.Counter(lab for _, lab, _, _ in gd.iter_keypoints(path))
+        return counts, gd.keypoint_labels_named(path)
+    return collections.Counter(lab for _, lab, _ in gd.read_pose_lines(path)), True
+
+
+def _short(text, most=24):
+    return text if len(text) <= most else text[:most - 3] + '...'
+
+
+def _listed(classes, named, most=8):
+    # ids in numeric order (by length, then digits), names after them
+    def key(c):
+        number = c.isascii() and c.isdigit()
+        return (not number, len(c) if number else 0, c)
+    shown = sorted(classes, key=key)
+    text = ', '.join(_short(c) for c in shown[:most])
+    return '%s %s%s' % ('labels' if named else 'ids', text, ', ...' if len(shown) > most else '')
+
+
+def added_file_problem(path, family, label, take=None):
+    """Why the rows of a user's file (`take`'s rows alone, when given) cannot be taken as
+    class `label`, or None: `label` relabels every row, so a file of several classes (a
+    community keypoint.csv holds its open hands and fists beside a new gesture), or one
+    that names another, would put other poses into it. DataError for a file that cannot be
+    read."""
+    counts, named = file_classes(path, family)
+    if take is not None:
+        if take not in counts:
+            return '%s --id %s: no row has that %s (%s)' % (
+                path, take, 'label' if named else 'id', _listed(counts, named))
+        return None
+    if len(counts) > 1:
+        return ('%s holds rows of %d classes (%s): --label %s would make every one %s; give '
+                '--id ID after --add to take the rows of one' % (
+                    path, len(counts), _listed(counts, named), label, label))
+    if named and counts and label not in counts:
+        found = _short(next(iter(counts)))
+        return ('%s labels its rows %s, not %s: give --label %s, or --id %s --label %s to take '
+                'them as %s' % (path, found, label, found, found, label, label))
+    return None
 
 
 # The keypoint model also learns from the Leap people seen as a webcam sees a hand: their
