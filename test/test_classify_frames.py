@@ -78,6 +78,35 @@ def test_recording_file_and_json_lines_file(tmp_path):
     assert a[-1]['hands'][0]['pinch_value'] == pytest.approx(0.5)
 
 
+def test_stamps_that_do_not_advance_are_spaced_as_the_sender_does(tmp_path, capsys):
+    # Every interval was 0: no hold grew, so no fold or unfold, where the sender's recording
+    # source spaces such a take by its frame rate (with a warning) and sees them.
+    frames = _dicts(['fist'] * 40 + ['open'] * 30 + ['fist'] * 40)
+    capsys.readouterr()
+    timed = run_main([str(_save_lines(tmp_path / 'timed.jsonl', frames))], capsys)   # 10 ms apart
+    assert [e for o in timed for e in o['hands'][0]['events'] if 'fold' in e] == ['unfold', 'fold']
+    stalled = [dict(f, timestamp=1400000000) for f in frames]
+    rec = str(tmp_path / 'stalled.json')
+    leapjs.save(rec, stalled, {'frameRate': 100})
+    assert classify_frames.main([rec]) == 0
+    captured = capsys.readouterr()
+    out = [json.loads(line) for line in captured.out.splitlines()]
+    assert [o['hands'] for o in out] == [o['hands'] for o in timed]
+    assert [o['timestamp'] for o in out] == [k * 10000 for k in range(110)]
+    assert captured.err == ('classify_frames: recording %s: its timestamps do not advance (109 of 109 '
+                            'steps between frames are not forward in time); played at 100 frames/s '
+                            '(its metadata.frameRate)\n' % rec)
+    # JSON Lines: a stamp as the frame before's is judged as a missing one (10 ms on)
+    out = run_main([str(_save_lines(tmp_path / 'stalled.jsonl', stalled))], capsys)
+    assert [o['hands'] for o in out] == [o['hands'] for o in timed]
+    assert {o['timestamp'] for o in out} == {1400000000}
+
+
+def _save_lines(path, dicts):
+    path.write_text(''.join(json.dumps(d) + '\n' for d in dicts))
+    return path
+
+
 def test_garbage_lines_never_stop_the_run():
     text = 'not json\n[1, 2]\n{"id": 3}\n{"id": 4, "hands": [{"type": "left"}], "pointables": "x"}\n' \
            '{"id": 5, "timestamp": 9, "hands": [{"type": "right", "palmPosition": [1, null, 2]}]}\n'

@@ -41,7 +41,10 @@ Output, one line per input frame, in input order:
                 "thumb_down": false, "events": ["pinch", "circle_cw"]}]}
 
 - id, timestamp: copied from the frame (timestamp in the frame's microseconds; null
-  when absent).
+  when absent). A frame without a timestamp is judged 10 ms after the one before, and so
+  is a JSON Lines frame stamped as the one before. A recording whose timestamps mostly do
+  not advance (all one stamp, or going back) is stamped k / its frame rate, as the
+  sender's recording source plays it, with the same warning on stderr.
 - hands: one entry per left / right hand in the frame, in frame order. fist, thumb_up,
   pinch, rock, open, thumb_down: the recognizer's held gestures; pinch_value: pinch strength - 0.2
   in 0..0.8 while pinching, else 0.
@@ -76,6 +79,7 @@ from leap_teleop.hands.frame import Frame, TrackedHand
 from leap_teleop.hands.gestures import GestureRecognizer, GestureState, ModelError
 from leap_teleop.hands.gestures import datasets as gesture_data
 from leap_teleop.hands.sources import SourceError, leapjs
+from leap_teleop.hands.sources.recording import stalled_steps, stalled_warning
 from leap_teleop.hands.tracker import hand_placement
 from leap_teleop.output_file import output_problem
 
@@ -91,6 +95,10 @@ class FrameClassifier:
 
     def __init__(self, stateless=False, model=None, keypoint_model=None):
         self.stateless = stateless
+        # JSON Lines: a frame stamped as the one before is judged as one without a stamp
+        # (the recognizer's own step), not as no time passing
+        self.repeated_stamp_missing = False
+        self._last_stamp = None
         self.models = {'model': model, 'keypoint_model': keypoint_model}
         self.user_gestures = self._recognizer(stateless).user_gestures
         self.recognizers = {}
@@ -110,6 +118,11 @@ class FrameClassifier:
             math.isfinite(ts) else None
         fid = d.get('id')
         fid = fid if isinstance(fid, (int, str)) and not isinstance(fid, bool) else None
+        if self.repeated_stamp_missing and math.isfinite(frame.timestamp):
+            repeated = frame.timestamp == self._last_stamp
+            self._last_stamp = frame.timestamp
+            if repeated:
+                frame = Frame(frame.id, math.nan, frame.hands, frame.gestures)
         return self.classify_frame(frame, fid, ts)
 
     def classify_frame(self, frame, fid, ts):
@@ -288,14 +301,45 @@ def with_unreadable_images(frames, paths):
         yield UnreadableImage(k, paths[k - 1])
 
 
-def frames_of(path):
+def _stamp(d):
+    """A frame dict's timestamp (us) when a finite number, else None."""
+    ts = d.get('timestamp') if isinstance(d, dict) else None
+    if not isinstance(ts, (int, float)) or isinstance(ts, bool):
+        return None
+    try:
+        return float(ts) if math.isfinite(ts) else None
+    except OverflowError:       # an integer beyond any float
+        return None
+
+
+def spaced_if_stalled(path, metadata, dicts):
+    """A recording's frame dicts, restamped k / frame rate (as copies; a warning on stderr)
+    when its stamps do not advance, as the sender's recording source plays it; else as
+    they are."""
+    stamped = [k for k, d in enumerate(dicts) if _stamp(d) is not None]
+    stalled = stalled_steps([_stamp(dicts[k]) * 1e-6 for k in stamped])
+    if not stalled:
+        return dicts
+    rate, warning = stalled_warning(path, stalled, metadata)
+    print('classify_frames: %s' % warning, file=sys.stderr)
+    dicts = list(dicts)
+    for n, k in enumerate(stamped):
+        dicts[k] = dict(dicts[k], timestamp=round(n * 1e6 / rate))
+    return dicts
+
+
+def frames_of(path, classifier=None):
+    """The frames of INPUT; `classifier` (a FrameClassifier) is told when they are JSON
+    Lines, whose repeated stamps it judges as missing ones."""
     if camera_input(path):
         return camera_frames(path)
+    if path not in (None, '-') and looks_like_recording(path):
+        metadata, dicts = leapjs.load(path)
+        return iter(spaced_if_stalled(path, metadata, dicts))
+    if classifier is not None:
+        classifier.repeated_stamp_missing = True
     if path in (None, '-'):
         return iter_json_lines(sys.stdin)
-    if looks_like_recording(path):
-        _, dicts = leapjs.load(path)
-        return iter(dicts)
     return iter_json_lines(gesture_data.open_text(path, errors='replace'))
 
 
@@ -334,7 +378,7 @@ def main(argv=None):
                 raise gesture_data.DataError('%s: no keypoint row in it' % args.keypoints)
             frames = itertools.chain([first], frames)
         else:
-            frames = frames_of(args.input)
+            frames = frames_of(args.input, classifier)
     except (SourceError, OSError, ModelError, gesture_data.DataError) + gesture_data.UNREADABLE as e:
         print('classify_frames: %s: %s' % (args.keypoints or args.input, e)
               if isinstance(e, gesture_data.UNREADABLE) else 'classify_frames: %s' % e,

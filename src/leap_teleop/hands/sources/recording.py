@@ -49,6 +49,24 @@ def file_frame_rate(metadata):
     return DEFAULT_RATE_HZ, 'the default; no usable metadata.frameRate'
 
 
+def stalled_steps(stamps):
+    """(steps that are not forward in time, all steps) between successive stamps (s) when
+    most of them are such (all one stamp, an exporter that wrote 0, a counter that did not
+    advance, or going back): the recording has no usable timing and is spaced by its frame
+    rate instead. None when its timing is usable."""
+    steps = [b - a for a, b in zip(stamps, stamps[1:])]
+    regular = sum(1 for d in steps if 0 < d <= MAX_GAP_S)
+    return (len(steps) - regular, len(steps)) if 2 * regular < len(steps) else None
+
+
+def stalled_warning(path, stalled, metadata):
+    """(frames a second, the warning) for a recording whose stalled_steps are `stalled`."""
+    rate, why = file_frame_rate(metadata)
+    return rate, ('recording %s: its timestamps do not advance (%d of %d steps between frames '
+                  'are not forward in time); played at %g frames/s (%s)'
+                  % ((path,) + tuple(stalled) + (rate, why)))
+
+
 class RecordingSource(HandSource):
     def __init__(self, path, loop=False, realtime=True, clock=time.time):
         self.path = str(path)
@@ -81,14 +99,12 @@ class RecordingSource(HandSource):
         # (seconds since the first frame, Frame); a Frame of None is a hand-less one
         self._frames = [(0.0, usable[0])]
         self.breaks = 0
-        if 2 * len(regular) < len(steps):
-            # Mostly one stamp (an exporter that wrote 0, a counter that did not advance)
-            # or going back: played as recorded, the whole take came at once with one
-            # stamp, or as a break at every frame.
-            rate, why = file_frame_rate(self.metadata)
-            log.warning('recording %s: its timestamps do not advance (%d of %d steps between '
-                        'frames are not forward in time); played at %g frames/s (%s)',
-                        self.path, len(steps) - len(regular), len(steps), rate, why)
+        stalled = stalled_steps([f.timestamp for f in usable])
+        if stalled:
+            # Played as recorded, the whole take came at once with one stamp, or as a
+            # break at every frame.
+            rate, warning = stalled_warning(self.path, stalled, self.metadata)
+            log.warning('%s', warning)
             self._frames = [(k / rate, frame) for k, frame in enumerate(usable)]
             steps = []
         for step, frame in zip(steps, usable[1:]):
