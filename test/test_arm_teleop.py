@@ -580,6 +580,22 @@ def test_a_thumbs_up_is_held_only_while_it_is_seen():
     assert t.status.state == ARMED
 
 
+def test_a_thumbs_up_flag_on_during_the_fist_does_not_count_toward_the_hold():
+    # Both flags on in the same frames (a sender's hysteresis at a transition, bindings):
+    # the first frame without the fist armed at once, and a pinch then acted.
+    t, c = armed_with_origin()
+    drive(t, c, hand(fist=True, thumb_up=True), periods=HOLD_PERIODS + 85)
+    assert t.status.state == DISARMED and t.status.reason == 'fist'
+    cmd = drive(t, c, hand(thumb_up=True))
+    assert t.status.state == DISARMED and 'hold' in t.status.reason
+    cmd = drive(t, c, hand(pinch=True, pinch_value=0.6))
+    assert t.status.state == DISARMED and cmd.gripper is None
+    drive(t, c, hand(thumb_up=True), periods=HOLD_PERIODS - 2)     # 0.30 s after the fist
+    assert t.status.state == DISARMED
+    drive(t, c, hand(thumb_up=True), periods=2)
+    assert t.status.state == ARMED
+
+
 def _moving_with_the_robot_lagging(lag):
     """2.4 s of a hand sweeping back and forth at 100 mm/s; the robot's joints are where the
     plan put them `lag` s before (None: it stopped at home). (teleop, [state per period])"""

@@ -363,7 +363,9 @@ class ArmTeleop:
         if self._hand_rx is not None and now - self._hand_rx > self.p.input_timeout:
             self._thumb_up_since = None       # a hold is seen, not assumed across a silence
         self._hand, self._hand_rx = hand, now
-        if not (hand.present and hand.thumb_up):
+        # A thumbs-up shown with the fist (both flags on at a transition) is no hold: the
+        # first frame without the fist armed at once.
+        if not (hand.present and hand.thumb_up) or hand.fist:
             self._thumb_up_since = None
         elif self._thumb_up_since is None:
             self._thumb_up_since = (hand.stamp, now)
