@@ -8,8 +8,8 @@ import time
 
 import numpy as np
 
-from leap_teleop.hands.gestures.temporal import HELD_GESTURES
 from leap_teleop.hands.sources.landmarks import hand_side
+from leap_teleop.hands.tracker import held_names
 
 # MediaPipe's hand skeleton: landmark index pairs.
 HAND_CONNECTIONS = ((0, 1), (1, 2), (2, 3), (3, 4), (0, 5), (5, 6), (6, 7), (7, 8),
@@ -21,10 +21,13 @@ FPS_SMOOTHING = 0.1
 
 
 def held_gestures(state):
-    """Names of the held gestures of a HandState (or GestureState) that are on."""
+    """Names of the gestures the recognizer holds for a hand, built-in and the user's own:
+    a HandState's `held` (its fist, thumb_up, ... flags are the bound actions, not the
+    gestures), or those of a GestureState."""
     if state is None:
         return []
-    return [g for g in HELD_GESTURES if getattr(state, g, False) is True]
+    held = getattr(state, 'held', None)
+    return list(held) if held is not None else list(held_names(state))
 
 
 def published_sides(landmarks, hands, width, height):

@@ -8,7 +8,7 @@ from typing import Tuple
 
 import numpy as np
 
-from leap_teleop.hands.gestures import GestureRecognizer, HandEvent
+from leap_teleop.hands.gestures import HELD_GESTURES, GestureRecognizer, HandEvent
 from leap_teleop.hands.gestures.bindings import Bindings
 from leap_teleop.vectors import wrap_angle
 
@@ -70,6 +70,15 @@ class HandState:
     turn: float = 0.0
     swing: float = 0.0
     events: Tuple[HandEvent, ...] = ()
+    # the gestures the recognizer holds (built-in, then the user's own), whatever the
+    # bindings make of them: the flags above are actions (arm bound to a V sign sets
+    # thumb_up while a V sign is held); not published, shown on the camera view
+    held: Tuple[str, ...] = ()
+
+
+def held_names(g):
+    """The names of the gestures a GestureState holds: built-in ones, then the user's."""
+    return tuple(name for name in HELD_GESTURES if getattr(g, name, False) is True) + tuple(g.user)
 
 
 def _finite_tuple(v, limit=None):
@@ -202,5 +211,5 @@ class HandTracker:
             pinch_value=min(max(float(gripper_value), 0.0), 0.8) if gripper else 0.0,
             rock=origin, open=g.open, thumb_down=g.thumb_down, origin_set=self._origin_angles is not None,
             pose_class=g.label, pose_probability=float(g.probability),
-            origin_palm=origin_palm, events=tuple(events), **rotation)
+            origin_palm=origin_palm, events=tuple(events), held=held_names(g), **rotation)
         return self.state
