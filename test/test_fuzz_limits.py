@@ -25,6 +25,7 @@ from leap_teleop.hands.tracker import HandTracker
 from leap_teleop.ros import hand_conversions
 from leap_teleop.ur10 import kinematics as kin
 from leap_teleop.ur10.teleop import ARMED, DISARMED, HOLDING, TRACKING, ArmInput, ArmTeleop, ArmTeleopParams
+from leap_teleop.ur10.trajectory import TrajectoryFollower
 
 HOME = kin.HOME_Q.copy()
 
@@ -305,6 +306,105 @@ def test_a_hand_stall_overlapping_a_joint_state_stall_re_anchors_on_its_return(h
     # none of the motion unseen is driven (the arm's lag behind that target is caught up)
     np.testing.assert_allclose(a.t.status.target, before, atol=1e-9)
     assert np.linalg.norm(kin.fk(cmd.q)[:3, 3] - held) < 1e-3
+
+
+class FollowedArm(Arm):
+    """Arm in a closed loop with the simulated controller, which starts every trajectory
+    from its own desired state; the robot goes on following its commands while its joint
+    states are withheld. `executed`: its desired (t, q, qd) every millisecond."""
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self.jtc = TrajectoryFollower(HOME, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+        self.executed = []
+
+    def period(self, h=None, joints=True, dt=0.008):
+        for k in range(1, 9):
+            t = self.now + dt * k / 8
+            self.executed.append((t, *(x.copy() for x in self.jtc.sample(t))))
+        self.now += dt
+        if h is not None:
+            h.stamp = h.stamp or self.now
+            self.t.on_hand(h, self.now)
+        q, qd = self.jtc.sample(self.now)
+        if joints:
+            self.t.on_joints(q.copy(), self.now, qd.copy())
+        cmd = self.t.step(self.now)
+        if cmd.points is not None:
+            self.jtc.command(self.now, cmd.points, cmd.stamp)
+        return cmd
+
+
+@pytest.mark.parametrize('limits', [(1.0, math.pi), (0.05, 0.5)])
+@pytest.mark.parametrize('event', ['fist', 'rock', 'target back in reach'])
+def test_joint_states_stopped_before_a_hold_ended_are_not_where_the_arm_rests(event, limits):
+    # States stop while the arm moves; a hold (an IK hold, or a fist before a re-arm) brings
+    # it to rest meanwhile; then, within joint_timeout of the last state: a fist, a rock with
+    # the hand still, or the target back in reach. Planned from the last state, the
+    # controller drove the arm back there: 125 mm at up to 2 rad/s against 1.
+    speed, accel = limits
+    a = FollowedArm(max_joint_speed=speed, max_joint_accel=accel, arm_hold_s=0.3)
+    a.t.on_joints(HOME, a.now, np.zeros(6))
+    for _ in range(40):
+        a.period(hand(thumb_up=True))
+    a.period(hand(rock=True))
+    assert a.t.status.state == TRACKING
+    sweep = [(-min(1.28 * k, 100.0), 200.0, 0.0) for k in range(200)]
+    for palm in sweep[:50]:
+        a.period(hand(palm_mm=palm))
+    assert np.abs(a.executed[-1][2]).max() > 0.5 * speed          # moving
+    last = a.now                                                   # the last joint state
+    out = (-400.0, 200.0, -400.0)                                  # out of reach
+    if event == 'rock':
+        a.period(hand(palm_mm=sweep[50], fist=True), joints=False)
+        while a.now < last + 0.36:
+            a.period(hand(palm_mm=sweep[50], thumb_up=True), joints=False)
+        assert a.t.status.state == ARMED
+    else:
+        for palm in sweep[50:75]:
+            a.period(hand(palm_mm=palm), joints=False)
+        a.period(hand(palm_mm=out), joints=False)
+        assert a.t.status.state == HOLDING and 'no IK solution' in a.t.status.reason
+    while a.now < last + 0.44:
+        a.period(hand(palm_mm=sweep[50] if event == 'rock' else out), joints=False)
+    at = a.now
+    rest = a.jtc.sample(at)[0]
+    assert not np.abs(a.jtc.sample(at)[1]).any()                  # the hold has ended
+    h = {'fist': hand(palm_mm=out, fist=True), 'rock': hand(palm_mm=sweep[50], rock=True),
+         'target back in reach': hand(palm_mm=sweep[75])}[event]
+    a.period(h, joints=False)
+    while a.now < last + 0.49:                                     # < joint_timeout
+        a.period(ArmInput(**{**vars(h), 'rock': False, 'stamp': 0.0}), joints=False)
+    for _ in range(60):
+        a.period(ArmInput(**{**vars(h), 'rock': False, 'stamp': 0.0}))
+    assert a.t.status.state == (DISARMED if event == 'fist' else TRACKING), a.t.status.reason
+    after = [(t, q, qd) for t, q, qd in a.executed if t > at]
+    assert max(float(np.abs(qd).max()) for _, _, qd in after) <= speed + 1e-9
+    # nothing jumps back: within the first horizon the joints move no further from the
+    # hold's rest than max_joint_speed allows, and the fist and the still hand's rock
+    # leave the arm where it rests
+    horizon = a.t.p.command_horizon
+    moved = max(float(np.abs(q - rest).max()) for t, q, _ in after if t <= at + horizon)
+    assert moved <= speed * horizon + 1e-9
+    if event != 'target back in reach':       # (the rock's origin: IK rounding only)
+        assert max(float(np.abs(q - rest).max()) for _, q, _ in after) < 1e-6
+
+
+@pytest.mark.parametrize('limits', [(1.0, math.pi), (0.3, 0.5)])
+def test_joint_states_back_where_a_hold_after_their_stop_rested_resume(limits):
+    # The same IK hold, the states back after a stall: where the hold rested is where the
+    # robot could have got to (it was disarmed as 'another pose').
+    a = FollowedArm(max_joint_speed=limits[0], max_joint_accel=limits[1])
+    a.arm_with_origin()
+    for k in range(50):
+        a.period(hand(palm_mm=(-min(1.28 * k, 100.0), 200.0, 0.0)))
+    for k in range(50, 75):
+        a.period(hand(palm_mm=(-min(1.28 * k, 100.0), 200.0, 0.0)), joints=False)
+    for _ in range(100):
+        a.period(hand(palm_mm=(-400.0, 200.0, -400.0)), joints=False)
+    assert a.t.status.state == HOLDING and 'no joint states' in a.t.status.reason
+    a.period(hand(palm_mm=(-400.0, 200.0, -400.0)))
+    assert a.t.status.state == HOLDING and 'no IK solution' in a.t.status.reason
 
 
 def test_clock_jumping_back_disarms_and_forgets_the_robot():

@@ -10,7 +10,10 @@ second point brings the joints to rest with the same deceleration bound. So:
   trajectory from its current desired state, and our first point continues it);
 * no joint accelerates faster than max_accel (segments are constant-acceleration
   parabolas, which the controller's cubic Hermite reproduces exactly);
-* if commands stop (the node dies) the robot decelerates to rest by itself.
+* if commands stop (the node dies) the robot decelerates to rest by itself;
+* once a plan has ended, the joints rest where it brought them until measured joints
+  received after its end are passed in (`received`): older ones show where a robot whose
+  states stopped was, not where it went on to, and a plan from them drove it back.
 
 The correction is min(gain * |e|, sqrt(2 a |e|)): proportional near the goal and no faster
 than it can still stop at the goal with the acceleration limit. With joint limits, a joint
@@ -58,30 +61,48 @@ class JointServo:
         # (t0, q0, v0, vA, t1, h, t_stop), q0 v0 vA tuples of floats: to vA by t1, on to h,
         # then to rest.
         self._plan = None
+        # The last plan once it has ended, while the measured joints passed in are older
+        # than its end: its rest is the joints' pose, not those (a robot whose states
+        # stopped went on along it, and a plan from them drove it back).
+        self._ended = None
+        # When the measured joints passed in were received (None: unknown, taken as now).
+        self.received = None
 
     def reset(self):
         """Forget the plan (the next call starts from the measured joints, at rest)."""
-        self._plan = None
+        self._plan = self._ended = None
 
     @property
     def moving(self):
         return self._plan is not None
 
+    def _ended_plan(self):
+        """The plan that has ended, as long as the measured joints are older than its end
+        (forgotten once they are not)."""
+        plan = self._ended
+        if plan is not None and (self.received is None
+                                 or self.received >= plan[0] + plan[5] + plan[6]):
+            plan = self._ended = None
+        return plan
+
     def _state(self, t, q_measured):
         """state_at as lists of floats."""
         plan = self._plan
         if plan is None:
+            if self._ended is not None and self._ended_plan() is not None:
+                return self._planned(self._ended, math.inf)     # its rest
             q = np.asarray(q_measured, dtype=float).tolist()
             return q, [0.0] * len(q)
         tau = max(t - plan[0], 0.0)
         if tau - plan[5] >= plan[6]:
-            self._plan = None      # at rest: later calls follow the measured joints
+            # at rest: later calls follow the measured joints received since
+            self._plan, self._ended = None, plan
         return self._planned(plan, tau)
 
     def state_at(self, t, q_measured):
         """(q, v) the last plan commands at time t; the measured joints at rest when
-        there is no plan or it has ended."""
-        if self._plan is None:
+        there is no plan or it has ended (its rest while they are older than its end)."""
+        if self._plan is None and (self._ended is None or self._ended_plan() is None):
             return np.array(q_measured, dtype=float), np.zeros(len(q_measured))
         q, v = self._state(t, q_measured)
         return np.array(q), np.array(v)
@@ -125,19 +146,23 @@ class JointServo:
 
     def rest(self, q_measured):
         """Where the last plan brings the joints to rest (the measured joints when there is
-        none), leaving the plan as it is."""
-        if self._plan is None:
-            return np.array(q_measured, dtype=float)
-        return np.array(self._planned(self._plan, self._plan[5] + self._plan[6])[0])
+        none, or it has ended and they are not older than its end), leaving the plan as it is."""
+        plan = self._plan
+        if plan is None:
+            if self._ended is None or self._ended_plan() is None:
+                return np.array(q_measured, dtype=float)
+            return np.array(self._planned(self._ended, math.inf)[0])
+        return np.array(self._planned(plan, plan[5] + plan[6])[0])
 
     def reach(self, t, q_measured):
         """(lo, hi): per joint, the extremes of the positions the last plan commands from
         time t until it rests (the measured joints when there is none). Its segments are
         constant accelerations, so a joint turns back at most once, in the first."""
-        if self._plan is None:
+        plan = self._plan
+        if plan is None and (self._ended is None or (plan := self._ended_plan()) is None):
             q = np.array(q_measured, dtype=float)
             return q, q.copy()
-        t0, q0, v0, vA, t1, h, t_stop = self._plan
+        t0, q0, v0, vA, t1, h, t_stop = plan
         start = max(t - t0, 0.0)
         taus = [start, t1, h, h + t_stop]
         for u, w in zip(v0, vA):
@@ -146,7 +171,7 @@ class JointServo:
                 turn = -u / a                      # where v crosses 0 in segment 1
                 if 0.0 < turn < t1:
                     taus.append(turn)
-        qs = np.array([self._planned(self._plan, tau)[0] for tau in taus if tau >= start])
+        qs = np.array([self._planned(plan, tau)[0] for tau in taus if tau >= start])
         return qs.min(axis=0), qs.max(axis=0)
 
     def _limits(self, n):
@@ -184,6 +209,7 @@ class JointServo:
         if t_stop is None:
             t_stop = max([abs(w) / a for w, a in zip(vA, accel or _floats(self.max_accel, n))])
         self._plan = (now, tuple(q), tuple(v), tuple(vA), max(t1, 1e-9), h, t_stop)
+        self._ended = None
         limits = limits or self._limits(n)
         points = [(t1, *self._inside(q1, vA, limits))] if t1 < h else []
         if t_stop <= 1e-9:

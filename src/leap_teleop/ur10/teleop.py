@@ -382,6 +382,8 @@ class ArmTeleop:
             ok = qd is not None and qd.shape == (6,) and all(map(math.isfinite, qd.tolist()))
             self._qd = qd if ok else np.zeros(6)
             self._joints_rx = now
+            # (states received before the servo's last plan ended are not where it rests)
+            self._servo.received = now
             return True
         return False
 
@@ -674,7 +676,8 @@ class ArmTeleop:
             # alone, the period after a hold took the other configuration).
             seed, v = (x.tolist() for x in self._servo.state_at(now, self._q))
             if not self._servo.moving:     # it has just come to rest: the servo goes on
-                seed = self._q.tolist()    # from the measured joints
+                # from the measured joints (its rest while they are older than that)
+                seed = self._servo.rest(self._q).tolist()
             rate = None
         # The target's IK follows its own of the period before (the hand moves on
         # continuously): nearest a goal that lags a fast wrist turn by half a turn, it took
