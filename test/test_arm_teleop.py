@@ -1218,6 +1218,25 @@ def test_joystick_target_stays_near_a_slow_arm_and_the_dead_zone_stops_it():
     assert not t._servo.moving or np.abs(t._servo.state_at(c.t, q)[1]).max() < 1e-9
 
 
+@pytest.mark.parametrize('lead', [0.0, 0.05])
+def test_a_joystick_target_is_not_dragged_along_by_an_arm_that_ran_past_it(lead):
+    # A push straight up at the simulation's limits: the target stops at the box's top, the
+    # arm brakes past it, drifting in x, and the target, re-based on the arm, slid 438 mm
+    # along the top at up to 0.71 m/s (the TCP at 0.75, 185 mm out of the box).
+    t, c = armed_with_origin(mode='joystick', max_joint_speed=1.0, max_joint_accel=math.pi,
+                             servo_lead=lead)
+    q, last = HOME.copy(), np.array(t.status.target)
+    start = last.copy()
+    for k in range(500):
+        _, q = follow(t, c, hand(palm_mm=(0.0, 200.0 + 150.0 * min(1.0, k / 25), 0.0)), 1, q)
+        target = np.array(t.status.target)
+        assert np.linalg.norm(target - last) <= t.p.max_tcp_speed * 0.008 + 1e-9
+        np.testing.assert_allclose(target[:2], start[:2], atol=1e-9)       # straight up
+        last = target
+    assert target[2] == pytest.approx(t.p.workspace_max[2])
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], target, atol=1e-3)
+
+
 @pytest.mark.parametrize('fields', [dict(palm_mm=(10.0, 200.0)), dict(palm_mm=(10.0, 200.0, 0.0, 5.0)),
                                     dict(palm_mm=(1.0, 'x', 3.0)), dict(pinch_value=None),
                                     dict(turn='0.1'), dict(stamp=None)])

@@ -964,6 +964,11 @@ class ArmTeleop:
         # (no target) it moves on from the arm, not from the origin; in an IK hold from the
         # last reachable target (pulled back toward the stopped arm, it crept along the
         # edge of the reach in holds and restarts).
+        excess = offset_mm * (1.0 - dead_zone_mm / n)
+        v = self._axes @ excess * 0.001 * self.p.joystick_gain
+        speed = float(np.linalg.norm(v))
+        if speed > self.p.max_tcp_speed:
+            v *= self.p.max_tcp_speed / speed
         base = kin.fk(self._servo.state_at(now, self._q)[0])[:3, 3]
         if self.status.state == HOLDING and self._target is not None:
             base = self._target
@@ -971,13 +976,19 @@ class ArmTeleop:
             lead = self._target - base
             d = float(np.linalg.norm(lead))
             cap = self.p.max_tcp_speed * JOYSTICK_LEAD_S
-            base = self._target if d <= cap else base + lead * (cap / d)
-        excess = offset_mm * (1.0 - dead_zone_mm / n)
-        v = self._axes @ excess * 0.001 * self.p.joystick_gain
-        speed = float(np.linalg.norm(v))
-        if speed > self.p.max_tcp_speed:
-            v *= self.p.max_tcp_speed / speed
-        return base + v * dt
+            # Pulled back only toward an arm behind it along the push: one that ran past it
+            # (braking past a box face) dragged it along the face with its overrun, at 3x
+            # max_tcp_speed and out of the box.
+            base = self._target if d <= cap or float(lead @ v) <= 0.0 else base + lead * (cap / d)
+        target = base + v * dt
+        if self._target is not None:
+            # (the pull-back and the push together: no more than max_tcp_speed either)
+            step = target - self._target
+            most = self.p.max_tcp_speed * dt
+            length = float(np.linalg.norm(step))
+            if length > most:
+                target = self._target + step * (most / length)
+        return target
 
     def _gripper_command(self, hand, now):
         if self.p.gripper_mode == 'binary':

@@ -30,7 +30,8 @@ TELEOP_PARAMS = {
                        gt=0.0, le=0.3),
     'joystick_gain': Param(2.0, 'joystick: TCP m/s per m of palm beyond the dead zone',
                            unit='1/s', gt=0.0, le=20.0),
-    'max_tcp_speed': Param(0.25, 'joystick: TCP speed cap', unit='m/s', gt=0.0, le=1.0),
+    'max_tcp_speed': Param(0.25, 'joystick: speed cap of the TCP target (the arm catching up '
+                                 'with it can go faster for a moment)', unit='m/s', gt=0.0, le=1.0),
     'workspace_min': Param([0.25, -0.9, 0.0], 'TCP target box, low corner (base frame)',
                            unit='m', length=3, ge=-3.0, le=3.0),
     'workspace_max': Param([1.15, 0.9, 0.9], 'TCP target box, high corner', unit='m',
