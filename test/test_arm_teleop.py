@@ -542,6 +542,38 @@ def test_a_hand_faster_than_the_joints_is_caught_up_along_its_path_above_the_tab
     np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=1e-3)
 
 
+@pytest.mark.parametrize('mode, direction, mm_s', [
+    ('imitation', (0.0, 1.0, 0.0), 100.0),          # up to the box's top: 78 mm above it
+    ('imitation', (0.0, -1.0, 0.0), 100.0),         # down to the table top: 16 mm under it
+    ('imitation', (0.0, -1.0, 0.0), 200.0),         # 34 mm
+    ('imitation', (0.0, 0.0, 1.0), 200.0),          # toward the near face: 70 mm past it
+    ('joystick', (0.0, 1.0, 0.0), 150.0)])          # a push up: 79 mm (mm: beyond the origin)
+def test_a_target_stopped_at_a_face_of_the_box_is_not_overrun(mode, direction, mm_s):
+    # At the simulation's limits, a hand moving on past a face: the clamp stopped the
+    # target dead there, and the servo, its joints near max_joint_speed, braked past it.
+    t, c = armed_with_origin(mode=mode, max_joint_speed=1.0, max_joint_accel=math.pi)
+    lo, hi = np.array(t.p.workspace_min), np.array(t.p.workspace_max)
+    q, out = HOME.copy(), 0.0
+    for k in range(int((400.0 / mm_s + 2.0) / 0.008)):
+        if mode == 'imitation':
+            palm = np.array(PALM) + np.array(direction) * min(mm_s * 0.008 * k, 400.0)
+        else:
+            palm = np.array(PALM) + np.array(direction) * mm_s * min(1.0, k / 25)
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
+        t.on_joints(q)
+        t.step(now)
+        for dt in np.arange(1, 9) * 0.001:             # the path the controller runs
+            p = t._servo.planned_at(now + dt)
+            if p is not None:
+                tcp = kin.fk(p)[:3, 3]
+                out = max(out, float(np.max(np.maximum(lo - tcp, tcp - hi))))
+        q = t._servo.state_at(now + 0.008, q)[0]
+    assert t.status.state == TRACKING
+    assert out < 0.0025, out                         # (the servo's lag off the line: 1.8 mm)
+    assert np.max(np.maximum(lo - kin.fk(q)[:3, 3], kin.fk(q)[:3, 3] - hi)) > -1e-3   # at the face
+
+
 def test_a_far_catch_up_after_a_joint_state_stall_is_stepped_not_refused_as_another_configuration():
     # The base had to turn 1.57 rad (> MAX_GOAL_JUMP) to where the hand went during the stall:
     # 'only another arm configuration reaches', held for good, 125 IK failures a second.

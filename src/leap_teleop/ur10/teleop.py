@@ -54,6 +54,11 @@ CATCH_UP_ENOUGH = 0.95
 # follows it a little late and must still stop there (at the full limit it overran a 5 cm
 # step by 12 mm).
 CATCH_UP_DECEL = 0.25
+# A goal heading for a face of the workspace box (where the clamp stops the target dead)
+# slows down to stop there at this much of the acceleration limit (at the simulation's
+# limits: 1.8 mm past it at most, against 78; CATCH_UP_DECEL's 1.3 mm began braking
+# twice as far from it).
+FACE_DECEL = 0.5
 # Joint states back after a stall further than this (rad) outside where the robot could
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
@@ -247,7 +252,7 @@ class ArmTeleop:
         self._goal = None              # (time, joint goal) of the last tracked target
         self._goal_rate = 0.0          # its last step / (max_joint_speed x the period)
         self._catching_up = False      # the goal is a step toward the target
-        self._last_reach = None        # (time, the target's IK) the period before
+        self._last_reach = None        # (time, the target's IK, the target) the period before
         self._lower_accel = None       # a max_joint_accel lowered live, not applied yet
         self._last_step = None
         self._gripper_sent = None
@@ -661,6 +666,18 @@ class ArmTeleop:
         cmd.points = self._servo.track(cmd.stamp, self._q, q, goal_velocity)
         return cmd
 
+    def _steps_to_face(self, target, before):
+        """How many more steps like the one from `before` take the target to the first face
+        of the box it heads for (infinite: none)."""
+        steps = math.inf
+        for x, b, lo, hi in zip(target.tolist(), before.tolist(), self._lo.tolist(),
+                                self._hi.tolist()):
+            if x > b:
+                steps = min(steps, (hi - x) / (x - b))
+            elif x < b:
+                steps = min(steps, (x - lo) / (b - x))
+        return steps
+
     def _next_goal(self, target, rotation, now, dt):
         """(joint goal, None) for this period, or (None, why not). The target's IK when the
         joints reach it from the last goal within about one period at their speed limits;
@@ -700,10 +717,11 @@ class ArmTeleop:
         need = _joint_time(q_list, seed, speed)
         # How fast the target's IK moves (normalised like the rate): a goal that follows it
         # closes the gap on top of that.
-        self._last_reach = (now, q_list)
+        self._last_reach = (now, q_list, target)
         moving = 0.0
         if last is not None and now > last[0]:
-            moving = _joint_time(q_list, last[1], speed) / (now - last[0])
+            moved = _joint_time(q_list, last[1], speed)
+            moving = moved / (now - last[0])
         if rate is None:
             rate = _joint_time(v, [0.0] * 6, speed)
         # Normalised acceleration: the speed limit gained per second (the bottleneck joint's).
@@ -712,6 +730,17 @@ class ArmTeleop:
         # goal stopped at speed is overrun by the servo's braking distance).
         rate = min(1.0, rate + accel * period,
                    moving + math.sqrt(2.0 * CATCH_UP_DECEL * accel * need))
+        braking = False
+        if moving > 0.0:
+            # Heading for a face of the box, where the clamp stops the target dead: no
+            # faster than the goal can still stop there, its way on counted as more steps
+            # like the target's last (the servo, braking at its limit once the goal had
+            # stopped, ran 16-78 mm past the face).
+            steps = self._steps_to_face(target, last[2])
+            if steps < math.inf:
+                most = math.sqrt(2.0 * FACE_DECEL * accel * (need + moved * steps))
+                braking = most < rate
+                rate = most if braking else rate
         lagging = False
         if self._goal is not None and self._servo.moving:
             # Goals each within a period can still run away from a servo bound by its
@@ -720,7 +749,8 @@ class ArmTeleop:
             if _joint_time(seed, sq, speed) > SERVO_LAG_PERIODS * period:
                 lagging = True
                 rate = min(rate, _joint_time(sv, [0.0] * 6, speed) + accel * period)
-        if not lagging and need <= period and (not self._catching_up or need <= rate * period):
+        if not lagging and need <= period and (not (self._catching_up or braking)
+                                               or need <= rate * period):
             # Within one period (a catch-up: within the slowed-down step): as it is.
             self._catching_up = False
             self._goal_rate = need / period
