@@ -500,6 +500,24 @@ def test_a_short_bag_looping_from_above_1_is_counted_on_every_pass():
     assert gaps.missed['/pub'] == 0 and gaps.last['/pub'] == 201
 
 
+def test_a_dropped_connections_last_read_is_never_a_restart_nor_the_new_ones_cost():
+    # rospy hands on the rest of a dropped connection's last read (up to hand_queue_size
+    # messages): 50 of them in a row were taken as a restarted publisher (counting the
+    # numbers between again), and one arriving first took the re-connection's gap.
+    gaps = SequenceGaps()
+    for seq in range(1, 201):
+        gaps.add('/pub', seq)
+    gaps.reconnected()
+    assert gaps.add('/pub', 203, current=False) == 2           # the old read's own loss
+    assert gaps.add('/pub', 400) == 196                         # the new connection's first
+    old = range(204, 204 + 3 * RESTART_RUN)                     # the old read's rest: late, not
+    assert [gaps.add('/pub', s, current=False) for s in old] == [0] * len(old)   # a restart
+    assert gaps.add('/pub', 401) == 0 and gaps.last['/pub'] == 401
+    assert gaps.add('/pub', 204, current=False) == 0            # twice is once
+    assert dict(gaps.missed) == {'/pub': 198 - len(old)}
+    assert dict(gaps.missed_across_reconnect) == {'/pub': 196 - len(old)}
+
+
 def test_a_gap_across_a_reconnection_is_counted_apart_once():
     gaps = SequenceGaps()
     assert [gaps.add('/player', s) for s in (1, 2, 5)] == [0, 0, 2]   # no re-connection: a loss

@@ -15,7 +15,9 @@ recording's own gaps, and a publisher that leaves it 0 shows none.
 A consumer that drops its connection on purpose (a late or silent stream re-made) loses
 what the old one still held and what was sent while the new one formed: the first gap
 after a re-connection is also counted apart (`missed_across_reconnect`), so what that
-choice cost is told from losses with no such cause.
+choice cost is told from losses with no such cause. The old connection's last read may
+still come after the new one's first message (add(..., current=False)): what of it falls
+in that gap is taken off the count again, and none of it is ever a restart.
 """
 import collections
 
@@ -33,16 +35,23 @@ class SequenceGaps:
         self.missed_across_reconnect = collections.Counter()   # ... of them, by a re-connection
         self._reconnected = set()               # publishers not heard since a re-connection
         self._back = {}                         # per publisher: (length, last, gaps) of a run below last
+        self._hole = {}                         # per publisher: (numbers, those come late) of the
+                                                # last gap across a re-connection
 
     def reconnected(self):
         """The consumer re-made its connection: each publisher's next gap is its cost."""
         self._reconnected = set(self.last)
 
-    def add(self, publisher, seq):
+    def add(self, publisher, seq, current=True):
         """One message from `publisher` numbered `seq`; returns how many were missed
-        just before it."""
+        just before it. current=False: delivered by a connection the consumer has dropped
+        (rospy hands on the rest of its last read, hundreds of messages): an older one is a
+        straggler whatever follows, and it leaves the next gap to the new connection."""
         last = self.last.get(publisher)
         if last is not None and seq <= last:
+            if not current:
+                self._filled(publisher, seq)
+                return 0
             if seq <= 1 or last - seq > RESTART_DROP:
                 self._restart(publisher, seq)
                 return 0
@@ -54,15 +63,26 @@ class SequenceGaps:
         gap = seq - last - 1
         if gap:
             self.missed[publisher] += gap
-            if publisher in self._reconnected:
+            if current and publisher in self._reconnected:
                 self.missed_across_reconnect[publisher] += gap
-        self._reconnected.discard(publisher)
+                self._hole[publisher] = (range(last + 1, seq), set())
+        if current:
+            self._reconnected.discard(publisher)
         return gap
+
+    def _filled(self, publisher, seq):
+        """The old connection's message came after all: not missed."""
+        hole = self._hole.get(publisher)
+        if hole is not None and seq in hole[0] and seq not in hole[1]:
+            hole[1].add(seq)
+            self.missed[publisher] -= 1
+            self.missed_across_reconnect[publisher] -= 1
 
     def _restart(self, publisher, seq):
         self.last[publisher] = seq
         self._reconnected.discard(publisher)
         self._back.pop(publisher, None)
+        self._hole.pop(publisher, None)
 
     def _below_last(self, publisher, seq):
         run = self._back.get(publisher)

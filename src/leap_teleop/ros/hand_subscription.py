@@ -36,6 +36,7 @@ class HandSubscription:
         self._lock = threading.Lock()
         self.check_period = float(check_period)
         self._last_check = None                        # ROS time of the last check
+        self._generation = 0                           # of the current Subscriber
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
         # watchdog of the node shares this thread. reset: a /clock that jumps back (a
@@ -44,10 +45,13 @@ class HandSubscription:
                       if self.health.after > 0 or self.health.silent_after > 0 else None)
 
     def _subscribe(self):
+        # Numbered: a dropped connection's last read still reaches the callback afterwards.
+        self._generation += 1
         return rospy.Subscriber(self.topic, self.msg_type, self._on_message,
-                                queue_size=self.queue_size, tcp_nodelay=True)
+                                callback_args=self._generation, queue_size=self.queue_size,
+                                tcp_nodelay=True)
 
-    def _on_message(self, msg):
+    def _on_message(self, msg, generation=None):
         caller = (getattr(msg, '_connection_header', None) or {}).get('callerid', '?')
         self.received[caller] += 1
         frame = msg.header.frame_id.lstrip('/')
@@ -64,7 +68,7 @@ class HandSubscription:
             why = self.callback(msg)
         now = rospy.get_time()
         with self._lock:                 # one hold per message: this is every hand message
-            self.gaps.add(caller, msg.header.seq)
+            self.gaps.add(caller, msg.header.seq, generation is None or generation == self._generation)
             self.health.on_message(now, bool(why) and why.startswith('late'),
                                    now - msg.header.stamp.to_sec())
 
