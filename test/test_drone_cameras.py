@@ -122,6 +122,36 @@ def test_camera_loop_stops_at_once_with_its_renderer_stuck():
     assert took < 3.0 and not loop.thread.is_alive() and proc.poll() is not None, took
 
 
+def test_chase_snapshots_close_at_once_with_a_picture_under_way():
+    # close() waited for the lock a stuck take held for its whole timeout (30 s in the
+    # simulator): past roslaunch's 15 s between Ctrl-C and SIGTERM.
+    import signal
+    import threading
+    import time
+    shots = cameras.ChaseSnapshots(timeout=30.0)
+    pose = ((0.0, 0.0, 1.0), _yaw_quat(0.0))
+    assert shots.take(*pose, width=64, height=48).shape == (48, 64, 3)
+    proc = shots.renderer.proc
+    os.kill(proc.pid, signal.SIGSTOP)
+    failed = []
+
+    def take():
+        try:
+            shots.take(*pose, width=64, height=48)
+        except RuntimeError as e:
+            failed.append(e)
+    taker = threading.Thread(target=take)
+    taker.start()
+    time.sleep(0.3)                                   # the picture is asked for and waits
+    started = time.monotonic()
+    shots.close()
+    took = time.monotonic() - started
+    taker.join(5.0)
+    assert took < 3.0 and failed and not taker.is_alive() and proc.poll() is not None, took
+    with pytest.raises(RuntimeError, match='shutting down'):
+        shots.take(*pose)                              # no renderer started after close
+
+
 CAMERA_SHAPES = {n: (c.height, c.width, 3) for n, c in cameras.CAMERAS.items()}
 
 

@@ -263,12 +263,15 @@ class ChaseSnapshots:
     def __init__(self, timeout=20.0):
         self.timeout = timeout
         self.renderer = None
+        self._closed = False
         self._lock = threading.Lock()   # one snapshot at a time (service threads)
 
     def take(self, pos, quat, path=None, width=640, height=480, arm=0.18):
         """The picture (height, width, 3) uint8, written to `path` as a PNG when given;
         RuntimeError (with the reason) when it cannot be drawn in `timeout` s."""
         with self._lock:
+            if self._closed:
+                raise RuntimeError('the simulator is shutting down')
             try:
                 if self.renderer is None:
                     self.renderer = RendererProcess()
@@ -289,6 +292,12 @@ class ChaseSnapshots:
             self.renderer = None
 
     def close(self):
+        # A snapshot under way holds the lock for up to `timeout`: its renderer is killed
+        # first (the take then fails at once), and no later take starts one.
+        self._closed = True
+        renderer = self.renderer
+        if renderer is not None:
+            renderer.kill()
         with self._lock:
             if self.renderer is not None:
                 self.renderer.close()
