@@ -106,6 +106,7 @@ CASES = [
     # naming its drone; both whole flights through the same launch file are drone_dual.test's.
     ('ardrone_dual', [['ardrone_dual.launch']],
      ['--rosout', 'drone1/drone_pilot: takeoff', '--rosout', 'drone2/drone_pilot: takeoff',
+      '--rosout', 'drone2/drone_pilot: tilt mode, following the left hand',
       '--topic', '/drone1/ardrone/takeoff:std_msgs/Empty',
       '--topic', '/drone2/ardrone/takeoff:std_msgs/Empty',
       '--topic', '/drone1/ardrone/navdata:leap_teleop/Navdata',

@@ -101,10 +101,10 @@ def main(argv=None):
     rospy.on_shutdown(node.stop)
     try:
         if not rospy.core.is_shutdown_requested():
-            node.reconfigure = Reconfigure('drone_pilot', PARAMS, RECONFIGURABLE, vars(node.pilot.cfg),
+            node.reconfigure = Reconfigure(node.name, PARAMS, RECONFIGURABLE, vars(node.pilot.cfg),
                                            node.retune)
             node.thread.start()
-            rospy.loginfo('drone_pilot: %s mode, following the %s hand', p['mode'], p['side'])
+            rospy.loginfo('%s: %s mode, following the %s hand', node.name, p['mode'], p['side'])
             rospy.spin()
     finally:
         node.stop()             # also when a signal came before on_shutdown was registered

@@ -103,7 +103,7 @@ class ArmNode:
 def main(argv=None):
     p, node = start_node('ur10_arm.py', 'ur10_arm', __doc__, PARAMS, ArmNode, argv,
                          hint=' (see %s)' % package_path('config', 'ur10_teleop.yaml'))
-    node.reconfigure = Reconfigure('ur10_arm', PARAMS, RECONFIGURABLE, vars(node.runner.teleop.p),
+    node.reconfigure = Reconfigure(node.name, PARAMS, RECONFIGURABLE, vars(node.runner.teleop.p),
                                    node.runner.retune)
     if node.wait_for_robot():
         with closed_at_shutdown():
