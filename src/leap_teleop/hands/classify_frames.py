@@ -95,10 +95,6 @@ class FrameClassifier:
 
     def __init__(self, stateless=False, model=None, keypoint_model=None):
         self.stateless = stateless
-        # JSON Lines: a frame stamped as the one before is judged as one without a stamp
-        # (the recognizer's own step), not as no time passing
-        self.repeated_stamp_missing = False
-        self._last_stamp = None
         self.models = {'model': model, 'keypoint_model': keypoint_model}
         self.user_gestures = self._recognizer(stateless).user_gestures
         self.recognizers = {}
@@ -118,11 +114,6 @@ class FrameClassifier:
             math.isfinite(ts) else None
         fid = d.get('id')
         fid = fid if isinstance(fid, (int, str)) and not isinstance(fid, bool) else None
-        if self.repeated_stamp_missing and math.isfinite(frame.timestamp):
-            repeated = frame.timestamp == self._last_stamp
-            self._last_stamp = frame.timestamp
-            if repeated:
-                frame = Frame(frame.id, math.nan, frame.hands, frame.gestures)
         return self.classify_frame(frame, fid, ts)
 
     def classify_frame(self, frame, fid, ts):
@@ -328,16 +319,15 @@ def spaced_if_stalled(path, metadata, dicts):
     return dicts
 
 
-def frames_of(path, classifier=None):
-    """The frames of INPUT; `classifier` (a FrameClassifier) is told when they are JSON
-    Lines, whose repeated stamps it judges as missing ones."""
+def frames_of(path):
+    """The frames of INPUT. A recording is spaced as the sender's recording source spaces
+    it; JSON Lines keep their stamps (a frame repeated with its stamp is no time passing,
+    as for the sender: judged 10 ms on, it came after the next frame of a 115 Hz Leap)."""
     if camera_input(path):
         return camera_frames(path)
     if path not in (None, '-') and looks_like_recording(path):
         metadata, dicts = leapjs.load(path)
         return iter(spaced_if_stalled(path, metadata, dicts))
-    if classifier is not None:
-        classifier.repeated_stamp_missing = True
     if path in (None, '-'):
         return iter_json_lines(sys.stdin)
     return iter_json_lines(gesture_data.open_text(path, errors='replace'))
@@ -378,7 +368,7 @@ def main(argv=None):
                 raise gesture_data.DataError('%s: no keypoint row in it' % args.keypoints)
             frames = itertools.chain([first], frames)
         else:
-            frames = frames_of(args.input, classifier)
+            frames = frames_of(args.input)
     except (SourceError, OSError, ModelError, gesture_data.DataError) + gesture_data.UNREADABLE as e:
         print('classify_frames: %s: %s' % (args.keypoints or args.input, e)
               if isinstance(e, gesture_data.UNREADABLE) else 'classify_frames: %s' % e,
