@@ -543,5 +543,33 @@ def test_a_long_off_filter_smooths_but_never_makes_a_glimpse_a_hold(hz, off_fram
     assert events == [] and not armed
     # deliberate ones still work: a held thumbs-up arms, fist -> open unfolds, open -> fist folds
     assert run([('point', 1.0), ('thumbs_up', 0.6), ('point', 1.0)])[1]
-    events, _, _ = run([('open', 1.0), ('fist', 1.0), ('open', 1.0 + off_frames / hz), ('fist', 1.0)])
+    events, _, _ = run([('open', 1.0), ('fist', 1.0), ('open', 1.0), ('fist', 1.0)])
     assert events == ['fold', 'unfold', 'fold']
+    # ... and at the default's moments: the gap to the next shape starts where the last one
+    # was shown, not where the filter let it go (a fist, a second of pointing, then an open
+    # hand took off)
+    events, _, _ = run([('fist', 1.0), ('point', 1.0), ('open', 1.0)])
+    assert events == []
+    tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
+    t, unfold = 0.0, None
+    for pose, seconds in (('fist', 1.0), ('open', 1.0)):
+        for _ in range(round(seconds * hz)):
+            st = tracker.update(poses[pose], t, 0)
+            if unfold is None and any(e.gesture == 'unfold' for e in st.events):
+                unfold = t - 1.0
+            t += 1.0 / hz
+    assert unfold is not None and unfold < 0.3, unfold
+
+
+def test_a_long_off_filter_does_not_make_a_glimpse_of_a_bound_gesture_an_arming_hold():
+    # The same carried frames on the bindings' path: a V sign bound to arm.
+    from leap_teleop.hands.gestures.bindings import Bindings
+    from leap_teleop.hands.gestures.temporal import GestureState
+    actions = Bindings({'arm': {'arm': ['thumb_up', 'two']}}).applier(('two',))
+    assert not actions.identity
+    for held in (dict(thumb_up=True), dict(user=('two',))):
+        assert actions.flags(GestureState(**held))[0] is True
+        carried = ('thumb_up',) if 'thumb_up' in held else ('two',)
+        assert actions.flags(GestureState(**held, unseen=carried))[0] is False, held
+    # the other actions' flags keep what the filter holds
+    assert actions.flags(GestureState(fist=True, unseen=('fist',)))[2] is True

@@ -177,16 +177,18 @@ class HeldFilter:
         self._frame_t = timestamp
         if not judged:              # held state only: the shapes wait for a judged frame
             return events
-        shape = 'fist' if state.fist else 'open' if state.open else None
+        # A shape carried past its credit by a long off-filter is no longer the shape: its
+        # end (where the gap to the next one starts) is where it was last shown.
+        unseen = state.unseen
+        shape = ('fist' if state.fist and 'fist' not in unseen else
+                 'open' if state.open and 'open' not in unseen else None)
         if stalled:
             self._stale_shape = shape
         elif shape != self._stale_shape:
             self._stale_shape = None
-        if shape is not None and raw_shape != shape and (shape == self._stale_shape
-                                                          or shape in state.unseen):
+        if shape is not None and shape == self._stale_shape and raw_shape != shape:
             # held over the stall by the filter, not seen: no hold (at 5 fps or under a fast
-            # sim clock the filter's few frames would make a first shape of their own); nor
-            # carried by a long off-filter
+            # sim clock the filter's few frames would make a first shape of their own)
             frame_dt = 0.0
         if shape != self._shape:
             if self._shape is not None and self._confirmed:
