@@ -343,30 +343,54 @@ def record_with_the_other_hand_resting(tmp_path, name, rest_s, *more):
                                  str(tmp_path / (name + '.jsonl'))] + list(more))
 
 
-def test_record_gestures_skips_frames_showing_both_hands_unless_a_side_is_given(tmp_path, capsys):
+def test_record_gestures_writes_no_take_of_two_hands_unless_a_side_is_given(tmp_path, capsys):
     # With the default --side any, the resting left hand was written as 'two' too: retrained,
-    # the user's open hand read as their class.
-    assert record_with_the_other_hand_resting(tmp_path, 'half', 0.5) == 0
-    captured = capsys.readouterr()
-    assert 'wrote 15 hand poses' in captured.out, captured.out
-    assert captured.err.splitlines()[-1] == (
-        'record_gestures: 15 of the 30 frames showed a left and a right hand and were skipped: '
-        'give --side right|left to record the hand showing the gesture'), captured.err
-    rows = gesture_data.read_pose_lines(str(tmp_path / 'half.jsonl'))
-    assert {gesture_data.first_hand(f).side for _, _, f in rows} == {'right'}
-    # both hands all along: nothing written, and the exit status says so
-    assert record_with_the_other_hand_resting(tmp_path, 'whole', 1.0) == 1
-    err = capsys.readouterr().err
-    assert err.splitlines()[-1] == (
-        'record_gestures: 30 of the 30 frames showed a left and a right hand and were skipped, '
-        'nothing written: give --side right|left to record the hand showing the gesture'), err
-    assert 'no hand in' not in err and not (tmp_path / 'whole.jsonl').exists()
+    # the user's open hand read as their class. Skipping only the frames that show both
+    # kept those where the gesture's hand was lost: the resting hand's alone.
+    for name, rest_s in (('half', 0.5), ('whole', 1.0)):
+        assert record_with_the_other_hand_resting(tmp_path, name, rest_s) == 1
+        err = capsys.readouterr().err
+        assert err.splitlines()[-1] == (
+            'record_gestures: the take showed more than one hand (%d of the 30 frames showed two '
+            'hands): nothing written; give --side right|left to record the hand showing the '
+            'gesture' % round(30 * rest_s)), err
+        assert not (tmp_path / (name + '.jsonl')).exists()
     # --side right records the gesture's hand on every frame, without a word about the other
     assert record_with_the_other_hand_resting(tmp_path, 'right', 1.0, '--side', 'right') == 0
     captured = capsys.readouterr()
-    assert 'wrote 30 hand poses' in captured.out and 'showed a left' not in captured.err
+    assert 'wrote 30 hand poses' in captured.out and 'showed two' not in captured.err
     rows = gesture_data.read_pose_lines(str(tmp_path / 'right.jsonl'))
     assert {gesture_data.first_hand(f).side for _, _, f in rows} == {'right'}
+
+
+class TwoOfASide(HandSource):
+    """A right hand in a V, then a left hand alone (the V's hand lost), then two hands
+    both typed right (a tracker's mistake): 10 frames each at 30 Hz."""
+
+    def frames(self):
+        v = render_hand('right', 'two', (60, 200, 0), hand_id=1)
+        rest = render_hand('left', 'open', (-80, 200, 0), hand_id=2)
+        rest_typed_right = render_hand('right', 'open', (-80, 200, 0), hand_id=2)
+        for i in range(30):
+            hands = [[v], [rest], [v, rest_typed_right]][i // 10]
+            yield Frame(i + 1, 100.0 + i / 30.0, hands)
+
+
+def test_record_gestures_refuses_a_take_of_both_sides_and_skips_two_hands_of_one(
+        tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(record_gestures, 'source_from_args', lambda args: TwoOfASide())
+    base = ['--source', 'scripted', '--script', str(tmp_path / 's.yaml'), '--label', 'two',
+            '--seconds', '5']
+    # any: the left hand of the frames where the V was lost would be written as 'two'
+    assert record_gestures.main(base + ['--out', str(tmp_path / 'any.jsonl')]) == 1
+    assert 'more than one hand (10 of the 30 frames showed two hands)' in capsys.readouterr().err
+    # right: the frames with two right hands are skipped and said so; the left one is not kept
+    assert record_gestures.main(base + ['--side', 'right', '--out', str(tmp_path / 'r.jsonl')]) == 0
+    captured = capsys.readouterr()
+    assert 'wrote 10 hand poses' in captured.out, captured.out
+    assert 'record_gestures: 10 of the 30 frames showed two right hands and were skipped' in captured.err
+    rows = gesture_data.read_pose_lines(str(tmp_path / 'r.jsonl'))
+    assert {gesture_data.first_hand(f).id for _, _, f in rows} == {1}
 
 
 class FailsNearTheEnd(HandSource):

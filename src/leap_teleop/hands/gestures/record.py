@@ -18,9 +18,11 @@ Leap-family hands are written as JSON Lines pose records, one per hand per frame
 the shared header (person,label,source_label,x0,y0,...,x20,y20; default NAME.csv), the
 21 landmarks relative to the wrist and divided by the largest absolute coordinate, as
 the community's keypoint.csv. Frames without a (matching) hand are counted as missing.
-With --side any (the default), a frame showing a left and a right hand is skipped and
-counted (the other hand, resting in view, would be written under NAME): give --side
-right|left to record the hand showing the gesture.
+With --side any (the default) a take must show one hand: if any frame shows two, or the
+take shows a left and a right hand, nothing is written (the other hand, resting in view,
+and the frames where the gesture's hand was lost would be written under NAME): give
+--side right|left to record the hand showing the gesture. With a side given, a frame
+showing two hands of that side is skipped and counted.
 """
 import argparse
 import collections
@@ -48,7 +50,7 @@ KEYPOINT_HEADER = ['person', 'label', 'source_label'] + [
 # what a recording session gave: its rows, frames seen, frames without a usable hand, the
 # source time it covered, why it ended ('time', 'source ended', 'interrupted' or the
 # source's SourceError) and the frames skipped for showing a left and a right hand
-Take = collections.namedtuple('Take', 'rows seen missing seconds ended both_sides')
+Take = collections.namedtuple('Take', 'rows seen missing seconds ended two_hands sides')
 
 
 class RecordError(ValueError):
@@ -95,8 +97,10 @@ def pose_record(frame, hand, person, label):
 def collect(source, family, label, person, seconds, side='any'):
     """The Take of `seconds` of source time (or less, if the source ends or fails first:
     the rows before a failure are kept, its SourceError is the Take's `ended`). With
-    side 'any', a frame showing both sides is skipped: one of its hands is not the gesture."""
-    rows, seen, missing, both_sides = [], 0, 0, 0
+    side 'any', a frame showing two hands is skipped, as is one showing two hands of the
+    side given: one of them is not the gesture (`two_hands` counts them; `sides`: the sides
+    of the hands written)."""
+    rows, seen, missing, two_hands, sides = [], 0, 0, 0, set()
     t0 = t_last = None
     period = 0.0                # between the last two frames: what the last one stands for
     ended = 'source ended'
@@ -112,19 +116,19 @@ def collect(source, family, label, person, seconds, side='any'):
                 period = t - t_last if t_last is not None else 0.0
                 t_last = t
             seen += 1
-            if side == 'any' and {'left', 'right'} <= {h.side for h in frame.hands}:
-                both_sides += 1
+            hands = [h for h in frame.hands if side == 'any' or h.side == side]
+            if len(hands) > 1:
+                two_hands += 1
                 continue
             got = 0
-            for hand in frame.hands:
-                if side != 'any' and hand.side != side:
-                    continue
+            for hand in hands:
                 if family == 'keypoints':
                     row = keypoint_row(hand, person, label)
                 else:
                     row = pose_record(frame, hand, person, label)
                 if row is not None:
                     rows.append(row)
+                    sides.add(hand.side)
                     got += 1
             missing += got == 0
     except KeyboardInterrupt:
@@ -136,7 +140,7 @@ def collect(source, family, label, person, seconds, side='any'):
     covered = seconds if ended == 'time' else (t_last - t0 + period if t0 is not None else 0.0)
     if ended == 'source ended' and covered >= seconds - 1e-6:
         ended, covered = 'time', seconds    # its last frame ended the time asked: a whole take
-    return Take(rows, seen, missing, covered, ended, both_sides)
+    return Take(rows, seen, missing, covered, ended, two_hands, sides)
 
 
 def session_names(path):
@@ -206,8 +210,8 @@ def main(argv=None):
     ap.add_argument('--out', default='', help='output file (default NAME.jsonl or NAME.csv)')
     ap.add_argument('--person', default='user', help='who is recorded (default %(default)s)')
     ap.add_argument('--side', default='any', choices=('any', 'right', 'left'),
-                    help='which hands to keep (default: any, skipping frames that show a left '
-                    'and a right hand)')
+                    help='which hands to keep (default: any, for a take that shows one hand '
+                    'only: nothing is written if two show)')
     if argv is None:   # drop ROS remappings (__name:=...) that rosrun / roslaunch add
         argv = [a for a in sys.argv[1:] if ':=' not in a]
     args = ap.parse_args(argv)
@@ -252,18 +256,25 @@ def main(argv=None):
         print('record_gestures: %s after %.1f of the %g s asked' % (
             'the source ended' if take.ended == 'source ended' else 'interrupted',
             take.seconds, args.seconds), file=sys.stderr)
-    # the other hand would be written under the label: such frames are skipped, and said so
-    both = ('record_gestures: %d of the %d frames showed a left and a right hand and were '
-            'skipped%s: give --side right|left to record the hand showing the gesture'
-            % (take.both_sides, seen, ', nothing written' if seen == take.both_sides else ''))
+    # The other hand would be written under the label: with --side any a take showing two
+    # hands is not written (the frames where the gesture's hand was lost would be the other
+    # one's); with a side, a frame showing two of its hands is skipped.
+    if args.side == 'any' and (take.two_hands or len(take.sides) > 1):
+        detail = ('%d of the %d frames showed two hands' % (take.two_hands, seen) if take.two_hands
+                  else 'a left hand in some frames, a right one in others')
+        print('record_gestures: the take showed more than one hand (%s): nothing written; give '
+              '--side right|left to record the hand showing the gesture' % detail, file=sys.stderr)
+        return 1
+    two = ('record_gestures: %d of the %d frames showed two %s hands and were skipped'
+           % (take.two_hands, seen, args.side))
     if not rows:
-        # said above when the source failed before any frame; below when every frame had two
-        if not (failed and seen == 0) and not (seen and seen == take.both_sides):
+        # said above when the source failed before any frame
+        if not (failed and seen == 0):
             print('record_gestures: no hand in %d frames: nothing written%s' % (
-                seen - take.both_sides, ' (a camera hand needs its image landmarks)'
+                seen - take.two_hands, ' (a camera hand needs its image landmarks)'
                 if family == 'keypoints' else ''), file=sys.stderr)
-        if take.both_sides:
-            print(both, file=sys.stderr)
+        if take.two_hands:
+            print(two, file=sys.stderr)
         return 1
     try:
         written = write(out, family, rows)
@@ -277,8 +288,8 @@ def main(argv=None):
     print('record_gestures: wrote %d %s of %r to %s (%d frames, hands missing in %d)'
           % (len(rows), 'keypoint rows' if family == 'keypoints' else 'hand poses',
              args.label, out, seen, missing))
-    if take.both_sides:
-        print(both, file=sys.stderr)
+    if take.two_hands:
+        print(two, file=sys.stderr)
     return 1 if failed else 0       # written, but a script should know the source failed
 
 
