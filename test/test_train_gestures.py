@@ -120,6 +120,11 @@ def test_a_file_of_several_classes_or_another_label_is_refused_with_label(tmp_pa
     line = _refusal(tmp_path, monkeypatch, capsys, ['--add', other, '--label', 'peace'])
     assert line.endswith('error: --add %s labels its rows wave, not peace: give --label wave, or --id wave '
                          '--label peace to take them as peace' % other), line
+    # a label no user class may take is not suggested (it is refused in turn)
+    thumbs = _keypoint_csv(tmp_path / 'thumbs.csv', ['thumbs_up'] * 3, header=True)
+    line = _refusal(tmp_path, monkeypatch, capsys, ['--add', thumbs, '--label', 'thumb'])
+    assert line.endswith('error: --add %s labels its rows thumbs_up, not thumb: give --id thumbs_up '
+                         '--label thumb to take them as thumb' % thumbs), line
     poses = _pose_records(tmp_path / 'two.jsonl', ['two', 'two', 'open'])
     line = _refusal(tmp_path, monkeypatch, capsys, ['--add', poses, '--label', 'two'])
     assert '--add %s holds rows of 2 classes (labels open, two)' % poses in line, line

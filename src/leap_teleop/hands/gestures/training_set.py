@@ -330,8 +330,11 @@ def added_file_problem(path, family, label, take=None):
                     path, len(counts), _listed(counts, named), label, label))
     if named and counts and label not in counts:
         found = _short(next(iter(counts)))
-        return ('%s labels its rows %s, not %s: give --label %s, or --id %s --label %s to take '
-                'them as %s' % (path, found, label, found, found, label, label))
+        take_as = '--id %s --label %s to take them as %s' % (found, label, label)
+        if shared_label_problem(found):      # not a name a user's class may take
+            return '%s labels its rows %s, not %s: give %s' % (path, found, label, take_as)
+        return ('%s labels its rows %s, not %s: give --label %s, or %s'
+                % (path, found, label, found, take_as))
     return None
 
 
