@@ -392,6 +392,36 @@ def test_hand_messages_in_another_frame_are_refused_with_a_throttled_warning(mon
     assert taken[-1] == 'world'
 
 
+def test_the_old_subscribers_messages_are_not_current_from_the_re_subscription_on(monkeypatch):
+    # The number went up only when the new Subscriber was made, after the consumer's reset
+    # (which waits for its lock): the old read's messages in between took the new
+    # connection's gap as an ordinary loss.
+    import collections
+    import threading
+
+    import rospy
+
+    from leap_teleop.msg import Hand
+    from leap_teleop.ros import hand_subscription as hs
+
+    sub = hs.HandSubscription.__new__(hs.HandSubscription)
+    sub.topic, sub.node, sub._lock, sub._generation = 'hands', 'client', threading.Lock(), 1
+    sub.health, sub.gaps = StreamHealth(0.5, 2.0), SequenceGaps()
+    sub.received, sub.callback, sub.frame, sub.wrong_frame = collections.Counter(), lambda m: None, '', 0
+    monkeypatch.setattr(rospy, 'get_time', lambda: 10.0)
+
+    def deliver(seq, generation):
+        msg = Hand()
+        msg.header.seq, msg.header.stamp = seq, rospy.Time.from_sec(10.0)
+        sub._on_message(msg, generation)
+    for seq in range(1, 11):
+        deliver(seq, 1)
+    sub._reconnected()
+    deliver(12, 1)                       # the old read, handled before the new Subscriber exists
+    deliver(30, 2)                       # the new connection's first message
+    assert dict(sub.gaps.missed) == {'?': 18} and dict(sub.gaps.missed_across_reconnect) == {'?': 17}
+
+
 def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscription(monkeypatch):
     # An exception in a check would end its timer's thread: no later check would run.
     import rospy
@@ -413,7 +443,7 @@ def test_a_check_that_fails_is_logged_and_the_next_one_finishes_the_resubscripti
     sub.topic, sub.node, sub._lock = 'hands', 'client', threading.Lock()
     sub.health = StreamHealth(0.5, 2.0)
     sub.gaps = SequenceGaps()
-    sub.check_period, sub._last_check = 0.25, None
+    sub.check_period, sub._last_check, sub._generation = 0.25, None, 1
     first = sub.sub = FakeSubscriber()
     made, logs = [], []
 
@@ -498,6 +528,22 @@ def test_a_short_bag_looping_from_above_1_is_counted_on_every_pass():
     assert [gaps.add('/pub', s) for s in range(150, 150 + RESTART_RUN - 1)] == [0] * (RESTART_RUN - 1)
     assert gaps.add('/pub', 200) == 0 and gaps.add('/pub', 190) == 0 and gaps.add('/pub', 201) == 0
     assert gaps.missed['/pub'] == 0 and gaps.last['/pub'] == 201
+
+
+def test_a_looping_bags_pass_goes_on_through_a_dropped_connections_last_read():
+    # A bag looping from 1001: a re-subscription within the first RESTART_RUN messages of a
+    # pass left the old read's rest out of the pass's run, and counted it lost.
+    gaps = SequenceGaps()
+    for seq in range(1001, 1121):
+        gaps.add('/play', seq)
+    for seq in range(1001, 1029):                 # the next pass, then a re-subscription
+        gaps.add('/play', seq)
+    gaps.reconnected()
+    for seq in range(1029, 1052):                 # the old read's rest arrives
+        gaps.add('/play', seq, current=False)
+    for seq in range(1081, 1121):                 # the new connection: 1052..1080 never came
+        gaps.add('/play', seq)
+    assert gaps.missed['/play'] == 29
 
 
 def test_a_dropped_connections_last_read_is_never_a_restart_nor_the_new_ones_cost():

@@ -50,6 +50,9 @@ class SequenceGaps:
         last = self.last.get(publisher)
         if last is not None and seq <= last:
             if not current:
+                run = self._back.get(publisher)
+                if run is not None and seq > run[1]:
+                    return self._below_last(publisher, seq)     # a looping bag's pass goes on
                 self._filled(publisher, seq)
                 return 0
             if seq <= 1 or last - seq > RESTART_DROP:

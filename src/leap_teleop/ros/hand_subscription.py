@@ -36,7 +36,7 @@ class HandSubscription:
         self._lock = threading.Lock()
         self.check_period = float(check_period)
         self._last_check = None                        # ROS time of the last check
-        self._generation = 0                           # of the current Subscriber
+        self._generation = 1                           # of the current Subscriber
         self.sub = self._subscribe()
         # Its own timer thread: a re-subscription talks to the master and may block; no
         # watchdog of the node shares this thread. reset: a /clock that jumps back (a
@@ -46,7 +46,6 @@ class HandSubscription:
 
     def _subscribe(self):
         # Numbered: a dropped connection's last read still reaches the callback afterwards.
-        self._generation += 1
         return rospy.Subscriber(self.topic, self.msg_type, self._on_message,
                                 callback_args=self._generation, queue_size=self.queue_size,
                                 tcp_nodelay=True)
@@ -91,8 +90,7 @@ class HandSubscription:
                 self.health.stalled(now)
             return
         if self.sub is None:         # a re-subscription that failed half-way: finish it
-            with self._lock:
-                self.gaps.reconnected()
+            self._reconnected()
             self.sub = self._subscribe()
             rospy.logwarn('%s: re-subscribed to %s', self.node, rospy.resolve_name(self.topic))
             return
@@ -121,11 +119,17 @@ class HandSubscription:
         # connections instead of making new ones.
         old, self.sub = self.sub, None
         old.unregister()
-        with self._lock:             # after the old connection's last message, so its
-            self.gaps.reconnected()  # next gap is the new connection's
+        self._reconnected()
         self.on_new_connection()
         self.sub = self._subscribe()
         rospy.logwarn('%s: re-subscribed to %s (%s)', self.node, rospy.resolve_name(self.topic), why)
+
+    def _reconnected(self):
+        # Before anything that may wait (the consumer's lock): from here on the old
+        # Subscriber's messages are not current, and the next gap is the new connection's.
+        with self._lock:
+            self._generation += 1
+            self.gaps.reconnected()
 
     def _listed_publishers(self):
         """How many publishers the master lists for the topic."""
