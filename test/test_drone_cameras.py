@@ -152,6 +152,33 @@ def test_chase_snapshots_close_at_once_with_a_picture_under_way():
         shots.take(*pose)                              # no renderer started after close
 
 
+def test_chase_snapshots_closed_while_their_renderer_starts_stop_at_once(monkeypatch):
+    # close() came while take() was still making its renderer: nothing was there to kill,
+    # and close() waited the take's whole timeout.
+    import threading
+    import time
+    made = []
+
+    class SlowToStart(cameras.RendererProcess):
+        def __init__(self):
+            time.sleep(0.5)
+            super().__init__()
+            made.append(self)
+    monkeypatch.setattr(cameras, 'RendererProcess', SlowToStart)
+    shots = cameras.ChaseSnapshots(timeout=30.0)
+    failed = []
+    taker = threading.Thread(target=lambda: failed.append(
+        pytest.raises(RuntimeError, shots.take, (0.0, 0.0, 1.0), _yaw_quat(0.0), None, 64, 48)))
+    taker.start()
+    time.sleep(0.2)
+    started = time.monotonic()
+    shots.close()
+    took = time.monotonic() - started
+    taker.join(5.0)
+    assert took < 3.0 and failed and 'shutting down' in str(failed[0].value), took
+    assert made and made[0].proc is None and shots.renderer is None
+
+
 CAMERA_SHAPES = {n: (c.height, c.width, 3) for n, c in cameras.CAMERAS.items()}
 
 

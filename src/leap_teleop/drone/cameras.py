@@ -275,6 +275,9 @@ class ChaseSnapshots:
             try:
                 if self.renderer is None:
                     self.renderer = RendererProcess()
+                    if self._closed:    # closed while it started: close() saw no renderer
+                        self._drop()
+                        raise RuntimeError('the simulator is shutting down')
                 return self.renderer.chase(pos, quat, width, height, arm, path,
                                            timeout=self.timeout)
             except PictureError:
