@@ -153,7 +153,12 @@ def test_a_name_whose_picture_never_came_is_given_back(tmp_path):
     written = snapshot_path(str(tmp_path), 'ur10_sim', 1.0)
     assert written == path
     with open(written, 'wb') as f:
-        f.write(b'\x89PNG')
-    release_snapshot_path(written)                   # a picture in it is kept
+        f.write(b'\x89PNG\r\n\x1a\n')
+    release_snapshot_path(written)                   # cut short (a renderer killed while
+    assert not os.path.exists(written)               # writing it): no picture, given back
+    written = snapshot_path(str(tmp_path), 'ur10_sim', 1.0)
+    from PIL import Image
+    Image.new('RGB', (4, 3)).save(written, format='PNG')
+    release_snapshot_path(written)                   # a whole picture in it is kept
     assert os.path.exists(written)
     release_snapshot_path(str(tmp_path / 'never_there.png'))

@@ -105,10 +105,19 @@ def snapshot_path(folder, name, sim_time):
             continue
 
 
+PNG_END = b'IEND\xaeB`\x82'     # the last chunk of every whole PNG file
+
+
 def release_snapshot_path(path):
-    """Remove the file snapshot_path reserved when no picture was written to it."""
+    """Remove the file snapshot_path reserved when no whole picture was written to it
+    (empty, or cut short: a renderer killed while writing, as at shutdown)."""
     try:
-        if os.path.getsize(path) == 0:
+        with open(path, 'rb') as f:
+            f.seek(0, os.SEEK_END)
+            size = f.tell()
+            f.seek(max(size - len(PNG_END), 0))
+            whole = size > 0 and f.read() == PNG_END
+        if not whole:
             os.remove(path)
     except OSError:          # gone already, or not ours to remove: nothing to give back
         pass
