@@ -99,6 +99,17 @@ def test_bad_parameter_ends_the_node_with_a_clear_error(master, script, args, sa
     assert 'Traceback' not in out, out
 
 
+def test_a_bad_parameter_line_names_the_node_with_its_namespace(master):
+    # In a dual launch both arms said 'ur10_arm: bad parameter ...'.
+    run = subprocess.run(['rosrun', 'leap_teleop', 'ur10_arm.py', '__ns:=/ur10_2', '__name:=ns_arm',
+                          '_hand:=middle', '_deadzone_mm:=3'], env=master,
+                         stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+    out = run.stdout + run.stderr
+    assert run.returncode == 1, out
+    assert "ur10_2/ns_arm: bad parameter: ~hand = 'middle'" in out, out
+    assert '~deadzone_mm is not a parameter of ur10_2/ns_arm' in out, out
+
+
 def test_sender_with_one_side_given_as_a_string_runs(master):
     # _sides:=right is the string 'right': a list of one side, not a KeyError traceback.
     run = subprocess.run(['rosrun', 'leap_teleop', 'sender.py', '__name:=one_side',

@@ -49,13 +49,14 @@ def start_node(script, name, doc, params, make, argv=None, errors=(ValueError, T
                          '_name:=value)\n' % (name, e))
         raise SystemExit(1)
     forward_library_logs()
-    warn_unknown_params(name, params)
+    label = rospy.get_name().lstrip('/') or name     # with its namespace: dual launches
+    warn_unknown_params(label, params)
     try:
         p = read_params(params)
         read_params(LIBRARY_PARAMS)         # checked, then read where they are used
         return p, make(p)
     except (ParamError,) + tuple(errors) as e:
-        rospy.logfatal('%s: bad parameter: %s%s', name, e, hint)
+        rospy.logfatal('%s: bad parameter: %s%s', label, e, hint)
         raise SystemExit(1)
 
 
