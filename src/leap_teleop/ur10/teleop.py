@@ -59,6 +59,12 @@ CATCH_UP_DECEL = 0.25
 # limits: 1.8 mm past it at most, against 78; CATCH_UP_DECEL's 1.3 mm began braking
 # twice as far from it).
 FACE_DECEL = 0.5
+# Whether the target heads for a face is judged from its motion over this long (s, about a
+# hand tremor's period), and only from a speed toward the face above FACE_APPROACH_MIN
+# (m/s): 1-3 mm from the table, the hand's noise made the last single step point at it in
+# most periods, and a slide along it lagged 10.5 mm rms instead of 4.1.
+FACE_WINDOW_S = 0.1
+FACE_APPROACH_MIN = 0.04
 # Joint states back after a stall further than this (rad) outside where the robot could
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
@@ -253,6 +259,9 @@ class ArmTeleop:
         self._goal_rate = 0.0          # its last step / (max_joint_speed x the period)
         self._catching_up = False      # the goal is a step toward the target
         self._last_reach = None        # (time, the target's IK, the target) the period before
+        # (time, the target's IK, the target) of the periods since _last_reach was last unset,
+        # the last FACE_WINDOW_S of them
+        self._reached = collections.deque(maxlen=STEP_WINDOW_MAX)
         self._lower_accel = None       # a max_joint_accel lowered live, not applied yet
         self._last_step = None
         self._gripper_sent = None
@@ -666,17 +675,17 @@ class ArmTeleop:
         cmd.points = self._servo.track(cmd.stamp, self._q, q, goal_velocity)
         return cmd
 
-    def _steps_to_face(self, target, before):
-        """How many more steps like the one from `before` take the target to the first face
-        of the box it heads for (infinite: none)."""
-        steps = math.inf
+    def _time_to_face(self, target, before, dt):
+        """Seconds until the target, moving on as it did from `before` over dt, reaches the
+        first face of the box it heads for at FACE_APPROACH_MIN or faster (infinite: none)."""
+        soon = math.inf
         for x, b, lo, hi in zip(target.tolist(), before.tolist(), self._lo.tolist(),
                                 self._hi.tolist()):
-            if x > b:
-                steps = min(steps, (hi - x) / (x - b))
-            elif x < b:
-                steps = min(steps, (x - lo) / (b - x))
-        return steps
+            if x - b > FACE_APPROACH_MIN * dt:
+                soon = min(soon, (hi - x) * dt / (x - b))
+            elif b - x > FACE_APPROACH_MIN * dt:
+                soon = min(soon, (x - lo) * dt / (b - x))
+        return soon
 
     def _next_goal(self, target, rotation, now, dt):
         """(joint goal, None) for this period, or (None, why not). The target's IK when the
@@ -701,6 +710,8 @@ class ArmTeleop:
         # the flipped shoulder, or the wrist's other way round.
         # Kept across holds that keep the origin (after a stall the wrist is as far behind).
         last = self._last_reach
+        if last is None:
+            self._reached.clear()
         q = kin.ik_nearest(kin.pose(target, rotation), seed if last is None else last[1],
                            lower=lo, upper=hi)
         if q is None:
@@ -718,10 +729,14 @@ class ArmTeleop:
         # How fast the target's IK moves (normalised like the rate): a goal that follows it
         # closes the gap on top of that.
         self._last_reach = (now, q_list, target)
+        reached = self._reached        # from the latest at least FACE_WINDOW_S ago on
+        while len(reached) > 1 and now - reached[1][0] >= FACE_WINDOW_S:
+            reached.popleft()
+        first = reached[0] if reached else self._last_reach
+        reached.append(self._last_reach)
         moving = 0.0
         if last is not None and now > last[0]:
-            moved = _joint_time(q_list, last[1], speed)
-            moving = moved / (now - last[0])
+            moving = _joint_time(q_list, last[1], speed) / (now - last[0])
         if rate is None:
             rate = _joint_time(v, [0.0] * 6, speed)
         # Normalised acceleration: the speed limit gained per second (the bottleneck joint's).
@@ -731,14 +746,15 @@ class ArmTeleop:
         rate = min(1.0, rate + accel * period,
                    moving + math.sqrt(2.0 * CATCH_UP_DECEL * accel * need))
         braking = False
-        if moving > 0.0:
+        if now > first[0]:
             # Heading for a face of the box, where the clamp stops the target dead: no
-            # faster than the goal can still stop there, its way on counted as more steps
-            # like the target's last (the servo, braking at its limit once the goal had
-            # stopped, ran 16-78 mm past the face).
-            steps = self._steps_to_face(target, last[2])
-            if steps < math.inf:
-                most = math.sqrt(2.0 * FACE_DECEL * accel * (need + moved * steps))
+            # faster than the goal can still stop there, the target's way on counted as its
+            # motion over the last FACE_WINDOW_S going on (the servo, braking at its limit
+            # once the goal had stopped, ran 16-78 mm past the face).
+            soon = self._time_to_face(target, first[2], now - first[0])
+            if soon < math.inf:
+                moved = _joint_time(q_list, first[1], speed)
+                most = math.sqrt(2.0 * FACE_DECEL * accel * (need + moved * soon / (now - first[0])))
                 braking = most < rate
                 rate = most if braking else rate
         lagging = False
