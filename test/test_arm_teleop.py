@@ -22,6 +22,7 @@ from leap_teleop.ur10.teleop import (
     ArmTeleop,
     ArmTeleopParams,
 )
+from leap_teleop.ur10.trajectory import TrajectoryFollower
 
 HOME = kin.HOME_Q.copy()
 PALM = (0.0, 200.0, 0.0)
@@ -572,6 +573,35 @@ def test_a_target_stopped_at_a_face_of_the_box_is_not_overrun(mode, direction, m
     assert t.status.state == TRACKING
     assert out < 0.0025, out                         # (the servo's lag off the line: 1.8 mm)
     assert np.max(np.maximum(lo - kin.fk(q)[:3, 3], kin.fk(q)[:3, 3] - hi)) > -1e-3   # at the face
+
+
+@pytest.mark.parametrize('deg, mm_s', [(30.0, 250.0), (45.0, 300.0), (20.0, 200.0)])
+def test_a_fast_hand_coming_obliquely_into_the_table_is_not_overrun(deg, mm_s):
+    # At the simulation's limits, a hand moving down at deg off vertical into the table and
+    # staying there: with the face cap judged from the target's last step alone, the goal,
+    # still catching up with a target already on the table top and sliding along it, slowed
+    # down within a period once the target stopped; the servo ran 32 mm (30 deg, 250 mm/s)
+    # and 28 mm (45 deg, 300 mm/s) under the table.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=math.pi)
+    # the simulated controller, which starts each trajectory from its own desired state
+    jtc = TrajectoryFollower(HOME, kin.MAX_JOINT_SPEED, kin.JOINT_LOWER, kin.JOINT_UPPER)
+    a = math.radians(deg)
+    way = 240.0 / math.cos(a)
+    q, under = HOME.copy(), 0.0
+    for k in range(int(way / mm_s / 0.008) + 250):
+        palm = np.array(PALM) + np.array([-math.sin(a), -math.cos(a), 0.0]) * min(mm_s * 0.008 * k, way)
+        for dt in np.arange(1, 9) * 0.001:             # the path it runs, every ms
+            under = max(under, -float(kin.fk(jtc.sample(c.t + dt)[0])[2, 3]))
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
+        q, qd = jtc.sample(now)
+        t.on_joints(q.copy(), now, qd.copy())
+        cmd = t.step(now)
+        if cmd.points is not None:
+            jtc.command(now, cmd.points, cmd.stamp)
+    assert t.status.state == TRACKING
+    assert under < 0.0035, under
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], t.status.target, atol=1e-3)
 
 
 def slide_lag(gap_mm, noisy):

@@ -56,8 +56,10 @@ CATCH_UP_ENOUGH = 0.95
 CATCH_UP_DECEL = 0.25
 # A goal heading for a face of the workspace box (where the clamp stops the target dead)
 # slows down to stop there at this much of the acceleration limit (at the simulation's
-# limits: 1.8 mm past it at most, against 78; CATCH_UP_DECEL's 1.3 mm began braking
-# twice as far from it).
+# limits: 1.8 mm past it at most straight on, against 78, 4.3 mm obliquely; CATCH_UP_DECEL's
+# 1.3 mm began braking twice as far from it). Not covered: a goal catching up with a target
+# that turns back at a face turns with it within a period, and the servo brakes past it
+# (a hand at 250 mm/s up to the box's top and back: 46-90 mm above it).
 FACE_DECEL = 0.5
 # Whether the target heads for a face is judged from its motion over this long (s, about a
 # hand tremor's period), and only from a speed toward the face above FACE_APPROACH_MIN
