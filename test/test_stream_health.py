@@ -546,6 +546,28 @@ def test_a_looping_bags_pass_goes_on_through_a_dropped_connections_last_read():
     assert gaps.missed['/play'] == 29
 
 
+@pytest.mark.parametrize('steps, lost', [
+    # the new connection's first message before the old read's rest: 1063..1100 never came
+    ([('new', range(1001, 1049)), ('R', None), ('new', [1101]), ('old', range(1049, 1063)),
+      ('new', range(1102, 1121))], 38),
+    # the old read's rest crossing the loop, then the new connection: 1011..1039 never came
+    ([('new', range(1001, 1100)), ('R', None),
+      ('old', list(range(1100, 1121)) + list(range(1001, 1011))), ('new', range(1040, 1121))], 29)])
+def test_a_looping_bag_re_subscribed_counts_what_never_came_whatever_the_order(steps, lost):
+    gaps = SequenceGaps()
+    for seq in range(1001, 1121):
+        gaps.add('/play', seq)
+    for kind, seqs in steps:
+        if kind == 'R':
+            gaps.reconnected()
+            continue
+        for seq in seqs:
+            gaps.add('/play', seq, kind == 'new')
+    for seq in range(1001, 1061):                 # one more pass: a pending run completes
+        gaps.add('/play', seq)
+    assert gaps.missed['/play'] == lost
+
+
 def test_a_dropped_connections_last_read_is_never_a_restart_nor_the_new_ones_cost():
     # rospy hands on the rest of a dropped connection's last read (up to hand_queue_size
     # messages): 50 of them in a row were taken as a restarted publisher (counting the

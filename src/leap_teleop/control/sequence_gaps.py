@@ -16,8 +16,10 @@ A consumer that drops its connection on purpose (a late or silent stream re-made
 what the old one still held and what was sent while the new one formed: the first gap
 after a re-connection is also counted apart (`missed_across_reconnect`), so what that
 choice cost is told from losses with no such cause. The old connection's last read may
-still come after the new one's first message (add(..., current=False)): what of it falls
-in that gap is taken off the count again, and none of it is ever a restart.
+still come (add(..., current=False)): before the new connection's first message it is
+the stream in its own order; after it, what of it falls in a gap already counted is
+taken off again, and it starts no restart (it may go on with a looping bag's pass that
+one of its own numbers began).
 """
 import collections
 
@@ -35,24 +37,35 @@ class SequenceGaps:
         self.missed_across_reconnect = collections.Counter()   # ... of them, by a re-connection
         self._reconnected = set()               # publishers not heard since a re-connection
         self._back = {}                         # per publisher: (length, last, gaps) of a run below last
+        self._heard_new = set()                 # publishers heard on the new connection
+        self._run_hole = {}                     # per publisher: (numbers, those come late) of a run's jump
         self._hole = {}                         # per publisher: (numbers, those come late) of the
                                                 # last gap across a re-connection
 
     def reconnected(self):
         """The consumer re-made its connection: each publisher's next gap is its cost."""
         self._reconnected = set(self.last)
+        self._heard_new = set()
 
     def add(self, publisher, seq, current=True):
         """One message from `publisher` numbered `seq`; returns how many were missed
         just before it. current=False: delivered by a connection the consumer has dropped
-        (rospy hands on the rest of its last read, hundreds of messages): an older one is a
-        straggler whatever follows, and it leaves the next gap to the new connection."""
+        (rospy hands on the rest of its last read, hundreds of messages): it leaves the
+        next gap to the new connection, and once that one has spoken an older number is a
+        straggler (or goes on with a looping pass under way)."""
         last = self.last.get(publisher)
+        if current:
+            self._heard_new.add(publisher)
         if last is not None and seq <= last:
-            if not current:
+            if not current and publisher in self._heard_new:    # a straggler
                 run = self._back.get(publisher)
                 if run is not None and seq > run[1]:
                     return self._below_last(publisher, seq)     # a looping bag's pass goes on
+                hole = self._run_hole.get(publisher)
+                if run is not None and hole is not None and seq in hole[0] and seq not in hole[1]:
+                    hole[1].add(seq)
+                    self._back[publisher] = (run[0], run[1], run[2] - 1)
+                    return 0
                 self._filled(publisher, seq)
                 return 0
             if seq <= 1 or last - seq > RESTART_DROP:
@@ -60,6 +73,7 @@ class SequenceGaps:
                 return 0
             return self._below_last(publisher, seq)   # a repeat, a straggler or a restart
         self._back.pop(publisher, None)
+        self._run_hole.pop(publisher, None)
         self.last[publisher] = seq
         if last is None:
             return 0
@@ -85,6 +99,7 @@ class SequenceGaps:
         self.last[publisher] = seq
         self._reconnected.discard(publisher)
         self._back.pop(publisher, None)
+        self._run_hole.pop(publisher, None)
         self._hole.pop(publisher, None)
 
     def _below_last(self, publisher, seq):
@@ -93,6 +108,8 @@ class SequenceGaps:
             self._back[publisher] = (1, seq, 0)
             return 0
         length, prev, gaps = run[0] + 1, seq, run[2] + seq - run[1] - 1
+        if seq - run[1] > 1:
+            self._run_hole[publisher] = (range(run[1] + 1, seq), set())
         if length < RESTART_RUN:
             self._back[publisher] = (length, prev, gaps)
             return 0
