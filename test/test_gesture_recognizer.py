@@ -573,3 +573,39 @@ def test_a_long_off_filter_does_not_make_a_glimpse_of_a_bound_gesture_an_arming_
         assert actions.flags(GestureState(**held, unseen=carried))[0] is False, held
     # the other actions' flags keep what the filter holds
     assert actions.flags(GestureState(fist=True, unseen=('fist',)))[2] is True
+
+
+@pytest.mark.parametrize('hz, off_frames, glimpse', [(10, 30, 1), (15, 100, 2), (30, 100, 4)])
+def test_a_glimpse_of_a_gesture_a_long_off_filter_still_holds_is_no_more_than_a_glimpse(
+        hz, off_frames, glimpse):
+    # Carried past its credit, a fist became the shape again on one frame showing it (no
+    # on_frames): a misread fist in the open hand held after a takeoff landed the drone; a
+    # thumbs-up re-shown for a few frames armed where the default needs on_frames more.
+    from leap_teleop.ur10 import kinematics as kin
+    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
+    poses = {p: render_hand('right', p, (0.0, 200.0, 0.0), hand_id=5)
+             for p in ('open', 'fist', 'thumbs_up', 'point')}
+
+    def run(parts):
+        tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
+        arm = ArmTeleop()
+        arm.on_joints(kin.HOME_Q.copy())
+        t, events, armed = 0.0, [], False
+        for pose, frames in parts:
+            for _ in range(frames):
+                st = tracker.update(poses[pose], t, 0)
+                events += [e.gesture for e in st.events if e.gesture in ('fold', 'unfold')]
+                arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+                                     thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
+                arm.step(100.0 + t)
+                armed = armed or arm.status.state == ARMED
+                t += 1.0 / hz
+        return events, armed
+
+    events, _ = run([('fist', round(1.5 * hz)), ('open', round(0.6 * hz)), ('fist', glimpse),
+                     ('open', 2 * hz)])
+    assert events == ['unfold'], events
+    short = max(1, round(0.2 * hz))
+    _, armed = run([('point', hz), ('thumbs_up', short), ('point', round(0.4 * hz)),
+                    ('thumbs_up', glimpse + 1), ('point', 2 * hz)])
+    assert not armed

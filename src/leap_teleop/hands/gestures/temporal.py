@@ -80,6 +80,8 @@ class HeldFilter:
         self.active = set()
         self._count = {name: 0 for name in self.names}
         self._since = {name: 0.0 for name in self.names}
+        self._lapsed = {}               # carried past its credit: name -> frames shown since
+        self._lapsed_since = {}         # ... the first of them
         self._last_confident = -math.inf
         self._shape = None              # 'fist' / 'open' held now, or None
         self._shape_since = 0.0
@@ -117,12 +119,30 @@ class HeldFilter:
                     active.add(name)
                 else:
                     active.discard(name)
+        # a gesture carried past its credit stays unseen until shown on_frames in a row
+        # again, as if it had stopped (a glimpse of it is no more than a glimpse)
+        lapsed = self._lapsed
+        for name in list(lapsed):
+            if name not in active:
+                del lapsed[name]
+            elif raw.get(name):
+                if lapsed[name] == 0:
+                    self._lapsed_since[name] = timestamp
+                lapsed[name] += 1
+                if lapsed[name] >= self.on_frames and timestamp - self._lapsed_since[name] \
+                        >= self.on_time.get(name, 0.0) - 1e-9:
+                    del lapsed[name]
+            else:
+                lapsed[name] = 0
+        for name in active:
+            if count[name] > CARRY_CREDIT_FRAMES:
+                lapsed[name] = 0
         return active
 
     def carried(self):
         """The held gestures not shown for more than CARRY_CREDIT_FRAMES judged frames."""
-        count = self._count
-        return tuple(n for n in self.active if count[n] > CARRY_CREDIT_FRAMES)
+        count, lapsed = self._count, self._lapsed
+        return tuple(n for n in self.active if count[n] > CARRY_CREDIT_FRAMES or n in lapsed)
 
     def unusable(self, timestamp):
         """An unusable frame: hold what we had for a moment, then let go; a thumbs-up
@@ -135,6 +155,9 @@ class HeldFilter:
             # unsure frame every other one kept a misread shape on for good)
             if name not in self.active:
                 self._count[name] = 0
+                self._lapsed.pop(name, None)
+            elif name in self._lapsed:      # ... as does one carried past its credit, shown again
+                self._lapsed[name] = 0
         return self.active
 
     def _stalled(self, dt):
