@@ -575,6 +575,28 @@ def test_a_target_stopped_at_a_face_of_the_box_is_not_overrun(mode, direction, m
     assert np.max(np.maximum(lo - kin.fk(q)[:3, 3], kin.fk(q)[:3, 3] - hi)) > -1e-3   # at the face
 
 
+@pytest.mark.parametrize('mm_s, accel', [(15.6, 0.5), (12.0, 1.0), (15.6, math.pi)])
+def test_a_slow_hand_at_a_face_is_not_overrun_at_a_low_acceleration(mm_s, accel):
+    # The face counted only from 40 mm/s of the target toward it: the top reached at 39 mm/s
+    # (the hand's 15.6 at scale 2.5) with max_joint_accel 0.5 ran 17.6 mm above it.
+    t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=accel)
+    lo, hi = np.array(t.p.workspace_min), np.array(t.p.workspace_max)
+    q, out = HOME.copy(), 0.0
+    for k in range(int((400.0 / mm_s + 2.0) / 0.008)):
+        palm = np.array(PALM) + np.array((0.0, 1.0, 0.0)) * min(mm_s * 0.008 * k, 400.0)
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
+        t.on_joints(q)
+        t.step(now)
+        for dt in np.arange(1, 9) * 0.001:             # the path the controller runs
+            p = t._servo.planned_at(now + dt)
+            if p is not None:
+                tcp = kin.fk(p)[:3, 3]
+                out = max(out, float(np.max(np.maximum(lo - tcp, tcp - hi))))
+        q = t._servo.state_at(now + 0.008, q)[0]
+    assert out < 0.001, out
+
+
 @pytest.mark.parametrize('deg, mm_s', [(30.0, 250.0), (45.0, 300.0), (20.0, 200.0)])
 def test_a_fast_hand_coming_obliquely_into_the_table_is_not_overrun(deg, mm_s):
     # At the simulation's limits, a hand moving down at deg off vertical into the table and

@@ -64,9 +64,12 @@ FACE_DECEL = 0.5
 # Whether the target heads for a face is judged from its motion over this long (s, about a
 # hand tremor's period), and only from a speed toward the face above FACE_APPROACH_MIN
 # (m/s): 1-3 mm from the table, the hand's noise made the last single step point at it in
-# most periods, and a slide along it lagged 10.5 mm rms instead of 4.1.
+# most periods, and a slide along it lagged 10.5 mm rms instead of 4.1. At 10 mm/s over the
+# window the noise 1 mm from the table slows 4 % of the goals and the slide lags as far
+# (4.09 mm rms) as 100 mm above it; at 40 a target reaching the top at 39 mm/s with
+# max_joint_accel 0.5 ran 17.6 mm above it.
 FACE_WINDOW_S = 0.1
-FACE_APPROACH_MIN = 0.04
+FACE_APPROACH_MIN = 0.01
 # Joint states back after a stall further than this (rad) outside where the robot could
 # have got to (its last trajectory to rest, or its braking distance at the speed it last
 # reported): another robot state, not a stall.
