@@ -543,6 +543,26 @@ def test_a_hand_faster_than_the_joints_is_caught_up_along_its_path_above_the_tab
     np.testing.assert_allclose(kin.fk(q)[:3, 3], b, atol=1e-3)
 
 
+def _past_the_box(t, c, palm_at, periods):
+    """Drive `t` with the palm at palm_at(k) for each 8 ms period k, the joints where the
+    servo's plan puts them; (how far the planned path, every ms, went past the box, m;
+    the joints at the end)."""
+    lo, hi = np.array(t.p.workspace_min), np.array(t.p.workspace_max)
+    q, out = HOME.copy(), 0.0
+    for k in range(periods):
+        now = c.tick()
+        t.on_hand(hand(palm_mm=tuple(palm_at(k)), stamp=now), now)
+        t.on_joints(q)
+        t.step(now)
+        for dt in np.arange(1, 9) * 0.001:             # the path the controller runs
+            p = t._servo.planned_at(now + dt)
+            if p is not None:
+                tcp = kin.fk(p)[:3, 3]
+                out = max(out, float(np.max(np.maximum(lo - tcp, tcp - hi))))
+        q = t._servo.state_at(now + 0.008, q)[0]
+    return out, q
+
+
 @pytest.mark.parametrize('mode, direction, mm_s', [
     ('imitation', (0.0, 1.0, 0.0), 100.0),          # up to the box's top: 78 mm above it
     ('imitation', (0.0, -1.0, 0.0), 100.0),         # down to the table top: 16 mm under it
@@ -553,23 +573,14 @@ def test_a_target_stopped_at_a_face_of_the_box_is_not_overrun(mode, direction, m
     # At the simulation's limits, a hand moving on past a face: the clamp stopped the
     # target dead there, and the servo, its joints near max_joint_speed, braked past it.
     t, c = armed_with_origin(mode=mode, max_joint_speed=1.0, max_joint_accel=math.pi)
+    if mode == 'imitation':
+        def palm_at(k):
+            return np.array(PALM) + np.array(direction) * min(mm_s * 0.008 * k, 400.0)
+    else:
+        def palm_at(k):
+            return np.array(PALM) + np.array(direction) * mm_s * min(1.0, k / 25)
+    out, q = _past_the_box(t, c, palm_at, int((400.0 / mm_s + 2.0) / 0.008))
     lo, hi = np.array(t.p.workspace_min), np.array(t.p.workspace_max)
-    q, out = HOME.copy(), 0.0
-    for k in range(int((400.0 / mm_s + 2.0) / 0.008)):
-        if mode == 'imitation':
-            palm = np.array(PALM) + np.array(direction) * min(mm_s * 0.008 * k, 400.0)
-        else:
-            palm = np.array(PALM) + np.array(direction) * mm_s * min(1.0, k / 25)
-        now = c.tick()
-        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
-        t.on_joints(q)
-        t.step(now)
-        for dt in np.arange(1, 9) * 0.001:             # the path the controller runs
-            p = t._servo.planned_at(now + dt)
-            if p is not None:
-                tcp = kin.fk(p)[:3, 3]
-                out = max(out, float(np.max(np.maximum(lo - tcp, tcp - hi))))
-        q = t._servo.state_at(now + 0.008, q)[0]
     assert t.status.state == TRACKING
     assert out < 0.0025, out                         # (the servo's lag off the line: 1.8 mm)
     assert np.max(np.maximum(lo - kin.fk(q)[:3, 3], kin.fk(q)[:3, 3] - hi)) > -1e-3   # at the face
@@ -580,20 +591,8 @@ def test_a_slow_hand_at_a_face_is_not_overrun_at_a_low_acceleration(mm_s, accel)
     # The face counted only from 40 mm/s of the target toward it: the top reached at 39 mm/s
     # (the hand's 15.6 at scale 2.5) with max_joint_accel 0.5 ran 17.6 mm above it.
     t, c = armed_with_origin(max_joint_speed=1.0, max_joint_accel=accel)
-    lo, hi = np.array(t.p.workspace_min), np.array(t.p.workspace_max)
-    q, out = HOME.copy(), 0.0
-    for k in range(int((400.0 / mm_s + 2.0) / 0.008)):
-        palm = np.array(PALM) + np.array((0.0, 1.0, 0.0)) * min(mm_s * 0.008 * k, 400.0)
-        now = c.tick()
-        t.on_hand(hand(palm_mm=tuple(palm), stamp=now), now)
-        t.on_joints(q)
-        t.step(now)
-        for dt in np.arange(1, 9) * 0.001:             # the path the controller runs
-            p = t._servo.planned_at(now + dt)
-            if p is not None:
-                tcp = kin.fk(p)[:3, 3]
-                out = max(out, float(np.max(np.maximum(lo - tcp, tcp - hi))))
-        q = t._servo.state_at(now + 0.008, q)[0]
+    out, _ = _past_the_box(t, c, lambda k: np.array(PALM) + np.array((0.0, 1.0, 0.0)) * min(
+        mm_s * 0.008 * k, 400.0), int((400.0 / mm_s + 2.0) / 0.008))
     assert out < 0.001, out
 
 

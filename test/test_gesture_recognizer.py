@@ -507,33 +507,41 @@ def test_pose_sequences_keep_exclusive_gestures(seq):
         assert not (s.fist and s.open) and not (s.fist and s.thumb_up) and not (s.fist and s.pinch)
 
 
+_POSES = {p: render_hand('right', p, (0.0, 200.0, 0.0), hand_id=5)
+          for p in ('thumbs_up', 'point', 'open', 'fist')}
+
+
+def _through_the_arm(parts, hz, off_frames):
+    """(pose, frames) parts at hz through a HandTracker and an ArmTeleop, as the sender and
+    the arm node run them: (fold / unfold events, whether it armed, frames with a gesture
+    carried past its credit)."""
+    from leap_teleop.ur10 import kinematics as kin
+    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
+    tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
+    arm = ArmTeleop()
+    arm.on_joints(kin.HOME_Q.copy())
+    t, events, armed, carried = 0.0, [], False, 0
+    for pose, frames in parts:
+        for _ in range(frames):
+            st = tracker.update(_POSES[pose], t, 0)
+            events += [e.gesture for e in st.events if e.gesture in ('fold', 'unfold')]
+            arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
+                                 thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
+            arm.step(100.0 + t)
+            armed = armed or arm.status.state == ARMED
+            carried += bool(getattr(tracker.recognizer._prev, 'unseen', ()))
+            t += 1.0 / hz
+    return events, armed, carried
+
+
 @pytest.mark.parametrize('hz', [30, 120])
 @pytest.mark.parametrize('off_frames', [10, 100])
 def test_a_long_off_filter_smooths_but_never_makes_a_glimpse_a_hold(hz, off_frames):
     # ~recognizer_off_frames above its default carried a thumbs-up (or a fist) over frames
     # that did not show it, and the arm's hold and the fold's counted them: a 3-frame
     # thumbs-up then a pointing hand armed the UR10, a 3-frame misread fist landed the drone.
-    from leap_teleop.ur10 import kinematics as kin
-    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
-    poses = {p: render_hand('right', p, (0.0, 200.0, 0.0), hand_id=5)
-             for p in ('thumbs_up', 'point', 'open', 'fist')}
-
-    def run(parts):
-        tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
-        arm = ArmTeleop()
-        arm.on_joints(kin.HOME_Q.copy())
-        t, events, armed, carried = 0.0, [], False, 0
-        for pose, seconds in parts:
-            for _ in range(round(seconds * hz)):
-                st = tracker.update(poses[pose], t, 0)
-                events += [e.gesture for e in st.events if e.gesture in ('fold', 'unfold')]
-                arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
-                                     thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
-                arm.step(100.0 + t)
-                armed = armed or arm.status.state == ARMED
-                carried += bool(getattr(tracker.recognizer._prev, 'unseen', ()))
-                t += 1.0 / hz
-        return events, armed, carried
+    def run(parts):                     # (pose, seconds)
+        return _through_the_arm([(p, round(s * hz)) for p, s in parts], hz, off_frames)
 
     glimpse = 3 / hz
     events, armed, carried = run([('point', 1.0), ('thumbs_up', glimpse), ('point', 3.0)])
@@ -554,7 +562,7 @@ def test_a_long_off_filter_smooths_but_never_makes_a_glimpse_a_hold(hz, off_fram
     t, unfold = 0.0, None
     for pose, seconds in (('fist', 1.0), ('open', 1.0)):
         for _ in range(round(seconds * hz)):
-            st = tracker.update(poses[pose], t, 0)
+            st = tracker.update(_POSES[pose], t, 0)
             if unfold is None and any(e.gesture == 'unfold' for e in st.events):
                 unfold = t - 1.0
             t += 1.0 / hz
@@ -581,26 +589,8 @@ def test_a_glimpse_of_a_gesture_a_long_off_filter_still_holds_is_no_more_than_a_
     # Carried past its credit, a fist became the shape again on one frame showing it (no
     # on_frames): a misread fist in the open hand held after a takeoff landed the drone; a
     # thumbs-up re-shown for a few frames armed where the default needs on_frames more.
-    from leap_teleop.ur10 import kinematics as kin
-    from leap_teleop.ur10.teleop import ARMED, ArmInput, ArmTeleop
-    poses = {p: render_hand('right', p, (0.0, 200.0, 0.0), hand_id=5)
-             for p in ('open', 'fist', 'thumbs_up', 'point')}
-
-    def run(parts):
-        tracker = HandTracker('right', GestureRecognizer(off_frames=off_frames))
-        arm = ArmTeleop()
-        arm.on_joints(kin.HOME_Q.copy())
-        t, events, armed = 0.0, [], False
-        for pose, frames in parts:
-            for _ in range(frames):
-                st = tracker.update(poses[pose], t, 0)
-                events += [e.gesture for e in st.events if e.gesture in ('fold', 'unfold')]
-                arm.on_hand(ArmInput(present=True, palm_mm=(0.0, 200.0, 0.0), fist=st.fist,
-                                     thumb_up=st.thumb_up, stamp=100.0 + t), 100.0 + t)
-                arm.step(100.0 + t)
-                armed = armed or arm.status.state == ARMED
-                t += 1.0 / hz
-        return events, armed
+    def run(parts):                     # (pose, frames)
+        return _through_the_arm(parts, hz, off_frames)[:2]
 
     events, _ = run([('fist', round(1.5 * hz)), ('open', round(0.6 * hz)), ('fist', glimpse),
                      ('open', 2 * hz)])
