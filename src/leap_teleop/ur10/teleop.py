@@ -205,7 +205,8 @@ class ArmTeleopStatus:
 class ArmTeleop:
     def __init__(self, params=None, step_interval=0.0, gesture_words=None):
         """gesture_words: per arm action (arm, origin, stop), the gesture the state lines
-        name for it (GESTURE_WORDS where not given) (the sender's bindings decide which gesture raises each flag).
+        name for it, GESTURE_WORDS where not given (the sender's bindings decide which
+        gesture raises each flag).
         step_interval: the longest time the loop that steps it leaves between two steps.
         Every command is planned over at least 1.5 times the longest step interval of the
         last STEP_WINDOW_S, up to that (and command_horizon's bound): a shorter horizon,
