@@ -599,3 +599,14 @@ def test_a_glimpse_of_a_gesture_a_long_off_filter_still_holds_is_no_more_than_a_
     _, armed = run([('point', hz), ('thumbs_up', short), ('point', round(0.4 * hz)),
                     ('thumbs_up', glimpse + 1), ('point', 2 * hz)])
     assert not armed
+
+
+@pytest.mark.parametrize('hz, frames', [(15, 5), (20, 6)])
+def test_a_thumbs_up_a_long_off_filter_still_holds_arms_only_when_held_anew(hz, frames):
+    # Carried past its credit, a thumbs-up was shown again from its first frame: re-shown
+    # for 5 frames at 15 fps (6 at 20 fps) it armed, where the default needs more.
+    short = max(1, round(0.2 * hz))
+    for off_frames in (3, 100):
+        _, armed, _ = _through_the_arm([('point', hz), ('thumbs_up', short), ('point', round(0.4 * hz)),
+                                        ('thumbs_up', frames), ('point', 2 * hz)], hz, off_frames)
+        assert not armed, off_frames
