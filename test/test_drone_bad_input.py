@@ -147,7 +147,8 @@ def test_unknown_gesture_names_and_sides_are_warned_about(monkeypatch):
     from leap_teleop.msg import GestureEvent
     from leap_teleop.ros.nodes.drone_pilot import DronePilotNode
     said, seen = [], []
-    node = SimpleNamespace(side=0, log=SimpleNamespace(warn=lambda key, fmt, *a: said.append(fmt % a)),
+    node = SimpleNamespace(side=0, name='drone/drone_pilot',
+                           log=SimpleNamespace(warn=lambda key, fmt, *a: said.append(fmt % a)),
                            pilot=SimpleNamespace(on_gesture=lambda *a: seen.append(a)))
     DronePilotNode.on_gesture(node, GestureEvent(side=7, gesture='unfold', active=True))
     DronePilotNode.on_gesture(node, GestureEvent(side=1, gesture='unfold', active=True))
