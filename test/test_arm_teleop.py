@@ -243,6 +243,17 @@ def stall(t, c, seconds, q=None):
     return cmds
 
 
+def stall_following(t, c, q, periods):
+    """Control periods with no hand input, the joints following the servo's plan (a
+    perfect controller); the joints at the end."""
+    for _ in range(periods):
+        now = c.tick()
+        t.on_joints(q)
+        t.step(now)
+        q = t._servo.state_at(now + 0.008, q)[0]
+    return q
+
+
 def sent(cmd):
     return cmd.q is not None or cmd.points is not None or cmd.gripper is not None
 
@@ -375,11 +386,7 @@ def test_a_re_anchor_while_the_hold_still_brakes_goes_on_to_the_last_target_with
         cmd, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
     last_target = np.array(t.status.target)
     assert np.abs(t._servo.state_at(c.t, q)[1]).max() > 0.5
-    for _ in range(26):                                       # a 0.21 s stall: the hold
-        now = c.tick()
-        t.on_joints(q)
-        t.step(now)
-        q = t._servo.state_at(now + 0.008, q)[0]
+    q = stall_following(t, c, q, 26)                          # a 0.21 s stall: the hold
     assert t.status.state == HOLDING and t._servo.moving
     q0, v0 = t._servo.state_at(c.t + 0.008, q)
     cmd, q = follow(t, c, hand(palm_mm=tuple(palm + [0.0, 100.0, 0.0])), 1, q)     # 0.25 m up
@@ -452,11 +459,7 @@ def test_an_origin_set_while_the_hold_brakes_is_where_tracking_can_stop(mode, sp
         if mode == 'joystick':
             palm = np.array(PALM) + [100.0, 0.0, 0.0]         # pushed at full speed
         _, q = follow(t, c, hand(palm_mm=tuple(palm)), 1, q)
-    for _ in range(26):                                       # a 0.21 s stall: the hold
-        now = c.tick()
-        t.on_joints(q)
-        t.step(now)
-        q = t._servo.state_at(now + 0.008, q)[0]
+    q = stall_following(t, c, q, 26)                          # a 0.21 s stall: the hold
     assert t.status.state == HOLDING and t._servo.moving
     start = kin.fk(q)[:3, 3]
     rest = kin.fk(_braked(t, c.t + 0.008, q))[:3, 3]
